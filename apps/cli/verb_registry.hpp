@@ -1,0 +1,31 @@
+#pragma once
+// Self-registering CLI verbs. Each verb lives in apps/cli/verbs/<verb>.cpp and registers itself
+// with a static VerbRegistrar, so adding a verb never touches main.cpp:
+//
+//   static twinwatch::cli::VerbRegistrar reg{"model", 20, [](CLI::App& app) {
+//     auto* sub = app.add_subcommand("model", "Inspect robot descriptions");
+//     ...
+//     sub->callback([opts] { twinwatch::cli::set_exit_code(run(*opts)); });
+//   }};
+//
+// The `order` sorts verbs in --help (foundation 10-19, simulator 20-29, ...).
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+namespace twinwatch::cli {
+
+using VerbSetup = std::function<void(CLI::App&)>;
+
+struct VerbRegistrar {
+  VerbRegistrar(std::string name, int order, VerbSetup setup);
+};
+
+/// Exit code the process returns after the chosen verb ran (0 = success).
+void set_exit_code(int code);
+int exit_code();
+
+/// Registers every verb on `app`, sorted by order. Called once by main().
+void register_all_verbs(CLI::App& app);
+
+}  // namespace twinwatch::cli

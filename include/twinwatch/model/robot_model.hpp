@@ -1,0 +1,149 @@
+#pragma once
+/// @file robot_model.hpp
+/// The fixed description of a serial robot arm and its drives.
+///
+/// Frame conventions (read this before adding a loader):
+/// - The base frame is the world frame; `gravity` is given in it (default (0, 0, -9.81) m/s²).
+/// - Every joint is revolute about the **z axis of its joint frame**. Joint i's frame is placed in
+///   its parent body's frame (the base for joint 0) by the constant `placement`. The body frame of
+///   the link that joint i moves is `placement * Rz(q_i + q_offset_i)`: it rotates with the joint
+///   and its origin lies on the joint axis.
+/// - Standard DH (UR): T_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i). Body i is then the frame *before*
+///   Tz Tx Rx, i.e. placement_{i+1} = Tz(d_i) Tx(a_i) Rx(α_i), and UR's published COMs/inertias (given
+///   in DH frame i) are re-expressed in body i by that same constant transform (see
+///   description_io.hpp). The flange is placement_{n+1}.
+/// - Modified DH (Craig, Franka): T_i = Rx(α_{i-1}) Tx(a_{i-1}) Rz(θ_i) Tz(d_i), so
+///   placement_i = Rx(α_{i-1}) Tx(a_{i-1}) Tz(d_i) and body i is MDH frame i.
+/// - URDF: placement = joint origin (xyz, rpy) followed by a rotation taking z onto the joint axis.
+/// - Inertial data of a body: mass [kg], centre of mass [m] in the body frame, rotational inertia
+///   [kg·m²] about the centre of mass with axes of the body frame.
+/// - A payload is a rigid body fixed to the flange; its COM and inertia are given in the flange
+///   frame. It is merged into the last link for dynamics and can change at run time.
+#include <Eigen/Geometry>
+#include <array>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/types.hpp"
+
+namespace twinwatch::model {
+
+/// The 10 standard inertial parameters of a link [m, m·cx, m·cy, m·cz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz],
+/// with the inertia about the **body-frame origin** (not the COM). Units kg, kg·m, kg·m².
+using StandardParameters = Eigen::Matrix<double, 10, 1>;
+
+/// Inertial parameters of one rigid body, expressed in that body's frame.
+struct RigidBodyInertia {
+  double mass = 0.0;                                        ///< [kg]
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();            ///< [m] in the body frame
+  Eigen::Matrix3d inertia_com = Eigen::Matrix3d::Zero();    ///< [kg·m²] about the COM, body axes
+
+  /// The 10 standard parameters (inertia about the body origin, Steiner's theorem).
+  StandardParameters to_standard_parameters() const;
+  /// Inverse of to_standard_parameters(). A zero mass gives a zero COM.
+  static RigidBodyInertia from_standard_parameters(const StandardParameters& pi);
+  /// The same body expressed in another frame F, where `F_T_this` maps this frame's
+  /// coordinates into F's.
+  RigidBodyInertia expressed_in(const Eigen::Isometry3d& F_T_this) const;
+  /// Two bodies rigidly joined (both expressed in the same frame).
+  RigidBodyInertia operator+(const RigidBodyInertia& other) const;
+  /// Throws InvalidArgument naming `what` when the mass is negative or not finite, or the inertia
+  /// is not symmetric, not positive semi-definite or violates the triangle inequality.
+  void validate(const std::string& what) const;
+};
+
+/// Limits of one joint.
+struct JointLimits {
+  double q_min = -std::numeric_limits<double>::infinity();   ///< [rad]
+  double q_max = std::numeric_limits<double>::infinity();    ///< [rad]
+  double qd_max = std::numeric_limits<double>::infinity();   ///< [rad/s], > 0
+  double torque_max = std::numeric_limits<double>::infinity();  ///< [N·m] joint side, > 0
+};
+
+/// Drive train of one joint: motor current ↔ joint torque (UR3e paper eq. 3):
+///   tau = i * kt * N * eta
+/// with eta the motoring efficiency when power flows from motor to load (sign(tau) == sign(qd))
+/// and `efficiency_reverse` when the load back-drives the motor.
+/// Unknown values are NaN and must be identified (twinwatch identify); never invent them.
+struct DriveParams {
+  double gear_ratio = std::numeric_limits<double>::quiet_NaN();       ///< N [-]
+  double torque_constant = std::numeric_limits<double>::quiet_NaN();  ///< kt [N·m/A], motor side
+  double efficiency = 1.0;          ///< eta, motoring, in (0, 1]
+  double efficiency_reverse = 1.0;  ///< eta when back-driven, in (0, 1]
+  double current_limit = std::numeric_limits<double>::infinity();  ///< [A]
+
+  /// True when both N and kt are known numbers.
+  bool gains_known() const;
+};
+
+/// One revolute joint and the link it moves.
+struct Joint {
+  std::string name;
+  Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< parent body → joint frame at q = 0
+  double q_offset = 0.0;   ///< body = placement * Rz(q + q_offset) [rad]
+  RigidBodyInertia body;   ///< the link moved by this joint, in its body frame
+  JointLimits limits;
+  DriveParams drive;
+};
+
+/// Plain description data, as loaded from a file; turned into a RobotModel to be used.
+struct RobotDescription {
+  std::string name;                 ///< e.g. "ur3e"
+  std::string source;               ///< file it was loaded from ("" if built in code)
+  std::vector<Joint> joints;        ///< base to tip
+  Eigen::Isometry3d flange = Eigen::Isometry3d::Identity();  ///< last body → flange (tool0)
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};                  ///< [m/s²] in the base frame
+};
+
+namespace detail {
+/// Hot-path cache of one link, rebuilt whenever the description or payload changes.
+struct LinkCache {
+  Eigen::Matrix3d R0;   ///< placement rotation (parent → joint frame)
+  Eigen::Vector3d p;    ///< placement translation [m], in the parent frame
+  double q_offset;      ///< [rad]
+  double m;             ///< [kg] (payload merged on the last link)
+  Eigen::Vector3d h;    ///< first moment m·c [kg·m], body frame
+  Eigen::Matrix3d I_o;  ///< inertia about the body origin [kg·m²], body frame
+};
+}  // namespace detail
+
+/// A validated robot description with its hot-path caches and the current payload.
+class RobotModel {
+ public:
+  /// Validates the description (≥ 1 and ≤ kMaxDof joints, valid inertias and limits, unit
+  /// rotations) and builds the caches. Throws InvalidArgument naming the joint and field.
+  explicit RobotModel(RobotDescription description);
+
+  int n_dof() const { return n_dof_; }
+  const std::string& name() const { return description_.name; }
+  const RobotDescription& description() const { return description_; }
+  const Joint& joint(int i) const { return description_.joints.at(static_cast<size_t>(i)); }
+  const Eigen::Vector3d& gravity() const { return description_.gravity; }
+  /// Sets the gravity vector [m/s²] in the base frame (e.g. a tilted mounting).
+  void set_gravity(const Eigen::Vector3d& g) { description_.gravity = g; }
+
+  /// Attaches a payload (COM and inertia in the flange frame); replaces any previous one.
+  /// Throws InvalidArgument if the payload is not physical.
+  void set_payload(const RigidBodyInertia& payload_in_flange);
+  /// Removes the payload (equivalent to a zero-mass payload).
+  void clear_payload() { set_payload(RigidBodyInertia{}); }
+  /// The current payload, in the flange frame.
+  const RigidBodyInertia& payload() const { return payload_; }
+
+  /// Replaces link i's inertial parameters (body frame), e.g. after identification.
+  void set_link_inertia(int i, const RigidBodyInertia& body);
+
+  /// Cached per-link data for the dynamics kernels.
+  const detail::LinkCache& link_cache(int i) const { return cache_[static_cast<size_t>(i)]; }
+
+ private:
+  void rebuild_cache();
+
+  RobotDescription description_;
+  RigidBodyInertia payload_;
+  int n_dof_ = 0;
+  std::array<detail::LinkCache, kMaxDof> cache_{};
+};
+
+}  // namespace twinwatch::model

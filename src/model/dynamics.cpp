@@ -1,0 +1,231 @@
+#include "twinwatch/model/dynamics.hpp"
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::model {
+
+namespace {
+
+// parent_R_body = R0 * Rz(theta), written column by column (Rz only mixes columns 0 and 1).
+inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
+  const double c = std::cos(theta);
+  const double s = std::sin(theta);
+  R.col(0) = c * R0.col(0) + s * R0.col(1);
+  R.col(1) = c * R0.col(1) - s * R0.col(0);
+  R.col(2) = R0.col(2);
+}
+
+inline void check_q(const RobotModel& model, const VectorJ& q) { check_size("q", q.size(), model.n_dof(), "model.n_dof"); }
+
+// core recursion shared by rnea / gravity / coriolis: the two flags switch gravity and the
+// velocity terms off without branching inside the joint loop more than once per term.
+void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ* qd, const VectorJ* qdd,
+               bool with_gravity) {
+  const int n = model.n_dof();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+
+  // forward pass: velocities and accelerations of every body, in its own frame
+  //   w_i  = R_i^T w_{i-1} + qd_i z
+  //   wd_i = R_i^T wd_{i-1} + (R_i^T w_{i-1}) x (qd_i z) + qdd_i z
+  //   a_i  = R_i^T (a_{i-1} + wd_{i-1} x p_i + w_{i-1} x (w_{i-1} x p_i)),  a_{-1} = -g
+  Eigen::Vector3d w_prev = Eigen::Vector3d::Zero();
+  Eigen::Vector3d wd_prev = Eigen::Vector3d::Zero();
+  Eigen::Vector3d a_prev = with_gravity ? Eigen::Vector3d(-model.gravity()) : Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    Eigen::Matrix3d& R = d.R[i];
+    rotate_about_z(c.R0, q[i] + c.q_offset, R);
+    const double qdi = qd ? (*qd)[i] : 0.0;
+    const double qddi = qdd ? (*qdd)[i] : 0.0;
+    const Eigen::Vector3d w_in = R.transpose() * w_prev;
+    d.w[i] = w_in + qdi * z;
+    d.wd[i] = R.transpose() * wd_prev + w_in.cross(qdi * z) + qddi * z;
+    d.a[i] = R.transpose() * (a_prev + wd_prev.cross(c.p) + w_prev.cross(w_prev.cross(c.p)));
+    w_prev = d.w[i];
+    wd_prev = d.wd[i];
+    a_prev = d.a[i];
+  }
+
+  // backward pass: body wrenches about the body origin, accumulated towards the base
+  //   F_i = m a_i + wd_i x h + w_i x (w_i x h)
+  //   N_i = I_o wd_i + w_i x (I_o w_i) + h x a_i
+  //   f_i = F_i + R_{i+1} f_{i+1};  n_i = N_i + R_{i+1} n_{i+1} + p_{i+1} x (R_{i+1} f_{i+1})
+  //   tau_i = z . n_i
+  d.tau.resize(n);
+  Eigen::Vector3d f_child = Eigen::Vector3d::Zero();
+  Eigen::Vector3d n_child = Eigen::Vector3d::Zero();
+  for (int i = n - 1; i >= 0; --i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    const Eigen::Vector3d& w = d.w[i];
+    const Eigen::Vector3d& wd = d.wd[i];
+    const Eigen::Vector3d& a = d.a[i];
+    const Eigen::Vector3d Iw = c.I_o * w;
+    d.f[i] = c.m * a + wd.cross(c.h) + w.cross(w.cross(c.h)) + f_child;
+    d.n[i] = c.I_o * wd + w.cross(Iw) + c.h.cross(a) + n_child;
+    d.tau[i] = d.n[i].z();
+    if (i > 0) {
+      // express this body's wrench in the parent frame, moment about the parent origin
+      f_child = d.R[i] * d.f[i];
+      n_child = d.R[i] * d.n[i] + c.p.cross(f_child);
+    }
+  }
+}
+
+}  // namespace
+
+DynamicsData::DynamicsData(const RobotModel& model) : n_dof(model.n_dof()) {
+  for (int i = 0; i < kMaxDof; ++i) {
+    R[i].setIdentity();
+    w[i].setZero();
+    wd[i].setZero();
+    a[i].setZero();
+    f[i].setZero();
+    n[i].setZero();
+    mc[i] = 0.0;
+    hc[i].setZero();
+    Ic[i].setZero();
+    oMi[i].setIdentity();
+  }
+  oMf.setIdentity();
+  tau = VectorJ::Zero(n_dof);
+  qdd = VectorJ::Zero(n_dof);
+  M = MatrixJ::Zero(n_dof, n_dof);
+  llt.compute(MatrixJ::Identity(n_dof, n_dof));
+}
+
+const Eigen::Isometry3d& forward_kinematics(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
+  check_q(model, q);
+  Eigen::Isometry3d parent = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < model.n_dof(); ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    rotate_about_z(c.R0, q[i] + c.q_offset, d.R[i]);
+    Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+    local.linear() = d.R[i];
+    local.translation() = c.p;
+    d.oMi[i] = parent * local;
+    parent = d.oMi[i];
+  }
+  d.oMf = parent * model.description().flange;
+  return d.oMf;
+}
+
+void point_jacobian(const RobotModel& model, const DynamicsData& d, int link, const Eigen::Vector3d& point,
+                    Matrix6J& J) {
+  const int n = model.n_dof();
+  if (link < 0 || link >= n) throw InvalidArgument("link index " + std::to_string(link) + " is out of range, expected 0 to " + std::to_string(n - 1));
+  J.setZero(6, n);
+  const Eigen::Vector3d p = d.oMi[link] * point;
+  // column j: [z_j x (p - o_j); z_j] for every joint j up to the link
+  for (int j = 0; j <= link; ++j) {
+    const Eigen::Vector3d zj = d.oMi[j].linear().col(2);
+    const Eigen::Vector3d oj = d.oMi[j].translation();
+    J.block<3, 1>(0, j) = zj.cross(p - oj);
+    J.block<3, 1>(3, j) = zj;
+  }
+}
+
+const VectorJ& rnea(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd) {
+  check_q(model, q);
+  check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
+  check_size("qdd", qdd.size(), model.n_dof(), "model.n_dof");
+  rnea_impl(model, d, q, &qd, &qdd, true);
+  return d.tau;
+}
+
+const VectorJ& gravity_torque(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
+  check_q(model, q);
+  rnea_impl(model, d, q, nullptr, nullptr, true);
+  return d.tau;
+}
+
+const VectorJ& nonlinear_effects(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd) {
+  check_q(model, q);
+  check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
+  rnea_impl(model, d, q, &qd, nullptr, true);
+  return d.tau;
+}
+
+const VectorJ& coriolis_torque(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd) {
+  check_q(model, q);
+  check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
+  rnea_impl(model, d, q, &qd, nullptr, false);
+  return d.tau;
+}
+
+const MatrixJ& crba(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
+  check_q(model, q);
+  const int n = model.n_dof();
+  // rotations at q
+  for (int i = 0; i < n; ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    rotate_about_z(c.R0, q[i] + c.q_offset, d.R[i]);
+    d.mc[i] = c.m;
+    d.hc[i] = c.h;
+    d.Ic[i] = c.I_o;
+  }
+  // composite bodies from the tip: move child composite (m, h, I_o) into the parent frame
+  //   h' = R h + m p
+  //   I' = R I R^T - m [p]x[p]x - [p]x[Rh]x - [Rh]x[p]x
+  for (int i = n - 1; i > 0; --i) {
+    const Eigen::Matrix3d& R = d.R[i];
+    const Eigen::Vector3d& p = model.link_cache(i).p;
+    const double m = d.mc[i];
+    const Eigen::Vector3d Rh = R * d.hc[i];
+    const Eigen::Matrix3d RIRt = R * d.Ic[i] * R.transpose();
+    // -m [p]x^2 = m (p.p 1 - p p^T);  -([p]x[r]x + [r]x[p]x) = 2 (p.r) 1 - p r^T - r p^T
+    const double pp = p.squaredNorm();
+    const double pr = p.dot(Rh);
+    Eigen::Matrix3d shift = -m * (p * p.transpose()) - p * Rh.transpose() - Rh * p.transpose();
+    shift.diagonal().array() += m * pp + 2.0 * pr;
+    d.mc[i - 1] += m;
+    d.hc[i - 1] += Rh + m * p;
+    d.Ic[i - 1] += RIRt + shift;
+  }
+  // column i: the wrench composite i needs for a unit acceleration of joint i,
+  //   f = z x h_c,  n = I_c z, carried towards the base; M(k, i) = z . n_k
+  d.M.resize(n, n);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d f = Eigen::Vector3d::UnitZ().cross(d.hc[i]);
+    Eigen::Vector3d m = d.Ic[i].col(2);
+    d.M(i, i) = m.z();
+    for (int k = i; k > 0; --k) {
+      f = d.R[k] * f;
+      m = d.R[k] * m + model.link_cache(k).p.cross(f);
+      d.M(k - 1, i) = m.z();
+      d.M(i, k - 1) = m.z();
+    }
+  }
+  return d.M;
+}
+
+const VectorJ& forward_dynamics(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd,
+                                const VectorJ& tau) {
+  check_size("tau", tau.size(), model.n_dof(), "model.n_dof");
+  // h = C qd + g, then solve M qdd = tau - h by Cholesky
+  nonlinear_effects(model, d, q, qd);
+  d.qdd = tau - d.tau;
+  crba(model, d, q);
+  d.llt.compute(d.M);
+  d.llt.solveInPlace(d.qdd);
+  return d.qdd;
+}
+
+double kinetic_energy(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd) {
+  check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
+  crba(model, d, q);
+  return 0.5 * qd.dot(d.M * qd);
+}
+
+double potential_energy(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
+  forward_kinematics(model, d, q);
+  double V = 0.0;
+  for (int i = 0; i < model.n_dof(); ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    // world first moment = m o_i + R h
+    const Eigen::Vector3d mc_world = c.m * d.oMi[i].translation() + d.oMi[i].linear() * c.h;
+    V -= model.gravity().dot(mc_world);
+  }
+  return V;
+}
+
+}  // namespace twinwatch::model
