@@ -1,0 +1,39 @@
+#pragma once
+/// @file description_io.hpp
+/// Loading robot descriptions: the project's JSON format (standard or modified DH, per-link
+/// inertials, per-joint drives and limits) and URDF (via urdfdom). See robot_model.hpp for the
+/// frame conventions every loader maps onto.
+///
+/// Errors: a malformed or physically invalid file throws twinwatch::ParseError naming the file,
+/// the field path (e.g. "joints[3].inertia") and, where known, the line; an unknown robot name
+/// throws InvalidArgument listing the robots that exist.
+#include <string>
+#include <vector>
+
+#include "twinwatch/model/robot_model.hpp"
+
+namespace twinwatch::model {
+
+/// Loads a description from a JSON file (see docs/robot-description.md for the format).
+RobotDescription load_description_json(const std::string& path);
+
+/// Parses a JSON description from a string; `origin` names it in error messages.
+RobotDescription parse_description_json(const std::string& text, const std::string& origin);
+
+/// Loads a serial chain from a URDF file, from `base_link` to `tip_link` (empty: the root and the
+/// single leaf). Fixed joints are merged; revolute/continuous joints become joints.
+RobotDescription load_description_urdf(const std::string& path, const std::string& base_link = "",
+                                       const std::string& tip_link = "");
+
+/// Loads a robot by built-in name ("ur3e", "ur5e", "panda": data/robots/<name>.json) or by path
+/// to a .json or .urdf file.
+RobotModel load_robot(const std::string& name_or_path);
+
+/// Names of the built-in robots (files in the data/robots directory).
+std::vector<std::string> builtin_robot_names();
+
+/// Directory holding the built-in robot files: $TWINWATCH_DATA_DIR/robots if set, else the
+/// source tree's data/robots.
+std::string robots_directory();
+
+}  // namespace twinwatch::model
