@@ -1,0 +1,59 @@
+#pragma once
+/// @file sample.hpp
+/// One sample of what a robot controller streams: the unit that flows through
+///   device (RTDE / recording / simulator) -> monitor (residual -> decision -> event).
+/// Field names follow the RTDE output names (../shared/reference/rtde-protocol.md) so a sample
+/// maps 1:1 onto a recording row. Fields a source does not provide are NaN (vectors) and the
+/// matching bit in `present` is clear.
+#include <cstdint>
+#include <limits>
+
+#include "twinwatch/core/types.hpp"
+
+namespace twinwatch {
+
+/// Which optional fields of a RobotSample are filled.
+enum SampleField : std::uint32_t {
+  kFieldTargetQ = 1u << 0,
+  kFieldTargetQd = 1u << 1,
+  kFieldTargetQdd = 1u << 2,
+  kFieldActualCurrent = 1u << 3,
+  kFieldTargetCurrent = 1u << 4,
+  kFieldTemperature = 1u << 5,
+  kFieldDigitalOutputs = 1u << 6,
+  kFieldRobotMode = 1u << 7,
+  kFieldTargetMoment = 1u << 8,
+  kFieldActualQd = 1u << 9,
+};
+
+/// One controller cycle. Units: rad, rad/s, rad/s², A, °C, N·m, s.
+struct RobotSample {
+  double timestamp = 0.0;           ///< controller time [s] (RTDE `timestamp`)
+  VectorJ q;                        ///< actual_q [rad]
+  VectorJ qd;                       ///< actual_qd [rad/s]
+  VectorJ target_q;                 ///< target_q [rad]
+  VectorJ target_qd;                ///< target_qd [rad/s]
+  VectorJ target_qdd;               ///< target_qdd [rad/s²]
+  VectorJ current;                  ///< actual_current [A]
+  VectorJ target_current;           ///< target_current [A]
+  VectorJ target_moment;            ///< target_moment [N·m]
+  VectorJ temperature;              ///< joint_temperatures [°C]
+  std::uint64_t digital_outputs = 0;  ///< actual_digital_output_bits
+  std::int32_t robot_mode = 7;        ///< robot_mode (7 = RUNNING)
+  std::uint32_t present = 0;          ///< OR of SampleField flags
+  bool gap_before = false;            ///< samples were lost just before this one (stream fault marker)
+
+  /// A sample for n joints with every vector sized n and set to NaN, nothing present.
+  static RobotSample empty(int n) {
+    RobotSample s;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (VectorJ* v : {&s.q, &s.qd, &s.target_q, &s.target_qd, &s.target_qdd, &s.current, &s.target_current,
+                       &s.target_moment, &s.temperature})
+      v->setConstant(n, nan);
+    return s;
+  }
+  int n_dof() const { return static_cast<int>(q.size()); }
+  bool has(SampleField f) const { return (present & f) != 0; }
+};
+
+}  // namespace twinwatch
