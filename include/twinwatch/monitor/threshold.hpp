@@ -1,0 +1,78 @@
+#pragma once
+/// @file threshold.hpp
+/// Residual thresholds learned from healthy runs.
+///
+/// - Static, per joint [UR3e §4.1]: thr_j = max nominal MAE_j + 3 sigma_j, where sigma_j is the
+///   standard deviation of the healthy residual of joint j.
+/// - Dynamic, state-dependent [Cao eq. 24-26]:
+///     |r_i| < r_det_i = Psi_i u_i + upsilon_i,   u_i = [|qdd_i|, |qd_i|, exp(-rho_i |qd_i|)]
+///   with Psi_i = diag(psi_i1, psi_i2, psi_i3) >= 0 and upsilon_i from the convex program
+///     min alpha  s.t.  xi_i <= r_det_i(k) - |r_i(k)| <= alpha   for every healthy sample k,
+///   solved as a linear program with COIN-OR CLP. rho_i, which the paper tunes by hand, is chosen
+///   from a grid by the smallest alpha.
+///
+/// Both are evaluated in O(1) per sample without allocation; both scale with a user sensitivity
+/// factor per joint (1 = as learned, < 1 more sensitive).
+#include <span>
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/types.hpp"
+
+namespace twinwatch::monitor {
+
+/// Static per-joint threshold [UR3e §4.1].
+struct StaticThreshold {
+  VectorJ level;  ///< threshold on |residual| per joint (units of the residual)
+
+  /// Learns max-MAE + k_sigma * sigma per joint from healthy residual runs.
+  /// @param runs residual vectors of each healthy run (each sample: n_dof values)
+  /// @param k_sigma multiplier of the standard deviation (3 in the paper)
+  /// Throws InvalidArgument on empty input or inconsistent sizes.
+  static StaticThreshold learn(const std::vector<std::vector<VectorJ>>& runs, double k_sigma = 3.0);
+};
+
+/// Options of the dynamic-threshold fit.
+struct DynamicThresholdOptions {
+  double margin = 0.0;        ///< xi_i: minimum distance between threshold and healthy |r| (units of r); <= 0: auto = 3 * MAD-sigma of r
+  std::vector<double> rho_grid{2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0};  ///< candidate rho_i [s/rad]
+  int max_samples = 20000;    ///< healthy samples used per joint (uniformly decimated above that)
+  double mean_gap_weight = 1e-3;  ///< tie-break: also minimise this weight * mean gap (keeps the LP well posed)
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+};
+
+/// Parameters of one joint's dynamic threshold [Cao eq. 24-25].
+struct DynamicThresholdJoint {
+  double psi_qdd = 0.0;  ///< psi_i1, multiplies |qdd|
+  double psi_qd = 0.0;   ///< psi_i2, multiplies |qd|
+  double psi_rev = 0.0;  ///< psi_i3, multiplies exp(-rho |qd|) (velocity reversals)
+  double upsilon = 0.0;  ///< upsilon_i, constant part
+  double rho = 0.0;      ///< rho_i [s/rad]
+  double margin = 0.0;   ///< xi_i used in the fit
+  double alpha = 0.0;    ///< optimal max gap of the fit (diagnostic)
+
+  /// r_det for the joint state [Cao eq. 24].
+  double evaluate(double qd, double qdd) const;
+};
+
+/// Summary of a dynamic-threshold fit for one joint.
+struct DynamicThresholdFit {
+  bool ok = false;
+  std::string message;
+  DynamicThresholdJoint params;
+};
+
+/// Fits one joint's dynamic threshold on healthy data [Cao eq. 26].
+/// @param r residual samples, @param qd [rad/s], @param qdd [rad/s²]: equal lengths, >= 10.
+DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<const double> qd,
+                                          std::span<const double> qdd, const DynamicThresholdOptions& options = {});
+
+/// Dynamic thresholds for all joints.
+struct DynamicThreshold {
+  std::vector<DynamicThresholdJoint> joints;
+  /// Fills level[i] = r_det_i for the state; level must have size n_dof (no allocation).
+  void evaluate(const VectorJ& qd, const VectorJ& qdd, VectorJ& level) const;
+};
+
+}  // namespace twinwatch::monitor

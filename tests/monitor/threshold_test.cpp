@@ -1,0 +1,128 @@
+#include "twinwatch/monitor/threshold.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::monitor {
+namespace {
+
+using ::testing::HasSubstr;
+
+// healthy residual of a joint: noise plus a model-error peak at every velocity reversal,
+// the structure Cao Fig. 1 shows. Returns r, qd, qdd of a 0.5 Hz sinusoid.
+struct Healthy {
+  std::vector<double> r, qd, qdd;
+};
+Healthy make_healthy(unsigned seed, double peak, double noise, double seconds = 20.0) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, noise);
+  Healthy h;
+  const double dt = 0.002, w = 2.0 * M_PI * 0.5;
+  for (double t = 0.0; t < seconds; t += dt) {
+    const double qd = 1.0 * std::cos(w * t);
+    const double qdd = -1.0 * w * std::sin(w * t);
+    h.qd.push_back(qd);
+    h.qdd.push_back(qdd);
+    h.r.push_back(peak * std::exp(-20.0 * std::abs(qd)) * (qdd > 0 ? 1.0 : -1.0) + n(rng));
+  }
+  return h;
+}
+
+TEST(DynamicThreshold, BoundsHealthyResidualWithMarginAndStaysBelowStaticLevel) {
+  const Healthy h = make_healthy(7, 2.0, 0.05);
+  const DynamicThresholdFit fit = fit_dynamic_threshold(h.r, h.qd, h.qdd);
+  ASSERT_TRUE(fit.ok) << fit.message;
+  // every healthy sample below the threshold by at least the margin (up to LP tolerance)
+  for (size_t k = 0; k < h.r.size(); k += 1) {
+    const double level = fit.params.evaluate(h.qd[k], h.qdd[k]);
+    EXPECT_GE(level - std::abs(h.r[k]), fit.params.margin - 1e-6) << "sample " << k;
+  }
+  // away from reversals the threshold is far below the static level (max |r|): this is what
+  // lets the dynamic threshold see smaller collisions [Cao Fig. 7]
+  double static_level = 0.0;
+  for (double r : h.r) static_level = std::max(static_level, std::abs(r));
+  const double level_fast = fit.params.evaluate(1.0, 0.0);
+  EXPECT_LT(level_fast, 0.25 * static_level);
+}
+
+TEST(DynamicThreshold, DetectsPulseThatStaticThresholdMisses) {
+  const Healthy train = make_healthy(11, 2.0, 0.05);
+  const DynamicThresholdFit fit = fit_dynamic_threshold(train.r, train.qd, train.qdd);
+  ASSERT_TRUE(fit.ok);
+  double static_level = 0.0;
+  for (double r : train.r) static_level = std::max(static_level, std::abs(r));
+  // a 1.0 (e.g. N·m) collision pulse at full speed on a new healthy run
+  Healthy test = make_healthy(12, 2.0, 0.05, 4.0);
+  const size_t k = 0;  // t = 0: qd = 1 rad/s, far from a reversal
+  const double pulse = 1.0;
+  ASSERT_LT(pulse, static_level);
+  EXPECT_GT(std::abs(test.r[k] + pulse), fit.params.evaluate(test.qd[k], test.qdd[k]));
+}
+
+TEST(DynamicThreshold, MismatchedLengthsNameTheSizes) {
+  std::vector<double> a(20, 0.0), b(19, 0.0);
+  try {
+    fit_dynamic_threshold(a, b, a);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("sizes 20, 19, 20, expected equal"));
+  }
+}
+
+TEST(DynamicThreshold, TooFewSamples) {
+  std::vector<double> a(5, 0.0);
+  EXPECT_THROW(
+      {
+        try {
+          fit_dynamic_threshold(a, a, a);
+        } catch (const InvalidArgument& e) {
+          EXPECT_THAT(e.what(), HasSubstr("5 healthy samples, expected at least 10"));
+          throw;
+        }
+      },
+      InvalidArgument);
+}
+
+TEST(DynamicThresholdOptions, RejectsNonPositiveRho) {
+  DynamicThresholdOptions o;
+  o.rho_grid = {5.0, -1.0};
+  try {
+    o.validate();
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("rho_grid[1] is -1, must be > 0"));
+  }
+}
+
+TEST(StaticThreshold, IsMaxMaePlusThreeSigma) {
+  // two runs with known residual distributions: run 0 constant 0.1, run 1 alternating +-0.2
+  std::vector<std::vector<VectorJ>> runs(2);
+  for (int k = 0; k < 1000; ++k) {
+    runs[0].push_back(VectorJ::Constant(2, 0.1));
+    runs[1].push_back(VectorJ::Constant(2, k % 2 ? 0.2 : -0.2));
+  }
+  const StaticThreshold t = StaticThreshold::learn(runs);
+  // max MAE = 0.2; pooled values {0.1 x1000, 0.2 x500, -0.2 x500}: mean 0.05, E[x^2] = 0.025
+  const double sigma = std::sqrt(0.025 - 0.05 * 0.05);
+  EXPECT_NEAR(t.level[0], 0.2 + 3.0 * sigma, 1e-12);
+  EXPECT_NEAR(t.level[1], 0.2 + 3.0 * sigma, 1e-12);
+}
+
+TEST(StaticThreshold, RejectsEmptyAndRaggedRuns) {
+  EXPECT_THROW(StaticThreshold::learn({}), InvalidArgument);
+  std::vector<std::vector<VectorJ>> runs{{VectorJ::Zero(2), VectorJ::Zero(3)}};
+  try {
+    StaticThreshold::learn(runs);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("has size 3, expected 2"));
+  }
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
