@@ -1,0 +1,67 @@
+#pragma once
+/// @file event.hpp
+/// What the monitor reports: alerts with a diagnosis, written as JSON lines and into an SQLite
+/// event store (the last stage of sample -> residual -> decision -> event).
+#include <memory>
+#include <string>
+#include <string_view>
+
+namespace twinwatch::monitor {
+
+/// Class of a diagnosed anomaly (UR3e §2.3, §4 sign/shape interpretation).
+enum class FaultClass {
+  Collision,        ///< short sharp pulse: contact on a link
+  Resistance,       ///< persistent positive residual correlated with motion: extra friction / resistance
+  PayloadChange,    ///< step-like residual across joints, often with a gripper I/O change
+  SensorFault,      ///< one channel jumping or frozen while the physics is consistent
+  StreamFault,      ///< timestamp gaps / lost samples
+  Wear,             ///< slow trend of friction / residual energy over cycles
+  Unknown,          ///< threshold exceeded, no signature fits well
+};
+
+/// Stable lower-case name ("collision", "resistance", "payload_change", ...).
+std::string_view to_string(FaultClass c);
+/// Inverse of to_string; throws InvalidArgument for an unknown name.
+FaultClass fault_class_from_string(std::string_view s);
+
+/// One alert with its diagnosis.
+struct Event {
+  double t_start = 0.0;     ///< [s] controller time the alert was raised
+  double t_end = 0.0;       ///< [s] when it cleared (== t_start while open)
+  bool open = true;         ///< still active
+  FaultClass fault = FaultClass::Unknown;
+  int joint = -1;           ///< 0-based joint most affected, -1 if none
+  int link = -1;            ///< 0-based link for contacts, -1 if none
+  double magnitude = 0.0;   ///< size of the fault in `units`
+  std::string units;        ///< e.g. "N·m", "kg", "N", "A", "samples"
+  double confidence = 0.0;  ///< [0, 1]
+  double peak_residual = 0.0;  ///< largest |residual| seen during the alert (residual units)
+  std::string detail;       ///< human-readable one-liner, e.g. "extra friction on J5 ≈ 0.8 N·m"
+
+  double duration() const { return t_end - t_start; }
+  /// One JSON object on one line (no trailing newline).
+  std::string to_json_line() const;
+};
+
+/// SQLite event store (embedded; default file events.db). Thread-compatible, not for RT loops:
+/// the monitor hands events to it from the consumer side.
+class EventStore {
+ public:
+  /// Opens or creates the database and its `events` table. Throws std::runtime_error naming the
+  /// file when SQLite cannot open it.
+  explicit EventStore(const std::string& path);
+  ~EventStore();
+  EventStore(const EventStore&) = delete;
+  EventStore& operator=(const EventStore&) = delete;
+
+  /// Inserts an event (source names the run, e.g. the recording file or the robot address).
+  void insert(const Event& e, const std::string& source);
+  /// Number of stored events.
+  long count() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace twinwatch::monitor
