@@ -1,0 +1,62 @@
+#pragma once
+/// @file diagnosis.hpp
+/// Fault isolation beyond [UR3e] Table 5: the residual torque over a window is fitted to fault
+/// signatures derived from the rigid-body model, and the best hypothesis is reported with its size.
+///
+/// Signatures (r = measured - predicted joint torque, window samples k):
+/// - Resistance on joint j:  r_k = e_j (c sign(qd_jk) + v qd_jk)           (2 unknowns, one joint)
+/// - Payload change:         r_k = J_n(q_k)^T W(dm, dh; w, wd, a of link n)  (4 unknowns: dm, dm*c)
+///   the wrench a point-like payload change exerts on the last link (inertia terms neglected);
+/// - Contact on link l:      r_k = J_l(q_k, p_l)^T F_k                        (3 unknowns per sample)
+///   with p_l the middle of link l; joints after l see nothing, which is what isolates the link;
+/// - Sensor fault on joint j: one channel frozen (identical values) or offset while the others agree.
+/// The explained fraction of ||r||² decides; ties go to the simpler hypothesis.
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/types.hpp"
+#include "twinwatch/model/dynamics.hpp"
+#include "twinwatch/monitor/event.hpp"
+
+namespace twinwatch::monitor {
+
+/// One sample of the diagnosis window.
+struct DiagnosisSample {
+  double t = 0.0;
+  VectorJ q, qd, qdd;
+  VectorJ r_tau;       ///< residual torque [N·m]
+  VectorJ current;     ///< measured current [A] (for frozen-channel checks)
+  std::uint64_t digital_outputs = 0;
+  bool gap_before = false;
+};
+
+/// One hypothesis and how well it explains the window.
+struct Hypothesis {
+  FaultClass fault = FaultClass::Unknown;
+  int joint = -1;
+  int link = -1;
+  double magnitude = 0.0;
+  std::string units;
+  double explained = 0.0;  ///< fraction of sum ||r||² explained, [0, 1]
+  std::string detail;
+};
+
+struct DiagnosisOptions {
+  double collision_max_duration = 0.25;  ///< [s] exceedances shorter than this read as a pulse
+  int frozen_samples = 25;               ///< identical consecutive current values that mark a stuck channel
+  double min_explained = 0.5;            ///< below this the class is Unknown
+  void validate() const;
+};
+
+/// Fits the signatures to a window. Allocates (runs once per alert, off the per-sample path).
+/// @param alert_duration how long the threshold was exceeded [s] (shape: pulse vs persistent)
+/// @param alert_joint joint whose threshold tripped first
+/// @return hypotheses sorted best first (never empty: the last resort is Unknown)
+std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vector<DiagnosisSample>& window,
+                                 double alert_duration, int alert_joint, const DiagnosisOptions& options = {});
+
+/// Cross-correlation matrix between residuals (rows) and joint velocities (columns) over a
+/// window, as printed in [UR3e] Table 5 (Pearson coefficients at lag 0).
+MatrixJ residual_velocity_correlation(const std::vector<VectorJ>& residual, const std::vector<VectorJ>& qd);
+
+}  // namespace twinwatch::monitor
