@@ -1,0 +1,270 @@
+// Robot description loaders: the project's JSON format and URDF (urdfdom).
+// Frame conventions: see include/twinwatch/model/robot_model.hpp.
+#include "twinwatch/model/description_io.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::model {
+
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+std::string read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw ParseError(path, 0, "", "cannot open the file (does it exist and is it readable?)");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// 1-based line of a byte offset
+int line_of(const std::string& text, size_t byte) {
+  byte = std::min(byte, text.size());
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(byte), '\n'));
+}
+
+std::string type_name(const json& j) {
+  if (j.is_null()) return "null";
+  return j.type_name();
+}
+
+// Walks a JSON object and reports errors with the field path.
+class Reader {
+ public:
+  Reader(const std::string& origin) : origin_(origin) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw ParseError(origin_, 0, path, what);
+  }
+
+  void only_keys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) const {
+    if (!obj.is_object()) fail(path, fmt::format("expected an object, got {}", type_name(obj)));
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+      bool ok = false;
+      for (const char* a : allowed) ok |= it.key() == a;
+      if (!ok) {
+        std::string list;
+        for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+        fail(path.empty() ? it.key() : path + "." + it.key(), fmt::format("unknown key '{}', expected one of: {}", it.key(), list));
+      }
+    }
+  }
+
+  const json& required(const json& obj, const std::string& path, const char* key) const {
+    if (!obj.contains(key)) fail(join(path, key), "missing required field");
+    return obj.at(key);
+  }
+
+  double number(const json& obj, const std::string& path, const char* key) const {
+    const json& v = required(obj, path, key);
+    if (!v.is_number()) fail(join(path, key), fmt::format("expected a number, got {}", type_name(v)));
+    return v.get<double>();
+  }
+
+  double number_or(const json& obj, const std::string& path, const char* key, double fallback) const {
+    if (!obj.contains(key)) return fallback;
+    return number(obj, path, key);
+  }
+
+  // null means "unknown" -> NaN; absent -> fallback
+  double nullable_number(const json& obj, const std::string& path, const char* key, double fallback) const {
+    if (!obj.contains(key)) return fallback;
+    const json& v = obj.at(key);
+    if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
+    if (!v.is_number()) fail(join(path, key), fmt::format("expected a number or null, got {}", type_name(v)));
+    return v.get<double>();
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> vec(const json& obj, const std::string& path, const char* key) const {
+    const json& v = required(obj, path, key);
+    const std::string p = join(path, key);
+    if (!v.is_array()) fail(p, fmt::format("expected an array of {} numbers, got {}", N, type_name(v)));
+    if (v.size() != N) fail(p, fmt::format("expected {} numbers, got {}", N, v.size()));
+    Eigen::Matrix<double, N, 1> out;
+    for (int i = 0; i < N; ++i) {
+      if (!v[static_cast<size_t>(i)].is_number())
+        fail(fmt::format("{}[{}]", p, i), fmt::format("expected a number, got {}", type_name(v[static_cast<size_t>(i)])));
+      out[i] = v[static_cast<size_t>(i)].get<double>();
+    }
+    return out;
+  }
+
+  std::string text(const json& obj, const std::string& path, const char* key) const {
+    const json& v = required(obj, path, key);
+    if (!v.is_string()) fail(join(path, key), fmt::format("expected a string, got {}", type_name(v)));
+    return v.get<std::string>();
+  }
+
+  static std::string join(const std::string& path, const char* key) { return path.empty() ? key : path + "." + key; }
+
+ private:
+  std::string origin_;
+};
+
+Eigen::Isometry3d rot_x(double a) {
+  return Eigen::Isometry3d(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()));
+}
+Eigen::Isometry3d trans(double x, double y, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+Eigen::Isometry3d from_xyz_rpy(const Eigen::Vector3d& xyz, const Eigen::Vector3d& rpy) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = xyz;
+  return T;
+}
+
+Eigen::Matrix3d inertia_from6(const Eigen::Matrix<double, 6, 1>& v) {
+  Eigen::Matrix3d I;
+  I << v(0), v(1), v(2), v(1), v(3), v(4), v(2), v(4), v(5);
+  return I;
+}
+
+}  // namespace
+
+RobotDescription parse_description_json(const std::string& text, const std::string& origin) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw ParseError(origin, line_of(text, e.byte > 0 ? e.byte - 1 : 0), "",
+                     fmt::format("not valid JSON: {}", e.what()));
+  }
+  const Reader r(origin);
+  r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment"});
+  RobotDescription d;
+  d.source = origin;
+  d.name = r.text(root, "", "name");
+  const std::string conv = r.text(root, "", "convention");
+  if (conv != "dh" && conv != "mdh")
+    r.fail("convention", fmt::format("expected \"dh\" (standard DH) or \"mdh\" (modified DH), got \"{}\"", conv));
+  const bool standard = conv == "dh";
+  if (root.contains("gravity")) d.gravity = r.vec<3>(root, "", "gravity");
+
+  const json& joints = r.required(root, "", "joints");
+  if (!joints.is_array()) r.fail("joints", fmt::format("expected an array, got {}", type_name(joints)));
+  if (joints.empty() || joints.size() > static_cast<size_t>(kMaxDof))
+    r.fail("joints", fmt::format("expected 1 to {} joints, got {}", kMaxDof, joints.size()));
+
+  // standard DH: body i = DH frame i-1 rotated by q_i; X_i = Tz(d) Tx(a) Rx(alpha) maps DH frame i
+  // into body i and is the placement of joint i+1. Modified DH: body i = MDH frame i.
+  Eigen::Isometry3d next_placement = Eigen::Isometry3d::Identity();
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const json& jj = joints[i];
+    const std::string p = fmt::format("joints[{}]", i);
+    r.only_keys(jj, p, {"name", "a", "d", "alpha", "theta_offset", "mass", "com", "inertia", "limits", "drive", "source",
+                        "notes"});
+    Joint j;
+    j.name = jj.contains("name") ? r.text(jj, p, "name") : fmt::format("joint{}", i + 1);
+    const double a = r.number(jj, p, "a"), dd = r.number(jj, p, "d"), alpha = r.number(jj, p, "alpha");
+    j.q_offset = r.number_or(jj, p, "theta_offset", 0.0);
+    RigidBodyInertia body;
+    body.mass = r.number(jj, p, "mass");
+    body.com = r.vec<3>(jj, p, "com");
+    body.inertia_com = inertia_from6(r.vec<6>(jj, p, "inertia"));
+    try {
+      body.validate("link");
+    } catch (const InvalidArgument& e) {
+      r.fail(p, e.what());
+    }
+    if (standard) {
+      const Eigen::Isometry3d X = trans(0, 0, dd) * trans(a, 0, 0) * rot_x(alpha);
+      j.placement = next_placement;
+      j.body = body.expressed_in(X);
+      next_placement = X;
+    } else {
+      j.placement = rot_x(alpha) * trans(a, 0, 0) * trans(0, 0, dd);
+      j.body = body;
+    }
+    if (jj.contains("limits")) {
+      const json& l = jj.at("limits");
+      const std::string lp = p + ".limits";
+      r.only_keys(l, lp, {"q_min", "q_max", "qd_max", "torque_max"});
+      j.limits.q_min = r.number_or(l, lp, "q_min", j.limits.q_min);
+      j.limits.q_max = r.number_or(l, lp, "q_max", j.limits.q_max);
+      j.limits.qd_max = r.number_or(l, lp, "qd_max", j.limits.qd_max);
+      j.limits.torque_max = r.number_or(l, lp, "torque_max", j.limits.torque_max);
+      if (!(j.limits.q_min < j.limits.q_max))
+        r.fail(lp, fmt::format("q_min ({}) must be < q_max ({})", j.limits.q_min, j.limits.q_max));
+      if (!(j.limits.qd_max > 0.0)) r.fail(lp + ".qd_max", fmt::format("must be > 0, got {}", j.limits.qd_max));
+      if (!(j.limits.torque_max > 0.0))
+        r.fail(lp + ".torque_max", fmt::format("must be > 0, got {}", j.limits.torque_max));
+    }
+    if (jj.contains("drive")) {
+      const json& dr = jj.at("drive");
+      const std::string dp = p + ".drive";
+      r.only_keys(dr, dp, {"gear_ratio", "torque_constant", "efficiency", "efficiency_reverse", "current_limit",
+                           "nominal_guess", "source", "notes"});
+      j.drive.gear_ratio = r.nullable_number(dr, dp, "gear_ratio", j.drive.gear_ratio);
+      j.drive.torque_constant = r.nullable_number(dr, dp, "torque_constant", j.drive.torque_constant);
+      j.drive.efficiency = r.number_or(dr, dp, "efficiency", 1.0);
+      j.drive.efficiency_reverse = r.number_or(dr, dp, "efficiency_reverse", j.drive.efficiency);
+      const double cl = r.nullable_number(dr, dp, "current_limit", j.drive.current_limit);
+      j.drive.current_limit = std::isnan(cl) ? std::numeric_limits<double>::infinity() : cl;
+    }
+    d.joints.push_back(j);
+  }
+  d.flange = standard ? next_placement : Eigen::Isometry3d::Identity();
+  if (root.contains("flange")) {
+    const json& f = root.at("flange");
+    r.only_keys(f, "flange", {"xyz", "rpy"});
+    d.flange = d.flange * from_xyz_rpy(r.vec<3>(f, "flange", "xyz"), r.vec<3>(f, "flange", "rpy"));
+  }
+  // final whole-model checks, reported against the file
+  try {
+    RobotModel check(d);
+  } catch (const InvalidArgument& e) {
+    throw ParseError(origin, 0, "joints", e.what());
+  }
+  return d;
+}
+
+RobotDescription load_description_json(const std::string& path) { return parse_description_json(read_file(path), path); }
+
+std::string robots_directory() {
+  if (const char* env = std::getenv("TWINWATCH_DATA_DIR"); env != nullptr && *env != '\0')
+    return (fs::path(env) / "robots").string();
+  return (fs::path(TWINWATCH_SOURCE_DIR) / "data" / "robots").string();
+}
+
+std::vector<std::string> builtin_robot_names() {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(robots_directory(), ec))
+    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+RobotModel load_robot(const std::string& name_or_path) {
+  const fs::path p(name_or_path);
+  if (p.extension() == ".json") return RobotModel(load_description_json(name_or_path));
+  if (p.extension() == ".urdf") return RobotModel(load_description_urdf(name_or_path));
+  const fs::path builtin = fs::path(robots_directory()) / (name_or_path + ".json");
+  if (fs::exists(builtin)) return RobotModel(load_description_json(builtin.string()));
+  std::string list;
+  for (const auto& n : builtin_robot_names()) list += (list.empty() ? "" : ", ") + n;
+  throw InvalidArgument(fmt::format("robot '{}' is unknown: not a built-in robot ({}) and not a .json or .urdf file",
+                                    name_or_path, list.empty() ? "none found in " + robots_directory() : list));
+}
+
+}  // namespace twinwatch::model

@@ -1,0 +1,131 @@
+// URDF loader (urdfdom). Maps a serial chain onto robot_model.hpp's conventions: every movable
+// joint's frame is rotated so that its axis is local z; fixed joints are merged.
+#include <fmt/format.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+
+namespace twinwatch::model {
+
+namespace {
+
+Eigen::Isometry3d to_iso(const urdf::Pose& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  return T;
+}
+
+// inertial block of a link, expressed in the link frame (zero body if absent)
+RigidBodyInertia link_inertia(const urdf::Link& link) {
+  RigidBodyInertia b;
+  if (!link.inertial) return b;
+  const urdf::Inertial& in = *link.inertial;
+  RigidBodyInertia local;
+  local.mass = in.mass;
+  local.inertia_com << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+  // inertial frame -> link frame
+  return local.expressed_in(to_iso(in.origin));
+}
+
+// rotation taking z onto the unit axis a
+Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
+  return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), a).toRotationMatrix();
+}
+
+}  // namespace
+
+RobotDescription load_description_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
+  urdf::ModelInterfaceSharedPtr urdf_model;
+  try {
+    urdf_model = urdf::parseURDFFile(path);
+  } catch (const std::exception& e) {
+    throw ParseError(path, 0, "", fmt::format("not a valid URDF: {}", e.what()));
+  }
+  if (!urdf_model) throw ParseError(path, 0, "", "not a valid URDF (urdfdom could not parse it: check the XML and that every joint names existing links)");
+
+  // chain ends: root (or base_link) and the single leaf (or tip_link)
+  const std::string base = base_link.empty() ? urdf_model->getRoot()->name : base_link;
+  if (!urdf_model->getLink(base)) throw ParseError(path, 0, "link", fmt::format("base link '{}' does not exist", base));
+  std::string tip = tip_link;
+  if (tip.empty()) {
+    std::vector<std::string> leaves;
+    for (const auto& [name, link] : urdf_model->links_)
+      if (link->child_links.empty()) leaves.push_back(name);
+    if (leaves.size() != 1) {
+      std::string list;
+      for (const auto& l : leaves) list += (list.empty() ? "" : ", ") + l;
+      throw ParseError(path, 0, "link",
+                       fmt::format("the tree has {} leaves ({}), expected one: name the tip link", leaves.size(), list));
+    }
+    tip = leaves.front();
+  }
+  if (!urdf_model->getLink(tip)) throw ParseError(path, 0, "link", fmt::format("tip link '{}' does not exist", tip));
+
+  // joints from tip up to base, then reversed
+  std::vector<urdf::JointConstSharedPtr> chain;
+  for (urdf::LinkConstSharedPtr l = urdf_model->getLink(tip); l->name != base;) {
+    if (!l->parent_joint)
+      throw ParseError(path, 0, "link", fmt::format("link '{}' is not below base link '{}'", tip, base));
+    chain.push_back(l->parent_joint);
+    l = urdf_model->getLink(l->parent_joint->parent_link_name);
+  }
+  std::reverse(chain.begin(), chain.end());
+
+  RobotDescription d;
+  d.name = urdf_model->getName();
+  d.source = path;
+  // T_acc: from the current body frame (or the base) to the frame reached so far
+  Eigen::Isometry3d T_acc = Eigen::Isometry3d::Identity();
+  bool have_body = false;
+  for (const auto& j : chain) {
+    const Eigen::Isometry3d origin = to_iso(j->parent_to_joint_origin_transform);
+    const urdf::Link& child = *urdf_model->getLink(j->child_link_name);
+    if (j->type == urdf::Joint::FIXED) {
+      T_acc = T_acc * origin;
+      if (have_body) {
+        Joint& last = d.joints.back();
+        last.body = last.body + link_inertia(child).expressed_in(T_acc);
+      }
+      continue;
+    }
+    if (j->type != urdf::Joint::REVOLUTE && j->type != urdf::Joint::CONTINUOUS)
+      throw ParseError(path, 0, fmt::format("joint '{}'", j->name), "only revolute, continuous and fixed joints are supported");
+    const Eigen::Vector3d axis(j->axis.x, j->axis.y, j->axis.z);
+    if (!(axis.norm() > 0.0)) throw ParseError(path, 0, fmt::format("joint '{}'.axis", j->name), "axis is zero");
+    Eigen::Isometry3d R_axis = Eigen::Isometry3d::Identity();
+    R_axis.linear() = z_onto(axis.normalized());
+    Joint jt;
+    jt.name = j->name;
+    jt.placement = T_acc * origin * R_axis;
+    // the child link frame seen from the body frame is R_axis^-1
+    const Eigen::Isometry3d body_T_link = R_axis.inverse();
+    jt.body = link_inertia(child).expressed_in(body_T_link);
+    if (j->type == urdf::Joint::REVOLUTE && j->limits) {
+      jt.limits.q_min = j->limits->lower;
+      jt.limits.q_max = j->limits->upper;
+    }
+    if (j->limits) {
+      if (j->limits->velocity > 0.0) jt.limits.qd_max = j->limits->velocity;
+      if (j->limits->effort > 0.0) jt.limits.torque_max = j->limits->effort;
+    }
+    d.joints.push_back(jt);
+    T_acc = body_T_link;
+    have_body = true;
+  }
+  if (d.joints.empty()) throw ParseError(path, 0, "joint", fmt::format("no movable joint between '{}' and '{}'", base, tip));
+  d.flange = T_acc;
+  try {
+    RobotModel check(d);
+  } catch (const InvalidArgument& e) {
+    throw ParseError(path, 0, "joints", e.what());
+  }
+  return d;
+}
+
+}  // namespace twinwatch::model
