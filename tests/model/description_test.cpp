@@ -1,0 +1,215 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/model/dynamics.hpp"
+
+namespace twinwatch::model {
+namespace {
+
+using ::testing::HasSubstr;
+
+// a minimal valid one-joint description; tests break one field at a time
+std::string one_joint(const std::string& joint_fields) {
+  return R"({"name": "t", "convention": "dh", "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" + joint_fields + "}]}";
+}
+const std::string kGood = R"("mass": 1.0, "com": [0, 0, 0], "inertia": [0.01, 0, 0, 0.01, 0, 0.01])";
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_description_json(text, "robot.json");
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(DescriptionJson, ValidMinimalFileLoads) {
+  const RobotDescription d = parse_description_json(one_joint(kGood), "robot.json");
+  ASSERT_EQ(d.joints.size(), 1u);
+  EXPECT_TRUE(std::isnan(d.joints[0].drive.gear_ratio)) << "unknown gear ratio must stay NaN";
+}
+
+TEST(DescriptionJson, SyntaxErrorNamesTheLine) {
+  EXPECT_THAT(error_of("{\n\"name\": \"t\",\n\"joints\": [,]\n}"), HasSubstr("robot.json:3"));
+}
+
+TEST(DescriptionJson, MissingFieldIsNamed) {
+  EXPECT_THAT(error_of(one_joint(R"("com": [0,0,0], "inertia": [0.01,0,0,0.01,0,0.01])")),
+              HasSubstr("field 'joints[0].mass': missing required field"));
+}
+
+TEST(DescriptionJson, WrongTypeSaysExpectedAndActual) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": "heavy", "com": [0,0,0], "inertia": [0.01,0,0,0.01,0,0.01])")),
+              HasSubstr("joints[0].mass': expected a number, got string"));
+}
+
+TEST(DescriptionJson, UnknownKeyIsRejected) {
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "masss": 2.0)")), HasSubstr("unknown key 'masss'"));
+}
+
+TEST(DescriptionJson, NegativeMassIsRejected) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": -1.0, "com": [0,0,0], "inertia": [0.01,0,0,0.01,0,0.01])")),
+              HasSubstr("mass of link is -1, must be >= 0"));
+}
+
+TEST(DescriptionJson, NonPositiveDefiniteInertiaIsRejected) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0,0], "inertia": [0.01,0,0,-0.01,0,0.01])")),
+              HasSubstr("not positive semi-definite"));
+}
+
+TEST(DescriptionJson, TriangleInequalityIsChecked) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0,0], "inertia": [0.01,0,0,0.01,0,0.05])")),
+              HasSubstr("triangle inequality"));
+}
+
+TEST(DescriptionJson, WrongVectorLengthIsNamed) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0], "inertia": [0.01,0,0,0.01,0,0.01])")),
+              HasSubstr("joints[0].com': expected 3 numbers, got 2"));
+}
+
+TEST(DescriptionJson, PositionLimitsMustBeOrdered) {
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "limits": {"q_min": 1.0, "q_max": -1.0})")),
+              HasSubstr("q_min (1) must be < q_max (-1)"));
+}
+
+TEST(DescriptionJson, UnknownConventionIsRejected) {
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh2", "joints": []})"), HasSubstr("expected \"dh\""));
+}
+
+TEST(LoadRobot, UnknownNameListsTheBuiltins) {
+  try {
+    load_robot("ur99");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("robot 'ur99' is unknown"));
+    EXPECT_THAT(e.what(), HasSubstr("ur3e"));
+  }
+}
+
+TEST(LoadRobot, MissingFileIsNamed) {
+  try {
+    load_robot("/nonexistent/robot.json");
+    FAIL();
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/nonexistent/robot.json: cannot open"));
+  }
+}
+
+TEST(Ur3e, MovingMassesSumToTheDatasheet) {
+  const RobotModel m = load_robot("ur3e");
+  double total = 0.0;
+  for (int i = 0; i < m.n_dof(); ++i) total += m.joint(i).body.mass;
+  EXPECT_NEAR(total, 8.7985, 1e-12);
+}
+
+// the flange at the zero pose from the DH product computed independently here
+TEST(Ur3e, ZeroPoseFlangeMatchesDhProduct) {
+  const RobotModel m = load_robot("ur3e");
+  DynamicsData d(m);
+  const double a[] = {0, -0.24355, -0.2132, 0, 0, 0}, dd[] = {0.15185, 0, 0, 0.13105, 0.08535, 0.0921},
+               al[] = {M_PI / 2, 0, 0, M_PI / 2, -M_PI / 2, 0};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    VectorJ q(6);
+    for (int i = 0; i < 6; ++i) q[i] = trial == 0 ? 0.0 : u(rng);
+    Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+    for (int i = 0; i < 6; ++i) {
+      const double ct = std::cos(q[i]), st = std::sin(q[i]), ca = std::cos(al[i]), sa = std::sin(al[i]);
+      Eigen::Matrix4d A;
+      A << ct, -st * ca, st * sa, a[i] * ct, st, ct * ca, -ct * sa, a[i] * st, 0, sa, ca, dd[i], 0, 0, 0, 1;
+      T = T * A;
+    }
+    EXPECT_LT((forward_kinematics(m, d, q).matrix() - T).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
+  }
+}
+
+// arm stretched horizontally (shoulder at -pi/2... here q = 0 has upper arm and forearm along -x):
+// shoulder gravity torque = -g * sum over links 2..6 of m_i * x_i, computed by hand from the DH data
+TEST(Ur3e, HorizontalArmGravityTorqueMatchesHandComputation) {
+  const RobotModel m = load_robot("ur3e");
+  DynamicsData d(m);
+  const VectorJ g = gravity_torque(m, d, VectorJ::Zero(6));
+  // x of each COM at q = 0 (links 4-6 COMs lie on the wrist axis line x = a2 + a3 in the horizontal plane)
+  const double x2 = -0.24355 + 0.13, x3 = -0.24355 - 0.2132 + 0.05, xw = -0.24355 - 0.2132;
+  const double expected = 9.81 * (3.4445 * x2 + 1.437 * x3 + (0.871 + 0.805 + 0.261) * xw);
+  EXPECT_NEAR(g[1], expected, 1e-9);
+  EXPECT_NEAR(g[0], 0.0, 1e-12);
+}
+
+// The URDF fixture is written from the same numbers in URDF link frames (UR ROS 2 description
+// layout); both loaders must give the same kinematics and dynamics.
+TEST(DescriptionUrdf, Ur3eMatchesJsonDescription) {
+  const RobotModel js = load_robot("ur3e");
+  const RobotModel ur = load_robot(std::string(TWINWATCH_SOURCE_DIR) + "/tests/data/model/ur3e.urdf");
+  ASSERT_EQ(ur.n_dof(), 6);
+  DynamicsData dj(js), du(ur);
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    VectorJ q(6), qd(6), qdd(6);
+    for (int i = 0; i < 6; ++i) q[i] = u(rng), qd[i] = u(rng), qdd[i] = u(rng);
+    const Eigen::Vector3d pj = forward_kinematics(js, dj, q).translation();
+    const Eigen::Vector3d pu = forward_kinematics(ur, du, q).translation();
+    EXPECT_LT((pj - pu).norm(), 1e-9) << "seed 42 trial " << trial;
+    const VectorJ tj = rnea(js, dj, q, qd, qdd);
+    const VectorJ tu = rnea(ur, du, q, qd, qdd);
+    EXPECT_LT((tj - tu).cwiseAbs().maxCoeff(), 1e-9) << "seed 42 trial " << trial;
+  }
+}
+
+TEST(DescriptionUrdf, MalformedXmlNamesTheFile) {
+  const std::string path = ::testing::TempDir() + "bad.urdf";
+  std::ofstream(path) << "<robot name='x'><link name='a'></robot";
+  try {
+    load_description_urdf(path);
+    FAIL();
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bad.urdf"));
+    EXPECT_THAT(e.what(), HasSubstr("not a valid URDF"));
+  }
+}
+
+TEST(DescriptionUrdf, BranchingTreeNeedsATip) {
+  const std::string path = ::testing::TempDir() + "branch.urdf";
+  std::ofstream(path) << R"(<robot name="b"><link name="base"/><link name="l1"/><link name="l2"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    <joint name="j2" type="revolute"><parent link="base"/><child link="l2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>)";
+  try {
+    load_description_urdf(path);
+    FAIL();
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("the tree has 2 leaves"));
+  }
+}
+
+TEST(Payload, ChangesGravityTorqueByJTransposeMg) {
+  RobotModel m = load_robot("ur3e");
+  DynamicsData d(m);
+  VectorJ q(6);
+  q << 0.3, -1.0, 1.2, -1.7, -1.5, 0.4;
+  const VectorJ g0 = gravity_torque(m, d, q);
+  RigidBodyInertia payload;
+  payload.mass = 0.5;
+  payload.com = Eigen::Vector3d(0.0, 0.0, 0.05);
+  m.set_payload(payload);
+  const VectorJ g1 = gravity_torque(m, d, q);
+  // J^T of the payload COM times its weight
+  forward_kinematics(m, d, q);
+  Matrix6J J;
+  const Eigen::Vector3d p_link = m.description().flange * payload.com;
+  point_jacobian(m, d, 5, p_link, J);
+  const VectorJ expected = -J.topRows<3>().transpose() * (0.5 * m.gravity());
+  EXPECT_LT((g1 - g0 - expected).cwiseAbs().maxCoeff(), 1e-12);
+  m.clear_payload();
+  EXPECT_LT((gravity_torque(m, d, q) - g0).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+}  // namespace
+}  // namespace twinwatch::model
