@@ -1,0 +1,88 @@
+// `twinwatch model show|list`: inspect robot descriptions.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/model/dynamics.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using twinwatch::model::RobotModel;
+
+std::string fmt_gain(double v, const char* unit) {
+  return std::isnan(v) ? std::string("unknown — identify") : fmt::format("{:g} {}", v, unit);
+}
+
+nlohmann::json to_json(const RobotModel& m) {
+  nlohmann::json j;
+  j["name"] = m.name();
+  j["source"] = m.description().source;
+  j["n_dof"] = m.n_dof();
+  double total = 0.0;
+  for (int i = 0; i < m.n_dof(); ++i) {
+    const auto& jt = m.joint(i);
+    total += jt.body.mass;
+    auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    j["joints"].push_back({{"name", jt.name},
+                           {"mass", jt.body.mass},
+                           {"com", {jt.body.com.x(), jt.body.com.y(), jt.body.com.z()}},
+                           {"q_min", num(jt.limits.q_min)},
+                           {"q_max", num(jt.limits.q_max)},
+                           {"qd_max", num(jt.limits.qd_max)},
+                           {"torque_max", num(jt.limits.torque_max)},
+                           {"gear_ratio", num(jt.drive.gear_ratio)},
+                           {"torque_constant", num(jt.drive.torque_constant)},
+                           {"efficiency", jt.drive.efficiency}});
+  }
+  j["moving_mass"] = total;
+  return j;
+}
+
+void print_summary(const RobotModel& m) {
+  fmt::print("robot {} ({} joints) from {}\n", m.name(), m.n_dof(), m.description().source);
+  fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9}  {}\n", "#", "joint", "mass kg", "COM (body frame) m",
+             "q range rad", "qd max", "tau max", "drive N / kt");
+  double total = 0.0;
+  for (int i = 0; i < m.n_dof(); ++i) {
+    const auto& j = m.joint(i);
+    total += j.body.mass;
+    fmt::print("{:<3} {:<14} {:>8.4f} {:>26} {:>18} {:>9.3f} {:>9.1f}  {} / {}\n", i + 1, j.name, j.body.mass,
+               fmt::format("[{:.4f} {:.4f} {:.4f}]", j.body.com.x(), j.body.com.y(), j.body.com.z()),
+               fmt::format("[{:.2f}, {:.2f}]", j.limits.q_min, j.limits.q_max), j.limits.qd_max, j.limits.torque_max,
+               fmt_gain(j.drive.gear_ratio, ""), fmt_gain(j.drive.torque_constant, "N·m/A"));
+  }
+  fmt::print("moving mass {:.4f} kg; gravity [{:g} {:g} {:g}] m/s²\n", total, m.gravity().x(), m.gravity().y(),
+             m.gravity().z());
+  twinwatch::model::DynamicsData d(m);
+  const auto& T = twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof()));
+  fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", T.translation().x(), T.translation().y(),
+             T.translation().z());
+}
+
+twinwatch::cli::VerbRegistrar reg{"model", 10, [](CLI::App& app) {
+  auto* model = app.add_subcommand("model", "Inspect robot descriptions (built-in names or .json/.urdf files)");
+  model->require_subcommand(1);
+
+  auto robot = std::make_shared<std::string>();
+  auto as_json = std::make_shared<bool>(false);
+  auto* show = model->add_subcommand("show", "Print a readable summary: links, masses, limits, drives");
+  show->add_option("ROBOT", *robot, "Built-in robot name (see 'twinwatch model list') or a .json/.urdf file")->required();
+  show->add_flag("--json", *as_json, "Print the summary as one JSON object");
+  show->callback([robot, as_json] {
+    const RobotModel m = twinwatch::model::load_robot(*robot);
+    if (*as_json)
+      fmt::print("{}\n", to_json(m).dump(2));
+    else
+      print_summary(m);
+  });
+
+  auto* list = model->add_subcommand("list", "List the built-in robots");
+  list->callback([] {
+    for (const auto& n : twinwatch::model::builtin_robot_names()) fmt::print("{}\n", n);
+  });
+}};
+
+}  // namespace
