@@ -1,0 +1,192 @@
+#include "twinwatch/model/regressor.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <cmath>
+#include <random>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::model {
+
+namespace {
+
+using Mat3x10 = Eigen::Matrix<double, 3, 10>;
+
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
+// I_o x written as L(x) [Ixx Ixy Ixz Iyy Iyz Izz]^T
+inline Eigen::Matrix<double, 3, 6> inertia_map(const Eigen::Vector3d& x) {
+  Eigen::Matrix<double, 3, 6> L;
+  L << x(0), x(1), x(2), 0, 0, 0, 0, x(0), 0, x(1), x(2), 0, 0, 0, x(0), 0, x(1), x(2);
+  return L;
+}
+
+inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  R.col(0) = c * R0.col(0) + s * R0.col(1);
+  R.col(1) = c * R0.col(1) - s * R0.col(0);
+  R.col(2) = R0.col(2);
+}
+
+}  // namespace
+
+int friction_columns_per_joint(FrictionColumns f) {
+  switch (f) {
+    case FrictionColumns::None: return 0;
+    case FrictionColumns::CoulombViscous: return 2;
+    case FrictionColumns::CoulombViscousOffset: return 3;
+  }
+  return 0;
+}
+
+void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
+               RegressorMatrix& Y, FrictionColumns friction) {
+  const int n = model.n_dof();
+  check_size("q", q.size(), n, "model.n_dof");
+  check_size("qd", qd.size(), n, "model.n_dof");
+  check_size("qdd", qdd.size(), n, "model.n_dof");
+  const int kf = friction_columns_per_joint(friction);
+  Y.setZero(n, 10 * n + kf * n);
+
+  // forward pass as in the RNEA: w, wd, a (a includes -g) of every body in its own frame
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d w_prev = Eigen::Vector3d::Zero(), wd_prev = Eigen::Vector3d::Zero();
+  Eigen::Vector3d a_prev = -model.gravity();
+  for (int i = 0; i < n; ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    rotate_about_z(c.R0, q[i] + c.q_offset, d.R[i]);
+    const Eigen::Matrix3d& R = d.R[i];
+    const Eigen::Vector3d w_in = R.transpose() * w_prev;
+    d.w[i] = w_in + qd[i] * z;
+    d.wd[i] = R.transpose() * wd_prev + w_in.cross(qd[i] * z) + qdd[i] * z;
+    d.a[i] = R.transpose() * (a_prev + wd_prev.cross(c.p) + w_prev.cross(w_prev.cross(c.p)));
+    w_prev = d.w[i];
+    wd_prev = d.wd[i];
+    a_prev = d.a[i];
+  }
+
+  // each link's body wrench is linear in its parameters:
+  //   F = [a, [wd]x + [w]x[w]x, 0] pi,   N = [0, -[a]x, L(wd) + [w]x L(w)] pi
+  // carried towards the base: F' = R F, N' = R N + [p]x R F; row j of Y is z . N at body j
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& w = d.w[i];
+    const Eigen::Vector3d& wd = d.wd[i];
+    const Eigen::Vector3d& a = d.a[i];
+    const Eigen::Matrix3d Sw = skew(w);
+    Mat3x10 F, N;
+    F.col(0) = a;
+    F.block<3, 3>(0, 1) = skew(wd) + Sw * Sw;
+    F.block<3, 6>(0, 4).setZero();
+    N.col(0).setZero();
+    N.block<3, 3>(0, 1) = -skew(a);
+    N.block<3, 6>(0, 4) = inertia_map(wd) + Sw * inertia_map(w);
+    Y.block<1, 10>(i, 10 * i) = N.row(2);
+    for (int j = i; j > 0; --j) {
+      const Eigen::Matrix3d& R = d.R[j];
+      const Eigen::Vector3d& p = model.link_cache(j).p;
+      const Mat3x10 RF = R * F;
+      N = R * N + skew(p) * RF;
+      F = RF;
+      Y.block<1, 10>(j - 1, 10 * i) = N.row(2);
+    }
+  }
+
+  // friction columns on the joint's own row
+  if (kf > 0) {
+    for (int j = 0; j < n; ++j) {
+      const int col = 10 * n + kf * j;
+      Y(j, col) = qd[j] > 0.0 ? 1.0 : (qd[j] < 0.0 ? -1.0 : 0.0);
+      Y(j, col + 1) = qd[j];
+      if (kf == 3) Y(j, col + 2) = 1.0;
+    }
+  }
+}
+
+Eigen::VectorXd standard_parameters(const RobotModel& model, FrictionColumns friction) {
+  const int n = model.n_dof();
+  const int kf = friction_columns_per_joint(friction);
+  Eigen::VectorXd pi = Eigen::VectorXd::Zero(10 * n + kf * n);
+  for (int i = 0; i < n; ++i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    pi(10 * i) = c.m;
+    pi.segment<3>(10 * i + 1) = c.h;
+    pi.segment<6>(10 * i + 4) << c.I_o(0, 0), c.I_o(0, 1), c.I_o(0, 2), c.I_o(1, 1), c.I_o(1, 2), c.I_o(2, 2);
+  }
+  return pi;
+}
+
+Eigen::VectorXd BaseParameters::base_values(const Eigen::VectorXd& pi) const {
+  check_size("pi", pi.size(), n_standard, "BaseParameters.n_standard");
+  Eigen::VectorXd beta(rank), dep(static_cast<Eigen::Index>(dependent.size()));
+  for (int k = 0; k < rank; ++k) beta(k) = pi(independent[static_cast<size_t>(k)]);
+  for (size_t k = 0; k < dependent.size(); ++k) dep(static_cast<Eigen::Index>(k)) = pi(dependent[k]);
+  if (dep.size() > 0) beta += K_d * dep;
+  return beta;
+}
+
+Eigen::MatrixXd BaseParameters::base_regressor(const RegressorMatrix& Y) const {
+  check_size("Y columns", Y.cols(), n_standard, "BaseParameters.n_standard");
+  Eigen::MatrixXd Yb(Y.rows(), rank);
+  for (int k = 0; k < rank; ++k) Yb.col(k) = Y.col(independent[static_cast<size_t>(k)]);
+  return Yb;
+}
+
+Eigen::VectorXd BaseParameters::standard_from_base(const Eigen::VectorXd& beta) const {
+  check_size("beta", beta.size(), rank, "BaseParameters.rank");
+  Eigen::VectorXd pi = Eigen::VectorXd::Zero(n_standard);
+  for (int k = 0; k < rank; ++k) pi(independent[static_cast<size_t>(k)]) = beta(k);
+  return pi;
+}
+
+void BaseParameterOptions::validate() const {
+  if (n_states < 1) throw InvalidArgument(fmt::format("n_states is {}, must be >= 1", n_states));
+  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0))
+    throw InvalidArgument(fmt::format("relative_tolerance is {}, must be in (0, 1)", relative_tolerance));
+}
+
+BaseParameters compute_base_parameters(const RobotModel& model, FrictionColumns friction,
+                                       const BaseParameterOptions& options) {
+  options.validate();
+  const int n = model.n_dof();
+  DynamicsData d(model);
+  RegressorMatrix Y;
+  const int p = 10 * n + friction_columns_per_joint(friction) * n;
+  // stack Y over random states spanning the joint ranges (positions), velocities and accelerations
+  Eigen::MatrixXd W(static_cast<Eigen::Index>(options.n_states) * n, p);
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int s = 0; s < options.n_states; ++s) {
+    VectorJ q(n), qd(n), qdd(n);
+    for (int i = 0; i < n; ++i) q[i] = M_PI * u(rng), qd[i] = 2.0 * u(rng), qdd[i] = 5.0 * u(rng);
+    regressor(model, d, q, qd, qdd, Y, friction);
+    W.middleRows(static_cast<Eigen::Index>(s) * n, n) = Y;
+  }
+  // column scaling would change which columns are picked; keep raw columns so that the choice
+  // favours the physically large ones (as the classic numeric procedure does)
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(W);
+  const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(std::min(W.rows(), W.cols()), p).template triangularView<Eigen::Upper>();
+  const double r00 = std::abs(R(0, 0));
+  BaseParameters b;
+  b.n_standard = p;
+  b.tolerance = options.relative_tolerance * r00;
+  int r = 0;
+  while (r < R.rows() && std::abs(R(r, r)) > b.tolerance) ++r;
+  b.rank = r;
+  const auto& perm = qr.colsPermutation().indices();
+  for (int k = 0; k < p; ++k) (k < r ? b.independent : b.dependent).push_back(perm(k));
+  // K_d = R1^-1 R2: every dependent column = independent columns times K_d
+  const Eigen::MatrixXd R1 = R.topLeftCorner(r, r);
+  const Eigen::MatrixXd R2 = R.block(0, r, r, p - r);
+  b.K_d = R1.triangularView<Eigen::Upper>().solve(R2);
+  // entries of K_d that are round-off (columns exactly dependent by structure): clean to zero
+  b.K_d = b.K_d.unaryExpr([](double v) { return std::abs(v) < 1e-10 ? 0.0 : v; });
+  return b;
+}
+
+}  // namespace twinwatch::model
