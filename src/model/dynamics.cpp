@@ -1,5 +1,6 @@
 #include "twinwatch/model/dynamics.hpp"
 
+#include "fast_sincos.hpp"
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::model {
@@ -8,8 +9,8 @@ namespace {
 
 // parent_R_body = R0 * Rz(theta), written column by column (Rz only mixes columns 0 and 1).
 inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
-  const double c = std::cos(theta);
-  const double s = std::sin(theta);
+  double s, c;
+  detail::fast_sincos(theta, s, c);
   R.col(0) = c * R0.col(0) + s * R0.col(1);
   R.col(1) = c * R0.col(1) - s * R0.col(0);
   R.col(2) = R0.col(2);

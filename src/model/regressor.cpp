@@ -3,16 +3,17 @@
 #include <fmt/format.h>
 
 #include <Eigen/QR>
+#include <array>
 #include <cmath>
 #include <random>
 
+#include "fast_sincos.hpp"
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::model {
 
 namespace {
 
-using Mat3x10 = Eigen::Matrix<double, 3, 10>;
 
 inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
@@ -28,7 +29,8 @@ inline Eigen::Matrix<double, 3, 6> inertia_map(const Eigen::Vector3d& x) {
 }
 
 inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
-  const double c = std::cos(theta), s = std::sin(theta);
+  double s, c;
+  detail::fast_sincos(theta, s, c);
   R.col(0) = c * R0.col(0) + s * R0.col(1);
   R.col(1) = c * R0.col(1) - s * R0.col(0);
   R.col(2) = R0.col(2);
@@ -73,27 +75,37 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
 
   // each link's body wrench is linear in its parameters:
   //   F = [a, [wd]x + [w]x[w]x, 0] pi,   N = [0, -[a]x, L(wd) + [w]x L(w)] pi
-  // carried towards the base: F' = R F, N' = R N + [p]x R F; row j of Y is z . N at body j
+  // and joint j (<= i) feels  Y(j, link i) = S_j^T [F; N]  with S_j = (v, u) the unit twist of
+  // joint j expressed in body i: u = z_j, v = z_j x (o_i - o_j). S_j is carried from body to body
+  //   u' = R^T u,  v' = R^T (v + u x p)
+  // which is O(n^2) 6-vectors instead of O(n^2) 6x10 wrench blocks.
+  std::array<Eigen::Vector3d, kMaxDof> u, v;
   for (int i = 0; i < n; ++i) {
+    if (i > 0) {
+      const Eigen::Matrix3d& R = d.R[i];
+      const Eigen::Vector3d& p = model.link_cache(i).p;
+      for (int j = 0; j < i; ++j) {
+        v[j] = R.transpose() * (v[j] + u[j].cross(p));
+        u[j] = R.transpose() * u[j];
+      }
+    }
+    u[i] = z;
+    v[i].setZero();
     const Eigen::Vector3d& w = d.w[i];
     const Eigen::Vector3d& wd = d.wd[i];
     const Eigen::Vector3d& a = d.a[i];
     const Eigen::Matrix3d Sw = skew(w);
-    Mat3x10 F, N;
-    F.col(0) = a;
-    F.block<3, 3>(0, 1) = skew(wd) + Sw * Sw;
-    F.block<3, 6>(0, 4).setZero();
-    N.col(0).setZero();
-    N.block<3, 3>(0, 1) = -skew(a);
-    N.block<3, 6>(0, 4) = inertia_map(wd) + Sw * inertia_map(w);
-    Y.block<1, 10>(i, 10 * i) = N.row(2);
-    for (int j = i; j > 0; --j) {
-      const Eigen::Matrix3d& R = d.R[j];
-      const Eigen::Vector3d& p = model.link_cache(j).p;
-      const Mat3x10 RF = R * F;
-      N = R * N + skew(p) * RF;
-      F = RF;
-      Y.block<1, 10>(j - 1, 10 * i) = N.row(2);
+    Eigen::Matrix<double, 6, 10> W;
+    W.block<3, 1>(0, 0) = a;
+    W.block<3, 3>(0, 1) = skew(wd) + Sw * Sw;
+    W.block<3, 6>(0, 4).setZero();
+    W.block<3, 1>(3, 0).setZero();
+    W.block<3, 3>(3, 1) = -skew(a);
+    W.block<3, 6>(3, 4) = inertia_map(wd) + Sw * inertia_map(w);
+    for (int j = 0; j <= i; ++j) {
+      Eigen::Matrix<double, 1, 6> S;
+      S << v[j].transpose(), u[j].transpose();
+      Y.block<1, 10>(j, 10 * i) = S * W;
     }
   }
 
