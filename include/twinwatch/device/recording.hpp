@@ -1,0 +1,74 @@
+#pragma once
+/// @file recording.hpp
+/// Recordings: CSV files whose header uses RTDE output names, one row per controller cycle —
+/// the same files a real robot (twinwatch record) and the simulator (twinwatch simulate) write.
+///
+/// Columns (n = number of joints, inferred from the header):
+///   timestamp, actual_q_0..n-1, actual_qd_*, target_q_*, target_qd_*, target_qdd_*,
+///   actual_current_*, target_current_*, target_moment_*, joint_temperatures_*,
+///   actual_digital_output_bits, robot_mode
+/// Only timestamp and actual_q_* are required; absent groups are NaN and flagged absent in
+/// RobotSample::present. Foreign logs load through a ColumnMap (their column -> RTDE name, scale).
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/sample.hpp"
+
+namespace twinwatch::device {
+
+/// Maps a foreign CSV's columns onto RTDE names: value_rtde = value_file * scale.
+struct ColumnMap {
+  struct Entry {
+    std::string rtde_name;  ///< e.g. "actual_q_3"
+    double scale = 1.0;     ///< e.g. pi/180 for degrees
+  };
+  std::map<std::string, Entry> columns;  ///< file column name -> entry
+  /// Loads "file_column,rtde_name[,scale]" lines ('#' comments). Throws ParseError with the line.
+  static ColumnMap load(const std::string& path);
+};
+
+/// A loaded recording.
+struct Recording {
+  std::string path;
+  int n_dof = 0;
+  std::vector<RobotSample> samples;
+  std::uint32_t present = 0;  ///< fields present in the file (SampleField flags)
+  int gaps = 0;               ///< timestamp steps > 1.5 x the median period (marked gap_before)
+  double median_period = 0.0; ///< [s]
+};
+
+/// Reads a recording. Throws twinwatch::ParseError naming the file, line and column for a
+/// non-numeric cell, a wrong number of cells, a missing required column, or a timestamp that
+/// goes backwards. Timestamp gaps are not errors: they are marked (gap_before) and counted.
+Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
+
+/// Streaming writer. Each write() appends one row with full double precision (round-trips).
+class RecordingWriter {
+ public:
+  /// Creates/truncates the file and writes the header for n joints and the given fields
+  /// (SampleField flags; timestamp, actual_q and actual_qd are always written).
+  RecordingWriter(const std::string& path, int n_dof, std::uint32_t fields);
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  void write(const RobotSample& s);
+  /// Flushes and closes; throws std::runtime_error naming the path on an I/O error.
+  void close();
+  long rows() const { return rows_; }
+
+ private:
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  int n_;
+  std::uint32_t fields_;
+  long rows_ = 0;
+  std::string line_;
+};
+
+/// Column names for n joints and the given fields, in file order.
+std::vector<std::string> recording_columns(int n_dof, std::uint32_t fields);
+
+}  // namespace twinwatch::device

@@ -1,0 +1,275 @@
+#include "twinwatch/device/recording.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::device {
+
+namespace {
+
+// vector groups in file order: field flag (0 = always), prefix, member
+struct Group {
+  std::uint32_t flag;
+  const char* prefix;
+  VectorJ RobotSample::*member;
+};
+const Group kGroups[] = {
+    {0, "actual_q_", &RobotSample::q},
+    {kFieldActualQd, "actual_qd_", &RobotSample::qd},
+    {kFieldTargetQ, "target_q_", &RobotSample::target_q},
+    {kFieldTargetQd, "target_qd_", &RobotSample::target_qd},
+    {kFieldTargetQdd, "target_qdd_", &RobotSample::target_qdd},
+    {kFieldActualCurrent, "actual_current_", &RobotSample::current},
+    {kFieldTargetCurrent, "target_current_", &RobotSample::target_current},
+    {kFieldTargetMoment, "target_moment_", &RobotSample::target_moment},
+    {kFieldTemperature, "joint_temperatures_", &RobotSample::temperature},
+};
+// a timestamp step longer than this many median periods marks a gap (lost samples)
+constexpr double kGapFactor = 1.5;
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  for (char c : line) {
+    if (c == ',') {
+      out.push_back(cell);
+      cell.clear();
+    } else if (c != '\r') {
+      cell += c;
+    }
+  }
+  out.push_back(cell);
+  for (auto& s : out) {
+    const auto b = s.find_first_not_of(" \t");
+    const auto e = s.find_last_not_of(" \t");
+    s = b == std::string::npos ? "" : s.substr(b, e - b + 1);
+  }
+  return out;
+}
+
+bool parse_double(const std::string& s, double& v) {
+  if (s.empty()) return false;
+  if (s == "nan" || s == "NaN") {
+    v = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  const char* b = s.data();
+  const char* e = b + s.size();
+  if (*b == '+') ++b;
+  auto r = std::from_chars(b, e, v);
+  return r.ec == std::errc() && r.ptr == e;
+}
+
+}  // namespace
+
+std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
+  std::vector<std::string> cols{"timestamp"};
+  fields |= kFieldActualQd;
+  for (const Group& g : kGroups)
+    if (g.flag == 0 || (fields & g.flag))
+      for (int j = 0; j < n; ++j) cols.push_back(fmt::format("{}{}", g.prefix, j));
+  if (fields & kFieldDigitalOutputs) cols.push_back("actual_digital_output_bits");
+  if (fields & kFieldRobotMode) cols.push_back("robot_mode");
+  return cols;
+}
+
+ColumnMap ColumnMap::load(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw ParseError(path, 0, "", "cannot open the column map");
+  ColumnMap m;
+  std::string line;
+  int ln = 0;
+  while (std::getline(f, line)) {
+    ++ln;
+    if (line.empty() || line[0] == '#') continue;
+    const auto cells = split_csv(line);
+    if (cells.size() < 2 || cells.size() > 3)
+      throw ParseError(path, ln, "", fmt::format("expected 'file_column,rtde_name[,scale]', got {} cells", cells.size()));
+    Entry e{cells[1], 1.0};
+    if (cells.size() == 3 && !parse_double(cells[2], e.scale))
+      throw ParseError(path, ln, "scale", fmt::format("expected a number, got '{}'", cells[2]));
+    m.columns[cells[0]] = e;
+  }
+  return m;
+}
+
+Recording read_recording(const std::string& path, const ColumnMap* map) {
+  std::ifstream f(path);
+  if (!f) throw ParseError(path, 0, "", "cannot open the recording (does it exist and is it readable?)");
+  std::string line;
+  if (!std::getline(f, line)) throw ParseError(path, 1, "", "empty file, expected a header of RTDE names");
+  std::vector<std::string> header = split_csv(line);
+  std::vector<double> scale(header.size(), 1.0);
+  std::vector<std::string> names = header;
+  if (map) {
+    for (size_t c = 0; c < header.size(); ++c) {
+      auto it = map->columns.find(header[c]);
+      if (it != map->columns.end()) {
+        names[c] = it->second.rtde_name;
+        scale[c] = it->second.scale;
+      }
+    }
+  }
+  // locate columns: each known name -> (group, joint)
+  Recording rec;
+  rec.path = path;
+  int ts_col = -1, do_col = -1, mode_col = -1;
+  int n = 0;
+  for (size_t c = 0; c < names.size(); ++c)
+    if (names[c].rfind("actual_q_", 0) == 0) n = std::max(n, std::atoi(names[c].c_str() + 9) + 1);
+  if (n == 0) throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)");
+  if (n > kMaxDof) throw ParseError(path, 1, "actual_q_*", fmt::format("{} joints, at most {} supported", n, kMaxDof));
+  rec.n_dof = n;
+  struct Target {
+    int group;
+    int joint;
+  };
+  std::vector<Target> target(names.size(), Target{-1, -1});
+  std::vector<std::vector<bool>> seen(std::size(kGroups), std::vector<bool>(static_cast<size_t>(n), false));
+  for (size_t c = 0; c < names.size(); ++c) {
+    const std::string& nm = names[c];
+    if (nm == "timestamp") ts_col = static_cast<int>(c);
+    else if (nm == "actual_digital_output_bits") do_col = static_cast<int>(c);
+    else if (nm == "robot_mode") mode_col = static_cast<int>(c);
+    else {
+      // longest matching prefix first (actual_qd_ before actual_q_)
+      int best = -1;
+      size_t best_len = 0;
+      for (size_t g = 0; g < std::size(kGroups); ++g) {
+        const std::string p = kGroups[g].prefix;
+        if (nm.rfind(p, 0) == 0 && p.size() > best_len && nm.size() > p.size() &&
+            std::all_of(nm.begin() + static_cast<long>(p.size()), nm.end(), ::isdigit)) {
+          best = static_cast<int>(g);
+          best_len = p.size();
+        }
+      }
+      if (best >= 0) {
+        const int j = std::atoi(nm.c_str() + best_len);
+        if (j < n) {
+          target[c] = {best, j};
+          seen[static_cast<size_t>(best)][static_cast<size_t>(j)] = true;
+        }
+      }
+    }
+  }
+  if (ts_col < 0) throw ParseError(path, 1, "timestamp", "missing required column");
+  for (int j = 0; j < n; ++j)
+    if (!seen[0][static_cast<size_t>(j)]) throw ParseError(path, 1, fmt::format("actual_q_{}", j), "missing required column");
+  // a group is present only when all its joints are
+  std::uint32_t present = 0;
+  for (size_t g = 1; g < std::size(kGroups); ++g) {
+    const bool all = std::all_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
+    const bool any = std::any_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
+    if (any && !all)
+      throw ParseError(path, 1, std::string(kGroups[g].prefix) + "*",
+                       fmt::format("some joints' columns are missing (expected {}0..{}{})", kGroups[g].prefix, kGroups[g].prefix, n - 1));
+    if (all) present |= kGroups[g].flag;
+  }
+  if (do_col >= 0) present |= kFieldDigitalOutputs;
+  if (mode_col >= 0) present |= kFieldRobotMode;
+  rec.present = present;
+
+  // rows
+  int ln = 1;
+  std::vector<double> dts;
+  while (std::getline(f, line)) {
+    ++ln;
+    if (line.empty() || line == "\r") continue;
+    const auto cells = split_csv(line);
+    if (cells.size() != header.size())
+      throw ParseError(path, ln, "", fmt::format("expected {} cells (as in the header), got {}", header.size(), cells.size()));
+    RobotSample s = RobotSample::empty(n);
+    s.present = present;
+    for (size_t c = 0; c < cells.size(); ++c) {
+      const bool used = static_cast<int>(c) == ts_col || static_cast<int>(c) == do_col || static_cast<int>(c) == mode_col ||
+                        target[c].group >= 0;
+      if (!used) continue;
+      double v;
+      if (!parse_double(cells[c], v))
+        throw ParseError(path, ln, header[c], fmt::format("expected a number, got '{}'", cells[c]));
+      v *= scale[c];
+      if (static_cast<int>(c) == ts_col) s.timestamp = v;
+      else if (static_cast<int>(c) == do_col) s.digital_outputs = static_cast<std::uint64_t>(v);
+      else if (static_cast<int>(c) == mode_col) s.robot_mode = static_cast<std::int32_t>(v);
+      else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
+    }
+    if (!rec.samples.empty()) {
+      const double dt = s.timestamp - rec.samples.back().timestamp;
+      if (!(dt > 0.0))
+        throw ParseError(path, ln, header[static_cast<size_t>(ts_col)],
+                         fmt::format("timestamp {} does not increase (previous {})", s.timestamp, rec.samples.back().timestamp));
+      dts.push_back(dt);
+    }
+    rec.samples.push_back(s);
+  }
+  if (rec.samples.empty()) throw ParseError(path, 2, "", "no data rows after the header");
+  // gaps: steps longer than kGapFactor median periods
+  if (!dts.empty()) {
+    std::vector<double> sorted = dts;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+    rec.median_period = sorted[sorted.size() / 2];
+    for (size_t k = 0; k < dts.size(); ++k)
+      if (dts[k] > kGapFactor * rec.median_period) {
+        rec.samples[k + 1].gap_before = true;
+        ++rec.gaps;
+      }
+  }
+  return rec;
+}
+
+RecordingWriter::RecordingWriter(const std::string& path, int n_dof, std::uint32_t fields)
+    : path_(path), n_(n_dof), fields_(fields | kFieldActualQd) {
+  if (n_dof < 1 || n_dof > kMaxDof)
+    throw InvalidArgument(fmt::format("recording n_dof is {}, expected 1 to {}", n_dof, kMaxDof));
+  f_ = std::fopen(path.c_str(), "w");
+  if (!f_) throw std::runtime_error(path + ": cannot open for writing");
+  std::string h;
+  for (const auto& c : recording_columns(n_, fields_)) h += (h.empty() ? "" : ",") + c;
+  h += '\n';
+  std::fputs(h.c_str(), f_);
+}
+
+RecordingWriter::~RecordingWriter() {
+  if (f_) std::fclose(f_);
+}
+
+void RecordingWriter::write(const RobotSample& s) {
+  line_.clear();
+  char buf[40];
+  auto put = [&](double v) {
+    auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip representation
+    line_.append(buf, r.ptr);
+  };
+  put(s.timestamp);
+  for (const Group& g : kGroups) {
+    if (g.flag != 0 && !(fields_ & g.flag)) continue;
+    const VectorJ& v = s.*g.member;
+    for (int j = 0; j < n_; ++j) {
+      line_ += ',';
+      put(j < v.size() ? v[j] : std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  if (fields_ & kFieldDigitalOutputs) line_ += fmt::format(",{}", s.digital_outputs);
+  if (fields_ & kFieldRobotMode) line_ += fmt::format(",{}", s.robot_mode);
+  line_ += '\n';
+  std::fwrite(line_.data(), 1, line_.size(), f_);
+  ++rows_;
+}
+
+void RecordingWriter::close() {
+  if (!f_) return;
+  const bool bad = std::ferror(f_) != 0;
+  const int rc = std::fclose(f_);
+  f_ = nullptr;
+  if (bad || rc != 0) throw std::runtime_error(path_ + ": write error (disk full?)");
+}
+
+}  // namespace twinwatch::device
