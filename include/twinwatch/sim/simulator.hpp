@@ -1,0 +1,171 @@
+#pragma once
+/// @file simulator.hpp
+/// The virtual robot: the plant that stands in for a physical arm (DESIGN.md "Observable element").
+///
+/// Its physics is deliberately richer than anything the twin fits (DESIGN.md rule 2):
+/// - rigid body: the robot file's model with every link mass / first moment / inertia perturbed by
+///   a seeded factor (the real arm never matches its datasheet);
+/// - friction per joint: LuGre [Canudas1995] (Stribeck curve, pre-sliding hysteresis at velocity
+///   reversals) + viscous friction that grows when the joint is cold, + harmonic-drive ripple
+///   (N-per-revolution and once-per-revolution terms);
+/// - drive: tau_joint = i kt N eta when motoring, i kt N / eta_rev when back-driven [UR3e eq. 3];
+/// - thermal: C dT/dt = R i² - (T - T_ambient) / R_th per joint;
+/// - measurement: current noise (DESIGN.md rule 4 range), offset, 0.1 mA quantisation; 20-bit
+///   encoders; the controller's velocity estimate from encoder differences; controller timestamp.
+/// The controller is an industrial one: PD + feed-forward of the NOMINAL model (the robot file,
+/// with the payload the user declared) on the target, torque limits; it hides faults in position.
+///
+/// Integration: semi-implicit Euler of the forward dynamics at `physics_rate` (>= 2 kHz), the
+/// controller and the recording at `rate` (500 Hz); the LuGre state is advanced exactly for the
+/// velocity held over a substep (stable for stiff bristles).
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/sample.hpp"
+#include "twinwatch/model/dynamics.hpp"
+#include "twinwatch/sim/trajectory.hpp"
+
+namespace twinwatch::sim {
+
+/// The truth of one joint (never visible to the twin).
+struct JointTruth {
+  // friction, joint side
+  double Fc = 0.4;        ///< Coulomb [N·m]
+  double Fs = 0.6;        ///< static (Stribeck peak) [N·m]
+  double vs = 0.05;       ///< Stribeck velocity [rad/s]
+  double Fv = 0.4;        ///< viscous at the reference temperature [N·m·s/rad]
+  double sigma0 = 2000;   ///< bristle stiffness [N·m/rad] (pre-sliding)
+  double sigma1 = 5;      ///< bristle damping [N·m·s/rad]
+  double visc_temp_coeff = 0.02;  ///< Fv(T) = Fv exp(-k (T - T_ref)) [1/°C]
+  double T_ref = 35.0;    ///< [°C]
+  double ripple = 0.03;   ///< N-per-rev ripple amplitude [N·m]
+  double ripple_phase = 0.0;
+  double ripple1 = 0.05;  ///< once-per-rev ripple amplitude [N·m]
+  double ripple1_phase = 0.0;
+  // drive
+  double gear_ratio = 101;
+  double kt = 0.1;        ///< [N·m/A]
+  double eta = 0.9;       ///< motoring efficiency
+  double eta_rev = 0.85;  ///< back-driven efficiency
+  // thermal
+  double R_heat = 0.8;    ///< heating [W/A²]
+  double R_th = 6.0;      ///< [°C/W]
+  double C_th = 400.0;    ///< [J/°C]
+  // measurement
+  double current_sigma = 0.02;  ///< [A]
+  double current_offset = 0.0;  ///< [A]
+};
+
+/// The plant's hidden parameters.
+struct PlantTruth {
+  std::vector<JointTruth> joints;
+  double ambient = 22.0;              ///< [°C]
+  double current_lsb = 1e-4;          ///< [A] (0.1 mA resolution of the logged current)
+  double encoder_lsb = 2 * M_PI / (1 << 20);  ///< [rad]
+  double inertial_perturbation = 0.05;  ///< relative spread of the truth link parameters vs the file
+};
+
+/// UR-sized default truth for a model (documented in docs/scenarios.md), seeded perturbations.
+PlantTruth default_truth(const model::RobotModel& model, unsigned seed);
+
+enum class FaultType {
+  Resistance,      ///< extra resistance on a joint [N·m], e.g. [UR3e §4.2] J5
+  FrictionGrowth,  ///< wear: friction (Coulomb and viscous) grows by `magnitude` (relative, 0.3 = +30 %) over the ramp
+  PayloadPick,     ///< a payload of `mass` is gripped (digital output bit set)
+  PayloadLoss,     ///< the payload is released / lost (digital output bit cleared) [UR3e §4.3]
+  Collision,       ///< force pulse at a point on a link; magnitude = peak joint-equivalent torque [N·m]
+  CurrentOffset,   ///< sensor: constant offset on one current channel [A]
+  StuckCurrent,    ///< sensor: one current channel frozen at its last value
+  DroppedSamples,  ///< stream: `magnitude` consecutive samples are not delivered (every `period` s)
+  TimestampJitter, ///< stream: controller timestamp jitter of sigma = magnitude [s]
+};
+
+/// Lower-case YAML name ("resistance", "friction_growth", ...).
+const char* to_string(FaultType t);
+
+struct FaultSpec {
+  FaultType type = FaultType::Resistance;
+  double onset = 0.0;   ///< [s]
+  double ramp = 0.0;    ///< [s] linear ramp to full magnitude
+  double end = std::numeric_limits<double>::infinity();  ///< [s]
+  double magnitude = 0.0;
+  int joint = -1;       ///< 0-based
+  int link = -1;        ///< 0-based (collisions)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();       ///< on the link, body frame [m]
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  ///< world frame
+  double duration = 0.05;  ///< collision pulse length [s]
+  double period = 0.0;     ///< dropped samples: repeat every period [s] (0: once)
+  model::RigidBodyInertia payload;  ///< payload pick
+  int io_bit = 0;          ///< digital output bit of the gripper
+
+  /// 0 before onset, ramps to 1, 0 after end.
+  double level(double t) const;
+};
+
+struct SimOptions {
+  double rate = 500.0;          ///< controller and recording rate [Hz]
+  int substeps = 4;             ///< physics steps per control step (rate * substeps >= 2000 Hz)
+  double duration = 10.0;       ///< [s]
+  unsigned seed = 1;
+  bool cold_start = false;      ///< joints start at ambient temperature (else warmed up, ~T_ref)
+  model::RigidBodyInertia payload;  ///< carried at start (truth), also declared to the controller
+  bool payload_declared = true; ///< the controller's model includes the payload
+  VectorJ kp, kd;               ///< PD gains [N·m/rad], [N·m·s/rad]; empty: defaults from the inertia
+  void validate(int n_dof) const;
+};
+
+/// Steps the plant and emits recorded samples.
+class Simulator {
+ public:
+  /// @param nominal the robot file's model (the controller's model); the plant's truth is derived
+  /// from it with `truth` perturbations. Throws InvalidArgument on invalid options or faults.
+  Simulator(const model::RobotModel& nominal, std::shared_ptr<const Trajectory> trajectory, PlantTruth truth,
+            SimOptions options, std::vector<FaultSpec> faults);
+
+  /// Runs for options.duration and calls `sink` for every delivered sample (dropped ones are not).
+  /// `progress` (may be empty) gets the fraction done now and then.
+  void run(const std::function<void(const RobotSample&)>& sink,
+           const std::function<void(double)>& progress = {});
+
+  /// One control period; returns false if the sample is dropped by a stream fault.
+  bool step(RobotSample& out);
+
+  double time() const { return t_; }
+  const VectorJ& q() const { return q_; }
+  const VectorJ& qd() const { return qd_; }
+  const model::RobotModel& truth_model() const { return truth_model_; }
+  /// Fields every sample carries.
+  static std::uint32_t fields();
+
+ private:
+  double friction_torque(int j, double qd, double dt);
+  void apply_payload_faults(double t);
+
+  model::RobotModel nominal_;
+  model::RobotModel truth_model_;
+  model::RobotModel controller_model_;
+  std::shared_ptr<const Trajectory> traj_;
+  PlantTruth truth_;
+  SimOptions opt_;
+  std::vector<FaultSpec> faults_;
+  model::DynamicsData dtruth_, dctrl_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  int n_;
+  double t_ = 0.0, t_ctrl_ = 0.0;
+  long tick_ = 0;
+  VectorJ q_, qd_, z_, temp_, q_meas_prev_, current_held_;
+  VectorJ kp_, kd_;
+  std::uint64_t dout_ = 0;
+  bool payload_on_ = false;
+  std::vector<bool> fault_applied_;
+  long dropped_left_ = 0;
+};
+
+}  // namespace twinwatch::sim

@@ -1,0 +1,67 @@
+#pragma once
+/// @file trajectory.hpp
+/// Target trajectories for the virtual robot (and, exported, for a real robot program).
+/// All are smooth (C2) so target_qdd exists; cyclic ones repeat with period().
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "twinwatch/core/types.hpp"
+#include "twinwatch/model/robot_model.hpp"
+
+namespace twinwatch::sim {
+
+class Trajectory {
+ public:
+  virtual ~Trajectory() = default;
+  virtual int n_dof() const = 0;
+  /// Target position [rad], velocity [rad/s] and acceleration [rad/s²] at time t [s] >= 0.
+  virtual void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const = 0;
+  /// Duration of one cycle [s]; evaluation beyond it repeats the cycle.
+  virtual double period() const = 0;
+};
+
+/// Finite Fourier series [Cao eq. 21] per joint j, harmonics l = 1..L, base pulsation w_f:
+///   q_j(t) = q0_j + sum_l ( a_lj / (l w_f) sin(l w_f t) - b_lj / (l w_f) cos(l w_f t) )
+struct FourierCoefficients {
+  double w_f = 0.0;         ///< base pulsation [rad/s]
+  VectorJ q0;               ///< offsets [rad]
+  Eigen::MatrixXd a, b;     ///< n_dof x L
+};
+std::unique_ptr<Trajectory> make_fourier(const FourierCoefficients& c);
+/// Random coefficients scaled so every joint stays inside +-amplitude [rad] around q0 (seeded).
+FourierCoefficients random_fourier(const VectorJ& q0, double amplitude, double period, int harmonics, unsigned seed);
+
+/// q_j = q0_j + A_j sin(2 pi f_j t + phi_j)
+std::unique_ptr<Trajectory> make_sine(const VectorJ& q0, const VectorJ& amplitude, const VectorJ& frequency,
+                                      const VectorJ& phase);
+
+/// Linear chirp from f0 to f1 [Hz] over `sweep` seconds on every joint with amplitude A_j [HESR §V-F].
+std::unique_ptr<Trajectory> make_chirp(const VectorJ& q0, const VectorJ& amplitude, double f0, double f1, double sweep);
+
+/// Point-to-point through waypoints with quintic segments (zero velocity and acceleration at each
+/// waypoint); segment k takes durations[k] seconds; the cycle returns to the first waypoint.
+std::unique_ptr<Trajectory> make_point_to_point(const std::vector<VectorJ>& waypoints, const std::vector<double>& durations);
+
+/// Bidirectional quasi-static poses [Cao eq. 12-14]: each pose is approached slowly from below and
+/// from above (offset delta [rad], creep speed [rad/s]) and held for `hold` seconds each time.
+std::unique_ptr<Trajectory> make_quasi_static(const std::vector<VectorJ>& poses, double delta, double creep_speed,
+                                              double hold);
+
+/// Cartesian paths of the flange position (orientation held at the start pose), through numerical
+/// inverse kinematics (damped least squares) sampled every `ik_step` seconds and interpolated.
+/// Figure-eight [UR3e §3.4]: a lemniscate of half-widths (ax, ay) [m] in the horizontal plane around
+/// the flange position at `start`, one loop per `period` seconds. `tilt` [rad] rocks the tool
+/// about its own x, y, z axes (amplitudes, at the loop frequency) so that the wrist joints move too.
+std::unique_ptr<Trajectory> make_figure_eight(const model::RobotModel& model, const VectorJ& start, double ax, double ay,
+                                              double period, const Eigen::Vector3d& tilt = Eigen::Vector3d::Zero(),
+                                              double ik_step = 0.002);
+/// Triangle [Cao validation]: an equilateral triangle of side `side` [m] in the horizontal plane,
+/// each edge a quintic whose peak speed is `speed` [m/s].
+std::unique_ptr<Trajectory> make_triangle(const model::RobotModel& model, const VectorJ& start, double side, double speed,
+                                          double ik_step = 0.002);
+
+/// Damped-least-squares IK for a flange pose, from `seed`. Returns false if not converged.
+bool inverse_kinematics(const model::RobotModel& model, const Eigen::Isometry3d& target, const VectorJ& seed, VectorJ& q);
+
+}  // namespace twinwatch::sim

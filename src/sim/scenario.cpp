@@ -1,0 +1,347 @@
+#include "twinwatch/sim/scenario.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+
+namespace twinwatch::sim {
+
+namespace {
+
+class Y {
+ public:
+  Y(std::string origin) : origin_(std::move(origin)) {}
+
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& field, const std::string& what) const {
+    const int line = n.IsDefined() && n.Mark().line >= 0 ? n.Mark().line + 1 : 0;
+    throw ParseError(origin_, line, field, what);
+  }
+
+  void only_keys(const YAML::Node& n, const std::string& path, const std::set<std::string>& allowed) const {
+    if (!n.IsMap()) fail(n, path, "expected a mapping of keys");
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string k = it->first.as<std::string>();
+      if (!allowed.count(k)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(it->first, join(path, k), fmt::format("unknown key '{}', expected one of: {}", k, list));
+      }
+    }
+  }
+
+  double number(const YAML::Node& parent, const std::string& path, const std::string& key) const {
+    const YAML::Node n = parent[key];
+    if (!n) fail(parent, join(path, key), "missing required field");
+    return as_number(n, join(path, key));
+  }
+  double number_or(const YAML::Node& parent, const std::string& path, const std::string& key, double fallback) const {
+    const YAML::Node n = parent[key];
+    return n ? as_number(n, join(path, key)) : fallback;
+  }
+  double as_number(const YAML::Node& n, const std::string& field) const {
+    if (!n.IsScalar()) fail(n, field, "expected a number, got a list or mapping");
+    try {
+      return n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(n, field, fmt::format("expected a number, got '{}'", n.Scalar()));
+    }
+  }
+  int integer(const YAML::Node& parent, const std::string& path, const std::string& key, int fallback) const {
+    const YAML::Node n = parent[key];
+    if (!n) return fallback;
+    const double v = as_number(n, join(path, key));
+    if (v != std::floor(v)) fail(n, join(path, key), fmt::format("expected a whole number, got {}", v));
+    return static_cast<int>(v);
+  }
+  std::string text(const YAML::Node& parent, const std::string& path, const std::string& key, const std::string& fallback) const {
+    const YAML::Node n = parent[key];
+    if (!n) return fallback;
+    if (!n.IsScalar()) fail(n, join(path, key), "expected a text value");
+    return n.Scalar();
+  }
+  bool boolean(const YAML::Node& parent, const std::string& path, const std::string& key, bool fallback) const {
+    const YAML::Node n = parent[key];
+    if (!n) return fallback;
+    try {
+      return n.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(n, join(path, key), fmt::format("expected true or false, got '{}'", n.Scalar()));
+    }
+  }
+  // a list of numbers of length `size` (or a scalar broadcast when allow_scalar)
+  VectorJ vec(const YAML::Node& parent, const std::string& path, const std::string& key, int size, bool allow_scalar = false) const {
+    const YAML::Node n = parent[key];
+    const std::string f = join(path, key);
+    if (!n) fail(parent, f, "missing required field");
+    return as_vec(n, f, size, allow_scalar);
+  }
+  VectorJ as_vec(const YAML::Node& n, const std::string& f, int size, bool allow_scalar = false) const {
+    if (allow_scalar && n.IsScalar()) return VectorJ::Constant(size, as_number(n, f));
+    if (!n.IsSequence()) fail(n, f, fmt::format("expected a list of {} numbers", size));
+    if (static_cast<int>(n.size()) != size) fail(n, f, fmt::format("expected {} numbers, got {}", size, n.size()));
+    VectorJ v(size);
+    for (int i = 0; i < size; ++i) v[i] = as_number(n[static_cast<size_t>(i)], fmt::format("{}[{}]", f, i));
+    return v;
+  }
+  static std::string join(const std::string& p, const std::string& k) { return p.empty() ? k : p + "." + k; }
+
+ private:
+  std::string origin_;
+};
+
+model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std::string& path) {
+  y.only_keys(n, path, {"mass", "com", "inertia"});
+  model::RigidBodyInertia p;
+  p.mass = y.number(n, path, "mass");
+  if (!(p.mass >= 0.0)) y.fail(n["mass"], path + ".mass", fmt::format("must be >= 0, got {}", p.mass));
+  if (n["com"]) p.com = y.vec(n, path, "com", 3);
+  if (n["inertia"]) {
+    const VectorJ I = y.vec(n, path, "inertia", 6);
+    p.inertia_com << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
+  }
+  try {
+    p.validate("payload");
+  } catch (const InvalidArgument& e) {
+    y.fail(n, path, e.what());
+  }
+  return p;
+}
+
+std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& t, const model::RobotModel& m,
+                                                  std::string& type) {
+  const std::string p = "trajectory";
+  if (!t) y.fail(t, p, "missing required field");
+  if (!t.IsMap()) y.fail(t, p, "expected a mapping with a 'type'");
+  type = y.text(t, p, "type", "");
+  const int n = m.n_dof();
+  VectorJ home = VectorJ::Zero(n);
+  if (n == 6) home << 0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0;
+  const VectorJ start = t["start"] ? y.vec(t, p, "start", n) : home;
+  try {
+    if (type == "figure_eight") {
+      y.only_keys(t, p, {"type", "start", "size", "period", "tilt"});
+      const VectorJ size = t["size"] ? y.vec(t, p, "size", 2) : VectorJ(VectorJ::Constant(2, 0.1));
+      const VectorJ tilt = t["tilt"] ? y.vec(t, p, "tilt", 3) : VectorJ(VectorJ::Zero(3));
+      return make_figure_eight(m, start, size[0], size[1], y.number_or(t, p, "period", 8.0),
+                               Eigen::Vector3d(tilt[0], tilt[1], tilt[2]));
+    }
+    if (type == "triangle") {
+      y.only_keys(t, p, {"type", "start", "side", "speed"});
+      return make_triangle(m, start, y.number_or(t, p, "side", 0.15), y.number_or(t, p, "speed", 0.2));
+    }
+    if (type == "fourier") {
+      y.only_keys(t, p, {"type", "start", "amplitude", "period", "harmonics", "seed"});
+      const auto c = random_fourier(start, y.number_or(t, p, "amplitude", 0.8), y.number_or(t, p, "period", 10.0),
+                                    y.integer(t, p, "harmonics", 5), static_cast<unsigned>(y.integer(t, p, "seed", 1)));
+      return make_fourier(c);
+    }
+    if (type == "sine") {
+      y.only_keys(t, p, {"type", "start", "amplitude", "frequency", "phase"});
+      const VectorJ A = y.vec(t, p, "amplitude", n, true);
+      const VectorJ f = y.vec(t, p, "frequency", n, true);
+      const VectorJ ph = t["phase"] ? y.vec(t, p, "phase", n, true) : VectorJ(VectorJ::Zero(n));
+      return make_sine(start, A, f, ph);
+    }
+    if (type == "chirp") {
+      y.only_keys(t, p, {"type", "start", "amplitude", "f0", "f1", "sweep"});
+      return make_chirp(start, y.vec(t, p, "amplitude", n, true), y.number_or(t, p, "f0", 0.1), y.number_or(t, p, "f1", 1.0),
+                        y.number_or(t, p, "sweep", 30.0));
+    }
+    if (type == "point_to_point") {
+      y.only_keys(t, p, {"type", "start", "waypoints", "durations"});
+      const YAML::Node w = t["waypoints"], d = t["durations"];
+      if (!w || !w.IsSequence()) y.fail(t, p + ".waypoints", "expected a list of joint vectors");
+      std::vector<VectorJ> wp;
+      for (size_t k = 0; k < w.size(); ++k) wp.push_back(y.as_vec(w[k], fmt::format("{}.waypoints[{}]", p, k), n));
+      if (!d || !d.IsSequence()) y.fail(t, p + ".durations", "expected a list of durations [s]");
+      std::vector<double> T;
+      for (size_t k = 0; k < d.size(); ++k) T.push_back(y.as_number(d[k], fmt::format("{}.durations[{}]", p, k)));
+      return make_point_to_point(wp, T);
+    }
+    if (type == "quasi_static") {
+      y.only_keys(t, p, {"type", "start", "poses", "delta", "creep_speed", "hold"});
+      const YAML::Node w = t["poses"];
+      if (!w || !w.IsSequence()) y.fail(t, p + ".poses", "expected a list of joint vectors");
+      std::vector<VectorJ> poses;
+      for (size_t k = 0; k < w.size(); ++k) poses.push_back(y.as_vec(w[k], fmt::format("{}.poses[{}]", p, k), n));
+      return make_quasi_static(poses, y.number_or(t, p, "delta", 0.1), y.number_or(t, p, "creep_speed", 0.05),
+                               y.number_or(t, p, "hold", 0.5));
+    }
+  } catch (const InvalidArgument& e) {
+    y.fail(t, p, e.what());
+  }
+  y.fail(t["type"] ? t["type"] : t, p + ".type",
+         fmt::format("expected one of figure_eight, triangle, fourier, sine, chirp, point_to_point, quasi_static; got '{}'", type));
+}
+
+FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
+  const std::string s = y.text(n, f, "type", "");
+  for (FaultType t : {FaultType::Resistance, FaultType::FrictionGrowth, FaultType::PayloadPick, FaultType::PayloadLoss,
+                      FaultType::Collision, FaultType::CurrentOffset, FaultType::StuckCurrent, FaultType::DroppedSamples,
+                      FaultType::TimestampJitter})
+    if (s == to_string(t)) return t;
+  y.fail(n["type"] ? n["type"] : n, f + ".type",
+         fmt::format("expected one of resistance, friction_growth, payload_pick, payload_loss, collision, current_offset, "
+                     "stuck_current, dropped_samples, timestamp_jitter; got '{}'", s));
+}
+
+}  // namespace
+
+Scenario parse_scenario(const std::string& text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ParseError(origin, e.mark.line + 1, "", fmt::format("not valid YAML: {}", e.msg));
+  }
+  const Y y(origin);
+  y.only_keys(root, "", {"name", "robot", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
+                         "payload_declared", "trajectory", "noise", "faults", "description"});
+  Scenario s;
+  s.path = origin;
+  s.name = y.text(root, "", "name", origin);
+  s.robot = y.text(root, "", "robot", "ur3e");
+  model::RobotModel m = [&] {
+    try {
+      return model::load_robot(s.robot);
+    } catch (const InvalidArgument& e) {
+      y.fail(root["robot"], "robot", e.what());
+    }
+  }();
+  const int n = m.n_dof();
+  s.options.seed = static_cast<unsigned>(y.integer(root, "", "seed", 1));
+  s.options.rate = y.number_or(root, "", "rate", 500.0);
+  s.options.substeps = y.integer(root, "", "substeps", std::max(1, static_cast<int>(std::ceil(2000.0 / s.options.rate))));
+  s.options.cold_start = y.boolean(root, "", "cold_start", false);
+  s.options.payload_declared = y.boolean(root, "", "payload_declared", true);
+  if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload");
+  s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type);
+  if (root["duration"] && root["cycles"]) y.fail(root["cycles"], "cycles", "give either duration or cycles, not both");
+  if (root["cycles"]) s.options.duration = y.number(root, "", "cycles") * s.trajectory->period();
+  else s.options.duration = y.number_or(root, "", "duration", s.trajectory->period());
+  if (root["noise"]) {
+    const YAML::Node nz = root["noise"];
+    y.only_keys(nz, "noise", {"current_sigma"});
+    const VectorJ sg = y.vec(nz, "noise", "current_sigma", n, true);
+    for (int j = 0; j < n; ++j) {
+      if (!(sg[j] >= 0.0)) y.fail(nz["current_sigma"], "noise.current_sigma", fmt::format("must be >= 0, got {}", sg[j]));
+      s.current_sigma.push_back(sg[j]);
+    }
+  }
+  try {
+    s.options.validate(n);
+  } catch (const InvalidArgument& e) {
+    y.fail(root, "", e.what());
+  }
+  if (const YAML::Node fl = root["faults"]) {
+    if (!fl.IsSequence()) y.fail(fl, "faults", "expected a list of faults");
+    for (size_t k = 0; k < fl.size(); ++k) {
+      const YAML::Node f = fl[k];
+      const std::string p = fmt::format("faults[{}]", k);
+      y.only_keys(f, p, {"type", "onset", "ramp", "end", "magnitude", "joint", "link", "point", "direction", "duration",
+                         "period", "mass", "com", "io_bit"});
+      FaultSpec fs;
+      fs.type = fault_type(y, f, p);
+      fs.onset = y.number(f, p, "onset");
+      if (!(fs.onset >= 0.0)) y.fail(f["onset"], p + ".onset", fmt::format("must be >= 0 s, got {}", fs.onset));
+      fs.ramp = y.number_or(f, p, "ramp", 0.0);
+      if (!(fs.ramp >= 0.0)) y.fail(f["ramp"], p + ".ramp", fmt::format("must be >= 0 s, got {}", fs.ramp));
+      fs.end = y.number_or(f, p, "end", std::numeric_limits<double>::infinity());
+      if (!(fs.end > fs.onset)) y.fail(f["end"], p + ".end", fmt::format("must be after onset ({} s), got {}", fs.onset, fs.end));
+      const bool joint_fault = fs.type == FaultType::Resistance || fs.type == FaultType::FrictionGrowth ||
+                               fs.type == FaultType::CurrentOffset || fs.type == FaultType::StuckCurrent;
+      if (joint_fault) {
+        // users count joints from 1 (J1..J6), as the papers do
+        const int j = y.integer(f, p, "joint", 0);
+        if (j < 1 || j > n) y.fail(f["joint"] ? f["joint"] : f, p + ".joint", fmt::format("expected 1 to {}, got {}", n, j));
+        fs.joint = j - 1;
+      }
+      const bool needs_magnitude = fs.type != FaultType::PayloadPick && fs.type != FaultType::PayloadLoss &&
+                                   fs.type != FaultType::StuckCurrent;
+      if (needs_magnitude) fs.magnitude = y.number(f, p, "magnitude");
+      if (fs.type == FaultType::Collision) {
+        const int l = y.integer(f, p, "link", 0);
+        if (l < 1 || l > n) y.fail(f["link"] ? f["link"] : f, p + ".link", fmt::format("expected 1 to {}, got {}", n, l));
+        fs.link = l - 1;
+        if (f["point"]) fs.point = y.vec(f, p, "point", 3);
+        if (f["direction"]) fs.direction = y.vec(f, p, "direction", 3);
+        if (!(fs.direction.norm() > 0)) y.fail(f["direction"], p + ".direction", "must not be zero");
+        fs.duration = y.number_or(f, p, "duration", 0.05);
+        if (!(fs.duration > 0)) y.fail(f["duration"], p + ".duration", fmt::format("must be > 0 s, got {}", fs.duration));
+        if (!(fs.magnitude > 0)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("must be > 0 N·m, got {}", fs.magnitude));
+        fs.end = fs.onset + fs.duration;
+      }
+      if (fs.type == FaultType::PayloadPick) {
+        fs.payload.mass = y.number(f, p, "mass");
+        if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
+        if (f["com"]) fs.payload.com = y.vec(f, p, "com", 3);
+        fs.magnitude = fs.payload.mass;
+      }
+      if (fs.type == FaultType::PayloadLoss) fs.magnitude = -s.options.payload.mass;
+      fs.io_bit = y.integer(f, p, "io_bit", 0);
+      if (fs.type == FaultType::DroppedSamples) {
+        fs.period = y.number_or(f, p, "period", 0.0);
+        if (!(fs.magnitude >= 1)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("must be >= 1 sample, got {}", fs.magnitude));
+      }
+      s.faults.push_back(fs);
+    }
+  }
+  return s;
+}
+
+Scenario load_scenario(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw ParseError(path, 0, "", "cannot open the scenario file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parse_scenario(ss.str(), path);
+}
+
+std::unique_ptr<Simulator> make_simulator(const Scenario& s) {
+  const model::RobotModel m = model::load_robot(s.robot);
+  PlantTruth truth = default_truth(m, s.options.seed);
+  for (size_t j = 0; j < s.current_sigma.size() && j < truth.joints.size(); ++j) truth.joints[j].current_sigma = s.current_sigma[j];
+  return std::make_unique<Simulator>(m, s.trajectory, truth, s.options, s.faults);
+}
+
+std::string labels_json(const Scenario& s) {
+  nlohmann::json j;
+  j["scenario"] = s.name;
+  j["seed"] = s.options.seed;
+  j["duration"] = s.options.duration;
+  j["rate"] = s.options.rate;
+  j["faults"] = nlohmann::json::array();
+  for (const FaultSpec& f : s.faults) {
+    nlohmann::json e;
+    e["type"] = to_string(f.type);
+    e["onset"] = f.onset;
+    e["ramp"] = f.ramp;
+    e["end"] = std::isfinite(f.end) ? nlohmann::json(f.end) : nlohmann::json(nullptr);
+    e["magnitude"] = f.magnitude;
+    e["joint"] = f.joint >= 0 ? nlohmann::json(f.joint + 1) : nlohmann::json(nullptr);
+    e["link"] = f.link >= 0 ? nlohmann::json(f.link + 1) : nlohmann::json(nullptr);
+    const char* units = "";
+    switch (f.type) {
+      case FaultType::Resistance: case FaultType::Collision: units = "N·m"; break;
+      case FaultType::FrictionGrowth: units = "relative"; break;
+      case FaultType::PayloadPick: case FaultType::PayloadLoss: units = "kg"; break;
+      case FaultType::CurrentOffset: units = "A"; break;
+      case FaultType::StuckCurrent: units = ""; break;
+      case FaultType::DroppedSamples: units = "samples"; break;
+      case FaultType::TimestampJitter: units = "s"; break;
+    }
+    e["units"] = units;
+    j["faults"].push_back(e);
+  }
+  return j.dump(2);
+}
+
+}  // namespace twinwatch::sim

@@ -1,0 +1,325 @@
+#include "twinwatch/sim/simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::sim {
+
+namespace {
+// closed-loop bandwidth of the default joint PD [rad/s] and its damping ratio: stiff enough that a
+// 1 N·m disturbance moves a wrist joint by a few mrad, slow enough for a 500 Hz loop
+constexpr double kDefaultBandwidth = 2 * M_PI * 10.0;
+constexpr double kDefaultDamping = 0.8;
+// velocity scale of the smooth sign used by the resistance fault [rad/s]
+constexpr double kResistanceVelocityScale = 0.01;
+}  // namespace
+
+const char* to_string(FaultType t) {
+  switch (t) {
+    case FaultType::Resistance: return "resistance";
+    case FaultType::FrictionGrowth: return "friction_growth";
+    case FaultType::PayloadPick: return "payload_pick";
+    case FaultType::PayloadLoss: return "payload_loss";
+    case FaultType::Collision: return "collision";
+    case FaultType::CurrentOffset: return "current_offset";
+    case FaultType::StuckCurrent: return "stuck_current";
+    case FaultType::DroppedSamples: return "dropped_samples";
+    case FaultType::TimestampJitter: return "timestamp_jitter";
+  }
+  return "unknown";
+}
+
+double FaultSpec::level(double t) const {
+  if (t < onset || t >= end) return 0.0;
+  if (ramp <= 0.0) return 1.0;
+  return std::min(1.0, (t - onset) / ramp);
+}
+
+PlantTruth default_truth(const model::RobotModel& m, unsigned seed) {
+  PlantTruth p;
+  std::mt19937 rng(seed ^ 0x9e3779b9u);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = m.n_dof();
+  for (int j = 0; j < n; ++j) {
+    JointTruth jt;
+    // joint size from the torque limit: friction, gains and noise scale with it
+    const double tau_max = std::isfinite(m.joint(j).limits.torque_max) ? m.joint(j).limits.torque_max : 50.0;
+    const double size = std::clamp(tau_max / 28.0, 0.3, 2.0);
+    jt.Fc = 0.35 * size * (1 + 0.2 * u(rng));
+    jt.Fs = jt.Fc * (1.4 + 0.2 * u(rng));
+    jt.vs = 0.04 * (1 + 0.3 * u(rng));
+    jt.Fv = 0.35 * size * (1 + 0.2 * u(rng));
+    jt.sigma0 = 3000 * size;
+    jt.sigma1 = 3.0 * size;
+    jt.ripple = 0.02 * size;
+    jt.ripple_phase = M_PI * u(rng);
+    jt.ripple1 = 0.03 * size;
+    jt.ripple1_phase = M_PI * u(rng);
+    jt.gear_ratio = 101;
+    jt.kt = size >= 1.5 ? 0.125 : (size >= 0.9 ? 0.11 : 0.0945);
+    jt.eta = 0.9;
+    jt.eta_rev = 0.85;
+    // DESIGN.md rule 4: sigma 0.014-0.04 A per joint, more on the base joint
+    jt.current_sigma = j == 0 ? 0.05 : std::clamp(0.012 + 0.012 * size, 0.014, 0.04);
+    jt.current_offset = 0.0;
+    p.joints.push_back(jt);
+  }
+  return p;
+}
+
+void SimOptions::validate(int n) const {
+  if (!(rate > 0.0)) throw InvalidArgument(fmt::format("rate is {} Hz, must be > 0", rate));
+  if (substeps < 1) throw InvalidArgument(fmt::format("substeps is {}, must be >= 1", substeps));
+  if (rate * substeps < 2000.0)
+    throw InvalidArgument(fmt::format("physics rate is {} Hz (rate {} x substeps {}), must be >= 2000 Hz", rate * substeps,
+                                      rate, substeps));
+  if (!(duration > 0.0)) throw InvalidArgument(fmt::format("duration is {} s, must be > 0", duration));
+  if (kp.size() != 0 && kp.size() != n) throw InvalidArgument(fmt::format("kp has size {}, expected {} (n_dof)", kp.size(), n));
+  if (kd.size() != 0 && kd.size() != n) throw InvalidArgument(fmt::format("kd has size {}, expected {} (n_dof)", kd.size(), n));
+  payload.validate("payload");
+}
+
+std::uint32_t Simulator::fields() {
+  return kFieldActualQd | kFieldTargetQ | kFieldTargetQd | kFieldTargetQdd | kFieldActualCurrent | kFieldTargetCurrent |
+         kFieldTargetMoment | kFieldTemperature | kFieldDigitalOutputs | kFieldRobotMode;
+}
+
+namespace {
+
+// armature: motor rotor inertia reflected through the gear, J_m N^2 [kg m^2]; rotor inertia grows
+// with the joint size
+double armature(const JointTruth& jt) {
+  const double rotor = jt.kt >= 0.12 ? 2.5e-5 : (jt.kt >= 0.1 ? 1.2e-5 : 5e-6);
+  return rotor * jt.gear_ratio * jt.gear_ratio;
+}
+
+model::RobotModel perturbed(const model::RobotModel& nominal, double spread, unsigned seed) {
+  model::RobotModel m = nominal;
+  std::mt19937 rng(seed ^ 0x85ebca6bu);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < m.n_dof(); ++i) {
+    model::RigidBodyInertia b = m.joint(i).body;
+    b.mass *= 1 + spread * u(rng);
+    b.com += Eigen::Vector3d(u(rng), u(rng), u(rng)) * (spread * 0.1 * std::max(b.com.norm(), 0.05));
+    b.inertia_com *= 1 + spread * u(rng);
+    m.set_link_inertia(i, b);
+  }
+  return m;
+}
+
+}  // namespace
+
+Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Trajectory> trajectory, PlantTruth truth,
+                     SimOptions options, std::vector<FaultSpec> faults)
+    : nominal_(nominal),
+      truth_model_(perturbed(nominal, truth.inertial_perturbation, options.seed)),
+      controller_model_(nominal),
+      traj_(std::move(trajectory)),
+      truth_(std::move(truth)),
+      opt_(std::move(options)),
+      faults_(std::move(faults)),
+      dtruth_(nominal),
+      dctrl_(nominal),
+      rng_(opt_.seed),
+      n_(nominal.n_dof()) {
+  opt_.validate(n_);
+  if (!traj_) throw InvalidArgument("trajectory is missing");
+  if (traj_->n_dof() != n_) throw InvalidArgument(fmt::format("trajectory has {} joints, expected {}", traj_->n_dof(), n_));
+  if (static_cast<int>(truth_.joints.size()) != n_)
+    throw InvalidArgument(fmt::format("truth has {} joints, expected {}", truth_.joints.size(), n_));
+  for (size_t k = 0; k < faults_.size(); ++k) {
+    const FaultSpec& f = faults_[k];
+    const bool needs_joint = f.type == FaultType::Resistance || f.type == FaultType::FrictionGrowth ||
+                             f.type == FaultType::CurrentOffset || f.type == FaultType::StuckCurrent;
+    if (needs_joint && (f.joint < 0 || f.joint >= n_))
+      throw InvalidArgument(fmt::format("fault {} ({}): joint is {}, expected 1 to {}", k, to_string(f.type), f.joint + 1, n_));
+    if (f.type == FaultType::Collision && (f.link < 0 || f.link >= n_))
+      throw InvalidArgument(fmt::format("fault {} (collision): link is {}, expected 1 to {}", k, f.link + 1, n_));
+    if (f.type == FaultType::Collision && !(f.duration > 0.0))
+      throw InvalidArgument(fmt::format("fault {} (collision): duration is {} s, must be > 0", k, f.duration));
+  }
+  fault_applied_.assign(faults_.size(), false);
+  if (opt_.payload.mass > 0.0) {
+    truth_model_.set_payload(opt_.payload);
+    if (opt_.payload_declared) controller_model_.set_payload(opt_.payload);
+    payload_on_ = true;
+    dout_ |= 1u;
+  }
+  // initial state on the trajectory
+  VectorJ qdd;
+  traj_->evaluate(0.0, q_, qd_, qdd);
+  z_ = VectorJ::Zero(n_);
+  temp_.resize(n_);
+  for (int j = 0; j < n_; ++j) temp_[j] = opt_.cold_start ? truth_.ambient : truth_.joints[static_cast<size_t>(j)].T_ref;
+  q_meas_prev_ = q_;
+  current_held_ = VectorJ::Zero(n_);
+  // default gains from the joint inertia at the start pose (incl. armature)
+  const MatrixJ M = model::crba(controller_model_, dctrl_, q_);
+  kp_.resize(n_);
+  kd_.resize(n_);
+  for (int j = 0; j < n_; ++j) {
+    const double I = M(j, j) + armature(truth_.joints[static_cast<size_t>(j)]);
+    kp_[j] = opt_.kp.size() ? opt_.kp[j] : I * kDefaultBandwidth * kDefaultBandwidth;
+    kd_[j] = opt_.kd.size() ? opt_.kd[j] : 2 * kDefaultDamping * kDefaultBandwidth * I;
+  }
+}
+
+double Simulator::friction_torque(int j, double v, double h) {
+  const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
+  double wear = 1.0, extra = 0.0;
+  for (const FaultSpec& f : faults_) {
+    if (f.joint != j) continue;
+    if (f.type == FaultType::FrictionGrowth) wear *= 1.0 + f.magnitude * f.level(t_);
+    if (f.type == FaultType::Resistance) extra += f.magnitude * f.level(t_) * std::tanh(v / kResistanceVelocityScale);
+  }
+  // LuGre: z' = v - sigma0 |v| / g(v) z, advanced exactly with v held over the step
+  const double Fc = jt.Fc * wear, Fs = jt.Fs * wear;
+  const double g = Fc + (Fs - Fc) * std::exp(-(v / jt.vs) * (v / jt.vs));
+  const double a = jt.sigma0 * std::abs(v) / g;
+  double& z = z_[j];
+  const double z_old = z;
+  if (a * h > 1e-12) {
+    const double z_ss = v / a;
+    z = z_ss + (z - z_ss) * std::exp(-a * h);
+  } else {
+    z += v * h;
+  }
+  const double zdot = (z - z_old) / h;
+  const double Fv = jt.Fv * wear * std::exp(-jt.visc_temp_coeff * (temp_[j] - jt.T_ref));
+  const double q = q_[j];
+  const double ripple = jt.ripple * std::sin(jt.gear_ratio * q + jt.ripple_phase) + jt.ripple1 * std::sin(q + jt.ripple1_phase);
+  return jt.sigma0 * z + jt.sigma1 * zdot + Fv * v + ripple + extra;
+}
+
+void Simulator::apply_payload_faults(double t) {
+  for (size_t k = 0; k < faults_.size(); ++k) {
+    const FaultSpec& f = faults_[k];
+    if (fault_applied_[k] || t < f.onset) continue;
+    if (f.type == FaultType::PayloadPick) {
+      truth_model_.set_payload(f.payload);
+      controller_model_.set_payload(f.payload);  // the program declares what it picks
+      dout_ |= (1ull << f.io_bit);
+      payload_on_ = true;
+      fault_applied_[k] = true;
+    } else if (f.type == FaultType::PayloadLoss) {
+      truth_model_.clear_payload();  // the controller still believes it carries it
+      dout_ &= ~(1ull << f.io_bit);
+      payload_on_ = false;
+      fault_applied_[k] = true;
+    }
+  }
+}
+
+bool Simulator::step(RobotSample& s) {
+  const double dt = 1.0 / opt_.rate;
+  const double h = dt / opt_.substeps;
+  apply_payload_faults(t_);
+
+  // controller: PD + nominal feed-forward (with armature) on the target, from measured state
+  VectorJ qt, qdt, qddt;
+  traj_->evaluate(t_, qt, qdt, qddt);
+  const VectorJ q_meas = ((q_.array() / truth_.encoder_lsb).round() * truth_.encoder_lsb).matrix();
+  const VectorJ qd_meas = tick_ == 0 ? qd_ : VectorJ((q_meas - q_meas_prev_) / dt);
+  VectorJ tau_cmd = model::rnea(controller_model_, dctrl_, qt, qdt, qddt);
+  for (int j = 0; j < n_; ++j) {
+    tau_cmd[j] += armature(truth_.joints[static_cast<size_t>(j)]) * qddt[j];
+    tau_cmd[j] += kp_[j] * (qt[j] - q_meas[j]) + kd_[j] * (qdt[j] - qd_meas[j]);
+    const double lim = nominal_.joint(j).limits.torque_max;
+    if (std::isfinite(lim)) tau_cmd[j] = std::clamp(tau_cmd[j], -lim, lim);
+  }
+
+  // collision force pulses: tau_ext = J^T F at the contact point
+  VectorJ tau_ext_peak = VectorJ::Zero(n_);
+  std::vector<std::pair<const FaultSpec*, double>> pulses;
+  for (const FaultSpec& f : faults_) {
+    if (f.type != FaultType::Collision || t_ < f.onset || t_ >= f.onset + f.duration) continue;
+    pulses.emplace_back(&f, std::sin(M_PI * (t_ - f.onset) / f.duration));
+  }
+
+  // physics substeps (semi-implicit Euler of M qdd + h = tau - tau_f + tau_ext)
+  for (int k = 0; k < opt_.substeps; ++k) {
+    VectorJ tau = tau_cmd;
+    for (int j = 0; j < n_; ++j) tau[j] -= friction_torque(j, qd_[j], h);
+    if (!pulses.empty()) {
+      model::forward_kinematics(truth_model_, dtruth_, q_);
+      Matrix6J J;
+      for (const auto& [f, shape] : pulses) {
+        model::point_jacobian(truth_model_, dtruth_, f->link, f->point, J);
+        const VectorJ unit = J.topRows<3>().transpose() * f->direction.normalized();
+        const double scale = unit.cwiseAbs().maxCoeff();
+        if (scale > 1e-9) tau += (f->magnitude * shape / scale) * unit;
+      }
+    }
+    const VectorJ hvec = model::nonlinear_effects(truth_model_, dtruth_, q_, qd_);
+    MatrixJ M = model::crba(truth_model_, dtruth_, q_);
+    for (int j = 0; j < n_; ++j) M(j, j) += armature(truth_.joints[static_cast<size_t>(j)]);
+    dtruth_.llt.compute(M);
+    const VectorJ qdd = dtruth_.llt.solve(tau - hvec);
+    qd_ += h * qdd;
+    q_ += h * qd_;
+  }
+
+  // drive, thermal, measurement
+  s = RobotSample::empty(n_);
+  s.present = fields();
+  s.q = ((q_.array() / truth_.encoder_lsb).round() * truth_.encoder_lsb).matrix();
+  s.qd = (s.q - q_meas) / dt;
+  s.target_q = qt;
+  s.target_qd = qdt;
+  s.target_qdd = qddt;
+  s.target_moment = tau_cmd;
+  for (int j = 0; j < n_; ++j) {
+    const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
+    const double kN = jt.kt * jt.gear_ratio;
+    const bool motoring = tau_cmd[j] * qd_[j] >= 0.0;
+    const double i_true = motoring ? tau_cmd[j] / (kN * jt.eta) : tau_cmd[j] * jt.eta_rev / kN;
+    temp_[j] += dt * (jt.R_heat * i_true * i_true - (temp_[j] - truth_.ambient) / jt.R_th) / jt.C_th;
+    double i_meas = i_true + jt.current_offset + jt.current_sigma * normal_(rng_);
+    s.target_current[j] = tau_cmd[j] / (kN * jt.eta);
+    for (const FaultSpec& f : faults_) {
+      if (f.joint != j) continue;
+      if (f.type == FaultType::CurrentOffset) i_meas += f.magnitude * f.level(t_);
+      if (f.type == FaultType::StuckCurrent && f.level(t_) > 0.0 && tick_ > 0) i_meas = current_held_[j];
+    }
+    i_meas = std::round(i_meas / truth_.current_lsb) * truth_.current_lsb;
+    current_held_[j] = i_meas;
+    s.current[j] = i_meas;
+    s.temperature[j] = std::round(temp_[j] * 10.0) / 10.0;
+  }
+  s.digital_outputs = dout_;
+  s.robot_mode = 7;
+  s.timestamp = t_ + dt;
+  for (const FaultSpec& f : faults_)
+    if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0) s.timestamp += f.magnitude * normal_(rng_);
+
+  q_meas_prev_ = q_meas;
+  t_ += dt;
+  ++tick_;
+
+  // stream faults: drop samples
+  bool deliver = true;
+  for (const FaultSpec& f : faults_) {
+    if (f.type != FaultType::DroppedSamples || t_ < f.onset || t_ >= f.end) continue;
+    const double since = t_ - f.onset;
+    const double phase = f.period > 0.0 ? std::fmod(since, f.period) : since;
+    if (phase < f.magnitude * dt - 1e-12) deliver = false;
+  }
+  return deliver;
+}
+
+void Simulator::run(const std::function<void(const RobotSample&)>& sink, const std::function<void(double)>& progress) {
+  const long steps = static_cast<long>(std::llround(opt_.duration * opt_.rate));
+  RobotSample s;
+  const long report_every = std::max(1L, steps / 100);
+  for (long k = 0; k < steps; ++k) {
+    if (step(s)) sink(s);
+    if (progress && k % report_every == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+  }
+  if (progress) progress(1.0);
+}
+
+}  // namespace twinwatch::sim
