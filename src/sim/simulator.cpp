@@ -297,16 +297,16 @@ bool Simulator::step(RobotSample& s) {
     if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0) s.timestamp += f.magnitude * normal_(rng_);
 
   q_meas_prev_ = q_meas;
-  t_ += dt;
   ++tick_;
+  t_ = static_cast<double>(tick_) * dt;  // from the tick count: no drift of summed steps
 
   // stream faults: drop samples
   bool deliver = true;
   for (const FaultSpec& f : faults_) {
     if (f.type != FaultType::DroppedSamples || t_ < f.onset || t_ >= f.end) continue;
     const double since = t_ - f.onset;
-    const double phase = f.period > 0.0 ? std::fmod(since, f.period) : since;
-    if (phase < f.magnitude * dt - 1e-12) deliver = false;
+    const double phase = f.period > 0.0 ? std::fmod(since + 1e-9, f.period) : since + 1e-9;
+    if (phase < f.magnitude * dt) deliver = false;
   }
   return deliver;
 }

@@ -1,0 +1,212 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/scenario.hpp"
+
+namespace twinwatch::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::vector<RobotSample> run(const Scenario& s) {
+  std::vector<RobotSample> out;
+  make_simulator(s)->run([&](const RobotSample& x) { out.push_back(x); });
+  return out;
+}
+
+Scenario scenario(const std::string& yaml) { return parse_scenario(yaml, "test.yaml"); }
+
+const char* kFigureEight =
+    "robot: ur3e\nseed: 5\nduration: 12\n"
+    "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n"
+    "payload: {mass: 0.5, com: [0, 0, 0.04]}\n";
+
+TEST(Simulator, SameSeedGivesIdenticalRecording) {
+  const auto a = run(scenario(kFigureEight));
+  const auto b = run(scenario(kFigureEight));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k].current, b[k].current) << "sample " << k;
+    ASSERT_EQ(a[k].q, b[k].q) << "sample " << k;
+  }
+  Scenario other = scenario(kFigureEight);
+  other.options.seed = 6;
+  const auto c = run(other);
+  EXPECT_NE(a[100].current, c[100].current) << "another seed must give other noise";
+}
+
+TEST(Simulator, ControllerTracksTheTargetWithinAFewMilliradians) {
+  const auto rec = run(scenario(kFigureEight));
+  double worst = 0.0;
+  for (size_t k = 500; k < rec.size(); ++k) worst = std::max(worst, (rec[k].target_q - rec[k].q).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 5e-3);
+  EXPECT_GT(worst, 1e-5) << "a real controller never tracks perfectly";
+}
+
+TEST(Simulator, CurrentNoiseAtRestIsInTheRealArmRange) {
+  // DESIGN.md rule 4: sigma 0.014-0.04 A per joint (base up to ~0.15 A)
+  Scenario s = scenario("robot: ur3e\nseed: 3\nduration: 4\ntrajectory: {type: sine, amplitude: 0.0, frequency: 0.1}\n");
+  const auto rec = run(s);
+  for (int j = 0; j < 6; ++j) {
+    double m = 0, m2 = 0;
+    const size_t N = rec.size() - 1000;
+    for (size_t k = 1000; k < rec.size(); ++k) m += rec[k].current[j], m2 += rec[k].current[j] * rec[k].current[j];
+    const double sd = std::sqrt(m2 / N - (m / N) * (m / N));
+    EXPECT_GE(sd, 0.012) << "joint " << j;
+    EXPECT_LE(sd, 0.15) << "joint " << j;
+  }
+}
+
+// UR3e Fig. 9-11: J5 resistance raises J5 current in the direction of motion, positions barely change
+TEST(Simulator, J5ResistanceRaisesJ5CurrentAlongMotionWhilePositionsHold) {
+  Scenario healthy = scenario(kFigureEight);
+  Scenario faulty = scenario(std::string(kFigureEight) + "faults:\n  - {type: resistance, joint: 5, onset: 2, magnitude: 0.8}\n");
+  const auto a = run(healthy), b = run(faulty);
+  ASSERT_EQ(a.size(), b.size());
+  double along = 0.0, pos_dev = 0.0;
+  int moving = 0;
+  for (size_t k = 1500; k < a.size(); ++k) {
+    const double v = a[k].qd[4];
+    if (std::abs(v) < 0.05) continue;
+    along += (b[k].current[4] - a[k].current[4]) * (v > 0 ? 1.0 : -1.0);
+    ++moving;
+    pos_dev = std::max(pos_dev, std::abs(b[k].q[4] - a[k].q[4]));
+  }
+  ASSERT_GT(moving, 1000) << "J5 must move in this trajectory";
+  along /= moving;
+  // 0.8 N·m through kt N eta ~ 0.0945 * 101 * 0.9 ~ 8.6 N·m/A -> ~0.09 A
+  EXPECT_GT(along, 0.06);
+  EXPECT_LT(along, 0.14);
+  EXPECT_LT(pos_dev, 0.01) << "the controller hides the fault in position";
+}
+
+// UR3e §4.3: releasing 0.5 kg shifts the currents by what J^T m g predicts. Compared against the
+// same run without the loss (same seed, same noise), while the joints move so that friction is
+// kinetic in both runs (at rest, static friction would absorb part of the step).
+TEST(Simulator, PayloadLossShiftsCurrentsAsJTransposeMgPredicts) {
+  const std::string base = "robot: ur3e\nseed: 9\nduration: 6\n"
+                           "trajectory: {type: sine, amplitude: 0.4, frequency: 0.1, phase: 0.3}\n"
+                           "payload: {mass: 0.5, com: [0, 0, 0.04]}\n";
+  const auto healthy = run(scenario(base));
+  const auto lost = run(scenario(base + "faults:\n  - {type: payload_loss, onset: 3}\n"));
+  ASSERT_EQ(healthy.size(), lost.size());
+  EXPECT_EQ(lost[1400].digital_outputs & 1u, 1u);
+  EXPECT_EQ(lost[1600].digital_outputs & 1u, 0u);
+  model::RobotModel with = model::load_robot("ur3e"), without = model::load_robot("ur3e");
+  model::RigidBodyInertia p;
+  p.mass = 0.5;
+  p.com = Eigen::Vector3d(0, 0, 0.04);
+  with.set_payload(p);
+  model::DynamicsData d(with), d2(without);
+  const PlantTruth truth = default_truth(with, 9);
+  VectorJ measured = VectorJ::Zero(6), predicted = VectorJ::Zero(6);
+  for (size_t k = 2000; k < 2900; ++k) {
+    const RobotSample& s = lost[k];
+    const VectorJ dtau = model::rnea(with, d, s.q, s.qd, s.target_qdd) - model::rnea(without, d2, s.q, s.qd, s.target_qdd);
+    for (int j = 0; j < 6; ++j) {
+      const auto& jt = truth.joints[static_cast<size_t>(j)];
+      const double kN = jt.kt * jt.gear_ratio;
+      // drive direction as the simulator's truth defines it (motoring vs back-driven)
+      const bool motoring = healthy[k].target_moment[j] * s.qd[j] >= 0.0;
+      predicted[j] += motoring ? dtau[j] / (kN * jt.eta) : dtau[j] * jt.eta_rev / kN;
+      measured[j] += healthy[k].current[j] - s.current[j];
+    }
+  }
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_NEAR(measured[j] / 900, predicted[j] / 900, std::max(0.15 * std::abs(predicted[j] / 900), 0.01)) << "joint " << j;
+  }
+  EXPECT_GT(std::abs(predicted[1] / 900), 0.05) << "the shoulder must carry a visible share of 0.5 kg";
+}
+
+TEST(Simulator, RecordingRoundTripsThroughTheReader) {
+  const auto rec = run(scenario(kFigureEight));
+  const std::string path = ::testing::TempDir() + "sim_rt.csv";
+  {
+    device::RecordingWriter w(path, 6, Simulator::fields());
+    for (const auto& s : rec) w.write(s);
+    w.close();
+  }
+  const device::Recording r = device::read_recording(path);
+  ASSERT_EQ(r.samples.size(), rec.size());
+  EXPECT_EQ(r.samples[777].current, rec[777].current);
+  EXPECT_EQ(r.samples[777].temperature, rec[777].temperature);
+  EXPECT_EQ(r.gaps, 0);
+}
+
+TEST(Simulator, DroppedSamplesLeaveAGapTheReaderFinds) {
+  Scenario s = scenario(std::string(kFigureEight) + "faults:\n  - {type: dropped_samples, onset: 3, magnitude: 4}\n");
+  const auto rec = run(s);
+  EXPECT_EQ(rec.size(), 6000u - 4u);
+}
+
+// with friction off, truth = controller model and PD off, the feed-forward alone must hold a pose:
+// any error in the plant integration or the drive chain would make the arm drift
+TEST(Simulator, FrictionlessPlantWithExactFeedForwardHoldsStill) {
+  model::RobotModel m = model::load_robot("ur3e");
+  PlantTruth truth = default_truth(m, 1);
+  for (auto& j : truth.joints) j.Fc = j.Fs = j.Fv = j.sigma0 = j.sigma1 = j.ripple = j.ripple1 = 0.0, j.sigma0 = 1.0;
+  SimOptions o;
+  o.duration = 2.0;
+  o.substeps = 8;
+  o.kp = VectorJ::Zero(6);
+  o.kd = VectorJ::Zero(6);
+  // zero target: the feed-forward is the gravity of the target pose only; compare against an
+  // unactuated check instead: start at rest with PD off and feed-forward of a static pose equal to
+  // the start pose -> the arm holds still exactly when the models match; with the perturbed truth it
+  // drifts, and energy bookkeeping must close: here we only require bounded tracking of gravity
+  auto traj = make_sine(VectorJ::Constant(6, 0.3), VectorJ::Zero(6), VectorJ::Constant(6, 0.1), VectorJ::Zero(6));
+  truth.inertial_perturbation = 0.0;
+  Simulator sim(m, std::move(traj), truth, o, {});
+  RobotSample s;
+  for (int k = 0; k < 1000; ++k) sim.step(s);
+  // identical truth and controller models, no friction: feed-forward gravity holds the arm still
+  EXPECT_LT((sim.q() - VectorJ::Constant(6, 0.3)).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(Scenario, EveryMalformedFieldIsNamed) {
+  struct Case {
+    std::string yaml, expect;
+  };
+  const std::string t = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
+  const std::vector<Case> cases = {
+      {"robot: ur99\n" + t, "field 'robot': robot 'ur99' is unknown"},
+      {"robot: ur3e\nduration: fast\n" + t, "test.yaml:2: field 'duration': expected a number, got 'fast'"},
+      {"robot: ur3e\ndurration: 3\n" + t, "unknown key 'durration'"},
+      {"robot: ur3e\n", "field 'trajectory': missing required field"},
+      {"robot: ur3e\ntrajectory: {type: spiral}\n", "field 'trajectory.type': expected one of figure_eight"},
+      {"robot: ur3e\ntrajectory: {type: sine, amplitude: [1, 2], frequency: 0.5}\n", "trajectory.amplitude': expected 6 numbers, got 2"},
+      {"robot: ur3e\nrate: 500\nsubsteps: 2\n" + t, "physics rate is 1000 Hz"},
+      {"robot: ur3e\npayload: {mass: -1}\n" + t, "payload.mass': must be >= 0"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: resistance, joint: 7, onset: 1, magnitude: 1}\n", "faults[0].joint': expected 1 to 6, got 7"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: meteor, onset: 1}\n", "faults[0].type': expected one of resistance"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: resistance, joint: 2, magnitude: 1}\n", "faults[0].onset': missing required field"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: resistance, joint: 2, onset: 5, end: 4, magnitude: 1}\n", "faults[0].end': must be after onset"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: collision, link: 3, onset: 5, magnitude: -2}\n", "faults[0].magnitude': must be > 0"},
+      {"robot: ur3e\n" + t + "faults:\n  - {type: payload_pick, onset: 5, mass: 0}\n", "faults[0].mass': must be > 0 kg"},
+      {"robot: ur3e\ncycles: 2\nduration: 3\n" + t, "give either duration or cycles"},
+      {"robot: ur3e\nduration: 3\n  bad: [\n" + t, "not valid YAML"},
+  };
+  for (const Case& c : cases) {
+    try {
+      parse_scenario(c.yaml, "test.yaml");
+      ADD_FAILURE() << "no error for:\n" << c.yaml;
+    } catch (const ParseError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(c.expect)) << c.yaml;
+    }
+  }
+}
+
+TEST(Scenario, LibraryScenariosAllLoad) {
+  for (const char* name : {"nominal_figure_eight", "excitation", "j5_resistance", "payload_loss_8_5s", "payload_loss_16s",
+                           "collision_5Nm_link3", "wear_ramp", "cold_start", "chirp", "triangle", "stream_and_sensor_faults"}) {
+    EXPECT_NO_THROW(load_scenario(std::string(TWINWATCH_SOURCE_DIR) + "/scenarios/ur3e/" + name + ".yaml")) << name;
+  }
+}
+
+}  // namespace
+}  // namespace twinwatch::sim
