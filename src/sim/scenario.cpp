@@ -203,7 +203,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     throw ParseError(origin, e.mark.line + 1, "", fmt::format("not valid YAML: {}", e.msg));
   }
   const Y y(origin);
-  y.only_keys(root, "", {"name", "robot", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
+  y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
                          "payload_declared", "trajectory", "noise", "faults", "description"});
   Scenario s;
   s.path = origin;
@@ -218,6 +218,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   }();
   const int n = m.n_dof();
   s.options.seed = static_cast<unsigned>(y.integer(root, "", "seed", 1));
+  s.serial = static_cast<unsigned>(y.integer(root, "", "robot_serial", 1));
   s.options.rate = y.number_or(root, "", "rate", 500.0);
   s.options.substeps = y.integer(root, "", "substeps", std::max(1, static_cast<int>(std::ceil(2000.0 / s.options.rate))));
   s.options.cold_start = y.boolean(root, "", "cold_start", false);
@@ -307,7 +308,7 @@ Scenario load_scenario(const std::string& path) {
 
 std::unique_ptr<Simulator> make_simulator(const Scenario& s) {
   const model::RobotModel m = model::load_robot(s.robot);
-  PlantTruth truth = default_truth(m, s.options.seed);
+  PlantTruth truth = default_truth(m, s.serial);
   for (size_t j = 0; j < s.current_sigma.size() && j < truth.joints.size(); ++j) truth.joints[j].current_sigma = s.current_sigma[j];
   return std::make_unique<Simulator>(m, s.trajectory, truth, s.options, s.faults);
 }

@@ -39,9 +39,10 @@ double FaultSpec::level(double t) const {
   return std::min(1.0, (t - onset) / ramp);
 }
 
-PlantTruth default_truth(const model::RobotModel& m, unsigned seed) {
+PlantTruth default_truth(const model::RobotModel& m, unsigned serial) {
   PlantTruth p;
-  std::mt19937 rng(seed ^ 0x9e3779b9u);
+  p.serial = serial;
+  std::mt19937 rng(serial ^ 0x9e3779b9u);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const int n = m.n_dof();
   for (int j = 0; j < n; ++j) {
@@ -49,10 +50,11 @@ PlantTruth default_truth(const model::RobotModel& m, unsigned seed) {
     // joint size from the torque limit: friction, gains and noise scale with it
     const double tau_max = std::isfinite(m.joint(j).limits.torque_max) ? m.joint(j).limits.torque_max : 50.0;
     const double size = std::clamp(tau_max / 28.0, 0.3, 2.0);
-    jt.Fc = 0.35 * size * (1 + 0.2 * u(rng));
+    // harmonic-drive friction has a floor even on small joints (motor-side friction seen through N)
+    jt.Fc = (0.35 + 0.2 * size) * (1 + 0.2 * u(rng));
     jt.Fs = jt.Fc * (1.4 + 0.2 * u(rng));
     jt.vs = 0.04 * (1 + 0.3 * u(rng));
-    jt.Fv = 0.35 * size * (1 + 0.2 * u(rng));
+    jt.Fv = (0.3 + 0.25 * size) * (1 + 0.2 * u(rng));
     jt.sigma0 = 3000 * size;
     jt.sigma1 = 3.0 * size;
     jt.ripple = 0.02 * size;
@@ -64,7 +66,7 @@ PlantTruth default_truth(const model::RobotModel& m, unsigned seed) {
     jt.eta = 0.9;
     jt.eta_rev = 0.85;
     // DESIGN.md rule 4: sigma 0.014-0.04 A per joint, more on the base joint
-    jt.current_sigma = j == 0 ? 0.05 : std::clamp(0.012 + 0.012 * size, 0.014, 0.04);
+    jt.current_sigma = j == 0 ? 0.03 : std::clamp(0.012 + 0.008 * size, 0.014, 0.04);
     jt.current_offset = 0.0;
     p.joints.push_back(jt);
   }
@@ -116,7 +118,7 @@ model::RobotModel perturbed(const model::RobotModel& nominal, double spread, uns
 Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Trajectory> trajectory, PlantTruth truth,
                      SimOptions options, std::vector<FaultSpec> faults)
     : nominal_(nominal),
-      truth_model_(perturbed(nominal, truth.inertial_perturbation, options.seed)),
+      truth_model_(perturbed(nominal, truth.inertial_perturbation, truth.serial)),
       controller_model_(nominal),
       traj_(std::move(trajectory)),
       truth_(std::move(truth)),

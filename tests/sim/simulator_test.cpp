@@ -103,7 +103,7 @@ TEST(Simulator, PayloadLossShiftsCurrentsAsJTransposeMgPredicts) {
   p.com = Eigen::Vector3d(0, 0, 0.04);
   with.set_payload(p);
   model::DynamicsData d(with), d2(without);
-  const PlantTruth truth = default_truth(with, 9);
+  const PlantTruth truth = default_truth(with, 1);  // robot_serial 1 (the default)
   VectorJ measured = VectorJ::Zero(6), predicted = VectorJ::Zero(6);
   for (size_t k = 2000; k < 2900; ++k) {
     const RobotSample& s = lost[k];

@@ -20,6 +20,7 @@ struct Scenario {
   std::vector<FaultSpec> faults;
   std::vector<double> current_sigma;  ///< per-joint override of the truth's noise (empty: defaults)
   std::string trajectory_type;
+  unsigned serial = 1;  ///< which physical robot (hidden parameters); the seed only changes noise
 };
 
 /// Loads and validates a scenario file (needs the robot to build Cartesian trajectories).

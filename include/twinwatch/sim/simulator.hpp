@@ -69,10 +69,14 @@ struct PlantTruth {
   double current_lsb = 1e-4;          ///< [A] (0.1 mA resolution of the logged current)
   double encoder_lsb = 2 * M_PI / (1 << 20);  ///< [rad]
   double inertial_perturbation = 0.05;  ///< relative spread of the truth link parameters vs the file
+  /// Identity of the physical robot: the same serial gives the same hidden parameters in every
+  /// scenario (the seed of a scenario only changes noise), as one real arm would.
+  unsigned serial = 1;
 };
 
-/// UR-sized default truth for a model (documented in docs/scenarios.md), seeded perturbations.
-PlantTruth default_truth(const model::RobotModel& model, unsigned seed);
+/// UR-sized default truth for a model (documented in docs/scenarios.md); `serial` picks one
+/// physical robot (its friction, inertial and drive spread).
+PlantTruth default_truth(const model::RobotModel& model, unsigned serial);
 
 enum class FaultType {
   Resistance,      ///< extra resistance on a joint [N·m], e.g. [UR3e §4.2] J5

@@ -1,0 +1,193 @@
+// `twinwatch identify REC.csv... -o twin.json` and `twinwatch validate --twin twin.json REC.csv`.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <optional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/signal/metrics.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+
+// "rec.csv=0.5" or "rec.csv=0.5,0,0,0.04": the payload a recording was made with
+struct PayloadArg {
+  std::string file;
+  model::RigidBodyInertia payload;
+};
+
+PayloadArg parse_payload(const std::string& s) {
+  const auto eq = s.rfind('=');
+  if (eq == std::string::npos)
+    throw InvalidArgument(fmt::format("--known-payload '{}': expected FILE=MASS[,CX,CY,CZ]", s));
+  PayloadArg a;
+  a.file = s.substr(0, eq);
+  std::stringstream ss(s.substr(eq + 1));
+  std::vector<double> v;
+  std::string tok;
+  while (std::getline(ss, tok, ',')) {
+    try {
+      v.push_back(std::stod(tok));
+    } catch (...) {
+      throw InvalidArgument(fmt::format("--known-payload '{}': '{}' is not a number", s, tok));
+    }
+  }
+  if (v.size() != 1 && v.size() != 4)
+    throw InvalidArgument(fmt::format("--known-payload '{}': expected 1 or 4 numbers (mass [kg], COM [m] in the flange frame), got {}", s, v.size()));
+  a.payload.mass = v[0];
+  if (v.size() == 4) a.payload.com = Eigen::Vector3d(v[1], v[2], v[3]);
+  a.payload.validate("--known-payload");
+  return a;
+}
+
+struct IdentifyOptions {
+  std::vector<std::string> recordings, payloads;
+  std::string output, robot = "ur3e", method = "physics", column_map;
+  double reversal_screen = 0.0;
+  int decimate = 1;
+  bool quiet = false;
+};
+
+int run_identify(const IdentifyOptions& o) {
+  if (o.method != "physics")
+    throw InvalidArgument(fmt::format("--method {}: only 'physics' is implemented in this version (sequential, mlp and "
+                                      "hybrid are not available yet)", o.method));
+  std::optional<device::ColumnMap> map;
+  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  std::vector<device::Recording> recs;
+  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+  std::vector<ident::TrainingRun> runs;
+  std::vector<PayloadArg> pay;
+  for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
+  for (const auto& r : recs) {
+    ident::TrainingRun t{&r, {}};
+    for (const auto& p : pay)
+      if (p.file == r.path) t.payload = p.payload;
+    runs.push_back(t);
+  }
+  for (const auto& p : pay) {
+    bool found = false;
+    for (const auto& r : recs) found |= r.path == p.file;
+    if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the recordings", p.file));
+  }
+  ident::IdentOptions io;
+  io.reversal_screen = o.reversal_screen;
+  io.decimate = o.decimate;
+  ident::IdentReport report;
+  const bool bar = !o.quiet && isatty(STDERR_FILENO);
+  ident::TwinModel twin = ident::identify_physics(o.robot, runs, io, report, [&](double f) {
+    if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
+  });
+  twin.save(o.output);
+  if (!o.quiet) {
+    fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);
+    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gain N·m/A");
+    for (int j = 0; j < twin.n_dof(); ++j) {
+      const auto& m = twin.joints[static_cast<size_t>(j)];
+      fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10.3f} {:>12}\n", j + 1, report.samples_used[static_cast<size_t>(j)], m.rmse, m.r2,
+                 m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
+    }
+    for (const auto& note : report.notes) fmt::print("note: {}\n", note);
+  }
+  return 0;
+}
+
+struct ValidateOptions {
+  std::string twin, recording, column_map;
+  double payload_mass = 0.0;
+  std::vector<double> payload_com;
+  bool json = false;
+};
+
+int run_validate(const ValidateOptions& o) {
+  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  std::optional<device::ColumnMap> map;
+  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
+  if (rec.n_dof != twin.n_dof())
+    throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
+  if (!(rec.present & kFieldActualCurrent)) throw InvalidArgument(fmt::format("{}: no actual_current_* columns", o.recording));
+  model::RigidBodyInertia p;
+  p.mass = o.payload_mass;
+  if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);
+  twin.set_payload(p);
+  const auto qdd = ident::joint_accelerations(rec);
+  const int n = twin.n_dof();
+  std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
+  VectorJ i;
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i);
+    for (int j = 0; j < n; ++j) {
+      meas[static_cast<size_t>(j)].push_back(s.current[j]);
+      pred[static_cast<size_t>(j)].push_back(i[j]);
+    }
+  }
+  nlohmann::json out;
+  out["recording"] = o.recording;
+  out["twin"] = o.twin;
+  if (!o.json) {
+    fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
+               rec.samples.size());
+    fmt::print("{:<8}", "metric");
+    for (int j = 0; j < n; ++j) fmt::print("{:>9}", fmt::format("J{}", j + 1));
+    fmt::print("\n");
+  }
+  std::vector<signal::FitMetrics> ms;
+  for (int j = 0; j < n; ++j) ms.push_back(signal::fit_metrics(meas[static_cast<size_t>(j)], pred[static_cast<size_t>(j)]));
+  for (const auto& m : ms)
+    out["joints"].push_back({{"rmse", m.rmse}, {"mae", m.mae}, {"r2", m.r2}, {"nrmse_pct", m.nrmse_pct}, {"d_tau_pct", m.rel_err_pct}});
+  if (o.json) {
+    fmt::print("{}\n", out.dump());
+    return 0;
+  }
+  auto row = [&](const char* name, auto get, const char* f) {
+    fmt::print("{:<8}", name);
+    for (const auto& m : ms) fmt::print("{:>9}", fmt::format(fmt::runtime(f), get(m)));
+    fmt::print("\n");
+  };
+  row("RMSE", [](const signal::FitMetrics& m) { return m.rmse; }, "{:.4f}");
+  row("MAE", [](const signal::FitMetrics& m) { return m.mae; }, "{:.4f}");
+  row("R²", [](const signal::FitMetrics& m) { return m.r2; }, "{:.4f}");
+  row("NRMSE%", [](const signal::FitMetrics& m) { return m.nrmse_pct; }, "{:.2f}");
+  row("d_tau%", [](const signal::FitMetrics& m) { return m.rel_err_pct; }, "{:.2f}");
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
+  auto o = std::make_shared<IdentifyOptions>();
+  auto* sub = app.add_subcommand("identify", "Build the reference model (twin file) from recordings of a healthy robot");
+  sub->add_option("RECORDINGS", o->recordings, "Recording CSV files (RTDE column names)")->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", o->output, "Twin file to write (JSON)")->required();
+  sub->add_option("--robot", o->robot, "Robot description (built-in name or file)")->capture_default_str();
+  sub->add_option("--method", o->method, "physics (rigid body + friction + drive, current domain)")->capture_default_str();
+  sub->add_option("--known-payload", o->payloads,
+                  "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
+                  "identifies the current-to-torque gains");
+  sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str();
+  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
+}};
+
+twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
+  auto o = std::make_shared<ValidateOptions>();
+  auto* sub = app.add_subcommand("validate", "Compare a twin's predicted currents with a recording (UR3e Table 3 metrics)");
+  sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload carried during the recording [kg]");
+  sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3);
+  sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
+  sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_validate(*o)); });
+}};
+
+}  // namespace

@@ -1,0 +1,48 @@
+#pragma once
+/// @file physics_ident.hpp
+/// Identification of the current-domain physics twin from recordings only (DESIGN.md rule 1).
+///
+/// Per joint, ordinary least squares of the measured current on the design row of
+/// twin_model.hpp, then the direction-dependent efficiency factor and a re-fit with it
+/// (two passes). Velocity reversals (|qd_j| < reversal_screen) can be left out of the fit
+/// [HESR §III-E]. The drive gain g_j comes out as 1 / (payload coefficient) when some recordings
+/// were made with a known payload.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/twin_model.hpp"
+
+namespace twinwatch::ident {
+
+struct IdentOptions {
+  double reversal_screen = 0.0;  ///< [rad/s] leave |qd_j| below this out of the fit (0: keep all)
+  int efficiency_passes = 2;     ///< re-fits with the direction-dependent factor
+  int decimate = 1;              ///< use every k-th sample
+  double temperature_ref = 35.0; ///< [°C]
+  void validate() const;
+};
+
+/// A recording and the payload the robot carried while it was made (mass 0: none/unknown).
+struct TrainingRun {
+  const device::Recording* recording = nullptr;
+  model::RigidBodyInertia payload;
+};
+
+struct IdentReport {
+  std::vector<long> samples_used;   ///< per joint
+  std::vector<double> rmse, r2;     ///< training fit per joint
+  std::vector<std::string> notes;
+};
+
+/// Joint accelerations of a recording: target_qdd when recorded, else a zero-phase smoothed
+/// central difference of actual_qd. Returns one vector per sample.
+std::vector<VectorJ> joint_accelerations(const device::Recording& rec);
+
+/// Identifies the physics twin. Throws InvalidArgument when the data cannot support it (no
+/// current column, too few samples, robot/recording joint counts differ).
+TwinModel identify_physics(const std::string& robot, const std::vector<TrainingRun>& runs, const IdentOptions& options,
+                           IdentReport& report, const std::function<void(double)>& progress = {});
+
+}  // namespace twinwatch::ident

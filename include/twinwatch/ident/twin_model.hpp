@@ -1,0 +1,90 @@
+#pragma once
+/// @file twin_model.hpp
+/// The reference ("healthy twin") model that twinwatch identify writes and the monitor runs.
+///
+/// Physics model [UR3e §3.2, eq. 3; HESR §III]: shared rigid-body base parameters beta, and per
+/// joint j a drive gain g_j = kt N eta [N·m/A], friction and a direction-dependent efficiency:
+///   tau_j = Y_b,j(q, qd, qdd) beta + tau_payload_j(q, qd, qdd)             (rigid body)
+///         + Fc_j sign(qd_j) + Fv_j qd_j + off_j + Ia_j qdd_j                (friction, rotor inertia)
+///         + Ft_j qd_j (T_j - T_ref)                                         (viscous vs temperature)
+///   i_j   = tau_j / g_j            when the drive is motoring (tau_j qd_j >= 0)
+///         = c_gen_j tau_j / g_j    when it is back-driven
+/// The gains are absolute (N·m/A) when the training data included a known payload; otherwise the
+/// common scale of beta and g is arbitrary (fixed so that prod g_j = 1) and only currents are
+/// meaningful (gains_known() is false).
+#include <Eigen/Core>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "twinwatch/model/regressor.hpp"
+
+namespace twinwatch::ident {
+
+/// Friction columns of a joint, in this order.
+enum FrictionColumn : int { kCoulomb = 0, kViscous, kOffset, kArmature, kViscousTemperature, kFrictionColumns };
+
+struct JointDrive {
+  double gain = 1.0;             ///< g_j [N·m/A] (arbitrary common scale when !gains_known)
+  double c_gen = 1.0;            ///< current factor when back-driven
+  Eigen::Matrix<double, kFrictionColumns, 1> friction = Eigen::Matrix<double, kFrictionColumns, 1>::Zero();  ///< [N·m, N·m·s/rad, N·m, kg·m², N·m·s/rad/°C]
+  double rmse = 0.0, r2 = 0.0;   ///< current fit on the training data
+};
+
+class TwinModel {
+ public:
+  TwinModel() = default;
+  /// @param robot the robot description the regressor uses (built-in name or path)
+  TwinModel(std::string robot, const model::RobotModel& model);
+
+  const model::RobotModel& robot() const { return *robot_; }
+  const std::string& robot_name() const { return robot_name_; }
+  int n_dof() const { return robot_ ? robot_->n_dof() : 0; }
+
+  std::vector<int> base_columns;   ///< standard-regressor columns of the base parameters
+  Eigen::VectorXd beta;            ///< base parameters (torque units when gains_known)
+  std::vector<JointDrive> joints;
+  bool gains_absolute = false;     ///< true when a known payload fixed the torque scale
+  double temperature_ref = 35.0;        ///< [°C] reference of the temperature column
+  std::string method = "physics";
+  std::vector<std::string> recordings;  ///< files that built it
+  std::string created;                  ///< ISO time
+
+  /// Payload the robot carries now (flange frame); enters through the identified gains.
+  void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
+  const model::RigidBodyInertia& payload() const { return payload_; }
+
+  /// True when the current-to-torque gains are absolute (a known payload was in the training data).
+  bool gains_known() const { return gains_absolute; }
+
+  /// Predicted joint torque [N·m] (incl. friction) and current [A] for one state; temperature
+  /// may be NaN (then T_ref is used). Torque is in arbitrary units unless gains_known().
+  void predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+               VectorJ& current) const;
+  /// Only the current.
+  void predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
+                       VectorJ& current) const;
+
+  /// Friction design row of joint j (kFrictionColumns values).
+  void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
+                    Eigen::Ref<Eigen::Matrix<double, kFrictionColumns, 1>> row) const;
+
+  /// Regressor and payload torque for a state (workspace internal).
+  void regress(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, model::RegressorMatrix& Y, VectorJ& tau_payload) const;
+
+  /// JSON text of the whole model / load it back. Load errors are ParseErrors naming the field.
+  std::string to_json() const;
+  static TwinModel from_json(const std::string& text, const std::string& origin);
+  void save(const std::string& path) const;
+  static TwinModel load(const std::string& path);
+
+ private:
+  std::string robot_name_;
+  std::shared_ptr<model::RobotModel> robot_;
+  model::RigidBodyInertia payload_;
+  mutable std::shared_ptr<model::DynamicsData> data_;
+  mutable model::RegressorMatrix Y_;
+};
+
+}  // namespace twinwatch::ident

@@ -1,0 +1,23 @@
+#pragma once
+/// @file metrics.hpp
+/// Fit metrics of a prediction against a measurement (UR3e Table 3; robot-identification
+/// benchmarks' relative torque error).
+#include <span>
+
+namespace twinwatch::signal {
+
+struct FitMetrics {
+  double rmse = 0.0;       ///< sqrt(mean (y - yhat)^2)
+  double mae = 0.0;        ///< mean |y - yhat|
+  double r2 = 0.0;         ///< 1 - SS_res / SS_tot (SS_tot about the mean of y)
+  double nrmse_pct = 0.0;  ///< 100 * rmse / (max y - min y)   (range-normalised)
+  double rel_err_pct = 0.0;  ///< d_tau: 100 * ||y - yhat||_2 / ||y||_2
+  double max_abs = 0.0;    ///< max |y - yhat|
+  long n = 0;
+};
+
+/// Metrics of `predicted` against `measured` (equal lengths >= 1; throws InvalidArgument otherwise).
+/// NaN pairs are skipped.
+FitMetrics fit_metrics(std::span<const double> measured, std::span<const double> predicted);
+
+}  // namespace twinwatch::signal

@@ -1,0 +1,189 @@
+#include "twinwatch/ident/twin_model.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+
+namespace twinwatch::ident {
+
+namespace {
+// JSON has no NaN: write it as null and read null back as NaN
+nlohmann::json numbers(const Eigen::VectorXd& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(std::isfinite(v(i)) ? nlohmann::json(v(i)) : nlohmann::json(nullptr));
+  return a;
+}
+Eigen::VectorXd numbers(const nlohmann::json& a, const std::string& origin, const std::string& field) {
+  if (!a.is_array()) throw ParseError(origin, 0, field, "expected an array of numbers");
+  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i].is_null()) v(static_cast<Eigen::Index>(i)) = std::numeric_limits<double>::quiet_NaN();
+    else if (a[i].is_number()) v(static_cast<Eigen::Index>(i)) = a[i].get<double>();
+    else throw ParseError(origin, 0, fmt::format("{}[{}]", field, i), fmt::format("expected a number, got {}", a[i].type_name()));
+  }
+  return v;
+}
+}  // namespace
+
+TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
+    : robot_name_(std::move(robot)),
+      robot_(std::make_shared<model::RobotModel>(model)),
+      data_(std::make_shared<model::DynamicsData>(model)) {
+  robot_->clear_payload();
+}
+
+void TwinModel::regress(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, model::RegressorMatrix& Y,
+                        VectorJ& tau_payload) const {
+  const int n = robot_->n_dof();
+  model::regressor(*robot_, *data_, q, qd, qdd, Y);
+  tau_payload.setZero(n);
+  if (payload_.mass > 0.0) {
+    // the payload's standard parameters in the last body frame times the last link's columns
+    const model::StandardParameters pi = payload_.expressed_in(robot_->description().flange).to_standard_parameters();
+    tau_payload = Y.block(0, 10 * (n - 1), n, 10) * pi;
+  }
+}
+
+void TwinModel::friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
+                             Eigen::Ref<Eigen::Matrix<double, kFrictionColumns, 1>> row) const {
+  const double v = qd[j];
+  const double T = temperature.size() > j && std::isfinite(temperature[j]) ? temperature[j] : temperature_ref;
+  row(kCoulomb) = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+  row(kViscous) = v;
+  row(kOffset) = 1.0;
+  row(kArmature) = qdd[j];
+  row(kViscousTemperature) = v * (T - temperature_ref);
+}
+
+void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                        VectorJ& current) const {
+  VectorJ tau_p;
+  regress(q, qd, qdd, Y_, tau_p);
+  const int n = robot_->n_dof();
+  torque.resize(n);
+  current.resize(n);
+  Eigen::Matrix<double, kFrictionColumns, 1> f;
+  for (int j = 0; j < n; ++j) {
+    const JointDrive& d = joints[static_cast<size_t>(j)];
+    double tau = tau_p[j];
+    for (size_t c = 0; c < base_columns.size(); ++c) tau += Y_(j, base_columns[c]) * beta(static_cast<Eigen::Index>(c));
+    friction_row(j, qd, qdd, temperature, f);
+    tau += f.dot(d.friction);
+    torque[j] = tau;
+    current[j] = (tau * qd[j] < 0.0 ? d.c_gen : 1.0) * tau / d.gain;
+  }
+}
+
+void TwinModel::predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
+                                VectorJ& current) const {
+  VectorJ tau;
+  predict(q, qd, qdd, temperature, tau, current);
+}
+
+std::string TwinModel::to_json() const {
+  nlohmann::json j;
+  j["format"] = "twinwatch-twin";
+  j["version"] = 1;
+  j["robot"] = robot_name_;
+  j["method"] = method;
+  j["created"] = created;
+  j["recordings"] = recordings;
+  j["temperature_ref"] = temperature_ref;
+  j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
+  j["gains_absolute"] = gains_absolute;
+  j["base_columns"] = base_columns;
+  j["beta"] = numbers(beta);
+  for (const auto& m : joints) {
+    nlohmann::json e;
+    e["gain"] = m.gain;
+    e["c_gen"] = m.c_gen;
+    e["friction"] = numbers(Eigen::VectorXd(m.friction));
+    e["friction_columns"] = {"coulomb", "viscous", "offset", "armature", "viscous_temperature"};
+    e["train_rmse"] = m.rmse;
+    e["train_r2"] = m.r2;
+    j["joints"].push_back(e);
+  }
+  return j.dump(1);
+}
+
+TwinModel TwinModel::from_json(const std::string& text, const std::string& origin) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw ParseError(origin, 0, "", fmt::format("not valid JSON: {}", e.what()));
+  }
+  auto need = [&](const nlohmann::json& o, const char* key, const std::string& path) -> const nlohmann::json& {
+    if (!o.contains(key)) throw ParseError(origin, 0, path + key, "missing required field");
+    return o.at(key);
+  };
+  if (j.value("format", "") != "twinwatch-twin")
+    throw ParseError(origin, 0, "format", "expected \"twinwatch-twin\" (is this a twin file from twinwatch identify?)");
+  try {
+    const std::string robot = need(j, "robot", "").get<std::string>();
+    TwinModel t(robot, model::load_robot(robot));
+    t.method = j.value("method", "physics");
+    t.created = j.value("created", "");
+    t.recordings = j.value("recordings", std::vector<std::string>{});
+    t.temperature_ref = j.value("temperature_ref", 35.0);
+    const auto& js = need(j, "joints", "");
+    if (!js.is_array() || static_cast<int>(js.size()) != t.n_dof())
+      throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));
+    t.gains_absolute = j.value("gains_absolute", false);
+    t.base_columns = need(j, "base_columns", "").get<std::vector<int>>();
+    for (int c : t.base_columns)
+      if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));
+    t.beta = numbers(need(j, "beta", ""), origin, "beta");
+    if (static_cast<size_t>(t.beta.size()) != t.base_columns.size())
+      throw ParseError(origin, 0, "beta", fmt::format("expected {} values (one per base column), got {}", t.base_columns.size(), t.beta.size()));
+    if (!t.beta.allFinite()) throw ParseError(origin, 0, "beta", "values must be finite numbers");
+    for (size_t k = 0; k < js.size(); ++k) {
+      const std::string p = fmt::format("joints[{}].", k);
+      JointDrive m;
+      m.gain = need(js[k], "gain", p).get<double>();
+      if (!(m.gain > 0.0)) throw ParseError(origin, 0, p + "gain", fmt::format("must be > 0, got {}", m.gain));
+      m.c_gen = js[k].value("c_gen", 1.0);
+      const Eigen::VectorXd f = numbers(need(js[k], "friction", p), origin, p + "friction");
+      if (f.size() != kFrictionColumns)
+        throw ParseError(origin, 0, p + "friction", fmt::format("expected {} values, got {}", int(kFrictionColumns), f.size()));
+      m.friction = f;
+      m.rmse = js[k].value("train_rmse", 0.0);
+      m.r2 = js[k].value("train_r2", 0.0);
+      t.joints.push_back(m);
+    }
+    if (j.contains("payload")) {
+      model::RigidBodyInertia p;
+      p.mass = j["payload"].value("mass", 0.0);
+      const auto c = j["payload"].value("com", std::vector<double>{0, 0, 0});
+      if (c.size() == 3) p.com = Eigen::Vector3d(c[0], c[1], c[2]);
+      t.set_payload(p);
+    }
+    return t;
+  } catch (const nlohmann::json::type_error& e) {
+    throw ParseError(origin, 0, "", fmt::format("wrong type: {}", e.what()));
+  } catch (const InvalidArgument& e) {
+    throw ParseError(origin, 0, "robot", e.what());
+  }
+}
+
+void TwinModel::save(const std::string& path) const {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  f << to_json() << '\n';
+}
+
+TwinModel TwinModel::load(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw ParseError(path, 0, "", "cannot open the twin file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return from_json(ss.str(), path);
+}
+
+}  // namespace twinwatch::ident

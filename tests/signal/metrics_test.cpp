@@ -1,0 +1,38 @@
+#include "twinwatch/signal/metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::signal {
+namespace {
+
+TEST(FitMetrics, HandComputedValues) {
+  const std::vector<double> y{1, 2, 3, 4}, yhat{1.5, 2, 2.5, 4};
+  const FitMetrics m = fit_metrics(y, yhat);
+  EXPECT_DOUBLE_EQ(m.rmse, std::sqrt(0.5 / 4));
+  EXPECT_DOUBLE_EQ(m.mae, 1.0 / 4);
+  EXPECT_DOUBLE_EQ(m.r2, 1.0 - 0.5 / 5.0);       // SS_tot = 5
+  EXPECT_DOUBLE_EQ(m.nrmse_pct, 100 * std::sqrt(0.125) / 3);
+  EXPECT_DOUBLE_EQ(m.rel_err_pct, 100 * std::sqrt(0.5 / 30));
+  EXPECT_DOUBLE_EQ(m.max_abs, 0.5);
+}
+
+TEST(FitMetrics, PerfectPredictionAndNanSkipping) {
+  const std::vector<double> y{1, NAN, 3}, yhat{1, 7, 3};
+  const FitMetrics m = fit_metrics(y, yhat);
+  EXPECT_EQ(m.n, 2);
+  EXPECT_EQ(m.rmse, 0.0);
+  EXPECT_EQ(m.r2, 1.0);
+}
+
+TEST(FitMetrics, MismatchedLengthsAreRejected) {
+  const std::vector<double> a{1, 2}, b{1};
+  EXPECT_THROW(fit_metrics(a, b), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace twinwatch::signal
