@@ -97,6 +97,7 @@ std::string TwinModel::to_json() const {
   j["temperature_ref"] = temperature_ref;
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
+  if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
   j["base_columns"] = base_columns;
   j["beta"] = numbers(beta);
   for (const auto& m : joints) {
@@ -136,6 +137,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     if (!js.is_array() || static_cast<int>(js.size()) != t.n_dof())
       throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));
     t.gains_absolute = j.value("gains_absolute", false);
+    if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
     t.base_columns = need(j, "base_columns", "").get<std::vector<int>>();
     for (int c : t.base_columns)
       if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));

@@ -10,6 +10,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "verb_registry.hpp"
 
@@ -85,6 +86,10 @@ int run_identify(const IdentifyOptions& o) {
   ident::TwinModel twin = ident::identify_physics(o.robot, runs, io, report, [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
   });
+  // thresholds of the monitor from the same healthy recordings (re-learn with 'twinwatch thresholds')
+  std::vector<monitor::HealthyRun> healthy;
+  for (const auto& r : runs) healthy.push_back({r.recording, r.payload});
+  twin.monitor_json = monitor::learn_thresholds(twin, healthy).to_json();
   twin.save(o.output);
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);

@@ -50,6 +50,7 @@ class TwinModel {
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
   std::string created;                  ///< ISO time
+  std::string monitor_json;             ///< the monitor's learned thresholds (opaque JSON, "" if none)
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }

@@ -1,0 +1,200 @@
+// `twinwatch monitor`, `twinwatch thresholds`, `twinwatch evaluate`: the condition-monitoring loop
+// on recordings, threshold re-learning, and scoring against scenario labels.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/monitor/monitor.hpp"
+#include "twinwatch/sim/scenario.hpp"
+#include "twinwatch/ui/html_report.hpp"
+#include "evaluate.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+
+struct MonitorOptions {
+  std::string twin, recording, events_path, db_path = "events.db";
+  double payload_mass = 0.0;
+  std::vector<double> payload_com;
+  std::vector<double> sensitivity;
+  bool static_threshold = false, quiet = false, json = false;
+};
+
+monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path) {
+  if (twin.monitor_json.empty())
+    throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", path, path));
+  return monitor::MonitorConfig::from_json(twin.monitor_json, path);
+}
+
+int run_monitor(const MonitorOptions& o) {
+  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  monitor::MonitorConfig cfg = config_of(twin, o.twin);
+  if (o.static_threshold) cfg.use_dynamic = false;
+  if (!o.sensitivity.empty()) {
+    if (static_cast<int>(o.sensitivity.size()) == 1) cfg.sensitivity = VectorJ::Constant(twin.n_dof(), o.sensitivity[0]);
+    else {
+      cfg.sensitivity.resize(static_cast<int>(o.sensitivity.size()));
+      for (size_t k = 0; k < o.sensitivity.size(); ++k) cfg.sensitivity[static_cast<int>(k)] = o.sensitivity[k];
+    }
+  }
+  const device::Recording rec = device::read_recording(o.recording);
+  if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
+  if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
+  model::RigidBodyInertia p;
+  p.mass = o.payload_mass;
+  if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);
+  twin.set_payload(p);
+  monitor::Monitor mon(twin, cfg);
+  std::ofstream jl;
+  if (!o.events_path.empty()) {
+    jl.open(o.events_path);
+    if (!jl) throw std::runtime_error(o.events_path + ": cannot open for writing");
+  }
+  std::unique_ptr<monitor::EventStore> store;
+  if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
+  mon.on_event = [&](const monitor::Event& e) {
+    if (e.open) {
+      if (!o.quiet && !o.json) fmt::print("{:9.3f} s  ALERT  {}\n", e.t_start, e.detail);
+      return;
+    }
+    if (!o.quiet && !o.json)
+      fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
+                 e.duration(), 100 * e.confidence);
+    if (jl) jl << e.to_json_line() << '\n';
+    if (o.json) fmt::print("{}\n", e.to_json_line());
+    if (store) store->insert(e, o.recording);
+  };
+  for (const auto& s : rec.samples) mon.push(s);
+  mon.finish();
+  if (!o.quiet && !o.json)
+    fmt::print("{} samples, {} gap(s), {} event(s){}\n", mon.samples(), mon.gaps(), mon.events().size(),
+               o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));
+  return 0;
+}
+
+struct ThresholdOptions {
+  std::string twin;
+  std::vector<std::string> recordings;
+  double payload_mass = 0.0;
+};
+
+int run_thresholds(const ThresholdOptions& o) {
+  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  std::vector<device::Recording> recs;
+  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f));
+  std::vector<monitor::HealthyRun> runs;
+  model::RigidBodyInertia p;
+  p.mass = o.payload_mass;
+  for (const auto& r : recs) runs.push_back({&r, p});
+  const auto cfg = monitor::learn_thresholds(twin, runs);
+  twin.monitor_json = cfg.to_json();
+  twin.save(o.twin);
+  fmt::print("thresholds learned from {} healthy recording(s) and stored in {}\n", recs.size(), o.twin);
+  for (int j = 0; j < twin.n_dof(); ++j)
+    fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
+               cfg.static_level[j], cfg.dynamic[static_cast<size_t>(j)].psi_qdd, cfg.dynamic[static_cast<size_t>(j)].psi_qd,
+               cfg.dynamic[static_cast<size_t>(j)].psi_rev, cfg.dynamic[static_cast<size_t>(j)].rho, cfg.dynamic[static_cast<size_t>(j)].upsilon);
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
+  auto o = std::make_shared<MonitorOptions>();
+  auto* sub = app.add_subcommand("monitor", "Watch a recording with the twin: residuals, alerts, diagnosis, events");
+  sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file");
+  sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m]")->expected(3);
+  sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
+  sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
+  sub->add_flag("--json", o->json, "Print closed events as JSON lines only");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_monitor(*o)); });
+}};
+
+twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app) {
+  auto o = std::make_shared<ThresholdOptions>();
+  auto* sub = app.add_subcommand("thresholds", "Re-learn the monitor's thresholds from healthy recordings (per payload/program)");
+  sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_thresholds(*o)); });
+}};
+
+struct EvaluateOptions {
+  std::string dir, twin, robot = "ur3e";
+  bool json = false, static_threshold = false;
+  double max_duration = 0.0;
+};
+
+int run_evaluate(const EvaluateOptions& o) {
+  std::vector<std::string> files;
+  if (std::filesystem::is_directory(o.dir)) {
+    for (const auto& e : std::filesystem::directory_iterator(o.dir))
+      if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") files.push_back(e.path().string());
+  } else {
+    files.push_back(o.dir);
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
+  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json);
+  if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
+  else cli::print_evaluation(ev);
+  return 0;
+}
+
+struct ReportOptions {
+  std::string twin, recording, output = "report.html", labels;
+  double payload_mass = 0.0;
+  std::vector<double> payload_com;
+};
+
+int run_report(const ReportOptions& o) {
+  const ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  std::string labels;
+  if (!o.labels.empty()) {
+    std::ifstream f(o.labels);
+    if (!f) throw std::runtime_error(o.labels + ": cannot open");
+    labels.assign(std::istreambuf_iterator<char>(f), {});
+  }
+  cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels);
+  fmt::print("report written to {}\n", o.output);
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
+  auto o = std::make_shared<EvaluateOptions>();
+  auto* sub = app.add_subcommand("evaluate", "Simulate scenarios, monitor them and score detection against the labels");
+  sub->add_option("SCENARIOS", o->dir, "Scenario directory (e.g. scenarios/ur3e) or one scenario file")->required()->check(CLI::ExistingPath);
+  sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
+  sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
+  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
+  sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
+  sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_evaluate(*o)); });
+}};
+
+twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
+  auto o = std::make_shared<ReportOptions>();
+  auto* sub = app.add_subcommand("report", "Write a self-contained HTML report: currents, residuals, thresholds, alerts, tables");
+  sub->add_option("--twin", o->twin, "Twin file")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
+  sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
+  sub->add_option("--payload-com", o->payload_com, "Payload COM [m]")->expected(3);
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
+}};
+
+}  // namespace

@@ -1,0 +1,111 @@
+#pragma once
+/// @file monitor.hpp
+/// The condition-monitoring loop: sample -> residual -> decision -> event.
+///
+/// Per sample (allocation-free): predicted current from the twin, residual r = i - i_hat [A],
+/// first-order IIR filter [AGV §4.3], state-dependent threshold [Cao eq. 24] (or the static one
+/// [UR3e §4.1]), counter debounce [AGV §5] per joint, stream-gap and frozen-channel checks. When an
+/// alert is raised, the residual window around it is handed to the signature diagnosis
+/// (diagnosis.hpp) once `diagnosis_delay` seconds of it are available; the event is reported when
+/// raised (class pending), when diagnosed, and when cleared.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "twinwatch/core/sample.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/twin_model.hpp"
+#include "twinwatch/monitor/debounce.hpp"
+#include "twinwatch/monitor/diagnosis.hpp"
+#include "twinwatch/monitor/event.hpp"
+#include "twinwatch/monitor/threshold.hpp"
+
+namespace twinwatch::monitor {
+
+/// Learned thresholds and user settings; stored in the twin file under "monitor".
+struct MonitorConfig {
+  VectorJ static_level;                       ///< [A] per joint
+  std::vector<DynamicThresholdJoint> dynamic; ///< [A] per joint (Cao eq. 24)
+  bool use_dynamic = true;
+  double filter_cutoff_hz = 40.0;             ///< first-order IIR on the current residual
+  int raise_after = 3;                        ///< consecutive exceedances that raise an alert
+  int clear_after = 50;                       ///< consecutive samples below that clear it
+  VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
+  double nominal_period = 0.002;              ///< [s]
+  double gap_factor = 1.5;                    ///< dt > gap_factor * period is a stream gap
+  double diagnosis_delay = 0.12;              ///< [s] of residual after the raise used by the diagnosis
+  double diagnosis_pre = 0.04;                ///< [s] before the raise
+  int frozen_samples = 25;                    ///< identical consecutive currents while moving: stuck channel
+
+  void validate(int n_dof) const;
+  std::string to_json() const;
+  static MonitorConfig from_json(const std::string& text, const std::string& origin);
+};
+
+struct LearnOptions {
+  double k_sigma = 3.0;   ///< UR3e §4.1
+  DynamicThresholdOptions dynamic;
+};
+
+/// A healthy run for threshold learning.
+struct HealthyRun {
+  const device::Recording* recording = nullptr;
+  model::RigidBodyInertia payload;
+};
+
+/// Learns static and dynamic thresholds from healthy runs with the twin's residuals.
+/// The static level is max(max-MAE + k sigma [UR3e], 1.1 x max healthy |r| [Cao]) so that the
+/// training data itself never trips it.
+MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs,
+                               const MonitorConfig& settings = {}, const LearnOptions& options = {});
+
+class Monitor {
+ public:
+  Monitor(const ident::TwinModel& twin, MonitorConfig config);
+
+  /// Processes one sample. Calls on_event for every raise, diagnosis and clear.
+  void push(const RobotSample& s);
+  /// Closes an open alert at the end of a run.
+  void finish();
+
+  std::function<void(const Event&)> on_event;
+
+  /// Outputs of the last sample.
+  const VectorJ& predicted_current() const { return i_hat_; }
+  const VectorJ& residual() const { return r_; }
+  const VectorJ& filtered_residual() const { return rf_; }
+  const VectorJ& level() const { return level_; }
+  double total_current() const { return i_total_; }
+  /// All events so far (closed and open).
+  const std::vector<Event>& events() const { return events_; }
+  long samples() const { return n_samples_; }
+  long gaps() const { return n_gaps_; }
+  /// The twin with the monitor's payload (set it when the program changes the payload).
+  ident::TwinModel& twin() { return twin_; }
+
+ private:
+  void open_event(int joint, double start, double t);
+  void run_diagnosis(double t);
+  double torque_gain(int j) const;
+
+  ident::TwinModel twin_;
+  MonitorConfig cfg_;
+  int n_;
+  double alpha_ = 1.0;  // IIR coefficient
+  std::vector<Debouncer> deb_;
+  VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
+  std::vector<int> frozen_run_;
+  double i_total_ = 0.0, t_prev_ = 0.0;
+  bool have_prev_ = false, filter_started_ = false;
+  long n_samples_ = 0, n_gaps_ = 0;
+  // ring buffer of recent samples for the diagnosis
+  std::vector<DiagnosisSample> ring_;
+  size_t ring_head_ = 0, ring_count_ = 0;
+  std::vector<Event> events_;
+  int open_ = -1;             // index of the open event
+  bool diagnosed_ = false;
+  double raise_time_ = 0.0;
+  std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
+};
+
+}  // namespace twinwatch::monitor

@@ -1,0 +1,323 @@
+#include "twinwatch/monitor/monitor.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/physics_ident.hpp"
+
+namespace twinwatch::monitor {
+
+namespace {
+// Cao's static rule: a margin above the largest healthy residual
+constexpr double kStaticPeakMargin = 1.1;
+// the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
+constexpr double kMovingVelocity = 0.01;
+// plausible current-to-torque gains of an arm joint [N·m/A]; outside, the identified gain is not
+// trusted for converting residuals to torque and the median of the plausible ones is used
+constexpr double kGainMin = 1.0, kGainMax = 200.0;
+
+double iir_alpha(double cutoff_hz, double period) {
+  // y += a (x - y), a = 1 - exp(-2 pi fc T)
+  return 1.0 - std::exp(-2.0 * M_PI * cutoff_hz * period);
+}
+
+nlohmann::json vec_json(const VectorJ& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+VectorJ json_vec(const nlohmann::json& a) {
+  VectorJ v(static_cast<int>(a.size()));
+  for (size_t i = 0; i < a.size(); ++i) v[static_cast<int>(i)] = a[i].get<double>();
+  return v;
+}
+
+// first-order IIR over a whole run of residuals, per joint
+std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const device::Recording& rec, double alpha,
+                                        std::vector<VectorJ>& qdds) {
+  qdds = ident::joint_accelerations(rec);
+  std::vector<VectorJ> out;
+  out.reserve(rec.samples.size());
+  VectorJ i, rf;
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i);
+    const VectorJ r = s.current - i;
+    if (k == 0) rf = r;
+    else rf += alpha * (r - rf);
+    out.push_back(rf);
+  }
+  return out;
+}
+
+}  // namespace
+
+void MonitorConfig::validate(int n) const {
+  if (static_level.size() != n) throw InvalidArgument(fmt::format("monitor static_level has size {}, expected {}", static_level.size(), n));
+  if (use_dynamic && static_cast<int>(dynamic.size()) != n)
+    throw InvalidArgument(fmt::format("monitor dynamic thresholds: {} joints, expected {}", dynamic.size(), n));
+  if (!(filter_cutoff_hz > 0.0)) throw InvalidArgument(fmt::format("filter_cutoff_hz is {}, must be > 0", filter_cutoff_hz));
+  if (raise_after < 1) throw InvalidArgument(fmt::format("raise_after is {}, must be >= 1", raise_after));
+  if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
+  if (sensitivity.size() != 0 && sensitivity.size() != n)
+    throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
+  for (int j = 0; j < sensitivity.size(); ++j)
+    if (!(sensitivity[j] > 0.0)) throw InvalidArgument(fmt::format("sensitivity of joint {} is {}, must be > 0", j + 1, sensitivity[j]));
+  if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
+}
+
+std::string MonitorConfig::to_json() const {
+  nlohmann::json j;
+  j["static_level_A"] = vec_json(static_level);
+  for (const auto& d : dynamic)
+    j["dynamic"].push_back({{"psi_qdd", d.psi_qdd}, {"psi_qd", d.psi_qd}, {"psi_rev", d.psi_rev}, {"upsilon", d.upsilon},
+                            {"rho", d.rho}, {"margin", d.margin}, {"alpha", d.alpha}});
+  j["use_dynamic"] = use_dynamic;
+  j["filter_cutoff_hz"] = filter_cutoff_hz;
+  j["raise_after"] = raise_after;
+  j["clear_after"] = clear_after;
+  if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
+  j["nominal_period"] = nominal_period;
+  return j.dump();
+}
+
+MonitorConfig MonitorConfig::from_json(const std::string& text, const std::string& origin) {
+  MonitorConfig c;
+  try {
+    const auto j = nlohmann::json::parse(text);
+    c.static_level = json_vec(j.at("static_level_A"));
+    if (j.contains("dynamic"))
+      for (const auto& d : j["dynamic"])
+        c.dynamic.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"), d.value("margin", 0.0),
+                             d.value("alpha", 0.0)});
+    c.use_dynamic = j.value("use_dynamic", !c.dynamic.empty());
+    c.filter_cutoff_hz = j.value("filter_cutoff_hz", c.filter_cutoff_hz);
+    c.raise_after = j.value("raise_after", c.raise_after);
+    c.clear_after = j.value("clear_after", c.clear_after);
+    if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"]);
+    c.nominal_period = j.value("nominal_period", c.nominal_period);
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
+  }
+  return c;
+}
+
+MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs, const MonitorConfig& settings,
+                               const LearnOptions& options) {
+  if (runs.empty()) throw InvalidArgument("learn thresholds: no healthy runs given");
+  const int n = twin.n_dof();
+  MonitorConfig c = settings;
+  const double alpha = iir_alpha(c.filter_cutoff_hz, c.nominal_period);
+  std::vector<std::vector<VectorJ>> res;
+  std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n));
+  VectorJ peak = VectorJ::Zero(n);
+  for (const HealthyRun& h : runs) {
+    ident::TwinModel t = twin;
+    t.set_payload(h.payload);
+    std::vector<VectorJ> qdds;
+    auto rf = filtered_residuals(t, *h.recording, alpha, qdds);
+    // skip the filter's start-up
+    const size_t skip = std::min<size_t>(rf.size(), 50);
+    for (size_t k = skip; k < rf.size(); ++k) {
+      peak = peak.cwiseMax(rf[k].cwiseAbs());
+      for (int j = 0; j < n; ++j) {
+        r[static_cast<size_t>(j)].push_back(rf[k][j]);
+        qd[static_cast<size_t>(j)].push_back(h.recording->samples[k].qd[j]);
+        qdd[static_cast<size_t>(j)].push_back(qdds[k][j]);
+      }
+    }
+    res.emplace_back(rf.begin() + static_cast<long>(skip), rf.end());
+  }
+  c.static_level = StaticThreshold::learn(res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
+  c.dynamic.clear();
+  for (int j = 0; j < n; ++j) {
+    const auto fit = fit_dynamic_threshold(r[static_cast<size_t>(j)], qd[static_cast<size_t>(j)], qdd[static_cast<size_t>(j)], options.dynamic);
+    if (!fit.ok) throw InvalidArgument(fmt::format("dynamic threshold of joint {}: {}", j + 1, fit.message));
+    c.dynamic.push_back(fit.params);
+  }
+  return c;
+}
+
+Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()) {
+  cfg_.validate(n_);
+  if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
+  alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
+  deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
+  i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
+  frozen_run_.assign(static_cast<size_t>(n_), 0);
+  const size_t cap = static_cast<size_t>(std::ceil((cfg_.diagnosis_pre + cfg_.diagnosis_delay + 0.5) / cfg_.nominal_period));
+  ring_.resize(cap);
+  for (auto& d : ring_) {
+    d.q = d.qd = d.qdd = d.r_tau = d.current = VectorJ::Zero(n_);
+  }
+  window_.reserve(cap);
+  events_.reserve(64);
+}
+
+double Monitor::torque_gain(int j) const {
+  const auto& js = twin_.joints;
+  const double g = js[static_cast<size_t>(j)].gain;
+  if (g >= kGainMin && g <= kGainMax) return g;
+  std::vector<double> ok;
+  for (const auto& d : js)
+    if (d.gain >= kGainMin && d.gain <= kGainMax) ok.push_back(d.gain);
+  if (ok.empty()) return 1.0;
+  std::nth_element(ok.begin(), ok.begin() + static_cast<long>(ok.size() / 2), ok.end());
+  return ok[ok.size() / 2];
+}
+
+void Monitor::open_event(int joint, double start, double t) {
+  Event e;
+  e.t_start = start;
+  e.t_end = t;
+  e.open = true;
+  e.joint = joint;
+  e.fault = FaultClass::Unknown;
+  e.detail = fmt::format("residual above threshold on J{}", joint + 1);
+  events_.push_back(e);
+  open_ = static_cast<int>(events_.size()) - 1;
+  diagnosed_ = false;
+  raise_time_ = t;
+  if (on_event) on_event(events_.back());
+}
+
+void Monitor::run_diagnosis(double t) {
+  Event& e = events_[static_cast<size_t>(open_)];
+  window_.clear();
+  const double from = e.t_start - cfg_.diagnosis_pre;
+  for (size_t k = 0; k < ring_count_; ++k) {
+    const size_t idx = (ring_head_ + ring_.size() - ring_count_ + k) % ring_.size();
+    if (ring_[idx].t >= from) window_.push_back(ring_[idx]);
+  }
+  DiagnosisOptions o;
+  o.frozen_samples = cfg_.frozen_samples;
+  // the exceedance lasted until now, or ended if the joints are below again
+  bool any_active = false;
+  for (const auto& d : deb_) any_active |= d.active();
+  const double duration = t - e.t_start;
+  const auto hyps = diagnose(twin_.robot(), window_, any_active ? duration : duration, e.joint, o);
+  const Hypothesis& h = hyps.front();
+  e.fault = h.fault;
+  if (h.joint >= 0) e.joint = h.joint;
+  e.link = h.link;
+  e.magnitude = h.magnitude;
+  e.units = h.units;
+  e.confidence = h.explained;
+  e.detail = h.detail;
+  diagnosed_ = true;
+  if (on_event) on_event(e);
+}
+
+void Monitor::push(const RobotSample& s) {
+  const double t = s.timestamp;
+  ++n_samples_;
+  // stream: gaps in the controller timestamp are events of their own, never interpolated
+  const double dt = have_prev_ ? t - t_prev_ : cfg_.nominal_period;
+  if (have_prev_ && (s.gap_before || dt > cfg_.gap_factor * cfg_.nominal_period)) {
+    ++n_gaps_;
+    Event g;
+    g.t_start = t_prev_;
+    g.t_end = t;
+    g.open = false;
+    g.fault = FaultClass::StreamFault;
+    g.magnitude = std::round(dt / cfg_.nominal_period) - 1.0;
+    g.units = "samples";
+    g.confidence = 1.0;
+    g.detail = fmt::format("{:.0f} sample(s) missing ({:.1f} ms gap in the controller timestamp)", g.magnitude, 1000 * dt);
+    events_.push_back(g);
+    if (on_event) on_event(g);
+  }
+  // acceleration: the controller's target when streamed, else a filtered difference of qd
+  if (s.has(kFieldTargetQdd)) {
+    qdd_ = s.target_qdd;
+  } else if (have_prev_ && dt > 0.0) {
+    qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
+  }
+  twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_);
+  r_ = s.current - i_hat_;
+  if (!filter_started_) {
+    rf_ = r_;
+    filter_started_ = true;
+  } else {
+    rf_ += alpha_ * (r_ - rf_);
+  }
+  i_total_ = s.current.cwiseAbs().sum();
+  // thresholds
+  for (int j = 0; j < n_; ++j) {
+    const double base = cfg_.use_dynamic ? cfg_.dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j]) : cfg_.static_level[j];
+    level_[j] = base * cfg_.sensitivity[j];
+  }
+  // ring buffer for the diagnosis (torque-domain residual through the drive gains)
+  DiagnosisSample& ds = ring_[ring_head_];
+  ds.t = t;
+  ds.q = s.q;
+  ds.qd = s.qd;
+  ds.qdd = qdd_;
+  for (int j = 0; j < n_; ++j) ds.r_tau[j] = torque_gain(j) * rf_[j];
+  ds.current = s.current;
+  ds.digital_outputs = s.digital_outputs;
+  ds.gap_before = false;  // gaps are reported as their own events
+  ring_head_ = (ring_head_ + 1) % ring_.size();
+  ring_count_ = std::min(ring_count_ + 1, ring_.size());
+
+  // frozen current channel while the joint moves: a sensor fault even below the threshold
+  for (int j = 0; j < n_; ++j) {
+    int& run = frozen_run_[static_cast<size_t>(j)];
+    run = (s.current[j] == frozen_val_[j] && std::abs(s.qd[j]) > kMovingVelocity) ? run + 1 : 0;
+    frozen_val_[j] = s.current[j];
+    if (run == cfg_.frozen_samples) {
+      Event f;
+      f.t_start = t - run * cfg_.nominal_period;
+      f.t_end = t;
+      f.open = false;
+      f.fault = FaultClass::SensorFault;
+      f.joint = j;
+      f.magnitude = run;
+      f.units = "samples";
+      f.confidence = 1.0;
+      f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves", j + 1, s.current[j]);
+      events_.push_back(f);
+      if (on_event) on_event(f);
+      if (open_ >= 0) open_ = static_cast<int>(events_.size()) - 2;  // keep pointing at the open alert
+    }
+  }
+
+  // decisions
+  bool any_active = false;
+  for (int j = 0; j < n_; ++j) {
+    const auto ch = deb_[static_cast<size_t>(j)].update(std::abs(rf_[j]) > level_[j], t);
+    if (ch == Debouncer::Change::Raised && open_ < 0) open_event(j, deb_[static_cast<size_t>(j)].start(), t);
+    any_active |= deb_[static_cast<size_t>(j)].active();
+  }
+  if (open_ >= 0) {
+    Event& e = events_[static_cast<size_t>(open_)];
+    e.t_end = t;
+    e.peak_residual = std::max(e.peak_residual, rf_.cwiseAbs().maxCoeff());
+    if (!diagnosed_ && t - raise_time_ >= cfg_.diagnosis_delay) run_diagnosis(t);
+    if (!any_active) {
+      if (!diagnosed_) run_diagnosis(t);
+      Event& done = events_[static_cast<size_t>(open_)];
+      done.open = false;
+      open_ = -1;
+      if (on_event) on_event(done);
+    }
+  }
+  qd_prev_ = s.qd;
+  t_prev_ = t;
+  have_prev_ = true;
+}
+
+void Monitor::finish() {
+  if (open_ < 0) return;
+  if (!diagnosed_) run_diagnosis(t_prev_);
+  Event& e = events_[static_cast<size_t>(open_)];
+  e.open = false;
+  open_ = -1;
+  if (on_event) on_event(e);
+}
+
+}  // namespace twinwatch::monitor
