@@ -18,6 +18,8 @@ constexpr double kContactJointFraction = 0.2;
 // samples whose residual norm is below this fraction of the window's peak are left out of the
 // contact fit (a collision pulse is short; the rest of the window is noise).
 constexpr double kPulseFraction = 0.3;
+// the residual at the end of the window, relative to its peak, above which a fault persists
+constexpr double kPersistentFraction = 0.35;
 // a hypothesis with one more parameter must explain this much more to win a tie
 constexpr double kComplexityPenalty = 0.02;
 // velocity below which a joint is taken as at rest for the frozen-channel check [rad/s]
@@ -213,7 +215,18 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
 
   // score every signature; parameters count as a small penalty
   std::vector<std::pair<double, Hypothesis>> scored;
-  const bool pulse = alert_duration < options.collision_max_duration;
+  // shape: a collision is a pulse that has decayed by the end of the window; a payload change or
+  // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint.
+  int dom = 0;
+  double peak_abs = 0.0;
+  for (const auto& s : window)
+    for (int j = 0; j < n; ++j)
+      if (std::abs(s.r_tau[j]) > peak_abs) peak_abs = std::abs(s.r_tau[j]), dom = j;
+  double tail = 0.0;
+  const size_t q0 = window.size() - std::max<size_t>(1, window.size() / 4);
+  for (size_t k = q0; k < window.size(); ++k) tail += window[k].r_tau[dom];
+  tail = std::abs(tail) / static_cast<double>(window.size() - q0);
+  const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
   Hypothesis contact = contact_hypothesis(model, window, total);
   scored.emplace_back(contact.explained - (pulse ? 0.0 : 0.3), contact);
   Hypothesis payload = payload_hypothesis(model, window, total);
@@ -222,7 +235,13 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     Hypothesis r = resistance_hypothesis(window, j, total);
     scored.emplace_back(r.explained - 2 * kComplexityPenalty - (pulse ? 0.3 : 0.0), r);
     Hypothesis o = offset_hypothesis(window, j, total);
-    scored.emplace_back(o.explained - kComplexityPenalty - (pulse ? 0.3 : 0.0), o);
+    // without a velocity reversal a constant offset and a Coulomb resistance look alike; extra
+    // torque that works against the motion is the common case (UR3e §2.3), so the offset only
+    // wins when the joint reverses (or rests) inside the window
+    bool pos = false, neg = false, rest = false;
+    for (const auto& smp : window) pos |= smp.qd[j] > kMovingVelocity, neg |= smp.qd[j] < -kMovingVelocity, rest |= std::abs(smp.qd[j]) <= kMovingVelocity;
+    const double ambiguity = (pos && neg) || rest ? 0.0 : 0.25;
+    scored.emplace_back(o.explained - kComplexityPenalty - ambiguity - (pulse ? 0.3 : 0.0), o);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   for (auto& [score, h] : scored) out.push_back(h);

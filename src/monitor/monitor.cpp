@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -12,13 +13,17 @@
 namespace twinwatch::monitor {
 
 namespace {
+// persistent faults (not a pulse) are diagnosed again on this much residual after the raise [s]:
+// friction and payload signatures need motion in both directions to tell them apart
+constexpr double kLongWindow = 1.0;
 // Cao's static rule: a margin above the largest healthy residual
 constexpr double kStaticPeakMargin = 1.1;
 // the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
 constexpr double kMovingVelocity = 0.01;
-// plausible current-to-torque gains of an arm joint [N·m/A]; outside, the identified gain is not
+// plausible current-to-torque gains kt N eta of a harmonic-drive arm joint [N·m/A] (kt 0.05-0.3,
+// N 50-160, eta 0.7-0.95); outside, the identified gain is not
 // trusted for converting residuals to torque and the median of the plausible ones is used
-constexpr double kGainMin = 1.0, kGainMax = 200.0;
+constexpr double kGainMin = 2.0, kGainMax = 40.0;
 
 double iir_alpha(double cutoff_hz, double period) {
   // y += a (x - y), a = 1 - exp(-2 pi fc T)
@@ -149,7 +154,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
-  const size_t cap = static_cast<size_t>(std::ceil((cfg_.diagnosis_pre + cfg_.diagnosis_delay + 0.5) / cfg_.nominal_period));
+  const size_t cap = static_cast<size_t>(std::ceil((cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
   ring_.resize(cap);
   for (auto& d : ring_) {
     d.q = d.qd = d.qdd = d.r_tau = d.current = VectorJ::Zero(n_);
@@ -181,6 +186,7 @@ void Monitor::open_event(int joint, double start, double t) {
   events_.push_back(e);
   open_ = static_cast<int>(events_.size()) - 1;
   diagnosed_ = false;
+  rediagnosed_ = false;
   raise_time_ = t;
   if (on_event) on_event(events_.back());
 }
@@ -193,13 +199,29 @@ void Monitor::run_diagnosis(double t) {
     const size_t idx = (ring_head_ + ring_.size() - ring_count_ + k) % ring_.size();
     if (ring_[idx].t >= from) window_.push_back(ring_[idx]);
   }
+  // the window is complete, so the residual can use the actual (not the target) acceleration:
+  // a centred difference of qd over +-kDiagHalfWidth samples. Then r = tau_meas - tau_hat is the
+  // external/fault torque itself, not the controller's reaction to it.
+  constexpr long kDiagHalfWidth = 3;
+  const long W = static_cast<long>(window_.size());
+  VectorJ tau, cur;
+  const VectorJ no_temp = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
+  for (long k = 0; k < W; ++k) {
+    const long a = std::max(0L, k - kDiagHalfWidth), b = std::min(W - 1, k + kDiagHalfWidth);
+    const double span = window_[static_cast<size_t>(b)].t - window_[static_cast<size_t>(a)].t;
+    if (span > 0.0) window_[static_cast<size_t>(k)].qdd = (window_[static_cast<size_t>(b)].qd - window_[static_cast<size_t>(a)].qd) / span;
+  }
+  for (auto& d : window_) {
+    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur);
+    for (int j = 0; j < n_; ++j) d.r_tau[j] = torque_gain(j) * (d.current[j] - cur[j]);
+  }
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
   // the exceedance lasted until now, or ended if the joints are below again
   bool any_active = false;
   for (const auto& d : deb_) any_active |= d.active();
   const double duration = t - e.t_start;
-  const auto hyps = diagnose(twin_.robot(), window_, any_active ? duration : duration, e.joint, o);
+  const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o);
   const Hypothesis& h = hyps.front();
   e.fault = h.fault;
   if (h.joint >= 0) e.joint = h.joint;
@@ -298,6 +320,12 @@ void Monitor::push(const RobotSample& s) {
     e.t_end = t;
     e.peak_residual = std::max(e.peak_residual, rf_.cwiseAbs().maxCoeff());
     if (!diagnosed_ && t - raise_time_ >= cfg_.diagnosis_delay) run_diagnosis(t);
+    // a persistent fault gets a second, longer look
+    if (diagnosed_ && !rediagnosed_ && t - raise_time_ >= kLongWindow) {
+      const FaultClass c = events_[static_cast<size_t>(open_)].fault;
+      if (c != FaultClass::Collision && c != FaultClass::StreamFault) run_diagnosis(t);
+      rediagnosed_ = true;
+    }
     if (!any_active) {
       if (!diagnosed_) run_diagnosis(t);
       Event& done = events_[static_cast<size_t>(open_)];
