@@ -68,7 +68,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet) {
   ident::TwinModel twin = ident::identify_physics(robot, {{&exc, {}}, {&fig, p}}, ident::IdentOptions{}, report);
   say(fmt::format("   identified: current RMSE per joint {:.3f} A", fmt::join(report.rmse, " ")));
   // thresholds on other healthy runs: three speeds, with and without payload
-  say("   learning thresholds on separate healthy runs (3 speeds, with and without payload)");
+  say("   learning thresholds on separate healthy runs (figure-eight at 3 speeds with/without payload, triangle)");
   std::vector<device::Recording> hs;
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8, 1003, 24, 0.5), "h1"));
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8Fast, 1004, 18, 0.5), "h2"));
@@ -124,7 +124,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         used[k] = true;
         if (sc.detected) continue;
         sc.detected = true;
-        sc.delay_ms = 1000.0 * std::max(0.0, e.t_start - onset);
+        sc.delay_ms = 1000.0 * std::max(0.0, e.t_detected - onset);
         sc.predicted_class = std::string(monitor::to_string(e.fault));
         sc.class_ok = sc.predicted_class == want;
         const int lj = lf["joint"].is_null() ? -1 : lf["joint"].get<int>() - 1;

@@ -41,6 +41,7 @@ std::string Event::to_json_line() const {
   nlohmann::json j;
   j["t_start"] = t_start;
   j["t_end"] = t_end;
+  j["t_detected"] = t_detected;
   j["duration_s"] = duration();
   j["open"] = open;
   j["class"] = std::string(to_string(fault));

@@ -179,6 +179,7 @@ void Monitor::open_event(int joint, double start, double t) {
   Event e;
   e.t_start = start;
   e.t_end = t;
+  e.t_detected = t;
   e.open = true;
   e.joint = joint;
   e.fault = FaultClass::Unknown;
@@ -244,6 +245,7 @@ void Monitor::push(const RobotSample& s) {
     Event g;
     g.t_start = t_prev_;
     g.t_end = t;
+    g.t_detected = t;
     g.open = false;
     g.fault = FaultClass::StreamFault;
     g.magnitude = std::round(dt / cfg_.nominal_period) - 1.0;
@@ -295,6 +297,7 @@ void Monitor::push(const RobotSample& s) {
       Event f;
       f.t_start = t - run * cfg_.nominal_period;
       f.t_end = t;
+      f.t_detected = t;
       f.open = false;
       f.fault = FaultClass::SensorFault;
       f.joint = j;

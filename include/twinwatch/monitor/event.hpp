@@ -28,6 +28,7 @@ FaultClass fault_class_from_string(std::string_view s);
 struct Event {
   double t_start = 0.0;     ///< [s] controller time the alert was raised
   double t_end = 0.0;       ///< [s] when it cleared (== t_start while open)
+  double t_detected = 0.0;  ///< [s] when the alert was raised (t_start + debounce): the detection delay counts to here
   bool open = true;         ///< still active
   FaultClass fault = FaultClass::Unknown;
   int joint = -1;           ///< 0-based joint most affected, -1 if none
