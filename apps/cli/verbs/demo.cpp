@@ -1,11 +1,18 @@
-// `twinwatch demo`: the main job on the built-in virtual UR3e. Each step is a function; later
-// stages (simulation, identification, monitoring) add their steps here.
+// `twinwatch demo`: the whole story on the built-in virtual UR3e — check the model, identify a twin
+// from simulated healthy runs, monitor the fault scenarios, print the detection table and write
+// an HTML report. Every step is a function.
 #include <fmt/format.h>
 
+#include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
+#include "evaluate.hpp"
+#include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
+#include "twinwatch/sim/scenario.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -16,7 +23,7 @@ using namespace twinwatch;
 int step_model_check(const std::string& robot_name) {
   model::RobotModel m = model::load_robot(robot_name);
   model::DynamicsData d(m);
-  fmt::print("== step 1: robot model '{}' ({} joints, {} )\n", m.name(), m.n_dof(), m.description().source);
+  fmt::print("== step 1: robot model '{}' ({} joints, {})\n", m.name(), m.n_dof(), m.description().source);
   std::mt19937 rng(2024);
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   double worst = 0.0;
@@ -29,20 +36,67 @@ int step_model_check(const std::string& robot_name) {
     worst = std::max(worst, (M * qdd + h - tau).cwiseAbs().maxCoeff());
   }
   fmt::print("   RNEA vs M(q) qdd + C qd + g on 1000 seeded states: max difference {:.2e} N·m\n", worst);
-  VectorJ home = VectorJ::Zero(m.n_dof());
-  if (m.n_dof() == 6) home << 0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0;
-  const VectorJ g = model::gravity_torque(m, d, home);
-  fmt::print("   gravity torque at the home pose [N·m]:");
-  for (int i = 0; i < m.n_dof(); ++i) fmt::print(" {:+.3f}", g[i]);
-  fmt::print("\n");
   return worst < 1e-9 ? 0 : 1;
 }
 
+std::vector<std::string> scenario_files(const std::string& dir) {
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".yaml") files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+struct Options {
+  std::string robot = "ur3e", out = "twinwatch-demo", scenarios;
+  double max_duration = 60.0;
+  bool quick = false;
+};
+
+int run(const Options& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (step_model_check(o.robot) != 0) return 1;
+  if (o.quick) return 0;
+  std::filesystem::create_directories(o.out);
+
+  fmt::print("== step 2: identify the twin from simulated healthy runs (recordings only, DESIGN.md rule 1)\n");
+  ident::TwinModel twin = cli::train_reference(o.robot, false);
+  const std::string twin_path = (std::filesystem::path(o.out) / "twin.json").string();
+  twin.save(twin_path);
+  fmt::print("   twin written to {}\n", twin_path);
+
+  fmt::print("== step 3: monitor the scenario library ({})\n", o.scenarios);
+  const auto files = scenario_files(o.scenarios);
+  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, false, o.max_duration, false);
+  cli::print_evaluation(ev);
+  std::ofstream(std::filesystem::path(o.out) / "evaluation.json") << cli::evaluation_json(ev) << '\n';
+
+  fmt::print("== step 4: report of the J5-resistance run (UR3e §4.2)\n");
+  sim::Scenario s = sim::load_scenario((std::filesystem::path(o.scenarios) / "j5_resistance.yaml").string());
+  const std::string rec = (std::filesystem::path(o.out) / "j5_resistance.csv").string();
+  {
+    device::RecordingWriter w(rec, 6, sim::Simulator::fields());
+    sim::make_simulator(s)->run([&](const RobotSample& x) { w.write(x); });
+    w.close();
+  }
+  const std::string html = (std::filesystem::path(o.out) / "report.html").string();
+  cli::write_report(twin, rec, s.options.payload.mass, {s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z()},
+                    html, sim::labels_json(s));
+  fmt::print("   {} (open it in a browser)\n", html);
+  fmt::print("done in {:.1f} s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
 twinwatch::cli::VerbRegistrar reg{"demo", 1, [](CLI::App& app) {
-  auto robot = std::make_shared<std::string>("ur3e");
-  auto* demo = app.add_subcommand("demo", "Run the whole story on the built-in virtual UR3e");
-  demo->add_option("--robot", *robot, "Robot to use")->capture_default_str();
-  demo->callback([robot] { twinwatch::cli::set_exit_code(step_model_check(*robot)); });
+  auto o = std::make_shared<Options>();
+  o->scenarios = std::string(TWINWATCH_SOURCE_DIR) + "/scenarios/ur3e";
+  auto* demo = app.add_subcommand("demo", "Run the whole story on the built-in virtual UR3e (identify, monitor faults, report)");
+  demo->add_option("--robot", o->robot, "Robot to use")->capture_default_str();
+  demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();
+  demo->add_option("--scenarios", o->scenarios, "Scenario directory")->capture_default_str();
+  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s]")->capture_default_str();
+  demo->add_flag("--quick", o->quick, "Only the model check (step 1)");
+  demo->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
 }};
 
 }  // namespace
