@@ -77,13 +77,14 @@ Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, doubl
   return h;
 }
 
-Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<DiagnosisSample>& w, double total) {
+Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<DiagnosisSample>& w, double total,
+                              const Eigen::Vector3d& com) {
   const int n = m.n_dof();
   const int last = n - 1;
   model::DynamicsData d(m);
   Matrix6J J;
   const auto K = static_cast<Eigen::Index>(w.size());
-  Eigen::MatrixXd A(K * n, 4);
+  Eigen::MatrixXd A(K * n, 1);
   Eigen::VectorXd b(K * n);
   for (Eigen::Index k = 0; k < K; ++k) {
     const DiagnosisSample& s = w[static_cast<size_t>(k)];
@@ -94,20 +95,11 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
     model::forward_kinematics(m, d, s.q);
     model::point_jacobian(m, d, last, Eigen::Vector3d::Zero(), J);
     const Eigen::Matrix3d R = d.oMi[static_cast<size_t>(last)].linear();
-    // unit-parameter body wrenches at the link origin: m -> (a, 0); h_x -> (wd x e + w x (w x e), e x a)
-    for (int p = 0; p < 4; ++p) {
-      Eigen::Vector3d F, N;
-      if (p == 0) {
-        F = acc;
-        N.setZero();
-      } else {
-        const Eigen::Vector3d e = Eigen::Vector3d::Unit(p - 1);
-        F = omd.cross(e) + om.cross(om.cross(e));
-        N = e.cross(acc);
-      }
-      const VectorJ tau = J.topRows<3>().transpose() * (R * F) + J.bottomRows<3>().transpose() * (R * N);
-      A.block(k * n, p, n, 1) = tau;
-    }
+    // wrench of a unit point mass at `com` on the last link (body frame, about its origin):
+    //   F = a + wd x c + w x (w x c),  N = c x a  (the point mass's own inertia terms are second order)
+    const Eigen::Vector3d F = acc + omd.cross(com) + om.cross(om.cross(com));
+    const Eigen::Vector3d N = com.cross(acc);
+    A.col(0).segment(k * n, n) = J.topRows<3>().transpose() * (R * F) + J.bottomRows<3>().transpose() * (R * N);
     b.segment(k * n, n) = s.r_tau;
   }
   Eigen::VectorXd x;
@@ -116,9 +108,7 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
   h.explained = ls_explained(A, b, total, x);
   h.magnitude = x(0);
   h.units = "kg";
-  const Eigen::Vector3d c = std::abs(x(0)) > 1e-6 ? Eigen::Vector3d(x.tail<3>() / x(0)) : Eigen::Vector3d::Zero();
-  h.detail = fmt::format("payload {:+.2f} kg (centre of mass ≈ [{:.3f}, {:.3f}, {:.3f}] m in the last link frame)", x(0),
-                         c.x(), c.y(), c.z());
+  h.detail = fmt::format("payload {:+.2f} kg", x(0));
   return h;
 }
 
@@ -229,8 +219,8 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
   Hypothesis contact = contact_hypothesis(model, window, total);
   scored.emplace_back(contact.explained - (pulse ? 0.0 : 0.3), contact);
-  Hypothesis payload = payload_hypothesis(model, window, total);
-  scored.emplace_back(payload.explained - 4 * kComplexityPenalty + (io_change ? 0.2 : 0.0) - (pulse ? 0.3 : 0.0), payload);
+  Hypothesis payload = payload_hypothesis(model, window, total, options.payload_com);
+  scored.emplace_back(payload.explained - kComplexityPenalty + (io_change ? 0.2 : 0.0) - (pulse ? 0.3 : 0.0), payload);
   for (int j = 0; j < n; ++j) {
     Hypothesis r = resistance_hypothesis(window, j, total);
     scored.emplace_back(r.explained - 2 * kComplexityPenalty - (pulse ? 0.3 : 0.0), r);
@@ -238,9 +228,15 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     // without a velocity reversal a constant offset and a Coulomb resistance look alike; extra
     // torque that works against the motion is the common case (UR3e §2.3), so the offset only
     // wins when the joint reverses (or rests) inside the window
-    bool pos = false, neg = false, rest = false;
-    for (const auto& smp : window) pos |= smp.qd[j] > kMovingVelocity, neg |= smp.qd[j] < -kMovingVelocity, rest |= std::abs(smp.qd[j]) <= kMovingVelocity;
-    const double ambiguity = (pos && neg) || rest ? 0.0 : 0.25;
+    // (each must hold for at least a tenth of the window to count)
+    double pos = 0, neg = 0, rest = 0;
+    for (const auto& smp : window) {
+      if (smp.qd[j] > kMovingVelocity) ++pos;
+      else if (smp.qd[j] < -kMovingVelocity) ++neg;
+      else ++rest;
+    }
+    const double tenth = 0.1 * static_cast<double>(window.size());
+    const double ambiguity = (pos > tenth && neg > tenth) || rest > tenth ? 0.0 : 0.25;
     scored.emplace_back(o.explained - kComplexityPenalty - ambiguity - (pulse ? 0.3 : 0.0), o);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });

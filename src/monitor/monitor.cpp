@@ -15,7 +15,11 @@ namespace twinwatch::monitor {
 namespace {
 // persistent faults (not a pulse) are diagnosed again on this much residual after the raise [s]:
 // friction and payload signatures need motion in both directions to tell them apart
-constexpr double kLongWindow = 1.0;
+constexpr double kLongWindow = 2.5;
+// an exceedance longer than this [s] is no collision pulse (50 ms pulse + filter + debounce tail)
+constexpr double kPulseMax = 0.5;
+// a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
+constexpr double kMergeGap = 1.0;
 // Cao's static rule: a margin above the largest healthy residual
 constexpr double kStaticPeakMargin = 1.1;
 // the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
@@ -218,6 +222,9 @@ void Monitor::run_diagnosis(double t) {
   }
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
+  // a payload change is most likely the declared payload (or one gripped at the flange)
+  const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, 0.04);
+  o.payload_com = twin_.robot().description().flange * com_flange;
   // the exceedance lasted until now, or ended if the joints are below again
   bool any_active = false;
   for (const auto& d : deb_) any_active |= d.active();
@@ -307,7 +314,7 @@ void Monitor::push(const RobotSample& s) {
       f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves", j + 1, s.current[j]);
       events_.push_back(f);
       if (on_event) on_event(f);
-      if (open_ >= 0) open_ = static_cast<int>(events_.size()) - 2;  // keep pointing at the open alert
+
     }
   }
 
@@ -315,7 +322,17 @@ void Monitor::push(const RobotSample& s) {
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
     const auto ch = deb_[static_cast<size_t>(j)].update(std::abs(rf_[j]) > level_[j], t);
-    if (ch == Debouncer::Change::Raised && open_ < 0) open_event(j, deb_[static_cast<size_t>(j)].start(), t);
+    if (ch == Debouncer::Change::Raised && open_ < 0) {
+      // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
+      // the last alert closed continues that alert instead of opening a new one
+      if (last_closed_ >= 0 && t - events_[static_cast<size_t>(last_closed_)].t_end < kMergeGap &&
+          events_[static_cast<size_t>(last_closed_)].fault != FaultClass::Collision) {
+        open_ = last_closed_;
+        events_[static_cast<size_t>(open_)].open = true;
+      } else {
+        open_event(j, deb_[static_cast<size_t>(j)].start(), t);
+      }
+    }
     any_active |= deb_[static_cast<size_t>(j)].active();
   }
   if (open_ >= 0) {
@@ -323,16 +340,17 @@ void Monitor::push(const RobotSample& s) {
     e.t_end = t;
     e.peak_residual = std::max(e.peak_residual, rf_.cwiseAbs().maxCoeff());
     if (!diagnosed_ && t - raise_time_ >= cfg_.diagnosis_delay) run_diagnosis(t);
-    // a persistent fault gets a second, longer look
+    // an alert still active after kLongWindow is no pulse: a second, longer look
     if (diagnosed_ && !rediagnosed_ && t - raise_time_ >= kLongWindow) {
-      const FaultClass c = events_[static_cast<size_t>(open_)].fault;
-      if (c != FaultClass::Collision && c != FaultClass::StreamFault) run_diagnosis(t);
+      run_diagnosis(t);
       rediagnosed_ = true;
     }
     if (!any_active) {
-      if (!diagnosed_) run_diagnosis(t);
+      // an alert that lasted well beyond a pulse gets its final look with everything seen
+      if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
+      last_closed_ = open_;
       open_ = -1;
       if (on_event) on_event(done);
     }

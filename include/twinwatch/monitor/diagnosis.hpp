@@ -44,7 +44,10 @@ struct Hypothesis {
 struct DiagnosisOptions {
   double collision_max_duration = 0.25;  ///< [s] exceedances shorter than this read as a pulse
   int frozen_samples = 25;               ///< identical consecutive current values that mark a stuck channel
-  double min_explained = 0.5;            ///< below this the class is Unknown
+  double min_explained = 0.35;           ///< below this the class is Unknown
+  /// centre of mass of a payload change, in the last link frame [m]: the declared payload's (a
+  /// short window cannot resolve a free COM; the mass alone is fitted)
+  Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
   void validate() const;
 };
 

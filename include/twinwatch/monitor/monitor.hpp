@@ -103,6 +103,7 @@ class Monitor {
   size_t ring_head_ = 0, ring_count_ = 0;
   std::vector<Event> events_;
   int open_ = -1;             // index of the open event
+  int last_closed_ = -1;      // index of the last closed alert (for merging re-raises)
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)

@@ -1,0 +1,129 @@
+// The monitoring loop end to end on the virtual robot: a twin identified from healthy runs only,
+// thresholds learned on other healthy runs, then faults the twin has never seen.
+#include "twinwatch/monitor/monitor.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/sim/scenario.hpp"
+
+namespace twinwatch::monitor {
+namespace {
+
+const char* kFig8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}";
+
+device::Recording run(const std::string& yaml) {
+  const sim::Scenario s = sim::parse_scenario(yaml, "test");
+  device::Recording rec;
+  rec.n_dof = 6;
+  rec.present = sim::Simulator::fields();
+  rec.median_period = 0.002;
+  sim::make_simulator(s)->run([&](const RobotSample& x) { rec.samples.push_back(x); });
+  return rec;
+}
+
+std::string scenario(unsigned seed, double duration, double payload, const std::string& faults = "") {
+  std::string y = "robot: ur3e\nseed: " + std::to_string(seed) + "\nduration: " + std::to_string(duration) + "\ntrajectory: " + kFig8 + "\n";
+  if (payload > 0) y += "payload: {mass: " + std::to_string(payload) + ", com: [0, 0, 0.04]}\n";
+  if (!faults.empty()) y += "faults:\n" + faults;
+  return y;
+}
+
+struct MonitorLoop : ::testing::Test {
+  static void SetUpTestSuite() {
+    const auto exc = run("robot: ur3e\nseed: 501\nduration: 60\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
+    const auto fig = run(scenario(502, 40, 0.5));
+    payload.mass = 0.5;
+    payload.com = Eigen::Vector3d(0, 0, 0.04);
+    ident::IdentReport rep;
+    twin = new ident::TwinModel(ident::identify_physics("ur3e", {{&exc, {}}, {&fig, payload}}, ident::IdentOptions{}, rep));
+    const auto h1 = run(scenario(503, 24, 0.5));
+    const auto h2 = run(scenario(504, 16, 0.0));
+    config = new MonitorConfig(learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}}));
+  }
+  static void TearDownTestSuite() {
+    delete twin;
+    delete config;
+  }
+  static std::vector<Event> monitor(const device::Recording& rec, double declared_payload) {
+    ident::TwinModel t = *twin;
+    if (declared_payload > 0) t.set_payload(payload);
+    Monitor m(t, *config);
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    return m.events();
+  }
+  static ident::TwinModel* twin;
+  static MonitorConfig* config;
+  static model::RigidBodyInertia payload;
+};
+ident::TwinModel* MonitorLoop::twin = nullptr;
+MonitorConfig* MonitorLoop::config = nullptr;
+model::RigidBodyInertia MonitorLoop::payload;
+
+TEST_F(MonitorLoop, NoFalseAlarmOnHealthyRunsWithNewSeeds) {
+  EXPECT_TRUE(monitor(run(scenario(601, 40, 0.5)), 0.5).empty());
+  EXPECT_TRUE(monitor(run(scenario(602, 40, 0.0)), 0.0).empty());
+}
+
+// UR3e §4.2: J5 resistance is detected and attributed to J5 (the paper could not isolate it)
+TEST_F(MonitorLoop, J5ResistanceIsDetectedAndAttributedToJ5) {
+  const auto ev = monitor(run(scenario(603, 16, 0.5, "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n")), 0.5);
+  ASSERT_FALSE(ev.empty());
+  EXPECT_GE(ev.front().t_start, 6.0);
+  EXPECT_EQ(ev.front().fault, FaultClass::Resistance) << ev.front().detail;
+  EXPECT_EQ(ev.front().joint, 4) << ev.front().detail;
+  EXPECT_NEAR(ev.front().magnitude, 0.8, 0.3) << ev.front().detail;
+}
+
+// UR3e §4.3: 0.5 kg payload loss detected within 100 ms, classified, mass within +-20 %
+TEST_F(MonitorLoop, PayloadLossIsDetectedFastAndSized) {
+  const auto ev = monitor(run(scenario(604, 12, 0.5, "  - {type: payload_loss, onset: 8.5}\n")), 0.5);
+  ASSERT_FALSE(ev.empty());
+  EXPECT_LT(ev.front().t_detected - 8.5, 0.1);
+  EXPECT_EQ(ev.front().fault, FaultClass::PayloadChange) << ev.front().detail;
+  EXPECT_NEAR(ev.front().magnitude, -0.5, 0.1) << ev.front().detail;
+}
+
+TEST_F(MonitorLoop, CollisionIsDetectedAsAPulse) {
+  const auto ev = monitor(run(scenario(605, 12, 0.5,
+                                      "  - {type: collision, link: 2, onset: 9.3, magnitude: 10, duration: 0.05, "
+                                      "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n")),
+                          0.5);
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_LT(ev.front().t_detected - 9.3, 0.05);
+  EXPECT_EQ(ev.front().fault, FaultClass::Collision) << ev.front().detail;
+  EXPECT_LT(ev.front().duration(), 0.5);
+}
+
+TEST_F(MonitorLoop, StreamGapsAndFrozenChannelsAreTheirOwnEvents) {
+  const auto ev = monitor(run(scenario(606, 12, 0.5,
+                                      "  - {type: dropped_samples, onset: 5, magnitude: 5, end: 5.1}\n"
+                                      "  - {type: stuck_current, joint: 3, onset: 8, end: 9}\n")),
+                          0.5);
+  bool gap = false, stuck = false;
+  for (const auto& e : ev) {
+    gap |= e.fault == FaultClass::StreamFault && e.magnitude == 5.0;
+    stuck |= e.fault == FaultClass::SensorFault && e.joint == 2;
+  }
+  EXPECT_TRUE(gap);
+  EXPECT_TRUE(stuck);
+}
+
+TEST(MonitorConfig, ValidationNamesTheField) {
+  MonitorConfig c;
+  c.static_level = VectorJ::Ones(6);
+  c.use_dynamic = false;
+  c.sensitivity = VectorJ::Ones(5);
+  try {
+    c.validate(6);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("sensitivity has size 5, expected 6"));
+  }
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
