@@ -1,0 +1,83 @@
+// Throughput and per-sample latency of the full monitoring loop (twin prediction, residual, IIR,
+// dynamic threshold, debounce; diagnosis only when an alert is raised) on a recorded healthy
+// UR3e figure-eight. Goal (issue 7): >= 1,000,000 samples/s on one core, p99 <= 10 us.
+//   build-bench/bench/monitor/monitor_benchmark
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/monitor/monitor.hpp"
+#include "twinwatch/sim/scenario.hpp"
+
+namespace {
+
+using namespace twinwatch;
+
+struct Setup {
+  ident::TwinModel twin;
+  monitor::MonitorConfig cfg;
+  device::Recording rec;
+  Setup() {
+    auto simulate = [](const std::string& yaml) {
+      device::Recording r;
+      r.n_dof = 6;
+      r.present = sim::Simulator::fields();
+      sim::make_simulator(sim::parse_scenario(yaml, "bench"))->run([&](const RobotSample& x) { r.samples.push_back(x); });
+      return r;
+    };
+    const auto exc = simulate("robot: ur3e\nseed: 1\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
+    rec = simulate("robot: ur3e\nseed: 2\nduration: 20\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n");
+    ident::IdentReport rep;
+    twin = ident::identify_physics("ur3e", {{&exc, {}}}, ident::IdentOptions{}, rep);
+    cfg = monitor::learn_thresholds(twin, {{&exc, {}}});
+  }
+};
+const Setup& setup() {
+  static const Setup s;
+  return s;
+}
+
+void BM_MonitorLoop(benchmark::State& st) {
+  const Setup& s = setup();
+  monitor::Monitor mon(s.twin, s.cfg);
+  size_t k = 0;
+  std::vector<double> lat;
+  lat.reserve(1 << 20);
+  for (auto _ : st) {
+    const auto t0 = std::chrono::steady_clock::now();
+    mon.push(s.rec.samples[k]);
+    lat.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    if (++k == s.rec.samples.size()) {
+      k = 0;
+      st.PauseTiming();
+      mon = monitor::Monitor(s.twin, s.cfg);
+      st.ResumeTiming();
+    }
+  }
+  std::sort(lat.begin(), lat.end());
+  st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+  st.counters["p50_us"] = lat[lat.size() / 2];
+  st.counters["p99_us"] = lat[lat.size() * 99 / 100];
+  st.counters["max_us"] = lat.back();
+}
+BENCHMARK(BM_MonitorLoop)->MinTime(2.0);
+
+// the twin prediction alone (the regressor dominates)
+void BM_TwinPredict(benchmark::State& st) {
+  const Setup& s = setup();
+  VectorJ tau, i;
+  size_t k = 0;
+  for (auto _ : st) {
+    const auto& x = s.rec.samples[k];
+    s.twin.predict(x.q, x.qd, x.target_qdd, x.temperature, tau, i);
+    benchmark::DoNotOptimize(i.data());
+    k = (k + 1) % s.rec.samples.size();
+  }
+}
+BENCHMARK(BM_TwinPredict);
+
+}  // namespace
+
+BENCHMARK_MAIN();
