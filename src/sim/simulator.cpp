@@ -235,7 +235,6 @@ bool Simulator::step(RobotSample& s) {
   }
 
   // collision force pulses: tau_ext = J^T F at the contact point
-  VectorJ tau_ext_peak = VectorJ::Zero(n_);
   std::vector<std::pair<const FaultSpec*, double>> pulses;
   for (const FaultSpec& f : faults_) {
     if (f.type != FaultType::Collision || t_ < f.onset || t_ >= f.onset + f.duration) continue;

@@ -14,7 +14,10 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string tmp(const std::string& name) { return ::testing::TempDir() + name; }
+// one file per test: ctest runs the test cases as parallel processes
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + name;
+}
 
 std::string error_of(const std::string& content) {
   const std::string p = tmp("bad.csv");

@@ -165,7 +165,7 @@ TEST(DescriptionUrdf, Ur3eMatchesJsonDescription) {
 }
 
 TEST(DescriptionUrdf, MalformedXmlNamesTheFile) {
-  const std::string path = ::testing::TempDir() + "bad.urdf";
+  const std::string path = ::testing::TempDir() + "description_test_bad.urdf";
   std::ofstream(path) << "<robot name='x'><link name='a'></robot";
   try {
     load_description_urdf(path);
@@ -177,7 +177,7 @@ TEST(DescriptionUrdf, MalformedXmlNamesTheFile) {
 }
 
 TEST(DescriptionUrdf, BranchingTreeNeedsATip) {
-  const std::string path = ::testing::TempDir() + "branch.urdf";
+  const std::string path = ::testing::TempDir() + "description_test_branch.urdf";
   std::ofstream(path) << R"(<robot name="b"><link name="base"/><link name="l1"/><link name="l2"/>
     <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
     <joint name="j2" type="revolute"><parent link="base"/><child link="l2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>)";

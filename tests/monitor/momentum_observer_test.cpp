@@ -34,7 +34,9 @@ TEST(MomentumObserver, ConvergesToExternalTorqueStep) {
     obs.update(q, qd, tau_m, dt);
     qd += qdd * dt;
     q += qd * dt;
-    if (t > 0.5 && t < 1.0) EXPECT_LT(obs.residual().cwiseAbs().maxCoeff(), 0.05) << "t=" << t;
+    if (t > 0.5 && t < 1.0) {
+      EXPECT_LT(obs.residual().cwiseAbs().maxCoeff(), 0.05) << "t=" << t;
+    }
   }
   // after 1 s of step (100 time constants) the residual equals tau_ext within discretisation
   EXPECT_LT((obs.residual() - tau_ext).cwiseAbs().maxCoeff(), 0.05);
