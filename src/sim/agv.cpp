@@ -16,20 +16,6 @@ constexpr double kInternalStep = 0.0005;
 constexpr double kStickSpeed = 1e-3;
 }  // namespace
 
-void DcMotorParams::validate(const char* which) const {
-  auto pos = [&](double v, const char* name) {
-    if (!(v > 0.0)) throw InvalidArgument(fmt::format("{} motor: {} is {}, must be > 0", which, name, v));
-  };
-  pos(Ra, "Ra");
-  pos(k, "k");
-  pos(J, "J");
-  if (!(Tq >= 0.0)) throw InvalidArgument(fmt::format("{} motor: Tq is {}, must be >= 0", which, Tq));
-  if (!(B >= 0.0)) throw InvalidArgument(fmt::format("{} motor: B is {}, must be >= 0", which, B));
-}
-
-DcMotorParams agv_table1_right() { return {6.16, 0.32, 0.021, 3.2e-3, 3.39e-3}; }
-DcMotorParams agv_table1_left() { return {6.41, 0.30, 0.021, 2.6e-3, 3.42e-3}; }
-
 void AgvParams::validate() const {
   right.validate("right");
   left.validate("left");
@@ -111,6 +97,34 @@ double PiController::update(double ref, double meas, double dt) {
   // anti-windup: only integrate while the output is not saturated
   if (std::abs(u) < lim_) integral_ = candidate;
   return std::clamp(g_.Kc * (e + integral_ / g_.Ti), -lim_, lim_);
+}
+
+std::vector<device::AgvTestRow> simulate_agv_tests(const AgvParams& params, unsigned seed) {
+  // settling and measuring time of a steady-state point, the 40 ms sampling, the 5 ms step log [s]
+  constexpr double kSettle = 2.0, kMeasure = 1.0, kPeriod = 0.04, kStepPeriod = 0.005;
+  std::vector<device::AgvTestRow> rows;
+  for (int m = 0; m < 2; ++m) {
+    const std::string name = m == 0 ? "right" : "left";
+    // steady state: fifteen voltages, robot in the air, mean of the 40 ms readings after settling
+    for (int k = 1; k <= 15; ++k) {
+      AgvPlant plant(params, seed + 31 * static_cast<unsigned>(k) + 7 * static_cast<unsigned>(m));
+      const double U = 6.0 * k / 15.0;
+      double w = 0, i = 0;
+      int n = 0;
+      for (double t = 0; t < kSettle + kMeasure; t += kPeriod) {
+        const auto& s = plant.step(m == 0 ? U : 0.0, m == 1 ? U : 0.0, kPeriod);
+        if (t >= kSettle) w += m == 0 ? s.w_right : s.w_left, i += m == 0 ? s.i_right : s.i_left, ++n;
+      }
+      rows.push_back({name, "steady", U, i / n, w / n, 0.0});
+    }
+    // step: 6 V from rest, encoder speed over each 5 ms sample
+    AgvPlant plant(params, seed + 1000 + static_cast<unsigned>(m));
+    for (double t = kStepPeriod; t <= 1.5; t += kStepPeriod) {
+      const auto& s = plant.step(m == 0 ? 6.0 : 0.0, m == 1 ? 6.0 : 0.0, kStepPeriod);
+      rows.push_back({name, "step", 6.0, m == 0 ? s.i_right : s.i_left, m == 0 ? s.w_right : s.w_left, t});
+    }
+  }
+  return rows;
 }
 
 }  // namespace twinwatch::sim

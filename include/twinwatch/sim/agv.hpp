@@ -9,28 +9,21 @@
 #include <cstdint>
 #include <random>
 
+#include <vector>
+
+#include "twinwatch/device/agv_tests.hpp"
+#include "twinwatch/model/dc_motor.hpp"
+
 namespace twinwatch::sim {
 
-struct DcMotorParams {
-  double Ra = 6.16;     ///< armature resistance [Ohm]
-  double k = 0.32;      ///< back-emf = torque constant [V·s/rad = N·m/A]
-  double Tq = 0.021;    ///< static (Coulomb) friction torque [N·m]
-  double B = 3.2e-3;    ///< viscous friction [N·m·s/rad]
-  double J = 3.39e-3;   ///< rotor + wheel inertia [kg·m²]
-  /// Open-loop time constant J Ra / (B Ra + k²) [s] and gain k / (B Ra + k²) [rad/s/V] (eq. 6).
-  double time_constant() const { return J * Ra / (B * Ra + k * k); }
-  double gain() const { return k / (B * Ra + k * k); }
-  void validate(const char* which) const;
-};
-
-/// AGV Table 1 (right and left motors of the real robot).
-DcMotorParams agv_table1_right();
-DcMotorParams agv_table1_left();
+using model::DcMotorParams;
+using model::agv_table1_right;
+using model::agv_table1_left;
 
 enum class AgvFault { None, MotorVoltageZero, BlockedWheel, WheelSlip, EncoderDropout };
 
 struct AgvParams {
-  DcMotorParams right = agv_table1_right(), left = agv_table1_left();
+  DcMotorParams right = model::agv_table1_right(), left = model::agv_table1_left();
   double wheel_radius = 0.0325;   ///< [m]
   double track = 0.15;            ///< distance between the wheels [m]
   int ticks_per_rev = 3840;       ///< quadrature, after the 120:1 gearbox
@@ -91,5 +84,10 @@ class PiController {
   double lim_;
   double integral_ = 0.0;
 };
+
+/// Simulated motor tests on a plant [AGV §4.1]: fifteen steady-state voltages in (0, 6] V (robot
+/// in the air, mean of the 40 ms readings after settling) and a 6 V step logged every 5 ms, with
+/// the plant's measurement noise (speed from the encoders, current with noise).
+std::vector<device::AgvTestRow> simulate_agv_tests(const AgvParams& params, unsigned seed);
 
 }  // namespace twinwatch::sim

@@ -1,0 +1,67 @@
+#pragma once
+/// @file agv_monitor.hpp
+/// The AGV twin monitor [AGV §4.3, §5]: pairs the real robot's and the twin's state datagrams by
+/// sequence number, forms the residual linear and angular speeds, filters them with a first-order
+/// IIR, compares with thresholds and debounces (N consecutive exceedances raise; a sample below
+/// resets the counter), and reports alerts with start time and duration. Lost, duplicated,
+/// reordered and malformed datagrams are counted, never fatal.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "twinwatch/device/agv_link.hpp"
+#include "twinwatch/monitor/debounce.hpp"
+
+namespace twinwatch::monitor {
+
+struct AgvMonitorOptions {
+  double threshold_v = 0.05;   ///< [m/s] on the filtered linear-speed residual
+  double threshold_w = 0.5;    ///< [rad/s] on the filtered angular-speed residual
+  double filter_alpha = 0.3;   ///< IIR y += a (x - y) per sample
+  int raise_after = 5;         ///< consecutive exceedances (5 x 40 ms = 200 ms)
+  int clear_after = 1;         ///< below once: the paper's counter reset and alert end
+  void validate() const;
+};
+
+struct AgvAlert {
+  char channel = 'v';   ///< 'v' linear or 'w' angular speed
+  double start = 0.0, end = 0.0;
+  bool open = true;
+  double duration() const { return end - start; }
+};
+
+struct AgvCounters {
+  long received = 0, paired = 0, lost = 0, duplicated = 0, reordered = 0, malformed = 0;
+};
+
+class AgvMonitor {
+ public:
+  explicit AgvMonitor(AgvMonitorOptions o = {});
+  /// Feeds raw bytes of one datagram (decoded here; malformed ones are counted).
+  void push_bytes(const std::uint8_t* data, std::size_t n);
+  void push(const device::AgvStateDatagram& d);
+  /// Closes an open alert.
+  void finish(double t);
+
+  const std::vector<AgvAlert>& alerts() const { return alerts_; }
+  const AgvCounters& counters() const { return c_; }
+  double residual_v() const { return rv_; }
+  double residual_w() const { return rw_; }
+
+ private:
+  void pair(const device::AgvStateDatagram& real, const device::AgvStateDatagram& twin);
+
+  AgvMonitorOptions o_;
+  AgvCounters c_;
+  std::array<device::AgvStateDatagram, 2> last_{};
+  std::array<bool, 2> have_{false, false};
+  std::array<std::uint32_t, 2> last_seq_{0, 0};
+  std::uint32_t last_paired_ = 0;
+  bool paired_any_ = false;
+  double rv_ = 0.0, rw_ = 0.0;
+  Debouncer dv_, dw_;
+  std::vector<AgvAlert> alerts_;
+  int open_v_ = -1, open_w_ = -1;
+};
+
+}  // namespace twinwatch::monitor

@@ -1,0 +1,75 @@
+#include "twinwatch/ident/agv_ident.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::ident {
+
+namespace {
+// a steady-state point needs the wheel turning (U / w is undefined at rest) [rad/s]
+constexpr double kMinSpeed = 0.5;
+
+// least squares y = a x + b
+void line_fit(const std::vector<double>& x, const std::vector<double>& y, double& a, double& b) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(x.size()), 2);
+  Eigen::VectorXd v(static_cast<Eigen::Index>(x.size()));
+  for (size_t k = 0; k < x.size(); ++k) A(static_cast<Eigen::Index>(k), 0) = x[k], A(static_cast<Eigen::Index>(k), 1) = 1.0, v(static_cast<Eigen::Index>(k)) = y[k];
+  const Eigen::Vector2d s = A.colPivHouseholderQr().solve(v);
+  a = s(0);
+  b = s(1);
+}
+}  // namespace
+
+AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string& motor) {
+  std::vector<double> x3, y3, w5, y5;
+  std::vector<std::pair<double, double>> step;
+  for (const auto& r : rows) {
+    if (r.motor != motor) continue;
+    if (r.test == "steady" && r.speed > kMinSpeed) {
+      x3.push_back(r.current / r.speed);
+      y3.push_back(r.voltage / r.speed);
+    } else if (r.test == "step") {
+      step.emplace_back(r.time, r.speed);
+    }
+  }
+  if (x3.size() < 3)
+    throw InvalidArgument(fmt::format("{} motor: {} steady-state points with the wheel turning, expected at least 3", motor, x3.size()));
+  AgvMotorFit fit;
+  fit.steady_points = static_cast<int>(x3.size());
+  // eq. 3: U/w = Ra i/w + k
+  line_fit(x3, y3, fit.params.Ra, fit.params.k);
+  // eq. 5: k i = B w + Tq
+  for (const auto& r : rows)
+    if (r.motor == motor && r.test == "steady" && r.speed > kMinSpeed) w5.push_back(r.speed), y5.push_back(fit.params.k * r.current);
+  line_fit(w5, y5, fit.params.B, fit.params.Tq);
+  // eq. 6: tau from the step: time to 63.2 % of the final speed (mean of the last fifth)
+  if (step.size() < 10) throw InvalidArgument(fmt::format("{} motor: {} step samples, expected at least 10", motor, step.size()));
+  std::sort(step.begin(), step.end());
+  double final = 0;
+  const size_t tail = step.size() / 5;
+  for (size_t k = step.size() - tail; k < step.size(); ++k) final += step[k].second;
+  final /= static_cast<double>(tail);
+  const double target = 0.632 * final;
+  // the encoder speed of sample k is the mean over (t_k - dt, t_k]: read it at the mid-point,
+  // interpolating linearly between the samples around the crossing
+  for (size_t k = 1; k < step.size(); ++k) {
+    if (step[k].second >= target) {
+      const double dt = step[k].first - step[k - 1].first;
+      const double t0 = step[k - 1].first - dt / 2, t1 = step[k].first - dt / 2;
+      const double f = (target - step[k - 1].second) / (step[k].second - step[k - 1].second);
+      fit.tau = t0 + f * (t1 - t0);
+      break;
+    }
+  }
+  if (!(fit.tau > 0.0)) throw InvalidArgument(fmt::format("{} motor: the step response never reaches 63 % of its final value", motor));
+  fit.step_points = static_cast<int>(step.size());
+  fit.params.J = fit.tau * (fit.params.B * fit.params.Ra + fit.params.k * fit.params.k) / fit.params.Ra;
+  return fit;
+}
+
+}  // namespace twinwatch::ident

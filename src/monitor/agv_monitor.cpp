@@ -1,0 +1,90 @@
+#include "twinwatch/monitor/agv_monitor.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::monitor {
+
+void AgvMonitorOptions::validate() const {
+  if (!(threshold_v > 0)) throw InvalidArgument(fmt::format("threshold_v is {}, must be > 0", threshold_v));
+  if (!(threshold_w > 0)) throw InvalidArgument(fmt::format("threshold_w is {}, must be > 0", threshold_w));
+  if (!(filter_alpha > 0 && filter_alpha <= 1)) throw InvalidArgument(fmt::format("filter_alpha is {}, must be in (0, 1]", filter_alpha));
+  if (raise_after < 1 || clear_after < 1)
+    throw InvalidArgument(fmt::format("raise_after {} and clear_after {} must be >= 1", raise_after, clear_after));
+}
+
+AgvMonitor::AgvMonitor(AgvMonitorOptions o) : o_(o), dv_(o.raise_after, o.clear_after), dw_(o.raise_after, o.clear_after) {
+  o_.validate();
+  alerts_.reserve(64);
+}
+
+void AgvMonitor::push_bytes(const std::uint8_t* data, std::size_t n) {
+  device::AgvStateDatagram d;
+  if (device::decode(data, n, d) != device::DecodeStatus::Ok) {
+    ++c_.malformed;
+    return;
+  }
+  push(d);
+}
+
+void AgvMonitor::push(const device::AgvStateDatagram& d) {
+  ++c_.received;
+  const int r = d.role == device::AgvRole::Twin ? 1 : 0;
+  if (have_[static_cast<size_t>(r)]) {
+    const std::uint32_t prev = last_seq_[static_cast<size_t>(r)];
+    if (d.seq == prev) {
+      ++c_.duplicated;
+      return;
+    }
+    if (d.seq < prev) {
+      ++c_.reordered;  // late: its partner has moved on, it cannot be paired any more
+      return;
+    }
+    c_.lost += d.seq - prev - 1;
+  }
+  have_[static_cast<size_t>(r)] = true;
+  last_seq_[static_cast<size_t>(r)] = d.seq;
+  last_[static_cast<size_t>(r)] = d;
+  const auto& other = last_[static_cast<size_t>(1 - r)];
+  if (have_[static_cast<size_t>(1 - r)] && other.seq == d.seq && (!paired_any_ || d.seq != last_paired_))
+    r == 0 ? pair(d, other) : pair(other, d);
+}
+
+void AgvMonitor::pair(const device::AgvStateDatagram& real, const device::AgvStateDatagram& twin) {
+  ++c_.paired;
+  paired_any_ = true;
+  last_paired_ = real.seq;
+  const double t = real.t;
+  // filtered residuals [AGV §4.3]
+  rv_ += o_.filter_alpha * ((real.v - twin.v) - rv_);
+  rw_ += o_.filter_alpha * ((real.w - twin.w) - rw_);
+  auto handle = [&](Debouncer& d, double r, double thr, char ch, int& open) {
+    const auto change = d.update(std::abs(r) > thr, t);
+    if (change == Debouncer::Change::Raised) {
+      alerts_.push_back({ch, d.start(), t, true});
+      open = static_cast<int>(alerts_.size()) - 1;
+    } else if (change == Debouncer::Change::Cleared && open >= 0) {
+      alerts_[static_cast<size_t>(open)].end = t;
+      alerts_[static_cast<size_t>(open)].open = false;
+      open = -1;
+    } else if (open >= 0) {
+      alerts_[static_cast<size_t>(open)].end = t;
+    }
+  };
+  handle(dv_, rv_, o_.threshold_v, 'v', open_v_);
+  handle(dw_, rw_, o_.threshold_w, 'w', open_w_);
+}
+
+void AgvMonitor::finish(double t) {
+  for (int* open : {&open_v_, &open_w_})
+    if (*open >= 0) {
+      alerts_[static_cast<size_t>(*open)].end = t;
+      alerts_[static_cast<size_t>(*open)].open = false;
+      *open = -1;
+    }
+}
+
+}  // namespace twinwatch::monitor
