@@ -50,7 +50,9 @@ const AgvState& AgvPlant::step(double ur, double ul, double dt) {
       return;
     }
     const double sgn = std::abs(w) < kStickSpeed ? (drive > 0 ? 1.0 : -1.0) : (w > 0 ? 1.0 : -1.0);
-    w += h * (drive - m.Tq * sgn - m.B * w) / m.J;
+    const double w_new = w + h * (drive - m.Tq * sgn - m.B * w) / m.J;
+    // friction cannot reverse the motion: crossing zero with a drive below Tq means it sticks
+    w = (w_new * w < 0.0 && std::abs(drive) <= m.Tq) ? 0.0 : w_new;
     th += h * w;
   };
   const int steps = std::max(1, static_cast<int>(std::ceil(dt / kInternalStep)));

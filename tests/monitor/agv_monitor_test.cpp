@@ -1,0 +1,97 @@
+#include "twinwatch/monitor/agv_monitor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace twinwatch::monitor {
+namespace {
+
+using device::AgvRole;
+using device::AgvStateDatagram;
+
+AgvStateDatagram state(AgvRole r, std::uint32_t seq, double w) {
+  AgvStateDatagram d;
+  d.role = r;
+  d.seq = seq;
+  d.t = seq * 0.04;
+  d.w = w;
+  return d;
+}
+
+TEST(AgvLink, DatagramsRoundTripAndMalformedOnesAreRejected) {
+  AgvStateDatagram d = state(AgvRole::Twin, 123456, -1.25);
+  d.v = 0.13;
+  d.enc_right = -77;
+  std::uint8_t buf[device::kAgvStateSize];
+  device::encode(d, buf);
+  AgvStateDatagram back;
+  ASSERT_EQ(device::decode(buf, sizeof buf, back), device::DecodeStatus::Ok);
+  EXPECT_EQ(back.seq, 123456u);
+  EXPECT_EQ(back.w, -1.25);
+  EXPECT_EQ(back.enc_right, -77);
+  EXPECT_EQ(back.role, AgvRole::Twin);
+  EXPECT_EQ(device::decode(buf, sizeof buf - 1, back), device::DecodeStatus::TooShort);
+  std::uint8_t longer[device::kAgvStateSize + 4] = {};
+  EXPECT_EQ(device::decode(longer, sizeof longer, back), device::DecodeStatus::TooLong);
+  buf[0] = 'X';
+  EXPECT_EQ(device::decode(buf, sizeof buf, back), device::DecodeStatus::WrongMagic);
+  buf[0] = 'T';
+  buf[4] = 9;
+  EXPECT_EQ(device::decode(buf, sizeof buf, back), device::DecodeStatus::WrongVersion);
+  // byte-exact layout: magic, version, role, seq little-endian at offset 8
+  device::encode(state(AgvRole::Real, 0x01020304u, 0.0), buf);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buf), 4), "TWAS");
+  EXPECT_EQ(buf[4], 1);
+  EXPECT_EQ(buf[8], 0x04);
+  EXPECT_EQ(buf[11], 0x01);
+  // garbage never crashes and is counted
+  AgvMonitor m;
+  std::mt19937 rng(5);
+  for (int k = 0; k < 1000; ++k) {
+    std::uint8_t g[80];
+    for (auto& b : g) b = static_cast<std::uint8_t>(rng());
+    m.push_bytes(g, static_cast<size_t>(rng() % 80));
+  }
+  EXPECT_EQ(m.counters().malformed, 1000);
+}
+
+TEST(AgvMonitor, CountsLostDuplicatedAndReordered) {
+  AgvMonitor m;
+  m.push(state(AgvRole::Real, 0, 0));
+  m.push(state(AgvRole::Twin, 0, 0));
+  m.push(state(AgvRole::Real, 1, 0));
+  m.push(state(AgvRole::Real, 1, 0));  // duplicate
+  m.push(state(AgvRole::Real, 4, 0));  // 2, 3 lost
+  m.push(state(AgvRole::Real, 3, 0));  // late
+  m.push(state(AgvRole::Twin, 4, 0));
+  EXPECT_EQ(m.counters().duplicated, 1);
+  EXPECT_EQ(m.counters().lost, 2 + 3);  // real lost 2 and 3; twin lost 1, 2, 3
+  EXPECT_EQ(m.counters().reordered, 1);
+  EXPECT_EQ(m.counters().paired, 2);
+}
+
+// AGV §5: one alert while the twins diverge, with its duration; transients do not alert
+TEST(AgvMonitor, DebouncedAlertHasStartAndDuration) {
+  AgvMonitor m;
+  std::uint32_t seq = 0;
+  auto feed = [&](double wr, double wt, int n) {
+    for (int k = 0; k < n; ++k, ++seq) {
+      m.push(state(AgvRole::Real, seq, wr));
+      m.push(state(AgvRole::Twin, seq, wt));
+    }
+  };
+  feed(0, 0, 10);
+  feed(1.0, 0.0, 2);  // an 80 ms transient: the IIR keeps it below the threshold long enough
+  feed(0, 0, 10);
+  EXPECT_TRUE(m.alerts().empty());
+  feed(1.7, 0.0, 75);  // 3 s of divergence
+  feed(0, 0, 20);
+  m.finish(seq * 0.04);
+  ASSERT_EQ(m.alerts().size(), 1u);
+  EXPECT_EQ(m.alerts()[0].channel, 'w');
+  EXPECT_NEAR(m.alerts()[0].duration(), 3.0, 0.25);
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
