@@ -7,14 +7,7 @@ namespace twinwatch::model {
 
 namespace {
 
-// parent_R_body = R0 * Rz(theta), written column by column (Rz only mixes columns 0 and 1).
-inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
-  double s, c;
-  detail::fast_sincos(theta, s, c);
-  R.col(0) = c * R0.col(0) + s * R0.col(1);
-  R.col(1) = c * R0.col(1) - s * R0.col(0);
-  R.col(2) = R0.col(2);
-}
+using detail::rotate_about_z;
 
 inline void check_q(const RobotModel& model, const VectorJ& q) { check_size("q", q.size(), model.n_dof(), "model.n_dof"); }
 

@@ -5,6 +5,7 @@
 // (perf, docs/benchmarks.md). Joint angles are small (|q| < a few turns), so a Cody–Waite
 // reduction to [-pi/4, pi/4] with pi/2 split in three parts and fdlibm's minimax polynomials give results within ~2 ulp of libm at a fraction of the cost. Angles beyond
 // kFastRange fall back to libm.
+#include <Eigen/Core>
 #include <cmath>
 
 namespace twinwatch::model::detail {
@@ -48,6 +49,16 @@ inline void fast_sincos(double x, double& s, double& c) {
     case 2: s = -sr; c = -cr; break;
     default: s = -cr; c = sr; break;
   }
+}
+
+// parent_R_body = R0 * Rz(theta), written column by column (Rz only mixes columns 0 and 1);
+// shared by the RNEA, CRBA, kinematics and the regressor.
+inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
+  double s, c;
+  fast_sincos(theta, s, c);
+  R.col(0) = c * R0.col(0) + s * R0.col(1);
+  R.col(1) = c * R0.col(1) - s * R0.col(0);
+  R.col(2) = R0.col(2);
 }
 
 }  // namespace twinwatch::model::detail

@@ -14,6 +14,8 @@ namespace twinwatch::model {
 
 namespace {
 
+using detail::rotate_about_z;
+
 
 inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
@@ -26,14 +28,6 @@ inline Eigen::Matrix<double, 3, 6> inertia_map(const Eigen::Vector3d& x) {
   Eigen::Matrix<double, 3, 6> L;
   L << x(0), x(1), x(2), 0, 0, 0, 0, x(0), 0, x(1), x(2), 0, 0, 0, x(0), 0, x(1), x(2);
   return L;
-}
-
-inline void rotate_about_z(const Eigen::Matrix3d& R0, double theta, Eigen::Matrix3d& R) {
-  double s, c;
-  detail::fast_sincos(theta, s, c);
-  R.col(0) = c * R0.col(0) + s * R0.col(1);
-  R.col(1) = c * R0.col(1) - s * R0.col(0);
-  R.col(2) = R0.col(2);
 }
 
 }  // namespace
