@@ -92,12 +92,16 @@ std::uint32_t Simulator::fields() {
 
 namespace {
 
+}  // namespace
+
 // armature: motor rotor inertia reflected through the gear, J_m N^2 [kg m^2]; rotor inertia grows
 // with the joint size
 double armature(const JointTruth& jt) {
   const double rotor = jt.kt >= 0.12 ? 2.5e-5 : (jt.kt >= 0.1 ? 1.2e-5 : 5e-6);
   return rotor * jt.gear_ratio * jt.gear_ratio;
 }
+
+namespace {
 
 model::RobotModel perturbed(const model::RobotModel& nominal, double spread, unsigned seed) {
   model::RobotModel m = nominal;

@@ -168,6 +168,44 @@ TEST(Simulator, FrictionlessPlantWithExactFeedForwardHoldsStill) {
   EXPECT_LT((sim.q() - VectorJ::Constant(6, 0.3)).cwiseAbs().maxCoeff(), 1e-6);
 }
 
+// energy balance with friction off: the work of the drive torque equals the change of kinetic
+// (incl. rotor) plus potential energy of the plant
+TEST(Simulator, FrictionlessPlantWorkEqualsEnergyChange) {
+  model::RobotModel m = model::load_robot("ur3e");
+  PlantTruth truth = default_truth(m, 1);
+  for (auto& j : truth.joints) j.Fc = j.Fs = j.Fv = j.sigma1 = j.ripple = j.ripple1 = 0.0, j.sigma0 = 1.0;
+  truth.inertial_perturbation = 0.0;
+  SimOptions o;
+  o.duration = 4.0;
+  o.substeps = 20;  // 10 kHz: the semi-implicit Euler energy error is O(h)
+  const sim::Scenario sc = parse_scenario(kFigureEight, "test.yaml");
+  Simulator sim(m, sc.trajectory, truth, o, {});
+  model::DynamicsData d(sim.truth_model());
+  auto energy = [&] {
+    double E = model::kinetic_energy(sim.truth_model(), d, sim.q(), sim.qd()) + model::potential_energy(sim.truth_model(), d, sim.q());
+    for (int j = 0; j < 6; ++j) E += 0.5 * armature(truth.joints[static_cast<size_t>(j)]) * sim.qd()[j] * sim.qd()[j];
+    return E;
+  };
+  const double E0 = energy();
+  double work = 0.0, moved = 0.0, exchanged = 0.0;
+  RobotSample s;
+  for (int k = 0; k < 2000; ++k) {
+    const VectorJ q0 = sim.q();
+    sim.step(s);
+    // the torque is held over the control period: work = tau . (q1 - q0)
+    const double dw = s.target_moment.dot(sim.q() - q0);
+    work += dw;
+    exchanged += std::abs(dw);
+    moved += (sim.q() - q0).cwiseAbs().sum();
+  }
+  const double dE = energy() - E0;
+  ASSERT_GT(moved, 1.0) << "the arm must move";
+  // the drive pumps energy in and out; the balance must close to a small fraction of what flowed
+  ASSERT_GT(exchanged, 1.0) << "energy exchanged " << exchanged << " J";
+  RecordProperty("exchanged_J", std::to_string(exchanged));
+  EXPECT_NEAR(work, dE, 0.002 * exchanged) << "work " << work << " J, energy change " << dE << " J, exchanged " << exchanged << " J";
+}
+
 TEST(Scenario, EveryMalformedFieldIsNamed) {
   struct Case {
     std::string yaml, expect;

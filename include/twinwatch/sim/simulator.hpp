@@ -74,6 +74,9 @@ struct PlantTruth {
   unsigned serial = 1;
 };
 
+/// Rotor inertia reflected through the gear, J_m N^2 [kg·m²], that the plant adds to M(q)'s diagonal.
+double armature(const JointTruth& joint);
+
 /// UR-sized default truth for a model (documented in docs/scenarios.md); `serial` picks one
 /// physical robot (its friction, inertial and drive spread).
 PlantTruth default_truth(const model::RobotModel& model, unsigned serial);
