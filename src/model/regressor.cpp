@@ -89,17 +89,23 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
     const Eigen::Vector3d& wd = d.wd[i];
     const Eigen::Vector3d& a = d.a[i];
     const Eigen::Matrix3d Sw = skew(w);
-    Eigen::Matrix<double, 6, 10> W;
-    W.block<3, 1>(0, 0) = a;
-    W.block<3, 3>(0, 1) = skew(wd) + Sw * Sw;
-    W.block<3, 6>(0, 4).setZero();
-    W.block<3, 1>(3, 0).setZero();
-    W.block<3, 3>(3, 1) = -skew(a);
-    W.block<3, 6>(3, 4) = inertia_map(wd) + Sw * inertia_map(w);
+    // the wrench map's blocks, using its sparsity (column 0 has no moment, columns 4-9 no force):
+    //   F = m a + A1 h,  N = -[a]x h + B6 I
+    const Eigen::Matrix3d A1 = skew(wd) + Sw * Sw;
+    const Eigen::Matrix<double, 3, 6> B6 = inertia_map(wd) + Sw * inertia_map(w);
+    const Eigen::Matrix3d A1t = A1.transpose();
+    const Eigen::Matrix<double, 6, 3> B6t = B6.transpose();
     for (int j = 0; j <= i; ++j) {
-      Eigen::Matrix<double, 1, 6> S;
-      S << v[j].transpose(), u[j].transpose();
-      Y.block<1, 10>(j, 10 * i) = S * W;
+      // Y(j, link i) = v . F + u . N, column block by column block
+      const Eigen::Vector3d& vj = v[j];
+      const Eigen::Vector3d& uj = u[j];
+      Y(j, 10 * i) = vj.dot(a);
+      const Eigen::Vector3d h_part = A1t * vj + a.cross(uj);  // A1^T v - [a]x^T u = A1^T v + a x u
+      Y(j, 10 * i + 1) = h_part.x();
+      Y(j, 10 * i + 2) = h_part.y();
+      Y(j, 10 * i + 3) = h_part.z();
+      const Eigen::Matrix<double, 6, 1> i_part = B6t * uj;
+      for (int c = 0; c < 6; ++c) Y(j, 10 * i + 4 + c) = i_part(c);
     }
   }
 
