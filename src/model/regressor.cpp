@@ -17,19 +17,6 @@ namespace {
 using detail::rotate_about_z;
 
 
-inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
-
-// I_o x written as L(x) [Ixx Ixy Ixz Iyy Iyz Izz]^T
-inline Eigen::Matrix<double, 3, 6> inertia_map(const Eigen::Vector3d& x) {
-  Eigen::Matrix<double, 3, 6> L;
-  L << x(0), x(1), x(2), 0, 0, 0, 0, x(0), 0, x(1), x(2), 0, 0, 0, x(0), 0, x(1), x(2);
-  return L;
-}
-
 }  // namespace
 
 int friction_columns_per_joint(FrictionColumns f) {
@@ -48,7 +35,8 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
   check_size("qd", qd.size(), n, "model.n_dof");
   check_size("qdd", qdd.size(), n, "model.n_dof");
   const int kf = friction_columns_per_joint(friction);
-  Y.setZero(n, 10 * n + kf * n);
+  // every entry is written below (the zero ones explicitly): no full setZero of the 5 KB buffer
+  Y.resize(n, 10 * n + kf * n);
 
   // forward pass as in the RNEA: w, wd, a (a includes -g) of every body in its own frame
   const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
@@ -85,32 +73,41 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
     }
     u[i] = z;
     v[i].setZero();
-    const Eigen::Vector3d& w = d.w[i];
-    const Eigen::Vector3d& wd = d.wd[i];
-    const Eigen::Vector3d& a = d.a[i];
-    const Eigen::Matrix3d Sw = skew(w);
-    // the wrench map's blocks, using its sparsity (column 0 has no moment, columns 4-9 no force):
-    //   F = m a + A1 h,  N = -[a]x h + B6 I
-    const Eigen::Matrix3d A1 = skew(wd) + Sw * Sw;
-    const Eigen::Matrix<double, 3, 6> B6 = inertia_map(wd) + Sw * inertia_map(w);
-    const Eigen::Matrix3d A1t = A1.transpose();
-    const Eigen::Matrix<double, 6, 3> B6t = B6.transpose();
+    const Eigen::Vector3d w = d.w[i];
+    const Eigen::Vector3d wd = d.wd[i];
+    const Eigen::Vector3d a = d.a[i];
+    const double ww = w.squaredNorm();
+    double* col = &Y(0, 10 * i);  // column-major: Y(j, 10 i + c) = col[c * ld + j]
+    const Eigen::Index ld = Y.outerStride();
     for (int j = 0; j <= i; ++j) {
-      // Y(j, link i) = v . F + u . N, column block by column block
+      // Y(j, link i) = v . F + u . N with F = m a + ([wd]x + [w]x[w]x) h and
+      // N = h x a + I wd + w x (I w), written out so that nothing spills:
+      //   mass:           v . a
+      //   first moment:   w (w . v) - |w|^2 v + v x wd + a x u
+      //   inertia (sym):  u^T I wd + s^T I w,  s = u x w
       const Eigen::Vector3d& vj = v[j];
       const Eigen::Vector3d& uj = u[j];
-      Y(j, 10 * i) = vj.dot(a);
-      const Eigen::Vector3d h_part = A1t * vj + a.cross(uj);  // A1^T v - [a]x^T u = A1^T v + a x u
-      Y(j, 10 * i + 1) = h_part.x();
-      Y(j, 10 * i + 2) = h_part.y();
-      Y(j, 10 * i + 3) = h_part.z();
-      const Eigen::Matrix<double, 6, 1> i_part = B6t * uj;
-      for (int c = 0; c < 6; ++c) Y(j, 10 * i + 4 + c) = i_part(c);
+      col[j] = vj.dot(a);
+      const Eigen::Vector3d hp = w * w.dot(vj) - ww * vj + vj.cross(wd) + a.cross(uj);
+      col[1 * ld + j] = hp.x();
+      col[2 * ld + j] = hp.y();
+      col[3 * ld + j] = hp.z();
+      const Eigen::Vector3d sj = uj.cross(w);
+      col[4 * ld + j] = uj.x() * wd.x() + sj.x() * w.x();
+      col[5 * ld + j] = uj.x() * wd.y() + uj.y() * wd.x() + sj.x() * w.y() + sj.y() * w.x();
+      col[6 * ld + j] = uj.x() * wd.z() + uj.z() * wd.x() + sj.x() * w.z() + sj.z() * w.x();
+      col[7 * ld + j] = uj.y() * wd.y() + sj.y() * w.y();
+      col[8 * ld + j] = uj.y() * wd.z() + uj.z() * wd.y() + sj.y() * w.z() + sj.z() * w.y();
+      col[9 * ld + j] = uj.z() * wd.z() + sj.z() * w.z();
     }
+    // joints after i do not feel link i
+    for (int c = 0; c < 10; ++c)
+      for (int j = i + 1; j < n; ++j) col[c * ld + j] = 0.0;
   }
 
   // friction columns on the joint's own row
   if (kf > 0) {
+    Y.rightCols(kf * n).setZero();
     for (int j = 0; j < n; ++j) {
       const int col = 10 * n + kf * j;
       Y(j, col) = qd[j] > 0.0 ? 1.0 : (qd[j] < 0.0 ? -1.0 : 0.0);
