@@ -78,6 +78,7 @@ std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
       for (int j = 0; j < n; ++j) cols.push_back(fmt::format("{}{}", g.prefix, j));
   if (fields & kFieldDigitalOutputs) cols.push_back("actual_digital_output_bits");
   if (fields & kFieldRobotMode) cols.push_back("robot_mode");
+  if (fields & kFieldStreamGap) cols.push_back("stream_gap");
   return cols;
 }
 
@@ -121,7 +122,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // locate columns: each known name -> (group, joint)
   Recording rec;
   rec.path = path;
-  int ts_col = -1, do_col = -1, mode_col = -1;
+  int ts_col = -1, do_col = -1, mode_col = -1, gap_col = -1;
   int n = 0;
   for (size_t c = 0; c < names.size(); ++c)
     if (names[c].rfind("actual_q_", 0) == 0) n = std::max(n, std::atoi(names[c].c_str() + 9) + 1);
@@ -139,6 +140,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     if (nm == "timestamp") ts_col = static_cast<int>(c);
     else if (nm == "actual_digital_output_bits") do_col = static_cast<int>(c);
     else if (nm == "robot_mode") mode_col = static_cast<int>(c);
+    else if (nm == "stream_gap") gap_col = static_cast<int>(c);
     else {
       // longest matching prefix first (actual_qd_ before actual_q_)
       int best = -1;
@@ -175,6 +177,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   }
   if (do_col >= 0) present |= kFieldDigitalOutputs;
   if (mode_col >= 0) present |= kFieldRobotMode;
+  if (gap_col >= 0) present |= kFieldStreamGap;
   rec.present = present;
 
   // rows
@@ -190,7 +193,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     s.present = present;
     for (size_t c = 0; c < cells.size(); ++c) {
       const bool used = static_cast<int>(c) == ts_col || static_cast<int>(c) == do_col || static_cast<int>(c) == mode_col ||
-                        target[c].group >= 0;
+                        static_cast<int>(c) == gap_col || target[c].group >= 0;
       if (!used) continue;
       double v;
       if (!parse_double(cells[c], v))
@@ -199,7 +202,10 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       if (static_cast<int>(c) == ts_col) s.timestamp = v;
       else if (static_cast<int>(c) == do_col) s.digital_outputs = static_cast<std::uint64_t>(v);
       else if (static_cast<int>(c) == mode_col) s.robot_mode = static_cast<std::int32_t>(v);
-      else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
+      else if (static_cast<int>(c) == gap_col) {
+        if (v != 0.0 && v != 1.0) throw ParseError(path, ln, header[c], fmt::format("expected 0 or 1, got '{}'", cells[c]));
+        s.gap_before = v != 0.0;
+      } else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
     }
     if (!rec.samples.empty()) {
       const double dt = s.timestamp - rec.samples.back().timestamp;
@@ -217,11 +223,10 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
     rec.median_period = sorted[sorted.size() / 2];
     for (size_t k = 0; k < dts.size(); ++k)
-      if (dts[k] > kGapFactor * rec.median_period) {
-        rec.samples[k + 1].gap_before = true;
-        ++rec.gaps;
-      }
+      if (dts[k] > kGapFactor * rec.median_period) rec.samples[k + 1].gap_before = true;
   }
+  // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
+  for (const RobotSample& s : rec.samples) rec.gaps += s.gap_before ? 1 : 0;
   return rec;
 }
 
@@ -259,6 +264,7 @@ void RecordingWriter::write(const RobotSample& s) {
   }
   if (fields_ & kFieldDigitalOutputs) line_ += fmt::format(",{}", s.digital_outputs);
   if (fields_ & kFieldRobotMode) line_ += fmt::format(",{}", s.robot_mode);
+  if (fields_ & kFieldStreamGap) line_ += s.gap_before ? ",1" : ",0";
   line_ += '\n';
   std::fwrite(line_.data(), 1, line_.size(), f_);
   ++rows_;

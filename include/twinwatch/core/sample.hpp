@@ -24,6 +24,7 @@ enum SampleField : std::uint32_t {
   kFieldRobotMode = 1u << 7,
   kFieldTargetMoment = 1u << 8,
   kFieldActualQd = 1u << 9,
+  kFieldStreamGap = 1u << 10,  ///< the source marks stream gaps itself (RTDE client: lost samples, reconnects)
 };
 
 /// One controller cycle. Units: rad, rad/s, rad/s², A, °C, N·m, s.

@@ -6,7 +6,8 @@
 /// Columns (n = number of joints, inferred from the header):
 ///   timestamp, actual_q_0..n-1, actual_qd_*, target_q_*, target_qd_*, target_qdd_*,
 ///   actual_current_*, target_current_*, target_moment_*, joint_temperatures_*,
-///   actual_digital_output_bits, robot_mode
+///   actual_digital_output_bits, robot_mode, stream_gap (1 where the source lost samples just before
+///   this row: RTDE gaps and reconnects)
 /// Only timestamp and actual_q_* are required; absent groups are NaN and flagged absent in
 /// RobotSample::present. Foreign logs load through a ColumnMap (their column -> RTDE name, scale).
 #include <cstdio>

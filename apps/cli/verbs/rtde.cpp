@@ -1,0 +1,305 @@
+// RTDE verbs:
+//   twinwatch record --rtde HOST[:PORT] --frequency 500 --duration 60 -o rec.csv
+//   twinwatch serve-robot SCENARIO.yaml [--port 30004] [--speed 1.0]
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/device/rtde_client.hpp"
+#include "twinwatch/device/rtde_server.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/rtde_frame.hpp"
+#include "twinwatch/sim/scenario.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+namespace rtde = device::rtde;
+using Clock = std::chrono::steady_clock;
+
+std::atomic<bool> g_interrupted{false};
+
+void install_interrupt_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = [](int) { g_interrupted = true; };
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  while (b <= s.size()) {
+    const std::size_t e = std::min(s.find(',', b), s.size());
+    if (e > b) out.push_back(s.substr(b, e - b));
+    b = e + 1;
+  }
+  return out;
+}
+
+// ---- record -------------------------------------------------------------------------------
+
+struct RecordOptions {
+  std::string endpoint, output, outputs;
+  double frequency = 500.0, duration = 60.0, wait = 0.0;
+  int protocol = 2;
+  bool no_reconnect = false, json = false, quiet = false;
+};
+
+int run_record(const RecordOptions& o) {
+  rtde::ClientOptions co;
+  rtde::parse_endpoint(o.endpoint, co.host, co.port);
+  co.frequency = o.frequency;
+  co.max_protocol = o.protocol;
+  co.reconnect = !o.no_reconnect;
+  if (!o.outputs.empty()) co.outputs = split_list(o.outputs);
+  for (const auto& name : co.outputs)
+    if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
+      log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
+  if (!(o.duration > 0.0)) throw InvalidArgument(fmt::format("--duration must be > 0 s, got {}", o.duration));
+  install_interrupt_handler();
+
+  rtde::Client client(co);
+  // The first connection: retry for up to --wait seconds (a robot that is still booting).
+  const auto wait_until = Clock::now() + std::chrono::duration<double>(o.wait);
+  for (;;) {
+    try {
+      client.start();
+      break;
+    } catch (const rtde::RecipeError&) {
+      throw;
+    } catch (const std::exception& e) {
+      if (Clock::now() >= wait_until || g_interrupted) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+  const rtde::ClientStats first = client.stats();
+  if (!o.quiet && !o.json)
+    fmt::print(stderr, "recording {}:{} (controller {}.{}.{}.{}, RTDE v{}, {} outputs at {:g} Hz) for {:g} s -> {}\n", co.host,
+               co.port, first.controller.major, first.controller.minor, first.controller.bugfix, first.controller.build,
+               first.protocol, co.outputs.size(), first.frequency, o.duration, o.output);
+
+  device::RecordingWriter writer(o.output, 6, client.sample_fields());
+  const bool bar = !o.quiet && !o.json && isatty(STDERR_FILENO);
+  const auto t0 = Clock::now();
+  const auto end = t0 + std::chrono::duration<double>(o.duration);
+  auto next_status = t0;
+  RobotSample s;
+  double t_first = std::numeric_limits<double>::quiet_NaN(), t_last = t_first;
+  while (Clock::now() < end && !g_interrupted) {
+    if (client.pop(s, std::chrono::milliseconds(50))) {
+      writer.write(s);
+      if (std::isnan(t_first)) t_first = s.timestamp;
+      t_last = s.timestamp;
+    } else if (client.finished()) {
+      break;
+    }
+    if (bar && Clock::now() >= next_status) {
+      const rtde::ClientStats st = client.stats();
+      const double el = std::chrono::duration<double>(Clock::now() - t0).count();
+      std::fprintf(stderr, "\r  %5.1f / %g s  %ld samples  lost %ld in %ld gaps  reconnects %ld%s   ", el, o.duration,
+                   writer.rows(), st.lost, st.gaps, st.reconnects, st.connected ? "" : "  (disconnected)");
+      next_status += std::chrono::milliseconds(250);
+    }
+  }
+  client.stop();
+  while (client.pop(s, std::chrono::nanoseconds(0))) {  // nothing already received is lost
+    writer.write(s);
+    t_last = s.timestamp;
+  }
+  writer.close();
+  if (bar) std::fprintf(stderr, "\n");
+  const rtde::ClientStats st = client.stats();
+  const std::string fatal = client.fatal_error();
+  const double cpu_pct = st.wall_seconds > 0 ? 100.0 * st.cpu_seconds / st.wall_seconds : 0.0;
+  if (o.json) {
+    nlohmann::json j = {{"output", o.output},
+                        {"host", co.host},
+                        {"port", co.port},
+                        {"protocol", st.protocol},
+                        {"controller_version", fmt::format("{}.{}.{}.{}", st.controller.major, st.controller.minor,
+                                                           st.controller.bugfix, st.controller.build)},
+                        {"frequency_hz", st.frequency},
+                        {"samples", writer.rows()},
+                        {"robot_time_s", std::isnan(t_first) ? 0.0 : t_last - t_first},
+                        {"received", st.received},
+                        {"lost", st.lost},
+                        {"gaps", st.gaps},
+                        {"dropped", st.dropped},
+                        {"reconnects", st.reconnects},
+                        {"protocol_errors", st.protocol_errors},
+                        {"text_messages", st.text_messages},
+                        {"arrival_jitter_p99_ms", 1e3 * st.arrival_p99_s},
+                        {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},
+                        {"client_cpu_percent", cpu_pct},
+                        {"interrupted", g_interrupted.load()},
+                        {"error", fatal.empty() ? nlohmann::json() : nlohmann::json(fatal)}};
+    fmt::print("{}\n", j.dump());
+  } else if (!o.quiet) {
+    fmt::print("{}: {} samples ({:.2f} s of controller time) from {}:{}; lost {} samples in {} gaps, {} reconnects, "
+               "{} dropped by a slow writer, {} protocol errors; arrival jitter p99 {:.2f} ms; client CPU {:.2f} %\n",
+               o.output, writer.rows(), std::isnan(t_first) ? 0.0 : t_last - t_first, co.host, co.port, st.lost, st.gaps,
+               st.reconnects, st.dropped, st.protocol_errors, 1e3 * st.arrival_p99_s, cpu_pct);
+  }
+  if (!fatal.empty()) {
+    std::fprintf(stderr, "error: %s\n", fatal.c_str());
+    return 1;
+  }
+  if (writer.rows() == 0) {
+    std::fprintf(stderr, "error: no samples received from %s:%u\n", co.host.c_str(), co.port);
+    return 1;
+  }
+  return 0;
+}
+
+// ---- serve-robot ----------------------------------------------------------------------------
+
+struct ServeOptions {
+  std::string scenario, bind = "127.0.0.1", version = "5.23.0.0";
+  int port = rtde::kDefaultPort;
+  double speed = 1.0, duration = -1.0, wait_client = 0.0;
+  long seed = -1;
+  bool json = false, quiet = false;
+};
+
+rtde::ControllerVersion parse_version(const std::string& s) {
+  rtde::ControllerVersion v;
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  char tail = 0;
+  const int n = std::sscanf(s.c_str(), "%u.%u.%u.%u%c", &a, &b, &c, &d, &tail);
+  if (n != 4) throw InvalidArgument(fmt::format("--controller-version '{}': expected MAJOR.MINOR.BUGFIX.BUILD, e.g. 5.23.0.0", s));
+  v.major = a;
+  v.minor = b;
+  v.bugfix = c;
+  v.build = d;
+  return v;
+}
+
+int run_serve(const ServeOptions& o) {
+  if (!(o.speed > 0.0)) throw InvalidArgument(fmt::format("--speed must be > 0, got {}", o.speed));
+  if (o.port < 0 || o.port > 65535) throw InvalidArgument(fmt::format("--port must be in 0..65535, got {}", o.port));
+  sim::Scenario sc = sim::load_scenario(o.scenario);
+  if (o.seed >= 0) sc.options.seed = static_cast<unsigned>(o.seed);
+  if (o.duration > 0) sc.options.duration = o.duration;
+  auto simulator = sim::make_simulator(sc);
+  model::RobotModel nominal = model::load_robot(sc.robot);  // the controller's own model
+  if (sc.options.payload_declared) nominal.set_payload(sc.options.payload);
+  sim::RtdeFrameBuilder frames(nominal);
+
+  rtde::ServerOptions so;
+  so.bind = o.bind;
+  so.port = static_cast<std::uint16_t>(o.port);
+  so.version = parse_version(o.version);
+  so.base_frequency = sc.options.rate;
+  rtde::Server server(so);
+  server.start();
+  install_interrupt_handler();
+  if (!o.quiet)
+    fmt::print(stderr, "serving '{}' over RTDE on {}:{} at {:g} Hz x{:g} speed for {:g} s of robot time (Ctrl-C stops)\n",
+               sc.name, o.bind, server.port(), sc.options.rate, o.speed, sc.options.duration);
+  std::fflush(stderr);
+
+  if (o.wait_client > 0) {  // tests and demos: start the robot when someone is listening
+    const auto until = Clock::now() + std::chrono::duration<double>(o.wait_client);
+    while (!g_interrupted && Clock::now() < until && server.stats().clients == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+
+  const long steps = std::llround(sc.options.duration * sc.options.rate);
+  const auto period = std::chrono::duration<double>(1.0 / (sc.options.rate * o.speed));
+  const bool bar = !o.quiet && !o.json && isatty(STDERR_FILENO);
+  RobotSample s;
+  long dropped_by_scenario = 0, late = 0;
+  const auto t0 = Clock::now();
+  long k = 0;
+  for (; k < steps && !g_interrupted; ++k) {
+    const auto due = t0 + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(k));
+    const auto now = Clock::now();
+    if (now < due) std::this_thread::sleep_until(due);
+    else if (now - due > period) ++late;  // could not keep the pace (machine too slow for --speed)
+    if (simulator->step(s)) server.publish(frames.build(s));
+    else ++dropped_by_scenario;  // a stream fault of the scenario: this cycle is not sent
+    if (bar && k % static_cast<long>(sc.options.rate / 4) == 0) {
+      const rtde::ServerStats st = server.stats();
+      std::fprintf(stderr, "\r  t = %7.2f s  clients %d  sent %ld  skipped %ld   ", simulator->time(), st.clients,
+                   st.packages_sent, st.packages_skipped);
+    }
+  }
+  server.stop();
+  if (bar) std::fprintf(stderr, "\n");
+  const rtde::ServerStats st = server.stats();
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (o.json) {
+    nlohmann::json j = {{"scenario", sc.name},
+                        {"port", server.port()},
+                        {"cycles", k},
+                        {"robot_time_s", static_cast<double>(k) / sc.options.rate},
+                        {"wall_s", wall},
+                        {"connections", st.connections},
+                        {"packages_sent", st.packages_sent},
+                        {"packages_skipped", st.packages_skipped},
+                        {"dropped_by_scenario", dropped_by_scenario},
+                        {"late_cycles", late},
+                        {"protocol_errors", st.protocol_errors},
+                        {"interrupted", g_interrupted.load()}};
+    fmt::print("{}\n", j.dump());
+  } else if (!o.quiet) {
+    fmt::print("served {} cycles ({:.2f} s of robot time in {:.2f} s) to {} connection(s): {} packages sent, {} skipped "
+               "(slow clients), {} withheld by the scenario's stream faults, {} late cycles, {} protocol errors\n",
+               k, static_cast<double>(k) / sc.options.rate, wall, st.connections, st.packages_sent, st.packages_skipped,
+               dropped_by_scenario, late, st.protocol_errors);
+  }
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
+  auto o = std::make_shared<RecordOptions>();
+  auto* sub = app.add_subcommand("record", "Record a robot's RTDE stream to a recording CSV (the simulator's format)");
+  sub->add_option("--rtde", o->endpoint, "Controller address HOST[:PORT] (port 30004 by default)")->required();
+  sub->add_option("-o,--output", o->output, "Recording CSV to write")->required();
+  sub->add_option("--frequency", o->frequency, "Output rate [Hz], 0 < f <= 500 (CB3: 125)")->capture_default_str();
+  sub->add_option("--duration", o->duration, "How long to record [s of wall-clock time]")->capture_default_str();
+  sub->add_option("--outputs", o->outputs,
+                  "Comma-separated RTDE output names (default: every recording column: timestamp, actual_q, actual_qd, "
+                  "target_q, target_qd, target_qdd, actual_current, target_current, target_moment, joint_temperatures, "
+                  "actual_digital_output_bits, robot_mode)");
+  sub->add_option("--wait", o->wait, "Keep trying the first connection for this long [s]")->capture_default_str();
+  sub->add_option("--protocol", o->protocol, "Highest RTDE protocol version to ask for (2, or 1 for old controllers)")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  sub->add_flag("--no-reconnect", o->no_reconnect, "Stop at the first disconnection instead of reconnecting with back-off");
+  sub->add_flag("--json", o->json, "Print the summary as one JSON object");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_record(*o)); });
+}};
+
+twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
+  auto o = std::make_shared<ServeOptions>();
+  auto* sub = app.add_subcommand("serve-robot", "Run the virtual robot in real time and serve it over RTDE like a UR e-Series controller");
+  sub->add_option("SCENARIO", o->scenario, "Scenario YAML (see scenarios/ur3e/ and docs/scenarios.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--port", o->port, "TCP port (0: any free port, printed at start)")->capture_default_str();
+  sub->add_option("--bind", o->bind, "Address to listen on (0.0.0.0 for other machines)")->capture_default_str();
+  sub->add_option("--speed", o->speed, "Real-time factor (2 = twice as fast; timestamps stay in robot time)")->capture_default_str();
+  sub->add_option("--duration", o->duration, "Override the scenario's duration [s of robot time]");
+  sub->add_option("--seed", o->seed, "Override the scenario's seed");
+  sub->add_option("--controller-version", o->version, "Version to report to clients")->capture_default_str();
+  sub->add_option("--wait-client", o->wait_client, "Hold the robot until a client connects, for at most this long [s]");
+  sub->add_flag("--json", o->json, "Print the summary as one JSON object");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run_serve(*o)); });
+}};
+
+}  // namespace
