@@ -15,8 +15,8 @@ namespace twinwatch::device::rtde {
 
 // ---- session ------------------------------------------------------------------------------
 
-ServerSession::ServerSession(ControllerVersion version, double base_frequency)
-    : version_(version), base_frequency_(base_frequency) {}
+ServerSession::ServerSession(ControllerVersion version, double base_frequency, int max_protocol)
+    : version_(version), base_frequency_(base_frequency), max_protocol_(max_protocol) {}
 
 void ServerSession::on_bytes(const std::uint8_t* data, std::size_t n, Bytes& out) {
   framer_.feed(data, n);
@@ -34,7 +34,7 @@ void ServerSession::handle(const Package& p, Bytes& out) {
     switch (static_cast<PackageType>(p.type)) {
       case PackageType::RequestProtocolVersion: {
         const std::uint16_t v = decode_request_protocol_version(p);
-        const bool ok = v == 1 || v == 2;
+        const bool ok = v >= 1 && v <= max_protocol_;
         if (ok) protocol_ = v;
         encode_protocol_version_reply(out, ok);
         return;
@@ -75,7 +75,7 @@ void ServerSession::handle(const Package& p, Bytes& out) {
         for (const FieldInfo* f : recipe_.fields) recipe_.payload_size += wire_size(f->type);
         has_recipe_ = true;
         frequency_ = freq;
-        phase_ = 1.0;  // the first cycle after START sends
+        phase_ = 1.0 - frequency_ / base_frequency_;  // the first cycle after START sends, then every base/f
         encode_setup_reply(out, PackageType::SetupOutputs, protocol_, recipe_.id, types);
         return;
       }
@@ -128,8 +128,15 @@ void ServerSession::handle(const Package& p, Bytes& out) {
     error_text(out, fmt::format("{} ({} payload bytes) is not an RTDE request; ignored", package_name(p.type), p.payload.size()));
   } catch (const ProtocolError& e) {
     error_text(out, e.what());
-    // a malformed version request still gets its answer, so a waiting client does not hang
-    if (p.type == static_cast<std::uint8_t>(PackageType::RequestProtocolVersion)) encode_protocol_version_reply(out, false);
+    // a malformed request still gets its (negative) answer, so a waiting client does not hang
+    switch (static_cast<PackageType>(p.type)) {
+      case PackageType::RequestProtocolVersion: encode_protocol_version_reply(out, false); break;
+      case PackageType::SetupOutputs:
+      case PackageType::SetupInputs: encode_setup_reply(out, static_cast<PackageType>(p.type), protocol_, 0, {}); break;
+      case PackageType::Start:
+      case PackageType::Pause: encode_accepted_reply(out, static_cast<PackageType>(p.type), false); break;
+      default: break;
+    }
   }
 }
 
@@ -154,7 +161,8 @@ struct Server::Connection {
   Bytes pending;     // bytes the socket did not take yet
   std::thread thread;
   std::atomic<bool> done{false};
-  Connection(int f, std::string p, const ServerOptions& o) : fd(f), peer(std::move(p)), session(o.version, o.base_frequency) {}
+  std::atomic<bool> streaming{false};  // mirror of session.streaming() for stats() (no lock order issue)
+  Connection(int f, std::string p, const ServerOptions& o) : fd(f), peer(std::move(p)), session(o.version, o.base_frequency, o.max_protocol) {}
 
   // Control replies must arrive: queue and wait for the socket (up to 1 s). Caller holds mutex.
   bool send_reliable(const Bytes& b) {
@@ -276,6 +284,7 @@ void Server::client_loop(std::shared_ptr<Connection> c) {
       encode_text_message(out, c->session.protocol(), {MessageLevel::Exception, e.what(), "twinwatch virtual controller"});
       close = true;
     }
+    c->streaming = c->session.streaming();
     const long new_errors = c->session.errors() - errors_before + (close ? 1 : 0);
     if (new_errors > 0) {
       std::lock_guard<std::mutex> slock(mutex_);
@@ -329,7 +338,10 @@ void Server::broadcast(const TextMessage& m) {
 
 ServerStats Server::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return stats_;
+  ServerStats s = stats_;
+  s.streaming = 0;
+  for (const auto& c : conns_) s.streaming += c->streaming && !c->done ? 1 : 0;
+  return s;
 }
 
 }  // namespace twinwatch::device::rtde

@@ -35,7 +35,8 @@ namespace twinwatch::device::rtde {
 /// One client connection's protocol state, without the socket (unit-tested and fuzzed directly).
 class ServerSession {
  public:
-  ServerSession(ControllerVersion version, double base_frequency);
+  /// @param max_protocol 2, or 1 to behave like an old controller that refuses v2.
+  ServerSession(ControllerVersion version, double base_frequency, int max_protocol = 2);
 
   /// Feeds received bytes; appends replies to `out`. Throws ProtocolError when the stream is
   /// corrupt and the connection must close.
@@ -56,6 +57,7 @@ class ServerSession {
 
   ControllerVersion version_;
   double base_frequency_;
+  int max_protocol_;
   int protocol_ = 2;  // until negotiated: ur_rtde never waits for the reply (fact sheet §4)
   Framer framer_;
   bool streaming_ = false, has_recipe_ = false;
@@ -72,10 +74,12 @@ struct ServerOptions {
   std::uint16_t port = kDefaultPort;  ///< 0: an ephemeral port (tests)
   ControllerVersion version{5, 23, 0, 0};
   double base_frequency = 500.0;  ///< e-Series control rate [Hz]
+  int max_protocol = 2;           ///< 1: refuse v2 like an old controller (tests of v1 fallback)
 };
 
 struct ServerStats {
   int clients = 0;           ///< connected now
+  int streaming = 0;         ///< of which started (START accepted)
   long connections = 0;      ///< accepted since start
   long packages_sent = 0;    ///< data packages
   long packages_skipped = 0; ///< data packages not sent because a client's socket was full
