@@ -212,7 +212,7 @@ int run_serve(const ServeOptions& o) {
 
   if (o.wait_client > 0) {  // tests and demos: start the robot when someone is listening
     const auto until = Clock::now() + std::chrono::duration<double>(o.wait_client);
-    while (!g_interrupted && Clock::now() < until && server.stats().clients == 0)
+    while (!g_interrupted && Clock::now() < until && server.stats().streaming == 0)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 
