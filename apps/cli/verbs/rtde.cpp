@@ -236,6 +236,8 @@ int run_serve(const ServeOptions& o) {
                    st.packages_sent, st.packages_skipped);
     }
   }
+  server.broadcast({rtde::MessageLevel::Info, g_interrupted ? "virtual robot stopped by the operator" : "scenario finished",
+                    "twinwatch virtual controller"});
   server.stop();
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ServerStats st = server.stats();
