@@ -1,6 +1,8 @@
 #include "verb_registry.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <csignal>
 #include <vector>
 
 namespace twinwatch::cli {
@@ -16,7 +18,17 @@ std::vector<Entry>& registry() {
   return entries;
 }
 int g_exit_code = 0;
+std::atomic<bool> g_interrupted{false};
 }  // namespace
+
+void install_interrupt_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = [](int) { g_interrupted = true; };
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+bool interrupted() { return g_interrupted.load(); }
 
 VerbRegistrar::VerbRegistrar(std::string name, int order, VerbSetup setup) {
   registry().push_back({std::move(name), order, std::move(setup)});

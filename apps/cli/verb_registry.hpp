@@ -25,6 +25,11 @@ struct VerbRegistrar {
 void set_exit_code(int code);
 int exit_code();
 
+/// Long-running verbs (serve-robot, record, live monitor): Ctrl-C / SIGTERM set a flag that the
+/// verb polls, so it can stop cleanly (flush files, say goodbye to clients) instead of dying.
+void install_interrupt_handler();
+bool interrupted();
+
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);
 

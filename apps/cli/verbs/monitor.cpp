@@ -12,6 +12,8 @@
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
+#include "twinwatch/device/rtde_client.hpp"
+#include "rtde_source.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/ui/html_report.hpp"
 #include "evaluate.hpp"
@@ -23,6 +25,8 @@ using namespace twinwatch;
 
 struct MonitorOptions {
   std::string twin, recording, events_path, db_path = "events.db";
+  std::string rtde, record_to;  // live input: controller address, optional copy of the stream
+  double duration = 0.0, wait = 0.0;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
@@ -46,9 +50,27 @@ int run_monitor(const MonitorOptions& o) {
       for (size_t k = 0; k < o.sensitivity.size(); ++k) cfg.sensitivity[static_cast<int>(k)] = o.sensitivity[k];
     }
   }
-  const device::Recording rec = device::read_recording(o.recording);
-  if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
-  if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
+  if (o.recording.empty() == o.rtde.empty())
+    throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
+  device::Recording rec;
+  std::unique_ptr<device::rtde::Client> client;
+  const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
+  if (o.rtde.empty()) {
+    rec = device::read_recording(o.recording);
+    if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
+    if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
+  } else {
+    if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
+    cli::RtdeSourceOptions so;
+    so.endpoint = o.rtde;
+    so.wait_s = o.wait;
+    cli::install_interrupt_handler();
+    client = cli::open_rtde(so);
+    cfg.nominal_period = 1.0 / client->stats().frequency;
+    if (!o.quiet && !o.json)
+      fmt::print(stderr, "monitoring {} ({}){}; Ctrl-C stops\n", o.rtde, cli::describe(*client),
+                 o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
+  }
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
   if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);
@@ -71,9 +93,35 @@ int run_monitor(const MonitorOptions& o) {
                  e.duration(), 100 * e.confidence);
     if (jl) jl << e.to_json_line() << '\n';
     if (o.json) fmt::print("{}\n", e.to_json_line());
-    if (store) store->insert(e, o.recording);
+    if (store) store->insert(e, source);
   };
-  for (const auto& s : rec.samples) mon.push(s);
+  if (!client) {
+    for (const auto& s : rec.samples) mon.push(s);
+  } else {
+    std::unique_ptr<device::RecordingWriter> copy;
+    if (!o.record_to.empty()) copy = std::make_unique<device::RecordingWriter>(o.record_to, 6, client->sample_fields());
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.duration > 0 ? o.duration : 1e9);
+    RobotSample s;
+    while (!cli::interrupted() && std::chrono::steady_clock::now() < end) {
+      if (client->pop(s, std::chrono::milliseconds(50))) {
+        mon.push(s);
+        if (copy) copy->write(s);
+      } else if (client->finished()) {
+        break;
+      }
+    }
+    client->stop();
+    while (client->pop(s, std::chrono::nanoseconds(0))) {  // what was received is still analysed
+      mon.push(s);
+      if (copy) copy->write(s);
+    }
+    if (copy) copy->close();
+    const auto st = client->stats();
+    if (!o.quiet && !o.json)
+      fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors\n", st.received, st.lost, st.gaps,
+                 st.reconnects, st.protocol_errors);
+    if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
+  }
   mon.finish();
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}\n", mon.samples(), mon.gaps(), mon.events().size(),
@@ -110,7 +158,11 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   auto o = std::make_shared<MonitorOptions>();
   auto* sub = app.add_subcommand("monitor", "Watch a recording with the twin: residuals, alerts, diagnosis, events");
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
-  sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
+  sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
+  sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)");
+  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]");
+  sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");

@@ -19,6 +19,7 @@
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/rtde_frame.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#include "rtde_source.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -27,15 +28,8 @@ using namespace twinwatch;
 namespace rtde = device::rtde;
 using Clock = std::chrono::steady_clock;
 
-std::atomic<bool> g_interrupted{false};
-
-void install_interrupt_handler() {
-  struct sigaction sa {};
-  sa.sa_handler = [](int) { g_interrupted = true; };
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
+using cli::install_interrupt_handler;
+using cli::interrupted;
 
 std::vector<std::string> split_list(const std::string& s) {
   std::vector<std::string> out;
@@ -58,37 +52,23 @@ struct RecordOptions {
 };
 
 int run_record(const RecordOptions& o) {
-  rtde::ClientOptions co;
-  rtde::parse_endpoint(o.endpoint, co.host, co.port);
-  co.frequency = o.frequency;
-  co.max_protocol = o.protocol;
-  co.reconnect = !o.no_reconnect;
-  if (!o.outputs.empty()) co.outputs = split_list(o.outputs);
-  for (const auto& name : co.outputs)
+  if (!(o.duration > 0.0)) throw InvalidArgument(fmt::format("--duration must be > 0 s, got {}", o.duration));
+  cli::RtdeSourceOptions so;
+  so.endpoint = o.endpoint;
+  so.frequency = o.frequency;
+  so.wait_s = o.wait;
+  so.protocol = o.protocol;
+  so.reconnect = !o.no_reconnect;
+  so.outputs = split_list(o.outputs);
+  for (const auto& name : so.outputs)
     if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
       log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
-  if (!(o.duration > 0.0)) throw InvalidArgument(fmt::format("--duration must be > 0 s, got {}", o.duration));
   install_interrupt_handler();
-
-  rtde::Client client(co);
-  // The first connection: retry for up to --wait seconds (a robot that is still booting).
-  const auto wait_until = Clock::now() + std::chrono::duration<double>(o.wait);
-  for (;;) {
-    try {
-      client.start();
-      break;
-    } catch (const rtde::RecipeError&) {
-      throw;
-    } catch (const std::exception& e) {
-      if (Clock::now() >= wait_until || g_interrupted) throw;
-      std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    }
-  }
-  const rtde::ClientStats first = client.stats();
+  const auto client_ptr = cli::open_rtde(so);
+  rtde::Client& client = *client_ptr;
+  const rtde::ClientOptions& co = client.options();
   if (!o.quiet && !o.json)
-    fmt::print(stderr, "recording {}:{} (controller {}.{}.{}.{}, RTDE v{}, {} outputs at {:g} Hz) for {:g} s -> {}\n", co.host,
-               co.port, first.controller.major, first.controller.minor, first.controller.bugfix, first.controller.build,
-               first.protocol, co.outputs.size(), first.frequency, o.duration, o.output);
+    fmt::print(stderr, "recording {}:{} ({}) for {:g} s -> {}\n", co.host, co.port, cli::describe(client), o.duration, o.output);
 
   device::RecordingWriter writer(o.output, 6, client.sample_fields());
   const bool bar = !o.quiet && !o.json && isatty(STDERR_FILENO);
@@ -97,7 +77,7 @@ int run_record(const RecordOptions& o) {
   auto next_status = t0;
   RobotSample s;
   double t_first = std::numeric_limits<double>::quiet_NaN(), t_last = t_first;
-  while (Clock::now() < end && !g_interrupted) {
+  while (Clock::now() < end && !interrupted()) {
     if (client.pop(s, std::chrono::milliseconds(50))) {
       writer.write(s);
       if (std::isnan(t_first)) t_first = s.timestamp;
@@ -143,7 +123,7 @@ int run_record(const RecordOptions& o) {
                         {"arrival_jitter_p99_ms", 1e3 * st.arrival_p99_s},
                         {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},
                         {"client_cpu_percent", cpu_pct},
-                        {"interrupted", g_interrupted.load()},
+                        {"interrupted", interrupted()},
                         {"error", fatal.empty() ? nlohmann::json() : nlohmann::json(fatal)}};
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
@@ -212,7 +192,7 @@ int run_serve(const ServeOptions& o) {
 
   if (o.wait_client > 0) {  // tests and demos: start the robot when someone is listening
     const auto until = Clock::now() + std::chrono::duration<double>(o.wait_client);
-    while (!g_interrupted && Clock::now() < until && server.stats().streaming == 0)
+    while (!interrupted() && Clock::now() < until && server.stats().streaming == 0)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 
@@ -223,7 +203,7 @@ int run_serve(const ServeOptions& o) {
   long dropped_by_scenario = 0, late = 0;
   const auto t0 = Clock::now();
   long k = 0;
-  for (; k < steps && !g_interrupted; ++k) {
+  for (; k < steps && !interrupted(); ++k) {
     const auto due = t0 + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(k));
     const auto now = Clock::now();
     if (now < due) std::this_thread::sleep_until(due);
@@ -236,7 +216,7 @@ int run_serve(const ServeOptions& o) {
                    st.packages_sent, st.packages_skipped);
     }
   }
-  server.broadcast({rtde::MessageLevel::Info, g_interrupted ? "virtual robot stopped by the operator" : "scenario finished",
+  server.broadcast({rtde::MessageLevel::Info, interrupted() ? "virtual robot stopped by the operator" : "scenario finished",
                     "twinwatch virtual controller"});
   server.stop();
   if (bar) std::fprintf(stderr, "\n");
@@ -254,7 +234,7 @@ int run_serve(const ServeOptions& o) {
                         {"dropped_by_scenario", dropped_by_scenario},
                         {"late_cycles", late},
                         {"protocol_errors", st.protocol_errors},
-                        {"interrupted", g_interrupted.load()}};
+                        {"interrupted", interrupted()}};
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
     fmt::print("served {} cycles ({:.2f} s of robot time in {:.2f} s) to {} connection(s): {} packages sent, {} skipped "

@@ -1,0 +1,43 @@
+#include "rtde_source.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <thread>
+
+#include "verb_registry.hpp"
+
+namespace twinwatch::cli {
+
+namespace rtde = device::rtde;
+
+std::unique_ptr<rtde::Client> open_rtde(const RtdeSourceOptions& o) {
+  rtde::ClientOptions co;
+  rtde::parse_endpoint(o.endpoint, co.host, co.port);
+  co.frequency = o.frequency;
+  co.max_protocol = o.protocol;
+  co.reconnect = o.reconnect;
+  if (!o.outputs.empty()) co.outputs = o.outputs;
+  auto client = std::make_unique<rtde::Client>(co);
+  // The first connection: retry for up to wait_s (a robot that is still booting).
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.wait_s);
+  for (;;) {
+    try {
+      client->start();
+      return client;
+    } catch (const rtde::RecipeError&) {
+      throw;  // NOT_FOUND names: retrying cannot help
+    } catch (const std::exception&) {
+      if (std::chrono::steady_clock::now() >= until || interrupted()) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+}
+
+std::string describe(const rtde::Client& c) {
+  const rtde::ClientStats st = c.stats();
+  return fmt::format("controller {}.{}.{}.{}, RTDE v{}, {} outputs at {:g} Hz", st.controller.major, st.controller.minor,
+                     st.controller.bugfix, st.controller.build, st.protocol, c.recipe().names.size(), st.frequency);
+}
+
+}  // namespace twinwatch::cli

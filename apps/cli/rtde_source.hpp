@@ -1,0 +1,27 @@
+#pragma once
+// Opening an RTDE stream from the command line (record --rtde, monitor --rtde): parses
+// HOST[:PORT], connects, and keeps trying the first connection for `wait_s` seconds.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "twinwatch/device/rtde_client.hpp"
+
+namespace twinwatch::cli {
+
+struct RtdeSourceOptions {
+  std::string endpoint;
+  double frequency = 500.0;
+  double wait_s = 0.0;
+  int protocol = 2;
+  bool reconnect = true;
+  std::vector<std::string> outputs;  ///< empty: the recording columns
+};
+
+/// A started client. Throws (RecipeError, connection errors) with the controller's address.
+std::unique_ptr<device::rtde::Client> open_rtde(const RtdeSourceOptions& o);
+
+/// "controller 5.23.0.0, RTDE v2, 12 outputs at 500 Hz"
+std::string describe(const device::rtde::Client& c);
+
+}  // namespace twinwatch::cli
