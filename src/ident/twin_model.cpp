@@ -61,18 +61,34 @@ void TwinModel::friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const
   row(kViscousTemperature) = v * (T - temperature_ref);
 }
 
+void TwinModel::sync_fitted() const {
+  const bool same = fitted_ && fitted_columns_ == base_columns && fitted_beta_.size() == beta.size() &&
+                    fitted_beta_ == beta && fitted_payload_.mass == payload_.mass && fitted_payload_.com == payload_.com &&
+                    fitted_payload_.inertia_com == payload_.inertia_com;
+  if (same) return;
+  const int n = robot_->n_dof();
+  Eigen::VectorXd pi = Eigen::VectorXd::Zero(10 * n);
+  for (size_t c = 0; c < base_columns.size(); ++c) pi(base_columns[c]) = beta(static_cast<Eigen::Index>(c));
+  if (!fitted_) fitted_.emplace(*robot_);
+  fitted_->set_standard_parameters(pi);
+  fitted_->set_payload(payload_);
+  if (!fitted_data_) fitted_data_.emplace(*fitted_);
+  fitted_columns_ = base_columns;
+  fitted_beta_ = beta;
+  fitted_payload_ = payload_;
+}
+
 void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                         VectorJ& current) const {
-  VectorJ tau_p;
-  regress(q, qd, qdd, Y_, tau_p);
+  sync_fitted();
+  const VectorJ& tau_rb = model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
   const int n = robot_->n_dof();
   torque.resize(n);
   current.resize(n);
   Eigen::Matrix<double, kFrictionColumns, 1> f;
   for (int j = 0; j < n; ++j) {
     const JointDrive& d = joints[static_cast<size_t>(j)];
-    double tau = tau_p[j];
-    for (size_t c = 0; c < base_columns.size(); ++c) tau += Y_(j, base_columns[c]) * beta(static_cast<Eigen::Index>(c));
+    double tau = tau_rb[j];
     friction_row(j, qd, qdd, temperature, f);
     tau += f.dot(d.friction);
     torque[j] = tau;

@@ -139,16 +139,34 @@ void RobotModel::set_link_inertia(int i, const RigidBodyInertia& body) {
     throw InvalidArgument(fmt::format("link index is {}, expected 0 to {}", i, n_dof_ - 1));
   body.validate(fmt::format("link {}", i));
   description_.joints[static_cast<size_t>(i)].body = body;
+  standard_override_.resize(0);
+  rebuild_cache();
+}
+
+void RobotModel::set_standard_parameters(const Eigen::VectorXd& pi) {
+  if (pi.size() != 10 * n_dof_)
+    throw InvalidArgument(fmt::format("standard parameter vector has size {}, expected {} (10 per link)", pi.size(), 10 * n_dof_));
+  for (Eigen::Index k = 0; k < pi.size(); ++k)
+    if (!std::isfinite(pi(k)))
+      throw InvalidArgument(fmt::format("standard parameter {} (link {}, column {}) is {}, expected a finite number", k, k / 10, k % 10, pi(k)));
+  standard_override_ = pi;
   rebuild_cache();
 }
 
 void RobotModel::rebuild_cache() {
   for (int i = 0; i < n_dof_; ++i) {
     const Joint& j = description_.joints[static_cast<size_t>(i)];
-    RigidBodyInertia body = j.body;
-    // merge the payload into the last link: flange frame -> last body frame
-    if (i == n_dof_ - 1 && (payload_.mass > 0.0 || !payload_.inertia_com.isZero(0.0))) body = body + payload_.expressed_in(description_.flange);
-    const StandardParameters pi = body.to_standard_parameters();
+    const bool payload_here = i == n_dof_ - 1 && (payload_.mass > 0.0 || !payload_.inertia_com.isZero(0.0));
+    StandardParameters pi;
+    if (standard_override_.size() > 0) {
+      pi = standard_override_.segment<10>(10 * i);
+      if (payload_here) pi += payload_.expressed_in(description_.flange).to_standard_parameters();
+    } else {
+      RigidBodyInertia body = j.body;
+      // merge the payload into the last link: flange frame -> last body frame
+      if (payload_here) body = body + payload_.expressed_in(description_.flange);
+      pi = body.to_standard_parameters();
+    }
     detail::LinkCache& c = cache_[static_cast<size_t>(i)];
     c.R0 = j.placement.linear();
     c.p = j.placement.translation();

@@ -131,8 +131,18 @@ class RobotModel {
   /// The current payload, in the flange frame.
   const RigidBodyInertia& payload() const { return payload_; }
 
-  /// Replaces link i's inertial parameters (body frame), e.g. after identification.
+  /// Replaces link i's inertial parameters (body frame), e.g. after identification. Clears any
+  /// parameters set by set_standard_parameters().
   void set_link_inertia(int i, const RigidBodyInertia& body);
+
+  /// Replaces the dynamic parameters of every link by a standard-parameter vector (10 per link, in
+  /// regressor column order: m, m·c, inertia about the body origin xx xy xz yy yz zz) that need not
+  /// be physical — e.g. a base-parameter fit mapped to standard parameters, so that RNEA evaluates
+  /// Y(q,qd,qdd)·pi exactly (the dynamics are linear in these parameters). The payload is still
+  /// added on the last link. Kinematics are unchanged. Only the inverse-dynamics kernels (rnea,
+  /// gravity, nonlinear effects) are meaningful with non-physical parameters. Throws
+  /// InvalidArgument on a size mismatch or a non-finite value.
+  void set_standard_parameters(const Eigen::VectorXd& pi);
 
   /// Cached per-link data for the dynamics kernels.
   const detail::LinkCache& link_cache(int i) const { return cache_[static_cast<size_t>(i)]; }
@@ -142,6 +152,7 @@ class RobotModel {
 
   RobotDescription description_;
   RigidBodyInertia payload_;
+  Eigen::VectorXd standard_override_;  // empty: parameters come from the description
   int n_dof_ = 0;
   std::array<detail::LinkCache, kMaxDof> cache_{};
 };
