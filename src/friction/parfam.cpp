@@ -324,6 +324,8 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     for (int i = 0; i < L.size(); ++i)
       if (c.theta[static_cast<std::size_t>(i)] != 0.0) c.active.push_back(i);
     for (int i = L.den(); i < L.size(); ++i) c.rational = c.rational || c.theta[static_cast<std::size_t>(i)] != 0.0;
+    // a threshold that prunes nothing more than the previous one gives the same candidate
+    if (!candidates.empty() && candidates.back().active == c.active) continue;
     ctx.theta = c.theta;
     ctx.active = c.active;
     ctx.rational = c.rational;

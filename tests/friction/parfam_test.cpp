@@ -248,9 +248,10 @@ TEST(ParFamV, SeesTheVelocityOnly) {
 TEST(ParFam, FitIsDeterministicForAGivenSeed) {
   HysteresisState st(HysteresisParams{15.0, 100.0}, kDt);
   const FrictionRecord train =
-      make_record(sine_velocity(10.0), [&](double v) { return 3.0 * st.step(v).h + 0.5 * v; }, kNoise, 25);
+      make_record(sine_velocity(5.0), [&](double v) { return 3.0 * st.step(v).h + 0.5 * v; }, kNoise, 25);
   ParFamOptions o;
-  o.hops = 3;
+  o.hops = 2;
+  o.refine_evaluations = 50;
   ParFamModel a(o), b(o);
   a.fit(train);
   b.fit(train);

@@ -120,7 +120,7 @@ struct ParFamOptions {
   double l1_smoothing = 1e-3;         ///< eps of the smoothed |theta|, > 0
   double coefficient_bound = 30.0;    ///< box |theta_i| <= bound during the search (unit-RMS data), > 0
   int starts = 2;                     ///< independent random starts of basin hopping, >= 1
-  int hops = 20;                      ///< basin-hopping steps per start, >= 0
+  int hops = 12;                      ///< basin-hopping steps per start, >= 0
   double hop_step = 0.5;              ///< uniform perturbation half-width, > 0
   double hop_temperature = 0.1;       ///< Metropolis temperature relative to the current loss, > 0
   int local_evaluations = 100;        ///< L-BFGS evaluations per local step, >= 10

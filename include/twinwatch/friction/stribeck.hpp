@@ -16,7 +16,7 @@ namespace twinwatch::friction {
 struct ParametricFitOptions {
   int global_evaluations = 3000;  ///< NLopt GN_CRS2_LM objective evaluations, >= 10
   int local_iterations = 100;     ///< Ceres Levenberg-Marquardt iterations per start, >= 1
-  int local_starts = 8;           ///< further LM starts drawn in the box, besides the global optimum, >= 0
+  int local_starts = 4;           ///< further LM starts drawn in the box, besides the global optimum, >= 0
   unsigned seed = 1;              ///< seeds the random search (deterministic fits)
   /// Throws InvalidArgument naming the first field out of range.
   void validate() const;
