@@ -17,6 +17,7 @@ endfunction()
 
 # twinwatch_add_tests(<module> [DEPS <targets>...])
 #   One GoogleTest executable twinwatch_<module>_tests from every tests/<module>/*_test.cpp.
+#   CTest names are "<module>.<Suite>.<Test>", so `ctest -R <module>` selects one module.
 function(twinwatch_add_tests module)
   cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
   file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${module}/*.cpp)
@@ -26,7 +27,7 @@ function(twinwatch_add_tests module)
   target_compile_definitions(twinwatch_${module}_tests PRIVATE
     TWINWATCH_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     TWINWATCH_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
-  gtest_discover_tests(twinwatch_${module}_tests DISCOVERY_MODE PRE_TEST
+  gtest_discover_tests(twinwatch_${module}_tests DISCOVERY_MODE PRE_TEST TEST_PREFIX "${module}."
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR} PROPERTIES TIMEOUT 600)
 endfunction()
 

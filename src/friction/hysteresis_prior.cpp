@@ -1,0 +1,145 @@
+#include "twinwatch/friction/hysteresis_prior.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::friction {
+
+namespace {
+
+double percentile(std::vector<double> a, double q) {
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(a.size() - 1));
+  std::nth_element(a.begin(), a.begin() + static_cast<long>(k), a.end());
+  return a[k];
+}
+
+std::vector<double> abs_of(std::span<const double> x) {
+  std::vector<double> a(x.size());
+  std::transform(x.begin(), x.end(), a.begin(), [](double v) { return std::abs(v); });
+  return a;
+}
+
+}  // namespace
+
+LoopDescriptors loop_descriptors(std::span<const double> qd, std::span<const double> y, double v_ref) {
+  check_size("y", static_cast<long>(y.size()), static_cast<long>(qd.size()), "size of qd");
+  if (qd.size() < 3) throw InvalidArgument(fmt::format("qd has {} samples, expected at least 3", qd.size()));
+  if (!std::isfinite(v_ref) || v_ref <= 0.0)
+    throw InvalidArgument(fmt::format("reversal threshold v_ref is {}, must be > 0 [rad/s]", v_ref));
+  // robust range of y
+  constexpr double kLow = 0.01, kHigh = 0.99;
+  std::vector<double> ys(y.begin(), y.end());
+  const double range = std::max(percentile(ys, kHigh) - percentile(ys, kLow), std::numeric_limits<double>::min());
+  LoopDescriptors d;
+  double down_sum = 0.0, up_sum = 0.0, slope_sum = 0.0;
+  int n_down = 0, n_up = 0;
+  // walk the record: a reversal is a sign change of qd after an excursion beyond +-v_ref
+  int armed = 0;  // sign of the last excursion beyond v_ref (0: none yet)
+  for (std::size_t k = 1; k < qd.size(); ++k) {
+    if (armed == 0) {
+      if (std::abs(qd[k]) >= v_ref) armed = qd[k] > 0.0 ? 1 : -1;
+      continue;
+    }
+    const bool crossed = armed > 0 ? (qd[k - 1] > 0.0 && qd[k] <= 0.0) : (qd[k - 1] < 0.0 && qd[k] >= 0.0);
+    if (!crossed) continue;
+    // y at qd = 0 by linear interpolation between k-1 and k
+    const double denom = qd[k - 1] - qd[k];
+    const double w = denom != 0.0 ? qd[k - 1] / denom : 1.0;
+    const double y0 = y[k - 1] + w * (y[k] - y[k - 1]);
+    // first sample after the crossing with |qd| >= v_ref in the new direction
+    std::size_t m = k;
+    while (m < qd.size() && -armed * qd[m] < v_ref) ++m;
+    if (m == qd.size()) break;  // the record ends inside the reversal
+    if (armed > 0) {
+      down_sum += y0;
+      ++n_down;
+    } else {
+      up_sum += y0;
+      ++n_up;
+    }
+    slope_sum += -armed * (y[m] - y0);
+    ++d.reversals;
+    armed = -armed;
+    k = m;
+  }
+  if (d.reversals == 0) return d;
+  // width needs both directions; with one only, the loop height is taken against 0
+  const double down = n_down > 0 ? down_sum / n_down : 0.0;
+  const double up = n_up > 0 ? up_sum / n_up : 0.0;
+  d.width = (n_down > 0 && n_up > 0 ? down - up : 2.0 * (n_down > 0 ? down : -up)) / range;
+  d.slope = slope_sum / d.reversals / range;
+  return d;
+}
+
+void HysteresisPriorOptions::validate() const {
+  if (!std::isfinite(alpha_min) || alpha_min <= 0.0)
+    throw InvalidArgument(fmt::format("prior alpha_min is {}, must be > 0 [1/s]", alpha_min));
+  if (!std::isfinite(alpha_max) || alpha_max <= alpha_min)
+    throw InvalidArgument(fmt::format("prior alpha_max is {}, must be > alpha_min ({})", alpha_max, alpha_min));
+  if (!std::isfinite(beta_min) || beta_min <= 0.0)
+    throw InvalidArgument(fmt::format("prior beta_min is {}, must be > 0 [s/rad]", beta_min));
+  if (!std::isfinite(beta_max) || beta_max <= beta_min)
+    throw InvalidArgument(fmt::format("prior beta_max is {}, must be > beta_min ({})", beta_max, beta_min));
+  if (grid < 2) throw InvalidArgument(fmt::format("prior grid is {}, must be >= 2", grid));
+  if (!(weight_width >= 0.0) || !(weight_slope >= 0.0) || weight_width + weight_slope <= 0.0)
+    throw InvalidArgument(fmt::format("prior weights (weight_width {}, weight_slope {}) must be >= 0 with a positive sum",
+                                      weight_width, weight_slope));
+  if (!(v_ref_fraction > 0.0 && v_ref_fraction < 1.0))
+    throw InvalidArgument(fmt::format("prior v_ref_fraction is {}, must be in (0, 1)", v_ref_fraction));
+}
+
+HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const HysteresisPriorOptions& options) {
+  options.validate();
+  record.validate("training record", 3);
+  // reversal threshold from the velocity scale
+  constexpr double kVelocityQuantile = 0.99;
+  const double v_ref = options.v_ref_fraction * percentile(abs_of(record.qd), kVelocityQuantile);
+  if (!(v_ref > 0.0)) throw InvalidArgument("training record: qd is zero, no hysteresis loop to calibrate on");
+  // measured descriptors on a lightly smoothed tau_f (5-sample centred moving average)
+  constexpr int kHalfWindow = 2;
+  const auto n = static_cast<long>(record.tau.size());
+  std::vector<double> tau_s(record.tau.size());
+  for (long k = 0; k < n; ++k) {
+    const long a = std::max(0L, k - kHalfWindow), b = std::min(n - 1, k + kHalfWindow);
+    double s = 0.0;
+    for (long i = a; i <= b; ++i) s += record.tau[static_cast<std::size_t>(i)];
+    tau_s[static_cast<std::size_t>(k)] = s / static_cast<double>(b - a + 1);
+  }
+  HysteresisPrior out;
+  out.measured = loop_descriptors(record.qd, tau_s, v_ref);
+  if (out.measured.reversals == 0)
+    throw InvalidArgument(fmt::format("training record: qd never reverses beyond +-{:.3g} rad/s, no hysteresis loop "
+                                      "to calibrate (alpha, beta) on",
+                                      v_ref));
+  // bounded log grid; alpha kept inside the stability region of eq. 11
+  constexpr double kStableFraction = 0.9;
+  const double alpha_max = std::min(options.alpha_max, kStableFraction / record.dt);
+  const double alpha_min = std::min(options.alpha_min, 0.5 * alpha_max);
+  out.cost = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < options.grid; ++i) {
+    const double alpha = alpha_min * std::pow(alpha_max / alpha_min, i / (options.grid - 1.0));
+    for (int j = 0; j < options.grid; ++j) {
+      const double beta = options.beta_min * std::pow(options.beta_max / options.beta_min, j / (options.grid - 1.0));
+      const HysteresisParams p{alpha, beta};
+      const HysteresisFeatures f = hysteresis_features(record.qd, record.dt, p);
+      const LoopDescriptors g = loop_descriptors(record.qd, f.h, v_ref);
+      // J_h of eq. 13
+      const double cost = options.weight_width * std::abs(out.measured.width - g.width) +
+                          options.weight_slope * std::abs(out.measured.slope - g.slope);
+      if (cost < out.cost) {
+        out.cost = cost;
+        out.params = p;
+        out.generated = g;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace twinwatch::friction

@@ -1,0 +1,197 @@
+#include "twinwatch/friction/study.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/friction/lugre.hpp"
+#include "twinwatch/friction/synthetic_joint.hpp"
+
+namespace twinwatch::friction {
+
+namespace {
+
+/// sqrt(mean (y - yhat)^2) over the samples where mask is set (all when mask is empty); 0 if none.
+double masked_rmse(std::span<const double> y, std::span<const double> yhat, const std::vector<char>& mask) {
+  double s = 0.0;
+  long n = 0;
+  for (std::size_t k = 0; k < y.size(); ++k) {
+    if (!mask.empty() && !mask[k]) continue;
+    s += (y[k] - yhat[k]) * (y[k] - yhat[k]);
+    ++n;
+  }
+  return n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
+}
+
+/// Fastest of `repeats` timed passes of predict() over the record, per sample [ns].
+double time_per_sample_ns(FrictionModel& m, const FrictionRecord& r, int repeats) {
+  double best = std::numeric_limits<double>::infinity();
+  volatile double sink = 0.0;
+  for (int i = 0; i < repeats; ++i) {
+    m.start(r.dt);
+    const auto t0 = std::chrono::steady_clock::now();
+    double acc = 0.0;
+    for (double v : r.qd) acc += m.step(v);
+    const auto t1 = std::chrono::steady_clock::now();
+    sink = sink + acc;
+    best = std::min(best, std::chrono::duration<double, std::nano>(t1 - t0).count());
+  }
+  return best / static_cast<double>(r.qd.size());
+}
+
+}  // namespace
+
+void FrictionStudyOptions::validate() const {
+  if (!std::isfinite(reversal_window) || reversal_window <= 0.0)
+    throw InvalidArgument(fmt::format("study reversal_window is {}, must be > 0 [s]", reversal_window));
+  if (!std::isfinite(reversal_threshold) || reversal_threshold < 0.0)
+    throw InvalidArgument(fmt::format("study reversal_threshold is {}, must be >= 0 [rad/s]", reversal_threshold));
+  if (!std::isfinite(chirp_split) || chirp_split <= 0.0)
+    throw InvalidArgument(fmt::format("study chirp_split is {}, must be > 0 [Hz]", chirp_split));
+  if (timing_repeats < 1) throw InvalidArgument(fmt::format("study timing_repeats is {}, must be >= 1", timing_repeats));
+  parfam.validate();
+  parametric.validate();
+  rbf.validate();
+}
+
+const ModelStudy& JointStudy::model(std::string_view name) const {
+  for (const ModelStudy& m : models)
+    if (m.name == name) return m;
+  throw InvalidArgument(fmt::format("joint study '{}' has no model '{}'", joint, name));
+}
+
+std::vector<char> reversal_window_mask(std::span<const double> qd, double dt, double window, double threshold,
+                                       int* reversals) {
+  std::vector<char> mask(qd.size(), 0);
+  const auto half = static_cast<long>(std::lround(window / dt));
+  const auto n = static_cast<long>(qd.size());
+  int count = 0;
+  int armed = 0;  // sign of the last excursion beyond the threshold
+  for (long k = 0; k < n; ++k) {
+    const double v = qd[static_cast<std::size_t>(k)];
+    if (armed == 0) {
+      if (std::abs(v) > threshold && v != 0.0) armed = v > 0.0 ? 1 : -1;
+      continue;
+    }
+    // a reversal: qd changes sign after an excursion beyond the threshold
+    if (armed * v < 0.0) {
+      ++count;
+      for (long i = std::max(0L, k - half); i <= std::min(n - 1, k + half); ++i) mask[static_cast<std::size_t>(i)] = 1;
+      armed = 0;
+      if (std::abs(v) > threshold) armed = v > 0.0 ? 1 : -1;
+    }
+  }
+  if (reversals) *reversals = count;
+  return mask;
+}
+
+JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudyOptions& options) {
+  options.validate();
+  data.train.validate("train");
+  data.fourier.validate("fourier");
+  data.chirp.validate("chirp");
+  check_size("chirp_frequency", static_cast<long>(data.chirp_frequency.size()), data.chirp.size(), "size of chirp.qd");
+  JointStudy out;
+  out.joint = data.joint;
+  // the windows and the chirp split
+  const std::vector<char> rev = reversal_window_mask(data.fourier.qd, data.fourier.dt, options.reversal_window,
+                                                     options.reversal_threshold, &out.reversals);
+  for (char c : rev) out.reversal_samples += c;
+  std::vector<char> id(data.chirp_frequency.size()), ood(id.size());
+  for (std::size_t k = 0; k < id.size(); ++k) {
+    id[k] = data.chirp_frequency[k] < options.chirp_split;
+    ood[k] = !id[k];
+  }
+  // the models, ParFam-H first: RBFNN-H uses its (alpha, beta)
+  ParFamOptions pv = options.parfam;
+  pv.input = ParFamInput::Velocity;
+  ParFamOptions ph = options.parfam;
+  ph.input = ParFamInput::Hysteresis;
+  auto parfam_h = std::make_unique<ParFamModel>(ph);
+  const FitSummary fit_h = parfam_h->fit(data.train);
+  RbfOptions rv = options.rbf;
+  rv.input = RbfInput::Velocity;
+  RbfOptions rh = options.rbf;
+  rh.input = RbfInput::Hysteresis;
+  rh.hysteresis = parfam_h->hysteresis();
+  std::vector<std::unique_ptr<FrictionModel>> models;
+  models.push_back(std::make_unique<LugreModel>(options.parametric));
+  models.push_back(std::make_unique<StribeckModel>(options.parametric));
+  models.push_back(std::make_unique<RbfNetwork>(rv));
+  models.push_back(std::make_unique<RbfNetwork>(rh));
+  models.push_back(std::make_unique<ParFamModel>(pv));
+  models.push_back(std::move(parfam_h));
+  // fit (ParFam-H is fitted already), predict, time
+  for (auto& m : models) {
+    ModelStudy s;
+    s.name = std::string(m->name());
+    s.fit = m->fitted() ? fit_h : m->fit(data.train);
+    if (!m->fitted()) {
+      out.models.push_back(s);
+      continue;
+    }
+    s.equation = m->equation();
+    const std::vector<double> pf = m->predict(data.fourier);
+    s.fourier_rmse = masked_rmse(data.fourier.tau, pf, {});
+    s.reversal_rmse = masked_rmse(data.fourier.tau, pf, rev);
+    const std::vector<double> pc = m->predict(data.chirp);
+    s.chirp_id_rmse = masked_rmse(data.chirp.tau, pc, id);
+    s.chirp_ood_rmse = masked_rmse(data.chirp.tau, pc, ood);
+    s.eval_ns = time_per_sample_ns(*m, data.fourier, options.timing_repeats);
+    out.models.push_back(std::move(s));
+  }
+  return out;
+}
+
+std::vector<SimulatedJoint> simulated_study_joints() {
+  // three harmonic-drive-like joints, in the spirit of HESR's J1-J3 (base, shoulder, elbow):
+  // - Coulomb levels of a few N·m, a 25-35 % Stribeck peak, viscous 2-7 N·m·s/rad;
+  // - four Maxwell-slip elements (40/30/20/10 % of the curve) breaking away between 0.1 and
+  //   6 mrad after a reversal: the pre-sliding range of a harmonic drive (lost motion and
+  //   hysteresis of about 1 arcmin = 0.3 mrad, torsional wind-up of a few mrad under load);
+  // - frictional lag of 10-25 ms in sliding;
+  // - torque noise 0.08-0.2 N·m, the current-noise level of DESIGN.md rule 4 times kt N.
+  const auto make = [](std::string name, double Fc, double Fs, double vs, double sigma2, double lag,
+                       std::vector<double> breakaway, double noise) {
+    SimulatedJoint j;
+    j.name = std::move(name);
+    const double weights[4] = {0.4, 0.3, 0.2, 0.1};
+    for (std::size_t i = 0; i < 4; ++i) j.truth.elements.push_back({2.0 * weights[i] * Fc / breakaway[i], weights[i]});
+    j.truth.Fc = Fc;
+    j.truth.Fs = Fs;
+    j.truth.vs = vs;
+    j.truth.sigma2 = sigma2;
+    j.truth.lag_time = lag;
+    j.torque_noise = noise;
+    return j;
+  };
+  return {make("J1", 6.0, 8.0, 0.05, 5.0, 0.015, {1.5e-4, 6e-4, 1.5e-3, 4e-3}, 0.15),
+          make("J2", 9.0, 12.0, 0.08, 7.0, 0.025, {2.5e-4, 1e-3, 2.5e-3, 6e-3}, 0.2),
+          make("J3", 3.0, 3.8, 0.04, 2.0, 0.010, {1e-4, 4e-4, 1e-3, 3e-3}, 0.08)};
+}
+
+FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed) {
+  // HESR Table I: training sweep 0.25 Hz at 1.2 rad/s; untrained Fourier; chirp 0.1-1.0 Hz
+  constexpr double kDuration = 20.0;   // [s] 4000 samples at 200 Hz, as the paper's validation record
+  constexpr double kVelocity = 1.2;    // [rad/s]
+  constexpr int kHarmonics = 5;
+  constexpr double kFourierBase = 0.1;  // [Hz]
+  SyntheticJointOptions o;
+  o.torque_noise = joint.torque_noise;
+  FrictionStudyData d;
+  d.joint = joint.name;
+  o.seed = seed * 3 + 1;
+  d.train = simulate_joint(joint.truth, sine_profile(0.25, kVelocity, kDuration), o).record;
+  o.seed = seed * 3 + 2;
+  d.fourier = simulate_joint(joint.truth, fourier_profile(kHarmonics, kFourierBase, kVelocity, kDuration, seed), o).record;
+  o.seed = seed * 3 + 3;
+  SyntheticRecord chirp = simulate_joint(joint.truth, chirp_profile(0.1, 1.0, kVelocity, kDuration), o);
+  d.chirp = std::move(chirp.record);
+  d.chirp_frequency = std::move(chirp.frequency);
+  return d;
+}
+
+}  // namespace twinwatch::friction

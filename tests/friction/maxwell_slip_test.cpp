@@ -1,0 +1,148 @@
+// The generalized Maxwell-slip truth and the simulated joint records: pre-sliding physics
+// (initial stiffness, break-away, Masing's rule, rate independence), sliding limit, measurement.
+#include "twinwatch/friction/maxwell_slip.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/friction/synthetic_joint.hpp"
+
+namespace twinwatch::friction {
+namespace {
+
+using ::testing::HasSubstr;
+
+/// Three elements, no Stribeck peak (Fs = Fc) so the caps do not depend on the velocity.
+MaxwellSlipParams flat_params() {
+  MaxwellSlipParams p;
+  p.elements = {{4000.0, 0.5}, {1000.0, 0.3}, {200.0, 0.2}};
+  p.Fc = p.Fs = 2.0;
+  p.vs = 0.05;
+  p.sigma2 = 0.0;
+  return p;
+}
+
+/// Moves the model by displacement x at constant velocity v in steps of h; returns the last torque.
+double move(MaxwellSlipFriction& m, double x, double v, double h = 1e-5) {
+  const auto n = static_cast<long>(std::lround(std::abs(x / v) / h));
+  double tau = 0.0;
+  for (long i = 0; i < n; ++i) tau = m.step(v, h);
+  return tau;
+}
+
+TEST(MaxwellSlip, VirginCurveHasTheSummedStiffnessThenBreaksAwayElementByElement) {
+  const MaxwellSlipParams p = flat_params();
+  MaxwellSlipFriction m(p);
+  // before the first break-away (w_1 Fc / k_1 = 0.25 mrad) the slope is sum k_i
+  EXPECT_NEAR(move(m, 1e-4, 0.01), 1e-4 * 5200.0, 1e-3);
+  // beyond the last break-away (0.4 Fc... w_3 Fc / k_3 = 2 mrad) the full Coulomb level
+  MaxwellSlipFriction m2(p);
+  EXPECT_NEAR(move(m2, 5e-3, 0.01), p.Fc, 1e-9);
+}
+
+TEST(MaxwellSlip, ReversalFollowsMasingsRule) {
+  // after a reversal the curve is the virgin curve scaled by two: F_r - F(d) = 2 F_virgin(d / 2)
+  const MaxwellSlipParams p = flat_params();
+  for (double d : {2e-4, 8e-4, 2e-3}) {
+    MaxwellSlipFriction virgin(p);
+    const double fv = move(virgin, d / 2.0, 0.01);
+    MaxwellSlipFriction m(p);
+    const double f_rev = move(m, 1e-2, 0.01);  // fully sliding in +
+    const double f_after = move(m, d, -0.01);
+    EXPECT_NEAR(f_rev - f_after, 2.0 * fv, 2e-3) << "d " << d;
+  }
+}
+
+TEST(MaxwellSlip, PreSlidingIsRateIndependent) {
+  // the same displacement at two velocities (no Stribeck, no lag) gives the same force
+  const MaxwellSlipParams p = flat_params();
+  MaxwellSlipFriction slow(p), fast(p);
+  EXPECT_NEAR(move(slow, 1.5e-3, 0.002, 1e-5), move(fast, 1.5e-3, 0.2, 1e-7), 1e-3);
+}
+
+TEST(MaxwellSlip, SteadySlidingFollowsTheStribeckCurvePlusViscous) {
+  MaxwellSlipParams p = flat_params();
+  p.Fs = 3.0;
+  p.sigma2 = 1.5;
+  p.lag_time = 0.02;
+  for (double v : {0.01, 0.05, 0.2, -0.5}) {
+    MaxwellSlipFriction m(p);
+    const double tau = move(m, 0.5 * std::abs(v) + 0.02, v, 1e-4);  // long enough for the lag to settle
+    const double s = p.Fc + (p.Fs - p.Fc) * std::exp(-(v / p.vs) * (v / p.vs));
+    EXPECT_NEAR(tau, std::copysign(s, v) + p.sigma2 * v, 1e-6) << "v " << v;
+  }
+}
+
+TEST(MaxwellSlip, InvalidParametersAreNamed) {
+  MaxwellSlipParams p = flat_params();
+  p.elements[1].stiffness = -3.0;
+  EXPECT_THAT([&] { MaxwellSlipFriction{p}; },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("elements[1].stiffness is -3")));
+  p = flat_params();
+  p.elements[0].weight = 0.6;
+  EXPECT_THAT([&] { MaxwellSlipFriction{p}; },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("weights sum to 1.1, expected 1")));
+  p = flat_params();
+  p.lag_time = -1.0;
+  EXPECT_THAT([&] { MaxwellSlipFriction{p}; }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("lag_time is -1")));
+  p.elements.clear();
+  EXPECT_THAT([&] { p.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("elements is empty")));
+}
+
+TEST(SyntheticJoint, MeasuredVelocityAndNoiseHaveTheRequestedLevels) {
+  const MaxwellSlipParams p = flat_params();
+  SyntheticJointOptions o;
+  o.torque_noise = 0.1;
+  o.seed = 31;
+  const SyntheticRecord r = simulate_joint(p, sine_profile(0.25, 1.2, 20.0), o);
+  ASSERT_EQ(r.record.size(), 4001);
+  ASSERT_EQ(r.frequency.size(), 4001u);
+  // velocity: central difference of a 20-bit encoder: error ~ lsb / (2 dt) plus O(dt^2)
+  double max_dv = 0.0, s = 0.0, s2 = 0.0;
+  for (std::size_t k = 1; k + 1 < r.true_qd.size(); ++k) max_dv = std::max(max_dv, std::abs(r.record.qd[k] - r.true_qd[k]));
+  EXPECT_LT(max_dv, o.encoder_lsb / o.dt + 2e-4);
+  // torque noise: sample standard deviation within 5 % of sigma
+  for (std::size_t k = 0; k < r.true_tau.size(); ++k) {
+    const double e = r.record.tau[k] - r.true_tau[k];
+    s += e;
+    s2 += e * e;
+  }
+  const double n = static_cast<double>(r.true_tau.size());
+  EXPECT_NEAR(std::sqrt(s2 / n - (s / n) * (s / n)), o.torque_noise, 0.05 * o.torque_noise) << "seed " << o.seed;
+  // same seed, same record
+  EXPECT_EQ(simulate_joint(p, sine_profile(0.25, 1.2, 20.0), o).record.tau, r.record.tau);
+}
+
+TEST(SyntheticJoint, ChirpFrequencyRunsFromStartToEnd) {
+  const SyntheticRecord r = simulate_joint(flat_params(), chirp_profile(0.1, 1.0, 1.2, 20.0));
+  EXPECT_NEAR(r.frequency.front(), 0.1, 1e-12);
+  EXPECT_NEAR(r.frequency.back(), 1.0, 1e-12);
+  EXPECT_NEAR(r.frequency[2000], 0.55, 1e-12);
+}
+
+TEST(SyntheticJoint, FourierProfileReachesTheRequestedPeak) {
+  const VelocityProfile p = fourier_profile(5, 0.1, 1.2, 20.0, 4);
+  double peak = 0.0;
+  for (int i = 0; i < 20000; ++i) peak = std::max(peak, std::abs(p.qd(i * 1e-3)));
+  EXPECT_NEAR(peak, 1.2, 1e-3);
+}
+
+TEST(SyntheticJoint, InvalidOptionsAreNamed) {
+  SyntheticJointOptions o;
+  o.substeps = 0;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("substeps is 0")));
+  o = {};
+  o.torque_noise = -0.1;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("torque_noise is -0.1")));
+  VelocityProfile empty;
+  empty.name = "nothing";
+  EXPECT_THAT([&] { simulate_joint(flat_params(), empty); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("profile 'nothing' has no qd(t)")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction

@@ -1,0 +1,113 @@
+// The HESR protocol on simulated joints whose truth is a generalized Maxwell-slip model (not a
+// family any model fits), and the acceptance criteria of issue 6 that the data support.
+#include "twinwatch/friction/study.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_records.hpp"
+#include "twinwatch/core/error.hpp"
+
+namespace twinwatch::friction {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr unsigned kSeed = 1;  // seeds the Fourier coefficients and the noise of the three records
+
+TEST(ReversalWindows, SineSweepHasOneWindowPerZeroCrossing) {
+  // 0.25 Hz for 20 s: qd = 0 at t = 2, 4, ..., 18 s (t = 0 starts from rest, t = 20 is the end)
+  const std::vector<double> qd = testing::sine_velocity(20.0);
+  int reversals = 0;
+  const std::vector<char> mask = reversal_window_mask(qd, testing::kDt, 0.1, 0.05, &reversals);
+  EXPECT_EQ(reversals, 9);
+  long n = 0;
+  for (char c : mask) n += c;
+  EXPECT_EQ(n, 9 * 41);  // +-20 samples around each crossing sample
+}
+
+TEST(ReversalWindows, NoiseAroundZeroIsNotAReversal) {
+  // a velocity that dithers by 0.01 rad/s around 0 never exceeds the threshold
+  std::vector<double> qd(400);
+  for (std::size_t k = 0; k < qd.size(); ++k) qd[k] = (k % 2 ? 0.01 : -0.01);
+  int reversals = -1;
+  reversal_window_mask(qd, testing::kDt, 0.1, 0.05, &reversals);
+  EXPECT_EQ(reversals, 0);
+}
+
+class SimulatedJointStudy : public ::testing::TestWithParam<int> {};
+
+// What issue 6 asks on joints with pre-sliding hysteresis, as far as it holds here:
+// ParFam-H at least 30 % below the velocity-only RBFNN inside the +-0.1 s reversal windows (HESR
+// Table IX reports 39-46 %), and below every other velocity-only or black-box model.
+TEST_P(SimulatedJointStudy, ParFamHBeatsTheVelocityOnlyAndBlackBoxModelsAtReversals) {
+  const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
+  const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
+  ASSERT_EQ(s.models.size(), 6u);
+  EXPECT_EQ(s.reversals, 8) << joint.name;
+  for (const ModelStudy& m : s.models) {
+    ASSERT_NE(m.fit.status, FitStatus::Failed) << joint.name << " " << m.name << ": " << m.fit.brief_report();
+    EXPECT_TRUE(std::isfinite(m.reversal_rmse)) << m.name;
+    // no model can beat the measurement noise on untrained data
+    EXPECT_GT(m.fourier_rmse, 0.9 * joint.torque_noise) << m.name;
+  }
+  const ModelStudy& ph = s.model("ParFam-H");
+  EXPECT_LT(ph.reversal_rmse, 0.7 * s.model("RBFNN").reversal_rmse) << joint.name << ": " << ph.equation;
+  for (const char* other : {"Stribeck", "RBFNN-H", "ParFam-V"})
+    EXPECT_LT(ph.reversal_rmse, s.model(other).reversal_rmse) << joint.name << " vs " << other << ": " << ph.equation;
+  // the hysteresis state is what makes the difference: ParFam-V is no better than Stribeck
+  EXPECT_GT(s.model("ParFam-V").reversal_rmse, 1.6 * ph.reversal_rmse) << joint.name;
+}
+
+// The remaining acceptance criteria of issue 6 do NOT hold on this truth (measured with kSeed and
+// the default options; numbers in the closing report): LuGre, whose displacement-driven bristle
+// matches the Maxwell-slip pre-sliding, has a lower reversal-window RMSE than ParFam-H on J1 and
+// J2 (0.65 vs 0.97 and 0.89 vs 2.45 N·m; on J3 ParFam-H is lowest, 0.280 vs 0.296), and ParFam-H's
+// chirp out-of-distribution RMSE is 8.4x (J1: an exp term of hd extrapolates), 3.1x (J2) and
+// 1.9x (J3) its in-distribution RMSE (LuGre 1.4x). The h state relaxes in time (1/alpha) while the
+// truth relaxes with displacement, and one 0.25 Hz training sweep cannot tell them apart. Kept
+// here, disabled, so the gap stays visible; run with --gtest_also_run_disabled_tests.
+TEST_P(SimulatedJointStudy, DISABLED_ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
+  const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
+  const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
+  const ModelStudy& ph = s.model("ParFam-H");
+  for (const ModelStudy& m : s.models) {
+    if (m.name != ph.name) {
+      EXPECT_LT(ph.reversal_rmse, m.reversal_rmse) << joint.name << " vs " << m.name;
+    }
+  }
+  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Joints, SimulatedJointStudy, ::testing::Values(0, 1, 2),
+                         [](const ::testing::TestParamInfo<int>& i) { return "J" + std::to_string(i.param + 1); });
+
+TEST(FrictionStudy, ChirpFrequencySizeMismatchIsNamed) {
+  FrictionStudyData d = simulated_study_data(simulated_study_joints()[2], kSeed);
+  d.chirp_frequency.pop_back();
+  EXPECT_THAT([&] { run_friction_study(d); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("chirp_frequency has size 4000, expected 4001")));
+}
+
+TEST(FrictionStudy, InvalidOptionsAreNamed) {
+  FrictionStudyOptions o;
+  o.reversal_window = 0.0;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("reversal_window is 0")));
+  o = {};
+  o.chirp_split = -0.6;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("chirp_split is -0.6")));
+  o = {};
+  o.parfam.hops = -1;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam hops is -1")));
+}
+
+TEST(FrictionStudy, UnknownModelNameIsNamed) {
+  JointStudy s;
+  s.joint = "J9";
+  EXPECT_THAT([&] { s.model("GPT"); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("joint study 'J9' has no model 'GPT'")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction
