@@ -26,10 +26,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "[%s] %.*s\n", names[static_cast<int>(level)], static_cast<int>(msg.size()), msg.data());
   });
   twinwatch::cli::register_all_verbs(app);
+  // verbs run inside parse(), so the log level must be set before it
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    if (a == "-v" || a == "--verbose") twinwatch::log::set_level(twinwatch::log::Level::Debug);
+    if (!a.empty() && a[0] != '-') break;  // the verb: its own options follow
+  }
 
   try {
     app.parse(argc, argv);
-    if (verbose) twinwatch::log::set_level(twinwatch::log::Level::Debug);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const twinwatch::ParseError& e) {

@@ -94,7 +94,7 @@ namespace {
 //            psi.u_k + upsilon - alpha    <= |r_k|
 //   min alpha + w * mean_k(psi.u_k + upsilon)
 bool solve_lp(const std::vector<double>& ar, const std::vector<double>& aqd, const std::vector<double>& aqdd,
-              double rho, double xi, double w, DynamicThresholdJoint& out) {
+              double rho, double xi, double w, DynamicThresholdJoint& out, double& objective) {
   const int K = static_cast<int>(ar.size());
   const int ncols = 5;
   const int nrows = 2 * K;
@@ -161,6 +161,7 @@ bool solve_lp(const std::vector<double>& ar, const std::vector<double>& aqd, con
   out.alpha = x[4];
   out.rho = rho;
   out.margin = xi;
+  objective = lp.objectiveValue();
   return true;
 }
 
@@ -202,10 +203,16 @@ DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<c
 
   DynamicThresholdFit best;
   best.message = "linear program infeasible or unbounded for every rho";
+  // rho is chosen by the LP's own objective (max gap + weighted mean level). Near-ties (often:
+  // the max gap is set by one binding sample for every rho) keep the earlier rho of the grid, so
+  // the choice does not flip on rounding differences in the residuals.
+  double best_obj = 0.0;
   for (double rho : options.rho_grid) {
     DynamicThresholdJoint p;
-    if (!solve_lp(ar, aqd, aqdd, rho, xi, options.mean_gap_weight, p)) continue;
-    if (!best.ok || p.alpha < best.params.alpha) {
+    double obj = 0.0;
+    if (!solve_lp(ar, aqd, aqdd, rho, xi, options.mean_gap_weight, p, obj)) continue;
+    if (!best.ok || obj < best_obj - 1e-6 * std::max(1e-12, std::abs(best_obj))) {
+      best_obj = obj;
       best.ok = true;
       best.params = p;
       best.message = "optimal";

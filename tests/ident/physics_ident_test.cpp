@@ -5,6 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/signal/metrics.hpp"
@@ -129,5 +131,41 @@ TEST(Identify, RejectsRecordingsWithoutCurrent) {
   }
 }
 
+}  // namespace
+}  // namespace twinwatch::ident
+
+namespace twinwatch::ident {
+namespace {
+// the fast prediction path (RNEA on base parameters mapped to standard ones) equals the regressor
+// form Y_b beta + Y_last pi_payload + friction, with and without a payload, after beta changes
+TEST_F(Fixture, PredictionEqualsTheRegressorForm) {
+  TwinModel t = *twin;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (int trial = 0; trial < 30; ++trial) {
+    model::RigidBodyInertia p;
+    if (trial % 2) {
+      p.mass = 0.5 + 0.1 * trial;
+      p.com = Eigen::Vector3d(0.01, -0.02, 0.04);
+    }
+    t.set_payload(p);
+    if (trial == 10) t.beta *= 1.1;
+    VectorJ q(6), qd(6), qdd(6), temp = VectorJ::Constant(6, 40.0);
+    for (int j = 0; j < 6; ++j) q[j] = 2 * N(rng), qd[j] = N(rng), qdd[j] = 3 * N(rng);
+    VectorJ tau, cur;
+    t.predict(q, qd, qdd, temp, tau, cur);
+    model::RegressorMatrix Y;
+    VectorJ tau_p;
+    t.regress(q, qd, qdd, Y, tau_p);
+    for (int j = 0; j < 6; ++j) {
+      double expect = tau_p[j];
+      for (size_t c = 0; c < t.base_columns.size(); ++c) expect += Y(j, t.base_columns[c]) * t.beta(static_cast<Eigen::Index>(c));
+      Eigen::Matrix<double, kFrictionColumns, 1> f;
+      t.friction_row(j, qd, qdd, temp, f);
+      expect += f.dot(t.joints[static_cast<size_t>(j)].friction);
+      EXPECT_NEAR(tau[j], expect, 1e-9 * (1 + std::abs(expect))) << "trial " << trial << " joint " << j;
+    }
+  }
+}
 }  // namespace
 }  // namespace twinwatch::ident

@@ -184,7 +184,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
 }};
 
 struct EvaluateOptions {
-  std::string dir, twin, robot = "ur3e";
+  std::string dir, twin, robot = "ur3e", save_twin;
   bool json = false, static_threshold = false;
   double max_duration = 0.0;
 };
@@ -200,6 +200,7 @@ int run_evaluate(const EvaluateOptions& o) {
   std::sort(files.begin(), files.end());
   if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
   const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+  if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);
@@ -231,6 +232,7 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("SCENARIOS", o->dir, "Scenario directory (e.g. scenarios/ur3e) or one scenario file")->required()->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
+  sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
   sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
