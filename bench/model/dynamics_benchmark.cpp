@@ -2,7 +2,8 @@
 //   cmake -B build-bench -DBUILD_BENCHMARKS=ON && cmake --build build-bench --target dynamics_benchmark
 //   build-bench/bench/model/dynamics_benchmark --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // Each iteration uses the next of 1024 pre-drawn random states, so branch prediction and caches
-// see varying inputs as they would in a real loop.
+// see varying inputs as they would in a real loop. "/baseline" is twinwatch before the issue-2
+// rewrite (dynamics_baseline.hpp), kept to measure the rewrite against in the same run.
 #include <benchmark/benchmark.h>
 
 #include <kdl/chaindynparam.hpp>
@@ -11,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "dynamics_baseline.hpp"
 #include "kdl_chain.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -56,6 +58,15 @@ void BM_Rnea_twinwatch(benchmark::State& st) {
   int k = 0;
   for (auto _ : st) {
     benchmark::DoNotOptimize(model::rnea(ur3e(), d, s.q[k], s.qd[k], s.qdd[k]).data());
+    k = (k + 1) & (kStates - 1);
+  }
+}
+void BM_Rnea_baseline(benchmark::State& st) {
+  model::DynamicsData d(ur3e());
+  const auto& s = states();
+  int k = 0;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(model::baseline::rnea(ur3e(), d, s.q[k], s.qd[k], s.qdd[k]).data());
     k = (k + 1) & (kStates - 1);
   }
 }
@@ -127,14 +138,27 @@ void BM_Regressor_twinwatch(benchmark::State& st) {
     k = (k + 1) & (kStates - 1);
   }
 }
+void BM_Regressor_baseline(benchmark::State& st) {
+  model::DynamicsData d(ur3e());
+  model::RegressorMatrix Y;
+  const auto& s = states();
+  int k = 0;
+  for (auto _ : st) {
+    model::baseline::regressor(ur3e(), d, s.q[k], s.qd[k], s.qdd[k], Y);
+    benchmark::DoNotOptimize(Y.data());
+    k = (k + 1) & (kStates - 1);
+  }
+}
 
 BENCHMARK(BM_Rnea_twinwatch)->Name("BM_Rnea/twinwatch");
+BENCHMARK(BM_Rnea_baseline)->Name("BM_Rnea/baseline");
 BENCHMARK(BM_Rnea_kdl)->Name("BM_Rnea/kdl");
 BENCHMARK(BM_MassMatrix_twinwatch)->Name("BM_MassMatrix/twinwatch");
 BENCHMARK(BM_MassMatrix_kdl)->Name("BM_MassMatrix/kdl");
 BENCHMARK(BM_ForwardDynamics_twinwatch)->Name("BM_ForwardDynamics/twinwatch");
 BENCHMARK(BM_ForwardDynamics_kdl)->Name("BM_ForwardDynamics/kdl");
 BENCHMARK(BM_Regressor_twinwatch)->Name("BM_Regressor/twinwatch");
+BENCHMARK(BM_Regressor_baseline)->Name("BM_Regressor/baseline");
 
 }  // namespace
 

@@ -7,17 +7,11 @@
 #include <cmath>
 #include <random>
 
-#include "fast_sincos.hpp"
+#include "forward_pass.hpp"
+#include "vec3.hpp"
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::model {
-
-namespace {
-
-using detail::rotate_about_z;
-
-
-}  // namespace
 
 int friction_columns_per_joint(FrictionColumns f) {
   switch (f) {
@@ -38,21 +32,17 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
   // every entry is written below (the zero ones explicitly): no full setZero of the 5 KB buffer
   Y.resize(n, 10 * n + kf * n);
 
-  // forward pass as in the RNEA: w, wd, a (a includes -g) of every body in its own frame
-  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d w_prev = Eigen::Vector3d::Zero(), wd_prev = Eigen::Vector3d::Zero();
-  Eigen::Vector3d a_prev = -model.gravity();
+  // forward pass as in the RNEA: R, w, wd, a (a includes -g) of every body in its own frame
+  using detail::M3;
+  using detail::V3;
+  M3 R[kMaxDof];
+  V3 W[kMaxDof], WD[kMaxDof], A[kMaxDof];
+  detail::forward_pass(model, q, &qd, &qdd, true, R, W, WD, A);
   for (int i = 0; i < n; ++i) {
-    const detail::LinkCache& c = model.link_cache(i);
-    rotate_about_z(c.R0, q[i] + c.q_offset, d.R[i]);
-    const Eigen::Matrix3d& R = d.R[i];
-    const Eigen::Vector3d w_in = R.transpose() * w_prev;
-    d.w[i] = w_in + qd[i] * z;
-    d.wd[i] = R.transpose() * wd_prev + w_in.cross(qd[i] * z) + qdd[i] * z;
-    d.a[i] = R.transpose() * (a_prev + wd_prev.cross(c.p) + w_prev.cross(w_prev.cross(c.p)));
-    w_prev = d.w[i];
-    wd_prev = d.wd[i];
-    a_prev = d.a[i];
+    detail::store(R[i], d.R[i]);
+    detail::store(W[i], d.w[i]);
+    detail::store(WD[i], d.wd[i]);
+    detail::store(A[i], d.a[i]);
   }
 
   // each link's body wrench is linear in its parameters:
@@ -60,49 +50,72 @@ void regressor(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
   // and joint j (<= i) feels  Y(j, link i) = S_j^T [F; N]  with S_j = (v, u) the unit twist of
   // joint j expressed in body i: u = z_j, v = z_j x (o_i - o_j). S_j is carried from body to body
   //   u' = R^T u,  v' = R^T (v + u x p)
-  // which is O(n^2) 6-vectors instead of O(n^2) 6x10 wrench blocks.
-  std::array<Eigen::Vector3d, kMaxDof> u, v;
+  // which is O(n^2) 6-vectors instead of O(n^2) 6x10 wrench blocks. The twists are stored by
+  // component (structure of arrays) so that the loops over j run two joints per SSE2 instruction
+  // and write contiguous runs of Y's column-major storage.
+  // Joints after i do not feel link i: their twists stay zero until they are reached, so the same
+  // loop writes the zero rows below i (exact zeros for finite inputs) without a branch or a
+  // memset per column.
+  alignas(16) double ux[kMaxDof] = {}, uy[kMaxDof] = {}, uz[kMaxDof] = {}, vx[kMaxDof] = {}, vy[kMaxDof] = {},
+                     vz[kMaxDof] = {};
+  double* const Yd = Y.data();
+  const Eigen::Index ld = Y.outerStride();
   for (int i = 0; i < n; ++i) {
+    // carry the twists of joints 0..i-1 into body i
     if (i > 0) {
-      const Eigen::Matrix3d& R = d.R[i];
-      const Eigen::Vector3d& p = model.link_cache(i).p;
+      const M3 Ri = R[i];
+      const V3 p = detail::load(model.link_cache(i).p);
       for (int j = 0; j < i; ++j) {
-        v[j] = R.transpose() * (v[j] + u[j].cross(p));
-        u[j] = R.transpose() * u[j];
+        const double tx = vx[j] + (uy[j] * p.z - uz[j] * p.y);
+        const double ty = vy[j] + (uz[j] * p.x - ux[j] * p.z);
+        const double tz = vz[j] + (ux[j] * p.y - uy[j] * p.x);
+        const double sx = ux[j], sy = uy[j], sz = uz[j];
+        vx[j] = Ri.c0.x * tx + Ri.c0.y * ty + Ri.c0.z * tz;
+        vy[j] = Ri.c1.x * tx + Ri.c1.y * ty + Ri.c1.z * tz;
+        vz[j] = Ri.c2.x * tx + Ri.c2.y * ty + Ri.c2.z * tz;
+        ux[j] = Ri.c0.x * sx + Ri.c0.y * sy + Ri.c0.z * sz;
+        uy[j] = Ri.c1.x * sx + Ri.c1.y * sy + Ri.c1.z * sz;
+        uz[j] = Ri.c2.x * sx + Ri.c2.y * sy + Ri.c2.z * sz;
       }
     }
-    u[i] = z;
-    v[i].setZero();
-    const Eigen::Vector3d w = d.w[i];
-    const Eigen::Vector3d wd = d.wd[i];
-    const Eigen::Vector3d a = d.a[i];
-    const double ww = w.squaredNorm();
-    double* col = &Y(0, 10 * i);  // column-major: Y(j, 10 i + c) = col[c * ld + j]
-    const Eigen::Index ld = Y.outerStride();
-    for (int j = 0; j <= i; ++j) {
-      // Y(j, link i) = v . F + u . N with F = m a + ([wd]x + [w]x[w]x) h and
-      // N = h x a + I wd + w x (I w), written out so that nothing spills:
-      //   mass:           v . a
-      //   first moment:   w (w . v) - |w|^2 v + v x wd + a x u
-      //   inertia (sym):  u^T I wd + s^T I w,  s = u x w
-      const Eigen::Vector3d& vj = v[j];
-      const Eigen::Vector3d& uj = u[j];
-      col[j] = vj.dot(a);
-      const Eigen::Vector3d hp = w * w.dot(vj) - ww * vj + vj.cross(wd) + a.cross(uj);
-      col[1 * ld + j] = hp.x();
-      col[2 * ld + j] = hp.y();
-      col[3 * ld + j] = hp.z();
-      const Eigen::Vector3d sj = uj.cross(w);
-      col[4 * ld + j] = uj.x() * wd.x() + sj.x() * w.x();
-      col[5 * ld + j] = uj.x() * wd.y() + uj.y() * wd.x() + sj.x() * w.y() + sj.y() * w.x();
-      col[6 * ld + j] = uj.x() * wd.z() + uj.z() * wd.x() + sj.x() * w.z() + sj.z() * w.x();
-      col[7 * ld + j] = uj.y() * wd.y() + sj.y() * w.y();
-      col[8 * ld + j] = uj.y() * wd.z() + uj.z() * wd.y() + sj.y() * w.z() + sj.z() * w.y();
-      col[9 * ld + j] = uj.z() * wd.z() + sj.z() * w.z();
+    // joint i's own twist in body i: u = z, v = 0
+    uz[i] = 1.0;
+
+    // Y(j, link i) = v . F + u . N with F = m a + ([wd]x + [w]x[w]x) h and
+    // N = h x a + I wd + w x (I w), written out per column:
+    //   mass:           v . a
+    //   first moment:   w (w . v) - |w|^2 v + v x wd + a x u
+    //   inertia (sym):  u^T I wd + s^T I w,  s = u x w
+    const V3 w = W[i], wd = WD[i], a = A[i];
+    const double ww = dot(w, w);
+    double* const c0 = Yd + 10 * i * ld;  // Y(j, 10 i + k) = c0[k * ld + j]
+    double* const c1 = c0 + ld;
+    double* const c2 = c0 + 2 * ld;
+    double* const c3 = c0 + 3 * ld;
+    double* const c4 = c0 + 4 * ld;
+    double* const c5 = c0 + 5 * ld;
+    double* const c6 = c0 + 6 * ld;
+    double* const c7 = c0 + 7 * ld;
+    double* const c8 = c0 + 8 * ld;
+    double* const c9 = c0 + 9 * ld;
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC ivdep  // the ten columns never overlap (GCC would need > 10 run-time alias checks)
+#endif
+    for (int j = 0; j < n; ++j) {
+      const double Ux = ux[j], Uy = uy[j], Uz = uz[j], Vx = vx[j], Vy = vy[j], Vz = vz[j];
+      c0[j] = Vx * a.x + Vy * a.y + Vz * a.z;
+      const double wv = w.x * Vx + w.y * Vy + w.z * Vz;
+      c1[j] = w.x * wv - ww * Vx + (Vy * wd.z - Vz * wd.y) + (a.y * Uz - a.z * Uy);
+      c2[j] = w.y * wv - ww * Vy + (Vz * wd.x - Vx * wd.z) + (a.z * Ux - a.x * Uz);
+      c3[j] = w.z * wv - ww * Vz + (Vx * wd.y - Vy * wd.x) + (a.x * Uy - a.y * Ux);
+      const double sx = Uy * w.z - Uz * w.y, sy = Uz * w.x - Ux * w.z, sz = Ux * w.y - Uy * w.x;
+      c4[j] = Ux * wd.x + sx * w.x;
+      c5[j] = Ux * wd.y + Uy * wd.x + sx * w.y + sy * w.x;
+      c6[j] = Ux * wd.z + Uz * wd.x + sx * w.z + sz * w.x;
+      c7[j] = Uy * wd.y + sy * w.y;
+      c8[j] = Uy * wd.z + Uz * wd.y + sy * w.z + sz * w.y;
+      c9[j] = Uz * wd.z + sz * w.z;
     }
-    // joints after i do not feel link i
-    for (int c = 0; c < 10; ++c)
-      for (int j = i + 1; j < n; ++j) col[c * ld + j] = 0.0;
   }
 
   // friction columns on the joint's own row

@@ -154,6 +154,7 @@ void RobotModel::set_standard_parameters(const Eigen::VectorXd& pi) {
 }
 
 void RobotModel::rebuild_cache() {
+  placements_about_x_ = true;
   for (int i = 0; i < n_dof_; ++i) {
     const Joint& j = description_.joints[static_cast<size_t>(i)];
     const bool payload_here = i == n_dof_ - 1 && (payload_.mass > 0.0 || !payload_.inertia_com.isZero(0.0));
@@ -174,6 +175,14 @@ void RobotModel::rebuild_cache() {
     c.m = pi(0);
     c.h = pi.segment<3>(1);
     c.I_o << pi(4), pi(5), pi(6), pi(5), pi(7), pi(8), pi(6), pi(8), pi(9);
+    // R0 = Rx(alpha) exactly (as the DH and MDH loaders build it): the kernels may then use
+    // (cos alpha, sin alpha) alone and get the same products as with the full matrix
+    const Eigen::Matrix3d& R0 = c.R0;
+    c.cos_alpha = R0(1, 1);
+    c.sin_alpha = R0(2, 1);
+    const bool about_x = R0(0, 0) == 1.0 && R0(1, 0) == 0.0 && R0(2, 0) == 0.0 && R0(0, 1) == 0.0 &&
+                         R0(0, 2) == 0.0 && R0(2, 2) == R0(1, 1) && R0(1, 2) == -R0(2, 1);
+    placements_about_x_ = placements_about_x_ && about_x;
   }
 }
 

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "kdl_chain.hpp"
+#include "turned_frames.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
 
@@ -67,6 +68,13 @@ TEST(KdlOracle, Ur5eWithPayloadAgreesOnThousandStates) {
   payload.inertia_com = Eigen::Vector3d(0.004, 0.005, 0.003).asDiagonal();
   m.set_payload(payload);
   compare_with_kdl(m, 202);
+}
+
+// general placement rotations (not Rx(alpha)): the kernels' general path against the same oracle
+TEST(KdlOracle, Ur5eWithTurnedBodyFramesAgreesOnThousandStates) {
+  RobotModel m = testing_support::with_turned_body_frames(load_robot("ur5e"), 7);
+  ASSERT_FALSE(m.placements_about_x());
+  compare_with_kdl(m, 303);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "turned_frames.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 namespace twinwatch::model {
@@ -30,6 +31,44 @@ TEST(Regressor, TimesStandardParametersEqualsRnea) {
       EXPECT_LT((Y * pi - tau).cwiseAbs().maxCoeff(), kTol) << name << " seed " << seed << " state " << s;
     }
   }
+}
+
+// general placement rotations take the other branch of the forward pass; the torque of the
+// same robot must not change, and Y pi must still equal the RNEA
+TEST(Regressor, TurnedBodyFramesTakeTheGeneralPathAndAgree) {
+  const RobotModel dh = load_robot("ur3e");
+  const RobotModel m = testing_support::with_turned_body_frames(dh, 11);
+  ASSERT_TRUE(dh.placements_about_x());
+  ASSERT_FALSE(m.placements_about_x());
+  DynamicsData d(m), d_dh(dh);
+  RegressorMatrix Y;
+  const Eigen::VectorXd pi = standard_parameters(m);
+  const unsigned seed = 78;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int s = 0; s < 200; ++s) {
+    VectorJ q(6), qd(6), qdd(6);
+    for (int i = 0; i < 6; ++i) q[i] = u(rng), qd[i] = u(rng), qdd[i] = 3 * u(rng);
+    regressor(m, d, q, qd, qdd, Y);
+    const VectorJ tau = rnea(m, d, q, qd, qdd);
+    EXPECT_LT((Y * pi - tau).cwiseAbs().maxCoeff(), kTol) << "seed " << seed << " state " << s;
+    EXPECT_LT((rnea(dh, d_dh, q, qd, qdd) - tau).cwiseAbs().maxCoeff(), kTol) << "seed " << seed << " state " << s;
+  }
+}
+
+// rows below the diagonal of each link block are exact zeros (joint j < i never feels link i)
+TEST(Regressor, JointsBeforeALinkDoNotFeelIt) {
+  const RobotModel m = load_robot("ur3e");
+  DynamicsData d(m);
+  RegressorMatrix Y = RegressorMatrix::Constant(6, 60, 7.0);  // stale contents must be overwritten
+  VectorJ q(6), qd(6), qdd(6);
+  q << 0.1, -0.7, 1.2, 0.4, -0.3, 2.0;
+  qd << 0.5, -0.2, 0.3, 1.0, -1.0, 0.3;
+  qdd << 1.0, 2.0, -1.5, 0.7, 0.2, -0.4;
+  regressor(m, d, q, qd, qdd, Y);
+  for (int i = 0; i < 6; ++i)
+    for (int j = i + 1; j < 6; ++j)
+      for (int k = 0; k < 10; ++k) EXPECT_EQ(Y(j, 10 * i + k), 0.0) << "row " << j << " link " << i << " column " << k;
 }
 
 TEST(Regressor, FrictionColumnsSitOnTheirJointRow) {

@@ -105,6 +105,8 @@ struct LinkCache {
   double m;             ///< [kg] (payload merged on the last link)
   Eigen::Vector3d h;    ///< first moment m·c [kg·m], body frame
   Eigen::Matrix3d I_o;  ///< inertia about the body origin [kg·m²], body frame
+  double cos_alpha;     ///< R0 = Rx(alpha) when RobotModel::placements_about_x(): its cos and sin
+  double sin_alpha;
 };
 }  // namespace detail
 
@@ -144,6 +146,10 @@ class RobotModel {
   /// InvalidArgument on a size mismatch or a non-finite value.
   void set_standard_parameters(const Eigen::VectorXd& pi);
 
+  /// True when every placement rotation is exactly Rx(alpha) (DH and modified DH descriptions);
+  /// the forward pass then rotates with 12 instead of 15 flops per vector.
+  bool placements_about_x() const { return placements_about_x_; }
+
   /// Cached per-link data for the dynamics kernels.
   const detail::LinkCache& link_cache(int i) const { return cache_[static_cast<size_t>(i)]; }
 
@@ -154,6 +160,7 @@ class RobotModel {
   RigidBodyInertia payload_;
   Eigen::VectorXd standard_override_;  // empty: parameters come from the description
   int n_dof_ = 0;
+  bool placements_about_x_ = false;
   std::array<detail::LinkCache, kMaxDof> cache_{};
 };
 
