@@ -78,13 +78,19 @@ std::string printable(std::span<const std::uint8_t> s) {
   return out;
 }
 
-std::vector<FieldInfo> make_output_fields() {
-  std::vector<FieldInfo> f;
+// Fields in table order, each with its first scalar's slot in a frame.
+struct FieldTable {
+  std::vector<FieldInfo> fields;
   int slot = 0;
-  auto add = [&](std::string name, DataType t) {
-    f.push_back({std::move(name), t, slot});
+  void add(std::string name, DataType t) {
+    fields.push_back({std::move(name), t, slot});
     slot += value_count(t);
-  };
+  }
+};
+
+std::vector<FieldInfo> make_output_fields() {
+  FieldTable table;
+  auto add = [&](std::string name, DataType t) { table.add(std::move(name), t); };
   using T = DataType;
   add("timestamp", T::Double);
   for (const char* n : {"target_q", "target_qd", "target_qdd", "target_current", "target_moment", "actual_q", "actual_qd",
@@ -108,16 +114,12 @@ std::vector<FieldInfo> make_output_fields() {
   for (int i = 0; i < 48; ++i) add(fmt::format("output_int_register_{}", i), T::Int32);
   for (int i = 0; i < 48; ++i) add(fmt::format("output_double_register_{}", i), T::Double);
   for (int i = 64; i < 128; ++i) add(fmt::format("output_bit_register_{}", i), T::Bool);
-  return f;
+  return table.fields;
 }
 
 std::vector<FieldInfo> make_input_fields() {
-  std::vector<FieldInfo> f;
-  int slot = 0;
-  auto add = [&](std::string name, DataType t) {
-    f.push_back({std::move(name), t, slot});
-    slot += value_count(t);
-  };
+  FieldTable table;
+  auto add = [&](std::string name, DataType t) { table.add(std::move(name), t); };
   using T = DataType;
   add("speed_slider_mask", T::Uint32);
   add("speed_slider_fraction", T::Double);
@@ -131,7 +133,7 @@ std::vector<FieldInfo> make_input_fields() {
   for (int i = 0; i < 48; ++i) add(fmt::format("input_int_register_{}", i), T::Int32);
   for (int i = 0; i < 48; ++i) add(fmt::format("input_double_register_{}", i), T::Double);
   for (int i = 64; i < 128; ++i) add(fmt::format("input_bit_register_{}", i), T::Bool);
-  return f;
+  return table.fields;
 }
 
 const FieldInfo* find_in(const std::vector<FieldInfo>& fields, std::string_view name) {
