@@ -214,7 +214,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
 }};
 
 struct EvaluateOptions {
-  std::string dir, twin, robot = "ur3e", save_twin;
+  std::string dir, twin, robot = "ur3e", save_twin, filter;
   bool json = false, static_threshold = false;
   double max_duration = 0.0;
 };
@@ -229,7 +229,11 @@ int run_evaluate(const EvaluateOptions& o) {
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
-  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+  if (!o.filter.empty() && !o.twin.empty())
+    throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
+                          "with (re-learn them with 'twinwatch thresholds --filter')");
+  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter))
+                                               : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
@@ -265,6 +269,7 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
   sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
+  sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_evaluate(*o)); });
 }};
