@@ -32,3 +32,11 @@ add_test(NAME cli.monitor_bad_filter COMMAND twinwatch monitor --twin ${PROJECT_
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --filter iir,fir)
 set_tests_properties(cli.monitor_bad_filter PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "residual_filter has 2 entries, expected 0, 1 or 6")
+# thresholds re-learned with the FIR, then monitored with it: no mismatch note, no alarm
+add_test(NAME cli.thresholds_fir
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_fir.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --filter fir && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --filter fir 2>&1")
+set_tests_properties(cli.thresholds_fir PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "with residual filter 'fir' and stored in.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)"
+  FAIL_REGULAR_EXPRESSION "note: the thresholds")

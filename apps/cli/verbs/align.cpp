@@ -70,6 +70,10 @@ int run_align(const AlignCliOptions& o) {
   if (!(std::abs(rb.median_period - T) <= kPeriodTolerance * T))
     throw InvalidArgument(fmt::format("{} is sampled every {:.6g} s, {} every {:.6g} s; expected the same period (within {:g} %)", o.a, T,
                                       o.b, rb.median_period, 100 * kPeriodTolerance));
+  // the lag is found on the sample index: lost samples in either recording shift what follows them
+  for (const auto* r : {&ra, &rb})
+    if (r->gaps > 0 && !o.json)
+      fmt::print(stderr, "warning: {} has {} stream gap(s); samples after a gap are compared as if none were lost\n", r->path, r->gaps);
   signal::AlignOptions opt;
   opt.max_lag = static_cast<int>(std::lround(o.max_lag_ms / 1000.0 / T));
   opt.subsample = !o.no_subsample;

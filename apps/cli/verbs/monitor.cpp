@@ -174,7 +174,8 @@ int run_thresholds(const ThresholdOptions& o) {
   const auto cfg = monitor::learn_thresholds(twin, runs, settings);
   twin.monitor_json = cfg.to_json();
   twin.save(o.twin);
-  fmt::print("thresholds learned from {} healthy recording(s) and stored in {}\n", recs.size(), o.twin);
+  fmt::print("thresholds learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n", recs.size(),
+             o.filter.empty() ? "iir" : o.filter, o.twin);
   for (int j = 0; j < twin.n_dof(); ++j)
     fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
                cfg.static_level[j], cfg.dynamic[static_cast<size_t>(j)].psi_qdd, cfg.dynamic[static_cast<size_t>(j)].psi_qd,
