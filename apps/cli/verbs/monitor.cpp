@@ -64,7 +64,13 @@ int run_monitor(const MonitorOptions& o) {
     const auto learned = cfg.residual_filter;
     cfg.residual_filter = split_filter(o.filter);
     cfg.validate(twin.n_dof());
-    if (cfg.residual_filter != learned && !o.quiet && !o.json)
+    // compare per joint: empty means "iir" everywhere, one entry means that kind everywhere
+    const auto per_joint = [n = static_cast<size_t>(twin.n_dof())](const std::vector<std::string>& v) {
+      std::vector<std::string> out(n, v.empty() ? "iir" : v.front());
+      if (v.size() == n) out = v;
+      return out;
+    };
+    if (per_joint(cfg.residual_filter) != per_joint(learned) && !o.quiet && !o.json)
       fmt::print(stderr, "note: the thresholds in {} were learned with residual filter '{}'; re-learn them with "
                          "'twinwatch thresholds --filter {}' for this filter\n",
                  o.twin, learned.empty() ? "iir" : fmt::format("{}", fmt::join(learned, ",")), o.filter);
