@@ -38,6 +38,7 @@ double fir_magnitude(std::span<const double> taps, double f_hz, double fs_hz);
 /// the start (no start-up transient towards zero), as the monitor's IIR starts at its first value.
 class FirFilter {
  public:
+  /// No taps: push() passes the input through (a placeholder, e.g. for joints that use another filter).
   FirFilter() = default;
   /// Throws InvalidArgument on empty taps or a non-finite tap (naming its index).
   explicit FirFilter(std::vector<double> taps);
@@ -48,7 +49,7 @@ class FirFilter {
   void reset() { primed_ = false; }
   const std::vector<double>& taps() const { return h_; }
   /// Group delay [samples] of a symmetric (linear-phase) filter: (taps - 1) / 2.
-  double group_delay() const { return 0.5 * static_cast<double>(h_.size() - 1); }
+  double group_delay() const { return h_.empty() ? 0.0 : 0.5 * static_cast<double>(h_.size() - 1); }
 
  private:
   std::vector<double> h_;
