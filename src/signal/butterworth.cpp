@@ -217,9 +217,8 @@ std::vector<double> sosfiltfilt(std::span<const Sos> sos, std::span<const double
   const int edge = padlen < 0 ? sosfiltfilt_padlen(sos) : padlen;
   const size_t n = x.size();
   if (n <= static_cast<size_t>(edge))
-    throw InvalidArgument(fmt::format("sosfiltfilt: input has {} samples, must be more than padlen = {} (3 x (2 x {} sections + 1 - "
-                                      "first-order sections))",
-                                      n, edge, sos.size()));
+    throw InvalidArgument(fmt::format("sosfiltfilt: input has {} samples, must be more than padlen = {}{}", n, edge,
+                                      padlen < 0 ? fmt::format(" (3 x (2 x {} sections + 1 - first-order sections))", sos.size()) : ""));
   // odd extension: 2 x[0] - x[edge..1] before, 2 x[n-1] - x[n-2..n-1-edge] after
   const size_t e = static_cast<size_t>(edge);
   std::vector<double> ext(n + 2 * e);

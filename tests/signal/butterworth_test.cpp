@@ -131,6 +131,8 @@ TEST(Butterworth, ValidationNamesTheValueAndTheLimit) {
   EXPECT_THAT(error_of([&] { ButterworthLowpass{4, 10, 500}.apply(x); }),
               ::testing::HasSubstr("input has 15 samples, must be more than padlen = 15"));
   EXPECT_THAT(error_of([&] { sosfiltfilt({}, x); }), ::testing::HasSubstr("no sections"));
+  EXPECT_THAT(error_of([&] { sosfiltfilt(butterworth_lowpass(2, 10, 500), x, 20); }),
+              ::testing::HasSubstr("input has 15 samples, must be more than padlen = 20"));
   std::vector<double> zi(3);
   const auto sos = butterworth_lowpass(4, 10, 500);
   EXPECT_THAT(error_of([&] { sosfilt(sos, x, zi); }), ::testing::HasSubstr("zi has 3 values, expected 2 per section = 4"));
