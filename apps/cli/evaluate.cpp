@@ -51,7 +51,7 @@ std::string expected_class(const std::string& fault) {
 
 }  // namespace
 
-ident::TwinModel train_reference(const std::string& robot, bool quiet) {
+ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter) {
   auto say = [&](const std::string& m) {
     if (!quiet) fmt::print("{}\n", m);
   };
@@ -79,7 +79,9 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet) {
   runs.push_back({&hs[1], p});
   runs.push_back({&hs[2], {}});
   runs.push_back({&hs[3], {}});
-  twin.monitor_json = monitor::learn_thresholds(twin, runs).to_json();
+  monitor::MonitorConfig settings;
+  settings.residual_filter = residual_filter;
+  twin.monitor_json = monitor::learn_thresholds(twin, runs, settings).to_json();
   return twin;
 }
 

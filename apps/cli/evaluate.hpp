@@ -11,7 +11,8 @@ namespace twinwatch::cli {
 
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
-ident::TwinModel train_reference(const std::string& robot, bool quiet);
+/// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).
+ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter = {});
 
 struct ScenarioScore {
   std::string name, fault, predicted_class, detail;

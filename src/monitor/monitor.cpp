@@ -45,9 +45,35 @@ VectorJ json_vec(const nlohmann::json& a) {
   return v;
 }
 
-// first-order IIR over a whole run of residuals, per joint
+// MonitorConfig::residual_filter: 0, 1 or n entries, each "iir" or "fir"
+void check_residual_filter(const MonitorConfig& c, int n) {
+  if (c.residual_filter.size() > 1 && static_cast<int>(c.residual_filter.size()) != n)
+    throw InvalidArgument(fmt::format("residual_filter has {} entries, expected 0, 1 or {} (one per joint)", c.residual_filter.size(), n));
+  for (size_t j = 0; j < c.residual_filter.size(); ++j)
+    if (c.residual_filter[j] != "iir" && c.residual_filter[j] != "fir")
+      throw InvalidArgument(fmt::format("residual_filter[{}] is '{}', expected 'iir' or 'fir'", j, c.residual_filter[j]));
+}
+
+// the residual filter kind of joint j (MonitorConfig::residual_filter)
+const std::string& filter_kind(const MonitorConfig& c, int j) {
+  static const std::string kIir = "iir";
+  if (c.residual_filter.empty()) return kIir;
+  return c.residual_filter.size() == 1 ? c.residual_filter[0] : c.residual_filter[static_cast<size_t>(j)];
+}
+
+// Cao eq. (29) FIR for the joints configured "fir"; joints without taps use the IIR
+std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
+  check_residual_filter(c, n);
+  std::vector<signal::FirFilter> f(static_cast<size_t>(n));
+  for (int j = 0; j < n; ++j)
+    if (filter_kind(c, j) == "fir") f[static_cast<size_t>(j)] = signal::FirFilter(signal::cao_torque_fir_taps());
+  return f;
+}
+
+// the monitor's residual filters (first-order IIR, or the FIR where configured) over a whole run
 std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const device::Recording& rec, double alpha,
-                                        std::vector<VectorJ>& qdds) {
+                                        std::vector<VectorJ>& qdds, const MonitorConfig& c) {
+  auto fir = make_fir_filters(c, twin.n_dof());
   qdds = ident::joint_accelerations(rec);
   std::vector<VectorJ> out;
   out.reserve(rec.samples.size());
@@ -58,6 +84,8 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
     const VectorJ r = s.current - i;
     if (k == 0) rf = r;
     else rf += alpha * (r - rf);
+    for (size_t j = 0; j < fir.size(); ++j)
+      if (!fir[j].taps().empty()) rf[static_cast<int>(j)] = fir[j].push(r[static_cast<int>(j)]);
     out.push_back(rf);
   }
   return out;
@@ -77,6 +105,7 @@ void MonitorConfig::validate(int n) const {
   for (int j = 0; j < sensitivity.size(); ++j)
     if (!(sensitivity[j] > 0.0)) throw InvalidArgument(fmt::format("sensitivity of joint {} is {}, must be > 0", j + 1, sensitivity[j]));
   if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
+  check_residual_filter(*this, n);
 }
 
 std::string MonitorConfig::to_json() const {
@@ -91,6 +120,7 @@ std::string MonitorConfig::to_json() const {
   j["clear_after"] = clear_after;
   if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
   j["nominal_period"] = nominal_period;
+  if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
   return j.dump();
 }
 
@@ -109,6 +139,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.clear_after = j.value("clear_after", c.clear_after);
     if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"]);
     c.nominal_period = j.value("nominal_period", c.nominal_period);
+    if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
   }
@@ -128,7 +159,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     ident::TwinModel t = twin;
     t.set_payload(h.payload);
     std::vector<VectorJ> qdds;
-    auto rf = filtered_residuals(t, *h.recording, alpha, qdds);
+    auto rf = filtered_residuals(t, *h.recording, alpha, qdds, c);
     // skip the filter's start-up
     const size_t skip = std::min<size_t>(rf.size(), 50);
     for (size_t k = skip; k < rf.size(); ++k) {
@@ -155,6 +186,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   cfg_.validate(n_);
   if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
+  fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
@@ -276,6 +308,8 @@ void Monitor::push(const RobotSample& s) {
   } else {
     rf_ += alpha_ * (r_ - rf_);
   }
+  for (size_t j = 0; j < fir_.size(); ++j)
+    if (!fir_[j].taps().empty()) rf_[static_cast<int>(j)] = fir_[j].push(r_[static_cast<int>(j)]);
   i_total_ = s.current.cwiseAbs().sum();
   // thresholds
   for (int j = 0; j < n_; ++j) {

@@ -1,6 +1,7 @@
 // `twinwatch monitor`, `twinwatch thresholds`, `twinwatch evaluate`: the condition-monitoring loop
 // on recordings, threshold re-learning, and scoring against scenario labels.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -30,8 +31,24 @@ struct MonitorOptions {
   double payload_mass = 0.0;
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
+  std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   bool static_threshold = false, quiet = false, json = false;
 };
+
+// --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
+std::vector<std::string> split_filter(const std::string& s) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  for (size_t k = 0; k <= s.size(); ++k)
+    if (k == s.size() || s[k] == ',') {
+      out.push_back(s.substr(start, k - start));
+      start = k + 1;
+    }
+  return out;
+}
+constexpr const char* kFilterHelp =
+    "Residual filter: 'iir' (first order at the twin's filter_cutoff_hz, AGV §4.3), 'fir' (Cao eq. 29: 6 taps, "
+    "-3 dB at 42.8 Hz at 500 Hz, 2.5-sample delay), or one per joint, e.g. iir,iir,iir,iir,fir,iir";
 
 monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path) {
   if (twin.monitor_json.empty())
@@ -43,6 +60,21 @@ int run_monitor(const MonitorOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
+  if (!o.filter.empty()) {
+    const auto learned = cfg.residual_filter;
+    cfg.residual_filter = split_filter(o.filter);
+    cfg.validate(twin.n_dof());
+    // compare per joint: empty means "iir" everywhere, one entry means that kind everywhere
+    const auto per_joint = [n = static_cast<size_t>(twin.n_dof())](const std::vector<std::string>& v) {
+      std::vector<std::string> out(n, v.empty() ? "iir" : v.front());
+      if (v.size() == n) out = v;
+      return out;
+    };
+    if (per_joint(cfg.residual_filter) != per_joint(learned) && !o.quiet && !o.json)
+      fmt::print(stderr, "note: the thresholds in {} were learned with residual filter '{}'; re-learn them with "
+                         "'twinwatch thresholds --filter {}' for this filter\n",
+                 o.twin, learned.empty() ? "iir" : fmt::format("{}", fmt::join(learned, ",")), o.filter);
+  }
   if (!o.sensitivity.empty()) {
     if (static_cast<int>(o.sensitivity.size()) == 1) cfg.sensitivity = VectorJ::Constant(twin.n_dof(), o.sensitivity[0]);
     else {
@@ -130,7 +162,7 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
-  std::string twin;
+  std::string twin, filter;
   std::vector<std::string> recordings;
   double payload_mass = 0.0;
 };
@@ -143,10 +175,13 @@ int run_thresholds(const ThresholdOptions& o) {
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
   for (const auto& r : recs) runs.push_back({&r, p});
-  const auto cfg = monitor::learn_thresholds(twin, runs);
+  monitor::MonitorConfig settings;
+  if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
+  const auto cfg = monitor::learn_thresholds(twin, runs, settings);
   twin.monitor_json = cfg.to_json();
   twin.save(o.twin);
-  fmt::print("thresholds learned from {} healthy recording(s) and stored in {}\n", recs.size(), o.twin);
+  fmt::print("thresholds learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n", recs.size(),
+             o.filter.empty() ? "iir" : o.filter, o.twin);
   for (int j = 0; j < twin.n_dof(); ++j)
     fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
                cfg.static_level[j], cfg.dynamic[static_cast<size_t>(j)].psi_qdd, cfg.dynamic[static_cast<size_t>(j)].psi_qd,
@@ -169,6 +204,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m]")->expected(3);
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
+  sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_monitor(*o)); });
@@ -180,11 +216,12 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]");
+  sub->add_option("--filter", o->filter, kFilterHelp);
   sub->callback([o] { twinwatch::cli::set_exit_code(run_thresholds(*o)); });
 }};
 
 struct EvaluateOptions {
-  std::string dir, twin, robot = "ur3e", save_twin;
+  std::string dir, twin, robot = "ur3e", save_twin, filter;
   bool json = false, static_threshold = false;
   double max_duration = 0.0;
 };
@@ -199,7 +236,11 @@ int run_evaluate(const EvaluateOptions& o) {
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
-  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+  if (!o.filter.empty() && !o.twin.empty())
+    throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
+                          "with (re-learn them with 'twinwatch thresholds --filter')");
+  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter))
+                                               : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
@@ -235,6 +276,7 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
   sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
+  sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_evaluate(*o)); });
 }};

@@ -19,6 +19,7 @@
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
 #include "twinwatch/monitor/threshold.hpp"
+#include "twinwatch/signal/fir.hpp"
 
 namespace twinwatch::monitor {
 
@@ -36,6 +37,11 @@ struct MonitorConfig {
   double diagnosis_delay = 0.12;              ///< [s] of residual after the raise used by the diagnosis
   double diagnosis_pre = 0.04;                ///< [s] before the raise
   int frozen_samples = 25;                    ///< identical consecutive currents while moving: stuck channel
+  /// Causal filter on each joint's current residual: "iir" (first order at filter_cutoff_hz
+  /// [AGV §4.3], the default) or "fir" (the six taps of Cao eq. 29: -3 dB at 42.8 Hz at 500 Hz,
+  /// -20 dB above 92 Hz, 2.5-sample delay). Empty: "iir" on every joint; one entry: every joint;
+  /// else one entry per joint. Thresholds must be learned with the same filters.
+  std::vector<std::string> residual_filter;
 
   void validate(int n_dof) const;
   std::string to_json() const;
@@ -107,6 +113,7 @@ class Monitor {
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
+  std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
 };
 
 }  // namespace twinwatch::monitor

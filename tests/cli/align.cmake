@@ -1,0 +1,42 @@
+# align: two simulated runs of one motion, the second recording started 0.7 s late into it (the
+# RTDE start-trigger latency of UR3e §3.4), aligned by cross-correlation (UR3e Table 2 layout)
+set(da ${PROJECT_BINARY_DIR}/cli-align)
+file(MAKE_DIRECTORY ${da})
+add_test(NAME cli.align_setup
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/tests/data/cli/short_fig8.yaml --seed 6 -o ${da}/full.csv -q && \
+(head -n 1 ${da}/full.csv; tail -n +352 ${da}/full.csv) > ${da}/late.csv && echo CUT")
+set_tests_properties(cli.align_setup PROPERTIES FIXTURES_SETUP align_pair PASS_REGULAR_EXPRESSION "CUT")
+# joint angles: the 350 dropped rows come back as a lag of -350 samples (the second one is early)
+add_test(NAME cli.align_angles COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv)
+set_tests_properties(cli.align_angles PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"
+  PASS_REGULAR_EXPRESSION "common lag -350\\.00 samples = -700\\.0 ms.*Raw RMSE \\[rad\\] +Aligned RMSE \\[rad\\].*J6 +-700\\.0")
+# noisy currents (different noise seeds), per joint, as JSON
+add_test(NAME cli.align_currents_json
+  COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --signal actual_current --per-joint --json)
+set_tests_properties(cli.align_currents_json PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"
+  PASS_REGULAR_EXPRESSION "\"joint\":2,\"lag_ms\":-70[01]\\.[0-9]+,\"lag_samples\":-350\\.[0-9]+")
+add_test(NAME cli.align_window_edge COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --max-lag-ms 500)
+set_tests_properties(cli.align_window_edge PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"
+  PASS_REGULAR_EXPRESSION "peak lies on the edge of the \\+-500 ms search window")
+add_test(NAME cli.align_bad_signal COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --signal qdd)
+set_tests_properties(cli.align_bad_signal PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"
+  PASS_REGULAR_EXPRESSION "--signal 'qdd' is not a recording column group; expected one of actual_q")
+add_test(NAME cli.align_bad_signal_fails COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --signal qdd)
+set_tests_properties(cli.align_bad_signal_fails PROPERTIES FIXTURES_REQUIRED "recordings;align_pair" WILL_FAIL TRUE)
+# the monitor with Cao's FIR on the residuals (thresholds learned with the IIR: a note says so)
+add_test(NAME cli.monitor_fir COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
+  ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db "" --filter fir)
+set_tests_properties(cli.monitor_fir PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "learned with residual filter 'iir'.*samples, 0 gap\\(s\\)")
+add_test(NAME cli.monitor_bad_filter COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
+  ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --filter iir,fir)
+set_tests_properties(cli.monitor_bad_filter PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "residual_filter has 2 entries, expected 0, 1 or 6")
+# thresholds re-learned with the FIR, then monitored with it: no mismatch note, no alarm
+add_test(NAME cli.thresholds_fir
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_fir.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --filter fir && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --filter fir 2>&1")
+set_tests_properties(cli.thresholds_fir PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "with residual filter 'fir' and stored in.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)"
+  FAIL_REGULAR_EXPRESSION "note: the thresholds")
