@@ -400,21 +400,25 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
   // friction re-estimated on every row (also |qd| < screen), rigid body fixed; forced when the
   // rigid-body rows were averaged (they carry no Coulomb/viscous information)
   m.rows_friction = rows;
+  const Eigen::MatrixXd cov_beta = s2 * Ainv.topLeftCorner(nb, nb);
   if (o.refit_friction || averaged) {
     std::vector<Eigen::Matrix3d> F(static_cast<size_t>(n), Eigen::Matrix3d::Zero());
     std::vector<Eigen::Vector3d> g(static_cast<size_t>(n), Eigen::Vector3d::Zero());
     std::vector<double> e(static_cast<size_t>(n), 0.0);
     std::vector<long> cnt(static_cast<size_t>(n), 0);
+    // F^T Y_b,j: how the friction estimate moves with beta (for the std propagation below)
+    std::vector<Eigen::MatrixXd> FY(static_cast<size_t>(n), Eigen::MatrixXd::Zero(kFric, nb));
+    Eigen::VectorXd yb(nb);
     auto add = [&](const TorqueData& d) {
       for (size_t k = 0; k < d.t.size(); k += static_cast<size_t>(o.decimate)) {
         model::regressor(model, dd, d.q[k], d.qd[k], d.qdd[k], Y);
         for (int j = 0; j < n; ++j) {
           if (!std::isfinite(d.tau[k][j])) continue;
-          double rb = 0.0;
-          for (int col = 0; col < nb; ++col) rb += Y(j, base.independent[static_cast<size_t>(col)]) * m.beta(col);
-          const double res = d.tau[k][j] - rb;
+          for (int col = 0; col < nb; ++col) yb(col) = Y(j, base.independent[static_cast<size_t>(col)]);
+          const double res = d.tau[k][j] - yb.dot(m.beta);
           const Eigen::Vector3d x(sgn(d.qd[k][j]), d.qd[k][j], 1.0);
           F[static_cast<size_t>(j)] += x * x.transpose();
+          FY[static_cast<size_t>(j)] += x * yb.transpose();
           g[static_cast<size_t>(j)] += x * res;
           e[static_cast<size_t>(j)] += res * res;
           ++cnt[static_cast<size_t>(j)];
@@ -432,9 +436,13 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
       const Eigen::VectorXd x = solve_normal(F[J], g[J], &Fi, nullptr);
       const double sse = std::max(0.0, e[J] - 2.0 * x.dot(g[J]) + x.dot(F[J] * x));
       const double s2j = sse / std::max(1.0, static_cast<double>(cnt[J] - kFric));
+      // Cov(x) = s_j^2 (F^T F)^-1 + H Cov(beta) H^T,  H = (F^T F)^-1 F^T Y_b,j: the conditional
+      // spread plus what the rigid-body uncertainty passes on (e.g. offset vs gravity terms)
+      const Eigen::MatrixXd H = Fi * FY[J];
+      const Eigen::MatrixXd cov = s2j * Fi + H * cov_beta * H.transpose();
       for (int f = 0; f < kFric; ++f) {
         m.friction(j, f) = x(f);
-        m.friction_std(j, f) = std::sqrt(std::max(0.0, s2j * Fi(f, f)));
+        m.friction_std(j, f) = std::sqrt(std::max(0.0, cov(f, f)));
       }
       m.rows_friction[J] = cnt[J];
     }

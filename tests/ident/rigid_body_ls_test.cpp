@@ -65,11 +65,11 @@ device::Recording synthetic(const model::RobotModel& m, const sim::Trajectory& t
   return rec;
 }
 
-struct Setup {
+struct Plant {
   model::RobotModel model = model::load_robot("ur3e");
   std::unique_ptr<sim::Trajectory> traj;
   double duration = 0.0;
-  Setup() {
+  Plant() {
     VectorJ q0(6);
     q0 << 0.2, -1.2, 1.0, -1.5, -1.4, 0.3;
     const auto c = sim::random_fourier(q0, 1.2, 10.0, 5, 11);
@@ -82,8 +82,8 @@ struct Setup {
   }
 };
 
-const Setup& setup() {
-  static const Setup s;
+const Plant& plant() {
+  static const Plant s;
   return s;
 }
 
@@ -102,7 +102,7 @@ double worst_normalised_error(const RigidBodyModel& m, const Eigen::VectorXd& tr
 }
 
 TEST(RigidBodyLs, RecoversBaseAndFrictionParametersWithinTheirStandardDeviations) {
-  const Setup& s = setup();
+  const Plant& s = plant();
   const device::Recording rec = synthetic(s.model, *s.traj, s.duration, 5, false, 0.0);
   const RigidBodyModel m = identify_rigid_body(s.model, "ur3e", {{&rec, 0.0, 1.0, nullptr}}, accurate_options());
   const Eigen::VectorXd truth = s.beta_true();
@@ -125,7 +125,7 @@ TEST(RigidBodyLs, RecoversBaseAndFrictionParametersWithinTheirStandardDeviations
 }
 
 TEST(RigidBodyLs, WeightsFindTheNoiseOfEachJoint) {
-  const Setup& s = setup();
+  const Plant& s = plant();
   const device::Recording rec = synthetic(s.model, *s.traj, s.duration, 6, false, 0.0);
   const RigidBodyModel wls = identify_rigid_body(s.model, "ur3e", {{&rec, 0.0, 1.0, nullptr}}, accurate_options());
   for (int j = 0; j < 6; ++j) EXPECT_NEAR(wls.sigma[static_cast<size_t>(j)], kNoise[j], 0.1 * kNoise[j]) << "joint " << j;
@@ -140,26 +140,30 @@ TEST(RigidBodyLs, WeightsFindTheNoiseOfEachJoint) {
 }
 
 TEST(RigidBodyLs, ForwardReverseAveragingCancelsOddFrictionTheModelCannotRepresent) {
-  const Setup& s = setup();
-  const double bump = 0.8;  // [N·m] odd, unmodelled friction near zero velocity
+  const Plant& s = plant();
+  const double bump = 3.0;  // [N·m] odd, unmodelled friction near zero velocity
   const device::Recording fwd = synthetic(s.model, *s.traj, s.duration, 7, false, bump);
   const device::Recording rev = synthetic(s.model, *s.traj, s.duration, 8, true, bump);
   RigidBodyLsOptions o = accurate_options();
   o.reversal_screen = 0.0;  // keep every row: the averaging alone must remove the friction
   const RigidBodyModel avg = identify_rigid_body(s.model, "ur3e", {{&fwd, 0.0, 1.0, &rev}}, o);
-  const RigidBodyModel plain = identify_rigid_body(s.model, "ur3e", {{&fwd, 0.0, 1.0, nullptr}, {&rev, 0.0, 1.0, nullptr}}, o);
+  // the forward run alone, fitted with the Coulomb + viscous model: the bump leaks into beta
+  const RigidBodyModel plain = identify_rigid_body(s.model, "ur3e", {{&fwd, 0.0, 1.0, nullptr}}, o);
   EXPECT_TRUE(avg.averaged);
   EXPECT_FALSE(plain.averaged);
   const Eigen::VectorXd truth = s.beta_true();
-  const double e_avg = worst_normalised_error(avg, truth), e_plain = worst_normalised_error(plain, truth);
+  const double e_avg = worst_normalised_error(avg, truth);
   EXPECT_LT(e_avg, kSigmas);
-  EXPECT_GT(e_plain, e_avg);  // the unmodelled friction biases the plain fit
+  // errors on the same scale (the averaged fit's std): the plain fit is biased well beyond it
+  double e_plain = 0.0;
+  for (Eigen::Index i = 0; i < truth.size(); ++i) e_plain = std::max(e_plain, std::abs(plain.beta(i) - truth(i)) / avg.beta_std(i));
+  EXPECT_GT(e_plain, 2.0 * kSigmas);
   for (int j = 0; j < 6; ++j)
     EXPECT_LT(std::abs(avg.friction(j, 2) - kFriction[j].off), kSigmas * avg.friction_std(j, 2) + 0.02) << "offset joint " << j;
 }
 
 TEST(RigidBodyLs, MismatchedReversePairIsRejected) {
-  const Setup& s = setup();
+  const Plant& s = plant();
   const device::Recording fwd = synthetic(s.model, *s.traj, s.duration, 7, false, 0.0);
   const device::Recording other = synthetic(s.model, *s.traj, s.duration, 8, false, 0.0);  // not reversed
   try {
@@ -171,7 +175,7 @@ TEST(RigidBodyLs, MismatchedReversePairIsRejected) {
 }
 
 TEST(RigidBodyLs, PredictionOnAHeldOutSegmentMatchesTheNoiseLevel) {
-  const Setup& s = setup();
+  const Plant& s = plant();
   const device::Recording rec = synthetic(s.model, *s.traj, s.duration, 9, false, 0.0);
   const RigidBodyLsOptions o = accurate_options();
   const RigidBodyModel m = identify_rigid_body(s.model, "ur3e", {{&rec, 0.0, 0.6, nullptr}}, o);
@@ -211,7 +215,7 @@ TEST(RigidBodyLs, LocalPolynomialEqualsSavitzkyGolayOnAUniformGrid) {
 }
 
 TEST(RigidBodyLs, MissingTorqueColumnsAreNamed) {
-  const Setup& s = setup();
+  const Plant& s = plant();
   device::Recording rec = synthetic(s.model, *s.traj, 2.0, 1, false, 0.0);
   RigidBodyLsOptions o = accurate_options();
   o.signal = TorqueSignal::CurrentAsTorque;
