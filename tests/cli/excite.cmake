@@ -26,3 +26,10 @@ if(EXISTS ${panda})
            --column-map ${PROJECT_SOURCE_DIR}/data/column_maps/franka_panda_gaz2019.csv --segment 0:0.65 -o ${d}/panda.json)
   set_tests_properties(cli.identify_torque_panda PROPERTIES PASS_REGULAR_EXPRESSION "J7 ")
 endif()
+add_test(NAME cli.validate_torque_bad_table COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e
+         --friction-table ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv)
+set_tests_properties(cli.validate_torque_bad_table PROPERTIES FIXTURES_REQUIRED excite_model
+                     PASS_REGULAR_EXPRESSION "bad_friction_table.csv:4: field 'phi2': expected a number, got 'abc'")
+add_test(NAME cli.validate_torque_bad_segment COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --segment 0.7:0.2)
+set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRED excite_model
+                     PASS_REGULAR_EXPRESSION "--segment '0.7:0.2': expected 0 <= FROM < TO <= 1")
