@@ -373,7 +373,10 @@ std::string excitation_scenario_yaml(const ExcitationTrajectory& t, const std::s
     for (Eigen::Index i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", v(i));
     return s + "]";
   };
-  os << fmt::format("name: excitation_{}\n", robot);
+  // scenario name from the robot's name or file stem ("panda", "data/robots/kinova_gen3.urdf" -> "kinova_gen3")
+  std::string stem = robot.substr(robot.find_last_of('/') == std::string::npos ? 0 : robot.find_last_of('/') + 1);
+  if (const auto dot = stem.find_last_of('.'); dot != std::string::npos && dot > 0) stem = stem.substr(0, dot);
+  os << fmt::format("name: excitation_{}\n", stem);
   os << fmt::format("robot: {}\n", robot);
   os << fmt::format("cycles: {}\n", cycles);
   os << "trajectory:\n";
