@@ -301,19 +301,18 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
     const TorqueData& dr = rev[si];
     const double T0 = segments[si].recording->samples.front().timestamp;
     const double Tend = segments[si].recording->samples.back().timestamp;
-    size_t rk = 0;  // partner sample in the reverse data
     for (size_t k = 0; k < d.t.size(); k += static_cast<size_t>(o.decimate)) {
       if (progress && (++done % 5000) == 0) progress(0.8 * static_cast<double>(done) * o.decimate / static_cast<double>(total));
       model::regressor(model, dd, d.q[k], d.qd[k], d.qdd[k], Y);
       VectorJ tau = d.tau[k];
       bool avg = false;
       if (!dr.t.empty()) {
-        // partner sample at the mirrored time: t_rev - T0_rev = Tend - t  (nearest sample)
+        // partner: the reverse sample nearest the mirrored time t_rev - T0_rev = Tend - t
+        // (binary search on its increasing time axis)
         const double T0r = segments[si].reverse->samples.front().timestamp;
         const double want = T0r + (Tend - d.t[k]);
-        // nearest partner sample (binary search on its increasing time axis)
         const auto it = std::lower_bound(dr.t.begin(), dr.t.end(), want);
-        rk = static_cast<size_t>(std::min<std::ptrdiff_t>(it - dr.t.begin(), static_cast<std::ptrdiff_t>(dr.t.size()) - 1));
+        size_t rk = static_cast<size_t>(std::min<std::ptrdiff_t>(it - dr.t.begin(), static_cast<std::ptrdiff_t>(dr.t.size()) - 1));
         if (rk > 0 && std::abs(dr.t[rk - 1] - want) < std::abs(dr.t[rk] - want)) --rk;
         if ((dr.q[rk] - d.q[k]).cwiseAbs().maxCoeff() > kReversePoseTolerance)
           throw InvalidArgument(fmt::format("{} is not {} played backwards: at t = {:.4f} s the poses differ by {:.4f} rad (> {} rad)",
