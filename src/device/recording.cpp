@@ -31,6 +31,8 @@ const Group kGroups[] = {
     {kFieldTargetCurrent, "target_current_", &RobotSample::target_current},
     {kFieldTargetMoment, "target_moment_", &RobotSample::target_moment},
     {kFieldTemperature, "joint_temperatures_", &RobotSample::temperature},
+    {kFieldJointTorque, "actual_joint_torque_", &RobotSample::joint_torque},
+    {kFieldCurrentAsTorque, "actual_current_as_torque_", &RobotSample::current_as_torque},
 };
 // a timestamp step longer than this many median periods marks a gap (lost samples)
 constexpr double kGapFactor = 1.5;
@@ -53,6 +55,24 @@ std::vector<std::string> split_csv(const std::string& line) {
     s = b == std::string::npos ? "" : s.substr(b, e - b + 1);
   }
   return out;
+}
+
+// an RTDE name a recording column may carry
+bool known_name(const std::string& nm) {
+  if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "stream_gap") return true;
+  for (const Group& g : kGroups) {
+    const std::string p = g.prefix;
+    if (nm.rfind(p, 0) == 0 && nm.size() > p.size() &&
+        std::all_of(nm.begin() + static_cast<long>(p.size()), nm.end(), ::isdigit))
+      return true;
+  }
+  return false;
+}
+
+std::string group_prefixes() {
+  std::string s;
+  for (const Group& g : kGroups) s += (s.empty() ? "" : ", ") + std::string(g.prefix);
+  return s;
 }
 
 bool parse_double(const std::string& s, double& v) {
@@ -86,6 +106,7 @@ ColumnMap ColumnMap::load(const std::string& path) {
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the column map");
   ColumnMap m;
+  m.path = path;
   std::string line;
   int ln = 0;
   while (std::getline(f, line)) {
@@ -95,9 +116,17 @@ ColumnMap ColumnMap::load(const std::string& path) {
     if (cells.size() < 2 || cells.size() > 3)
       throw ParseError(path, ln, "", fmt::format("expected 'file_column,rtde_name[,scale]', got {} cells", cells.size()));
     Entry e{cells[1], 1.0};
-    if (cells.size() == 3 && !parse_double(cells[2], e.scale))
-      throw ParseError(path, ln, "scale", fmt::format("expected a number, got '{}'", cells[2]));
+    if (cells.size() == 3 && (!parse_double(cells[2], e.scale) || !std::isfinite(e.scale) || e.scale == 0.0))
+      throw ParseError(path, ln, "scale", fmt::format("expected a finite non-zero number, got '{}'", cells[2]));
+    if (cells[0].empty()) throw ParseError(path, ln, "file_column", "empty column name");
+    if (!known_name(e.rtde_name))
+      throw ParseError(path, ln, "rtde_name",
+                       fmt::format("unknown name '{}', expected timestamp, actual_digital_output_bits, robot_mode, stream_gap "
+                                   "or one of {}<joint> (joints from 0)", e.rtde_name, group_prefixes()));
+    if (m.columns.count(cells[0]))
+      throw ParseError(path, ln, "file_column", fmt::format("'{}' is already mapped on line {}", cells[0], m.lines[cells[0]]));
     m.columns[cells[0]] = e;
+    m.lines[cells[0]] = ln;
   }
   return m;
 }
@@ -111,6 +140,15 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   std::vector<double> scale(header.size(), 1.0);
   std::vector<std::string> names = header;
   if (map) {
+    // every mapped column must exist: a typo in the map would otherwise drop a signal silently
+    for (const auto& [col, entry] : map->columns)
+      if (std::find(header.begin(), header.end(), col) == header.end()) {
+        const auto ln = map->lines.find(col);
+        throw ParseError(path, 1, col,
+                         fmt::format("column map{} maps column '{}' to {}, but the header has no such column",
+                                     map->path.empty() ? "" : fmt::format(" ({} line {})", map->path, ln == map->lines.end() ? 0 : ln->second),
+                                     col, entry.rtde_name));
+      }
     for (size_t c = 0; c < header.size(); ++c) {
       auto it = map->columns.find(header[c]);
       if (it != map->columns.end()) {

@@ -198,14 +198,16 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
     if (jj.contains("limits")) {
       const json& l = jj.at("limits");
       const std::string lp = p + ".limits";
-      r.only_keys(l, lp, {"q_min", "q_max", "qd_max", "torque_max"});
+      r.only_keys(l, lp, {"q_min", "q_max", "qd_max", "qdd_max", "torque_max"});
       j.limits.q_min = r.number_or(l, lp, "q_min", j.limits.q_min);
       j.limits.q_max = r.number_or(l, lp, "q_max", j.limits.q_max);
       j.limits.qd_max = r.number_or(l, lp, "qd_max", j.limits.qd_max);
       j.limits.torque_max = r.number_or(l, lp, "torque_max", j.limits.torque_max);
+      j.limits.qdd_max = r.number_or(l, lp, "qdd_max", j.limits.qdd_max);
       if (!(j.limits.q_min < j.limits.q_max))
         r.fail(lp, fmt::format("q_min ({}) must be < q_max ({})", j.limits.q_min, j.limits.q_max));
       if (!(j.limits.qd_max > 0.0)) r.fail(lp + ".qd_max", fmt::format("must be > 0, got {}", j.limits.qd_max));
+      if (!(j.limits.qdd_max > 0.0)) r.fail(lp + ".qdd_max", fmt::format("must be > 0, got {}", j.limits.qdd_max));
       if (!(j.limits.torque_max > 0.0))
         r.fail(lp + ".torque_max", fmt::format("must be > 0, got {}", j.limits.torque_max));
     }

@@ -108,6 +108,8 @@ RobotModel::RobotModel(RobotDescription description) : description_(std::move(de
           fmt::format("position limits of {} are [{}, {}], expected q_min < q_max", who, l.q_min, l.q_max));
     if (!(l.qd_max > 0.0))
       throw InvalidArgument(fmt::format("velocity limit of {} is {}, must be > 0", who, l.qd_max));
+    if (!(l.qdd_max > 0.0))
+      throw InvalidArgument(fmt::format("acceleration limit of {} is {}, must be > 0", who, l.qdd_max));
     if (!(l.torque_max > 0.0))
       throw InvalidArgument(fmt::format("torque limit of {} is {}, must be > 0", who, l.torque_max));
     const DriveParams& d = j.drive;

@@ -143,6 +143,36 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
                                     y.integer(t, p, "harmonics", 5), static_cast<unsigned>(y.integer(t, p, "seed", 1)));
       return make_fourier(c);
     }
+    if (type == "fourier_series") {
+      // explicit coefficients, e.g. written by `twinwatch excite` [Cao eq. 21]
+      y.only_keys(t, p, {"type", "base_frequency", "q0", "a", "b"});
+      FourierCoefficients c;
+      const double f = y.number(t, p, "base_frequency");
+      if (!(f > 0.0)) y.fail(t["base_frequency"], p + ".base_frequency", fmt::format("must be > 0 Hz, got {}", f));
+      c.w_f = 2.0 * M_PI * f;
+      c.q0 = y.vec(t, p, "q0", n);
+      auto matrix = [&](const std::string& key) {
+        const YAML::Node mn = t[key];
+        const std::string f2 = p + "." + key;
+        if (!mn) y.fail(t, f2, "missing required field");
+        if (!mn.IsSequence() || static_cast<int>(mn.size()) != n)
+          y.fail(mn, f2, fmt::format("expected {} rows (one per joint), each a list of harmonics", n));
+        const YAML::Node r0 = mn[0];
+        const int L = r0.IsSequence() ? static_cast<int>(r0.size()) : 0;
+        if (L < 1) y.fail(r0, f2 + "[0]", "expected a list of at least one number");
+        Eigen::MatrixXd M(n, L);
+        for (int j = 0; j < n; ++j) {
+          const VectorJ r = y.as_vec(mn[static_cast<size_t>(j)], fmt::format("{}[{}]", f2, j), L);
+          M.row(j) = r.transpose();
+        }
+        return M;
+      };
+      c.a = matrix("a");
+      c.b = matrix("b");
+      if (c.a.cols() != c.b.cols())
+        y.fail(t["b"], p + ".b", fmt::format("expected {} harmonics per row (as in a), got {}", c.a.cols(), c.b.cols()));
+      return make_fourier(c);
+    }
     if (type == "sine") {
       y.only_keys(t, p, {"type", "start", "amplitude", "frequency", "phase"});
       const VectorJ A = y.vec(t, p, "amplitude", n, true);
@@ -179,7 +209,7 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
     y.fail(t, p, e.what());
   }
   y.fail(t["type"] ? t["type"] : t, p + ".type",
-         fmt::format("expected one of figure_eight, triangle, fourier, sine, chirp, point_to_point, quasi_static; got '{}'", type));
+         fmt::format("expected one of figure_eight, triangle, fourier, fourier_series, sine, chirp, point_to_point, quasi_static; got '{}'", type));
 }
 
 FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {

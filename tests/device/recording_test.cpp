@@ -114,6 +114,72 @@ TEST(Recording, ColumnMapRenamesAndScalesForeignLogs) {
   EXPECT_NEAR(r.samples[0].q[1], -M_PI / 4, 1e-15);
 }
 
+std::string map_error(const std::string& content) {
+  const std::string mp = tmp("bad.map");
+  std::ofstream(mp) << content;
+  try {
+    ColumnMap::load(mp);
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Recording, ColumnMapUnknownRtdeNameNamesTheLine) {
+  EXPECT_THAT(map_error("t,timestamp\nq1,actual_qq_0\n"), HasSubstr("bad.map:2: field 'rtde_name': unknown name 'actual_qq_0'"));
+}
+
+TEST(Recording, ColumnMapBadScaleNamesTheLine) {
+  EXPECT_THAT(map_error("t,timestamp,abc\n"), HasSubstr("bad.map:1: field 'scale': expected a finite non-zero number, got 'abc'"));
+  EXPECT_THAT(map_error("\nt,timestamp,0\n"), HasSubstr("bad.map:2: field 'scale'"));
+}
+
+TEST(Recording, ColumnMapWrongCellCountNamesTheLine) {
+  EXPECT_THAT(map_error("# c\nt\n"), HasSubstr("bad.map:2: expected 'file_column,rtde_name[,scale]', got 1 cells"));
+}
+
+TEST(Recording, ColumnMapDuplicateColumnNamesBothLines) {
+  EXPECT_THAT(map_error("q1,actual_q_0\nq1,actual_q_1\n"), HasSubstr("bad.map:2: field 'file_column': 'q1' is already mapped on line 1"));
+}
+
+TEST(Recording, ColumnMapColumnAbsentFromTheFileIsAnError) {
+  const std::string p = tmp("foreign.csv");
+  std::ofstream(p) << "Time,q1\n0,1\n1,2\n";
+  const std::string mp = tmp("foreign.map");
+  std::ofstream(mp) << "Time,timestamp,0.001\nq1,actual_q_0\ntau1,actual_joint_torque_0\n";
+  const ColumnMap map = ColumnMap::load(mp);
+  try {
+    read_recording(p, &map);
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("foreign.csv:1: field 'tau1'"));
+    EXPECT_THAT(e.what(), HasSubstr("foreign.map line 3"));
+  }
+}
+
+TEST(Recording, ColumnMapLoadsTorqueSensorAndTimeInAnotherUnit) {
+  const std::string p = tmp("kinova.csv");
+  std::ofstream(p) << "Time,Position1,Torque1,TorqueCur1\n0,0.5,1.25,1.5\n1,0.6,1.5,x\n";
+  const std::string mp = tmp("kinova.map");
+  std::ofstream(mp) << "Time,timestamp,0.001\nPosition1,actual_q_0\nTorque1,actual_joint_torque_0\nTorqueCur1,actual_current_as_torque_0\n";
+  const ColumnMap map = ColumnMap::load(mp);
+  try {
+    read_recording(p, &map);
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    // the error names the file's own column, not the RTDE name
+    EXPECT_THAT(e.what(), HasSubstr("kinova.csv:3: field 'TorqueCur1': expected a number, got 'x'"));
+  }
+  std::ofstream(p) << "Time,Position1,Torque1,TorqueCur1\n0,0.5,1.25,1.5\n1,0.6,1.5,1.75\n";
+  const Recording r = read_recording(p, &map);
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.samples[1].timestamp, 0.001);
+  EXPECT_TRUE(r.present & kFieldJointTorque);
+  EXPECT_TRUE(r.present & kFieldCurrentAsTorque);
+  EXPECT_DOUBLE_EQ(r.samples[1].joint_torque[0], 1.5);
+  EXPECT_DOUBLE_EQ(r.samples[1].current_as_torque[0], 1.75);
+}
+
 TEST(Recording, MissingFileIsNamed) { EXPECT_THROW(read_recording("/nonexistent/rec.csv"), ParseError); }
 
 }  // namespace

@@ -68,6 +68,17 @@ TEST(DescriptionJson, TriangleInequalityIsChecked) {
               HasSubstr("triangle inequality"));
 }
 
+TEST(DescriptionJson, AccelerationLimitMustBePositive) {
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "limits": {"qdd_max": 0})")),
+              HasSubstr("joints[0].limits.qdd_max': must be > 0, got 0"));
+}
+
+TEST(DescriptionJson, AccelerationLimitIsOptionalAndLoads) {
+  const RobotModel panda = load_robot("panda");
+  EXPECT_DOUBLE_EQ(panda.joint(1).limits.qdd_max, 7.5);  // Franka specifications
+  EXPECT_FALSE(std::isfinite(load_robot("ur3e").joint(0).limits.qdd_max));  // UR publishes none
+}
+
 TEST(DescriptionJson, WrongVectorLengthIsNamed) {
   EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0], "inertia": [0.01,0,0,0.01,0,0.01])")),
               HasSubstr("joints[0].com': expected 3 numbers, got 2"));

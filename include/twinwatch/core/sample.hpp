@@ -25,6 +25,8 @@ enum SampleField : std::uint32_t {
   kFieldTargetMoment = 1u << 8,
   kFieldActualQd = 1u << 9,
   kFieldStreamGap = 1u << 10,  ///< the source marks stream gaps itself (RTDE client: lost samples, reconnects)
+  kFieldJointTorque = 1u << 11,      ///< measured joint torque (joint torque sensors; not an RTDE output)
+  kFieldCurrentAsTorque = 1u << 12,  ///< actual_current_as_torque (the controller's current-derived torque)
 };
 
 /// One controller cycle. Units: rad, rad/s, rad/s², A, °C, N·m, s.
@@ -39,6 +41,8 @@ struct RobotSample {
   VectorJ target_current;           ///< target_current [A]
   VectorJ target_moment;            ///< target_moment [N·m]
   VectorJ temperature;              ///< joint_temperatures [°C]
+  VectorJ joint_torque;             ///< actual_joint_torque [N·m]: joint torque sensors (Panda, Kinova); twinwatch name
+  VectorJ current_as_torque;        ///< actual_current_as_torque [N·m] (RTDE; or a foreign log's current-derived torque)
   std::uint64_t digital_outputs = 0;  ///< actual_digital_output_bits
   std::int32_t robot_mode = 7;        ///< robot_mode (7 = RUNNING)
   std::uint32_t present = 0;          ///< OR of SampleField flags
@@ -49,7 +53,7 @@ struct RobotSample {
     RobotSample s;
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (VectorJ* v : {&s.q, &s.qd, &s.target_q, &s.target_qd, &s.target_qdd, &s.current, &s.target_current,
-                       &s.target_moment, &s.temperature})
+                       &s.target_moment, &s.temperature, &s.joint_torque, &s.current_as_torque})
       v->setConstant(n, nan);
     return s;
   }

@@ -6,6 +6,7 @@
 /// Columns (n = number of joints, inferred from the header):
 ///   timestamp, actual_q_0..n-1, actual_qd_*, target_q_*, target_qd_*, target_qdd_*,
 ///   actual_current_*, target_current_*, target_moment_*, joint_temperatures_*,
+///   actual_joint_torque_* (joint torque sensors, a twinwatch name), actual_current_as_torque_*,
 ///   actual_digital_output_bits, robot_mode, stream_gap (1 where the source lost samples just before
 ///   this row: RTDE gaps and reconnects)
 /// Only timestamp and actual_q_* are required; absent groups are NaN and flagged absent in
@@ -26,7 +27,11 @@ struct ColumnMap {
     double scale = 1.0;     ///< e.g. pi/180 for degrees
   };
   std::map<std::string, Entry> columns;  ///< file column name -> entry
-  /// Loads "file_column,rtde_name[,scale]" lines ('#' comments). Throws ParseError with the line.
+  std::string path;                      ///< the map file ("" if built in code), for error messages
+  std::map<std::string, int> lines;      ///< file column name -> line of the map file
+  /// Loads "file_column,rtde_name[,scale]" lines ('#' comments). Throws ParseError with the line
+  /// for a wrong number of cells, a scale that is not a finite non-zero number, an unknown RTDE
+  /// name or a file column mapped twice. See docs/recordings.md.
   static ColumnMap load(const std::string& path);
 };
 
@@ -41,8 +46,8 @@ struct Recording {
 };
 
 /// Reads a recording. Throws twinwatch::ParseError naming the file, line and column for a
-/// non-numeric cell, a wrong number of cells, a missing required column, or a timestamp that
-/// goes backwards. Timestamp gaps are not errors: they are marked (gap_before) and counted.
+/// non-numeric cell, a wrong number of cells, a missing required column, a timestamp that
+/// goes backwards, or a column map entry whose file column is not in the header. Timestamp gaps are not errors: they are marked (gap_before) and counted.
 Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
 
 /// Streaming writer. Each write() appends one row with full double precision (round-trips).

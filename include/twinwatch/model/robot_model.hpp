@@ -58,6 +58,7 @@ struct JointLimits {
   double q_min = -std::numeric_limits<double>::infinity();   ///< [rad]
   double q_max = std::numeric_limits<double>::infinity();    ///< [rad]
   double qd_max = std::numeric_limits<double>::infinity();   ///< [rad/s], > 0
+  double qdd_max = std::numeric_limits<double>::infinity();  ///< [rad/s²], > 0 (infinite: not published)
   double torque_max = std::numeric_limits<double>::infinity();  ///< [N·m] joint side, > 0
 };
 

@@ -1,0 +1,153 @@
+// `twinwatch excite ROBOT -o traj.yaml`: design an optimised finite-Fourier excitation trajectory
+// (Cao eq. 21-22, condition number of the base-parameter observation matrix) and write it as a
+// scenario that `twinwatch simulate` runs.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/excitation.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+
+// a duration is a whole number of periods when it is within this of one (relative)
+constexpr double kWholeCycleTolerance = 1e-9;
+
+struct Options {
+  std::string robot, output;
+  int harmonics = 5, samples = 100, global = 3000, local = 3000;
+  double base_frequency = 0.1, duration = 0.0, amplitude = 1.0, qdd_default = 5.0, fraction = 0.9;
+  unsigned seed = 1;
+  std::vector<double> q0;
+  bool json = false, quiet = false, progress = false;
+};
+
+nlohmann::json vec(const VectorJ& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+
+int run(const Options& o) {
+  const model::RobotModel m = model::load_robot(o.robot);
+  ident::ExcitationOptions eo;
+  eo.harmonics = o.harmonics;
+  eo.base_frequency = o.base_frequency;
+  eo.seed = o.seed;
+  eo.samples = o.samples;
+  eo.amplitude = o.amplitude;
+  eo.default_qdd_max = o.qdd_default;
+  eo.limit_fraction = o.fraction;
+  eo.global_evaluations = o.global;
+  eo.local_evaluations = o.local;
+  if (!o.q0.empty()) eo.q0 = Eigen::Map<const Eigen::VectorXd>(o.q0.data(), static_cast<Eigen::Index>(o.q0.size()));
+  eo.validate(m.n_dof());
+  // the run must end at rest: a whole number of periods
+  const double period = 1.0 / o.base_frequency;
+  int cycles = 1;
+  if (o.duration > 0.0) {
+    const double c = o.duration / period;
+    cycles = static_cast<int>(std::lround(c));
+    if (cycles < 1 || std::abs(c - cycles) > kWholeCycleTolerance * std::max(1.0, c))
+      throw InvalidArgument(fmt::format("--duration {} s is not a whole number of periods ({} s at --base-frequency {} Hz); "
+                                        "use e.g. {} s", o.duration, period, o.base_frequency, std::max(1L, std::lround(c)) * period));
+  }
+  const bool bar = !o.quiet && !o.json && (o.progress || isatty(STDERR_FILENO));
+  const auto t0 = std::chrono::steady_clock::now();
+  const ident::ExcitationResult r = ident::design_excitation(m, eo, [&](double f, double best) {
+    if (!bar) return;
+    const int w = 30, k = static_cast<int>(f * w);
+    std::fprintf(stderr, "\r  optimising [%.*s%*s] %3.0f %%  best cond %.4g   ", k, "##############################", w - k, "",
+                 100 * f, best);
+    if (f >= 1.0) std::fprintf(stderr, "\n");
+  });
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string comment = fmt::format(
+      "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
+      "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
+      "cond(W) over {} base-parameter columns on {} points: random start {:.6g}, global {:.6g}, final {:.6g}",
+      m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final);
+  std::ofstream f(o.output);
+  if (!f) throw InvalidArgument(fmt::format("{}: cannot open for writing", o.output));
+  f << ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment);
+  f.close();
+  if (!f) throw InvalidArgument(fmt::format("{}: write error", o.output));
+  if (o.json) {
+    nlohmann::json j{{"robot", m.name()},
+                     {"output", o.output},
+                     {"harmonics", o.harmonics},
+                     {"base_frequency", o.base_frequency},
+                     {"period", period},
+                     {"cycles", cycles},
+                     {"seed", o.seed},
+                     {"base_columns", r.base_columns},
+                     {"cond_start", r.cond_start},
+                     {"cond_global", r.cond_global},
+                     {"cond_final", r.cond_final},
+                     {"evaluations", r.evaluations},
+                     {"seconds", wall},
+                     {"q_lo", vec(r.q_lo)},
+                     {"q_hi", vec(r.q_hi)},
+                     {"qd_limit", vec(r.qd_lim)},
+                     {"qdd_limit", vec(r.qdd_lim)},
+                     {"q_min", vec(r.q_min_seen)},
+                     {"q_max", vec(r.q_max_seen)},
+                     {"qd_peak", vec(r.qd_peak)},
+                     {"qdd_peak", vec(r.qdd_peak)}};
+    fmt::print("{}\n", j.dump(2));
+    return 0;
+  }
+  if (o.quiet) return 0;
+  fmt::print("excitation for {}: {} harmonics, period {:g} s x {} cycle(s) -> {}\n", m.name(), o.harmonics, period, cycles,
+             o.output);
+  fmt::print("cond(W), {} base columns on {} points: random start {:.4g} -> global {:.4g} -> final {:.4g} ({} evaluations, {:.1f} s)\n",
+             r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final, r.evaluations, wall);
+  fmt::print("{:<6} {:>22} {:>22} {:>16} {:>16}\n", "joint", "q range used rad", "q allowed rad", "|qd| peak/limit",
+             "|qdd| peak/limit");
+  for (int j = 0; j < m.n_dof(); ++j)
+    fmt::print("J{:<5} {:>22} {:>22} {:>16} {:>16}\n", j + 1, fmt::format("[{:.3f}, {:.3f}]", r.q_min_seen[j], r.q_max_seen[j]),
+               fmt::format("[{:.3f}, {:.3f}]", r.q_lo[j], r.q_hi[j]), fmt::format("{:.3f}/{:.3f}", r.qd_peak[j], r.qd_lim[j]),
+               fmt::format("{:.2f}/{:.2f}", r.qdd_peak[j], r.qdd_lim[j]));
+  fmt::print("run it: twinwatch simulate {} -o excitation.csv\n", o.output);
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
+  auto o = std::make_shared<Options>();
+  auto* sub = app.add_subcommand("excite", "Design an optimised excitation trajectory (finite Fourier, min cond(W)) as a scenario");
+  sub->footer(
+      "A finite Fourier series per joint (Cao eq. 21) that starts and ends at rest (zero velocity and\n"
+      "acceleration, position back at q0), stays inside the joint position, velocity and acceleration limits,\n"
+      "and whose coefficients NLopt chooses (global CRS2 then local Subplex) to minimise the condition number of\n"
+      "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction). Writes a scenario\n"
+      "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too.");
+  sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, panda) or a .json/.urdf description")->required();
+  sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
+  sub->add_option("--harmonics", o->harmonics, "Harmonics L per joint (>= 3)")->capture_default_str();
+  sub->add_option("--base-frequency", o->base_frequency, "Base frequency [Hz]; the period is its inverse")->capture_default_str();
+  sub->add_option("--duration", o->duration, "Total run time [s], a whole number of periods (default: one period)");
+  sub->add_option("--seed", o->seed, "Seed of the random start and of the global search")->capture_default_str();
+  sub->add_option("--q0", o->q0, "Centre (start and end) position per joint [rad] (default: middle of each range)");
+  sub->add_option("--amplitude", o->amplitude, "Largest excursion from q0 [rad] besides the joint limits")->capture_default_str();
+  sub->add_option("--limit-fraction", o->fraction, "Share of the velocity/acceleration limits and position range used")
+      ->capture_default_str();
+  sub->add_option("--default-qdd-max", o->qdd_default,
+                  "Acceleration limit [rad/s²] for joints whose description publishes none")->capture_default_str();
+  sub->add_option("--samples", o->samples, "Points per period at which cond(W) is evaluated")->capture_default_str();
+  sub->add_option("--global-evals", o->global, "Objective evaluations of the global step (0: skip)")->capture_default_str();
+  sub->add_option("--local-evals", o->local, "Objective evaluations of the local step (0: skip)")->capture_default_str();
+  sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+}};
+
+}  // namespace

@@ -1,0 +1,97 @@
+#pragma once
+/// @file excitation.hpp
+/// Excitation trajectory design for dynamic identification.
+///
+/// Each joint j follows a finite Fourier series [Cao eq. 21], [Swevers1997]:
+///   q_j(t)   = q0_j + sum_{k=1..L} ( a_kj / (k w) sin(k w t) - b_kj / (k w) cos(k w t) )
+///   qd_j(t)  =        sum_k ( a_kj cos(k w t) + b_kj sin(k w t) )
+///   qdd_j(t) =        sum_k k w ( -a_kj sin(k w t) + b_kj cos(k w t) )
+/// with base pulsation w = 2 pi f_b and period T = 1 / f_b. The boundary conditions of [Cao eq. 22]
+/// (q(0) = q(T) = q0, qd = qdd = 0 at both ends) are linear in (a, b); since the series is
+/// T-periodic, the conditions at t = T equal those at t = 0, and they read
+///   sum_k a_kj = 0,   sum_k k b_kj = 0,   sum_k b_kj / k = 0.
+/// **Construction:** these are eliminated exactly (no offset polynomial, no penalty): a_1j and
+/// (b_1j, b_2j) are solved from the free coefficients a_2..a_L and b_3..b_L, so every candidate the
+/// optimiser tries starts and ends at rest at q0 to round-off, and the trajectory can repeat for
+/// whole cycles. Needs L >= 3 harmonics.
+///
+/// **Limits:** position (description limits minus a margin, intersected with q0 +- amplitude),
+/// velocity (qd_max) and acceleration (qdd_max, or `default_qdd_max` where the description has
+/// none), all scaled by `limit_fraction`, are enforced by projection: a candidate's joint j is
+/// scaled by min(1, 1 / r_j), r_j its largest limit ratio on the optimisation grid (scaling keeps
+/// the boundary conditions, which are homogeneous). The result is checked and, if needed, scaled
+/// again on a dense grid, so the limits hold everywhere the dense grid looks.
+///
+/// **Objective:** the condition number of the observation matrix W stacked from the base regressor
+/// Y_b(q, qd, qdd) (rigid body + per-joint Coulomb, viscous, offset columns, i.e. the unknowns of
+/// rigid_body_ls.hpp) on `samples` points of one period [Swevers1997, HESR §III-C]. NLopt: a global
+/// step (GN_CRS2_LM, controlled random search with local mutation) then a local one (LN_SBPLX).
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "twinwatch/core/types.hpp"
+#include "twinwatch/model/regressor.hpp"
+#include "twinwatch/model/robot_model.hpp"
+
+namespace twinwatch::ident {
+
+struct ExcitationOptions {
+  int harmonics = 5;              ///< L, >= 3 (three coefficients per joint are fixed by the end conditions)
+  double base_frequency = 0.1;    ///< f_b [Hz]; period 1 / f_b
+  unsigned seed = 1;              ///< random start (and NLopt's own randomness)
+  int samples = 100;              ///< grid points per period for cond(W)
+  int check_samples = 5000;       ///< dense grid points per period for the final limit check
+  VectorJ q0;                     ///< centre [rad]; empty: the middle of each joint's range (0 if unbounded)
+  double amplitude = 1.0;         ///< largest excursion |q - q0| [rad] allowed besides the joint limits
+  double position_margin = 0.05;  ///< [rad] kept away from q_min / q_max
+  double limit_fraction = 0.9;    ///< share of qd_max / qdd_max (and of the position range) used
+  double default_qdd_max = 5.0;   ///< [rad/s²] where the description publishes no acceleration limit
+  int global_evaluations = 3000;  ///< NLopt GN_CRS2_LM budget (0: skip the global step)
+  int local_evaluations = 3000;   ///< NLopt LN_SBPLX budget (0: skip the local step)
+  model::FrictionColumns friction = model::FrictionColumns::CoulombViscousOffset;  ///< columns in W
+  /// Throws InvalidArgument naming the first bad field (q0 is checked against the model's joints).
+  void validate(int n_dof) const;
+};
+
+/// Finite Fourier coefficients of an excitation (same layout as sim::FourierCoefficients).
+struct ExcitationTrajectory {
+  double w_f = 0.0;       ///< base pulsation [rad/s]
+  VectorJ q0;             ///< centre = start = end position [rad]
+  Eigen::MatrixXd a, b;   ///< n_dof x L
+  double period() const { return 2.0 * M_PI / w_f; }
+  /// q [rad], qd [rad/s], qdd [rad/s²] at time t [s].
+  void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const;
+};
+
+struct ExcitationResult {
+  ExcitationTrajectory trajectory;
+  double cond_start = 0.0;        ///< cond(W) of the (projected) random start
+  double cond_global = 0.0;       ///< after the global step
+  double cond_final = 0.0;        ///< after the local step and the dense-grid check
+  int evaluations = 0;            ///< objective evaluations
+  int base_columns = 0;           ///< columns of W (base parameters incl. friction)
+  VectorJ q_lo, q_hi, qd_lim, qdd_lim;  ///< the limits enforced [rad], [rad/s], [rad/s²]
+  VectorJ q_min_seen, q_max_seen, qd_peak, qdd_peak;  ///< extremes on the dense grid
+};
+
+/// Designs an excitation trajectory for `model`. `progress` (may be empty) gets (fraction done,
+/// best cond so far). Throws InvalidArgument on bad options.
+ExcitationResult design_excitation(const model::RobotModel& model, const ExcitationOptions& options,
+                                   const std::function<void(double, double)>& progress = {});
+
+/// cond(W) of a trajectory: W stacked from the base regressor on `samples` points of one period
+/// (ratio of the largest to the smallest singular value; infinity if rank deficient).
+double excitation_condition_number(const model::RobotModel& model, const ExcitationTrajectory& trajectory,
+                                   int samples, model::FrictionColumns friction);
+
+/// A complete scenario file (YAML) that `twinwatch simulate` runs: robot `robot`, `cycles` periods
+/// of the trajectory (type fourier_series, see docs/scenarios.md). `comment` lines are prefixed
+/// with '#'.
+std::string excitation_scenario_yaml(const ExcitationTrajectory& trajectory, const std::string& robot, int cycles,
+                                     const std::string& comment);
+
+}  // namespace twinwatch::ident

@@ -1,0 +1,35 @@
+# excite -> simulate -> identify-torque -> validate-torque on a short run (fixtures keep the order)
+set(d ${PROJECT_BINARY_DIR}/cli-excite)
+file(MAKE_DIRECTORY ${d})
+add_test(NAME cli.excite_json COMMAND twinwatch excite ur3e -o ${d}/exc.yaml --harmonics 4 --base-frequency 0.25
+         --duration 8 --global-evals 200 --local-evals 200 --json)
+set_tests_properties(cli.excite_json PROPERTIES FIXTURES_SETUP excite_yaml PASS_REGULAR_EXPRESSION "\"cond_final\": [0-9]")
+add_test(NAME cli.excite_simulate COMMAND twinwatch simulate ${d}/exc.yaml -o ${d}/exc.csv)
+set_tests_properties(cli.excite_simulate PROPERTIES FIXTURES_REQUIRED excite_yaml FIXTURES_SETUP excite_rec
+                     PASS_REGULAR_EXPRESSION "excitation_ur3e: [0-9]+ samples")
+add_test(NAME cli.identify_torque COMMAND twinwatch identify-torque ${d}/exc.csv --robot ur3e --signal target_moment
+         -o ${d}/rb.json)
+set_tests_properties(cli.identify_torque PROPERTIES FIXTURES_REQUIRED excite_rec FIXTURES_SETUP excite_model
+                     PASS_REGULAR_EXPRESSION "J6 ")
+add_test(NAME cli.validate_torque COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e --json)
+set_tests_properties(cli.validate_torque PROPERTIES FIXTURES_REQUIRED excite_model
+                     PASS_REGULAR_EXPRESSION "\"published\": \\[")
+add_test(NAME cli.excite_bad_duration COMMAND twinwatch excite ur3e -o ${d}/x.yaml --duration 3.3)
+set_tests_properties(cli.excite_bad_duration PROPERTIES PASS_REGULAR_EXPRESSION "not a whole number of periods")
+add_test(NAME cli.identify_torque_no_torque COMMAND twinwatch identify-torque ${d}/exc.csv --robot ur3e -o ${d}/x.json)
+set_tests_properties(cli.identify_torque_no_torque PROPERTIES FIXTURES_REQUIRED excite_rec
+                     PASS_REGULAR_EXPRESSION "no actual_joint_torque_\\* columns")
+# real data (only where ../shared/data/real is present): the Panda log loads through its column map
+set(panda ${PROJECT_SOURCE_DIR}/../shared/data/real/franka_panda_gaz2019_excitation/panda_excitation_combined.csv)
+if(EXISTS ${panda})
+  add_test(NAME cli.identify_torque_panda COMMAND twinwatch identify-torque ${panda} --robot panda
+           --column-map ${PROJECT_SOURCE_DIR}/data/column_maps/franka_panda_gaz2019.csv --segment 0:0.65 -o ${d}/panda.json)
+  set_tests_properties(cli.identify_torque_panda PROPERTIES PASS_REGULAR_EXPRESSION "J7 ")
+endif()
+add_test(NAME cli.validate_torque_bad_table COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e
+         --friction-table ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv)
+set_tests_properties(cli.validate_torque_bad_table PROPERTIES FIXTURES_REQUIRED excite_model
+                     PASS_REGULAR_EXPRESSION "bad_friction_table.csv:4: field 'phi2': expected a number, got 'abc'")
+add_test(NAME cli.validate_torque_bad_segment COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --segment 0.7:0.2)
+set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRED excite_model
+                     PASS_REGULAR_EXPRESSION "--segment '0.7:0.2': expected 0 <= FROM < TO <= 1")

@@ -1,0 +1,258 @@
+#include "twinwatch/ident/excitation.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/scenario.hpp"
+#include "twinwatch/sim/trajectory.hpp"
+
+namespace twinwatch::ident {
+namespace {
+
+// end conditions are exact by construction; this bounds the round-off of sums of L terms
+constexpr double kEndTolerance = 1e-9;
+// dense-grid points per period used by the test (4x the design's own check grid)
+constexpr int kDenseSamples = 20000;
+// a peak between two dense-grid points of the design's check grid can exceed its value by
+// ~ (2 pi L / check_samples)^2 / 8 relative; 1e-4 covers L <= 20 with check_samples = 5000
+constexpr double kGridSlack = 1e-4;
+
+ExcitationOptions small_options(unsigned seed) {
+  ExcitationOptions o;
+  o.harmonics = 4;
+  o.base_frequency = 0.2;
+  o.seed = seed;
+  o.samples = 60;
+  o.global_evaluations = 300;
+  o.local_evaluations = 300;
+  return o;
+}
+
+struct Designed {
+  model::RobotModel model = model::load_robot("ur3e");
+  ExcitationOptions options = small_options(7);
+  ExcitationResult result = design_excitation(model, options);
+};
+
+const Designed& designed() {
+  static const Designed d;
+  return d;
+}
+
+TEST(Excitation, StartsAndEndsAtRestAtQ0) {
+  const auto& d = designed();
+  const ExcitationTrajectory& t = d.result.trajectory;
+  VectorJ q, qd, qdd;
+  for (double time : {0.0, t.period(), 3.0 * t.period()}) {
+    t.evaluate(time, q, qd, qdd);
+    for (int j = 0; j < d.model.n_dof(); ++j) {
+      EXPECT_NEAR(q[j], t.q0[j], kEndTolerance) << "joint " << j << " t " << time;
+      EXPECT_NEAR(qd[j], 0.0, kEndTolerance) << "joint " << j << " t " << time;
+      EXPECT_NEAR(qdd[j], 0.0, kEndTolerance) << "joint " << j << " t " << time;
+    }
+  }
+  // the trajectory actually moves (the projection did not scale a joint to nothing)
+  for (int j = 0; j < d.model.n_dof(); ++j) EXPECT_GT(d.result.qd_peak[j], 0.05 * d.result.qd_lim[j]) << "joint " << j;
+}
+
+TEST(Excitation, MatchesTheSimulatorsIndependentFourierEvaluator) {
+  const auto& d = designed();
+  const ExcitationTrajectory& t = d.result.trajectory;
+  sim::FourierCoefficients c{t.w_f, t.q0, t.a, t.b};
+  const auto traj = sim::make_fourier(c);
+  VectorJ q, qd, qdd, q2, qd2, qdd2;
+  for (int m = 0; m < 97; ++m) {
+    const double time = t.period() * m / 97.0;
+    t.evaluate(time, q, qd, qdd);
+    traj->evaluate(time, q2, qd2, qdd2);
+    EXPECT_THAT(std::vector<double>(q.begin(), q.end()), ::testing::Pointwise(::testing::DoubleNear(1e-12), std::vector<double>(q2.begin(), q2.end())));
+    EXPECT_THAT(std::vector<double>(qd.begin(), qd.end()), ::testing::Pointwise(::testing::DoubleNear(1e-12), std::vector<double>(qd2.begin(), qd2.end())));
+    EXPECT_THAT(std::vector<double>(qdd.begin(), qdd.end()), ::testing::Pointwise(::testing::DoubleNear(1e-12), std::vector<double>(qdd2.begin(), qdd2.end())));
+  }
+  // derivatives: central finite differences of q and qd
+  const double h = 1e-5;
+  for (double time : {0.37, 1.9, 4.1}) {
+    VectorJ qp, qdp, qddp, qm, qdm, qddm;
+    t.evaluate(time, q, qd, qdd);
+    t.evaluate(time + h, qp, qdp, qddp);
+    t.evaluate(time - h, qm, qdm, qddm);
+    for (int j = 0; j < d.model.n_dof(); ++j) {
+      EXPECT_NEAR((qp[j] - qm[j]) / (2 * h), qd[j], 1e-6);
+      EXPECT_NEAR((qdp[j] - qdm[j]) / (2 * h), qdd[j], 1e-5);
+    }
+  }
+}
+
+TEST(Excitation, RespectsPositionVelocityAndAccelerationLimitsOnADenseGrid) {
+  const auto& d = designed();
+  const ExcitationTrajectory& t = d.result.trajectory;
+  VectorJ q, qd, qdd;
+  for (int m = 0; m <= kDenseSamples; ++m) {
+    t.evaluate(t.period() * m / kDenseSamples, q, qd, qdd);
+    for (int j = 0; j < d.model.n_dof(); ++j) {
+      const auto& lim = d.model.joint(j).limits;
+      // the enforced (tightened) limits ...
+      const double span = d.result.q_hi[j] - d.result.q_lo[j];
+      ASSERT_GE(q[j], d.result.q_lo[j] - kGridSlack * span) << "joint " << j << " sample " << m;
+      ASSERT_LE(q[j], d.result.q_hi[j] + kGridSlack * span) << "joint " << j << " sample " << m;
+      ASSERT_LE(std::abs(qd[j]), d.result.qd_lim[j] * (1 + kGridSlack)) << "joint " << j << " sample " << m;
+      ASSERT_LE(std::abs(qdd[j]), d.result.qdd_lim[j] * (1 + kGridSlack)) << "joint " << j << " sample " << m;
+      // ... and the description's own limits, with the requested amplitude and default acceleration
+      ASSERT_GT(q[j], lim.q_min);
+      ASSERT_LT(q[j], lim.q_max);
+      ASSERT_LE(std::abs(q[j] - t.q0[j]), d.options.amplitude * (1 + kGridSlack));
+      ASSERT_LE(std::abs(qd[j]), lim.qd_max);
+      ASSERT_LE(std::abs(qdd[j]), d.options.default_qdd_max);  // UR files publish no qdd_max
+    }
+  }
+}
+
+TEST(Excitation, OptimisedConditionNumberIsLowerThanTheRandomStart) {
+  const auto& d = designed();
+  EXPECT_LT(d.result.cond_final, d.result.cond_start);
+  EXPECT_LE(d.result.cond_final, d.result.cond_global * (1 + 1e-9));
+  // the reported value is the SVD condition number of W built independently from sim's evaluator
+  const double c = excitation_condition_number(d.model, d.result.trajectory, d.options.samples, d.options.friction);
+  EXPECT_NEAR(c, d.result.cond_final, 1e-9 * c);
+  // a (rescaled) pure single-harmonic motion excites far worse: the design matters
+  ExcitationTrajectory one = d.result.trajectory;
+  one.a.setZero();
+  one.b.setZero();
+  one.a.col(1).setConstant(0.1);
+  one.a.col(0).setConstant(-0.1);
+  EXPECT_GT(excitation_condition_number(d.model, one, d.options.samples, d.options.friction), d.result.cond_final);
+}
+
+TEST(Excitation, PandaUsesItsPublishedAccelerationLimits) {
+  const model::RobotModel panda = model::load_robot("panda");
+  ExcitationOptions o = small_options(3);
+  o.global_evaluations = 60;
+  o.local_evaluations = 60;
+  const ExcitationResult r = design_excitation(panda, o);
+  const double qdd_max[7] = {15, 7.5, 10, 12.5, 15, 20, 20};  // Franka specifications
+  for (int j = 0; j < 7; ++j) {
+    EXPECT_DOUBLE_EQ(r.qdd_lim[j], o.limit_fraction * qdd_max[j]);
+    EXPECT_LE(r.qdd_peak[j], r.qdd_lim[j] * (1 + kGridSlack));
+    EXPECT_GT(r.q_min_seen[j], panda.joint(j).limits.q_min);
+    EXPECT_LT(r.q_max_seen[j], panda.joint(j).limits.q_max);
+  }
+}
+
+TEST(Excitation, EmittedScenarioLoadsAndRunsInTheSimulator) {
+  const auto& d = designed();
+  const std::string yaml = excitation_scenario_yaml(d.result.trajectory, "ur3e", 1, "test\nsecond line");
+  const sim::Scenario s = sim::parse_scenario(yaml, "excite.yaml");
+  EXPECT_EQ(s.trajectory_type, "fourier_series");
+  EXPECT_NEAR(s.options.duration, d.result.trajectory.period(), 1e-9);
+  // the scenario's trajectory is the designed one
+  VectorJ q, qd, qdd, q2, qd2, qdd2;
+  for (double time : {0.0, 1.3, 4.44}) {
+    d.result.trajectory.evaluate(time, q, qd, qdd);
+    s.trajectory->evaluate(time, q2, qd2, qdd2);
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_NEAR(q[j], q2[j], 1e-12);
+      EXPECT_NEAR(qdd[j], qdd2[j], 1e-9);
+    }
+  }
+  // and the virtual robot follows it
+  auto simulator = sim::make_simulator(s);
+  long rows = 0;
+  double worst = 0.0;
+  RobotSample last;
+  simulator->run([&](const RobotSample& smp) {
+    ++rows;
+    worst = std::max(worst, (smp.q - smp.target_q).cwiseAbs().maxCoeff());
+    last = smp;
+  });
+  EXPECT_GT(rows, static_cast<long>(0.99 * s.options.duration * s.options.rate));
+  EXPECT_LT(worst, 0.05) << "tracking error [rad]";
+  EXPECT_LT(last.target_qd.cwiseAbs().maxCoeff(), 0.02);  // the run ends (almost) at rest
+}
+
+TEST(ExcitationScenario, MalformedFourierSeriesNamesTheField) {
+  const std::string head = "robot: ur3e\ntrajectory:\n  type: fourier_series\n  base_frequency: 0.1\n  q0: [0, 0, 0, 0, 0, 0]\n";
+  try {
+    sim::parse_scenario(head + "  a: [[1], [1]]\n  b: [[1], [1], [1], [1], [1], [1]]\n", "x.yaml");
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("trajectory.a"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("expected 6 rows"));
+  }
+  try {
+    sim::parse_scenario(head + "  a: [[1], [1], [1], [1], [1], [1]]\n  b: [[1, 2], [1, 2], [1, 2], [1, 2], [1, 2], [1, 2]]\n",
+                        "x.yaml");
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("trajectory.b"));
+  }
+  try {
+    sim::parse_scenario("robot: ur3e\ntrajectory:\n  type: fourier_series\n  base_frequency: -1\n", "x.yaml");
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("base_frequency"));
+  }
+}
+
+void expect_invalid(const ExcitationOptions& o, int n, const std::string& what) {
+  try {
+    o.validate(n);
+    FAIL() << "expected InvalidArgument with '" << what << "'";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr(what));
+  }
+}
+
+TEST(ExcitationOptions, EachBadFieldIsNamed) {
+  ExcitationOptions o;
+  o.harmonics = 2;
+  expect_invalid(o, 6, "harmonics is 2");
+  o = {};
+  o.base_frequency = 0.0;
+  expect_invalid(o, 6, "base_frequency is 0");
+  o = {};
+  o.samples = 5;
+  expect_invalid(o, 6, "samples is 5");
+  o = {};
+  o.check_samples = 50;
+  expect_invalid(o, 6, "check_samples is 50");
+  o = {};
+  o.q0 = VectorJ::Zero(5);
+  expect_invalid(o, 6, "q0 has 5 values, expected 6");
+  o = {};
+  o.amplitude = -1;
+  expect_invalid(o, 6, "amplitude is -1");
+  o = {};
+  o.position_margin = -0.1;
+  expect_invalid(o, 6, "position_margin is -0.1");
+  o = {};
+  o.limit_fraction = 1.5;
+  expect_invalid(o, 6, "limit_fraction is 1.5");
+  o = {};
+  o.default_qdd_max = 0;
+  expect_invalid(o, 6, "default_qdd_max is 0");
+  o = {};
+  o.global_evaluations = -1;
+  expect_invalid(o, 6, "global_evaluations is -1");
+  o = {};
+  o.local_evaluations = -2;
+  expect_invalid(o, 6, "local_evaluations is -2");
+}
+
+TEST(ExcitationOptions, CentreOutsideTheLimitsIsRejected) {
+  const model::RobotModel panda = model::load_robot("panda");
+  ExcitationOptions o = small_options(1);
+  o.q0 = VectorJ::Zero(7);  // panda joint 4 range is [-3.07, -0.07]: 0 is outside
+  try {
+    design_excitation(panda, o);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("q0[3]"));
+  }
+}
+
+}  // namespace
+}  // namespace twinwatch::ident
