@@ -25,6 +25,11 @@ constexpr double kColumnUnused = 1e-9;
 // the Lasso folds are whole blocks of this length [s] (neighbouring samples are correlated, a
 // random split would leak them between training and test and pick too small a lambda)
 constexpr double kFoldBlock = 1.0;
+// random configurations that reveal the independent gravity columns of each joint, the seed of
+// their draw, and the relative pivot below which a column counts as dependent
+constexpr int kGravityProbes = 200;
+constexpr unsigned kGravitySeed = 7;
+constexpr double kGravityRank = 1e-9;
 
 std::string now_iso() {
   const std::time_t t = std::time(nullptr);
@@ -69,7 +74,7 @@ std::vector<GravitySample> paired_holds(const device::Recording& rec, const Sequ
   const double still = target ? kStillTarget : kStillMeasured;
   auto stationary = [&](size_t k) { return velocity_of(rec, rec.samples[k]).cwiseAbs().maxCoeff() <= still; };
   struct Hold {
-    VectorJ q, current, approach;
+    VectorJ q, qt, current, approach;  // measured and commanded (target) pose
   };
   std::vector<Hold> holds;
   // stationary segments of at least min_hold: mean q and current over their second half
@@ -86,13 +91,15 @@ std::vector<GravitySample> paired_holds(const device::Recording& rec, const Sequ
     if (len >= o.min_hold && k > 0) {
       Hold h;
       const size_t a = k + (e - k) / 2;
-      h.q = VectorJ::Zero(rec.n_dof);
+      h.q = h.qt = VectorJ::Zero(rec.n_dof);
       h.current = VectorJ::Zero(rec.n_dof);
       for (size_t m = a; m < e; ++m) {
         h.q += rec.samples[m].q;
+        h.qt += position_of(rec, rec.samples[m]);
         h.current += rec.samples[m].current;
       }
       h.q /= static_cast<double>(e - a);
+      h.qt /= static_cast<double>(e - a);
       h.current /= static_cast<double>(e - a);
       h.approach = VectorJ::Zero(rec.n_dof);
       const double t0 = rec.samples[k].timestamp;
@@ -102,11 +109,13 @@ std::vector<GravitySample> paired_holds(const device::Recording& rec, const Sequ
     k = e;
   }
   // consecutive holds at the same pose reached from opposite directions (Cao eq. 12-14):
-  // i_1 + i_2 = 2 G(phi) when qd is small and qdd = 0
+  // i_1 + i_2 = 2 G(phi) when qd is small and qdd = 0. The pose is compared on the commanded
+  // position when recorded: friction holds the measured one a little short of it on each side
+  // (about 1.5e-3 rad on the UR3e wrist), which the average cancels too
   std::vector<GravitySample> out;
   for (size_t i = 0; i + 1 < holds.size();) {
     const Hold &a = holds[i], &b = holds[i + 1];
-    if ((a.q - b.q).cwiseAbs().maxCoeff() < o.pose_tolerance && a.approach.dot(b.approach) < 0.0) {
+    if ((a.qt - b.qt).cwiseAbs().maxCoeff() < o.pose_tolerance && a.approach.dot(b.approach) < 0.0) {
       out.push_back({(a.q + b.q) / 2, (a.current + b.current) / 2});
       i += 2;
     } else {
@@ -189,7 +198,31 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
     gs.insert(gs.end(), s.begin(), s.end());
   }
   report.poses = static_cast<int>(gs.size());
-  seq.gravity_columns = model::compute_base_parameters(rm).independent;
+  // per joint, a minimal set of gravity columns: the independent columns of row j of
+  // Yg = Y(q, 0, 0) over random configurations of the robot description (column-pivoted QR);
+  // the full-dynamics base set would leave more unknowns than poses and fit noise
+  std::vector<std::vector<int>> joint_cols(static_cast<size_t>(n));
+  {
+    std::mt19937 rng(kGravitySeed);
+    std::uniform_real_distribution<double> U(-M_PI, M_PI);
+    std::vector<Eigen::MatrixXd> rows(static_cast<size_t>(n), Eigen::MatrixXd(kGravityProbes, 10 * n));
+    VectorJ q(n);
+    for (int r = 0; r < kGravityProbes; ++r) {
+      for (int j = 0; j < n; ++j) q[j] = U(rng);
+      twin.regress(q, zero, zero, Y, tau_p);
+      for (int j = 0; j < n; ++j) rows[static_cast<size_t>(j)].row(r) = Y.row(j).head(10 * n);
+    }
+    std::vector<int> all;
+    for (int j = 0; j < n; ++j) {
+      Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(rows[static_cast<size_t>(j)]);
+      qr.setThreshold(kGravityRank);
+      for (Eigen::Index k = 0; k < qr.rank(); ++k) joint_cols[static_cast<size_t>(j)].push_back(qr.colsPermutation().indices()(k));
+      all.insert(all.end(), joint_cols[static_cast<size_t>(j)].begin(), joint_cols[static_cast<size_t>(j)].end());
+    }
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    seq.gravity_columns = all;
+  }
   const int ng = static_cast<int>(seq.gravity_columns.size());
   Eigen::MatrixXd G(static_cast<long>(gs.size()) * n, ng);
   for (size_t s = 0; s < gs.size(); ++s) {
@@ -206,8 +239,14 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
       ij(static_cast<long>(s)) = gs[s].current[j];
     }
     std::vector<int> used;
-    for (int c = 0; c < ng; ++c)
-      if (Gj.col(c).cwiseAbs().maxCoeff() > kColumnUnused) used.push_back(c);
+    for (int c = 0; c < ng; ++c) {
+      const auto& jc = joint_cols[static_cast<size_t>(j)];
+      if (std::find(jc.begin(), jc.end(), seq.gravity_columns[static_cast<size_t>(c)]) != jc.end() &&
+          Gj.col(c).cwiseAbs().maxCoeff() > kColumnUnused)
+        used.push_back(c);
+    }
+    if (static_cast<long>(used.size()) > Gj.rows())
+      report.notes.push_back(fmt::format("joint {}: {} gravity columns but only {} quasi-static poses: min-norm fit", j + 1, used.size(), Gj.rows()));
     Eigen::VectorXd th = Eigen::VectorXd::Zero(ng);
     if (!used.empty()) {
       Eigen::MatrixXd A(Gj.rows(), static_cast<long>(used.size()));
@@ -221,8 +260,6 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
     seq.joints[static_cast<size_t>(j)].gravity = th;
     report.gravity_rmse[static_cast<size_t>(j)] = std::sqrt((Gj * th - ij).squaredNorm() / static_cast<double>(gs.size()));
   }
-  if (gs.size() < static_cast<size_t>(ng))
-    report.notes.push_back(fmt::format("only {} quasi-static poses for {} gravity columns: the gravity fit is min-norm", gs.size(), ng));
   if (progress) progress(0.05);
 
   // 2. friction from mirrored sine samples, per joint: (i1 - i2) / 2 = Fc sign(qd) + Fv qd

@@ -183,8 +183,12 @@ struct Sequential : ::testing::Test {
     exc = new device::Recording(simulate("validation/excitation_train.yaml", 40));
     fig = new device::Recording(simulate("validation/figure_eight_fast_payload.yaml", 12));
     SequentialOptions o;
-    o.nlambda = 40;  // keeps the test short; the CLI uses 100
-    twin = new TwinModel(identify_sequential("ur3e", {qs}, {sine}, {{exc, {}}}, o, report));
+    o.nlambda = 40;  // keeps the test short; the CLI uses 100 lambdas, 10 folds, every 2nd sample
+    o.nfolds = 5;
+    o.decimate = 4;
+    // the Lasso needs varied states: one periodic excitation alone lets it fit proxies that
+    // extrapolate badly (docs/validation.md), so the sine and quasi-static runs join it
+    twin = new TwinModel(identify_sequential("ur3e", {qs}, {sine}, {{exc, {}}, {sine, {}}, {qs, {}}}, o, report));
   }
   static void TearDownTestSuite() {
     delete qs;
@@ -230,7 +234,8 @@ TEST_F(Sequential, PredictsAnUntrainedTrajectory) {
   }
   for (int j : {0, 3, 4, 5}) {
     const auto m = signal::fit_metrics(meas[static_cast<size_t>(j)], pred[static_cast<size_t>(j)]);
-    EXPECT_LT(m.rmse, 0.08) << "joint " << j + 1;
+    // the physics twin reaches 0.018-0.036 A on these joints (docs/validation.md)
+    EXPECT_LT(m.rmse, 0.06) << "joint " << j + 1;
   }
 }
 

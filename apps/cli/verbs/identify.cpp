@@ -59,6 +59,7 @@ struct IdentifyOptions {
   std::vector<std::string> quasi_static, sine;
   std::vector<int> lasso_joints{2, 3};
   double prune = 1e-3;
+  bool lasso_1se = false;
 };
 
 int run_identify_sequential(const IdentifyOptions& o);
@@ -149,6 +150,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   so.library.config_joints.clear();
   for (int j : o.lasso_joints) so.library.config_joints.push_back(j - 1);
   so.prune_ratio = o.prune;
+  so.use_1se = o.lasso_1se;
   so.decimate = std::max(o.decimate, 2);
   ident::SequentialReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
@@ -247,12 +249,18 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--method", o->method,
                   "physics (rigid body + friction + drive, current domain) | sequential (Cao: gravity from --quasi-static, "
                   "friction from --sine, Lasso over A ⊗ B on RECORDINGS with 10-fold CV)")->capture_default_str();
-  sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14)")
+  sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14); repeatable")
+      ->expected(1)
+      ->allow_extra_args(false)
       ->check(CLI::ExistingFile);
-  sub->add_option("--sine", o->sine, "sequential: recording of a sine with the same frequency and phase on every joint (Cao eq. 15)")
+  sub->add_option("--sine", o->sine, "sequential: recording of a sine with the same frequency and phase on every joint (Cao eq. 15); repeatable")
+      ->expected(1)
+      ->allow_extra_args(false)
       ->check(CLI::ExistingFile);
   sub->add_option("--lasso-joints", o->lasso_joints, "sequential: joints (1-based) whose sin/cos up to 2q form B of the library")
+      ->delimiter(',')
       ->capture_default_str();
+  sub->add_flag("--lasso-1se", o->lasso_1se, "sequential: choose lambda_1se (sparser) instead of lambda_min");
   sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "

@@ -24,7 +24,7 @@ namespace twinwatch::ident {
 struct SequentialOptions {
   CandidateLibrary library{{}, {1, 2}, 2};  ///< A over all joints, B over J2, J3, m = 2
   double min_hold = 0.3;        ///< [s] shortest stationary segment that counts as a quasi-static pose
-  double pose_tolerance = 2e-3; ///< [rad] two holds are the same pose when max |q_a - q_b| is below this
+  double pose_tolerance = 5e-3; ///< [rad] two holds are the same pose when max |q_a - q_b| (commanded q when recorded) is below this
   double sine_min_speed = 0.02; ///< [rad/s] sine pairs slower than this are left out (sign of qd unsure)
   double sine_q_tolerance = 2e-3;   ///< [rad] mirrored samples must agree in q to this
   double sine_qd_tolerance = 0.02;  ///< [rad/s] ... and have opposite qd to this (+2 % of |qd|)
