@@ -1,6 +1,6 @@
 #!/usr/bin/env Rscript
 # cv.glmnet on the design written by `lasso_benchmark --write-data=DIR` (bench/ident/lasso_peers.sh).
-# Usage: Rscript lasso_glmnet.R DIR REPEATS  -> prints "seconds <median>" and writes DIR/glmnet.txt
+# Usage: Rscript lasso_glmnet.R DIR REPEATS  -> prints "wall <median s> cpu <median s>" and writes DIR/glmnet.txt
 suppressMessages(library(glmnet))
 args <- commandArgs(trailingOnly = TRUE)
 dir <- args[1]
@@ -11,10 +11,13 @@ x <- matrix(readBin(file.path(dir, "X.f64"), "double", n * p), n, p)  # column-m
 y <- readBin(file.path(dir, "y.f64"), "double", n)
 foldid <- readBin(file.path(dir, "foldid.i32"), "integer", n) + 1
 times <- numeric(reps)
+cpu <- numeric(reps)
 for (r in seq_len(reps)) {
-  t0 <- proc.time()[["elapsed"]]
+  t0 <- proc.time()
   cv <- cv.glmnet(x, y, foldid = foldid, nlambda = 100, standardize = TRUE, type.measure = "mse")
-  times[r] <- proc.time()[["elapsed"]] - t0
+  t1 <- proc.time()
+  times[r] <- t1[["elapsed"]] - t0[["elapsed"]]
+  cpu[r] <- (t1[["user.self"]] + t1[["sys.self"]]) - (t0[["user.self"]] + t0[["sys.self"]])
 }
 b <- as.numeric(coef(cv, s = "lambda.min"))
 out <- file(file.path(dir, "glmnet.txt"), "w")
@@ -23,4 +26,4 @@ writeLines(sprintf("lambda_1se %.17g", cv$lambda.1se), out)
 writeLines(sprintf("nlambda %d", length(cv$lambda)), out)
 writeLines(paste("coef", paste(sprintf("%.17g", b), collapse = " ")), out)
 close(out)
-cat(sprintf("seconds %.4f\n", median(times)))
+cat(sprintf("wall %.4f cpu %.4f\n", median(times), median(cpu)))

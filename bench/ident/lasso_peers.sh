@@ -35,8 +35,8 @@ PY
 echo "== R cv.glmnet(x, y, foldid, nlambda = 100, standardize = TRUE), thresh 1e-7 (median of $REPS) =="
 Rscript bench/ident/lasso_glmnet.R "$D" "$REPS" | tee "$D/glmnet.time"
 echo "== scikit-learn LassoCV(cv = same folds, n_alphas = 100, eps = 1e-4) on standardised X (median of $REPS) =="
-/usr/bin/python3 bench/ident/lasso_sklearn.py "$D" "$REPS" 1e-4 | sed 's/^/  tol 1e-4 (default): /' | tee "$D/sk4.time"
-/usr/bin/python3 bench/ident/lasso_sklearn.py "$D" "$REPS" 1e-7 | sed 's/^/  tol 1e-7: /' | tee "$D/sk7.time"
+/usr/bin/python3 bench/ident/lasso_sklearn.py "$D" "$REPS" 1e-4 | tee "$D/sk4.time"
+/usr/bin/python3 bench/ident/lasso_sklearn.py "$D" "$REPS" 1e-7 | tee "$D/sk7.time"
 python3 - "$D" <<'PY'
 import json, sys
 d = sys.argv[1]
@@ -46,27 +46,27 @@ def sel(name):
         k, *v = line.split()
         out[k] = [float(x) for x in v]
     return out
-ours_t = {b["name"]: b["real_time"] / 1e3 for b in json.load(open(f"{d}/ours.json"))["benchmarks"]}
-t_ours = ours_t["BM_CvLasso_Covariance"]
-t_glm = float(open(f"{d}/glmnet.time").read().split()[-1])
-t_sk4 = float(open(f"{d}/sk4.time").read().split()[-1])
-t_sk7 = float(open(f"{d}/sk7.time").read().split()[-1])
-print("\n| method | time [s] | ours / peer |")
-print("|---|---|---|")
-print(f"| ours, covariance updates | {t_ours:.3f} | 1 |")
-print(f"| ours, naive updates (baseline) | {ours_t['BM_CvLasso_NaiveBaseline']/1:.3f} | {t_ours/ours_t['BM_CvLasso_NaiveBaseline']:.3f} |")
-print(f"| R cv.glmnet 4.1 | {t_glm:.3f} | {t_ours/t_glm:.3f} |")
-print(f"| scikit-learn LassoCV, tol 1e-4 | {t_sk4:.3f} | {t_ours/t_sk4:.3f} |")
-print(f"| scikit-learn LassoCV, tol 1e-7 | {t_sk7:.3f} | {t_ours/t_sk7:.3f} |")
+def times(name):
+    w = open(f"{d}/{name}").read().split()
+    return float(w[w.index("wall") + 1]), float(w[w.index("cpu") + 1])
+ours = {b["name"].split("/")[0]: (b["real_time"] / 1e3, b["cpu_time"] / 1e3) for b in json.load(open(f"{d}/ours.json"))["benchmarks"]}
+rows = [("ours, covariance updates", ours["BM_CvLasso_Covariance"]),
+        ("ours, naive updates (baseline)", ours["BM_CvLasso_NaiveBaseline"]),
+        ("R cv.glmnet", times("glmnet.time")),
+        ("scikit-learn LassoCV, tol 1e-4 (default)", times("sk4.time")),
+        ("scikit-learn LassoCV, tol 1e-7", times("sk7.time"))]
+w0, c0 = rows[0][1]
+print("\n| method | wall [s] | CPU [s] | ours / method, CPU | ours / method, wall |")
+print("|---|---|---|---|---|")
+for name, (w, c) in rows:
+    print(f"| {name} | {w:.3f} | {c:.3f} | {c0 / c:.3f} | {w0 / w:.3f} |")
 o, g = sel("ours.txt"), sel("glmnet.txt")
-print("\nselection agreement (coefficients incl. intercept at lambda_min, max abs difference / max abs coefficient):")
-import math
+print("\nselection agreement (coefficients incl. intercept at lambda_min; max abs difference / max abs coefficient):")
 for name, s in [("glmnet", g), ("sklearn tol 1e-4", sel("sklearn_1e-4.txt")), ("sklearn tol 1e-7", sel("sklearn_1e-7.txt"))]:
     dc = max(abs(a - b) for a, b in zip(o["coef"], s["coef"])) / max(abs(a) for a in o["coef"][1:])
     nz_o = sum(1 for a in o["coef"][1:] if a != 0.0)
     nz_s = sum(1 for a in s["coef"][1:] if a != 0.0)
-    print(f"  vs {name:<17} lambda_min ours {o['lambda_min'][0]:.6g} / {s['lambda_min'][0]:.6g} (ratio {o['lambda_min'][0]/s['lambda_min'][0]:.6f}),"
-          f" nonzero {nz_o} / {nz_s}, coef rel diff {dc:.2e}")
-if "lambda_1se" in g:
-    print(f"  lambda_1se ours {o['lambda_1se'][0]:.6g}, glmnet {g['lambda_1se'][0]:.6g}")
+    print(f"  vs {name:<17} lambda_min {o['lambda_min'][0]:.6g} / {s['lambda_min'][0]:.6g} (ratio {o['lambda_min'][0]/s['lambda_min'][0]:.6f}), "
+          f"path length {int(o['nlambda'][0])} / {int(s['nlambda'][0])}, nonzero {nz_o} / {nz_s}, coef rel diff {dc:.2e}")
+print(f"  lambda_1se ours {o['lambda_1se'][0]:.6g}, glmnet {g['lambda_1se'][0]:.6g}")
 PY

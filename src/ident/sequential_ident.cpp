@@ -297,13 +297,14 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
   bool any_payload = false;
   for (const auto& r : general) any_payload |= r.payload.mass > 0.0;
   const int pc = o.library.size(n);
-  const int p = pc + (any_payload ? n : 0);
+  const int p = pc + (any_payload ? 1 : 0);
   long N = 0;
   for (const auto& r : general) N += (static_cast<long>(r.recording->samples.size()) + o.decimate - 1) / o.decimate;
   if (N < 10L * o.nfolds)
     throw InvalidArgument(fmt::format("sequential identification: {} samples in the general recordings, expected at least {}", N, 10 * o.nfolds));
   Eigen::MatrixXd X(N, p);
-  Eigen::MatrixXd Yr(N, n), I(N, n), Base(N, n);
+  Eigen::MatrixXd Yr(N, n), I(N, n), Base(N, n), TauP;
+  if (any_payload) TauP.setZero(N, n);
   std::vector<long> block(static_cast<size_t>(N));
   Eigen::VectorXd grow(pc);
   long row = 0, block_base = 0;
@@ -328,7 +329,7 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
       if (any_payload) {
         twin.set_payload(r.payload);
         twin.regress(s.q, s.qd, qdd[k], Y, tau_p);
-        X.row(row).tail(n) = tau_p.transpose();
+        TauP.row(row) = tau_p.transpose();
       }
       for (int j = 0; j < n; ++j) {
         I(row, j) = s.current[j];
@@ -355,11 +356,21 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
   LassoOptions lo;
   lo.nlambda = o.nlambda;
   lo.algorithm = LassoAlgorithm::Covariance;  // p in the hundreds, n in the tens of thousands
+  std::vector<LassoCvResult> fits;
   if (any_payload) {
+    // joint j's own payload torque as one unpenalised column (its coefficient is 1 / gain_j):
+    // the design differs per joint, so one Lasso per joint (the payload torques of all joints
+    // together are too collinear along one payload run to be told apart)
     lo.penalty_factor = Eigen::VectorXd::Ones(p);
-    lo.penalty_factor.tail(n).setZero();
+    lo.penalty_factor(pc) = 0.0;
+    for (int j = 0; j < n; ++j) {
+      X.col(pc) = TauP.col(j);
+      fits.push_back(cv_lasso(X, Yr.col(j), lo, cv));
+      if (progress) progress(0.3 + 0.65 * (j + 1) / n);
+    }
+  } else {
+    fits = cv_lasso_multi(X, Yr, lo, cv);
   }
-  const std::vector<LassoCvResult> fits = cv_lasso_multi(X, Yr, lo, cv);
   if (progress) progress(0.95);
 
   report.lasso_samples = N;
@@ -374,12 +385,16 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
     m.intercept = f.a0;
     for (int k = 0; k < pc; ++k)
       if (f.beta(k) != 0.0) m.lasso_index.push_back(k), m.lasso_value.push_back(f.beta(k));
-    if (any_payload) m.payload = f.beta.tail(n);
+    if (any_payload) {
+      m.payload = Eigen::VectorXd::Zero(n);
+      m.payload(j) = f.beta(pc);
+    }
     const int pick = o.use_1se ? f.index_1se : f.index_min;
     m.lambda = f.path.lambda(pick);
     m.cv_rmse = std::sqrt(f.cvm(pick));
     if (!f.path.converged) report.notes.push_back(fmt::format("joint {}: {}", j + 1, f.path.message));
     // full-model fit on the general recordings
+    if (any_payload) X.col(pc) = TauP.col(j);
     const Eigen::VectorXd pred = Base.col(j) + f.predict(X);
     const double sse = (pred - I.col(j)).squaredNorm();
     const double sst = (I.col(j).array() - I.col(j).mean()).square().sum();

@@ -5,7 +5,7 @@
 ///   i_j = sum_c Yg_jc(q) theta_jc                         gravity   (eq. 11, Yg = Y(q, 0, 0))
 ///       + Fc_j sign(qd_j) + Fv_j qd_j                     friction  (eq. 15, Coulomb + viscous)
 ///       + a0_j + sum_k p_jk g_k(q, qd, qdd)               remaining inertial/Coriolis (eq. 17-20)
-///       + sum_l h_jl tau_payload_l(q, qd, qdd)            known payload (only when trained with one)
+///       + h_j tau_payload_j(q, qd, qdd)                   known payload (only when trained with one)
 /// with the candidates g = A ⊗ B (eq. 17), A = [qdd_i ; qd_i qd_k (i <= k)] over the motion
 /// joints, B = w(q_c1) ⊗ w(q_c2) ⊗ ..., w(q) = [1, sin q, cos q, ..., sin m q, cos m q] over the
 /// configuration joints (m = 2, Cao Appendix 1). Every coefficient is per joint and in amperes, so
@@ -43,7 +43,7 @@ struct SequentialJoint {
   double intercept = 0.0;            ///< a0_j [A]
   std::vector<int> lasso_index;      ///< nonzero candidates of the remaining-torque Lasso
   std::vector<double> lasso_value;   ///< their coefficients p_jk
-  Eigen::VectorXd payload;           ///< h_jl [A/(N·m)] per joint l (empty: no payload term)
+  Eigen::VectorXd payload;           ///< h_jl [A/(N·m)] per joint l, identified: l = j only (empty: no payload term)
   double lambda = 0.0;               ///< chosen Lasso lambda
   double cv_rmse = 0.0;              ///< 10-fold CV RMSE of the remaining-current Lasso at lambda [A]
   double rmse = 0.0, r2 = 0.0;       ///< full-model fit on the training recordings [A]
