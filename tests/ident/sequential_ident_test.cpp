@@ -176,36 +176,35 @@ device::Recording simulate(const std::string& file, double duration) {
   return rec;
 }
 
+// recordings are simulated once per process; the identification runs in one test (ctest runs
+// each test in its own process, so splitting it would repeat the Lasso for every check)
 struct Sequential : ::testing::Test {
   static void SetUpTestSuite() {
     qs = new device::Recording(simulate("validation/quasi_static_train.yaml", 16 * 7.6));  // the first 16 poses
     sine = new device::Recording(simulate("validation/sine_train.yaml", 20));
     exc = new device::Recording(simulate("validation/excitation_train.yaml", 40));
-    fig = new device::Recording(simulate("validation/figure_eight_fast_payload.yaml", 12));
-    SequentialOptions o;
-    o.nlambda = 40;  // keeps the test short; the CLI uses 100 lambdas, 10 folds, every 2nd sample
-    o.nfolds = 5;
-    o.decimate = 4;
-    // the Lasso needs varied states: one periodic excitation alone lets it fit proxies that
-    // extrapolate badly (docs/validation.md), so the sine and quasi-static runs join it
-    twin = new TwinModel(identify_sequential("ur3e", {qs}, {sine}, {{exc, {}}, {sine, {}}, {qs, {}}}, o, report));
   }
   static void TearDownTestSuite() {
     delete qs;
     delete sine;
     delete exc;
-    delete fig;
-    delete twin;
   }
-  static device::Recording *qs, *sine, *exc, *fig;
-  static TwinModel* twin;
-  static SequentialReport report;
+  static device::Recording *qs, *sine, *exc;
 };
-device::Recording *Sequential::qs = nullptr, *Sequential::sine = nullptr, *Sequential::exc = nullptr, *Sequential::fig = nullptr;
-TwinModel* Sequential::twin = nullptr;
-SequentialReport Sequential::report;
+device::Recording *Sequential::qs = nullptr, *Sequential::sine = nullptr, *Sequential::exc = nullptr;
 
-TEST_F(Sequential, EveryStepFindsItsData) {
+TEST_F(Sequential, IdentifiesFromRecordingsAndPredictsAnUntrainedTrajectory) {
+  const device::Recording fig = simulate("validation/figure_eight_fast_payload.yaml", 12);
+  SequentialOptions o;
+  o.nlambda = 40;  // keeps the test short; the CLI uses 100 lambdas, 10 folds, every 2nd sample
+  o.nfolds = 5;
+  o.decimate = 4;
+  SequentialReport report;
+  // the Lasso needs varied states: one periodic excitation alone lets it fit proxies that
+  // extrapolate badly (docs/validation.md), so the sine and quasi-static runs join it
+  const TwinModel twin = identify_sequential("ur3e", {qs}, {sine}, {{exc, {}}, {sine, {}}, {qs, {}}}, o, report);
+
+  // every step finds its data
   EXPECT_EQ(report.poses, 16);
   for (int j = 0; j < 6; ++j) {
     EXPECT_GT(report.friction_pairs[static_cast<size_t>(j)], 1000) << "joint " << j;
@@ -214,22 +213,20 @@ TEST_F(Sequential, EveryStepFindsItsData) {
     EXPECT_GT(report.nonzero[static_cast<size_t>(j)], 0) << "joint " << j;
     EXPECT_LT(report.nonzero[static_cast<size_t>(j)], report.candidates) << "joint " << j;
   }
-  ASSERT_TRUE(twin->sequential.has_value());
-  EXPECT_EQ(twin->method, "sequential");
+  ASSERT_TRUE(twin.sequential.has_value());
+  EXPECT_EQ(twin.method, "sequential");
   // friction comes out positive (the simulator's truth has Coulomb > 0 on every joint)
-  for (const auto& jm : twin->sequential->joints) EXPECT_GT(jm.coulomb, 0.0);
-}
+  for (const auto& jm : twin.sequential->joints) EXPECT_GT(jm.coulomb, 0.0);
 
-TEST_F(Sequential, PredictsAnUntrainedTrajectory) {
-  // the figure-eight carries 0.5 kg that the training runs did not: leave the loaded shoulder and
-  // elbow out; the other joints must follow it
-  const auto qdd = joint_accelerations(*fig);
+  // the untrained figure-eight carries 0.5 kg that the training runs did not: leave the loaded
+  // shoulder and elbow out; the other joints must follow it
+  const auto qdd = joint_accelerations(fig);
   std::vector<std::vector<double>> meas(6), pred(6);
   VectorJ i;
   const VectorJ nan = VectorJ::Constant(6, std::nan(""));
-  for (size_t k = 0; k < fig->samples.size(); ++k) {
-    const RobotSample& s = fig->samples[k];
-    twin->predict_current(s.q, s.qd, qdd[k], nan, i);
+  for (size_t k = 0; k < fig.samples.size(); ++k) {
+    const RobotSample& s = fig.samples[k];
+    twin.predict_current(s.q, s.qd, qdd[k], nan, i);
     for (int j = 0; j < 6; ++j) meas[static_cast<size_t>(j)].push_back(s.current[j]), pred[static_cast<size_t>(j)].push_back(i[j]);
   }
   for (int j : {0, 3, 4, 5}) {
@@ -237,23 +234,20 @@ TEST_F(Sequential, PredictsAnUntrainedTrajectory) {
     // the physics twin reaches 0.018-0.036 A on these joints (docs/validation.md)
     EXPECT_LT(m.rmse, 0.06) << "joint " << j + 1;
   }
-}
 
-TEST_F(Sequential, TwinFileRoundTripsThePrediction) {
-  const TwinModel back = TwinModel::from_json(twin->to_json(), "mem");
+  // the twin file round-trips the prediction
+  const TwinModel back = TwinModel::from_json(twin.to_json(), "mem");
   ASSERT_TRUE(back.sequential.has_value());
   VectorJ a, b;
-  const VectorJ nan = VectorJ::Constant(6, std::nan(""));
   for (size_t k = 0; k < exc->samples.size(); k += 997) {
     const RobotSample& s = exc->samples[k];
-    twin->predict_current(s.q, s.qd, s.target_qdd, nan, a);
+    twin.predict_current(s.q, s.qd, s.target_qdd, nan, a);
     back.predict_current(s.q, s.qd, s.target_qdd, nan, b);
     EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-12);
   }
-}
 
-TEST_F(Sequential, TwinFileErrorsNameTheField) {
-  std::string text = twin->to_json();
+  // and a bad twin file names the field
+  std::string text = twin.to_json();
   const auto pos = text.find("\"lasso_index\": [");
   ASSERT_NE(pos, std::string::npos);
   text.insert(pos + 16, "99999, ");
