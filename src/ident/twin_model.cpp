@@ -29,6 +29,95 @@ Eigen::VectorXd numbers(const nlohmann::json& a, const std::string& origin, cons
   }
   return v;
 }
+
+// the optional "sequential" block (Cao's sequential model, sequential_model.hpp)
+nlohmann::json sequential_to_json(const SequentialModel& m, int n) {
+  nlohmann::json s;
+  s["library"] = {{"motion_joints", m.library.motion_joints},
+                  {"config_joints", m.library.config_joints},
+                  {"harmonics", m.library.harmonics},
+                  {"candidates", m.library.size(n)}};
+  s["gravity_columns"] = m.gravity_columns;
+  s["recordings"] = {{"quasi_static", m.quasi_static}, {"sine", m.sine}, {"general", m.general}};
+  for (const auto& jm : m.joints) {
+    nlohmann::json e;
+    e["gravity"] = numbers(jm.gravity);
+    e["coulomb"] = jm.coulomb;
+    e["viscous"] = jm.viscous;
+    e["intercept"] = jm.intercept;
+    e["lasso_index"] = jm.lasso_index;
+    e["lasso_value"] = jm.lasso_value;
+    std::vector<std::string> names;
+    for (int k : jm.lasso_index) names.push_back(m.library.name(n, k));
+    e["lasso_terms"] = names;
+    if (jm.payload.size() > 0) e["payload"] = numbers(jm.payload);
+    e["lambda"] = jm.lambda;
+    e["cv_rmse"] = jm.cv_rmse;
+    e["train_rmse"] = jm.rmse;
+    e["train_r2"] = jm.r2;
+    s["joints"].push_back(e);
+  }
+  return s;
+}
+
+SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::string& origin) {
+  auto need = [&](const nlohmann::json& o, const char* key, const std::string& path) -> const nlohmann::json& {
+    if (!o.contains(key)) throw ParseError(origin, 0, path + key, "missing required field");
+    return o.at(key);
+  };
+  SequentialModel m;
+  const auto& lib = need(s, "library", "sequential.");
+  m.library.motion_joints = lib.value("motion_joints", std::vector<int>{});
+  m.library.config_joints = need(lib, "config_joints", "sequential.library.").get<std::vector<int>>();
+  m.library.harmonics = need(lib, "harmonics", "sequential.library.").get<int>();
+  try {
+    m.library.validate(n);
+  } catch (const InvalidArgument& e) {
+    throw ParseError(origin, 0, "sequential.library", e.what());
+  }
+  const int p = m.library.size(n);
+  m.gravity_columns = need(s, "gravity_columns", "sequential.").get<std::vector<int>>();
+  for (int c : m.gravity_columns)
+    if (c < 0 || c >= 10 * n) throw ParseError(origin, 0, "sequential.gravity_columns", fmt::format("column {} out of range 0..{}", c, 10 * n - 1));
+  if (s.contains("recordings")) {
+    m.quasi_static = s["recordings"].value("quasi_static", std::vector<std::string>{});
+    m.sine = s["recordings"].value("sine", std::vector<std::string>{});
+    m.general = s["recordings"].value("general", std::vector<std::string>{});
+  }
+  const auto& js = need(s, "joints", "sequential.");
+  if (!js.is_array() || static_cast<int>(js.size()) != n)
+    throw ParseError(origin, 0, "sequential.joints", fmt::format("expected {} joints, got {}", n, js.size()));
+  for (size_t k = 0; k < js.size(); ++k) {
+    const std::string f = fmt::format("sequential.joints[{}].", k);
+    SequentialJoint jm;
+    jm.gravity = numbers(need(js[k], "gravity", f), origin, f + "gravity");
+    if (jm.gravity.size() != static_cast<Eigen::Index>(m.gravity_columns.size()))
+      throw ParseError(origin, 0, f + "gravity", fmt::format("expected {} values (one per gravity column), got {}", m.gravity_columns.size(), jm.gravity.size()));
+    jm.coulomb = need(js[k], "coulomb", f).get<double>();
+    jm.viscous = need(js[k], "viscous", f).get<double>();
+    jm.intercept = need(js[k], "intercept", f).get<double>();
+    jm.lasso_index = need(js[k], "lasso_index", f).get<std::vector<int>>();
+    jm.lasso_value = need(js[k], "lasso_value", f).get<std::vector<double>>();
+    if (jm.lasso_index.size() != jm.lasso_value.size())
+      throw ParseError(origin, 0, f + "lasso_value", fmt::format("expected {} values (one per lasso_index), got {}", jm.lasso_index.size(), jm.lasso_value.size()));
+    for (int i : jm.lasso_index)
+      if (i < 0 || i >= p) throw ParseError(origin, 0, f + "lasso_index", fmt::format("candidate {} out of range 0..{}", i, p - 1));
+    if (js[k].contains("payload")) {
+      jm.payload = numbers(js[k]["payload"], origin, f + "payload");
+      if (jm.payload.size() != n) throw ParseError(origin, 0, f + "payload", fmt::format("expected {} values, got {}", n, jm.payload.size()));
+    }
+    if (!jm.gravity.allFinite() || !jm.payload.allFinite()) throw ParseError(origin, 0, f + "gravity", "values must be finite numbers");
+    jm.lambda = js[k].value("lambda", 0.0);
+    jm.cv_rmse = js[k].value("cv_rmse", 0.0);
+    jm.rmse = js[k].value("train_rmse", 0.0);
+    jm.r2 = js[k].value("train_r2", 0.0);
+    m.joints.push_back(std::move(jm));
+  }
+  for (size_t k = 1; k < m.joints.size(); ++k)
+    if (m.joints[k].payload.size() != m.joints[0].payload.size())
+      throw ParseError(origin, 0, fmt::format("sequential.joints[{}].payload", k), "present on some joints only");
+  return m;
+}
 }  // namespace
 
 TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
@@ -78,8 +167,22 @@ void TwinModel::sync_fitted() const {
   fitted_payload_ = payload_;
 }
 
+void TwinModel::predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque,
+                                   VectorJ& current) const {
+  // payload torque first (it uses Y_), then the gravity regressor Yg = Y(q, 0, 0) into Y_
+  const int n = robot_->n_dof();
+  VectorJ tau_p = VectorJ::Zero(n);
+  if (payload_.mass > 0.0 && sequential->has_payload()) regress(q, qd, qdd, Y_, tau_p);
+  const VectorJ zero = VectorJ::Zero(n);
+  model::regressor(*robot_, *data_, q, zero, zero, Y_);
+  sequential->predict(q, qd, qdd, Y_, tau_p, current);
+  torque.resize(n);
+  for (int j = 0; j < n; ++j) torque[j] = current[j] * joints[static_cast<size_t>(j)].gain;
+}
+
 void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                         VectorJ& current) const {
+  if (sequential) return predict_sequential(q, qd, qdd, torque, current);
   sync_fitted();
   const VectorJ& tau_rb = model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
   const int n = robot_->n_dof();
@@ -126,6 +229,7 @@ std::string TwinModel::to_json() const {
     e["train_r2"] = m.r2;
     j["joints"].push_back(e);
   }
+  if (sequential) j["sequential"] = sequential_to_json(*sequential, n_dof());
   return j.dump(1);
 }
 
@@ -175,6 +279,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       m.r2 = js[k].value("train_r2", 0.0);
       t.joints.push_back(m);
     }
+    if (j.contains("sequential")) t.sequential = sequential_from_json(j["sequential"], t.n_dof(), origin);
     if (j.contains("payload")) {
       model::RigidBodyInertia p;
       p.mass = j["payload"].value("mass", 0.0);

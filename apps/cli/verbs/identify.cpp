@@ -10,6 +10,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/ident/sequential_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "verb_registry.hpp"
@@ -54,9 +55,17 @@ struct IdentifyOptions {
   double reversal_screen = 0.0;
   int decimate = 1;
   bool quiet = false;
+  // --method sequential (Cao): the recordings of the gravity and friction steps, the library
+  std::vector<std::string> quasi_static, sine;
+  std::vector<int> lasso_joints{2, 3};
+  double prune = 1e-3;
+  bool lasso_1se = false;
 };
 
+int run_identify_sequential(const IdentifyOptions& o);
+
 int run_identify(const IdentifyOptions& o) {
+  if (o.method == "sequential") return run_identify_sequential(o);
   if (o.method != "physics")
     throw InvalidArgument(fmt::format("--method {}: only 'physics' is implemented in this version (sequential, mlp and "
                                       "hybrid are not available yet)", o.method));
@@ -98,6 +107,71 @@ int run_identify(const IdentifyOptions& o) {
       const auto& m = twin.joints[static_cast<size_t>(j)];
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10.3f} {:>12}\n", j + 1, report.samples_used[static_cast<size_t>(j)], m.rmse, m.r2,
                  m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
+    }
+    for (const auto& note : report.notes) fmt::print("note: {}\n", note);
+  }
+  return 0;
+}
+
+// Cao's sequential identification: gravity (--quasi-static), friction (--sine), Lasso (RECORDINGS)
+int run_identify_sequential(const IdentifyOptions& o) {
+  if (o.quasi_static.empty())
+    throw InvalidArgument("--method sequential needs --quasi-static FILE: a recording of poses reached from both directions "
+                          "(e.g. scenarios/ur3e/validation/quasi_static_train.yaml)");
+  if (o.sine.empty())
+    throw InvalidArgument("--method sequential needs --sine FILE: a recording of a sine with common turning points on every joint "
+                          "(e.g. scenarios/ur3e/validation/sine_train.yaml)");
+  std::optional<device::ColumnMap> map;
+  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  auto read_all = [&](const std::vector<std::string>& files) {
+    std::vector<device::Recording> v;
+    for (const auto& f : files) v.push_back(device::read_recording(f, map ? &*map : nullptr));
+    return v;
+  };
+  const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
+  std::vector<const device::Recording*> qsp, snp;
+  for (const auto& r : qs) qsp.push_back(&r);
+  for (const auto& r : sn) snp.push_back(&r);
+  std::vector<ident::TrainingRun> runs;
+  std::vector<PayloadArg> pay;
+  for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
+  for (const auto& p : pay) {
+    bool found = false;
+    for (const auto& r : gen) found |= r.path == p.file;
+    if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the general recordings", p.file));
+  }
+  for (const auto& r : gen) {
+    ident::TrainingRun t{&r, {}};
+    for (const auto& p : pay)
+      if (p.file == r.path) t.payload = p.payload;
+    runs.push_back(t);
+  }
+  ident::SequentialOptions so;
+  so.library.config_joints.clear();
+  for (int j : o.lasso_joints) so.library.config_joints.push_back(j - 1);
+  so.prune_ratio = o.prune;
+  so.use_1se = o.lasso_1se;
+  so.decimate = std::max(o.decimate, 2);
+  ident::SequentialReport report;
+  const bool bar = !o.quiet && isatty(STDERR_FILENO);
+  ident::TwinModel twin = ident::identify_sequential(o.robot, qsp, snp, runs, so, report, [&](double f) {
+    if (bar) std::fprintf(stderr, "\r  identifying (sequential) %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
+  });
+  std::vector<monitor::HealthyRun> healthy;
+  for (const auto& r : runs) healthy.push_back({r.recording, r.payload});
+  twin.monitor_json = monitor::learn_thresholds(twin, healthy).to_json();
+  twin.save(o.output);
+  if (!o.quiet) {
+    fmt::print("twin '{}' (sequential method, Cao) from {} quasi-static, {} sine, {} general recording(s) -> {}\n", twin.robot_name(),
+               qs.size(), sn.size(), gen.size(), o.output);
+    fmt::print("gravity from {} paired poses; Lasso on {} candidates (A ⊗ B, m = 2) x {} samples, {}-fold CV\n", report.poses,
+               report.candidates, report.lasso_samples, so.nfolds);
+    fmt::print("{:<6} {:>9} {:>10} {:>8} {:>9} {:>9} {:>9} {:>8}\n", "joint", "grav A", "fric pairs", "nonzero", "CV RMSE", "RMSE A",
+               "R²", "Fc A");
+    for (int j = 0; j < twin.n_dof(); ++j) {
+      const size_t J = static_cast<size_t>(j);
+      fmt::print("J{:<5} {:>9.4f} {:>10} {:>8} {:>9.4f} {:>9.4f} {:>9.4f} {:>8.3f}\n", j + 1, report.gravity_rmse[J], report.friction_pairs[J],
+                 report.nonzero[J], report.cv_rmse[J], report.rmse[J], report.r2[J], twin.sequential->joints[J].coulomb);
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
   }
@@ -172,7 +246,22 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("RECORDINGS", o->recordings, "Recording CSV files (RTDE column names)")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "Twin file to write (JSON)")->required();
   sub->add_option("--robot", o->robot, "Robot description (built-in name or file)")->capture_default_str();
-  sub->add_option("--method", o->method, "physics (rigid body + friction + drive, current domain)")->capture_default_str();
+  sub->add_option("--method", o->method,
+                  "physics (rigid body + friction + drive, current domain) | sequential (Cao: gravity from --quasi-static, "
+                  "friction from --sine, Lasso over A ⊗ B on RECORDINGS with 10-fold CV)")->capture_default_str();
+  sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14); repeatable")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->check(CLI::ExistingFile);
+  sub->add_option("--sine", o->sine, "sequential: recording of a sine with the same frequency and phase on every joint (Cao eq. 15); repeatable")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->check(CLI::ExistingFile);
+  sub->add_option("--lasso-joints", o->lasso_joints, "sequential: joints (1-based) whose sin/cos up to 2q form B of the library")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_flag("--lasso-1se", o->lasso_1se, "sequential: choose lambda_1se (sparser) instead of lambda_min");
+  sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "twinwatch/ident/sequential_model.hpp"
 #include "twinwatch/model/regressor.hpp"
 
 namespace twinwatch::ident {
@@ -52,6 +53,9 @@ class TwinModel {
   std::vector<std::string> recordings;  ///< files that built it
   std::string created;                  ///< ISO time
   std::string monitor_json;             ///< the monitor's learned thresholds (opaque JSON, "" if none)
+  /// Cao's sequential model (method "sequential"): when set, predict() uses it for the current
+  /// and reports torque as gain * current (see sequential_model.hpp).
+  std::optional<SequentialModel> sequential;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
@@ -92,6 +96,7 @@ class TwinModel {
   // exactly, at the cost of one RNEA (≈ 0.6 µs) instead of the full regressor plus a 36-term
   // product (≈ 1.8 µs). Re-synced whenever beta, base_columns or the payload change.
   void sync_fitted() const;
+  void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
   mutable std::optional<model::RobotModel> fitted_;  // by value: copies of a twin never share it
   mutable std::optional<model::DynamicsData> fitted_data_;
   mutable Eigen::VectorXd fitted_beta_;
