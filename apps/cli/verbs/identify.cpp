@@ -9,6 +9,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/learned_ident.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
@@ -54,12 +55,36 @@ struct IdentifyOptions {
   double reversal_screen = 0.0;
   int decimate = 1;
   bool quiet = false;
+  // learned methods (mlp, hybrid); unset: the method's defaults
+  std::vector<int> hidden;
+  std::optional<double> l2;
+  std::optional<std::uint64_t> seed;
+  std::optional<int> max_evaluations;
+  std::string inputs;
 };
 
+// options of the learned methods: the method's defaults, then what the command line sets
+ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
+  ident::LearnedIdentOptions lo = ident::LearnedIdentOptions::defaults(o.method);
+  if (!o.hidden.empty()) lo.mlp.hidden = o.hidden;
+  if (o.l2) lo.mlp.l2 = *o.l2;
+  if (o.seed) lo.mlp.seed = *o.seed;
+  if (o.max_evaluations) lo.mlp.max_evaluations = *o.max_evaluations;
+  if (!o.inputs.empty()) lo.inputs = ident::LearnedInputs::parse(o.inputs);
+  lo.physics.reversal_screen = o.reversal_screen;
+  lo.physics.decimate = o.decimate;
+  lo.decimate = o.decimate;
+  lo.validate();
+  return lo;
+}
+
 int run_identify(const IdentifyOptions& o) {
-  if (o.method != "physics")
-    throw InvalidArgument(fmt::format("--method {}: only 'physics' is implemented in this version (sequential, mlp and "
-                                      "hybrid are not available yet)", o.method));
+  if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
+    throw InvalidArgument(fmt::format("--method {}: expected physics, mlp or hybrid", o.method));
+  const bool learned = o.method == "mlp" || o.method == "hybrid";
+  if (!learned && (!o.hidden.empty() || o.l2 || o.seed || o.max_evaluations || !o.inputs.empty()))
+    throw InvalidArgument(fmt::format("--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp|hybrid, not {}", o.method));
+  const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
   std::optional<device::ColumnMap> map;
   if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
   std::vector<device::Recording> recs;
@@ -83,9 +108,19 @@ int run_identify(const IdentifyOptions& o) {
   io.decimate = o.decimate;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
-  ident::TwinModel twin = ident::identify_physics(o.robot, runs, io, report, [&](double f) {
+  auto show = [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
-  });
+  };
+  ident::LearnedIdentReport lr;
+  ident::TwinModel twin = learned ? ident::identify_learned(o.robot, runs, o.method == "mlp" ? ident::LearnedRole::Current
+                                                                                             : ident::LearnedRole::Residual,
+                                                            lo, lr, show)
+                                  : ident::identify_physics(o.robot, runs, io, report, show);
+  if (learned) {
+    report = lr.physics;
+    report.rmse = lr.rmse;
+    report.r2 = lr.r2;
+  }
   // thresholds of the monitor from the same healthy recordings (re-learn with 'twinwatch thresholds')
   std::vector<monitor::HealthyRun> healthy;
   for (const auto& r : runs) healthy.push_back({r.recording, r.payload});
@@ -100,6 +135,14 @@ int run_identify(const IdentifyOptions& o) {
                  m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
+    if (learned) {
+      const auto& mo = twin.learned->net;
+      fmt::print("network: inputs {} ({}), hidden {}, l2 {:g}, seed {}; L-BFGS {} after {} evaluations (kept #{}), "
+                 "loss (z units) fit {:.4g} held-out {:.4g}\n",
+                 twin.learned->inputs.to_string(), mo.n_inputs(), fmt::join(mo.hidden(), "-"), mo.l2, mo.seed,
+                 ident::to_string(lr.fit.stop), lr.fit.evaluations, lr.fit.best_evaluation, lr.fit.train_loss, lr.fit.validation_loss);
+      fmt::print("held-out RMSE A: {:.4f}\n", fmt::join(lr.validation_rmse, " "));
+    }
   }
   return 0;
 }
@@ -172,7 +215,17 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("RECORDINGS", o->recordings, "Recording CSV files (RTDE column names)")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "Twin file to write (JSON)")->required();
   sub->add_option("--robot", o->robot, "Robot description (built-in name or file)")->capture_default_str();
-  sub->add_option("--method", o->method, "physics (rigid body + friction + drive, current domain)")->capture_default_str();
+  sub->add_option("--method", o->method,
+                  "physics (rigid body + friction + drive, current domain); mlp (UR3e §3.5: a network on q and smoothed qd "
+                  "predicts the currents; torque only through known gains); hybrid (physics + a network trained on its "
+                  "current residual)")->capture_default_str();
+  sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
+  sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default 1e-4)");
+  sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
+  sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
+  sub->add_option("--inputs", o->inputs,
+                  "mlp/hybrid: network features per joint joined by '+': q, qd, qdd, temperature, friction_shape "
+                  "(mlp default q+qd, hybrid q+qd+qdd+friction_shape)");
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "twinwatch/ident/learned_model.hpp"
 #include "twinwatch/model/regressor.hpp"
 
 namespace twinwatch::ident {
@@ -52,6 +53,11 @@ class TwinModel {
   std::vector<std::string> recordings;  ///< files that built it
   std::string created;                  ///< ISO time
   std::string monitor_json;             ///< the monitor's learned thresholds (opaque JSON, "" if none)
+  /// Learned block (UR3e §3.5), absent for the physics method. Role Current (method "mlp"): the
+  /// network's output is the predicted current and the torque is g_j i_j (/ c_gen_j when
+  /// back-driven), meaningful only when gains_known(). Role Residual (method "hybrid"): the output
+  /// is added to the physics current, and g_j times it (/ c_gen_j) to the torque.
+  std::optional<LearnedModel> learned;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
@@ -92,6 +98,9 @@ class TwinModel {
   // exactly, at the cost of one RNEA (≈ 0.6 µs) instead of the full regressor plus a 36-term
   // product (≈ 1.8 µs). Re-synced whenever beta, base_columns or the payload change.
   void sync_fitted() const;
+  // adds (hybrid) or substitutes (mlp) the learned block's output
+  void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                     VectorJ& current) const;
   mutable std::optional<model::RobotModel> fitted_;  // by value: copies of a twin never share it
   mutable std::optional<model::DynamicsData> fitted_data_;
   mutable Eigen::VectorXd fitted_beta_;
