@@ -31,8 +31,14 @@ LearnedIdentOptions LearnedIdentOptions::defaults(const std::string& method) {
   LearnedIdentOptions o;
   if (method == "mlp") return o;  // UR3e §3.5: q and SG-smoothed qd, one hidden layer of 15 ReLU units
   if (method == "hybrid") {
-    o.inputs.qdd = true;
+    // velocity features only, strongly regularised (docs/validation.md, "Learned reference"):
+    // with q as input the network memorises the training programs' configurations and its
+    // correction hurts an untrained path (triangle J4 0.035 -> 0.075 A); qdd extrapolates badly
+    // (a faster program reaches 1.5-2x the trained accelerations); temperature moves by < 0.5 °C
+    // in these runs. What transfers is a friction-like function of the joint velocities.
+    o.inputs.q = false;
     o.inputs.friction_shape = true;
+    o.mlp.l2 = 1e-2;
     return o;
   }
   throw InvalidArgument(fmt::format("learned method '{}': expected 'mlp' or 'hybrid'", method));

@@ -73,7 +73,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   if (!o.inputs.empty()) lo.inputs = ident::LearnedInputs::parse(o.inputs);
   lo.physics.reversal_screen = o.reversal_screen;
   lo.physics.decimate = o.decimate;
-  lo.decimate = o.decimate;
+  lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
 }
@@ -148,7 +148,7 @@ int run_identify(const IdentifyOptions& o) {
 }
 
 struct ValidateOptions {
-  std::string twin, recording, column_map;
+  std::string twin, recording, column_map, predictions;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
   bool json = false;
@@ -177,6 +177,22 @@ int run_validate(const ValidateOptions& o) {
       meas[static_cast<size_t>(j)].push_back(s.current[j]);
       pred[static_cast<size_t>(j)].push_back(i[j]);
     }
+  }
+  if (!o.predictions.empty()) {
+    // per sample: time, measured and predicted current of every joint (for plots)
+    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
+    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
+    fmt::print(f, "timestamp");
+    for (int j = 0; j < n; ++j) fmt::print(f, ",actual_current_{}", j);
+    for (int j = 0; j < n; ++j) fmt::print(f, ",predicted_current_{}", j);
+    fmt::print(f, "\n");
+    for (size_t k = 0; k < rec.samples.size(); ++k) {
+      fmt::print(f, "{}", rec.samples[k].timestamp);
+      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", meas[static_cast<size_t>(j)][k]);
+      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", pred[static_cast<size_t>(j)][k]);
+      fmt::print(f, "\n");
+    }
+    std::fclose(f);
   }
   nlohmann::json out;
   out["recording"] = o.recording;
@@ -220,17 +236,17 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "predicts the currents; torque only through known gains); hybrid (physics + a network trained on its "
                   "current residual)")->capture_default_str();
   sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
-  sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default 1e-4)");
+  sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)");
   sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
   sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
   sub->add_option("--inputs", o->inputs,
                   "mlp/hybrid: network features per joint joined by '+': q, qd, qdd, temperature, friction_shape "
-                  "(mlp default q+qd, hybrid q+qd+qdd+friction_shape)");
+                  "(mlp default q+qd, hybrid qd+friction_shape)");
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
-  sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str();
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
@@ -244,6 +260,7 @@ twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried during the recording [kg]");
   sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3);
   sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
+  sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current per sample to this CSV");
   sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_validate(*o)); });
 }};
