@@ -197,6 +197,27 @@ void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
     torque[j] = tau;
     current[j] = (tau * qd[j] < 0.0 ? d.c_gen : 1.0) * tau / d.gain;
   }
+  if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
+}
+
+void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                              VectorJ& current) const {
+  // network output: the current itself (mlp) or a correction of the physics current (hybrid);
+  // torque through the drive gain, with the direction factor of the resulting current
+  VectorJ y;
+  learned->evaluate(q, qd, qdd, temperature, y);
+  const int n = robot_->n_dof();
+  for (int j = 0; j < n; ++j) {
+    const JointDrive& d = joints[static_cast<size_t>(j)];
+    if (learned->role == LearnedRole::Current) {
+      current[j] = y[j];
+      torque[j] = d.gain * y[j] / (y[j] * qd[j] < 0.0 ? d.c_gen : 1.0);
+    } else {
+      const double c = torque[j] * qd[j] < 0.0 ? d.c_gen : 1.0;
+      current[j] += y[j];
+      torque[j] += d.gain * y[j] / c;
+    }
+  }
 }
 
 void TwinModel::predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
@@ -217,6 +238,7 @@ std::string TwinModel::to_json() const {
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
+  if (learned) j["learned"] = nlohmann::json::parse(learned->to_json());
   j["base_columns"] = base_columns;
   j["beta"] = numbers(beta);
   for (const auto& m : joints) {
@@ -258,6 +280,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));
     t.gains_absolute = j.value("gains_absolute", false);
     if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
+    if (j.contains("learned")) t.learned = LearnedModel::from_json(j["learned"].dump(), origin, t.n_dof());
     t.base_columns = need(j, "base_columns", "").get<std::vector<int>>();
     for (int c : t.base_columns)
       if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));

@@ -9,6 +9,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/learned_ident.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/ident/sequential_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
@@ -60,15 +61,39 @@ struct IdentifyOptions {
   std::vector<int> lasso_joints{2, 3};
   double prune = 1e-3;
   bool lasso_1se = false;
+  // learned methods (mlp, hybrid); unset: the method's defaults
+  std::vector<int> hidden;
+  std::optional<double> l2;
+  std::optional<std::uint64_t> seed;
+  std::optional<int> max_evaluations;
+  std::string inputs;
 };
+
+// options of the learned methods: the method's defaults, then what the command line sets
+ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
+  ident::LearnedIdentOptions lo = ident::LearnedIdentOptions::defaults(o.method);
+  if (!o.hidden.empty()) lo.mlp.hidden = o.hidden;
+  if (o.l2) lo.mlp.l2 = *o.l2;
+  if (o.seed) lo.mlp.seed = *o.seed;
+  if (o.max_evaluations) lo.mlp.max_evaluations = *o.max_evaluations;
+  if (!o.inputs.empty()) lo.inputs = ident::LearnedInputs::parse(o.inputs);
+  lo.physics.reversal_screen = o.reversal_screen;
+  lo.physics.decimate = o.decimate;
+  lo.decimate = std::max(lo.decimate, o.decimate);
+  lo.validate();
+  return lo;
+}
 
 int run_identify_sequential(const IdentifyOptions& o);
 
 int run_identify(const IdentifyOptions& o) {
   if (o.method == "sequential") return run_identify_sequential(o);
-  if (o.method != "physics")
-    throw InvalidArgument(fmt::format("--method {}: only 'physics' is implemented in this version (sequential, mlp and "
-                                      "hybrid are not available yet)", o.method));
+  if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
+    throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", o.method));
+  const bool learned = o.method == "mlp" || o.method == "hybrid";
+  if (!learned && (!o.hidden.empty() || o.l2 || o.seed || o.max_evaluations || !o.inputs.empty()))
+    throw InvalidArgument(fmt::format("--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp|hybrid, not {}", o.method));
+  const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
   std::optional<device::ColumnMap> map;
   if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
   std::vector<device::Recording> recs;
@@ -92,9 +117,19 @@ int run_identify(const IdentifyOptions& o) {
   io.decimate = o.decimate;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
-  ident::TwinModel twin = ident::identify_physics(o.robot, runs, io, report, [&](double f) {
+  auto show = [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
-  });
+  };
+  ident::LearnedIdentReport lr;
+  ident::TwinModel twin = learned ? ident::identify_learned(o.robot, runs, o.method == "mlp" ? ident::LearnedRole::Current
+                                                                                             : ident::LearnedRole::Residual,
+                                                            lo, lr, show)
+                                  : ident::identify_physics(o.robot, runs, io, report, show);
+  if (learned) {
+    report = lr.physics;
+    report.rmse = lr.rmse;
+    report.r2 = lr.r2;
+  }
   // thresholds of the monitor from the same healthy recordings (re-learn with 'twinwatch thresholds')
   std::vector<monitor::HealthyRun> healthy;
   for (const auto& r : runs) healthy.push_back({r.recording, r.payload});
@@ -109,6 +144,14 @@ int run_identify(const IdentifyOptions& o) {
                  m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
+    if (learned) {
+      const auto& mo = twin.learned->net;
+      fmt::print("network: inputs {} ({}), hidden {}, l2 {:g}, seed {}; L-BFGS {} after {} evaluations (kept #{}), "
+                 "loss (z units) fit {:.4g} held-out {:.4g}\n",
+                 twin.learned->inputs.to_string(), mo.n_inputs(), fmt::join(mo.hidden(), "-"), mo.l2, mo.seed,
+                 ident::to_string(lr.fit.stop), lr.fit.evaluations, lr.fit.best_evaluation, lr.fit.train_loss, lr.fit.validation_loss);
+      fmt::print("held-out RMSE A: {:.4f}\n", fmt::join(lr.validation_rmse, " "));
+    }
   }
   return 0;
 }
@@ -179,7 +222,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
 }
 
 struct ValidateOptions {
-  std::string twin, recording, column_map;
+  std::string twin, recording, column_map, predictions;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
   bool json = false;
@@ -208,6 +251,22 @@ int run_validate(const ValidateOptions& o) {
       meas[static_cast<size_t>(j)].push_back(s.current[j]);
       pred[static_cast<size_t>(j)].push_back(i[j]);
     }
+  }
+  if (!o.predictions.empty()) {
+    // per sample: time, measured and predicted current of every joint (for plots)
+    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
+    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
+    fmt::print(f, "timestamp");
+    for (int j = 0; j < n; ++j) fmt::print(f, ",actual_current_{}", j);
+    for (int j = 0; j < n; ++j) fmt::print(f, ",predicted_current_{}", j);
+    fmt::print(f, "\n");
+    for (size_t k = 0; k < rec.samples.size(); ++k) {
+      fmt::print(f, "{}", rec.samples[k].timestamp);
+      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", meas[static_cast<size_t>(j)][k]);
+      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", pred[static_cast<size_t>(j)][k]);
+      fmt::print(f, "\n");
+    }
+    std::fclose(f);
   }
   nlohmann::json out;
   out["recording"] = o.recording;
@@ -247,8 +306,17 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "Twin file to write (JSON)")->required();
   sub->add_option("--robot", o->robot, "Robot description (built-in name or file)")->capture_default_str();
   sub->add_option("--method", o->method,
-                  "physics (rigid body + friction + drive, current domain) | sequential (Cao: gravity from --quasi-static, "
-                  "friction from --sine, Lasso over A ⊗ B on RECORDINGS with 10-fold CV)")->capture_default_str();
+                  "physics (rigid body + friction + drive, current domain); mlp (UR3e §3.5: a network on q and smoothed qd "
+                  "predicts the currents; torque only through known gains); hybrid (physics + a network trained on its "
+                  "current residual); sequential (Cao: gravity from --quasi-static, friction from --sine, Lasso over A ⊗ B on "
+                  "RECORDINGS with 10-fold CV)")->capture_default_str();
+  sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
+  sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)");
+  sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
+  sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
+  sub->add_option("--inputs", o->inputs,
+                  "mlp/hybrid: network features per joint joined by '+': q, qd, qdd, temperature, friction_shape "
+                  "(mlp default q+qd, hybrid qd+friction_shape)");
   sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14); repeatable")
       ->expected(1)
       ->allow_extra_args(false)
@@ -266,7 +334,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
-  sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str();
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
@@ -280,6 +348,7 @@ twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried during the recording [kg]");
   sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3);
   sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
+  sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current per sample to this CSV");
   sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_validate(*o)); });
 }};

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "twinwatch/ident/sequential_model.hpp"
+#include "twinwatch/ident/learned_model.hpp"
 #include "twinwatch/model/regressor.hpp"
 
 namespace twinwatch::ident {
@@ -56,6 +57,11 @@ class TwinModel {
   /// Cao's sequential model (method "sequential"): when set, predict() uses it for the current
   /// and reports torque as gain * current (see sequential_model.hpp).
   std::optional<SequentialModel> sequential;
+  /// Learned block (UR3e §3.5), absent for the physics method. Role Current (method "mlp"): the
+  /// network's output is the predicted current and the torque is g_j i_j (/ c_gen_j when
+  /// back-driven), meaningful only when gains_known(). Role Residual (method "hybrid"): the output
+  /// is added to the physics current, and g_j times it (/ c_gen_j) to the torque.
+  std::optional<LearnedModel> learned;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
@@ -97,6 +103,9 @@ class TwinModel {
   // product (≈ 1.8 µs). Re-synced whenever beta, base_columns or the payload change.
   void sync_fitted() const;
   void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
+  // adds (hybrid) or substitutes (mlp) the learned block's output
+  void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                     VectorJ& current) const;
   mutable std::optional<model::RobotModel> fitted_;  // by value: copies of a twin never share it
   mutable std::optional<model::DynamicsData> fitted_data_;
   mutable Eigen::VectorXd fitted_beta_;
