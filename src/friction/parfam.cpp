@@ -408,6 +408,24 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
   return out;
 }
 
+ParFamModel ParFamModel::restore(const ParFamExpression& expression, const HysteresisParams& hysteresis) {
+  expression.validate();
+  ParFamOptions o;
+  o.input = expression.dim == 1 ? ParFamInput::Velocity : ParFamInput::Hysteresis;
+  o.functions = expression.functions;
+  o.denominator_floor = expression.denominator_floor;
+  if (o.input == ParFamInput::Hysteresis) {
+    hysteresis.validate();
+    o.hysteresis = hysteresis;
+  }
+  ParFamModel m(o);
+  m.expression_ = expression;
+  m.compiled_ = CompiledExpression(expression);
+  m.hysteresis_ = hysteresis;
+  m.fitted_ = true;
+  return m;
+}
+
 void ParFamModel::start(double dt) {
   if (!fitted_) throw InvalidArgument(fmt::format("{} is not fitted: call fit() first", name()));
   if (options_.input == ParFamInput::Hysteresis)

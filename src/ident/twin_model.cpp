@@ -114,6 +114,7 @@ std::string TwinModel::to_json() const {
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
+  if (!friction_json.empty()) j["friction_models"] = nlohmann::json::parse(friction_json);
   j["base_columns"] = base_columns;
   j["beta"] = numbers(beta);
   for (const auto& m : joints) {
@@ -154,6 +155,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));
     t.gains_absolute = j.value("gains_absolute", false);
     if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
+    if (j.contains("friction_models")) t.friction_json = j["friction_models"].dump();
     t.base_columns = need(j, "base_columns", "").get<std::vector<int>>();
     for (int c : t.base_columns)
       if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));

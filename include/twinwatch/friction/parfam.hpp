@@ -151,6 +151,11 @@ class ParFamModel final : public FrictionModel {
   bool fitted() const noexcept override { return fitted_; }
   void start(double dt) override;
   double step(double qd) noexcept override;
+  /// A fitted model from a stored expression (e.g. a twin file's friction block): input from
+  /// the expression's dim (1: ParFam-V, 3: ParFam-H with `hysteresis`). Throws InvalidArgument
+  /// when the expression or the hysteresis parameters are invalid.
+  static ParFamModel restore(const ParFamExpression& expression, const HysteresisParams& hysteresis = {});
+
   /// "tau_f = <expression>" and, for ParFam-H, "; (alpha, beta) = (a, b)".
   std::string equation() const override;
 

@@ -52,6 +52,9 @@ class TwinModel {
   std::vector<std::string> recordings;  ///< files that built it
   std::string created;                  ///< ISO time
   std::string monitor_json;             ///< the monitor's learned thresholds (opaque JSON, "" if none)
+  /// Optional friction block "friction_models": per-joint symbolic residual-torque equations
+  /// (HESR Table VII; JSON array of friction/twin_block.hpp, opaque here, "" if none).
+  std::string friction_json;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
