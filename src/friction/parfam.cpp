@@ -220,6 +220,7 @@ void ParFamOptions::validate() const {
     throw InvalidArgument(fmt::format("ParFam refine_evaluations is {}, must be >= 10", refine_evaluations));
   if (!std::isfinite(denominator_floor) || denominator_floor <= 0.0)
     throw InvalidArgument(fmt::format("ParFam denominator_floor is {}, must be > 0", denominator_floor));
+  if (!std::isfinite(input_guard)) throw InvalidArgument(fmt::format("ParFam input_guard is {}, must be finite", input_guard));
   if (!std::isfinite(refine_ridge) || refine_ridge < 0.0)
     throw InvalidArgument(fmt::format("ParFam refine_ridge is {}, must be >= 0", refine_ridge));
   if (lm_iterations < 1) throw InvalidArgument(fmt::format("ParFam lm_iterations is {}, must be >= 1", lm_iterations));
@@ -389,7 +390,22 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     theta[static_cast<std::size_t>(L.den() + i)] /= sx[i];
   }
   for (int j = 0; j < L.k; ++j) theta[static_cast<std::size_t>(L.num() + 1 + d + j)] *= sy;
-  expression_ = {d, options_.functions, theta, options_.denominator_floor};
+  expression_ = {d, options_.functions, theta, options_.denominator_floor, {}, {}};
+  // the input guard: the training range of qd (and h, hd with the final alpha, beta), widened
+  if (options_.input_guard >= 0.0) {
+    std::vector<std::vector<double>> cols{record.qd};
+    if (d == 3) {
+      HysteresisFeatures f = hysteresis_features(record.qd, record.dt, hysteresis_);
+      cols.push_back(std::move(f.h));
+      cols.push_back(std::move(f.hd));
+    }
+    for (const auto& c : cols) {
+      const auto [lo, hi] = std::minmax_element(c.begin(), c.end());
+      const double w = *hi - *lo;
+      expression_.input_min.push_back(*lo - options_.input_guard * w);
+      expression_.input_max.push_back(*hi + options_.input_guard * w);
+    }
+  }
   compiled_ = CompiledExpression(expression_);
   fitted_ = true;
   // training RMSE of the deployed form

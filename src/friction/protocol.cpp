@@ -226,7 +226,7 @@ ProtocolResult run_hesr_protocol(const ProtocolRecords& r, const ProtocolOptions
   return out;
 }
 
-ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned seed) {
+ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
   // a rigid body per joint in the spirit of a base, shoulder and elbow joint: a vertical base
   // axis sees no gravity, the shoulder the largest gravity torque; values in N·m and kg·m^2
   struct Rigid {
@@ -257,7 +257,12 @@ ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned
   };
   ProtocolRecords r;
   r.joint = joint.name;
-  r.train = make(sine_profile(0.25, kVelocity, kDuration), seed * 3 + 1, nullptr);
+  constexpr int kRichHarmonics = 4;     // 0.25, 0.5, 0.75, 1.0 Hz
+  constexpr unsigned kRichSeedOffset = 50;  // coefficients unlike the validation trajectory's
+  r.train = make(training == TrainingExcitation::Sweep
+                     ? sine_profile(0.25, kVelocity, kDuration)
+                     : fourier_profile(kRichHarmonics, 0.25, kVelocity, kDuration, seed + kRichSeedOffset),
+                 seed * 3 + 1, nullptr);
   r.fourier = make(fourier_profile(kHarmonics, kFourierBase, kVelocity, kDuration, seed), seed * 3 + 2, nullptr);
   r.chirp = make(chirp_profile(0.1, 1.0, kVelocity, kDuration), seed * 3 + 3, &r.chirp_frequency);
   return r;

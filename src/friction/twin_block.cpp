@@ -51,6 +51,10 @@ std::string friction_block_to_json(const std::vector<JointFrictionEquation>& equ
     for (UnaryOp op : e.expression.functions) j["functions"].push_back(std::string(to_string(op)));
     j["theta"] = e.expression.theta;
     j["denominator_floor"] = e.expression.denominator_floor;
+    if (!e.expression.input_min.empty()) {
+      j["input_min"] = e.expression.input_min;
+      j["input_max"] = e.expression.input_max;
+    }
     if (e.expression.dim == 3) {
       j["alpha"] = e.hysteresis.alpha;
       j["beta"] = e.hysteresis.beta;
@@ -100,6 +104,16 @@ std::vector<JointFrictionEquation> friction_block_from_json(const std::string& t
         if (!std::isfinite(v)) throw ParseError(origin, 0, p + "theta", "values must be finite numbers");
       e.expression.denominator_floor = j.contains("denominator_floor") ? positive(j, "denominator_floor", p, origin) : 0.05;
       if (e.expression.dim == 3) e.hysteresis = {positive(j, "alpha", p, origin), positive(j, "beta", p, origin)};
+      // the optional input guard: both bounds, dim finite numbers each, min <= max
+      if (j.contains("input_min") || j.contains("input_max")) {
+        e.expression.input_min = need(j, "input_min", p, origin).get<std::vector<double>>();
+        e.expression.input_max = need(j, "input_max", p, origin).get<std::vector<double>>();
+        try {
+          e.expression.validate();
+        } catch (const InvalidArgument& err) {
+          throw ParseError(origin, 0, p + "input_min", err.what());
+        }
+      }
       out.push_back(std::move(e));
     } catch (const nlohmann::json::type_error& err) {
       throw ParseError(origin, 0, p.substr(0, p.size() - 1), fmt::format("wrong type: {}", err.what()));

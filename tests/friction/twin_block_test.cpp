@@ -45,6 +45,9 @@ TEST(FrictionBlock, RoundTripsThroughTheTwinFileIntoTheCompiledEvaluator) {
   EXPECT_EQ(eqs[0].joint, 3);
   EXPECT_EQ(eqs[0].expression.theta, m.expression().theta);
   EXPECT_EQ(eqs[0].hysteresis.alpha, m.hysteresis().alpha);
+  EXPECT_EQ(eqs[0].expression.input_min, m.expression().input_min);
+  EXPECT_EQ(eqs[0].expression.input_max, m.expression().input_max);
+  ASSERT_EQ(eqs[0].expression.input_min.size(), 3u);
   ParFamModel restored = eqs[0].model();
   EXPECT_EQ(restored.equation(), m.equation());
   // the same predictions on an untrained record, bit for bit (same compiled terms, same h recursion)
@@ -63,6 +66,9 @@ TEST(FrictionBlock, MalformedBlocksNameTheField) {
               HasSubstr("expected 7 values (dim 1, 1 functions), got 2"));
   EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 3, "functions": ["tanh"], "theta": [0,0,0,0,0,0,0,0,0,0,0,0,0]}])"),
               HasSubstr("friction_models[0].alpha"));
+  EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 1, "functions": ["tanh"], "theta": [0,0,0,0,0,0,0],
+                                 "input_min": [1], "input_max": [0]}])"),
+              HasSubstr("input guard 0 is [1, 0]"));
 }
 
 }  // namespace

@@ -32,6 +32,8 @@ struct StudyOptions {
   int decimate = 1;
   int trials = 200;
   int hops = -1;
+  double input_guard = 0.1;
+  bool rich_training = false;
   unsigned seed = 1;
   double screening = 0.1;
   bool json = false, quiet = false;
@@ -234,6 +236,7 @@ int run_closed_loop_study(const StudyOptions& o) {
     say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
     FrictionStudyOptions so;
     if (o.hops >= 0) so.parfam.hops = o.hops;
+    so.parfam.input_guard = o.input_guard;
     const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
@@ -302,7 +305,8 @@ int run(const StudyOptions& o) {
   if (o.simulated) {
     for (const SimulatedJoint& j : simulated_study_joints()) {
       if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
-      joints.push_back(simulated_protocol_records(j, o.seed));
+      joints.push_back(simulated_protocol_records(
+          j, o.seed, o.rich_training ? TrainingExcitation::Fourier : TrainingExcitation::Sweep));
     }
   } else {
     joints = recorded_joints(o);
@@ -312,6 +316,7 @@ int run(const StudyOptions& o) {
   po.seed = o.seed;
   po.rigid.reversal_threshold = o.screening;
   if (o.hops >= 0) po.study.parfam.hops = o.hops;
+  po.study.parfam.input_guard = o.input_guard;
   const auto t0 = std::chrono::steady_clock::now();
   if (!o.quiet)
     po.progress = [t0](std::string_view msg) {
@@ -375,6 +380,11 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str();
   sub->add_option("--trials", o->trials, "Monte Carlo trials per uncertainty level (Table V)")->capture_default_str();
   sub->add_option("--hops", o->hops, "ParFam basin-hopping steps per start (default: the library's)");
+  sub->add_option("--input-guard", o->input_guard,
+                  "ParFam input guard: inputs clamped to the training range widened by this fraction (< 0: off)")
+      ->capture_default_str();
+  sub->add_flag("--rich-training", o->rich_training,
+                "--simulated: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
   sub->add_option("--seed", o->seed, "Seed of the simulated records and the Monte Carlo draws")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin,
                   "Store each joint's ParFam-H equation in this existing twin file (friction_models block)")

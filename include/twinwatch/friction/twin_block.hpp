@@ -6,8 +6,10 @@
 ///
 /// JSON (the value of the twin file's "friction_models" key):
 ///   [{"joint": 1, "model": "ParFam-H", "dim": 3, "functions": ["tanh", ...], "theta": [...],
-///     "denominator_floor": 0.05, "alpha": 10.2, "beta": 95.0, "equation": "tau_f = ..."}, ...]
-/// theta follows the layout of ParFamExpression; alpha and beta are present when dim is 3.
+///     "denominator_floor": 0.05, "alpha": 10.2, "beta": 95.0, "input_min": [...], "input_max": [...],
+///     "equation": "tau_f = ..."}, ...]
+/// theta follows the layout of ParFamExpression; alpha and beta are present when dim is 3; the
+/// input guard (input_min/max, dim values each) is optional.
 #include <string>
 #include <vector>
 
