@@ -11,6 +11,7 @@
 #include <random>
 
 #include "parfam_family.hpp"
+#include "twinwatch/friction/study.hpp"
 #include "parfam_stage3.hpp"
 #include "twinwatch/core/error.hpp"
 
@@ -220,6 +221,8 @@ void ParFamOptions::validate() const {
     throw InvalidArgument(fmt::format("ParFam refine_evaluations is {}, must be >= 10", refine_evaluations));
   if (!std::isfinite(denominator_floor) || denominator_floor <= 0.0)
     throw InvalidArgument(fmt::format("ParFam denominator_floor is {}, must be > 0", denominator_floor));
+  if (reversal_weight < 1)
+    throw InvalidArgument(fmt::format("ParFam reversal_weight is {}, must be >= 1", reversal_weight));
   if (!std::isfinite(input_guard)) throw InvalidArgument(fmt::format("ParFam input_guard is {}, must be finite", input_guard));
   if (!std::isfinite(refine_ridge) || refine_ridge < 0.0)
     throw InvalidArgument(fmt::format("ParFam refine_ridge is {}, must be >= 0", refine_ridge));
@@ -282,6 +285,19 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
   const double sy = std::max(rms(record.tau, 1, 0), kMinScale);
   data.y.resize(record.tau.size());
   for (std::size_t k = 0; k < record.tau.size(); ++k) data.y[k] = record.tau[k] / sy;
+  // reversal weighting: the samples near reversals appended (weight - 1) more times
+  if (options_.reversal_weight > 1) {
+    constexpr double kWindow = 0.1, kThreshold = 0.05;  // [s], [rad/s]: HESR's reversal windows
+    const std::vector<char> rev = reversal_window_mask(record.qd, record.dt, kWindow, kThreshold);
+    const int n0 = data.n;
+    for (int w = 1; w < options_.reversal_weight; ++w)
+      for (int k = 0; k < n0; ++k) {
+        if (!rev[static_cast<std::size_t>(k)]) continue;
+        for (int i = 0; i < d; ++i) data.x.push_back(data.x[static_cast<std::size_t>(k * d + i)]);
+        data.y.push_back(data.y[static_cast<std::size_t>(k)]);
+        ++data.n;
+      }
+  }
   // stage 2: basin hopping on eq. 15, pruning, final refine on the mean-square error
   LossContext ctx;
   ctx.data = &data;

@@ -330,3 +330,16 @@ TEST(ParFamExpression, InputGuardClampsOutsideTheDomainOnly) {
 
 }  // namespace
 }  // namespace twinwatch::friction
+
+namespace twinwatch::friction {
+namespace {
+
+TEST(ParFam, ReversalWeightBelowOneIsNamed) {
+  ParFamOptions o;
+  o.reversal_weight = 0;
+  EXPECT_THAT([&] { o.validate(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam reversal_weight is 0, must be >= 1")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction

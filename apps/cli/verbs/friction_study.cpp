@@ -33,6 +33,7 @@ struct StudyOptions {
   int trials = 200;
   int hops = -1;
   double input_guard = 0.1;
+  int reversal_weight = 1;
   bool rich_training = false;
   unsigned seed = 1;
   double screening = 0.1;
@@ -237,6 +238,7 @@ int run_closed_loop_study(const StudyOptions& o) {
     FrictionStudyOptions so;
     if (o.hops >= 0) so.parfam.hops = o.hops;
     so.parfam.input_guard = o.input_guard;
+    so.parfam.reversal_weight = o.reversal_weight;
     const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
@@ -317,6 +319,7 @@ int run(const StudyOptions& o) {
   po.rigid.reversal_threshold = o.screening;
   if (o.hops >= 0) po.study.parfam.hops = o.hops;
   po.study.parfam.input_guard = o.input_guard;
+  po.study.parfam.reversal_weight = o.reversal_weight;
   const auto t0 = std::chrono::steady_clock::now();
   if (!o.quiet)
     po.progress = [t0](std::string_view msg) {
@@ -382,6 +385,9 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--hops", o->hops, "ParFam basin-hopping steps per start (default: the library's)");
   sub->add_option("--input-guard", o->input_guard,
                   "ParFam input guard: inputs clamped to the training range widened by this fraction (< 0: off)")
+      ->capture_default_str();
+  sub->add_option("--reversal-weight", o->reversal_weight,
+                  "ParFam: samples within +-0.1 s of a training reversal count this many times (1: plain mse)")
       ->capture_default_str();
   sub->add_flag("--rich-training", o->rich_training,
                 "--simulated: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");

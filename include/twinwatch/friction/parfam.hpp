@@ -141,6 +141,10 @@ struct ParFamOptions {
   /// Input guard of the identified expression: the training range of each input widened by this
   /// fraction of its width on both sides, >= 0; negative: no guard.
   double input_guard = 0.1;
+  /// Reversal-weighted eq. 15: training samples within +-0.1 s of a velocity reversal (|qd| beyond
+  /// 0.05 rad/s before the sign change) count this many times in Stage 2 and the refine, >= 1
+  /// (1: the plain mean-square error of HESR). Stage 3 stays unweighted.
+  int reversal_weight = 1;
   bool refine_hysteresis = true;      ///< run Stage 3 (ParFam-H only)
   int lm_iterations = 50;             ///< Stage 3 Levenberg-Marquardt iterations, >= 1
   HysteresisPriorOptions prior;       ///< Stage 1 grid
