@@ -11,6 +11,7 @@
 #include <random>
 
 #include "parfam_family.hpp"
+#include "twinwatch/friction/study.hpp"
 #include "parfam_stage3.hpp"
 #include "twinwatch/core/error.hpp"
 
@@ -220,6 +221,9 @@ void ParFamOptions::validate() const {
     throw InvalidArgument(fmt::format("ParFam refine_evaluations is {}, must be >= 10", refine_evaluations));
   if (!std::isfinite(denominator_floor) || denominator_floor <= 0.0)
     throw InvalidArgument(fmt::format("ParFam denominator_floor is {}, must be > 0", denominator_floor));
+  if (reversal_weight < 1)
+    throw InvalidArgument(fmt::format("ParFam reversal_weight is {}, must be >= 1", reversal_weight));
+  if (!std::isfinite(input_guard)) throw InvalidArgument(fmt::format("ParFam input_guard is {}, must be finite", input_guard));
   if (!std::isfinite(refine_ridge) || refine_ridge < 0.0)
     throw InvalidArgument(fmt::format("ParFam refine_ridge is {}, must be >= 0", refine_ridge));
   if (lm_iterations < 1) throw InvalidArgument(fmt::format("ParFam lm_iterations is {}, must be >= 1", lm_iterations));
@@ -281,6 +285,19 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
   const double sy = std::max(rms(record.tau, 1, 0), kMinScale);
   data.y.resize(record.tau.size());
   for (std::size_t k = 0; k < record.tau.size(); ++k) data.y[k] = record.tau[k] / sy;
+  // reversal weighting: the samples near reversals appended (weight - 1) more times
+  if (options_.reversal_weight > 1) {
+    constexpr double kWindow = 0.1, kThreshold = 0.05;  // [s], [rad/s]: HESR's reversal windows
+    const std::vector<char> rev = reversal_window_mask(record.qd, record.dt, kWindow, kThreshold);
+    const int n0 = data.n;
+    for (int w = 1; w < options_.reversal_weight; ++w)
+      for (int k = 0; k < n0; ++k) {
+        if (!rev[static_cast<std::size_t>(k)]) continue;
+        for (int i = 0; i < d; ++i) data.x.push_back(data.x[static_cast<std::size_t>(k * d + i)]);
+        data.y.push_back(data.y[static_cast<std::size_t>(k)]);
+        ++data.n;
+      }
+  }
   // stage 2: basin hopping on eq. 15, pruning, final refine on the mean-square error
   LossContext ctx;
   ctx.data = &data;
@@ -389,7 +406,22 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     theta[static_cast<std::size_t>(L.den() + i)] /= sx[i];
   }
   for (int j = 0; j < L.k; ++j) theta[static_cast<std::size_t>(L.num() + 1 + d + j)] *= sy;
-  expression_ = {d, options_.functions, theta, options_.denominator_floor};
+  expression_ = {d, options_.functions, theta, options_.denominator_floor, {}, {}};
+  // the input guard: the training range of qd (and h, hd with the final alpha, beta), widened
+  if (options_.input_guard >= 0.0) {
+    std::vector<std::vector<double>> cols{record.qd};
+    if (d == 3) {
+      HysteresisFeatures f = hysteresis_features(record.qd, record.dt, hysteresis_);
+      cols.push_back(std::move(f.h));
+      cols.push_back(std::move(f.hd));
+    }
+    for (const auto& c : cols) {
+      const auto [lo, hi] = std::minmax_element(c.begin(), c.end());
+      const double w = *hi - *lo;
+      expression_.input_min.push_back(*lo - options_.input_guard * w);
+      expression_.input_max.push_back(*hi + options_.input_guard * w);
+    }
+  }
   compiled_ = CompiledExpression(expression_);
   fitted_ = true;
   // training RMSE of the deployed form
@@ -406,6 +438,24 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
                             expression_.active_coefficients(), refined_mse, chosen->threshold, stage3);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
+}
+
+ParFamModel ParFamModel::restore(const ParFamExpression& expression, const HysteresisParams& hysteresis) {
+  expression.validate();
+  ParFamOptions o;
+  o.input = expression.dim == 1 ? ParFamInput::Velocity : ParFamInput::Hysteresis;
+  o.functions = expression.functions;
+  o.denominator_floor = expression.denominator_floor;
+  if (o.input == ParFamInput::Hysteresis) {
+    hysteresis.validate();
+    o.hysteresis = hysteresis;
+  }
+  ParFamModel m(o);
+  m.expression_ = expression;
+  m.compiled_ = CompiledExpression(expression);
+  m.hysteresis_ = hysteresis;
+  m.fitted_ = true;
+  return m;
 }
 
 void ParFamModel::start(double dt) {

@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "parfam_family.hpp"
@@ -57,6 +58,16 @@ void ParFamExpression::validate() const {
       throw InvalidArgument(fmt::format("ParFam expression theta[{}] is {}, must be finite", i, theta[i]));
   if (!std::isfinite(denominator_floor) || denominator_floor <= 0.0)
     throw InvalidArgument(fmt::format("ParFam expression denominator_floor is {}, must be > 0", denominator_floor));
+  if (input_min.size() != input_max.size())
+    throw InvalidArgument(fmt::format("ParFam expression input_max has size {}, expected {} (size of input_min)",
+                                      input_max.size(), input_min.size()));
+  if (!input_min.empty()) {
+    check_size("ParFam expression input_min", static_cast<long>(input_min.size()), dim, "dim");
+    for (std::size_t i = 0; i < input_min.size(); ++i)
+      if (!(input_min[i] <= input_max[i]) || !std::isfinite(input_min[i]) || !std::isfinite(input_max[i]))
+        throw InvalidArgument(fmt::format("ParFam expression input guard {} is [{}, {}], expected finite min <= max", i,
+                                          input_min[i], input_max[i]));
+  }
 }
 
 double ParFamExpression::operator()(const double* x) const noexcept {
@@ -64,7 +75,12 @@ double ParFamExpression::operator()(const double* x) const noexcept {
   bool rational = false;
   for (int i = L.den(); i < L.size(); ++i) rational = rational || theta[static_cast<std::size_t>(i)] != 0.0;
   detail::Cache c;
-  return detail::forward(L, functions.data(), theta.data(), x, rational, denominator_floor, c);
+  if (input_min.empty()) return detail::forward(L, functions.data(), theta.data(), x, rational, denominator_floor, c);
+  // the input guard
+  double xg[3];
+  for (int i = 0; i < dim; ++i)
+    xg[i] = std::clamp(x[i], input_min[static_cast<std::size_t>(i)], input_max[static_cast<std::size_t>(i)]);
+  return detail::forward(L, functions.data(), theta.data(), xg, rational, denominator_floor, c);
 }
 
 int ParFamExpression::active_coefficients() const noexcept {
@@ -113,6 +129,11 @@ CompiledExpression::CompiledExpression(const ParFamExpression& e) {
   const auto th = [&](int i) { return e.theta[static_cast<std::size_t>(i)]; };
   c0_ = th(L.num());
   floor_ = e.denominator_floor;
+  // the input guard (h and hd stay unbounded for a velocity-only expression: they are ignored)
+  for (std::size_t i = 0; i < e.input_min.size(); ++i) {
+    lo_[i] = e.input_min[i];
+    hi_[i] = e.input_max[i];
+  }
   for (int i = 0; i < L.d; ++i) {
     c_[i] = th(L.num() + 1 + i);
     e_[i] = th(L.den() + i);
@@ -133,6 +154,9 @@ CompiledExpression::CompiledExpression(const ParFamExpression& e) {
 }
 
 double CompiledExpression::operator()(double qd, double h, double hd) const noexcept {
+  qd = std::clamp(qd, lo_[0], hi_[0]);
+  h = std::clamp(h, lo_[1], hi_[1]);
+  hd = std::clamp(hd, lo_[2], hi_[2]);
   double num = c0_ + c_[0] * qd + c_[1] * h + c_[2] * hd;
   double den = 1.0 + e_[0] * qd + e_[1] * h + e_[2] * hd;
   for (int j = 0; j < n_units_; ++j) {

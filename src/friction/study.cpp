@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "twinwatch/core/error.hpp"
@@ -14,7 +15,8 @@ namespace twinwatch::friction {
 
 namespace {
 
-/// sqrt(mean (y - yhat)^2) over the samples where mask is set (all when mask is empty); 0 if none.
+/// sqrt(mean (y - yhat)^2) over the samples where mask is set (all when mask is empty); NaN if none
+/// (e.g. a validation record without a velocity reversal has no reversal-window RMSE).
 double masked_rmse(std::span<const double> y, std::span<const double> yhat, const std::vector<char>& mask) {
   double s = 0.0;
   long n = 0;
@@ -23,7 +25,7 @@ double masked_rmse(std::span<const double> y, std::span<const double> yhat, cons
     s += (y[k] - yhat[k]) * (y[k] - yhat[k]);
     ++n;
   }
-  return n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
+  return n ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
 }
 
 /// Fastest of `repeats` timed passes of predict() over the record, per sample [ns].
@@ -92,7 +94,8 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   options.validate();
   data.train.validate("train");
   data.fourier.validate("fourier");
-  data.chirp.validate("chirp");
+  const bool has_chirp = data.chirp.size() > 0;
+  if (has_chirp) data.chirp.validate("chirp");
   check_size("chirp_frequency", static_cast<long>(data.chirp_frequency.size()), data.chirp.size(), "size of chirp.qd");
   JointStudy out;
   out.joint = data.joint;
@@ -110,37 +113,68 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   pv.input = ParFamInput::Velocity;
   ParFamOptions ph = options.parfam;
   ph.input = ParFamInput::Hysteresis;
-  auto parfam_h = std::make_unique<ParFamModel>(ph);
-  const FitSummary fit_h = parfam_h->fit(data.train);
+  auto parfam_h = std::make_shared<ParFamModel>(ph);
+  FitSummary fit_h;
+  try {
+    fit_h = parfam_h->fit(data.train);
+  } catch (const InvalidArgument& e) {
+    // Stage 1 needs velocity reversals in the training record (loop descriptors, eq. 13); without
+    // them (e.g. a one-directional move) (alpha, beta) start from the documented defaults of
+    // HysteresisParams and Stage 3 refines them. Said in the fit message, never silently.
+    if (ph.hysteresis) throw;
+    ph.hysteresis = HysteresisParams{};
+    parfam_h = std::make_shared<ParFamModel>(ph);
+    fit_h = parfam_h->fit(data.train);
+    fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({}, {}); {}",
+                                e.what(), ph.hysteresis->alpha, ph.hysteresis->beta, fit_h.message);
+  }
   RbfOptions rv = options.rbf;
   rv.input = RbfInput::Velocity;
   RbfOptions rh = options.rbf;
   rh.input = RbfInput::Hysteresis;
   rh.hysteresis = parfam_h->hysteresis();
-  std::vector<std::unique_ptr<FrictionModel>> models;
-  models.push_back(std::make_unique<LugreModel>(options.parametric));
-  models.push_back(std::make_unique<StribeckModel>(options.parametric));
-  models.push_back(std::make_unique<RbfNetwork>(rv));
-  models.push_back(std::make_unique<RbfNetwork>(rh));
-  models.push_back(std::make_unique<ParFamModel>(pv));
+  std::vector<std::shared_ptr<FrictionModel>> models;
+  models.push_back(std::make_shared<LugreModel>(options.parametric));
+  models.push_back(std::make_shared<StribeckModel>(options.parametric));
+  models.push_back(std::make_shared<RbfNetwork>(rv));
+  models.push_back(std::make_shared<RbfNetwork>(rh));
+  models.push_back(std::make_shared<ParFamModel>(pv));
   models.push_back(std::move(parfam_h));
   // fit (ParFam-H is fitted already), predict, time
   for (auto& m : models) {
     ModelStudy s;
     s.name = std::string(m->name());
-    s.fit = m->fitted() ? fit_h : m->fit(data.train);
+    if (m->fitted()) {
+      s.fit = fit_h;
+    } else {
+      // a model whose fit cannot run on these data (too few samples for its hold-out blocks, ...)
+      // is reported as failed with the reason; the other models are still compared
+      try {
+        s.fit = m->fit(data.train);
+      } catch (const InvalidArgument& e) {
+        s.fit.status = FitStatus::Failed;
+        s.fit.message = e.what();
+      }
+    }
     if (!m->fitted()) {
+      s.fourier_rmse = s.reversal_rmse = s.chirp_id_rmse = s.chirp_ood_rmse = s.eval_ns =
+          std::numeric_limits<double>::quiet_NaN();
       out.models.push_back(s);
       continue;
     }
     s.equation = m->equation();
-    const std::vector<double> pf = m->predict(data.fourier);
-    s.fourier_rmse = masked_rmse(data.fourier.tau, pf, {});
-    s.reversal_rmse = masked_rmse(data.fourier.tau, pf, rev);
-    const std::vector<double> pc = m->predict(data.chirp);
-    s.chirp_id_rmse = masked_rmse(data.chirp.tau, pc, id);
-    s.chirp_ood_rmse = masked_rmse(data.chirp.tau, pc, ood);
+    s.fourier_prediction = m->predict(data.fourier);
+    s.fourier_rmse = masked_rmse(data.fourier.tau, s.fourier_prediction, {});
+    s.reversal_rmse = masked_rmse(data.fourier.tau, s.fourier_prediction, rev);
+    if (has_chirp) {
+      const std::vector<double> pc = m->predict(data.chirp);
+      s.chirp_id_rmse = masked_rmse(data.chirp.tau, pc, id);
+      s.chirp_ood_rmse = masked_rmse(data.chirp.tau, pc, ood);
+    } else {
+      s.chirp_id_rmse = s.chirp_ood_rmse = std::numeric_limits<double>::quiet_NaN();
+    }
     s.eval_ns = time_per_sample_ns(*m, data.fourier, options.timing_repeats);
+    s.model = m;
     out.models.push_back(std::move(s));
   }
   return out;

@@ -88,6 +88,7 @@ SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityPro
   out.true_qd.resize(n);
   if (profile.frequency) out.frequency.resize(n);
   std::vector<double> q(n);
+  out.true_qdd.resize(n);
   const double h = options.dt / options.substeps;
   // sample 0: relaxed elements, the velocity of t = 0
   double pos = 0.0;
@@ -106,6 +107,13 @@ SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityPro
     out.true_qd[k] = profile.qd(t);
     out.true_tau[k] = gms.torque(out.true_qd[k]);
   }
+  // true acceleration by a central difference of the profile (step far below the sample time)
+  constexpr double kAccStep = 1e-5;  // [s]
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * options.dt;
+    out.true_qdd[k] = (profile.qd(t + kAccStep) - profile.qd(std::max(0.0, t - kAccStep))) / (t + kAccStep - std::max(0.0, t - kAccStep));
+  }
+  out.true_q = q;
   // measurement: quantised encoder, central differences (one-sided at the ends), noisy torque
   for (double& v : q)
     if (options.encoder_lsb > 0.0) v = std::round(v / options.encoder_lsb) * options.encoder_lsb;
@@ -113,6 +121,7 @@ SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityPro
     const std::size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
     out.record.qd[k] = (q[b] - q[a]) / (static_cast<double>(b - a) * options.dt);
   }
+  out.q = q;
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   for (std::size_t k = 0; k < n; ++k) {

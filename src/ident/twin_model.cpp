@@ -239,6 +239,7 @@ std::string TwinModel::to_json() const {
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
   if (learned) j["learned"] = nlohmann::json::parse(learned->to_json());
+  if (!friction_json.empty()) j["friction_models"] = nlohmann::json::parse(friction_json);
   j["base_columns"] = base_columns;
   j["beta"] = numbers(beta);
   for (const auto& m : joints) {
@@ -281,6 +282,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     t.gains_absolute = j.value("gains_absolute", false);
     if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
     if (j.contains("learned")) t.learned = LearnedModel::from_json(j["learned"].dump(), origin, t.n_dof());
+    if (j.contains("friction_models")) t.friction_json = j["friction_models"].dump();
     t.base_columns = need(j, "base_columns", "").get<std::vector<int>>();
     for (int c : t.base_columns)
       if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));

@@ -299,3 +299,47 @@ TEST(ParFam, UnfittedModelRefusesToStartAndUnstableSampleTimeIsRejected) {
 
 }  // namespace
 }  // namespace twinwatch::friction
+
+namespace twinwatch::friction {
+namespace {
+
+// the input guard: inside the identified domain the guarded expression is the expression; outside
+// it is the value at the nearest domain point (no extrapolation), in both evaluators
+TEST(ParFamExpression, InputGuardClampsOutsideTheDomainOnly) {
+  ParFamExpression e;
+  e.functions = {UnaryOp::Exp, UnaryOp::Tanh};
+  e.theta.assign(static_cast<std::size_t>(ParFamExpression::parameter_count(3, 2)), 0.0);
+  e.theta[2] = 0.5;   // a_1 hd: exp(0.5 hd)
+  e.theta[12] = 1.0;  // w_1 (layout d = 3, k = 2: a_j at 4 j, c_0 at 8, w at 12)
+  e.theta[4] = 3.0;   // a_2 qd: tanh(3 qd)
+  e.theta[13] = 2.0;  // w_2
+  ParFamExpression g = e;
+  g.input_min = {-1.0, -1.0, -4.0};
+  g.input_max = {1.0, 1.0, 4.0};
+  const CompiledExpression ce(e), cg(g);
+  const double inside[3] = {0.3, 0.2, 2.0};
+  EXPECT_DOUBLE_EQ(g(inside), e(inside));
+  EXPECT_DOUBLE_EQ(cg(0.3, 0.2, 2.0), ce(0.3, 0.2, 2.0));
+  const double outside[3] = {0.3, 0.2, 40.0}, edge[3] = {0.3, 0.2, 4.0};
+  EXPECT_DOUBLE_EQ(g(outside), e(edge));
+  EXPECT_DOUBLE_EQ(cg(0.3, 0.2, 40.0), ce(0.3, 0.2, 4.0));
+  EXPECT_GT(e(outside), 1e8);  // unguarded: exp(20) runs away
+  g.input_max = {1.0, 1.0};
+  EXPECT_THAT([&] { g.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("input_max has size 2, expected 3")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction
+
+namespace twinwatch::friction {
+namespace {
+
+TEST(ParFam, ReversalWeightBelowOneIsNamed) {
+  ParFamOptions o;
+  o.reversal_weight = 0;
+  EXPECT_THAT([&] { o.validate(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam reversal_weight is 0, must be >= 1")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction

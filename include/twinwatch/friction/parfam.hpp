@@ -51,6 +51,10 @@ struct ParFamExpression {
   std::vector<UnaryOp> functions;    ///< g_1..g_k
   std::vector<double> theta;         ///< size parameter_count(dim, k)
   double denominator_floor = 0.05;   ///< protected division threshold, > 0
+  /// Input guard: x_i is clamped to [input_min[i], input_max[i]] before evaluation, so the
+  /// expression never extrapolates beyond the identified domain (an exp or a steep tanh of hd
+  /// would otherwise run away on faster motion). Empty: no guard; else both of size dim.
+  std::vector<double> input_min, input_max;
 
   /// Number of coefficients of the family: k (d + 1) + (1 + d + k) + (d + k).
   static int parameter_count(int dim, int k) noexcept { return k * (dim + 1) + 1 + dim + k + dim + k; }
@@ -67,7 +71,7 @@ struct ParFamExpression {
   int active_coefficients() const noexcept;
 
   /// Throws InvalidArgument naming the field: dim not 1 or 3, no function, theta of the wrong
-  /// size, a non-finite coefficient, floor <= 0.
+  /// size, a non-finite coefficient, floor <= 0, a guard of the wrong size or with min > max.
   void validate() const;
 };
 
@@ -96,6 +100,8 @@ class CompiledExpression {
   };
   Unit units_[kMaxUnits];
   int n_units_ = 0;
+  double lo_[3] = {-1e300, -1e300, -1e300};  ///< input guard (no guard: +-1e300)
+  double hi_[3] = {1e300, 1e300, 1e300};
   double c0_ = 0.0;
   double c_[3] = {0.0, 0.0, 0.0};
   double e_[3] = {0.0, 0.0, 0.0};
@@ -132,6 +138,13 @@ struct ParFamOptions {
   int refine_evaluations = 500;       ///< L-BFGS evaluations of the final refine, >= 10
   double refine_ridge = 1e-6;         ///< ridge weight of the final refine (mse + ridge |theta|^2), >= 0
   double denominator_floor = 0.05;    ///< protected division, > 0
+  /// Input guard of the identified expression: the training range of each input widened by this
+  /// fraction of its width on both sides, >= 0; negative: no guard.
+  double input_guard = 0.1;
+  /// Reversal-weighted eq. 15: training samples within +-0.1 s of a velocity reversal (|qd| beyond
+  /// 0.05 rad/s before the sign change) count this many times in Stage 2 and the refine, >= 1
+  /// (1: the plain mean-square error of HESR). Stage 3 stays unweighted.
+  int reversal_weight = 1;
   bool refine_hysteresis = true;      ///< run Stage 3 (ParFam-H only)
   int lm_iterations = 50;             ///< Stage 3 Levenberg-Marquardt iterations, >= 1
   HysteresisPriorOptions prior;       ///< Stage 1 grid
@@ -151,6 +164,11 @@ class ParFamModel final : public FrictionModel {
   bool fitted() const noexcept override { return fitted_; }
   void start(double dt) override;
   double step(double qd) noexcept override;
+  /// A fitted model from a stored expression (e.g. a twin file's friction block): input from
+  /// the expression's dim (1: ParFam-V, 3: ParFam-H with `hysteresis`). Throws InvalidArgument
+  /// when the expression or the hysteresis parameters are invalid.
+  static ParFamModel restore(const ParFamExpression& expression, const HysteresisParams& hysteresis = {});
+
   /// "tau_f = <expression>" and, for ParFam-H, "; (alpha, beta) = (a, b)".
   std::string equation() const override;
 

@@ -10,6 +10,7 @@
 ///
 /// plus simulated joints for it (generalized Maxwell-slip truth, synthetic_joint.hpp).
 /// RBFNN-H gets the (alpha, beta) identified by ParFam-H ("the same hysteresis features").
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,7 @@ struct FrictionStudyData {
   std::string joint;                    ///< label
   FrictionRecord train;                 ///< identification record (HESR: 0.25 Hz sine sweep)
   FrictionRecord fourier;               ///< untrained validation trajectory
-  FrictionRecord chirp;                 ///< 0.1-1.0 Hz chirp
+  FrictionRecord chirp;                 ///< 0.1-1.0 Hz chirp; may be empty (no chirp columns then)
   std::vector<double> chirp_frequency;  ///< instantaneous chirp frequency per sample [Hz]
 };
 
@@ -52,6 +53,8 @@ struct ModelStudy {
   double chirp_id_rmse = 0.0;   ///< [N·m], chirp samples below the split frequency
   double chirp_ood_rmse = 0.0;  ///< [N·m], chirp samples from the split frequency on
   double eval_ns = 0.0;         ///< deployed evaluation (state update + model) per sample [ns]
+  std::vector<double> fourier_prediction;  ///< the model's prediction of the Fourier record [N·m]
+  std::shared_ptr<FrictionModel> model;    ///< the fitted model (null when the fit failed)
 };
 
 /// The study of one joint.
@@ -70,7 +73,7 @@ std::vector<char> reversal_window_mask(std::span<const double> qd, double dt, do
                                        int* reversals = nullptr);
 
 /// Runs the protocol on one joint. Throws InvalidArgument on bad records/options (chirp_frequency
-/// must match the chirp record's size).
+/// must match the chirp record's size). An empty chirp record leaves the chirp RMSEs NaN.
 JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudyOptions& options = {});
 
 /// Three simulated harmonic-drive-like joints (generalized Maxwell-slip truth with four elements,

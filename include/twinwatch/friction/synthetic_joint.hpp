@@ -48,6 +48,9 @@ struct SyntheticRecord {
   FrictionRecord record;           ///< measured qd (central difference of the quantised position), noisy tau_f
   std::vector<double> true_tau;    ///< truth friction at the sample instants [N·m]
   std::vector<double> true_qd;     ///< true velocity at the sample instants [rad/s]
+  std::vector<double> q;           ///< measured (quantised encoder) position [rad], q(0) = 0
+  std::vector<double> true_q;      ///< true position [rad]
+  std::vector<double> true_qdd;    ///< true acceleration at the sample instants [rad/s^2] (central difference of qd(t), 1e-5 s)
   std::vector<double> frequency;   ///< profile frequency at the samples [Hz] (empty if the profile has none)
 };
 

@@ -62,6 +62,9 @@ class TwinModel {
   /// back-driven), meaningful only when gains_known(). Role Residual (method "hybrid"): the output
   /// is added to the physics current, and g_j times it (/ c_gen_j) to the torque.
   std::optional<LearnedModel> learned;
+  /// Optional friction block "friction_models": per-joint symbolic residual-torque equations
+  /// (HESR Table VII; JSON array of friction/twin_block.hpp, opaque here, "" if none).
+  std::string friction_json;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }

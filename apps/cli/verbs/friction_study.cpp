@@ -1,0 +1,403 @@
+// `twinwatch friction-study REC... | --simulated [--json]`: the HESR evaluation protocol (§V) on
+// recordings or on the built-in simulated joints, printed as the paper's tables.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/friction/closed_loop.hpp"
+#include "twinwatch/friction/protocol.hpp"
+#include "twinwatch/friction/synthetic_joint.hpp"
+#include "twinwatch/friction/twin_block.hpp"
+#include "twinwatch/ident/twin_model.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+using namespace twinwatch::friction;
+
+struct StudyOptions {
+  std::vector<std::string> recordings;
+  bool simulated = false, closed_loop = false;
+  std::vector<int> joints;  // 1-based
+  std::string column_map, torque = "current", save_twin;
+  double gain = 1.0;
+  double split = 0.5;
+  int decimate = 1;
+  int trials = 200;
+  int hops = -1;
+  double input_guard = 0.1;
+  int reversal_weight = 1;
+  bool rich_training = false;
+  unsigned seed = 1;
+  double screening = 0.1;
+  bool json = false, quiet = false;
+};
+
+// joint j of a recording as a JointRecord (every k-th sample), torque = gain * current or target_moment
+JointRecord joint_record(const device::Recording& rec, int j, const StudyOptions& o) {
+  const bool moment = o.torque == "moment";
+  const std::uint32_t need = moment ? kFieldTargetMoment : kFieldActualCurrent;
+  if (!(rec.present & need))
+    throw InvalidArgument(fmt::format("{}: no {} columns (--torque {}), expected the joint torque source", rec.path,
+                                      moment ? "target_moment_*" : "actual_current_*", o.torque));
+  if (!(rec.present & kFieldActualQd))
+    throw InvalidArgument(fmt::format("{}: no actual_qd_* columns, expected the measured joint velocity", rec.path));
+  if (rec.gaps > 0)
+    throw InvalidArgument(fmt::format("{}: {} timestamp gap(s), expected a uniformly sampled record", rec.path, rec.gaps));
+  JointRecord r;
+  r.dt = rec.median_period * o.decimate;
+  for (std::size_t k = 0; k < rec.samples.size(); k += static_cast<std::size_t>(o.decimate)) {
+    const RobotSample& s = rec.samples[k];
+    r.q.push_back(s.q[j]);
+    r.qd.push_back(s.qd[j]);
+    r.tau.push_back(moment ? s.target_moment[j] : o.gain * s.current[j]);
+  }
+  r.validate(fmt::format("{} joint {}", rec.path, j + 1));
+  return r;
+}
+
+JointRecord slice(const JointRecord& r, long a, long b) {
+  JointRecord s;
+  s.dt = r.dt;
+  s.q.assign(r.q.begin() + a, r.q.begin() + b);
+  s.qd.assign(r.qd.begin() + a, r.qd.begin() + b);
+  s.tau.assign(r.tau.begin() + a, r.tau.begin() + b);
+  return s;
+}
+
+std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
+  if (o.recordings.size() > 3)
+    throw InvalidArgument(fmt::format("{} recordings given, expected 1 to 3 (TRAIN [VALIDATION [CHIRP]])", o.recordings.size()));
+  std::optional<device::ColumnMap> map;
+  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  std::vector<device::Recording> recs;
+  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+  for (const auto& r : recs)
+    if (r.n_dof != recs[0].n_dof)
+      throw InvalidArgument(fmt::format("{} has {} joints, {} has {}", r.path, r.n_dof, recs[0].path, recs[0].n_dof));
+  // the joints: given, or every joint that moves in the training record
+  std::vector<int> joints;
+  for (int j : o.joints) {
+    if (j < 1 || j > recs[0].n_dof)
+      throw InvalidArgument(fmt::format("--joint {} is out of range, expected 1..{}", j, recs[0].n_dof));
+    joints.push_back(j - 1);
+  }
+  if (joints.empty())
+    for (int j = 0; j < recs[0].n_dof; ++j) {
+      double peak = 0.0;
+      for (const RobotSample& s : recs[0].samples) peak = std::max(peak, std::abs(s.qd[j]));
+      if (peak > 2.0 * o.screening) joints.push_back(j);
+    }
+  if (joints.empty())
+    throw InvalidArgument(fmt::format("{}: no joint moves faster than {} rad/s; name one with --joint", recs[0].path,
+                                      2.0 * o.screening));
+  std::vector<ProtocolRecords> out;
+  for (int j : joints) {
+    ProtocolRecords p;
+    p.joint = fmt::format("J{}", j + 1);
+    const JointRecord first = joint_record(recs[0], j, o);
+    if (recs.size() == 1) {
+      // one recording: the first `split` of it trains, the rest validates
+      const auto cut = static_cast<long>(std::lround(o.split * static_cast<double>(first.size())));
+      p.train = slice(first, 0, cut);
+      p.fourier = slice(first, cut, first.size());
+    } else {
+      p.train = first;
+      p.fourier = joint_record(recs[1], j, o);
+    }
+    if (recs.size() == 3) p.chirp = joint_record(recs[2], j, o);
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::string num(double v, int prec = 4) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, prec) : "n/a"; }
+
+nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+void print_tables(const std::vector<ProtocolResult>& res, const StudyOptions& o) {
+  const std::vector<std::string> names = {"LuGre", "Stribeck", "RBFNN", "RBFNN-H", "ParFam-V", "ParFam-H"};
+  const auto table = [&](const char* title, auto get, int prec) {
+    fmt::print("\n{}\n{:<10}", title, "Model");
+    for (const auto& r : res) fmt::print("{:>12}", r.study.joint);
+    fmt::print("\n");
+    for (const auto& n : names) {
+      fmt::print("{:<10}", n);
+      for (const auto& r : res) fmt::print("{:>12}", num(get(r.study.model(n)), prec));
+      fmt::print("\n");
+    }
+  };
+  fmt::print("HESR friction study ({} joint(s){})\n", res.size(), o.simulated ? ", simulated Maxwell-slip joints" : "");
+  for (const auto& r : res) {
+    fmt::print("{}: {} (screening {} rad/s, {} retained samples, rank {}/{})\n", r.study.joint, r.rigid.equation(),
+               r.rigid.options.reversal_threshold, r.rigid.samples, r.rigid.rank, r.rigid.columns);
+    fmt::print("{}: {} reversals in the validation record, {} samples in their +-0.1 s windows\n", r.study.joint,
+               r.study.reversals, r.study.reversal_samples);
+  }
+  table("Table VIII: offline residual-torque RMSE on the untrained validation record [N·m]",
+        [](const ModelStudy& m) { return m.fourier_rmse; }, 4);
+  table("Table IX: RMSE within +-0.1 s velocity-reversal windows [N·m]",
+        [](const ModelStudy& m) { return m.reversal_rmse; }, 4);
+  table("Chirp: in-distribution RMSE (below the split frequency) [N·m]",
+        [](const ModelStudy& m) { return m.chirp_id_rmse; }, 4);
+  table("Chirp: out-of-distribution RMSE (from the split frequency on) [N·m]",
+        [](const ModelStudy& m) { return m.chirp_ood_rmse; }, 4);
+  table("Chirp: OOD / ID RMSE ratio", [](const ModelStudy& m) { return m.chirp_ood_rmse / m.chirp_id_rmse; }, 2);
+  for (const auto& r : res) {
+    fmt::print("\nTable III ({}): reversal-screening threshold sensitivity of the rigid-body fit\n", r.study.joint);
+    fmt::print("{:>8} {:>9} {:>6} {:>10} {:>10} {:>10}\n", "Th.", "Samples", "Rank", "All", "Ret.", "log10 k");
+    for (const auto& s : r.screening)
+      fmt::print("{:>8.2f} {:>9} {:>6} {:>10.4f} {:>10.4f} {:>10.3f}\n", s.threshold, s.samples, s.rank, s.rmse_all,
+                 s.rmse_retained, s.log10_condition);
+  }
+  for (const auto& r : res) {
+    fmt::print("\nTable IV ({}): smoothing-window sensitivity of ParFam-H (window 1 = nominal)\n", r.study.joint);
+    fmt::print("{:>8} {:>14} {:>14} {:>12}\n", "Window", "Offline RMSE", "Reversal RMSE", "Rev. samples");
+    for (const auto& s : r.smoothing)
+      fmt::print("{:>8} {:>14} {:>14} {:>12}\n", s.window, num(s.fourier_rmse), num(s.reversal_rmse), s.reversal_samples);
+  }
+  for (const auto& r : res) {
+    fmt::print("\nTable V ({}): measurement-uncertainty sensitivity of ParFam-H, {} trials per level\n", r.study.joint,
+               o.trials);
+    fmt::print("{:>8} {:>22} {:>22} {:>12}\n", "Level", "Offline RMSE", "Reversal RMSE", "ranked 1st");
+    for (const auto& u : r.uncertainty)
+      fmt::print("{:>7.0f}% {:>22} {:>22} {:>11.0f}%\n", 100 * u.level,
+                 fmt::format("{:.4f} ± {:.4f}", u.fourier_mean, u.fourier_std),
+                 fmt::format("{:.4f} ± {:.4f}", u.reversal_mean, u.reversal_std), 100 * u.first_share);
+  }
+  table("Table VI: evaluation time per sample (state update + model) [ns]",
+        [](const ModelStudy& m) { return m.eval_ns; }, 1);
+  table("Identification time [s]", [](const ModelStudy& m) { return m.fit.seconds; }, 2);
+  fmt::print("\nFits\n");
+  for (const auto& r : res)
+    for (const auto& m : r.study.models) fmt::print("{} {}: {}\n", r.study.joint, m.name, m.fit.brief_report());
+  fmt::print("\nTable VII: identified equations\n");
+  for (const auto& r : res)
+    for (const char* n : {"ParFam-H", "ParFam-V"}) fmt::print("{} {}: {}\n", r.study.joint, n, r.study.model(n).equation);
+}
+
+nlohmann::json to_json(const std::vector<ProtocolResult>& res) {
+  nlohmann::json out;
+  for (const auto& r : res) {
+    nlohmann::json j;
+    j["joint"] = r.study.joint;
+    j["rigid_body"] = {{"equation", r.rigid.equation()}, {"samples", r.rigid.samples}, {"rank", r.rigid.rank},
+                       {"inertia", r.rigid.inertia}, {"gravity_sin", r.rigid.gravity_sin},
+                       {"gravity_cos", r.rigid.gravity_cos}, {"offset", r.rigid.offset}};
+    j["reversals"] = r.study.reversals;
+    j["reversal_samples"] = r.study.reversal_samples;
+    for (const auto& m : r.study.models)
+      j["models"].push_back({{"name", m.name}, {"fit_status", std::string(to_string(m.fit.status))},
+                             {"fit_seconds", m.fit.seconds}, {"equation", m.equation},
+                             {"fourier_rmse", jnum(m.fourier_rmse)}, {"reversal_rmse", jnum(m.reversal_rmse)},
+                             {"chirp_id_rmse", jnum(m.chirp_id_rmse)}, {"chirp_ood_rmse", jnum(m.chirp_ood_rmse)},
+                             {"eval_ns", m.eval_ns}});
+    for (const auto& s : r.screening)
+      j["screening"].push_back({{"threshold", s.threshold}, {"samples", s.samples}, {"rank", s.rank},
+                                {"rmse_all", s.rmse_all}, {"rmse_retained", s.rmse_retained},
+                                {"log10_condition", jnum(s.log10_condition)}});
+    for (const auto& s : r.smoothing)
+      j["smoothing"].push_back({{"window", s.window}, {"fourier_rmse", jnum(s.fourier_rmse)},
+                                {"reversal_rmse", jnum(s.reversal_rmse)}, {"reversal_samples", s.reversal_samples}});
+    for (const auto& u : r.uncertainty)
+      j["uncertainty"].push_back({{"level", u.level}, {"fourier_mean", u.fourier_mean}, {"fourier_std", u.fourier_std},
+                                  {"reversal_mean", u.reversal_mean}, {"reversal_std", u.reversal_std},
+                                  {"first_share", u.first_share}});
+    out["joints"].push_back(j);
+  }
+  return out;
+}
+
+// HESR §V-G on the simulated joints: models fitted on each joint's residual-torque sweep, then the
+// eq. 19-20 feed-forward with each of them on a 10 s untrained Fourier trajectory
+int run_closed_loop_study(const StudyOptions& o) {
+  if (!o.recordings.empty())
+    throw InvalidArgument("--closed-loop runs on the simulated joints; give no recordings");
+  const std::vector<std::string> comps = {"None", "Baseline", "LuGre", "RBFNN-H", "ParFam-H", "True friction"};
+  struct JointRuns {
+    std::string joint;
+    std::vector<ClosedLoopRun> runs;
+  };
+  std::vector<JointRuns> all;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto say = [&](const std::string& msg) {
+    if (o.quiet) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
+  };
+  for (const SimulatedJoint& j : simulated_study_joints()) {
+    if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
+    say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
+    FrictionStudyOptions so;
+    if (o.hops >= 0) so.parfam.hops = o.hops;
+    so.parfam.input_guard = o.input_guard;
+    so.parfam.reversal_weight = o.reversal_weight;
+    const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
+    ClosedLoopOptions co = closed_loop_options_for(j);
+    co.seed = o.seed;
+    const VelocityProfile desired = closed_loop_profile(o.seed);
+    JointRuns jr{j.name, {}};
+    say(fmt::format("{}: closed loop, {} compensations", j.name, comps.size()));
+    jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, false));
+    jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, true));
+    for (const char* name : {"LuGre", "RBFNN-H", "ParFam-H"}) {
+      const ModelStudy& m = study.model(name);
+      if (!m.model) throw InvalidArgument(fmt::format("{}: the {} fit failed: {}", j.name, name, m.fit.brief_report()));
+      jr.runs.push_back(run_closed_loop(j.truth, desired, m.model.get(), co, true));
+    }
+    MaxwellSlipOracle oracle(j.truth);
+    jr.runs.push_back(run_closed_loop(j.truth, desired, &oracle, co, true));
+    all.push_back(std::move(jr));
+  }
+  if (o.json) {
+    nlohmann::json out;
+    for (const auto& jr : all) {
+      nlohmann::json j;
+      j["joint"] = jr.joint;
+      for (const auto& r : jr.runs)
+        j["runs"].push_back({{"compensation", r.compensation}, {"rmse", r.rmse}, {"segment_average", r.segment_average},
+                             {"reversal_rmse", r.reversal_rmse}, {"reversals", r.reversals}});
+      out["joints"].push_back(j);
+    }
+    fmt::print("{}\n", out.dump());
+    return 0;
+  }
+  fmt::print("HESR closed loop (§V-G): velocity-command joint, adaptive PD torque-error feed-forward (eq. 19-20),\n"
+             "10 s untrained Fourier trajectory; tracking error q_d - q [rad]\n");
+  fmt::print("\nTable X: tracking RMSE [rad]\n{:<14}", "Compensation");
+  for (const auto& jr : all) fmt::print("{:>11}", jr.joint);
+  fmt::print("\n");
+  for (std::size_t c = 0; c < comps.size(); ++c) {
+    fmt::print("{:<14}", comps[c]);
+    for (const auto& jr : all) fmt::print("{:>11.5f}", jr.runs[c].rmse);
+    fmt::print("\n");
+  }
+  fmt::print("\nTable XI: segment-wise (1 s) and reversal-event (+-0.1 s) RMSE [rad]\n{:<14}{:>11}", "Compensation",
+             "Seg. avg.");
+  for (const auto& jr : all) fmt::print("{:>11}", "Rev. " + jr.joint);
+  fmt::print("\n");
+  for (std::size_t c = 0; c < comps.size(); ++c) {
+    double seg = 0.0;
+    for (const auto& jr : all) seg += jr.runs[c].segment_average / static_cast<double>(all.size());
+    fmt::print("{:<14}{:>11.5f}", comps[c], seg);
+    for (const auto& jr : all) fmt::print("{:>11.5f}", jr.runs[c].reversal_rmse);
+    fmt::print("\n");
+  }
+  fmt::print("(None: qd_cmd = qd_d; Baseline: eq. 19 with the rigid body only; True friction: the simulator's "
+             "Maxwell-slip truth as the model, an oracle reference)\n");
+  return 0;
+}
+
+int run(const StudyOptions& o) {
+  if (o.closed_loop) return run_closed_loop_study(o);
+  if (o.simulated == !o.recordings.empty())
+    throw InvalidArgument("give either recordings (TRAIN [VALIDATION [CHIRP]]) or --simulated, not both and not neither");
+  if (o.torque != "current" && o.torque != "moment")
+    throw InvalidArgument(fmt::format("--torque is '{}', expected 'current' or 'moment'", o.torque));
+  if (!(o.split > 0.0 && o.split < 1.0)) throw InvalidArgument(fmt::format("--split is {}, must be in (0, 1)", o.split));
+  if (o.decimate < 1) throw InvalidArgument(fmt::format("--decimate is {}, must be >= 1", o.decimate));
+  std::vector<ProtocolRecords> joints;
+  if (o.simulated) {
+    for (const SimulatedJoint& j : simulated_study_joints()) {
+      if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
+      joints.push_back(simulated_protocol_records(
+          j, o.seed, o.rich_training ? TrainingExcitation::Fourier : TrainingExcitation::Sweep));
+    }
+  } else {
+    joints = recorded_joints(o);
+  }
+  ProtocolOptions po;
+  po.trials = o.trials;
+  po.seed = o.seed;
+  po.rigid.reversal_threshold = o.screening;
+  if (o.hops >= 0) po.study.parfam.hops = o.hops;
+  po.study.parfam.input_guard = o.input_guard;
+  po.study.parfam.reversal_weight = o.reversal_weight;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!o.quiet)
+    po.progress = [t0](std::string_view msg) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
+    };
+  std::optional<ident::TwinModel> twin;
+  if (!o.save_twin.empty()) twin = ident::TwinModel::load(o.save_twin);  // fail early on a bad twin file
+  std::vector<ProtocolResult> res;
+  for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
+  if (twin) {
+    // the friction block: ParFam-H of every studied joint, re-loadable into the compiled evaluator
+    std::vector<JointFrictionEquation> eqs;
+    for (const auto& r : res) {
+      const int joint = std::stoi(r.study.joint.substr(1));
+      if (joint > twin->n_dof())
+        throw InvalidArgument(fmt::format("--save-twin {}: joint {} is beyond the twin's {} joints", o.save_twin, joint,
+                                          twin->n_dof()));
+      const auto* m = dynamic_cast<const ParFamModel*>(r.study.model("ParFam-H").model.get());
+      if (!m) throw InvalidArgument(fmt::format("{}: ParFam-H was not fitted, nothing to store", r.study.joint));
+      eqs.push_back(friction_equation_of(*m, joint));
+    }
+    twin->friction_json = friction_block_to_json(eqs);
+    twin->save(o.save_twin);
+    if (!o.quiet) fmt::print(stderr, "stored {} friction equation(s) in {}\n", eqs.size(), o.save_twin);
+  }
+  if (o.json)
+    fmt::print("{}\n", to_json(res).dump());
+  else
+    print_tables(res, o);
+  return 0;
+}
+
+twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
+  auto o = std::make_shared<StudyOptions>();
+  auto* sub = app.add_subcommand(
+      "friction-study",
+      "HESR friction study: fit LuGre, Stribeck, RBFNN, RBFNN-H, ParFam-V and ParFam-H to one joint's residual torque "
+      "and print HESR Tables III-IX and the chirp split");
+  sub->footer(
+      "Input: 1 to 3 recordings TRAIN [VALIDATION [CHIRP]] (RTDE column names, or any CSV through --column-map) with\n"
+      "actual_q_*, actual_qd_* and the torque source: actual_current_* times --gain (N·m/A; 1 when the column is\n"
+      "already a current-based torque in N·m) or target_moment_* (--torque moment). With one recording its first\n"
+      "--split fraction trains and the rest validates; without a chirp the chirp rows read n/a (a chirp's frequency\n"
+      "is estimated from its velocity reversals). Each joint is decoupled from its rigid body by least squares on\n"
+      "[qdd, sin q, cos q, 1] (single-joint gravity; exact when the other joints stand still) with |qd| < --screening\n"
+      "left out of that fit only, and [sign(qd), qd] as nuisance columns. --simulated runs the built-in Maxwell-slip\n"
+      "joints J1-J3 instead (20 s sweep, Fourier and chirp records at 200 Hz).");
+  sub->add_option("RECORDINGS", o->recordings, "TRAIN [VALIDATION [CHIRP]] recordings")->check(CLI::ExistingFile);
+  sub->add_flag("--simulated", o->simulated, "Run on the built-in simulated joints J1-J3");
+  sub->add_flag("--closed-loop", o->closed_loop,
+                "HESR §V-G instead: velocity-command simulated joints with the eq. 19-20 feed-forward of each model "
+                "(Tables X-XI)");
+  sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
+  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
+  sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str();
+  sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample (e.g. 5: 1 kHz -> 200 Hz)")->capture_default_str();
+  sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str();
+  sub->add_option("--trials", o->trials, "Monte Carlo trials per uncertainty level (Table V)")->capture_default_str();
+  sub->add_option("--hops", o->hops, "ParFam basin-hopping steps per start (default: the library's)");
+  sub->add_option("--input-guard", o->input_guard,
+                  "ParFam input guard: inputs clamped to the training range widened by this fraction (< 0: off)")
+      ->capture_default_str();
+  sub->add_option("--reversal-weight", o->reversal_weight,
+                  "ParFam: samples within +-0.1 s of a training reversal count this many times (1: plain mse)")
+      ->capture_default_str();
+  sub->add_flag("--rich-training", o->rich_training,
+                "--simulated: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
+  sub->add_option("--seed", o->seed, "Seed of the simulated records and the Monte Carlo draws")->capture_default_str();
+  sub->add_option("--save-twin", o->save_twin,
+                  "Store each joint's ParFam-H equation in this existing twin file (friction_models block)")
+      ->check(CLI::ExistingFile);
+  sub->add_flag("--json", o->json, "Print the tables as one JSON object {\"joints\": [...]}");
+  sub->add_flag("-q,--quiet", o->quiet, "No progress messages on stderr");
+  sub->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+}};
+
+}  // namespace

@@ -1,0 +1,57 @@
+// Per-sample evaluation of every residual-torque model of the HESR study (HESR Table VI), side by
+// side in the same run, and the identification time of ParFam-H on 20 s of 200 Hz data.
+// Goals (issue 6): ParFam-H evaluation <= 0.2 us per sample, identification <= 30 s.
+//   build-bench/bench/friction/friction_eval_benchmark
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "twinwatch/friction/study.hpp"
+
+namespace {
+
+using namespace twinwatch::friction;
+
+struct Setup {
+  FrictionStudyData data;
+  JointStudy study;
+  Setup() : data(simulated_study_data(simulated_study_joints()[1], 1)), study(run_friction_study(data)) {}
+};
+const Setup& setup() {
+  static const Setup s;
+  return s;
+}
+
+// one pass of step() over the 4001-sample Fourier record (hysteresis/bristle state update + model)
+void BM_Step(benchmark::State& state, const char* name) {
+  const Setup& s = setup();
+  FrictionModel& m = *s.study.model(name).model;
+  const std::vector<double>& qd = s.data.fourier.qd;
+  for (auto _ : state) {
+    m.start(s.data.fourier.dt);
+    double acc = 0.0;
+    for (double v : qd) acc += m.step(v);
+    benchmark::DoNotOptimize(acc);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(qd.size()));
+}
+BENCHMARK_CAPTURE(BM_Step, LuGre, "LuGre");
+BENCHMARK_CAPTURE(BM_Step, Stribeck, "Stribeck");
+BENCHMARK_CAPTURE(BM_Step, RBFNN, "RBFNN");
+BENCHMARK_CAPTURE(BM_Step, RBFNN_H, "RBFNN-H");
+BENCHMARK_CAPTURE(BM_Step, ParFam_V, "ParFam-V");
+BENCHMARK_CAPTURE(BM_Step, ParFam_H, "ParFam-H");
+
+// the three stages of ParFam-H on the 20 s, 200 Hz sweep of J2
+void BM_IdentifyParFamH(benchmark::State& state) {
+  const Setup& s = setup();
+  for (auto _ : state) {
+    ParFamModel m;
+    benchmark::DoNotOptimize(m.fit(s.data.train));
+  }
+}
+BENCHMARK(BM_IdentifyParFamH)->Unit(benchmark::kSecond)->Iterations(3);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,102 @@
+#pragma once
+/// @file closed_loop.hpp
+/// The closed-loop application of HESR §V-G on a simulated joint: a commercial-style
+/// velocity-command interface (inner PI velocity loop, no torque command), and the torque-error
+/// adaptive PD velocity feed-forward of HESR eq. 19-20:
+///
+///   tau_d   = I qdd_d + f_hat(qd_d)            (rigid body + the residual-torque model)
+///   e_tau   = tau_d - tau_meas                 (tau_meas: noisy current-based torque, low-passed)
+///   qd_comp = K_p(|qd_d|) e_tau + K_d(|qd_d|) de_tau/dt                          (eq. 19)
+///   K_{p,d}(|qd_d|) = K^min + (K^max - K^min) exp(-lambda |qd_d|)                   (eq. 20)
+///   qd_cmd  = qd_d + qd_comp
+///
+/// The plant: I qdd = u - tau_f, tau_f from a generalized Maxwell-slip truth (maxwell_slip.hpp),
+/// u = kv (qd_cmd - qd) + ki int (qd_cmd - qd) dt, integrated on substeps. Evaluation code:
+/// it reads the truth by construction (it *is* the simulated robot).
+#include <string>
+#include <vector>
+
+#include "twinwatch/friction/friction_model.hpp"
+#include "twinwatch/friction/maxwell_slip.hpp"
+#include "twinwatch/friction/study.hpp"
+#include "twinwatch/friction/synthetic_joint.hpp"
+
+namespace twinwatch::friction {
+
+/// Gains of eq. 20 (units: K_p [rad/s per N·m], K_d [rad per N·m], lambda [s/rad]).
+struct AdaptivePdGains {
+  double kp_min = 0.005, kp_max = 0.05;
+  double kd_min = 0.0, kd_max = 0.0005;
+  double lambda = 4.0;
+  /// K_p(|qd_d|) and K_d(|qd_d|) of eq. 20.
+  double kp(double qd_d) const noexcept;
+  double kd(double qd_d) const noexcept;
+  /// Throws InvalidArgument naming the field: negative or non-finite gains, min > max, lambda < 0.
+  void validate() const;
+};
+
+struct ClosedLoopOptions {
+  double inertia = 0.45;        ///< I [kg·m^2] (plant and the rigid-body part of tau_d), > 0
+  double kv = 25.0;             ///< inner velocity-loop proportional gain [N·m·s/rad], > 0
+  double ki = 150.0;            ///< inner velocity-loop integral gain [N·m/rad], >= 0
+  double dt = 0.005;            ///< command period [s] (200 Hz), > 0
+  int substeps = 20;            ///< plant/inner-loop steps per command period, >= 1
+  double torque_noise = 0.1;    ///< sigma of tau_meas [N·m], >= 0
+  double derivative_filter = 0.02;  ///< time constant of the de_tau/dt filter [s], > 0
+  /// Time constant of the first-order low-pass that smooths the current-based torque estimate
+  /// before it enters e_tau [s], >= 0 (0: raw). HESR §V-G: the current-derived torque is noisy;
+  /// a controller cannot use it unfiltered.
+  double torque_filter = 0.1;
+  double reversal_window = 0.1; ///< +-window around desired-velocity zero crossings [s], > 0
+  double segment = 1.0;         ///< segment length of the segment-wise RMSE [s], > 0
+  AdaptivePdGains gains;
+  unsigned seed = 1;            ///< seeds the torque noise
+  /// Throws InvalidArgument naming the first field out of range.
+  void validate() const;
+};
+
+/// One closed-loop run.
+struct ClosedLoopRun {
+  std::string compensation;       ///< "None", "Baseline", or the model's name
+  std::vector<double> q_d, q;     ///< desired and actual position [rad] per command period
+  double rmse = 0.0;              ///< tracking RMSE of q_d - q [rad] (Table X)
+  double segment_average = 0.0;   ///< mean of the per-segment RMSEs [rad] (Table XI)
+  double reversal_rmse = 0.0;     ///< RMSE within +-window of desired-velocity zero crossings [rad] (Table XI)
+  int reversals = 0;
+};
+
+/// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0). `model` predicts the
+/// residual torque along qd_d for tau_d; null means "Baseline" (tau_d = I qdd_d). With
+/// `feedforward` false the command is qd_d alone ("None"). Throws InvalidArgument on bad options.
+ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
+                              const ClosedLoopOptions& options = {}, bool feedforward = true);
+
+/// Closed-loop options for a simulated study joint: its inertia (the rigid body of
+/// simulated_protocol_records), an inner velocity loop of 55 rad/s bandwidth (kv = 55 I,
+/// ki = 6 kv), eq. 20 gains relative to 1/kv (K_p 0.13/kv .. 1.3/kv, K_d 0 .. 0.01/kv, lambda 4 s/rad,
+/// chosen on the true-friction feed-forward: larger K_p oscillates, smaller does little),
+/// the joint's torque noise.
+ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint);
+
+/// The closed-loop desired trajectory: 10 s, five harmonics of 0.1 Hz, peak 1.0 rad/s,
+/// coefficients from seed + 100 (not the study's validation trajectory).
+VelocityProfile closed_loop_profile(unsigned seed);
+
+/// The truth itself as a FrictionModel (an oracle reference for the closed loop: what a perfect
+/// residual-torque model would give). fit() does nothing; equation() names the truth.
+class MaxwellSlipOracle final : public FrictionModel {
+ public:
+  explicit MaxwellSlipOracle(MaxwellSlipParams truth);
+  std::string_view name() const noexcept override { return "True friction"; }
+  FitSummary fit(const FrictionRecord& record) override;
+  bool fitted() const noexcept override { return true; }
+  void start(double dt) override;
+  double step(double qd) noexcept override;
+  std::string equation() const override { return "generalized Maxwell-slip truth"; }
+
+ private:
+  MaxwellSlipFriction gms_;
+  double dt_ = 0.005;
+};
+
+}  // namespace twinwatch::friction

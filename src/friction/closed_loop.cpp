@@ -1,0 +1,184 @@
+#include "twinwatch/friction/closed_loop.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/friction/study.hpp"
+
+namespace twinwatch::friction {
+
+namespace {
+
+void check_positive(const char* what, double v) {
+  if (!std::isfinite(v) || v <= 0.0) throw InvalidArgument(fmt::format("closed-loop {} is {}, must be > 0", what, v));
+}
+
+void check_nonnegative(const char* what, double v) {
+  if (!std::isfinite(v) || v < 0.0) throw InvalidArgument(fmt::format("closed-loop {} is {}, must be >= 0", what, v));
+}
+
+}  // namespace
+
+double AdaptivePdGains::kp(double qd_d) const noexcept {
+  return kp_min + (kp_max - kp_min) * std::exp(-lambda * std::abs(qd_d));
+}
+
+double AdaptivePdGains::kd(double qd_d) const noexcept {
+  return kd_min + (kd_max - kd_min) * std::exp(-lambda * std::abs(qd_d));
+}
+
+void AdaptivePdGains::validate() const {
+  check_nonnegative("gains.kp_min", kp_min);
+  check_nonnegative("gains.kp_max", kp_max);
+  check_nonnegative("gains.kd_min", kd_min);
+  check_nonnegative("gains.kd_max", kd_max);
+  check_nonnegative("gains.lambda", lambda);
+  if (kp_min > kp_max) throw InvalidArgument(fmt::format("closed-loop gains.kp_min is {}, must be <= kp_max ({})", kp_min, kp_max));
+  if (kd_min > kd_max) throw InvalidArgument(fmt::format("closed-loop gains.kd_min is {}, must be <= kd_max ({})", kd_min, kd_max));
+}
+
+void ClosedLoopOptions::validate() const {
+  check_positive("inertia", inertia);
+  check_positive("kv", kv);
+  check_nonnegative("ki", ki);
+  check_positive("dt", dt);
+  if (substeps < 1) throw InvalidArgument(fmt::format("closed-loop substeps is {}, must be >= 1", substeps));
+  check_nonnegative("torque_noise", torque_noise);
+  check_positive("derivative_filter", derivative_filter);
+  check_nonnegative("torque_filter", torque_filter);
+  check_positive("reversal_window", reversal_window);
+  check_positive("segment", segment);
+  gains.validate();
+}
+
+ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
+                              const ClosedLoopOptions& o, bool feedforward) {
+  o.validate();
+  if (!desired.qd) throw InvalidArgument(fmt::format("desired profile '{}' has no qd(t)", desired.name));
+  if (!std::isfinite(desired.duration) || desired.duration <= o.dt)
+    throw InvalidArgument(fmt::format("desired profile '{}' duration is {}, must be > dt ({})", desired.name,
+                                      desired.duration, o.dt));
+  MaxwellSlipFriction plant_friction(truth);
+  if (model) model->start(o.dt);
+  ClosedLoopRun run;
+  run.compensation = !feedforward ? "None" : (model ? std::string(model->name()) : "Baseline");
+  const auto n = static_cast<std::size_t>(std::floor(desired.duration / o.dt)) + 1;
+  run.q_d.resize(n);
+  run.q.resize(n);
+  std::vector<double> qd_d(n);
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> noise(0.0, o.torque_noise);
+  const double h = o.dt / o.substeps;
+  constexpr double kAccStep = 1e-5;  // [s] central difference of the desired velocity
+  double q = 0.0, qd = 0.0, integral = 0.0, u = 0.0, qdes = 0.0;
+  double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0;
+  bool first = true;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * o.dt;
+    // desired state at the command instant
+    const double v_d = desired.qd(t);
+    const double a_d = (desired.qd(t + kAccStep) - desired.qd(std::max(0.0, t - kAccStep))) /
+                       (t + kAccStep - std::max(0.0, t - kAccStep));
+    qd_d[k] = v_d;
+    run.q_d[k] = qdes;
+    run.q[k] = q;
+    // eq. 19-20: torque error between the model torque and the measured (noisy) motor torque
+    double qd_cmd = v_d;
+    if (feedforward) {
+      const double f_hat = model ? model->step(v_d) : 0.0;
+      const double tau_d = o.inertia * a_d + f_hat;
+      // the current-based torque estimate: noisy, then low-passed
+      const double tau_raw = u + noise(rng);
+      tau_filtered = first ? tau_raw : tau_filtered + o.dt / (o.torque_filter + o.dt) * (tau_raw - tau_filtered);
+      const double e = tau_d - tau_filtered;
+      // first-order filtered derivative of e_tau (the current-based torque is noisy)
+      const double de = first ? 0.0 : (e - e_prev) / o.dt;
+      first = false;
+      const double a = o.dt / (o.derivative_filter + o.dt);
+      de_filtered += a * (de - de_filtered);
+      e_prev = e;
+      qd_cmd += o.gains.kp(v_d) * e + o.gains.kd(v_d) * de_filtered;
+    }
+    // plant and inner PI velocity loop over one command period (semi-implicit Euler)
+    for (int s = 0; s < o.substeps; ++s) {
+      const double err = qd_cmd - qd;
+      integral += err * h;
+      u = o.kv * err + o.ki * integral;
+      const double tau_f = plant_friction.step(qd, h);
+      qd += h * (u - tau_f) / o.inertia;
+      q += h * qd;
+      // the desired position by the trapezoidal rule on the substeps
+      const double ts = t + s * h;
+      qdes += 0.5 * h * (desired.qd(ts) + desired.qd(ts + h));
+    }
+  }
+  // Table X: tracking RMSE; Table XI: per-segment RMSE mean, +-window at desired reversals
+  double s_all = 0.0;
+  for (std::size_t k = 0; k < n; ++k) s_all += (run.q_d[k] - run.q[k]) * (run.q_d[k] - run.q[k]);
+  run.rmse = std::sqrt(s_all / static_cast<double>(n));
+  const auto seg = static_cast<std::size_t>(std::lround(o.segment / o.dt));
+  double seg_sum = 0.0;
+  int segs = 0;
+  for (std::size_t a = 0; a + seg <= n; a += seg) {
+    double s = 0.0;
+    for (std::size_t k = a; k < a + seg; ++k) s += (run.q_d[k] - run.q[k]) * (run.q_d[k] - run.q[k]);
+    seg_sum += std::sqrt(s / static_cast<double>(seg));
+    ++segs;
+  }
+  run.segment_average = segs ? seg_sum / segs : run.rmse;
+  const std::vector<char> mask = reversal_window_mask(qd_d, o.dt, o.reversal_window, 0.0, &run.reversals);
+  double s_rev = 0.0;
+  long n_rev = 0;
+  for (std::size_t k = 0; k < n; ++k)
+    if (mask[k]) {
+      s_rev += (run.q_d[k] - run.q[k]) * (run.q_d[k] - run.q[k]);
+      ++n_rev;
+    }
+  run.reversal_rmse = n_rev ? std::sqrt(s_rev / static_cast<double>(n_rev)) : 0.0;
+  return run;
+}
+
+ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint) {
+  // inner loop bandwidth typical of a commercial joint velocity loop (~9 Hz), PI zero at 1 Hz
+  constexpr double kBandwidth = 55.0;  // [rad/s]
+  constexpr double kIntegralRatio = 6.0;  // ki / kv [1/s]
+  ClosedLoopOptions o;
+  o.inertia = joint.name == "J1" ? 0.45 : joint.name == "J2" ? 0.60 : 0.20;
+  o.kv = kBandwidth * o.inertia;
+  o.ki = kIntegralRatio * o.kv;
+  o.gains.kp_min = 0.13 / o.kv;
+  o.gains.kp_max = 1.3 / o.kv;
+  o.gains.kd_min = 0.0;
+  o.gains.kd_max = 0.01 / o.kv;
+  o.gains.lambda = 4.0;
+  o.torque_noise = joint.torque_noise;
+  return o;
+}
+
+VelocityProfile closed_loop_profile(unsigned seed) {
+  constexpr int kHarmonics = 5;
+  constexpr double kBase = 0.1, kPeak = 1.0, kDuration = 10.0;  // [Hz], [rad/s], [s]
+  return fourier_profile(kHarmonics, kBase, kPeak, kDuration, seed + 100);
+}
+
+MaxwellSlipOracle::MaxwellSlipOracle(MaxwellSlipParams truth) : gms_(std::move(truth)) {}
+
+FitSummary MaxwellSlipOracle::fit(const FrictionRecord&) {
+  FitSummary s;
+  s.status = FitStatus::Converged;
+  s.message = "oracle: the simulator's truth, nothing fitted";
+  return s;
+}
+
+void MaxwellSlipOracle::start(double dt) {
+  if (!std::isfinite(dt) || dt <= 0.0) throw InvalidArgument(fmt::format("oracle dt is {}, must be > 0 [s]", dt));
+  dt_ = dt;
+  gms_.reset();
+}
+
+double MaxwellSlipOracle::step(double qd) noexcept { return gms_.step(qd, dt_); }
+
+}  // namespace twinwatch::friction

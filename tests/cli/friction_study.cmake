@@ -1,0 +1,15 @@
+# twinwatch friction-study: the HESR tables on one simulated joint (short: 5 Monte Carlo trials, 2 hops)
+add_test(NAME cli.friction_study_simulated
+         COMMAND twinwatch friction-study --simulated --joint 3 --trials 5 --hops 2 -q)
+set_tests_properties(cli.friction_study_simulated PROPERTIES PASS_REGULAR_EXPRESSION
+  "Table IX: RMSE within.*ParFam-H +[0-9.]+.*Table III \\(J3\\).*0\\.15 +[0-9]+ +6 .*Table IV.*Table V \\(J3\\).*5%.*Table VI.*ParFam-H: tau_f = ")
+add_test(NAME cli.friction_study_json
+         COMMAND twinwatch friction-study --simulated --joint 3 --trials 5 --hops 2 -q --json)
+set_tests_properties(cli.friction_study_json PROPERTIES PASS_REGULAR_EXPRESSION
+  "\"joint\":\"J3\".*\"name\":\"ParFam-H\".*\"screening\".*\"smoothing\".*\"uncertainty\"")
+add_test(NAME cli.friction_study_needs_input COMMAND twinwatch friction-study)
+set_tests_properties(cli.friction_study_needs_input PROPERTIES PASS_REGULAR_EXPRESSION
+  "give either recordings .* or --simulated")
+add_test(NAME cli.friction_study_closed_loop COMMAND twinwatch friction-study --closed-loop --joint 3 --hops 2 -q)
+set_tests_properties(cli.friction_study_closed_loop PROPERTIES PASS_REGULAR_EXPRESSION
+  "Table X: tracking RMSE.*ParFam-H +[0-9.]+.*Table XI.*True friction")
