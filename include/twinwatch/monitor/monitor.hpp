@@ -19,6 +19,7 @@
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
 #include "twinwatch/monitor/threshold.hpp"
+#include "twinwatch/monitor/trend.hpp"
 
 namespace twinwatch::monitor {
 
@@ -36,6 +37,7 @@ struct MonitorConfig {
   double diagnosis_delay = 0.12;              ///< [s] of residual after the raise used by the diagnosis
   double diagnosis_pre = 0.04;                ///< [s] before the raise
   int frozen_samples = 25;                    ///< identical consecutive currents while moving: stuck channel
+  TrendConfig trend;                          ///< slow-wear trend per cycle window (trend.hpp)
 
   void validate(int n_dof) const;
   std::string to_json() const;
@@ -80,6 +82,8 @@ class Monitor {
   const std::vector<Event>& events() const { return events_; }
   long samples() const { return n_samples_; }
   long gaps() const { return n_gaps_; }
+  /// The slow-wear trend detector (per-window friction, residual energy, I_total history).
+  const TrendDetector& trend() const { return trend_; }
   /// The twin with the monitor's payload (set it when the program changes the payload).
   ident::TwinModel& twin() { return twin_; }
 
@@ -107,6 +111,7 @@ class Monitor {
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
+  TrendDetector trend_;
 };
 
 }  // namespace twinwatch::monitor
