@@ -198,7 +198,11 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   VectorJ g = VectorJ::Ones(n_);
   if (twin_.gains_known())
     for (int j = 0; j < n_; ++j) g[j] = torque_gain(j);
-  trend_ = TrendDetector(twin_, cfg_.trend, g, twin_.gains_known() ? "N·m" : "A");
+  // the loop compensates the residual for temperature itself (push), the detector gets it compensated
+  temp_slope_ = cfg_.trend.temperature_slope.size() == n_ ? cfg_.trend.temperature_slope : VectorJ(VectorJ::Zero(n_));
+  TrendConfig tc = cfg_.trend;
+  tc.temperature_slope = VectorJ::Zero(n_);
+  trend_ = TrendDetector(twin_, tc, g, twin_.gains_known() ? "N·m" : "A");
 }
 
 double Monitor::torque_gain(int j) const {
@@ -304,6 +308,11 @@ void Monitor::push(const RobotSample& s) {
   }
   twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_);
   r_ = s.current - i_hat_;
+  // temperature: the viscous friction's slope learned on a healthy warm-up (trend.hpp), so that
+  // neither the thresholds nor the wear trend see a cooling or warming joint as a fault
+  for (int j = 0; j < n_; ++j)
+    if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
+      r_[j] -= temp_slope_[j] * s.qd[j] * (s.temperature[j] - cfg_.trend.temperature_ref);
   if (!filter_started_) {
     rf_ = r_;
     filter_started_ = true;

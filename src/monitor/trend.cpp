@@ -20,6 +20,8 @@ constexpr double kSecondsPerHour = 3600.0;
 constexpr double kRidge = 1e-9;
 // a joint needs this many moving samples in a window for a fit (3 unknowns, noisy samples)
 constexpr long kMinFitSamples = 50;
+// consecutive exceedances the monitor needs to raise an alert (MonitorConfig::raise_after default)
+constexpr int kDebounce = 3;
 // temperature span [°C] a learning run must cover for a slope to be learnable
 constexpr double kMinTemperatureSpan = 1.0;
 
@@ -90,9 +92,10 @@ TrendDetector::TrendDetector(const ident::TwinModel& twin, TrendConfig config, c
   nominal_ = v_ref_ = z_ = slope_ = VectorJ::Zero(n_);
   ata_.assign(static_cast<size_t>(n_), Eigen::Matrix3d::Zero());
   atb_.assign(static_cast<size_t>(n_), Eigen::Vector3d::Zero());
-  energy_ = temp_sum_ = speed_sum_ = VectorJ::Zero(n_);
+  energy_ = temp_sum_ = speed_sum_ = dissip_ = VectorJ::Zero(n_);
   headroom_ = VectorJ::Constant(n_, std::numeric_limits<double>::infinity());
   moving_.assign(static_cast<size_t>(n_), 0);
+  margins_.assign(static_cast<size_t>(kDebounce * n_), -std::numeric_limits<double>::infinity());
   temp_n_.assign(static_cast<size_t>(n_), 0);
   hist_.resize(static_cast<size_t>(n_));
   const size_t H = static_cast<size_t>(cfg_.history);
@@ -143,10 +146,15 @@ bool TrendDetector::push(double t, const VectorJ& qd, const VectorJ& r, const Ve
       const Eigen::Vector3d phi(sgn(qd[j]), qd[j], 1.0);
       ata_[static_cast<size_t>(j)].noalias() += phi * phi.transpose();
       atb_[static_cast<size_t>(j)].noalias() += phi * y;
+      dissip_[j] += y * phi(0);
       speed_sum_[j] += std::abs(qd[j]);
       ++moving_[static_cast<size_t>(j)];
-      // headroom before the threshold trips in the direction friction pushes the residual
-      headroom_[j] = std::min(headroom_[j], level[j] - rf[j] * sgn(qd[j]));
+      // headroom before the threshold trips in the direction friction pushes the residual: the
+      // margin must be exceeded kDebounce samples in a row, so the largest of the last ones counts
+      double* mh = &margins_[static_cast<size_t>(kDebounce * j)];
+      for (int k = kDebounce - 1; k > 0; --k) mh[k] = mh[k - 1];
+      mh[0] = level[j] - rf[j] * sgn(qd[j]);
+      headroom_[j] = std::min(headroom_[j], *std::max_element(mh, mh + kDebounce));
     }
   }
   if (t - t_open_ < window_) return false;
@@ -178,7 +186,10 @@ void TrendDetector::close_window(double t) {
       }
       p.coulomb = gain_[j] * x(0);
       p.viscous = gain_[j] * x(1);
-      p.friction = gain_[j] * (x(0) + x(1) * v_ref_[j]);
+      // the trended scalar: the mean residual in the direction of motion, mean(y sign(qd)) = extra
+      // Coulomb + extra viscous * mean|qd| (+ a constant misfit term over whole cycles). One number
+      // per window, far better conditioned than a + b v from the collinear sign(qd)/qd fit
+      p.friction = gain_[j] * dissip_[j] / static_cast<double>(m);
       p.valid = true;
     }
     auto& h = hist_[J];
@@ -188,7 +199,7 @@ void TrendDetector::close_window(double t) {
     // reset the joint's accumulators
     ata_[J].setZero();
     atb_[J].setZero();
-    energy_[j] = temp_sum_[j] = speed_sum_[j] = 0.0;
+    energy_[j] = temp_sum_[j] = speed_sum_[j] = dissip_[j] = 0.0;
     moving_[J] = temp_n_[J] = 0;
     headroom_[j] = std::numeric_limits<double>::infinity();
   }

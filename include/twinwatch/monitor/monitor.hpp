@@ -112,6 +112,7 @@ class Monitor {
   double raise_time_ = 0.0;
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
   TrendDetector trend_;
+  VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
 };
 
 }  // namespace twinwatch::monitor

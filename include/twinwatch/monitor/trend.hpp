@@ -14,11 +14,15 @@
 /// Per window and joint j, least squares over the samples where the joint moves (|qd| > v_min):
 ///   r_j - k_T,j qd_j (T_j - T_ref) = a_j sign(qd_j) + b_j qd_j + c_j          (Coulomb, viscous, offset)
 /// where r = i - i_hat is the current residual [A] and k_T,j the temperature slope of the viscous
-/// friction learned on a healthy warm-up (learn_trend_temperature). The window's extra friction is
-///   f_j = a_j + b_j v_ref,j    [A] (times the drive gain: [N·m] when the gains are known)
-/// at a fixed reference speed v_ref,j (the mean |qd_j| of the first windows), so the series is
-/// comparable across windows. Also per window: residual energy E_j = sum r_j^2 dt [A²·s] and the mean
-/// total current I_total = sum_j |i_j| [A].
+/// friction learned on a healthy warm-up (learn_trend_temperature); a_j, b_j (the Coulomb/viscous
+/// split) are kept in the history. The trended extra friction of the window is the mean
+/// compensated residual in the direction of motion over the same samples,
+///   f_j = mean( (r_j - k_T,j qd_j (T_j - T_ref)) sign(qd_j) )   [A] (x drive gain: [N·m] when known)
+/// = extra Coulomb + extra viscous x mean|qd_j| (+ a misfit constant over whole cycles): one
+/// well-conditioned number per window (a + b v alone swings with the collinearity of sign(qd) and
+/// qd). Its nominal is the twin's friction at v_ref,j = the mean |qd_j| of the first windows. Also
+/// per window: residual energy E_j = sum r_j^2 dt [A²·s] and the mean total current
+/// I_total = sum_j |i_j| [A].
 ///
 /// Trend test per joint over the last `history` windows: the Mann–Kendall statistic
 /// [Mann1945, Kendall1975] z of the series and the Theil–Sen slope [Sen1968] (median of pairwise
@@ -123,8 +127,9 @@ class TrendDetector {
   // accumulators of the open window, per joint: normal equations of [sign, qd, 1]
   std::vector<Eigen::Matrix3d> ata_;
   std::vector<Eigen::Vector3d> atb_;
-  VectorJ energy_, temp_sum_, speed_sum_, headroom_;
+  VectorJ energy_, temp_sum_, speed_sum_, dissip_, headroom_;
   std::vector<long> moving_, temp_n_;
+  std::vector<double> margins_;  // last threshold margins per joint (debounce-aware headroom)
   long samples_ = 0;
   double itot_sum_ = 0.0, t_open_ = 0.0, t_prev_ = 0.0;
   bool started_ = false;
