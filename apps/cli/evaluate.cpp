@@ -44,6 +44,15 @@ const char* kFigure8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt
 const char* kFigure8Fast = "{type: figure_eight, size: [0.12, 0.08], period: 6, tilt: [0.3, 0.4, 0.5]}";
 const char* kFigure8Slow = "{type: figure_eight, size: [0.12, 0.08], period: 11, tilt: [0.3, 0.4, 0.5]}";
 
+// pick-and-place between two stations (scenarios/ur3e/long): approach, descend, dwell, lift, transfer
+#define TW_PP_WAYPOINTS                                                                                                          \
+  "[[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "    \
+  "[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3], [0.6, -1.2, 1.45, -1.8, -1.85, -0.3], "      \
+  "[0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3]]"
+const char* kPickPlace = "{type: point_to_point, waypoints: " TW_PP_WAYPOINTS ", durations: [0.8, 0.4, 0.8, 1.6, 0.8, 0.4, 0.8, 1.6]}";
+const char* kPickPlaceFast = "{type: point_to_point, waypoints: " TW_PP_WAYPOINTS ", durations: [0.6, 0.3, 0.6, 1.2, 0.6, 0.3, 0.6, 1.2]}";
+#undef TW_PP_WAYPOINTS
+
 std::string expected_class(const std::string& fault) {
   if (fault == "resistance") return "resistance";
   if (fault == "friction_growth") return "wear";
@@ -90,17 +99,27 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet) {
   ident::TwinModel twin = ident::identify_physics(robot, {{&exc, {}}, {&fig, p}}, ident::IdentOptions{}, report);
   say(fmt::format("   identified: current RMSE per joint {:.3f} A", fmt::join(report.rmse, " ")));
   // thresholds on other healthy runs: three speeds, with and without payload
-  say("   learning thresholds on separate healthy runs (figure-eight at 3 speeds with/without payload, triangle)");
+  say("   learning thresholds on separate healthy runs (figure-eight at 3 speeds with/without payload, triangle at 3 speeds, "
+      "pick-and-place)");
   std::vector<device::Recording> hs;
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8, 1003, 24, 0.5), "h1"));
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8Fast, 1004, 18, 0.5), "h2"));
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8Slow, 1005, 22, 0.0), "h3"));
   hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.2}", 1006, 17, 0.0), "h4"));
+  // thresholds are per program: every program the robot runs (other seeds than the evaluation's)
+  hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.3}", 1009, 12, 0.5), "h5"));
+  hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.12}", 1010, 20, 0.0), "h6"));
+  hs.push_back(simulate_to_memory(healthy(robot, kPickPlace, 1011, 22, 0.5), "h7"));
+  hs.push_back(simulate_to_memory(healthy(robot, kPickPlaceFast, 1012, 15, 0.0), "h8"));
   std::vector<monitor::HealthyRun> runs;
   runs.push_back({&hs[0], p});
   runs.push_back({&hs[1], p});
   runs.push_back({&hs[2], {}});
   runs.push_back({&hs[3], {}});
+  runs.push_back({&hs[4], p});
+  runs.push_back({&hs[5], {}});
+  runs.push_back({&hs[6], p});
+  runs.push_back({&hs[7], {}});
   monitor::MonitorConfig cfg = monitor::learn_thresholds(twin, runs);
   // slow-wear trend: the viscous friction's temperature slope on a healthy warm-up from cold and a
   // cool-down from warm of one program (the twin's training runs barely change temperature)

@@ -188,7 +188,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
 }};
 
 struct EvaluateOptions {
-  std::string dir, twin, robot = "ur3e", save_twin, trend_csv;
+  std::vector<std::string> dirs;
+  std::string twin, robot = "ur3e", save_twin, trend_csv;
   bool json = false, static_threshold = false, sweep = false;
   double max_duration = 0.0;
   cli::SweepOptions sweep_options;
@@ -204,17 +205,21 @@ int run_evaluate(const EvaluateOptions& o) {
     else cli::print_sweep(sw, o.sweep_options);
     return 0;
   }
-  if (o.dir.empty()) throw InvalidArgument("evaluate: give a SCENARIOS directory or file, or --sweep-collisions");
+  if (o.dirs.empty()) throw InvalidArgument("evaluate: give a SCENARIOS directory or file, or --sweep-collisions");
   if (!o.trend_csv.empty()) std::filesystem::remove(o.trend_csv);
   std::vector<std::string> files;
-  if (std::filesystem::is_directory(o.dir)) {
-    for (const auto& e : std::filesystem::directory_iterator(o.dir))
-      if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") files.push_back(e.path().string());
-  } else {
-    files.push_back(o.dir);
+  for (const auto& d : o.dirs) {
+    std::vector<std::string> here;
+    if (std::filesystem::is_directory(d)) {
+      for (const auto& e : std::filesystem::directory_iterator(d))
+        if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") here.push_back(e.path().string());
+    } else {
+      here.push_back(d);
+    }
+    if (here.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", d));
+    std::sort(here.begin(), here.end());
+    files.insert(files.end(), here.begin(), here.end());
   }
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
   const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv);
@@ -245,9 +250,9 @@ int run_report(const ReportOptions& o) {
 twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   auto o = std::make_shared<EvaluateOptions>();
   auto* sub = app.add_subcommand("evaluate", "Simulate scenarios, monitor them and score detection against the labels");
-  sub->add_option("SCENARIOS", o->dir,
+  sub->add_option("SCENARIOS", o->dirs,
                   "Scenario directory (e.g. scenarios/ur3e; scenarios/ur3e/long holds >= 1 h of nominal operation and the "
-                  "2-hour wear ramps) or one scenario file")
+                  "2-hour wear ramps) or scenario files; several may be given")
       ->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
