@@ -264,11 +264,17 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
   c.temperature_ref = twin.temperature_ref;
   c.temperature_slope = VectorJ::Zero(n);
   const int R = static_cast<int>(runs.size());
-  constexpr int P = 4;  // [sign, qd, 1, qd (T - T_ref)]
-  std::vector<Eigen::Matrix4d> A(static_cast<size_t>(n), Eigen::Matrix4d::Zero());
-  std::vector<Eigen::Vector4d> b(static_cast<size_t>(n), Eigen::Vector4d::Zero());
+  // columns: [sign, qd, 1] per program (its own misfit), one shared qd (T - T_ref)
+  int programs = 0;
+  for (const TrendRun& run : runs) {
+    if (run.program < 0) throw InvalidArgument(fmt::format("learn trend temperature: program index {} must be >= 0", run.program));
+    programs = std::max(programs, run.program + 1);
+  }
+  const int P = 3 * programs + 1;
+  std::vector<Eigen::MatrixXd> A(static_cast<size_t>(n), Eigen::MatrixXd::Zero(P, P));
+  std::vector<Eigen::VectorXd> b(static_cast<size_t>(n), Eigen::VectorXd::Zero(P));
   VectorJ tmin = VectorJ::Constant(n, std::numeric_limits<double>::infinity()), tmax = -tmin;
-  Eigen::Vector4d phi;
+  Eigen::VectorXd phi = Eigen::VectorXd::Zero(P);
   VectorJ i_hat;
   for (int ri = 0; ri < R; ++ri) {
     const TrendRun& run = runs[static_cast<size_t>(ri)];
@@ -286,7 +292,12 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
         tmin[j] = std::min(tmin[j], s.temperature[j]);
         tmax[j] = std::max(tmax[j], s.temperature[j]);
         // pooled normal equations of r = a sign(qd) + b qd + c + k_T qd (T - T_ref)
-        phi << sgn(s.qd[j]), s.qd[j], 1.0, s.qd[j] * (s.temperature[j] - c.temperature_ref);
+        const int g = 3 * run.program;
+        phi.setZero();
+        phi(g) = sgn(s.qd[j]);
+        phi(g + 1) = s.qd[j];
+        phi(g + 2) = 1.0;
+        phi(P - 1) = s.qd[j] * (s.temperature[j] - c.temperature_ref);
         A[static_cast<size_t>(j)].noalias() += phi * phi.transpose();
         b[static_cast<size_t>(j)].noalias() += phi * (s.current[j] - i_hat[j]);
       }
@@ -297,7 +308,7 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
       throw InvalidArgument(fmt::format("learn trend temperature: joint {} temperature spans {:.1f} °C over the runs, need >= {:.1f} °C "
                                         "(give a warm-up from cold)",
                                         j + 1, std::isfinite(tmax[j] - tmin[j]) ? tmax[j] - tmin[j] : 0.0, kMinTemperatureSpan));
-    Eigen::Matrix4d M = A[static_cast<size_t>(j)];
+    Eigen::MatrixXd M = A[static_cast<size_t>(j)];
     M.diagonal().array() += kRidge * M.trace();
     c.temperature_slope[j] = M.ldlt().solve(b[static_cast<size_t>(j)])(P - 1);
   }

@@ -144,7 +144,10 @@ int run_thresholds(const ThresholdOptions& o) {
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
   for (const auto& r : recs) runs.push_back({&r, p});
-  const auto cfg = monitor::learn_thresholds(twin, runs);
+  // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
+  monitor::MonitorConfig settings;
+  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
+  const auto cfg = monitor::learn_thresholds(twin, runs, settings);
   twin.monitor_json = cfg.to_json();
   twin.save(o.twin);
   fmt::print("thresholds learned from {} healthy recording(s) and stored in {}\n", recs.size(), o.twin);

@@ -143,16 +143,17 @@ class TrendDetector {
   bool warn_pending_ = false;
 };
 
-/// Learns the temperature slope k_T of the viscous friction per joint from healthy runs of one
-/// program that together span a range of joint temperatures (a warm-up from cold, a cool-down from
-/// warm): the pooled least squares of the twin's current residual on
-/// [sign(qd), qd, 1, qd (T - T_ref)] over the moving samples. Returns `settings` with
-/// temperature_slope and temperature_ref (the twin's) set.
+/// Learns the temperature slope k_T of the viscous friction per joint from healthy runs that span
+/// a range of joint temperatures (per program a warm-up from cold and a cool-down from warm): the
+/// pooled least squares of the twin's current residual on [sign(qd), qd, 1] of each program (its
+/// own misfit) and one shared qd (T - T_ref), over the moving samples. Fast programs give the slope
+/// its leverage. Returns `settings` with temperature_slope and temperature_ref (the twin's) set.
 /// Throws InvalidArgument when no run carries temperatures or a joint's temperature does not vary
 /// (span < 1 °C over the runs: nothing to learn from).
 struct TrendRun {
   const device::Recording* recording = nullptr;
   model::RigidBodyInertia payload;
+  int program = 0;  ///< runs of one program share its Coulomb/viscous/offset misfit (0-based)
 };
 TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs,
                                     const TrendConfig& settings = {});
