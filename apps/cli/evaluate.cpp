@@ -2,11 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
@@ -40,13 +44,40 @@ const char* kFigure8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt
 const char* kFigure8Fast = "{type: figure_eight, size: [0.12, 0.08], period: 6, tilt: [0.3, 0.4, 0.5]}";
 const char* kFigure8Slow = "{type: figure_eight, size: [0.12, 0.08], period: 11, tilt: [0.3, 0.4, 0.5]}";
 
+// pick-and-place between two stations (scenarios/ur3e/long): approach, descend, dwell, lift, transfer
+#define TW_PP_WAYPOINTS                                                                                                          \
+  "[[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "    \
+  "[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3], [0.6, -1.2, 1.45, -1.8, -1.85, -0.3], "      \
+  "[0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3]]"
+const char* kPickPlace = "{type: point_to_point, waypoints: " TW_PP_WAYPOINTS ", durations: [0.8, 0.4, 0.8, 1.6, 0.8, 0.4, 0.8, 1.6]}";
+const char* kPickPlaceFast = "{type: point_to_point, waypoints: " TW_PP_WAYPOINTS ", durations: [0.6, 0.3, 0.6, 1.2, 0.6, 0.3, 0.6, 1.2]}";
+#undef TW_PP_WAYPOINTS
+
 std::string expected_class(const std::string& fault) {
-  if (fault == "resistance" || fault == "friction_growth") return "resistance";
+  if (fault == "resistance") return "resistance";
+  if (fault == "friction_growth") return "wear";
   if (fault == "payload_loss" || fault == "payload_pick") return "payload_change";
   if (fault == "collision") return "collision";
   if (fault == "current_offset" || fault == "stuck_current") return "sensor_fault";
   if (fault == "dropped_samples" || fault == "timestamp_jitter") return "stream_fault";
   return "unknown";
+}
+
+// appends one scenario's per-window trend history: scenario, t, joint, friction, coulomb, viscous,
+// energy, temperature, valid, I_total
+void append_trend_csv(const std::string& path, const std::string& name, const monitor::TrendDetector& tr) {
+  const bool fresh = !std::filesystem::exists(path);
+  std::ofstream f(path, std::ios::app);
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  if (fresh) f << "scenario,t,joint,friction,coulomb,viscous,energy,temperature,valid,i_total\n";
+  const auto& it = tr.total_current();
+  for (int j = 0; j < tr.n_dof(); ++j) {
+    const auto& h = tr.history(j);
+    const size_t off = it.size() - h.size();
+    for (size_t k = 0; k < h.size(); ++k)
+      f << fmt::format("{},{:.3f},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.2f},{},{:.5f}\n", name, h[k].t, j + 1, h[k].friction, h[k].coulomb,
+                       h[k].viscous, h[k].energy, h[k].temperature, h[k].valid ? 1 : 0, it[off + k]);
+  }
 }
 
 }  // namespace
@@ -68,25 +99,45 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   ident::TwinModel twin = ident::identify_physics(robot, {{&exc, {}}, {&fig, p}}, ident::IdentOptions{}, report);
   say(fmt::format("   identified: current RMSE per joint {:.3f} A", fmt::join(report.rmse, " ")));
   // thresholds on other healthy runs: three speeds, with and without payload
-  say("   learning thresholds on separate healthy runs (figure-eight at 3 speeds with/without payload, triangle)");
+  say("   learning thresholds on separate healthy runs (figure-eight at 3 speeds with/without payload, triangle at 3 speeds, "
+      "pick-and-place)");
   std::vector<device::Recording> hs;
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8, 1003, 24, 0.5), "h1"));
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8Fast, 1004, 18, 0.5), "h2"));
   hs.push_back(simulate_to_memory(healthy(robot, kFigure8Slow, 1005, 22, 0.0), "h3"));
   hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.2}", 1006, 17, 0.0), "h4"));
+  // thresholds are per program: every program the robot runs (other seeds than the evaluation's)
+  hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.3}", 1009, 12, 0.5), "h5"));
+  hs.push_back(simulate_to_memory(healthy(robot, "{type: triangle, side: 0.15, speed: 0.12}", 1010, 20, 0.0), "h6"));
+  hs.push_back(simulate_to_memory(healthy(robot, kPickPlace, 1011, 22, 0.5), "h7"));
+  hs.push_back(simulate_to_memory(healthy(robot, kPickPlaceFast, 1012, 15, 0.0), "h8"));
   std::vector<monitor::HealthyRun> runs;
   runs.push_back({&hs[0], p});
   runs.push_back({&hs[1], p});
   runs.push_back({&hs[2], {}});
   runs.push_back({&hs[3], {}});
+  runs.push_back({&hs[4], p});
+  runs.push_back({&hs[5], {}});
+  runs.push_back({&hs[6], p});
+  runs.push_back({&hs[7], {}});
   monitor::MonitorConfig settings;
   settings.residual_filter = residual_filter;
-  twin.monitor_json = monitor::learn_thresholds(twin, runs, settings).to_json();
+  monitor::MonitorConfig cfg = monitor::learn_thresholds(twin, runs, settings);
+  // slow-wear trend: the viscous friction's temperature slope on a healthy warm-up from cold and a
+  // cool-down from warm of one program (the twin's training runs barely change temperature)
+  say("   learning the wear trend's temperature slope (figure-eight with payload: 600 s from cold, 600 s from warm)");
+  sim::Scenario cold = healthy(robot, kFigure8, 1007, 600, 0.5);
+  cold.options.cold_start = true;
+  const auto hc = simulate_to_memory(cold, "trend-cold");
+  const auto hw = simulate_to_memory(healthy(robot, kFigure8, 1008, 600, 0.5), "trend-warm");
+  cfg.trend = monitor::learn_trend_temperature(twin, {{&hc, p}, {&hw, p}}, cfg.trend);
+  say(fmt::format("   temperature slope per joint {:.2e} A·s/rad/°C", fmt::join(cfg.trend.temperature_slope, " ")));
+  twin.monitor_json = cfg.to_json();
   return twin;
 }
 
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
-                              double max_duration, bool quiet, const std::string& report_dir) {
+                              double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv) {
   Evaluation ev;
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
   if (static_threshold) cfg.use_dynamic = false;
@@ -99,10 +150,20 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     const auto labels = nlohmann::json::parse(sim::labels_json(s));
     ident::TwinModel t = twin;
     t.set_payload(s.options.payload);  // what the program declares
-    monitor::Monitor mon(t, cfg);
+    monitor::MonitorConfig scfg = cfg;
+    scfg.trend.cycle_period = s.trajectory->period();  // the program's cycle time
+    monitor::Monitor mon(t, scfg);
     auto simulator = sim::make_simulator(s);
-    simulator->run([&](const RobotSample& x) { mon.push(x); });
+    const bool long_run = s.options.duration > 300;
+    double shown = 0.0;
+    simulator->run([&](const RobotSample& x) { mon.push(x); },
+                   [&](double f) {
+                     if (quiet || !long_run || f < shown + 0.25) return;
+                     shown = f;
+                     fmt::print("   {} {:.0f} %\n", s.name, 100 * f);
+                   });
     mon.finish();
+    if (!trend_csv.empty()) append_trend_csv(trend_csv, s.name, mon.trend());
     // score: each labelled fault is detected by the first event that starts inside its window;
     // events matching no fault window are false alarms
     std::vector<bool> used(mon.events().size(), false);
@@ -128,7 +189,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         sc.detected = true;
         sc.delay_ms = 1000.0 * std::max(0.0, e.t_detected - onset);
         sc.predicted_class = std::string(monitor::to_string(e.fault));
-        sc.class_ok = sc.predicted_class == want;
+        sc.class_ok = sc.predicted_class == want || (want == "wear" && sc.predicted_class == "resistance");
         const int lj = lf["joint"].is_null() ? -1 : lf["joint"].get<int>() - 1;
         const int ll = lf["link"].is_null() ? -1 : lf["link"].get<int>() - 1;
         sc.joint_ok = ll >= 0 ? e.link == ll : (lj >= 0 ? e.joint == lj : true);
@@ -143,10 +204,24 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       sc.duration_s = s.options.duration;
       scs.push_back(sc);
     }
-    int fa = 0;
+    int fa = 0, wfa = 0;
     for (size_t k = 0; k < used.size(); ++k)
-      if (!used[k]) ++fa;
+      if (!used[k]) {
+        ++fa;
+        if (mon.events()[k].fault == monitor::FaultClass::Wear) ++wfa;
+      }
     scs.front().false_alarms = fa;
+    scs.front().wear_false_alarms = wfa;
+    // the first wear warning and the first threshold alert (stream gaps aside)
+    for (const auto& e : mon.events()) {
+      if (e.fault == monitor::FaultClass::Wear && !std::isfinite(scs.front().t_first_wear)) {
+        scs.front().t_first_wear = e.t_detected;
+        scs.front().wear_detail = e.detail;
+      }
+      if (e.fault != monitor::FaultClass::Wear && e.fault != monitor::FaultClass::StreamFault && !std::isfinite(scs.front().t_first_alert))
+        scs.front().t_first_alert = e.t_detected;
+    }
+    ev.wear_false_alarms += wfa;
     ev.false_alarms += fa;
     // monitored time outside fault windows counts towards the false-alarm rate
     ev.monitored_hours += s.options.duration / 3600.0;
@@ -163,14 +238,152 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
   return ev;
 }
 
+void SweepOptions::validate() const {
+  if (links.empty()) throw InvalidArgument("sweep links is empty, give at least one link");
+  for (int l : links)
+    if (l < 1 || l > 6) throw InvalidArgument(fmt::format("sweep link {} is out of range, expected 1..6", l));
+  if (magnitudes.empty()) throw InvalidArgument("sweep magnitudes is empty, give at least one");
+  for (double m : magnitudes)
+    if (!(m > 0.0)) throw InvalidArgument(fmt::format("sweep magnitude {} N·m, must be > 0", m));
+  if (!(max_delay > 0.0)) throw InvalidArgument(fmt::format("sweep max_delay is {} s, must be > 0", max_delay));
+}
+
+Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool quiet) {
+  o.validate();
+  // contact points and the onset phase of the library's collision scenarios, per link
+  auto point_of = [](int link) -> std::string {
+    if (link == 2) return "[-0.12, 0.0, 0.1]";
+    if (link == 3) return "[-0.1, 0.0, 0.03]";
+    return "[0.0, -0.04, 0.03]";
+  };
+  constexpr double kOnset = 10.0, kDuration = 16.0, kWindowAfter = 1.0;
+  std::vector<double> mags = o.magnitudes;
+  std::sort(mags.begin(), mags.end(), std::greater<>());
+  const monitor::MonitorConfig base = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  Sweep sw;
+  unsigned seed = o.seed;
+  int done = 0;
+  const int total = static_cast<int>(o.links.size() * mags.size());
+  for (int link : o.links)
+    for (double m : mags) {
+      SweepRun run;
+      run.link = link;
+      run.magnitude = m;
+      run.seed = seed++;
+      // the onset moves with the seed so that contacts hit different phases of the cycle
+      const double onset = kOnset + 0.37 * static_cast<double>(run.seed % 11);
+      const std::string yaml = fmt::format(
+          "robot: ur3e\nseed: {}\nduration: {}\ntrajectory: {}\npayload: {{mass: 0.5, com: [0, 0, 0.04]}}\n"
+          "faults:\n  - {{type: collision, link: {}, onset: {}, magnitude: {}, duration: 0.05, point: {}, direction: [0.3, 1.0, -0.2]}}\n",
+          run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
+      const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m));
+      const device::Recording rec = simulate_to_memory(s, s.path);
+      ident::TwinModel t = twin;
+      t.set_payload(s.options.payload);
+      for (int k = 0; k < 2; ++k) {
+        monitor::MonitorConfig cfg = base;
+        cfg.use_dynamic = k == 1;
+        cfg.trend.enabled = false;  // 16 s runs: no trend
+        monitor::Monitor mon(t, cfg);
+        for (const auto& x : rec.samples) mon.push(x);
+        mon.finish();
+        // detection: the first alert raised between the onset and onset + max_delay
+        for (const auto& e : mon.events()) {
+          const bool in_window = e.t_end >= onset - 0.01 && e.t_start <= onset + 0.05 + kWindowAfter;
+          if (!in_window) {
+            ++run.false_alarms[k];
+            continue;
+          }
+          if (!run.detected[k] && e.t_detected - onset <= o.max_delay) {
+            run.detected[k] = true;
+            run.delay_ms[k] = 1000.0 * std::max(0.0, e.t_detected - onset);
+          }
+        }
+      }
+      sw.runs.push_back(run);
+      ++done;
+      if (!quiet)
+        fmt::print("   [{}/{}] link {} {:>5.2f} N·m: static {} dynamic {}\n", done, total, link, m,
+                   run.detected[0] ? fmt::format("{:.0f} ms", run.delay_ms[0]) : "missed",
+                   run.detected[1] ? fmt::format("{:.0f} ms", run.delay_ms[1]) : "missed");
+    }
+  // detection limits: walk down the magnitudes until the first miss
+  sw.limit.assign(2, std::vector<double>(o.links.size(), std::numeric_limits<double>::quiet_NaN()));
+  for (int k = 0; k < 2; ++k) {
+    double every = 0.0;
+    for (size_t li = 0; li < o.links.size(); ++li) {
+      for (double m : mags) {
+        bool hit = false;
+        for (const auto& r : sw.runs)
+          if (r.link == o.links[li] && r.magnitude == m) hit = r.detected[k];
+        if (!hit) break;
+        sw.limit[static_cast<size_t>(k)][li] = m;
+      }
+      const double l = sw.limit[static_cast<size_t>(k)][li];
+      every = std::isfinite(every) && std::isfinite(l) ? std::max(every, l) : std::numeric_limits<double>::quiet_NaN();
+    }
+    sw.every_link[k] = every;
+  }
+  return sw;
+}
+
+void print_sweep(const Sweep& s, const SweepOptions& o) {
+  fmt::print("\n{:>6} {:>8} {:>6} {:>16} {:>16}\n", "link", "N·m", "seed", "static delay ms", "dynamic delay ms");
+  for (const auto& r : s.runs)
+    fmt::print("{:>6} {:>8.2f} {:>6} {:>16} {:>16}\n", r.link, r.magnitude, r.seed,
+               r.detected[0] ? fmt::format("{:.0f}", r.delay_ms[0]) : "missed", r.detected[1] ? fmt::format("{:.0f}", r.delay_ms[1]) : "missed");
+  auto lim = [](double v) { return std::isfinite(v) ? fmt::format("{:g}", v) : std::string("none"); };
+  fmt::print("\nsmallest magnitude from which every larger contact was detected [N·m]\n{:<10}", "threshold");
+  for (int l : o.links) fmt::print(" {:>8}", fmt::format("link {}", l));
+  fmt::print(" {:>12}\n", "every link");
+  const char* names[2] = {"static", "dynamic"};
+  for (int k = 0; k < 2; ++k) {
+    fmt::print("{:<10}", names[k]);
+    for (double v : s.limit[static_cast<size_t>(k)]) fmt::print(" {:>8}", lim(v));
+    fmt::print(" {:>12}\n", lim(s.every_link[k]));
+  }
+  int fa[2] = {0, 0};
+  for (const auto& r : s.runs) {
+    fa[0] += r.false_alarms[0];
+    fa[1] += r.false_alarms[1];
+  }
+  fmt::print("false alarms outside the contact windows: static {}, dynamic {}\n", fa[0], fa[1]);
+}
+
+std::string sweep_json(const Sweep& s, const SweepOptions& o) {
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json j;
+  j["runs"] = nlohmann::json::array();
+  for (const auto& r : s.runs)
+    j["runs"].push_back({{"link", r.link}, {"magnitude_Nm", r.magnitude}, {"seed", r.seed},
+                         {"static", {{"detected", r.detected[0]}, {"delay_ms", r.detected[0] ? num(r.delay_ms[0]) : nullptr}, {"false_alarms", r.false_alarms[0]}}},
+                         {"dynamic", {{"detected", r.detected[1]}, {"delay_ms", r.detected[1] ? num(r.delay_ms[1]) : nullptr}, {"false_alarms", r.false_alarms[1]}}}});
+  const char* names[2] = {"static", "dynamic"};
+  for (int k = 0; k < 2; ++k) {
+    nlohmann::json per = nlohmann::json::object();
+    for (size_t li = 0; li < o.links.size(); ++li) per[fmt::format("link{}", o.links[li])] = num(s.limit[static_cast<size_t>(k)][li]);
+    j["smallest_detected"][names[k]] = {{"per_link", per}, {"every_link", num(s.every_link[k])}};
+  }
+  return j.dump();
+}
+
 void print_evaluation(const Evaluation& e) {
   fmt::print("\n{:<28} {:<16} {:>8} {:>10} {:>8} {:>8} {:>7}\n", "scenario", "fault", "detected", "delay ms", "class", "joint", "false");
   for (const auto& s : e.scores)
     fmt::print("{:<28} {:<16} {:>8} {:>10} {:>8} {:>8} {:>7}\n", s.name, s.has_fault ? s.fault : "-",
                s.has_fault ? (s.detected ? "yes" : "NO") : "-", s.detected ? fmt::format("{:.0f}", s.delay_ms) : "-",
                s.detected ? (s.class_ok ? "ok" : "wrong") : "-", s.detected ? (s.joint_ok ? "ok" : "wrong") : "-", s.false_alarms);
-  fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour)\n", e.false_alarms, e.monitored_hours,
-             e.false_alarms_per_hour());
+  bool any_wear = false;
+  for (const auto& s : e.scores) any_wear |= std::isfinite(s.t_first_wear) || s.fault == "friction_growth";
+  if (any_wear) {
+    fmt::print("\n{:<28} {:>18} {:>22}   {}\n", "scenario", "wear warning at s", "first threshold at s", "warning");
+    for (const auto& s : e.scores)
+      if (std::isfinite(s.t_first_wear) || s.fault == "friction_growth")
+        fmt::print("{:<28} {:>18} {:>22}   {}\n", s.name, std::isfinite(s.t_first_wear) ? fmt::format("{:.0f}", s.t_first_wear) : "-",
+                   std::isfinite(s.t_first_alert) ? fmt::format("{:.1f}", s.t_first_alert) : "-", s.wear_detail);
+  }
+  fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
+             e.false_alarms_per_hour(), e.wear_false_alarms);
 }
 
 std::string evaluation_json(const Evaluation& e) {
@@ -185,9 +398,16 @@ std::string evaluation_json(const Evaluation& e) {
                               {"class_ok", s.class_ok},
                               {"joint_ok", s.joint_ok},
                               {"magnitude", s.magnitude},
-                              {"false_alarms", s.false_alarms}});
+                              {"false_alarms", s.false_alarms},
+                              {"wear_false_alarms", s.wear_false_alarms},
+                              {"duration_s", s.duration_s},
+                              {"first_wear_warning_s", std::isfinite(s.t_first_wear) ? nlohmann::json(s.t_first_wear) : nlohmann::json(nullptr)},
+                              {"first_threshold_alert_s", std::isfinite(s.t_first_alert) ? nlohmann::json(s.t_first_alert) : nlohmann::json(nullptr)},
+                              {"wear_warning", s.wear_detail}});
   j["false_alarms_per_hour"] = e.false_alarms_per_hour();
   j["monitored_hours"] = e.monitored_hours;
+  j["false_alarms"] = e.false_alarms;
+  j["wear_false_alarms"] = e.wear_false_alarms;
   return j.dump();
 }
 

@@ -2,6 +2,7 @@
 // Shared by `twinwatch evaluate` and `twinwatch demo`: train a reference twin on simulated healthy
 // runs, then monitor scenarios and score the events against their labels (evaluation code: the
 // only place that reads labels, DESIGN.md rule 1).
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -19,21 +20,55 @@ struct ScenarioScore {
   bool has_fault = false, detected = false, class_ok = false, joint_ok = false;
   double delay_ms = 0.0, magnitude = 0.0, true_magnitude = 0.0;
   int false_alarms = 0;
+  int wear_false_alarms = 0;   ///< false alarms that were wear warnings
   double duration_s = 0.0;
+  double t_first_wear = std::numeric_limits<double>::quiet_NaN();   ///< [s] first wear warning
+  double t_first_alert = std::numeric_limits<double>::quiet_NaN();  ///< [s] first threshold alert (no stream gaps)
+  std::string wear_detail;
 };
 
 struct Evaluation {
   std::vector<ScenarioScore> scores;
-  int false_alarms = 0;
+  int false_alarms = 0, wear_false_alarms = 0;
   double monitored_hours = 0.0;
   double false_alarms_per_hour() const { return monitored_hours > 0 ? false_alarms / monitored_hours : 0.0; }
 };
 
 /// Runs every scenario file: simulate, monitor with `twin`, score against the labels.
 /// `max_duration` skips longer scenarios (0: none skipped). `report_dir` (may be empty) gets one
-/// HTML report per scenario.
+/// HTML report per scenario. `trend_csv` (may be empty) gets the per-window wear-trend history
+/// of every scenario appended.
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
-                              double max_duration, bool quiet, const std::string& report_dir = "");
+                              double max_duration, bool quiet, const std::string& report_dir = "", const std::string& trend_csv = "");
+
+/// Collision-sensitivity sweep [Cao §5]: contacts of decreasing magnitude on several links, each
+/// run monitored with the static [UR3e §4.1] and the dynamic [Cao eq. 24] threshold.
+struct SweepOptions {
+  std::vector<int> links{2, 3, 5};  ///< 1-based links
+  std::vector<double> magnitudes{10, 8, 6, 5, 4, 3, 2.5, 2, 1.5, 1.25, 1, 0.75, 0.5};  ///< [N·m] joint-equivalent peak
+  unsigned seed = 7000;             ///< first noise seed (one per run; the library and training do not use 7000+)
+  double max_delay = 0.2;           ///< [s] an alert later than this after the onset is not a detection of the pulse
+  void validate() const;
+};
+struct SweepRun {
+  int link = 0;
+  double magnitude = 0.0;
+  unsigned seed = 0;
+  bool detected[2] = {false, false};           ///< [0] static, [1] dynamic
+  double delay_ms[2] = {0.0, 0.0};
+  int false_alarms[2] = {0, 0};
+};
+struct Sweep {
+  std::vector<SweepRun> runs;
+  /// Per threshold ([0] static, [1] dynamic) and link: the smallest magnitude from which every
+  /// larger one in the sweep was detected (NaN: not even the largest).
+  std::vector<std::vector<double>> limit;
+  /// Per threshold: the smallest magnitude detected on every link (max over links of limit).
+  double every_link[2] = {0.0, 0.0};
+};
+Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool quiet);
+void print_sweep(const Sweep& s, const SweepOptions& o);
+std::string sweep_json(const Sweep& s, const SweepOptions& o);
 
 void print_evaluation(const Evaluation& e);
 std::string evaluation_json(const Evaluation& e);

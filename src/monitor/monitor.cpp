@@ -91,6 +91,32 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   return out;
 }
 
+nlohmann::json trend_json(const TrendConfig& t) {
+  nlohmann::json j{{"enabled", t.enabled}, {"window_s", t.window_s}, {"cycle_period", t.cycle_period}, {"v_min", t.v_min},
+                   {"min_moving_fraction", t.min_moving_fraction}, {"baseline_windows", t.baseline_windows},
+                   {"min_windows", t.min_windows}, {"history", t.history}, {"z_crit", t.z_crit},
+                   {"min_rate_pct_per_h", t.min_rate_pct_per_h}, {"persist", t.persist}, {"temperature_ref", t.temperature_ref}};
+  if (t.temperature_slope.size()) j["temperature_slope"] = vec_json(t.temperature_slope);
+  return j;
+}
+TrendConfig trend_from_json(const nlohmann::json& j) {
+  TrendConfig t;
+  t.enabled = j.value("enabled", t.enabled);
+  t.window_s = j.value("window_s", t.window_s);
+  t.cycle_period = j.value("cycle_period", t.cycle_period);
+  t.v_min = j.value("v_min", t.v_min);
+  t.min_moving_fraction = j.value("min_moving_fraction", t.min_moving_fraction);
+  t.baseline_windows = j.value("baseline_windows", t.baseline_windows);
+  t.min_windows = j.value("min_windows", t.min_windows);
+  t.history = j.value("history", t.history);
+  t.z_crit = j.value("z_crit", t.z_crit);
+  t.min_rate_pct_per_h = j.value("min_rate_pct_per_h", t.min_rate_pct_per_h);
+  t.persist = j.value("persist", t.persist);
+  t.temperature_ref = j.value("temperature_ref", t.temperature_ref);
+  if (j.contains("temperature_slope")) t.temperature_slope = json_vec(j["temperature_slope"]);
+  return t;
+}
+
 }  // namespace
 
 void MonitorConfig::validate(int n) const {
@@ -106,6 +132,7 @@ void MonitorConfig::validate(int n) const {
     if (!(sensitivity[j] > 0.0)) throw InvalidArgument(fmt::format("sensitivity of joint {} is {}, must be > 0", j + 1, sensitivity[j]));
   if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
   check_residual_filter(*this, n);
+  trend.validate(n);
 }
 
 std::string MonitorConfig::to_json() const {
@@ -121,6 +148,7 @@ std::string MonitorConfig::to_json() const {
   if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
+  j["trend"] = trend_json(trend);
   return j.dump();
 }
 
@@ -140,6 +168,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"]);
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
+    if (j.contains("trend")) c.trend = trend_from_json(j["trend"]);
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
   }
@@ -197,6 +226,15 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   }
   window_.reserve(cap);
   events_.reserve(64);
+  // slow-wear trend in torque units when the drive gains are known
+  VectorJ g = VectorJ::Ones(n_);
+  if (twin_.gains_known())
+    for (int j = 0; j < n_; ++j) g[j] = torque_gain(j);
+  // the loop compensates the residual for temperature itself (push), the detector gets it compensated
+  temp_slope_ = cfg_.trend.temperature_slope.size() == n_ ? cfg_.trend.temperature_slope : VectorJ(VectorJ::Zero(n_));
+  TrendConfig tc = cfg_.trend;
+  tc.temperature_slope = VectorJ::Zero(n_);
+  trend_ = TrendDetector(twin_, tc, g, twin_.gains_known() ? "N·m" : "A");
 }
 
 double Monitor::torque_gain(int j) const {
@@ -302,6 +340,11 @@ void Monitor::push(const RobotSample& s) {
   }
   twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_);
   r_ = s.current - i_hat_;
+  // temperature: the viscous friction's slope learned on a healthy warm-up (trend.hpp), so that
+  // neither the thresholds nor the wear trend see a cooling or warming joint as a fault
+  for (int j = 0; j < n_; ++j)
+    if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
+      r_[j] -= temp_slope_[j] * s.qd[j] * (s.temperature[j] - cfg_.trend.temperature_ref);
   if (!filter_started_) {
     rf_ = r_;
     filter_started_ = true;
@@ -388,6 +431,11 @@ void Monitor::push(const RobotSample& s) {
       open_ = -1;
       if (on_event) on_event(done);
     }
+  }
+  // slow wear: per-window friction trend (samples of an open alert are left out)
+  if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0)) {
+    events_.push_back(trend_.warning());
+    if (on_event) on_event(events_.back());
   }
   qd_prev_ = s.qd;
   t_prev_ = t;

@@ -28,7 +28,7 @@ struct MonitorOptions {
   std::string twin, recording, events_path, db_path = "events.db";
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
   double duration = 0.0, wait = 0.0;
-  double payload_mass = 0.0;
+  double payload_mass = 0.0, cycle_period = 0.0;
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
@@ -75,6 +75,7 @@ int run_monitor(const MonitorOptions& o) {
                          "'twinwatch thresholds --filter {}' for this filter\n",
                  o.twin, learned.empty() ? "iir" : fmt::format("{}", fmt::join(learned, ",")), o.filter);
   }
+  if (o.cycle_period > 0) cfg.trend.cycle_period = o.cycle_period;
   if (!o.sensitivity.empty()) {
     if (static_cast<int>(o.sensitivity.size()) == 1) cfg.sensitivity = VectorJ::Constant(twin.n_dof(), o.sensitivity[0]);
     else {
@@ -175,7 +176,9 @@ int run_thresholds(const ThresholdOptions& o) {
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
   for (const auto& r : recs) runs.push_back({&r, p});
+  // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
+  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
   const auto cfg = monitor::learn_thresholds(twin, runs, settings);
   twin.monitor_json = cfg.to_json();
@@ -205,6 +208,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--cycle-period", o->cycle_period,
+                  "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
+                  "trend.window_s)");
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_monitor(*o)); });
@@ -221,28 +227,45 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
 }};
 
 struct EvaluateOptions {
-  std::string dir, twin, robot = "ur3e", save_twin, filter;
-  bool json = false, static_threshold = false;
+  std::vector<std::string> dirs;
+  std::string twin, robot = "ur3e", save_twin, trend_csv, filter;
+  bool json = false, static_threshold = false, sweep = false;
   double max_duration = 0.0;
+  cli::SweepOptions sweep_options;
 };
 
 int run_evaluate(const EvaluateOptions& o) {
-  std::vector<std::string> files;
-  if (std::filesystem::is_directory(o.dir)) {
-    for (const auto& e : std::filesystem::directory_iterator(o.dir))
-      if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") files.push_back(e.path().string());
-  } else {
-    files.push_back(o.dir);
+  if (o.sweep) {
+    o.sweep_options.validate();
+    const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+    if (!o.save_twin.empty()) twin.save(o.save_twin);
+    const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
+    if (o.json) fmt::print("{}\n", cli::sweep_json(sw, o.sweep_options));
+    else cli::print_sweep(sw, o.sweep_options);
+    return 0;
   }
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", o.dir));
+  if (o.dirs.empty()) throw InvalidArgument("evaluate: give a SCENARIOS directory or file, or --sweep-collisions");
+  if (!o.trend_csv.empty()) std::filesystem::remove(o.trend_csv);
+  std::vector<std::string> files;
+  for (const auto& d : o.dirs) {
+    std::vector<std::string> here;
+    if (std::filesystem::is_directory(d)) {
+      for (const auto& e : std::filesystem::directory_iterator(d))
+        if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") here.push_back(e.path().string());
+    } else {
+      here.push_back(d);
+    }
+    if (here.empty()) throw InvalidArgument(fmt::format("{}: no scenario files (*.yaml) found", d));
+    std::sort(here.begin(), here.end());
+    files.insert(files.end(), here.begin(), here.end());
+  }
   if (!o.filter.empty() && !o.twin.empty())
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
   const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter))
                                                : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
-  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json);
+  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);
   return 0;
@@ -270,7 +293,10 @@ int run_report(const ReportOptions& o) {
 twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   auto o = std::make_shared<EvaluateOptions>();
   auto* sub = app.add_subcommand("evaluate", "Simulate scenarios, monitor them and score detection against the labels");
-  sub->add_option("SCENARIOS", o->dir, "Scenario directory (e.g. scenarios/ur3e) or one scenario file")->required()->check(CLI::ExistingPath);
+  sub->add_option("SCENARIOS", o->dirs,
+                  "Scenario directory (e.g. scenarios/ur3e; scenarios/ur3e/long holds >= 1 h of nominal operation and the "
+                  "2-hour wear ramps) or scenario files; several may be given")
+      ->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
@@ -278,6 +304,19 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
+  sub->add_option("--trend-csv", o->trend_csv,
+                  "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
+                  "temperature, I_total) to this CSV");
+  sub->add_flag("--sweep-collisions", o->sweep,
+                "Instead of scenario files: collisions of decreasing magnitude on --links, each monitored with the static "
+                "and the dynamic threshold; prints the smallest contact detected on every link (Cao: 10 vs 5 N·m)");
+  sub->add_option("--links", o->sweep_options.links, "With --sweep-collisions: links to hit (1-based)")->capture_default_str();
+  sub->add_option("--magnitudes", o->sweep_options.magnitudes, "With --sweep-collisions: peak joint-equivalent torques [N·m]")
+      ->capture_default_str();
+  sub->add_option("--sweep-seed", o->sweep_options.seed, "With --sweep-collisions: first noise seed (one per run)")->capture_default_str();
+  sub->add_option("--max-delay", o->sweep_options.max_delay,
+                  "With --sweep-collisions: an alert later than this after the contact [s] does not count")
+      ->capture_default_str();
   sub->callback([o] { twinwatch::cli::set_exit_code(run_evaluate(*o)); });
 }};
 

@@ -20,6 +20,7 @@
 #include "twinwatch/monitor/event.hpp"
 #include "twinwatch/monitor/threshold.hpp"
 #include "twinwatch/signal/fir.hpp"
+#include "twinwatch/monitor/trend.hpp"
 
 namespace twinwatch::monitor {
 
@@ -42,6 +43,7 @@ struct MonitorConfig {
   /// -20 dB above 92 Hz, 2.5-sample delay). Empty: "iir" on every joint; one entry: every joint;
   /// else one entry per joint. Thresholds must be learned with the same filters.
   std::vector<std::string> residual_filter;
+  TrendConfig trend;                          ///< slow-wear trend per cycle window (trend.hpp)
 
   void validate(int n_dof) const;
   std::string to_json() const;
@@ -86,6 +88,8 @@ class Monitor {
   const std::vector<Event>& events() const { return events_; }
   long samples() const { return n_samples_; }
   long gaps() const { return n_gaps_; }
+  /// The slow-wear trend detector (per-window friction, residual energy, I_total history).
+  const TrendDetector& trend() const { return trend_; }
   /// The twin with the monitor's payload (set it when the program changes the payload).
   ident::TwinModel& twin() { return twin_; }
 
@@ -114,6 +118,8 @@ class Monitor {
   double raise_time_ = 0.0;
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
+  TrendDetector trend_;
+  VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
 };
 
 }  // namespace twinwatch::monitor
