@@ -20,6 +20,6 @@ set_tests_properties(cli.identify_learned_options_need_a_learned_method PROPERTI
                      PASS_REGULAR_EXPRESSION "--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp\\|hybrid, not physics")
 add_test(NAME cli.identify_unknown_method COMMAND twinwatch identify ${d}/exc.csv --method lstm -o ${d}/never.json)
 set_tests_properties(cli.identify_unknown_method PROPERTIES FIXTURES_REQUIRED recordings
-                     PASS_REGULAR_EXPRESSION "--method lstm: expected physics, mlp or hybrid")
+                     PASS_REGULAR_EXPRESSION "--method lstm: expected physics, sequential, mlp or hybrid")
 add_test(NAME cli.identify_unknown_feature COMMAND twinwatch identify ${d}/exc.csv --method hybrid --inputs qd+jerk -o ${d}/never.json)
 set_tests_properties(cli.identify_unknown_feature PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "unknown feature 'jerk'")
