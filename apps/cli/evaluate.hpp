@@ -13,7 +13,8 @@ namespace twinwatch::cli {
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
 /// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).
-ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter = {});
+ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter = {},
+                                 bool all_programs = false);
 
 struct ScenarioScore {
   std::string name, fault, predicted_class, detail;

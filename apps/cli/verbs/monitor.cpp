@@ -229,7 +229,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
 struct EvaluateOptions {
   std::vector<std::string> dirs;
   std::string twin, robot = "ur3e", save_twin, trend_csv, filter;
-  bool json = false, static_threshold = false, sweep = false;
+  bool json = false, static_threshold = false, sweep = false, all_programs = false;
   double max_duration = 0.0;
   cli::SweepOptions sweep_options;
 };
@@ -237,7 +237,7 @@ struct EvaluateOptions {
 int run_evaluate(const EvaluateOptions& o) {
   if (o.sweep) {
     o.sweep_options.validate();
-    const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json) : ident::TwinModel::load(o.twin);
+    const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
     const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
     if (o.json) fmt::print("{}\n", cli::sweep_json(sw, o.sweep_options));
@@ -262,7 +262,7 @@ int run_evaluate(const EvaluateOptions& o) {
   if (!o.filter.empty() && !o.twin.empty())
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
-  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter))
+  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
                                                : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv);
@@ -302,6 +302,9 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
   sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
+  sub->add_flag("--all-programs", o->all_programs,
+                "Learn one threshold set over every program of scenarios/ur3e/long (triangle at 3 speeds, pick-and-place) "
+                "instead of the figure-eight and triangle only; wider thresholds (misses payload loss on the figure-eight)");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->add_option("--trend-csv", o->trend_csv,
