@@ -9,17 +9,7 @@
 #include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/model/regressor.hpp"
 
-// Allocation counter: this test binary interposes malloc (glibc exports __libc_malloc), so every
-// heap allocation — operator new, Eigen's aligned_malloc, std containers — is seen while counting.
-extern "C" void* __libc_malloc(size_t);
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-extern "C" void* malloc(size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
+#include "malloc_counter.hpp"  // counts heap allocations (one TU per test binary)
 
 namespace twinwatch::model {
 namespace {

@@ -10,16 +10,7 @@
 #include "signal/fixture_csv.hpp"
 #include "twinwatch/core/error.hpp"
 
-// counts heap allocations while g_counting is set (as tests/model/dynamics_invariants_test.cpp)
-extern "C" void* __libc_malloc(size_t);
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-extern "C" void* malloc(size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
+#include "malloc_counter.hpp"  // counts heap allocations (one TU per test binary)
 
 namespace twinwatch::signal {
 namespace {

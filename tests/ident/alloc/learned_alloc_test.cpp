@@ -12,15 +12,7 @@
 #include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/model/description_io.hpp"
 
-extern "C" void* __libc_malloc(size_t);
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-extern "C" void* malloc(size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
+#include "malloc_counter.hpp"  // counts heap allocations (one TU per test binary)
 
 namespace twinwatch::ident {
 namespace {
