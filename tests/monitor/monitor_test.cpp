@@ -7,29 +7,14 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "monitor/simulated_run.hpp"
 #include "twinwatch/sim/scenario.hpp"
 
 namespace twinwatch::monitor {
 namespace {
 
-const char* kFig8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}";
-
-device::Recording run(const std::string& yaml) {
-  const sim::Scenario s = sim::parse_scenario(yaml, "test");
-  device::Recording rec;
-  rec.n_dof = 6;
-  rec.present = sim::Simulator::fields();
-  rec.median_period = 0.002;
-  sim::make_simulator(s)->run([&](const RobotSample& x) { rec.samples.push_back(x); });
-  return rec;
-}
-
-std::string scenario(unsigned seed, double duration, double payload, const std::string& faults = "") {
-  std::string y = "robot: ur3e\nseed: " + std::to_string(seed) + "\nduration: " + std::to_string(duration) + "\ntrajectory: " + kFig8 + "\n";
-  if (payload > 0) y += "payload: {mass: " + std::to_string(payload) + ", com: [0, 0, 0.04]}\n";
-  if (!faults.empty()) y += "faults:\n" + faults;
-  return y;
-}
+using test::run;
+using test::scenario;
 
 struct MonitorLoop : ::testing::Test {
   static void SetUpTestSuite() {

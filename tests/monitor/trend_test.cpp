@@ -13,6 +13,7 @@
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/monitor/monitor.hpp"
+#include "monitor/simulated_run.hpp"
 #include "twinwatch/sim/scenario.hpp"
 
 namespace twinwatch::monitor {
@@ -283,15 +284,7 @@ TEST(TrendConfigJson, RoundTripsThroughTheMonitorConfig) {
 
 // ---- on the virtual robot: a twin identified from healthy runs, a shortened ramp ----
 
-device::Recording simulate(const std::string& yaml) {
-  const sim::Scenario s = sim::parse_scenario(yaml, "trend-test");
-  device::Recording rec;
-  rec.n_dof = 6;
-  rec.present = sim::Simulator::fields();
-  rec.median_period = 0.002;
-  sim::make_simulator(s)->run([&](const RobotSample& x) { rec.samples.push_back(x); });
-  return rec;
-}
+const auto& simulate = test::run;
 
 const char* kFig8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}";
 

@@ -38,7 +38,7 @@ double fir_magnitude(std::span<const double> taps, double f_hz, double fs_hz);
 /// the start (no start-up transient towards zero), as the monitor's IIR starts at its first value.
 class FirFilter {
  public:
-  /// No taps: push() passes the input through (a placeholder, e.g. for joints that use another filter).
+  /// No taps: push() returns its input unchanged (identity filter), for joints whose residual uses the IIR instead.
   FirFilter() = default;
   /// Throws InvalidArgument on empty taps or a non-finite tap (naming its index).
   explicit FirFilter(std::vector<double> taps);
