@@ -1,8 +1,10 @@
 #include "twinwatch/monitor/monitor.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <limits>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -81,7 +83,13 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
     twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i);
-    const VectorJ r = s.current - i;
+    VectorJ r = s.current - i;
+    // the monitor's temperature compensation (Monitor::push), so thresholds learned on a warm-up
+    // from cold see the residual the monitor will see
+    if (c.trend.temperature_slope.size() == r.size())
+      for (int j = 0; j < r.size(); ++j)
+        if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
+          r[j] -= c.trend.temperature_slope[j] * s.qd[j] * (s.temperature[j] - c.trend.temperature_ref);
     if (k == 0) rf = r;
     else rf += alpha * (r - rf);
     for (size_t j = 0; j < fir.size(); ++j)
@@ -117,12 +125,58 @@ TrendConfig trend_from_json(const nlohmann::json& j) {
   return t;
 }
 
+nlohmann::json dynamic_json(const std::vector<DynamicThresholdJoint>& dynamic) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& d : dynamic)
+    a.push_back({{"psi_qdd", d.psi_qdd}, {"psi_qd", d.psi_qd}, {"psi_rev", d.psi_rev}, {"upsilon", d.upsilon},
+                 {"rho", d.rho}, {"margin", d.margin}, {"alpha", d.alpha}});
+  return a;
+}
+std::vector<DynamicThresholdJoint> json_dynamic(const nlohmann::json& a) {
+  std::vector<DynamicThresholdJoint> out;
+  for (const auto& d : a)
+    out.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"), d.value("margin", 0.0),
+                   d.value("alpha", 0.0)});
+  return out;
+}
+
+// the sizes of one threshold set ("what" names it in the message)
+void check_levels(const VectorJ& static_level, const std::vector<DynamicThresholdJoint>& dynamic, bool use_dynamic, int n,
+                  const std::string& what) {
+  if (static_level.size() != n)
+    throw InvalidArgument(fmt::format("{} static_level has size {}, expected {}", what, static_level.size(), n));
+  if (use_dynamic && static_cast<int>(dynamic.size()) != n)
+    throw InvalidArgument(fmt::format("{} dynamic thresholds: {} joints, expected {}", what, dynamic.size(), n));
+}
+
+void check_program_name(const std::string& name) {
+  if (name.empty()) throw InvalidArgument("threshold set: the program name is empty");
+  for (char ch : name)
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-' && ch != '.')
+      throw InvalidArgument(fmt::format("threshold set: program name '{}' has the character '{}'; use letters, digits, '_', '-', '.'",
+                                        name, ch));
+}
+
 }  // namespace
 
+void MonitorConfig::select_program(const std::string& name) {
+  if (name.empty()) return;
+  const auto it = programs.find(name);
+  if (it == programs.end()) {
+    std::vector<std::string> known;
+    for (const auto& [k, v] : programs) known.push_back(k);
+    throw InvalidArgument(fmt::format("no thresholds learned for program '{}' (known: {}); learn them with 'twinwatch thresholds "
+                                      "--program {} HEALTHY.csv...' or run without --program for the default set",
+                                      name, known.empty() ? "none" : fmt::format("{}", fmt::join(known, ", ")), name));
+  }
+  static_level = it->second.static_level;
+  dynamic = it->second.dynamic;
+  program = name;
+}
+
 void MonitorConfig::validate(int n) const {
-  if (static_level.size() != n) throw InvalidArgument(fmt::format("monitor static_level has size {}, expected {}", static_level.size(), n));
-  if (use_dynamic && static_cast<int>(dynamic.size()) != n)
-    throw InvalidArgument(fmt::format("monitor dynamic thresholds: {} joints, expected {}", dynamic.size(), n));
+  check_levels(static_level, dynamic, use_dynamic, n, "monitor");
+  for (const auto& [name, set] : programs) check_levels(set.static_level, set.dynamic, use_dynamic, n, fmt::format("program '{}'", name));
   if (!(filter_cutoff_hz > 0.0)) throw InvalidArgument(fmt::format("filter_cutoff_hz is {}, must be > 0", filter_cutoff_hz));
   if (raise_after < 1) throw InvalidArgument(fmt::format("raise_after is {}, must be >= 1", raise_after));
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
@@ -138,9 +192,7 @@ void MonitorConfig::validate(int n) const {
 std::string MonitorConfig::to_json() const {
   nlohmann::json j;
   j["static_level_A"] = vec_json(static_level);
-  for (const auto& d : dynamic)
-    j["dynamic"].push_back({{"psi_qdd", d.psi_qdd}, {"psi_qd", d.psi_qd}, {"psi_rev", d.psi_rev}, {"upsilon", d.upsilon},
-                            {"rho", d.rho}, {"margin", d.margin}, {"alpha", d.alpha}});
+  if (!dynamic.empty()) j["dynamic"] = dynamic_json(dynamic);
   j["use_dynamic"] = use_dynamic;
   j["filter_cutoff_hz"] = filter_cutoff_hz;
   j["raise_after"] = raise_after;
@@ -149,6 +201,9 @@ std::string MonitorConfig::to_json() const {
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
   j["trend"] = trend_json(trend);
+  for (const auto& [name, set] : programs)
+    j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
+                           {"runs", set.runs}, {"seconds", set.seconds}};
   return j.dump();
 }
 
@@ -157,10 +212,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
   try {
     const auto j = nlohmann::json::parse(text);
     c.static_level = json_vec(j.at("static_level_A"));
-    if (j.contains("dynamic"))
-      for (const auto& d : j["dynamic"])
-        c.dynamic.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"), d.value("margin", 0.0),
-                             d.value("alpha", 0.0)});
+    if (j.contains("dynamic")) c.dynamic = json_dynamic(j["dynamic"]);
     c.use_dynamic = j.value("use_dynamic", !c.dynamic.empty());
     c.filter_cutoff_hz = j.value("filter_cutoff_hz", c.filter_cutoff_hz);
     c.raise_after = j.value("raise_after", c.raise_after);
@@ -169,6 +221,15 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
     if (j.contains("trend")) c.trend = trend_from_json(j["trend"]);
+    if (j.contains("programs"))
+      for (const auto& [name, p] : j["programs"].items()) {
+        ThresholdSet set;
+        set.static_level = json_vec(p.at("static_level_A"));
+        if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
+        set.runs = p.value("runs", 0);
+        set.seconds = p.value("seconds", 0.0);
+        c.programs[name] = std::move(set);
+      }
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
   }
@@ -209,6 +270,19 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     c.dynamic.push_back(fit.params);
   }
   return c;
+}
+
+void learn_program_thresholds(MonitorConfig& config, const std::string& name, const ident::TwinModel& twin,
+                              const std::vector<HealthyRun>& runs, const LearnOptions& options) {
+  check_program_name(name);
+  const MonitorConfig learned = learn_thresholds(twin, runs, config, options);
+  ThresholdSet set;
+  set.static_level = learned.static_level;
+  set.dynamic = learned.dynamic;
+  set.runs = static_cast<int>(runs.size());
+  for (const auto& r : runs)
+    if (r.recording->samples.size() > 1) set.seconds += r.recording->samples.back().timestamp - r.recording->samples.front().timestamp;
+  config.programs[name] = std::move(set);
 }
 
 Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()) {

@@ -40,3 +40,15 @@ $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR
 set_tests_properties(cli.thresholds_fir PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "with residual filter 'fir' and stored in.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)"
   FAIL_REGULAR_EXPRESSION "note: the thresholds")
+# thresholds per program: learned into a named set, selected with --program; the default set stays
+add_test(NAME cli.thresholds_program
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_prog.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --program fig8_loop && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --program fig8_loop 2>&1 && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
+set_tests_properties(cli.thresholds_program PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
+add_test(NAME cli.monitor_unknown_program COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
+  ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --program palletizing)
+set_tests_properties(cli.monitor_unknown_program PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "no thresholds learned for program 'palletizing' \\(known: none\\)")

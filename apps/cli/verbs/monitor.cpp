@@ -32,6 +32,7 @@ struct MonitorOptions {
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
+  std::string program;  // threshold set of this program ("" = the default set)
   bool static_threshold = false, quiet = false, json = false;
 };
 
@@ -60,6 +61,12 @@ int run_monitor(const MonitorOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
+  cfg.select_program(o.program);
+  if (!o.quiet && !o.json && !cfg.programs.empty())
+    fmt::print(stderr, "thresholds: {}\n",
+               o.program.empty() ? fmt::format("the default set ({} has sets for {} program(s); choose one with --program)", o.twin,
+                                               cfg.programs.size())
+                                 : fmt::format("learned for program '{}'", o.program));
   if (!o.filter.empty()) {
     const auto learned = cfg.residual_filter;
     cfg.residual_filter = split_filter(o.filter);
@@ -163,7 +170,7 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
-  std::string twin, filter;
+  std::string twin, filter, program;
   std::vector<std::string> recordings;
   double payload_mass = 0.0;
 };
@@ -180,10 +187,30 @@ int run_thresholds(const ThresholdOptions& o) {
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
-  const auto cfg = monitor::learn_thresholds(twin, runs, settings);
-  twin.monitor_json = cfg.to_json();
-  twin.save(o.twin);
-  fmt::print("thresholds learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n", recs.size(),
+  monitor::MonitorConfig cfg = settings;
+  if (o.program.empty()) {
+    cfg = monitor::learn_thresholds(twin, runs, settings);
+  } else {
+    monitor::learn_program_thresholds(cfg, o.program, twin, runs);
+    if (cfg.static_level.size() == 0) {  // a twin without thresholds: the first program's set is also the default
+      const auto& set = cfg.programs.at(o.program);
+      cfg.static_level = set.static_level;
+      cfg.dynamic = set.dynamic;
+    }
+    cfg.select_program(o.program);  // for the table below
+  }
+  ident::TwinModel out = twin;
+  monitor::MonitorConfig stored = cfg;
+  if (!o.program.empty() && !twin.monitor_json.empty()) {  // keep the default set as it was
+    const auto before = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
+    stored.static_level = before.static_level;
+    stored.dynamic = before.dynamic;
+  }
+  stored.program.clear();
+  out.monitor_json = stored.to_json();
+  out.save(o.twin);
+  fmt::print("thresholds {} learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n",
+             o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program), recs.size(),
              o.filter.empty() ? "iir" : o.filter, o.twin);
   for (int j = 0; j < twin.n_dof(); ++j)
     fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
@@ -208,6 +235,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--program", o->program,
+                  "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
+                  "default set");
   sub->add_option("--cycle-period", o->cycle_period,
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
                   "trend.window_s)");
@@ -223,6 +253,9 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]");
   sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--program", o->program,
+                  "Store the thresholds as the set of this program (letters, digits, _ - .), selected with 'monitor --program'; "
+                  "the default set and the other programs' sets are kept. Without it: re-learn the default set");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_thresholds(*o)); });
 }};
 
@@ -303,8 +336,9 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
   sub->add_flag("--all-programs", o->all_programs,
-                "Learn one threshold set over every program of scenarios/ur3e/long (triangle at 3 speeds, pick-and-place) "
-                "instead of the figure-eight and triangle only; wider thresholds (misses payload loss on the figure-eight)");
+                "Learn ONE threshold set over every program of scenarios/ur3e/long (figure-eight, triangle at 3 speeds, "
+                "pick-and-place) instead of one set per program; wider thresholds (misses payload loss on the figure-eight); "
+                "for comparison");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->add_option("--trend-csv", o->trend_csv,

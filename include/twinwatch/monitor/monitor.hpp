@@ -9,6 +9,7 @@
 /// (diagnosis.hpp) once `diagnosis_delay` seconds of it are available; the event is reported when
 /// raised (class pending), when diagnosed, and when cleared.
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,16 @@
 #include "twinwatch/monitor/trend.hpp"
 
 namespace twinwatch::monitor {
+
+/// The thresholds learned for one program (the motion the robot repeats): healthy residuals differ
+/// between programs (speeds, reversals, payload, warm-up), and one set learned over all of them is
+/// as wide as the widest program needs, which costs sensitivity on the quiet ones.
+struct ThresholdSet {
+  VectorJ static_level;                       ///< [A] per joint (UR3e §4.1)
+  std::vector<DynamicThresholdJoint> dynamic; ///< [A] per joint (Cao eq. 24)
+  int runs = 0;                               ///< healthy runs it was learned on
+  double seconds = 0.0;                       ///< their total duration [s]
+};
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
 struct MonitorConfig {
@@ -44,7 +55,14 @@ struct MonitorConfig {
   /// else one entry per joint. Thresholds must be learned with the same filters.
   std::vector<std::string> residual_filter;
   TrendConfig trend;                          ///< slow-wear trend per cycle window (trend.hpp)
+  /// Threshold sets per program, by name (e.g. the scenario's trajectory type or the name of the
+  /// robot program); static_level/dynamic above are the default set for any other program.
+  std::map<std::string, ThresholdSet> programs;
+  std::string program;                        ///< the set in use ("": the default); not stored
 
+  /// Makes the set learned for `name` the active one (static_level, dynamic). Empty: keep the
+  /// default. Throws InvalidArgument naming the known programs when there is no such set.
+  void select_program(const std::string& name);
   void validate(int n_dof) const;
   std::string to_json() const;
   static MonitorConfig from_json(const std::string& text, const std::string& origin);
@@ -61,11 +79,18 @@ struct HealthyRun {
   model::RigidBodyInertia payload;
 };
 
-/// Learns static and dynamic thresholds from healthy runs with the twin's residuals.
+/// Learns static and dynamic thresholds from healthy runs with the twin's residuals (temperature-
+/// compensated with settings.trend.temperature_slope when it is set, as the monitor does).
 /// The static level is max(max-MAE + k sigma [UR3e], 1.1 x max healthy |r| [Cao]) so that the
 /// training data itself never trips it.
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs,
                                const MonitorConfig& settings = {}, const LearnOptions& options = {});
+
+/// Learns the thresholds of one program on its healthy runs and stores them in config.programs
+/// under `name` (replacing an earlier set of that name); config's other settings are used as is.
+/// Throws InvalidArgument for an empty name or one with characters other than [A-Za-z0-9_.-].
+void learn_program_thresholds(MonitorConfig& config, const std::string& name, const ident::TwinModel& twin,
+                              const std::vector<HealthyRun>& runs, const LearnOptions& options = {});
 
 class Monitor {
  public:
