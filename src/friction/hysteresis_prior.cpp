@@ -82,6 +82,12 @@ void HysteresisPriorOptions::validate() const {
     throw InvalidArgument(fmt::format("prior alpha_min is {}, must be > 0 [1/s]", alpha_min));
   if (!std::isfinite(alpha_max) || alpha_max <= alpha_min)
     throw InvalidArgument(fmt::format("prior alpha_max is {}, must be > alpha_min ({})", alpha_max, alpha_min));
+  if (!std::isfinite(displacement_alpha_min) || displacement_alpha_min <= 0.0)
+    throw InvalidArgument(
+        fmt::format("prior displacement_alpha_min is {}, must be > 0 [1/rad]", displacement_alpha_min));
+  if (!std::isfinite(displacement_alpha_max) || displacement_alpha_max <= displacement_alpha_min)
+    throw InvalidArgument(fmt::format("prior displacement_alpha_max is {}, must be > displacement_alpha_min ({})",
+                                      displacement_alpha_max, displacement_alpha_min));
   if (!std::isfinite(beta_min) || beta_min <= 0.0)
     throw InvalidArgument(fmt::format("prior beta_min is {}, must be > 0 [s/rad]", beta_min));
   if (!std::isfinite(beta_max) || beta_max <= beta_min)
@@ -92,6 +98,13 @@ void HysteresisPriorOptions::validate() const {
                                       weight_width, weight_slope));
   if (!(v_ref_fraction > 0.0 && v_ref_fraction < 1.0))
     throw InvalidArgument(fmt::format("prior v_ref_fraction is {}, must be in (0, 1)", v_ref_fraction));
+}
+
+HysteresisParams HysteresisPriorOptions::fallback() const noexcept {
+  HysteresisParams p;
+  p.drive = drive;
+  if (drive == HysteresisDrive::Displacement) p.alpha = std::sqrt(displacement_alpha_min * displacement_alpha_max);
+  return p;
 }
 
 HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const HysteresisPriorOptions& options) {
@@ -117,16 +130,18 @@ HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const H
     throw InvalidArgument(fmt::format("training record: qd never reverses beyond +-{:.3g} rad/s, no hysteresis loop "
                                       "to calibrate (alpha, beta) on",
                                       v_ref));
-  // bounded log grid; alpha kept inside the stability region of eq. 11
+  // bounded log grid; in the time clock alpha is kept inside the stability region of eq. 11
+  const bool time = options.drive == HysteresisDrive::Time;
   constexpr double kStableFraction = 0.9;
-  const double alpha_max = std::min(options.alpha_max, kStableFraction / record.dt);
-  const double alpha_min = std::min(options.alpha_min, 0.5 * alpha_max);
+  const double alpha_max =
+      time ? std::min(options.alpha_max, kStableFraction / record.dt) : options.displacement_alpha_max;
+  const double alpha_min = time ? std::min(options.alpha_min, 0.5 * alpha_max) : options.displacement_alpha_min;
   out.cost = std::numeric_limits<double>::infinity();
   for (int i = 0; i < options.grid; ++i) {
     const double alpha = alpha_min * std::pow(alpha_max / alpha_min, i / (options.grid - 1.0));
     for (int j = 0; j < options.grid; ++j) {
       const double beta = options.beta_min * std::pow(options.beta_max / options.beta_min, j / (options.grid - 1.0));
-      const HysteresisParams p{alpha, beta};
+      const HysteresisParams p{alpha, beta, options.drive};
       const HysteresisFeatures f = hysteresis_features(record.qd, record.dt, p);
       const LoopDescriptors g = loop_descriptors(record.qd, f.h, v_ref);
       // J_h of eq. 13

@@ -46,6 +46,14 @@ double time_per_sample_ns(FrictionModel& m, const FrictionRecord& r, int repeats
 
 }  // namespace
 
+ParFamOptions study_parfam_options() {
+  ParFamOptions o;
+  o.prior.drive = HysteresisDrive::Displacement;
+  constexpr double kStudyL1 = 1e-3;  // gamma of eq. 15 on unit-RMS data
+  o.l1 = kStudyL1;
+  return o;
+}
+
 void FrictionStudyOptions::validate() const {
   if (!std::isfinite(reversal_window) || reversal_window <= 0.0)
     throw InvalidArgument(fmt::format("study reversal_window is {}, must be > 0 [s]", reversal_window));
@@ -122,7 +130,7 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
     // them (e.g. a one-directional move) (alpha, beta) start from the documented defaults of
     // HysteresisParams and Stage 3 refines them. Said in the fit message, never silently.
     if (ph.hysteresis) throw;
-    ph.hysteresis = HysteresisParams{};
+    ph.hysteresis = ph.prior.fallback();
     parfam_h = std::make_shared<ParFamModel>(ph);
     fit_h = parfam_h->fit(data.train);
     fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({}, {}); {}",

@@ -70,16 +70,15 @@ TEST(ParFamFamily, ReverseModeMatchesFiniteDifferences) {
   }
 }
 
-TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences) {
+void check_stage3_jacobian(HysteresisDrive drive, double alpha, const double (&sx)[3]) {
   const detail::Layout L{3, 4};
   const std::vector<double> qd = two_tone_velocity(3.0);
   const std::vector<double> y(qd.size(), 0.3);
-  const double sx[3] = {0.7, 0.8, 9.0};
   const std::vector<double> theta = random_theta(L.size(), 7, 0.5);
   std::vector<int> active;
   for (int i = 0; i < L.size(); ++i) active.push_back(i);
-  const detail::Stage3Cost cost(qd, kDt, sx, y, L, kAllOps.data(), true, 1e-3, theta, active);
-  std::vector<double> ab{std::log(14.0), std::log(40.0)};
+  const detail::Stage3Cost cost(qd, kDt, sx, y, L, kAllOps.data(), true, 1e-3, theta, active, drive);
+  std::vector<double> ab{std::log(alpha), std::log(40.0)};
   std::vector<double> th = theta;
   const auto n = qd.size();
   std::vector<double> r(n), J0(n * 2), J1(n * th.size());
@@ -110,6 +109,15 @@ TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences
     for (std::size_t k = 0; k < n; k += 7)
       ASSERT_NEAR(J1[k * th.size() + i], fd[k], kTol * std::max(1.0, std::abs(fd[k]))) << "theta " << i << " k " << k;
   }
+}
+
+TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences) {
+  check_stage3_jacobian(HysteresisDrive::Time, 14.0, {0.7, 0.8, 9.0});
+}
+
+TEST(ParFamStage3, JacobianThroughTheDisplacementClockMatchesFiniteDifferences) {
+  // alpha |qd| dt reaches ~1 here: the exact exponential step, not the Euler regime
+  check_stage3_jacobian(HysteresisDrive::Displacement, 300.0, {0.7, 0.8, 90.0});
 }
 
 TEST(ParFamExpression, PrintsTheActiveTermsInTableViiOrder) {

@@ -61,15 +61,26 @@ TEST_P(SimulatedJointStudy, ParFamHBeatsTheVelocityOnlyAndBlackBoxModelsAtRevers
   EXPECT_GT(s.model("ParFam-V").reversal_rmse, 1.6 * ph.reversal_rmse) << joint.name;
 }
 
-// The remaining acceptance criteria of issue 6 do NOT hold on this truth (measured with kSeed and
-// the default options, friction-only records): LuGre, whose displacement-driven bristle matches the
-// Maxwell-slip pre-sliding, has a lower reversal-window RMSE than ParFam-H on J1 and J2 (0.65 vs
-// 0.97 and 0.89 vs 2.45 N·m; on J3 ParFam-H is lowest), and ParFam-H's chirp out-of-distribution
-// RMSE is 2.1x (J1), 1.75x (J2) and 1.95x (J3) its in-distribution RMSE (8.4x, 3.1x, 1.9x before
-// the input guard; LuGre 1.4x). The h state relaxes in time (1/alpha) while the truth relaxes with
-// displacement, and one 0.25 Hz training sweep cannot tell them apart. The full protocol with
-// rigid-body decoupling and what was tried: docs/validation.md, "Identification II". Kept here,
-// disabled, so the gap stays visible; run with --gtest_also_run_disabled_tests.
+// HESR §V-F: trained on the 0.25 Hz sweep only, ParFam-H stays stable on the 0.6-1.0 Hz half of
+// the chirp: out-of-distribution RMSE at most 1.5x the in-distribution RMSE. This holds with h in
+// the displacement clock and gamma = 1e-3 (study_parfam_options(); measured 1.2-1.4x); with HESR's
+// time clock the ratio is 2.1-2.8x (docs/validation.md, "Acceptance of issue 6").
+TEST_P(SimulatedJointStudy, ParFamHIsStableOnTheChirp) {
+  const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
+  const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
+  const ModelStudy& ph = s.model("ParFam-H");
+  ASSERT_TRUE(std::isfinite(ph.chirp_id_rmse) && std::isfinite(ph.chirp_ood_rmse)) << joint.name;
+  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name << ": " << ph.equation;
+  // and it is not "stable" by being uniformly bad: in distribution it is within 2.5x the torque noise
+  EXPECT_LT(ph.chirp_id_rmse, 2.5 * joint.torque_noise) << joint.name << ": " << ph.equation;
+}
+
+// Not met on this truth (kSeed, study defaults, friction-only records): LuGre, whose bristle state
+// carries the Stribeck curve g(v) in its displacement-driven dynamics, has a lower reversal-window
+// RMSE than ParFam-H on J1 and J2 (0.65 vs 0.71 and 0.89 vs 1.12 N·m; on J3 ParFam-H is lowest).
+// The chirp half of this marker holds on all three joints (ParFamHIsStableOnTheChirp). What was
+// tried: docs/validation.md, "Acceptance of issue 6". Kept disabled so the gap stays visible; run
+// with --gtest_also_run_disabled_tests.
 TEST_P(SimulatedJointStudy, DISABLED_ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
   const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
