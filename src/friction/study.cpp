@@ -63,6 +63,8 @@ void FrictionStudyOptions::validate() const {
     throw InvalidArgument(fmt::format("study chirp_split is {}, must be > 0 [Hz]", chirp_split));
   if (timing_repeats < 1) throw InvalidArgument(fmt::format("study timing_repeats is {}, must be >= 1", timing_repeats));
   parfam.validate();
+  if (!std::isfinite(parfam_v_l1) || parfam_v_l1 < 0.0)
+    throw InvalidArgument(fmt::format("study parfam_v_l1 is {}, must be >= 0", parfam_v_l1));
   parametric.validate();
   rbf.validate();
 }
@@ -119,6 +121,7 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   // the models, ParFam-H first: RBFNN-H uses its (alpha, beta)
   ParFamOptions pv = options.parfam;
   pv.input = ParFamInput::Velocity;
+  pv.l1 = options.parfam_v_l1;
   ParFamOptions ph = options.parfam;
   ph.input = ParFamInput::Hysteresis;
   auto parfam_h = std::make_shared<ParFamModel>(ph);
