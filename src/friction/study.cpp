@@ -136,7 +136,7 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
     ph.hysteresis = ph.prior.fallback();
     parfam_h = std::make_shared<ParFamModel>(ph);
     fit_h = parfam_h->fit(data.train);
-    fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({}, {}); {}",
+    fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({:.4g}, {:.4g}); {}",
                                 e.what(), ph.hysteresis->alpha, ph.hysteresis->beta, fit_h.message);
   }
   RbfOptions rv = options.rbf;
