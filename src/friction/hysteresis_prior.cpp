@@ -124,6 +124,41 @@ HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const H
     for (long i = a; i <= b; ++i) s += record.tau[static_cast<std::size_t>(i)];
     tau_s[static_cast<std::size_t>(k)] = s / static_cast<double>(b - a + 1);
   }
+  if (options.remove_viscous) {
+    // least squares tau ~ c0 + c1 qd + c2 sgn(qd) on the sliding samples: 3x3 normal equations
+    double A[3][4] = {};
+    for (long k = 0; k < n; ++k) {
+      const double v = record.qd[static_cast<std::size_t>(k)];
+      if (std::abs(v) < v_ref) continue;
+      const double row[3] = {1.0, v, v > 0.0 ? 1.0 : -1.0};
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) A[i][j] += row[i] * row[j];
+        A[i][3] += row[i] * tau_s[static_cast<std::size_t>(k)];
+      }
+    }
+    // Gauss-Jordan with partial pivoting; a singular system (no sliding in one direction) keeps tau
+    bool ok = true;
+    for (int c = 0; c < 3 && ok; ++c) {
+      int piv = c;
+      for (int r = c + 1; r < 3; ++r)
+        if (std::abs(A[r][c]) > std::abs(A[piv][c])) piv = r;
+      constexpr double kSingular = 1e-12;
+      if (std::abs(A[piv][c]) < kSingular * (1.0 + std::abs(A[0][0]))) {
+        ok = false;
+        break;
+      }
+      std::swap(A[c], A[piv]);
+      for (int r = 0; r < 3; ++r) {
+        if (r == c) continue;
+        const double f = A[r][c] / A[c][c];
+        for (int j = c; j < 4; ++j) A[r][j] -= f * A[c][j];
+      }
+    }
+    if (ok) {
+      const double c1 = A[1][3] / A[1][1];
+      for (long k = 0; k < n; ++k) tau_s[static_cast<std::size_t>(k)] -= c1 * record.qd[static_cast<std::size_t>(k)];
+    }
+  }
   HysteresisPrior out;
   out.measured = loop_descriptors(record.qd, tau_s, v_ref);
   if (out.measured.reversals == 0)

@@ -49,7 +49,9 @@ double time_per_sample_ns(FrictionModel& m, const FrictionRecord& r, int repeats
 ParFamOptions study_parfam_options() {
   ParFamOptions o;
   o.prior.drive = HysteresisDrive::Displacement;
-  constexpr double kStudyL1 = 1e-3;  // gamma of eq. 15 on unit-RMS data
+  o.prior.remove_viscous = true;
+  o.functions = {UnaryOp::Tanh, UnaryOp::Tanh};
+  constexpr double kStudyL1 = 1e-6;  // gamma of eq. 15 on unit-RMS data
   o.l1 = kStudyL1;
   return o;
 }
@@ -113,6 +115,9 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   const std::vector<char> rev = reversal_window_mask(data.fourier.qd, data.fourier.dt, options.reversal_window,
                                                      options.reversal_threshold, &out.reversals);
   for (char c : rev) out.reversal_samples += c;
+  out.train = data.train;
+  out.fourier = data.fourier;
+  out.reversal_mask = rev;
   std::vector<char> id(data.chirp_frequency.size()), ood(id.size());
   for (std::size_t k = 0; k < id.size(); ++k) {
     id[k] = data.chirp_frequency[k] < options.chirp_split;

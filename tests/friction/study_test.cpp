@@ -61,36 +61,26 @@ TEST_P(SimulatedJointStudy, ParFamHBeatsTheVelocityOnlyAndBlackBoxModelsAtRevers
   EXPECT_GT(s.model("ParFam-V").reversal_rmse, 1.6 * ph.reversal_rmse) << joint.name;
 }
 
-// HESR §V-F: trained on the 0.25 Hz sweep only, ParFam-H stays stable on the 0.6-1.0 Hz half of
-// the chirp: out-of-distribution RMSE at most 1.5x the in-distribution RMSE. This holds with h in
-// the displacement clock and gamma = 1e-3 (study_parfam_options(); measured 1.2-1.4x); with HESR's
-// time clock the ratio is 2.1-2.8x (docs/validation.md, "Acceptance of issue 6").
-TEST_P(SimulatedJointStudy, ParFamHIsStableOnTheChirp) {
-  const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
-  const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
-  const ModelStudy& ph = s.model("ParFam-H");
-  ASSERT_TRUE(std::isfinite(ph.chirp_id_rmse) && std::isfinite(ph.chirp_ood_rmse)) << joint.name;
-  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name << ": " << ph.equation;
-  // and it is not "stable" by being uniformly bad: in distribution it is within 2.5x the torque noise
-  EXPECT_LT(ph.chirp_id_rmse, 2.5 * joint.torque_noise) << joint.name << ": " << ph.equation;
-}
-
-// Not met on this truth (kSeed, study defaults, friction-only records): LuGre, whose bristle state
-// carries the Stribeck curve g(v) in its displacement-driven dynamics, has a lower reversal-window
-// RMSE than ParFam-H on J1 and J2 (0.65 vs 0.71 and 0.89 vs 1.12 N·m; on J3 ParFam-H is lowest).
-// The chirp half of this marker holds on all three joints (ParFamHIsStableOnTheChirp). What was
-// tried: docs/validation.md, "Acceptance of issue 6". Kept disabled so the gap stays visible; run
-// with --gtest_also_run_disabled_tests.
-TEST_P(SimulatedJointStudy, DISABLED_ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
+// The acceptance goals of issue 6 on this truth (kSeed, study_parfam_options(), friction-only
+// records): ParFam-H has the lowest reversal-window RMSE of all six models on every joint
+// (measured 0.590 vs LuGre 0.646, 0.580 vs 0.886, 0.261 vs 0.296 N·m), and trained on the 0.25 Hz
+// sweep only it stays stable on the 0.6-1.0 Hz half of the chirp (HESR §V-F): out-of-distribution
+// RMSE <= 1.5x in-distribution (measured 1.26, 1.07, 1.41). With HESR's time clock and operator
+// library neither holds (LuGre lower on J1/J2, ratio 1.75-2.1). This is seed 1; on other seeds the
+// goals hold partly (docs/validation.md, "Acceptance of issue 6").
+TEST_P(SimulatedJointStudy, ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
   const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
   const ModelStudy& ph = s.model("ParFam-H");
   for (const ModelStudy& m : s.models) {
     if (m.name != ph.name) {
-      EXPECT_LT(ph.reversal_rmse, m.reversal_rmse) << joint.name << " vs " << m.name;
+      EXPECT_LT(ph.reversal_rmse, m.reversal_rmse) << joint.name << " vs " << m.name << ": " << ph.equation;
     }
   }
-  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name;
+  ASSERT_TRUE(std::isfinite(ph.chirp_id_rmse) && std::isfinite(ph.chirp_ood_rmse)) << joint.name;
+  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name << ": " << ph.equation;
+  // and it is not "stable" by being uniformly bad: in distribution it is within 2.5x the torque noise
+  EXPECT_LT(ph.chirp_id_rmse, 2.5 * joint.torque_noise) << joint.name << ": " << ph.equation;
 }
 
 INSTANTIATE_TEST_SUITE_P(Joints, SimulatedJointStudy, ::testing::Values(0, 1, 2),

@@ -36,8 +36,10 @@ struct StudyOptions {
   int reversal_weight = 1;
   bool rich_training = false;
   std::string memory = "displacement";
+  int remove_viscous = -1;  // < 0: the study's (on); 0 off, 1 on
+  std::string predictions;  // CSV of the validation record and every model's prediction
   std::string functions;  // empty: the library's operator set
-  double l1 = -1.0;       // < 0: the library's gamma
+  double l1 = -1.0;       // < 0: the study's gamma
   int starts = -1;        // < 0: the library's
   double fixed_alpha = 0.0, fixed_beta = 0.0;  // > 0 both: Stage 1 skipped
   unsigned seed = 1;
@@ -136,6 +138,7 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
     p.prior.drive = HysteresisDrive::Displacement;
   else
     throw InvalidArgument(fmt::format("--memory is '{}', expected 'time' or 'displacement'", o.memory));
+  if (o.remove_viscous >= 0) p.prior.remove_viscous = o.remove_viscous > 0;
   if (o.fixed_alpha > 0.0 || o.fixed_beta > 0.0) {
     p.hysteresis = HysteresisParams{o.fixed_alpha, o.fixed_beta, p.prior.drive};
     p.hysteresis->validate();
@@ -375,6 +378,31 @@ int run(const StudyOptions& o) {
   if (!o.save_twin.empty()) twin = ident::TwinModel::load(o.save_twin);  // fail early on a bad twin file
   std::vector<ProtocolResult> res;
   for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
+  if (!o.predictions.empty()) {
+    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
+    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
+    fmt::print(f, "joint,t,qd,tau,reversal");
+    for (const auto& m : res.at(0).study.models) fmt::print(f, ",{}", m.name);
+    fmt::print(f, "\n");
+    for (const auto& r : res) {
+      // the training record (label "<joint>-train", no predictions) for re-fits outside twinwatch
+      const FrictionRecord& tr = r.study.train;
+      for (std::size_t k = 0; k < tr.qd.size(); ++k) {
+        fmt::print(f, "{}-train,{:.4f},{:.6g},{:.6g},0", r.study.joint, static_cast<double>(k) * tr.dt, tr.qd[k], tr.tau[k]);
+        for (std::size_t m = 0; m < r.study.models.size(); ++m) fmt::print(f, ",");
+        fmt::print(f, "\n");
+      }
+      const FrictionRecord& v = r.study.fourier;
+      for (std::size_t k = 0; k < v.qd.size(); ++k) {
+        fmt::print(f, "{},{:.4f},{:.6g},{:.6g},{}", r.study.joint, static_cast<double>(k) * v.dt, v.qd[k], v.tau[k],
+                   static_cast<int>(r.study.reversal_mask[k]));
+        for (const auto& m : r.study.models)
+          fmt::print(f, ",{:.6g}", k < m.fourier_prediction.size() ? m.fourier_prediction[k] : 0.0);
+        fmt::print(f, "\n");
+      }
+    }
+    std::fclose(f);
+  }
   if (twin) {
     // the friction block: ParFam-H of every studied joint, re-loadable into the compiled evaluator
     std::vector<JointFrictionEquation> eqs;
@@ -441,11 +469,17 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                   "or 'displacement' (eq. 10 in the travelled-distance clock, hd = alpha |qd| (tanh(beta qd) - h): "
                   "rate-independent pre-sliding memory, Dahl-like)")
       ->capture_default_str();
+  sub->add_option("--predictions", o->predictions,
+                  "Write CSV joint,t,qd,tau,reversal,<model>... of the validation record (residual torque) and every "
+                  "model's prediction, for plots; the training record follows as joint '<J>-train' without predictions");
   sub->add_option("--functions", o->functions,
-                  "ParFam operator set, a comma list of sin, cos, exp, tanh, one unit each (default sin,cos,exp,tanh)");
+                  "ParFam operator set, a comma list of sin, cos, exp, tanh, one unit each (default: the study's tanh,tanh; "
+                  "HESR's library is sin,cos,exp,tanh)");
+  sub->add_option("--prior-remove-viscous", o->remove_viscous,
+                  "Stage 1: remove the viscous slope of tau_f before the loop descriptors, 1 or 0 (default: the study's, 1)");
   sub->add_option("--alpha", o->fixed_alpha, "Fix the hysteresis alpha (with --beta; skips Stage 1, Stage 3 still refines)");
   sub->add_option("--beta", o->fixed_beta, "Fix the hysteresis beta (with --alpha)");
-  sub->add_option("--l1", o->l1, "ParFam L1 weight gamma of eq. 15 on unit-RMS data (default: the study's, 1e-3)");
+  sub->add_option("--l1", o->l1, "ParFam L1 weight gamma of eq. 15 on unit-RMS data (default: the study's, 1e-6)");
   sub->add_option("--starts", o->starts, "ParFam basin-hopping random starts (default: the library's)");
   sub->add_option("--seed", o->seed, "Seed of the simulated records and the Monte Carlo draws")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin,

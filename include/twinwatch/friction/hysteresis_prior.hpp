@@ -50,6 +50,12 @@ struct HysteresisPriorOptions {
   double weight_width = 1.0;   ///< w_a, >= 0
   double weight_slope = 1.0;   ///< w_s, >= 0 (w_a + w_s > 0)
   double v_ref_fraction = 0.1; ///< v_ref = this * 99th percentile of |qd|, in (0, 1)
+  /// Remove the viscous part of tau_f before its descriptors: c1 of the least-squares fit
+  /// tau_f ~ c0 + c1 qd + c2 sgn(qd) on the sliding samples (|qd| >= v_ref), c1 qd subtracted.
+  /// h has no viscous part, so without this the measured loop is compared with h over a range
+  /// stretched by c1 * 2 max|qd| (the width of a saturating h then never matches, and the grid
+  /// drifts to the smallest beta, where h stops saturating).
+  bool remove_viscous = false;
   /// Throws InvalidArgument naming the first field out of range.
   void validate() const;
   /// The start when Stage 1 cannot run (no reversal in the record): HysteresisParams' defaults

@@ -31,10 +31,15 @@ struct FrictionStudyData {
   std::vector<double> chirp_frequency;  ///< instantaneous chirp frequency per sample [Hz]
 };
 
-/// The ParFam options the study uses: the library's HESR family with two changes measured on the
-/// simulated joints (docs/validation.md, "Acceptance of issue 6"): h in the displacement clock
-/// (hysteresis.hpp; the pre-sliding memory of a harmonic drive is undone by motion, not by time)
-/// and gamma = 1e-3 (eq. 15), which prunes the expression to a few terms that extrapolate.
+/// The ParFam options the study uses: the library's HESR family with three changes measured on the
+/// simulated joints (docs/validation.md, "Acceptance of issue 6"):
+/// - h in the displacement clock (hysteresis.hpp): the pre-sliding memory of a harmonic drive is
+///   undone by motion, not by waiting;
+/// - Stage 1 compares the loops after removing the viscous slope of tau_f (remove_viscous), so
+///   that a saturating, sign-like h can match (beta no longer drifts to the grid's lower edge);
+/// - two tanh units instead of {sin, cos, exp, tanh} (still degree 1, the same rational-free outer
+///   layer), gamma = 1e-6: saturating odd primitives, one takes the Stribeck drop in qd and one
+///   shapes the pre-sliding curve in h; sin/cos/exp units fit the sweep and extrapolate worse.
 ParFamOptions study_parfam_options();
 
 struct FrictionStudyOptions {
@@ -72,6 +77,9 @@ struct JointStudy {
   std::vector<ModelStudy> models;  ///< in HESR Table VIII order
   int reversals = 0;               ///< reversals found in the Fourier record
   long reversal_samples = 0;       ///< samples inside their windows
+  FrictionRecord train;            ///< the residual-torque training record
+  FrictionRecord fourier;          ///< the validation record the predictions are scored on
+  std::vector<char> reversal_mask; ///< its +-window reversal samples
   /// The model called `name`; throws InvalidArgument when there is none.
   const ModelStudy& model(std::string_view name) const;
 };
