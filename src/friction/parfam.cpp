@@ -22,6 +22,12 @@ namespace {
 using detail::Cache;
 using detail::Layout;
 
+// Stage 3 bounds of the hysteresis parameters: beta [s/rad] (tanh(1e5 qd) = sgn(qd) to 1e-12 for
+// |qd| >= 1.5e-4 rad/s, below a 20-bit encoder's velocity resolution at 200 Hz) and, in the
+// displacement clock, alpha [1/rad] (a pre-sliding distance of 1 urad)
+constexpr double kMaxBeta = 1e5;
+constexpr double kMaxDisplacementAlpha = 1e6;
+
 // floor of an input/output RMS used for scaling (a constant-zero column stays unscaled)
 constexpr double kMinScale = 1e-12;
 
@@ -382,6 +388,11 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     constexpr double kStableFraction = 0.95;  // keep 1 - alpha dt away from 0
     if (hysteresis_.drive == HysteresisDrive::Time)
       problem.SetParameterUpperBound(ab, 0, std::log(kStableFraction / record.dt));
+    else
+      problem.SetParameterUpperBound(ab, 0, std::log(kMaxDisplacementAlpha));
+    // beta beyond this is sign(qd) for every measurable velocity; unbounded, LM drove it to 1e49
+    // and beyond (tanh(inf * 0) is NaN at a sample with qd = 0)
+    problem.SetParameterUpperBound(ab, 1, std::log(kMaxBeta));
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = options_.lm_iterations;
