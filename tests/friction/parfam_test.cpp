@@ -221,6 +221,30 @@ TEST(HysteresisPrior, FindsTheGridPointOfAPureHysteresisLoop) {
   EXPECT_GT(p.measured.width, 0.1);  // a real loop
 }
 
+TEST(HysteresisPrior, DisplacementClockFindsTheDahlStateUnderViscousFriction) {
+  // tau = 5 h + 4 qd with h a Dahl state (displacement clock, 1/alpha = 2.2 mrad, sign-like beta):
+  // with the viscous slope removed Stage 1 finds alpha within a grid step and a sign-like beta;
+  // without it the viscous part widens tau's range, the loop looks narrower than a saturating h,
+  // and the grid drifts to a small beta (h no longer saturating) -- the bias the option removes
+  const HysteresisParams truth{447.0, 400.0, HysteresisDrive::Displacement};
+  HysteresisState st(truth, kDt);
+  const FrictionRecord rec =
+      make_record(sine_velocity(20.0), [&](double v) { return 5.0 * st.step(v).h + 4.0 * v; }, kNoise, 29);
+  HysteresisPriorOptions o;
+  o.drive = HysteresisDrive::Displacement;
+  o.remove_viscous = true;
+  const HysteresisPrior p = calibrate_hysteresis_prior(rec, o);
+  EXPECT_EQ(p.params.drive, HysteresisDrive::Displacement);
+  EXPECT_LT(std::abs(std::log(p.params.alpha / truth.alpha)), std::log(1.6)) << p.params.alpha;
+  // sign-like at the reversal threshold v_ref = 0.12 rad/s: tanh(beta v_ref) > 0.99 (beta beyond
+  // that is not identifiable from the loop descriptors)
+  EXPECT_GT(std::tanh(p.params.beta * 0.12), 0.99) << p.params.beta;
+  o.remove_viscous = false;
+  const HysteresisPrior q = calibrate_hysteresis_prior(rec, o);
+  EXPECT_LT(std::tanh(q.params.beta * 0.12), 0.9) << q.params.beta;
+  EXPECT_GT(q.cost, p.cost);
+}
+
 TEST(HysteresisPrior, LoopDescriptorsOfASingleValuedCurveHaveNoWidth) {
   const std::vector<double> qd = sine_velocity(20.0);
   std::vector<double> y(qd.size());
