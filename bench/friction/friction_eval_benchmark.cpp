@@ -60,7 +60,8 @@ BENCHMARK_CAPTURE(BM_HysteresisState, Time, HysteresisDrive::Time);
 BENCHMARK_CAPTURE(BM_HysteresisState, Displacement, HysteresisDrive::Displacement);
 
 // the three stages of ParFam-H on the 20 s, 200 Hz sweep of J2, with the study's options
-// (displacement clock, gamma 1e-3) and with the library's (HESR's time clock, gamma 1e-5)
+// (displacement clock, viscous-free Stage 1, two tanh units, gamma 1e-6) and with the library's
+// (HESR as printed: time clock, sin/cos/exp/tanh, gamma 1e-5)
 void BM_IdentifyParFamH(benchmark::State& state, bool study) {
   const Setup& s = setup();
   for (auto _ : state) {
