@@ -307,6 +307,32 @@ TEST(ParFam, InvalidOptionsAreNamed) {
   o = {};
   o.prior.grid = 1;
   EXPECT_THAT([&] { ParFamModel{o}; }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("prior grid is 1")));
+  o = {};
+  o.prior.displacement_alpha_min = 0.0;
+  EXPECT_THAT([&] { ParFamModel{o}; },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("prior displacement_alpha_min is 0, must be > 0")));
+  o = {};
+  o.prior.displacement_alpha_max = 5.0;
+  EXPECT_THAT([&] { ParFamModel{o}; }, ::testing::ThrowsMessage<InvalidArgument>(
+                                           HasSubstr("prior displacement_alpha_max is 5, must be > displacement_alpha_min (10)")));
+}
+
+TEST(ParFam, DisplacementClockNeedsNoEulerStabilityAndSaysSoInTheEquation) {
+  // alpha*dt = 1.5 is unstable for eq. 11 in time, but alpha [1/rad] of the displacement clock has
+  // no such limit (exact step); the fitted equation names the clock
+  ParFamOptions o;
+  o.hysteresis = HysteresisParams{300.0, 100.0, HysteresisDrive::Displacement};
+  o.hops = 2;
+  ParFamModel m(o);
+  const FrictionRecord train = make_record(sine_velocity(5.0), [](double v) { return v; }, kNoise, 26);
+  ASSERT_NE(m.fit(train).status, FitStatus::Failed);
+  EXPECT_EQ(m.hysteresis().drive, HysteresisDrive::Displacement);
+  EXPECT_THAT(m.equation(), HasSubstr("displacement clock"));
+  // the fallback start of a record without reversals is in the displacement units
+  HysteresisPriorOptions po;
+  po.drive = HysteresisDrive::Displacement;
+  EXPECT_EQ(po.fallback().drive, HysteresisDrive::Displacement);
+  EXPECT_NEAR(po.fallback().alpha, std::sqrt(10.0 * 3000.0), 1e-9);
 }
 
 TEST(ParFam, InvalidExpressionIsNamed) {

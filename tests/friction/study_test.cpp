@@ -103,6 +103,9 @@ TEST(FrictionStudy, InvalidOptionsAreNamed) {
   o = {};
   o.parfam.hops = -1;
   EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam hops is -1")));
+  o = {};
+  o.parfam_v_l1 = -1e-5;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("study parfam_v_l1 is -1e-05")));
 }
 
 TEST(FrictionStudy, UnknownModelNameIsNamed) {

@@ -23,7 +23,7 @@
 ///   dh/ds = -alpha * h + alpha * tanh(beta * qd)      i.e.   hd = alpha |qd| (tanh(beta qd) - h)
 ///
 /// -- eq. 10 with the relaxation rate alpha |qd| instead of alpha (alpha in [1/rad]: 1/alpha is the
-/// pre-sliding distance), which is the Dahl model with exponent 1 (a Bouc-Wen state with n = 1,
+/// pre-sliding distance), which is the Dahl model [Dahl1968] with exponent 1 (a Bouc-Wen state with n = 1,
 /// A = beta_BW = gamma_BW). It is rate independent: the h-q loop is the same at any speed, and h
 /// does not move while the joint stands still. It is discretised exactly for qd held over a step,
 ///
