@@ -23,3 +23,10 @@ add_test(NAME cli.friction_study_time_clock
          COMMAND twinwatch friction-study --simulated --joint 3 --trials 2 --hops 2 --memory time -q)
 set_tests_properties(cli.friction_study_time_clock PROPERTIES PASS_REGULAR_EXPRESSION
   "stage 1 \\(time clock\\)")
+add_test(NAME cli.friction_study_bad_remove_viscous
+         COMMAND twinwatch friction-study --simulated --prior-remove-viscous 2 -q)
+set_tests_properties(cli.friction_study_bad_remove_viscous PROPERTIES PASS_REGULAR_EXPRESSION
+  "--prior-remove-viscous is 2, expected 0 or 1")
+add_test(NAME cli.friction_study_predictions
+         COMMAND twinwatch friction-study --simulated --joint 3 --trials 1 --hops 2 -q
+                 --predictions ${CMAKE_CURRENT_BINARY_DIR}/friction_predictions.csv)

@@ -138,7 +138,9 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
     p.prior.drive = HysteresisDrive::Displacement;
   else
     throw InvalidArgument(fmt::format("--memory is '{}', expected 'time' or 'displacement'", o.memory));
-  if (o.remove_viscous >= 0) p.prior.remove_viscous = o.remove_viscous > 0;
+  if (o.remove_viscous > 1)
+    throw InvalidArgument(fmt::format("--prior-remove-viscous is {}, expected 0 or 1", o.remove_viscous));
+  if (o.remove_viscous >= 0) p.prior.remove_viscous = o.remove_viscous == 1;
   if (o.fixed_alpha > 0.0 || o.fixed_beta > 0.0) {
     p.hysteresis = HysteresisParams{o.fixed_alpha, o.fixed_beta, p.prior.drive};
     p.hysteresis->validate();
