@@ -42,15 +42,35 @@ BENCHMARK_CAPTURE(BM_Step, RBFNN_H, "RBFNN-H");
 BENCHMARK_CAPTURE(BM_Step, ParFam_V, "ParFam-V");
 BENCHMARK_CAPTURE(BM_Step, ParFam_H, "ParFam-H");
 
-// the three stages of ParFam-H on the 20 s, 200 Hz sweep of J2
-void BM_IdentifyParFamH(benchmark::State& state) {
+// the hysteresis state alone over the Fourier record: HESR's time clock (Euler, eq. 11) vs the
+// displacement clock (one exp per sample more)
+void BM_HysteresisState(benchmark::State& state, HysteresisDrive drive) {
+  const Setup& s = setup();
+  const std::vector<double>& qd = s.data.fourier.qd;
+  HysteresisState h(HysteresisParams{drive == HysteresisDrive::Time ? 20.0 : 600.0, 30.0, drive}, s.data.fourier.dt);
+  for (auto _ : state) {
+    h.reset();
+    double acc = 0.0;
+    for (double v : qd) acc += h.step(v).hd;
+    benchmark::DoNotOptimize(acc);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(qd.size()));
+}
+BENCHMARK_CAPTURE(BM_HysteresisState, Time, HysteresisDrive::Time);
+BENCHMARK_CAPTURE(BM_HysteresisState, Displacement, HysteresisDrive::Displacement);
+
+// the three stages of ParFam-H on the 20 s, 200 Hz sweep of J2, with the study's options
+// (displacement clock, viscous-free Stage 1, two tanh units, gamma 1e-6) and with the library's
+// (HESR as printed: time clock, sin/cos/exp/tanh, gamma 1e-5)
+void BM_IdentifyParFamH(benchmark::State& state, bool study) {
   const Setup& s = setup();
   for (auto _ : state) {
-    ParFamModel m;
+    ParFamModel m(study ? study_parfam_options() : ParFamOptions{});
     benchmark::DoNotOptimize(m.fit(s.data.train));
   }
 }
-BENCHMARK(BM_IdentifyParFamH)->Unit(benchmark::kSecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_IdentifyParFamH, Study, true)->Unit(benchmark::kSecond)->Iterations(3);
+BENCHMARK_CAPTURE(BM_IdentifyParFamH, TimeClock, false)->Unit(benchmark::kSecond)->Iterations(3);
 
 }  // namespace
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "twinwatch/core/error.hpp"
@@ -62,6 +63,8 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
     throw InvalidArgument(fmt::format("desired profile '{}' duration is {}, must be > dt ({})", desired.name,
                                       desired.duration, o.dt));
   MaxwellSlipFriction plant_friction(truth);
+  MaxwellSlipFriction desired_friction(truth);  // the truth along qd_d: scores f_hat (evaluation only)
+  double ff_sse = 0.0;
   if (model) model->start(o.dt);
   ClosedLoopRun run;
   run.compensation = !feedforward ? "None" : (model ? std::string(model->name()) : "Baseline");
@@ -89,6 +92,10 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
     double qd_cmd = v_d;
     if (feedforward) {
       const double f_hat = model ? model->step(v_d) : 0.0;
+      if (model) {
+        const double f_true = desired_friction.step(v_d, o.dt);
+        ff_sse += (f_hat - f_true) * (f_hat - f_true);
+      }
       const double tau_d = o.inertia * a_d + f_hat;
       // the current-based torque estimate: noisy, then low-passed
       const double tau_raw = u + noise(rng);
@@ -119,6 +126,8 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   double s_all = 0.0;
   for (std::size_t k = 0; k < n; ++k) s_all += (run.q_d[k] - run.q[k]) * (run.q_d[k] - run.q[k]);
   run.rmse = std::sqrt(s_all / static_cast<double>(n));
+  run.feedforward_rmse = model && feedforward ? std::sqrt(ff_sse / static_cast<double>(n))
+                                              : std::numeric_limits<double>::quiet_NaN();
   const auto seg = static_cast<std::size_t>(std::lround(o.segment / o.dt));
   double seg_sum = 0.0;
   int segs = 0;

@@ -16,7 +16,12 @@ void HysteresisParams::validate() const {
     throw InvalidArgument(fmt::format("hysteresis beta is {}, must be > 0", beta));
 }
 
+const char* to_string(HysteresisDrive d) noexcept {
+  return d == HysteresisDrive::Time ? "time" : "displacement";
+}
+
 bool HysteresisParams::stable(double dt) const noexcept {
+  if (drive == HysteresisDrive::Displacement) return dt > 0.0;
   const double decay = 1.0 - alpha * dt;
   return dt > 0.0 && decay > 0.0 && decay < 1.0;
 }
@@ -26,7 +31,7 @@ HysteresisState::HysteresisState(HysteresisParams params, double dt, double h0)
   params_.validate();
   if (!std::isfinite(dt) || dt <= 0.0)
     throw InvalidArgument(fmt::format("sample time dt is {}, must be > 0", dt));
-  if (!params_.stable(dt))
+  if (params_.drive == HysteresisDrive::Time && !params_.stable(dt))
     throw InvalidArgument(fmt::format(
         "hysteresis alpha*dt is {} (alpha {}, dt {}), must be in (0, 1) for a stable eq. 11",
         alpha_dt_, params_.alpha, dt));

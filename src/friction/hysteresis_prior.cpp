@@ -82,6 +82,12 @@ void HysteresisPriorOptions::validate() const {
     throw InvalidArgument(fmt::format("prior alpha_min is {}, must be > 0 [1/s]", alpha_min));
   if (!std::isfinite(alpha_max) || alpha_max <= alpha_min)
     throw InvalidArgument(fmt::format("prior alpha_max is {}, must be > alpha_min ({})", alpha_max, alpha_min));
+  if (!std::isfinite(displacement_alpha_min) || displacement_alpha_min <= 0.0)
+    throw InvalidArgument(
+        fmt::format("prior displacement_alpha_min is {}, must be > 0 [1/rad]", displacement_alpha_min));
+  if (!std::isfinite(displacement_alpha_max) || displacement_alpha_max <= displacement_alpha_min)
+    throw InvalidArgument(fmt::format("prior displacement_alpha_max is {}, must be > displacement_alpha_min ({})",
+                                      displacement_alpha_max, displacement_alpha_min));
   if (!std::isfinite(beta_min) || beta_min <= 0.0)
     throw InvalidArgument(fmt::format("prior beta_min is {}, must be > 0 [s/rad]", beta_min));
   if (!std::isfinite(beta_max) || beta_max <= beta_min)
@@ -92,6 +98,13 @@ void HysteresisPriorOptions::validate() const {
                                       weight_width, weight_slope));
   if (!(v_ref_fraction > 0.0 && v_ref_fraction < 1.0))
     throw InvalidArgument(fmt::format("prior v_ref_fraction is {}, must be in (0, 1)", v_ref_fraction));
+}
+
+HysteresisParams HysteresisPriorOptions::fallback() const noexcept {
+  HysteresisParams p;
+  p.drive = drive;
+  if (drive == HysteresisDrive::Displacement) p.alpha = std::sqrt(displacement_alpha_min * displacement_alpha_max);
+  return p;
 }
 
 HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const HysteresisPriorOptions& options) {
@@ -111,22 +124,59 @@ HysteresisPrior calibrate_hysteresis_prior(const FrictionRecord& record, const H
     for (long i = a; i <= b; ++i) s += record.tau[static_cast<std::size_t>(i)];
     tau_s[static_cast<std::size_t>(k)] = s / static_cast<double>(b - a + 1);
   }
+  if (options.remove_viscous) {
+    // least squares tau ~ c0 + c1 qd + c2 sgn(qd) on the sliding samples: 3x3 normal equations
+    double A[3][4] = {};
+    for (long k = 0; k < n; ++k) {
+      const double v = record.qd[static_cast<std::size_t>(k)];
+      if (std::abs(v) < v_ref) continue;
+      const double row[3] = {1.0, v, v > 0.0 ? 1.0 : -1.0};
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) A[i][j] += row[i] * row[j];
+        A[i][3] += row[i] * tau_s[static_cast<std::size_t>(k)];
+      }
+    }
+    // Gauss-Jordan with partial pivoting; a singular system (no sliding in one direction) keeps tau
+    bool ok = true;
+    for (int c = 0; c < 3 && ok; ++c) {
+      int piv = c;
+      for (int r = c + 1; r < 3; ++r)
+        if (std::abs(A[r][c]) > std::abs(A[piv][c])) piv = r;
+      constexpr double kSingular = 1e-12;
+      if (std::abs(A[piv][c]) < kSingular * (1.0 + std::abs(A[0][0]))) {
+        ok = false;
+        break;
+      }
+      std::swap(A[c], A[piv]);
+      for (int r = 0; r < 3; ++r) {
+        if (r == c) continue;
+        const double f = A[r][c] / A[c][c];
+        for (int j = c; j < 4; ++j) A[r][j] -= f * A[c][j];
+      }
+    }
+    if (ok) {
+      const double c1 = A[1][3] / A[1][1];
+      for (long k = 0; k < n; ++k) tau_s[static_cast<std::size_t>(k)] -= c1 * record.qd[static_cast<std::size_t>(k)];
+    }
+  }
   HysteresisPrior out;
   out.measured = loop_descriptors(record.qd, tau_s, v_ref);
   if (out.measured.reversals == 0)
     throw InvalidArgument(fmt::format("training record: qd never reverses beyond +-{:.3g} rad/s, no hysteresis loop "
                                       "to calibrate (alpha, beta) on",
                                       v_ref));
-  // bounded log grid; alpha kept inside the stability region of eq. 11
+  // bounded log grid; in the time clock alpha is kept inside the stability region of eq. 11
+  const bool time = options.drive == HysteresisDrive::Time;
   constexpr double kStableFraction = 0.9;
-  const double alpha_max = std::min(options.alpha_max, kStableFraction / record.dt);
-  const double alpha_min = std::min(options.alpha_min, 0.5 * alpha_max);
+  const double alpha_max =
+      time ? std::min(options.alpha_max, kStableFraction / record.dt) : options.displacement_alpha_max;
+  const double alpha_min = time ? std::min(options.alpha_min, 0.5 * alpha_max) : options.displacement_alpha_min;
   out.cost = std::numeric_limits<double>::infinity();
   for (int i = 0; i < options.grid; ++i) {
     const double alpha = alpha_min * std::pow(alpha_max / alpha_min, i / (options.grid - 1.0));
     for (int j = 0; j < options.grid; ++j) {
       const double beta = options.beta_min * std::pow(options.beta_max / options.beta_min, j / (options.grid - 1.0));
-      const HysteresisParams p{alpha, beta};
+      const HysteresisParams p{alpha, beta, options.drive};
       const HysteresisFeatures f = hysteresis_features(record.qd, record.dt, p);
       const LoopDescriptors g = loop_descriptors(record.qd, f.h, v_ref);
       // J_h of eq. 13

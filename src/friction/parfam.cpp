@@ -22,6 +22,12 @@ namespace {
 using detail::Cache;
 using detail::Layout;
 
+// Stage 3 bounds of the hysteresis parameters: beta [s/rad] (tanh(1e5 qd) = sgn(qd) to 1e-12 for
+// |qd| >= 1.5e-4 rad/s, below a 20-bit encoder's velocity resolution at 200 Hz) and, in the
+// displacement clock, alpha [1/rad] (a pre-sliding distance of 1 urad)
+constexpr double kMaxBeta = 1e5;
+constexpr double kMaxDisplacementAlpha = 1e6;
+
 // floor of an input/output RMS used for scaling (a constant-zero column stays unscaled)
 constexpr double kMinScale = 1e-12;
 
@@ -255,8 +261,8 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     } else {
       prior_ = calibrate_hysteresis_prior(record, options_.prior);
       hysteresis_ = prior_->params;
-      stage1 = fmt::format("stage 1 (alpha, beta) = ({:.4g}, {:.4g}), J_h {:.3g}", hysteresis_.alpha, hysteresis_.beta,
-                           prior_->cost);
+      stage1 = fmt::format("stage 1 ({} clock) (alpha, beta) = ({:.4g}, {:.4g}), J_h {:.3g}",
+                           to_string(hysteresis_.drive), hysteresis_.alpha, hysteresis_.beta, prior_->cost);
     }
     HysteresisState(hysteresis_, record.dt);  // throws when eq. 11 is unstable at this dt
   }
@@ -377,10 +383,16 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     std::vector<double> active_theta = z;
     ceres::Problem problem;
     problem.AddResidualBlock(new detail::Stage3Cost(record.qd, record.dt, sx, data.y, L, ctx.ops, rational,
-                                            options_.denominator_floor, theta, ctx.active),
+                                            options_.denominator_floor, theta, ctx.active, hysteresis_.drive),
                              nullptr, ab, active_theta.data());
     constexpr double kStableFraction = 0.95;  // keep 1 - alpha dt away from 0
-    problem.SetParameterUpperBound(ab, 0, std::log(kStableFraction / record.dt));
+    if (hysteresis_.drive == HysteresisDrive::Time)
+      problem.SetParameterUpperBound(ab, 0, std::log(kStableFraction / record.dt));
+    else
+      problem.SetParameterUpperBound(ab, 0, std::log(kMaxDisplacementAlpha));
+    // beta beyond this is sign(qd) for every measurable velocity; unbounded, LM drove it to 1e49
+    // and beyond (tanh(inf * 0) is NaN at a sample with qd = 0)
+    problem.SetParameterUpperBound(ab, 1, std::log(kMaxBeta));
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = options_.lm_iterations;
@@ -389,7 +401,7 @@ FitSummary ParFamModel::fit(const FrictionRecord& record) {
     ceres::Solver::Summary summary;
     ceres::Solve(so, &problem, &summary);
     if (summary.IsSolutionUsable() && summary.final_cost <= summary.initial_cost) {
-      hysteresis_ = {std::exp(ab[0]), std::exp(ab[1])};
+      hysteresis_ = {std::exp(ab[0]), std::exp(ab[1]), hysteresis_.drive};
       for (std::size_t a = 0; a < z.size(); ++a) theta[static_cast<std::size_t>(ctx.active[a])] = active_theta[a];
     }
     evaluations += static_cast<long>(summary.iterations.size());
@@ -475,7 +487,8 @@ double ParFamModel::step(double qd) noexcept {
 std::string ParFamModel::equation() const {
   std::string s = "tau_f = " + expression_.to_string();
   if (options_.input == ParFamInput::Hysteresis)
-    s += fmt::format("; (alpha, beta) = ({:.4g}, {:.4g})", hysteresis_.alpha, hysteresis_.beta);
+    s += fmt::format("; (alpha, beta) = ({:.4g}, {:.4g}){}", hysteresis_.alpha, hysteresis_.beta,
+                     hysteresis_.drive == HysteresisDrive::Displacement ? ", displacement clock" : "");
   return s;
 }
 

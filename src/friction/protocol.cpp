@@ -149,7 +149,7 @@ ProtocolResult run_hesr_protocol(const ProtocolRecords& r, const ProtocolOptions
       m.fit(sd.train);
     } catch (const InvalidArgument&) {
       // no reversal for Stage 1: the same fallback as the study (defaults, refined by Stage 3)
-      po.hysteresis = HysteresisParams{};
+      po.hysteresis = po.prior.fallback();
       m = ParFamModel(po);
       m.fit(sd.train);
     }

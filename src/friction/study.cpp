@@ -46,6 +46,16 @@ double time_per_sample_ns(FrictionModel& m, const FrictionRecord& r, int repeats
 
 }  // namespace
 
+ParFamOptions study_parfam_options() {
+  ParFamOptions o;
+  o.prior.drive = HysteresisDrive::Displacement;
+  o.prior.remove_viscous = true;
+  o.functions = {UnaryOp::Tanh, UnaryOp::Tanh};
+  constexpr double kStudyL1 = 1e-6;  // gamma of eq. 15 on unit-RMS data
+  o.l1 = kStudyL1;
+  return o;
+}
+
 void FrictionStudyOptions::validate() const {
   if (!std::isfinite(reversal_window) || reversal_window <= 0.0)
     throw InvalidArgument(fmt::format("study reversal_window is {}, must be > 0 [s]", reversal_window));
@@ -55,6 +65,8 @@ void FrictionStudyOptions::validate() const {
     throw InvalidArgument(fmt::format("study chirp_split is {}, must be > 0 [Hz]", chirp_split));
   if (timing_repeats < 1) throw InvalidArgument(fmt::format("study timing_repeats is {}, must be >= 1", timing_repeats));
   parfam.validate();
+  if (!std::isfinite(parfam_v_l1) || parfam_v_l1 < 0.0)
+    throw InvalidArgument(fmt::format("study parfam_v_l1 is {}, must be >= 0", parfam_v_l1));
   parametric.validate();
   rbf.validate();
 }
@@ -103,6 +115,9 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   const std::vector<char> rev = reversal_window_mask(data.fourier.qd, data.fourier.dt, options.reversal_window,
                                                      options.reversal_threshold, &out.reversals);
   for (char c : rev) out.reversal_samples += c;
+  out.train = data.train;
+  out.fourier = data.fourier;
+  out.reversal_mask = rev;
   std::vector<char> id(data.chirp_frequency.size()), ood(id.size());
   for (std::size_t k = 0; k < id.size(); ++k) {
     id[k] = data.chirp_frequency[k] < options.chirp_split;
@@ -111,6 +126,7 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
   // the models, ParFam-H first: RBFNN-H uses its (alpha, beta)
   ParFamOptions pv = options.parfam;
   pv.input = ParFamInput::Velocity;
+  pv.l1 = options.parfam_v_l1;
   ParFamOptions ph = options.parfam;
   ph.input = ParFamInput::Hysteresis;
   auto parfam_h = std::make_shared<ParFamModel>(ph);
@@ -122,10 +138,10 @@ JointStudy run_friction_study(const FrictionStudyData& data, const FrictionStudy
     // them (e.g. a one-directional move) (alpha, beta) start from the documented defaults of
     // HysteresisParams and Stage 3 refines them. Said in the fit message, never silently.
     if (ph.hysteresis) throw;
-    ph.hysteresis = HysteresisParams{};
+    ph.hysteresis = ph.prior.fallback();
     parfam_h = std::make_shared<ParFamModel>(ph);
     fit_h = parfam_h->fit(data.train);
-    fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({}, {}); {}",
+    fit_h.message = fmt::format("stage 1 not possible ({}), (alpha, beta) started at the defaults ({:.4g}, {:.4g}); {}",
                                 e.what(), ph.hysteresis->alpha, ph.hysteresis->beta, fit_h.message);
   }
   RbfOptions rv = options.rbf;

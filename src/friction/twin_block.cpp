@@ -58,6 +58,7 @@ std::string friction_block_to_json(const std::vector<JointFrictionEquation>& equ
     if (e.expression.dim == 3) {
       j["alpha"] = e.hysteresis.alpha;
       j["beta"] = e.hysteresis.beta;
+      j["memory"] = to_string(e.hysteresis.drive);
     }
     j["equation"] = "tau_f = " + e.expression.to_string();
     out.push_back(j);
@@ -103,7 +104,17 @@ std::vector<JointFrictionEquation> friction_block_from_json(const std::string& t
       for (double v : e.expression.theta)
         if (!std::isfinite(v)) throw ParseError(origin, 0, p + "theta", "values must be finite numbers");
       e.expression.denominator_floor = j.contains("denominator_floor") ? positive(j, "denominator_floor", p, origin) : 0.05;
-      if (e.expression.dim == 3) e.hysteresis = {positive(j, "alpha", p, origin), positive(j, "beta", p, origin)};
+      if (e.expression.dim == 3) {
+        e.hysteresis = {positive(j, "alpha", p, origin), positive(j, "beta", p, origin)};
+        // the memory clock of h; files written before it existed used HESR's time clock
+        if (j.contains("memory")) {
+          const std::string m = j.at("memory").get<std::string>();
+          if (m == "displacement")
+            e.hysteresis.drive = HysteresisDrive::Displacement;
+          else if (m != "time")
+            throw ParseError(origin, 0, p + "memory", fmt::format("expected 'time' or 'displacement', got '{}'", m));
+        }
+      }
       // the optional input guard: both bounds, dim finite numbers each, min <= max
       if (j.contains("input_min") || j.contains("input_max")) {
         e.expression.input_min = need(j, "input_min", p, origin).get<std::vector<double>>();

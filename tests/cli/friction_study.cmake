@@ -12,4 +12,21 @@ set_tests_properties(cli.friction_study_needs_input PROPERTIES PASS_REGULAR_EXPR
   "give either recordings .* or --simulated")
 add_test(NAME cli.friction_study_closed_loop COMMAND twinwatch friction-study --closed-loop --joint 3 --hops 2 -q)
 set_tests_properties(cli.friction_study_closed_loop PROPERTIES PASS_REGULAR_EXPRESSION
-  "Table X: tracking RMSE.*ParFam-H +[0-9.]+.*Table XI.*True friction")
+  "Table X: tracking RMSE.*ParFam-H +[0-9.]+.*Table XI.*True friction.*Feed-forward model error.*ParFam-H +[0-9.]+")
+add_test(NAME cli.friction_study_bad_memory COMMAND twinwatch friction-study --simulated --memory distance -q)
+set_tests_properties(cli.friction_study_bad_memory PROPERTIES PASS_REGULAR_EXPRESSION
+  "--memory is 'distance', expected 'time' or 'displacement'")
+add_test(NAME cli.friction_study_bad_functions COMMAND twinwatch friction-study --simulated --functions tanh,log -q)
+set_tests_properties(cli.friction_study_bad_functions PROPERTIES PASS_REGULAR_EXPRESSION
+  "--functions has 'log', expected a comma list of sin, cos, exp, tanh")
+add_test(NAME cli.friction_study_time_clock
+         COMMAND twinwatch friction-study --simulated --joint 3 --trials 2 --hops 2 --memory time -q)
+set_tests_properties(cli.friction_study_time_clock PROPERTIES PASS_REGULAR_EXPRESSION
+  "stage 1 \\(time clock\\)")
+add_test(NAME cli.friction_study_bad_remove_viscous
+         COMMAND twinwatch friction-study --simulated --prior-remove-viscous 2 -q)
+set_tests_properties(cli.friction_study_bad_remove_viscous PROPERTIES PASS_REGULAR_EXPRESSION
+  "--prior-remove-viscous is 2, expected 0 or 1")
+add_test(NAME cli.friction_study_predictions
+         COMMAND twinwatch friction-study --simulated --joint 3 --trials 1 --hops 2 -q
+                 --predictions ${CMAKE_CURRENT_BINARY_DIR}/friction_predictions.csv)

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -145,6 +146,115 @@ TEST(Hysteresis, InvalidBetaIsRejected) {
 TEST(Hysteresis, InvalidInitialStateIsRejected) {
   EXPECT_THROW(HysteresisState(HysteresisParams{}, kDt, 1.5), InvalidArgument);
   EXPECT_THROW(HysteresisState(HysteresisParams{}, 0.0), InvalidArgument);
+}
+
+// ---- the displacement clock (eq. 10 in ds = |qd| dt): Dahl-like, rate-independent memory ----
+
+HysteresisParams displacement(double alpha, double beta) { return {alpha, beta, HysteresisDrive::Displacement}; }
+
+TEST(HysteresisDisplacement, ReproducesTheDahlLoopAfterAReversal) {
+  // Dahl (exponent 1) with a sign-like transition: after a reversal from h_r, moving a distance d
+  // in the new direction gives h = sgn - (sgn - h_r) exp(-alpha d), whatever the speed profile.
+  // The velocity here is random and positive; d is its rectangle-rule integral.
+  const unsigned seed = 7;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> speed(0.01, 2.0);
+  const HysteresisParams p = displacement(400.0, 1e7);
+  HysteresisState s(p, kDt);
+  // first saturate at h = -1 by a long negative move
+  for (int k = 0; k < 400; ++k) s.step(-1.0);
+  ASSERT_NEAR(s.h(), -1.0, 1e-12);
+  double d = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const double v = speed(rng);
+    const HysteresisSample x = s.step(v);
+    d += v * kDt;
+    const double dahl = 1.0 - 2.0 * std::exp(-p.alpha * d);
+    ASSERT_NEAR(x.h, dahl, 1e-12) << "seed " << seed << " k " << k;
+    // hd = dh/dt = alpha |qd| (1 - h): the Dahl slope dh/ds times the speed
+    ASSERT_NEAR(x.hd, p.alpha * v * (1.0 - dahl), 1e-9);
+  }
+}
+
+TEST(HysteresisDisplacement, LoopIsRateIndependentWhileTheTimeClockIsNot) {
+  // position q = A sin(2 pi f t) at 0.25 Hz and 1 Hz, 400 samples per period each: the same
+  // positions are visited at the same samples, and per-sample displacements are equal, so the
+  // displacement clock gives the identical h-q loop; the time clock (eq. 11) gives different loops.
+  constexpr int kPerPeriod = 400, kPeriods = 3;
+  const double A = 0.3;  // [rad]
+  const auto run = [&](double f, const HysteresisParams& p) {
+    const double dt = 1.0 / (f * kPerPeriod);
+    std::vector<double> qd(kPerPeriod * kPeriods);
+    for (std::size_t k = 0; k < qd.size(); ++k)
+      qd[k] = 2.0 * std::numbers::pi * f * A * std::cos(2.0 * std::numbers::pi * f * static_cast<double>(k) * dt);
+    // beta scaled with 1/f keeps tanh(beta qd) a function of the position phase only
+    HysteresisParams q = p;
+    q.beta = p.beta / f;
+    return hysteresis_features(qd, dt, q).h;
+  };
+  const std::vector<double> slow = run(0.25, displacement(60.0, 50.0)), fast = run(1.0, displacement(60.0, 50.0));
+  double max_diff = 0.0;
+  for (std::size_t k = 0; k < slow.size(); ++k) max_diff = std::max(max_diff, std::abs(slow[k] - fast[k]));
+  EXPECT_LT(max_diff, 1e-12);
+  // the loop is a real hysteresis loop: different h at the same position on the way up and down
+  // (samples 400 and 200 of a period are both at q = 0, moving up and down)
+  EXPECT_GT(slow[2 * kPerPeriod] - slow[kPerPeriod + 200], 1.0);
+  // the time clock with the same alpha [1/s] at 0.25 and 1 Hz: not rate independent
+  const HysteresisParams t{4.0, 50.0};
+  const std::vector<double> slow_t = run(0.25, t), fast_t = run(1.0, t);
+  double max_diff_t = 0.0;
+  for (std::size_t k = 0; k < slow_t.size(); ++k) max_diff_t = std::max(max_diff_t, std::abs(slow_t[k] - fast_t[k]));
+  EXPECT_GT(max_diff_t, 0.1);
+}
+
+TEST(HysteresisDisplacement, KeepsItsMemoryAtStandstill) {
+  // the time clock relaxes h to tanh(0) = 0 while the joint stands still; the displacement clock
+  // keeps the pre-sliding state (no motion, no change), like a deflected bristle
+  HysteresisState disp(displacement(300.0, 200.0), kDt), time(HysteresisParams{10.0, 200.0}, kDt);
+  for (int k = 0; k < 200; ++k) {
+    disp.step(0.5);
+    time.step(0.5);
+  }
+  const double h_disp = disp.h(), h_time = time.h();
+  ASSERT_GT(h_disp, 0.99);
+  ASSERT_GT(h_time, 0.99);
+  for (int k = 0; k < 1000; ++k) {  // 5 s at rest
+    const HysteresisSample d = disp.step(0.0);
+    EXPECT_EQ(d.hd, 0.0);
+    time.step(0.0);
+  }
+  EXPECT_EQ(disp.h(), h_disp);
+  EXPECT_LT(std::abs(time.h()), 1e-6);
+}
+
+TEST(HysteresisDisplacement, StaysBoundedForAnyStepSize) {
+  // the exact exponential step is a convex combination of h and tanh(beta qd): |h| <= 1 even when
+  // alpha |qd| dt is far above the Euler limit of eq. 11
+  const unsigned seed = 11;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 3.0);
+  std::vector<double> qd(20000);
+  for (double& v : qd) v = noise(rng);
+  for (double alpha : {1.0, 1e3, 1e6}) {
+    const HysteresisParams p = displacement(alpha, 300.0);
+    EXPECT_TRUE(p.stable(kDt));
+    const HysteresisFeatures f = hysteresis_features(qd, kDt, p);
+    for (std::size_t k = 0; k < qd.size(); ++k) {
+      ASSERT_LE(std::abs(f.h[k]), 1.0) << "seed " << seed << " alpha " << alpha << " k " << k;
+      ASSERT_LE(std::abs(f.hd[k]), 2.0 * alpha * std::abs(qd[k]) + 1e-9);
+    }
+  }
+}
+
+TEST(HysteresisDisplacement, MatchesTheTimeClockInTheSmallStepLimitAtUnitSpeed) {
+  // at |qd| = 1 rad/s the displacement clock is the time clock (ds = dt); its exact step
+  // h = T + (h - T) e^{-alpha dt} and Euler's (1 - alpha dt) agree to O((alpha dt)^2) per step
+  const double alpha = 2.0, dt = 1e-4;
+  HysteresisState disp(displacement(alpha, 1e4), dt), time(HysteresisParams{alpha, 1e4}, dt);
+  for (int k = 0; k < 20000; ++k) {
+    const double v = (k / 5000) % 2 ? -1.0 : 1.0;
+    EXPECT_NEAR(disp.step(v).h, time.step(v).h, 2e-4) << "k " << k;
+  }
 }
 
 }  // namespace

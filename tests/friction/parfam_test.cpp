@@ -70,16 +70,15 @@ TEST(ParFamFamily, ReverseModeMatchesFiniteDifferences) {
   }
 }
 
-TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences) {
+void check_stage3_jacobian(HysteresisDrive drive, double alpha, const double (&sx)[3]) {
   const detail::Layout L{3, 4};
   const std::vector<double> qd = two_tone_velocity(3.0);
   const std::vector<double> y(qd.size(), 0.3);
-  const double sx[3] = {0.7, 0.8, 9.0};
   const std::vector<double> theta = random_theta(L.size(), 7, 0.5);
   std::vector<int> active;
   for (int i = 0; i < L.size(); ++i) active.push_back(i);
-  const detail::Stage3Cost cost(qd, kDt, sx, y, L, kAllOps.data(), true, 1e-3, theta, active);
-  std::vector<double> ab{std::log(14.0), std::log(40.0)};
+  const detail::Stage3Cost cost(qd, kDt, sx, y, L, kAllOps.data(), true, 1e-3, theta, active, drive);
+  std::vector<double> ab{std::log(alpha), std::log(40.0)};
   std::vector<double> th = theta;
   const auto n = qd.size();
   std::vector<double> r(n), J0(n * 2), J1(n * th.size());
@@ -110,6 +109,15 @@ TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences
     for (std::size_t k = 0; k < n; k += 7)
       ASSERT_NEAR(J1[k * th.size() + i], fd[k], kTol * std::max(1.0, std::abs(fd[k]))) << "theta " << i << " k " << k;
   }
+}
+
+TEST(ParFamStage3, JacobianThroughTheHysteresisRecursionMatchesFiniteDifferences) {
+  check_stage3_jacobian(HysteresisDrive::Time, 14.0, {0.7, 0.8, 9.0});
+}
+
+TEST(ParFamStage3, JacobianThroughTheDisplacementClockMatchesFiniteDifferences) {
+  // alpha |qd| dt reaches ~1 here: the exact exponential step, not the Euler regime
+  check_stage3_jacobian(HysteresisDrive::Displacement, 300.0, {0.7, 0.8, 90.0});
 }
 
 TEST(ParFamExpression, PrintsTheActiveTermsInTableViiOrder) {
@@ -213,6 +221,30 @@ TEST(HysteresisPrior, FindsTheGridPointOfAPureHysteresisLoop) {
   EXPECT_GT(p.measured.width, 0.1);  // a real loop
 }
 
+TEST(HysteresisPrior, DisplacementClockFindsTheDahlStateUnderViscousFriction) {
+  // tau = 5 h + 4 qd with h a Dahl state (displacement clock, 1/alpha = 2.2 mrad, sign-like beta):
+  // with the viscous slope removed Stage 1 finds alpha within a grid step and a sign-like beta;
+  // without it the viscous part widens tau's range, the loop looks narrower than a saturating h,
+  // and the grid drifts to a small beta (h no longer saturating) -- the bias the option removes
+  const HysteresisParams truth{447.0, 400.0, HysteresisDrive::Displacement};
+  HysteresisState st(truth, kDt);
+  const FrictionRecord rec =
+      make_record(sine_velocity(20.0), [&](double v) { return 5.0 * st.step(v).h + 4.0 * v; }, kNoise, 29);
+  HysteresisPriorOptions o;
+  o.drive = HysteresisDrive::Displacement;
+  o.remove_viscous = true;
+  const HysteresisPrior p = calibrate_hysteresis_prior(rec, o);
+  EXPECT_EQ(p.params.drive, HysteresisDrive::Displacement);
+  EXPECT_LT(std::abs(std::log(p.params.alpha / truth.alpha)), std::log(1.6)) << p.params.alpha;
+  // sign-like at the reversal threshold v_ref = 0.12 rad/s: tanh(beta v_ref) > 0.99 (beta beyond
+  // that is not identifiable from the loop descriptors)
+  EXPECT_GT(std::tanh(p.params.beta * 0.12), 0.99) << p.params.beta;
+  o.remove_viscous = false;
+  const HysteresisPrior q = calibrate_hysteresis_prior(rec, o);
+  EXPECT_LT(std::tanh(q.params.beta * 0.12), 0.9) << q.params.beta;
+  EXPECT_GT(q.cost, p.cost);
+}
+
 TEST(HysteresisPrior, LoopDescriptorsOfASingleValuedCurveHaveNoWidth) {
   const std::vector<double> qd = sine_velocity(20.0);
   std::vector<double> y(qd.size());
@@ -275,6 +307,32 @@ TEST(ParFam, InvalidOptionsAreNamed) {
   o = {};
   o.prior.grid = 1;
   EXPECT_THAT([&] { ParFamModel{o}; }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("prior grid is 1")));
+  o = {};
+  o.prior.displacement_alpha_min = 0.0;
+  EXPECT_THAT([&] { ParFamModel{o}; },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("prior displacement_alpha_min is 0, must be > 0")));
+  o = {};
+  o.prior.displacement_alpha_max = 5.0;
+  EXPECT_THAT([&] { ParFamModel{o}; }, ::testing::ThrowsMessage<InvalidArgument>(
+                                           HasSubstr("prior displacement_alpha_max is 5, must be > displacement_alpha_min (10)")));
+}
+
+TEST(ParFam, DisplacementClockNeedsNoEulerStabilityAndSaysSoInTheEquation) {
+  // alpha*dt = 1.5 is unstable for eq. 11 in time, but alpha [1/rad] of the displacement clock has
+  // no such limit (exact step); the fitted equation names the clock
+  ParFamOptions o;
+  o.hysteresis = HysteresisParams{300.0, 100.0, HysteresisDrive::Displacement};
+  o.hops = 2;
+  ParFamModel m(o);
+  const FrictionRecord train = make_record(sine_velocity(5.0), [](double v) { return v; }, kNoise, 26);
+  ASSERT_NE(m.fit(train).status, FitStatus::Failed);
+  EXPECT_EQ(m.hysteresis().drive, HysteresisDrive::Displacement);
+  EXPECT_THAT(m.equation(), HasSubstr("displacement clock"));
+  // the fallback start of a record without reversals is in the displacement units
+  HysteresisPriorOptions po;
+  po.drive = HysteresisDrive::Displacement;
+  EXPECT_EQ(po.fallback().drive, HysteresisDrive::Displacement);
+  EXPECT_NEAR(po.fallback().alpha, std::sqrt(10.0 * 3000.0), 1e-9);
 }
 
 TEST(ParFam, InvalidExpressionIsNamed) {

@@ -61,25 +61,26 @@ TEST_P(SimulatedJointStudy, ParFamHBeatsTheVelocityOnlyAndBlackBoxModelsAtRevers
   EXPECT_GT(s.model("ParFam-V").reversal_rmse, 1.6 * ph.reversal_rmse) << joint.name;
 }
 
-// The remaining acceptance criteria of issue 6 do NOT hold on this truth (measured with kSeed and
-// the default options, friction-only records): LuGre, whose displacement-driven bristle matches the
-// Maxwell-slip pre-sliding, has a lower reversal-window RMSE than ParFam-H on J1 and J2 (0.65 vs
-// 0.97 and 0.89 vs 2.45 N·m; on J3 ParFam-H is lowest), and ParFam-H's chirp out-of-distribution
-// RMSE is 2.1x (J1), 1.75x (J2) and 1.95x (J3) its in-distribution RMSE (8.4x, 3.1x, 1.9x before
-// the input guard; LuGre 1.4x). The h state relaxes in time (1/alpha) while the truth relaxes with
-// displacement, and one 0.25 Hz training sweep cannot tell them apart. The full protocol with
-// rigid-body decoupling and what was tried: docs/validation.md, "Identification II". Kept here,
-// disabled, so the gap stays visible; run with --gtest_also_run_disabled_tests.
-TEST_P(SimulatedJointStudy, DISABLED_ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
+// The acceptance goals of issue 6 on this truth (kSeed, study_parfam_options(), friction-only
+// records): ParFam-H has the lowest reversal-window RMSE of all six models on every joint
+// (measured 0.590 vs LuGre 0.646, 0.580 vs 0.886, 0.261 vs 0.296 N·m), and trained on the 0.25 Hz
+// sweep only it stays stable on the 0.6-1.0 Hz half of the chirp (HESR §V-F): out-of-distribution
+// RMSE <= 1.5x in-distribution (measured 1.26, 1.07, 1.41). With HESR's time clock and operator
+// library neither holds (LuGre lower on J1/J2, ratio 1.75-2.1). This is seed 1; on other seeds the
+// goals hold partly (docs/validation.md, "Acceptance of issue 6").
+TEST_P(SimulatedJointStudy, ParFamHIsLowestOfAllModelsAndStableOnTheChirp) {
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
   const JointStudy s = run_friction_study(simulated_study_data(joint, kSeed));
   const ModelStudy& ph = s.model("ParFam-H");
   for (const ModelStudy& m : s.models) {
     if (m.name != ph.name) {
-      EXPECT_LT(ph.reversal_rmse, m.reversal_rmse) << joint.name << " vs " << m.name;
+      EXPECT_LT(ph.reversal_rmse, m.reversal_rmse) << joint.name << " vs " << m.name << ": " << ph.equation;
     }
   }
-  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name;
+  ASSERT_TRUE(std::isfinite(ph.chirp_id_rmse) && std::isfinite(ph.chirp_ood_rmse)) << joint.name;
+  EXPECT_LE(ph.chirp_ood_rmse, 1.5 * ph.chirp_id_rmse) << joint.name << ": " << ph.equation;
+  // and it is not "stable" by being uniformly bad: in distribution it is within 2.5x the torque noise
+  EXPECT_LT(ph.chirp_id_rmse, 2.5 * joint.torque_noise) << joint.name << ": " << ph.equation;
 }
 
 INSTANTIATE_TEST_SUITE_P(Joints, SimulatedJointStudy, ::testing::Values(0, 1, 2),
@@ -102,6 +103,9 @@ TEST(FrictionStudy, InvalidOptionsAreNamed) {
   o = {};
   o.parfam.hops = -1;
   EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam hops is -1")));
+  o = {};
+  o.parfam_v_l1 = -1e-5;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("study parfam_v_l1 is -1e-05")));
 }
 
 TEST(FrictionStudy, UnknownModelNameIsNamed) {

@@ -17,7 +17,7 @@ using ::testing::HasSubstr;
 
 ParFamModel fitted_parfam_h() {
   const FrictionStudyData d = simulated_study_data(simulated_study_joints()[2], 1);
-  ParFamOptions o;
+  ParFamOptions o = study_parfam_options();  // h in the displacement clock: stored with the block
   o.hops = 4;  // a quick fit: the test is about storage, not accuracy
   ParFamModel m(o);
   m.fit(d.train);
@@ -45,6 +45,8 @@ TEST(FrictionBlock, RoundTripsThroughTheTwinFileIntoTheCompiledEvaluator) {
   EXPECT_EQ(eqs[0].joint, 3);
   EXPECT_EQ(eqs[0].expression.theta, m.expression().theta);
   EXPECT_EQ(eqs[0].hysteresis.alpha, m.hysteresis().alpha);
+  ASSERT_EQ(m.hysteresis().drive, HysteresisDrive::Displacement);
+  EXPECT_EQ(eqs[0].hysteresis.drive, HysteresisDrive::Displacement);
   EXPECT_EQ(eqs[0].expression.input_min, m.expression().input_min);
   EXPECT_EQ(eqs[0].expression.input_max, m.expression().input_max);
   ASSERT_EQ(eqs[0].expression.input_min.size(), 3u);
@@ -69,6 +71,9 @@ TEST(FrictionBlock, MalformedBlocksNameTheField) {
   EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 1, "functions": ["tanh"], "theta": [0,0,0,0,0,0,0],
                                  "input_min": [1], "input_max": [0]}])"),
               HasSubstr("input guard 0 is [1, 0]"));
+  EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 3, "functions": ["tanh"], "theta": [0,0,0,0,0,0,0,0,0,0,0,0,0],
+                                 "alpha": 300, "beta": 50, "memory": "distance"}])"),
+              HasSubstr("friction_models[0].memory': expected 'time' or 'displacement', got 'distance'"));
 }
 
 }  // namespace

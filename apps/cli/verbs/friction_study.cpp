@@ -35,6 +35,13 @@ struct StudyOptions {
   double input_guard = 0.1;
   int reversal_weight = 1;
   bool rich_training = false;
+  std::string memory = "displacement";
+  int remove_viscous = -1;  // < 0: the study's (on); 0 off, 1 on
+  std::string predictions;  // CSV of the validation record and every model's prediction
+  std::string functions;  // empty: the library's operator set
+  double l1 = -1.0;       // < 0: the study's gamma
+  int starts = -1;        // < 0: the library's
+  double fixed_alpha = 0.0, fixed_beta = 0.0;  // > 0 both: Stage 1 skipped
   unsigned seed = 1;
   double screening = 0.1;
   bool json = false, quiet = false;
@@ -116,6 +123,42 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
     out.push_back(std::move(p));
   }
   return out;
+}
+
+// the ParFam options the command line sets (for ParFam-H, ParFam-V and the smoothing re-fits)
+void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
+  if (o.hops >= 0) p.hops = o.hops;
+  if (o.starts >= 0) p.starts = o.starts;
+  if (o.l1 >= 0.0) p.l1 = o.l1;
+  p.input_guard = o.input_guard;
+  p.reversal_weight = o.reversal_weight;
+  if (o.memory == "time")
+    p.prior.drive = HysteresisDrive::Time;
+  else if (o.memory == "displacement")
+    p.prior.drive = HysteresisDrive::Displacement;
+  else
+    throw InvalidArgument(fmt::format("--memory is '{}', expected 'time' or 'displacement'", o.memory));
+  if (o.remove_viscous > 1)
+    throw InvalidArgument(fmt::format("--prior-remove-viscous is {}, expected 0 or 1", o.remove_viscous));
+  if (o.remove_viscous >= 0) p.prior.remove_viscous = o.remove_viscous == 1;
+  if (o.fixed_alpha > 0.0 || o.fixed_beta > 0.0) {
+    p.hysteresis = HysteresisParams{o.fixed_alpha, o.fixed_beta, p.prior.drive};
+    p.hysteresis->validate();
+  }
+  if (!o.functions.empty()) {
+    p.functions.clear();
+    std::size_t a = 0;
+    while (a <= o.functions.size()) {
+      const std::size_t b = std::min(o.functions.find(',', a), o.functions.size());
+      const std::string f = o.functions.substr(a, b - a);
+      if (f == "sin") p.functions.push_back(UnaryOp::Sin);
+      else if (f == "cos") p.functions.push_back(UnaryOp::Cos);
+      else if (f == "exp") p.functions.push_back(UnaryOp::Exp);
+      else if (f == "tanh") p.functions.push_back(UnaryOp::Tanh);
+      else throw InvalidArgument(fmt::format("--functions has '{}', expected a comma list of sin, cos, exp, tanh", f));
+      a = b + 1;
+    }
+  }
 }
 
 std::string num(double v, int prec = 4) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, prec) : "n/a"; }
@@ -236,9 +279,7 @@ int run_closed_loop_study(const StudyOptions& o) {
     if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
     say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
     FrictionStudyOptions so;
-    if (o.hops >= 0) so.parfam.hops = o.hops;
-    so.parfam.input_guard = o.input_guard;
-    so.parfam.reversal_weight = o.reversal_weight;
+    apply_parfam_options(so.parfam, o);
     const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
@@ -263,7 +304,8 @@ int run_closed_loop_study(const StudyOptions& o) {
       j["joint"] = jr.joint;
       for (const auto& r : jr.runs)
         j["runs"].push_back({{"compensation", r.compensation}, {"rmse", r.rmse}, {"segment_average", r.segment_average},
-                             {"reversal_rmse", r.reversal_rmse}, {"reversals", r.reversals}});
+                             {"reversal_rmse", r.reversal_rmse}, {"reversals", r.reversals},
+                             {"feedforward_rmse", jnum(r.feedforward_rmse)}});
       out["joints"].push_back(j);
     }
     fmt::print("{}\n", out.dump());
@@ -288,6 +330,16 @@ int run_closed_loop_study(const StudyOptions& o) {
     for (const auto& jr : all) seg += jr.runs[c].segment_average / static_cast<double>(all.size());
     fmt::print("{:<14}{:>11.5f}", comps[c], seg);
     for (const auto& jr : all) fmt::print("{:>11.5f}", jr.runs[c].reversal_rmse);
+    fmt::print("\n");
+  }
+  fmt::print("\nFeed-forward model error along the desired trajectory, RMSE of f_hat(qd_d) - tau_f,true(qd_d) [N·m]\n"
+             "{:<14}", "Compensation");
+  for (const auto& jr : all) fmt::print("{:>11}", jr.joint);
+  fmt::print("\n");
+  for (std::size_t c = 0; c < comps.size(); ++c) {
+    if (!std::isfinite(all.empty() ? 0.0 : all[0].runs[c].feedforward_rmse)) continue;
+    fmt::print("{:<14}", comps[c]);
+    for (const auto& jr : all) fmt::print("{:>11.4f}", jr.runs[c].feedforward_rmse);
     fmt::print("\n");
   }
   fmt::print("(None: qd_cmd = qd_d; Baseline: eq. 19 with the rigid body only; True friction: the simulator's "
@@ -317,9 +369,7 @@ int run(const StudyOptions& o) {
   po.trials = o.trials;
   po.seed = o.seed;
   po.rigid.reversal_threshold = o.screening;
-  if (o.hops >= 0) po.study.parfam.hops = o.hops;
-  po.study.parfam.input_guard = o.input_guard;
-  po.study.parfam.reversal_weight = o.reversal_weight;
+  apply_parfam_options(po.study.parfam, o);
   const auto t0 = std::chrono::steady_clock::now();
   if (!o.quiet)
     po.progress = [t0](std::string_view msg) {
@@ -330,6 +380,31 @@ int run(const StudyOptions& o) {
   if (!o.save_twin.empty()) twin = ident::TwinModel::load(o.save_twin);  // fail early on a bad twin file
   std::vector<ProtocolResult> res;
   for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
+  if (!o.predictions.empty()) {
+    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
+    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
+    fmt::print(f, "joint,t,qd,tau,reversal");
+    for (const auto& m : res.at(0).study.models) fmt::print(f, ",{}", m.name);
+    fmt::print(f, "\n");
+    for (const auto& r : res) {
+      // the training record (label "<joint>-train", no predictions) for re-fits outside twinwatch
+      const FrictionRecord& tr = r.study.train;
+      for (std::size_t k = 0; k < tr.qd.size(); ++k) {
+        fmt::print(f, "{}-train,{:.4f},{:.6g},{:.6g},0", r.study.joint, static_cast<double>(k) * tr.dt, tr.qd[k], tr.tau[k]);
+        for (std::size_t m = 0; m < r.study.models.size(); ++m) fmt::print(f, ",");
+        fmt::print(f, "\n");
+      }
+      const FrictionRecord& v = r.study.fourier;
+      for (std::size_t k = 0; k < v.qd.size(); ++k) {
+        fmt::print(f, "{},{:.4f},{:.6g},{:.6g},{}", r.study.joint, static_cast<double>(k) * v.dt, v.qd[k], v.tau[k],
+                   static_cast<int>(r.study.reversal_mask[k]));
+        for (const auto& m : r.study.models)
+          fmt::print(f, ",{:.6g}", k < m.fourier_prediction.size() ? m.fourier_prediction[k] : 0.0);
+        fmt::print(f, "\n");
+      }
+    }
+    std::fclose(f);
+  }
   if (twin) {
     // the friction block: ParFam-H of every studied joint, re-loadable into the compiled evaluator
     std::vector<JointFrictionEquation> eqs;
@@ -391,6 +466,23 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--rich-training", o->rich_training,
                 "--simulated: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
+  sub->add_option("--memory", o->memory,
+                  "Clock of the hysteresis state h: 'time' (HESR eq. 10 as printed, h relaxes in time with 1/alpha) "
+                  "or 'displacement' (eq. 10 in the travelled-distance clock, hd = alpha |qd| (tanh(beta qd) - h): "
+                  "rate-independent pre-sliding memory, Dahl-like)")
+      ->capture_default_str();
+  sub->add_option("--predictions", o->predictions,
+                  "Write CSV joint,t,qd,tau,reversal,<model>... of the validation record (residual torque) and every "
+                  "model's prediction, for plots; the training record follows as joint '<J>-train' without predictions");
+  sub->add_option("--functions", o->functions,
+                  "ParFam operator set, a comma list of sin, cos, exp, tanh, one unit each (default: the study's tanh,tanh; "
+                  "HESR's library is sin,cos,exp,tanh)");
+  sub->add_option("--prior-remove-viscous", o->remove_viscous,
+                  "Stage 1: remove the viscous slope of tau_f before the loop descriptors, 1 or 0 (default: the study's, 1)");
+  sub->add_option("--alpha", o->fixed_alpha, "Fix the hysteresis alpha (with --beta; skips Stage 1, Stage 3 still refines)");
+  sub->add_option("--beta", o->fixed_beta, "Fix the hysteresis beta (with --alpha)");
+  sub->add_option("--l1", o->l1, "ParFam L1 weight gamma of eq. 15 on unit-RMS data (default: the study's, 1e-6)");
+  sub->add_option("--starts", o->starts, "ParFam basin-hopping random starts (default: the library's)");
   sub->add_option("--seed", o->seed, "Seed of the simulated records and the Monte Carlo draws")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin,
                   "Store each joint's ParFam-H equation in this existing twin file (friction_models block)")

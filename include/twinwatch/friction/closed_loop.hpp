@@ -63,6 +63,9 @@ struct ClosedLoopRun {
   double segment_average = 0.0;   ///< mean of the per-segment RMSEs [rad] (Table XI)
   double reversal_rmse = 0.0;     ///< RMSE within +-window of desired-velocity zero crossings [rad] (Table XI)
   int reversals = 0;
+  /// RMSE of the model's f_hat(qd_d) against the truth friction along the desired trajectory
+  /// [N·m] (evaluation only: explains the tracking figures); NaN without a model.
+  double feedforward_rmse = 0.0;
 };
 
 /// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0). `model` predicts the

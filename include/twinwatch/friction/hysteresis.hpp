@@ -13,19 +13,51 @@
 /// The update is O(1) per sample, allocates nothing and never throws once constructed.
 /// Stability: 0 < 1 - alpha*dt < 1 keeps the recursion non-oscillatory, and then |h_k| <= 1 for
 /// every k whenever |h_0| <= 1 (HESR eq. 12: V = h^2/2 decreases outside [-1, 1]).
+///
+/// Memory clock. Eq. 10 relaxes h in TIME (HysteresisDrive::Time, the paper's form). The
+/// pre-sliding memory of a harmonic drive relaxes with DISPLACEMENT instead (a bristle/asperity
+/// deflection is undone by moving, not by waiting: Dahl, LuGre's z, Maxwell-slip elements). With
+/// HysteresisDrive::Displacement, eq. 10 is the same law written in the travelled-distance clock
+/// s, ds = |qd| dt:
+///
+///   dh/ds = -alpha * h + alpha * tanh(beta * qd)      i.e.   hd = alpha |qd| (tanh(beta qd) - h)
+///
+/// -- eq. 10 with the relaxation rate alpha |qd| instead of alpha (alpha in [1/rad]: 1/alpha is the
+/// pre-sliding distance), which is the Dahl model [Dahl1968] with exponent 1 (a Bouc-Wen state with n = 1,
+/// A = beta_BW = gamma_BW). It is rate independent: the h-q loop is the same at any speed, and h
+/// does not move while the joint stands still. It is discretised exactly for qd held over a step,
+///
+///   h_k  = T_k + (h_{k-1} - T_k) exp(-alpha |qd_k| dt),   T_k = tanh(beta qd_k)
+///   hd_k = alpha |qd_k| (T_k - h_k),
+///
+/// because alpha |qd| dt is far above 1 at speed (1/alpha is a few mrad, a 200 Hz sample moves
+/// several mrad) and Euler would oscillate there; the exact step keeps |h_k| <= 1 for any dt
+/// (h_k is a convex combination of h_{k-1} and T_k), so eq. 12's bound holds unconditionally.
+#include <cmath>
 #include <span>
 #include <vector>
 
 namespace twinwatch::friction {
 
+/// The clock in which h relaxes (see the file comment).
+enum class HysteresisDrive {
+  Time,         ///< HESR eq. 10-11 as printed: hd = -alpha h + alpha tanh(beta qd), alpha [1/s]
+  Displacement, ///< eq. 10 in the displacement clock: hd = alpha |qd| (tanh(beta qd) - h), alpha [1/rad]
+};
+
+/// "time" / "displacement".
+const char* to_string(HysteresisDrive d) noexcept;
+
 /// Parameters of the hysteresis state (HESR eq. 10).
 struct HysteresisParams {
-  double alpha = 10.0;  ///< relaxation rate (inverse memory time constant) [1/s], > 0
+  double alpha = 10.0;  ///< relaxation rate [1/s] (Time) or [1/rad] (Displacement), > 0
   double beta = 100.0;  ///< transition sharpness of tanh(beta*qd) [s/rad], > 0
+  HysteresisDrive drive = HysteresisDrive::Time;
 
   /// Throws InvalidArgument naming the field when alpha or beta is not a finite positive number.
   void validate() const;
-  /// True when the Euler recursion (eq. 11) at sample time dt [s] satisfies 0 < 1 - alpha*dt < 1.
+  /// True when the recursion at sample time dt [s] is stable: Time: 0 < 1 - alpha*dt < 1 (eq. 11);
+  /// Displacement: always (exact exponential step), for dt > 0.
   bool stable(double dt) const noexcept;
 };
 
@@ -48,8 +80,14 @@ class HysteresisState {
   /// Advances by one sample with the measured velocity qd_k [rad/s]; returns (h_k, hd_k).
   HysteresisSample step(double qd) noexcept {
     const double drive = fast_tanh(params_.beta * qd);
-    h_ = decay_ * h_ + alpha_dt_ * drive;
-    return {h_, params_.alpha * (drive - h_)};
+    if (params_.drive == HysteresisDrive::Time) {
+      h_ = decay_ * h_ + alpha_dt_ * drive;
+      return {h_, params_.alpha * (drive - h_)};
+    }
+    // displacement clock: exact step of dh/ds = alpha (T - h) over ds = |qd| dt
+    const double rate = params_.alpha * std::abs(qd);
+    h_ = drive + (h_ - drive) * std::exp(-rate * dt_);
+    return {h_, rate * (drive - h_)};
   }
 
   /// Resets the state to h0 (clamped to [-1, 1]).

@@ -37,16 +37,31 @@ struct LoopDescriptors {
 LoopDescriptors loop_descriptors(std::span<const double> qd, std::span<const double> y, double v_ref);
 
 struct HysteresisPriorOptions {
-  double alpha_min = 1.0;      ///< [1/s], > 0
-  double alpha_max = 100.0;    ///< [1/s], > alpha_min; clipped to 0.9/dt (stability of eq. 11)
+  /// The memory clock of h (hysteresis.hpp); selects the alpha range below.
+  HysteresisDrive drive = HysteresisDrive::Time;
+  double alpha_min = 1.0;      ///< [1/s], > 0 (Time)
+  double alpha_max = 100.0;    ///< [1/s], > alpha_min; clipped to 0.9/dt (stability of eq. 11) (Time)
+  /// Displacement clock: 1/alpha is the pre-sliding distance, here 0.3 mrad .. 0.1 rad.
+  double displacement_alpha_min = 10.0;    ///< [1/rad], > 0
+  double displacement_alpha_max = 3000.0;  ///< [1/rad], > displacement_alpha_min
   double beta_min = 10.0;      ///< [s/rad], > 0
   double beta_max = 1000.0;    ///< [s/rad], > beta_min
   int grid = 16;               ///< log-spaced points per axis, >= 2
   double weight_width = 1.0;   ///< w_a, >= 0
   double weight_slope = 1.0;   ///< w_s, >= 0 (w_a + w_s > 0)
   double v_ref_fraction = 0.1; ///< v_ref = this * 99th percentile of |qd|, in (0, 1)
+  /// Remove the viscous part of tau_f before its descriptors: c1 of the least-squares fit
+  /// tau_f ~ c0 + c1 qd + c2 sgn(qd) on the sliding samples (|qd| >= v_ref), c1 qd subtracted.
+  /// h has no viscous part, so without this the measured loop is compared with h over a range
+  /// stretched by c1 * 2 max|qd| (the width of a saturating h then never matches, and the grid
+  /// drifts to the smallest beta, where h stops saturating).
+  bool remove_viscous = false;
   /// Throws InvalidArgument naming the first field out of range.
   void validate() const;
+  /// The start when Stage 1 cannot run (no reversal in the record): HysteresisParams' defaults
+  /// (10 1/s, 100 s/rad) in the time clock; in the displacement clock the geometric middle of
+  /// the displacement alpha range, beta 100 s/rad.
+  HysteresisParams fallback() const noexcept;
 };
 
 /// Result of Stage 1.
