@@ -137,11 +137,16 @@ int run_identify(const IdentifyOptions& o) {
   twin.save(o.output);
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);
-    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gain N·m/A");
+    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gen %", "gain N·m/A");
     for (int j = 0; j < twin.n_dof(); ++j) {
-      const auto& m = twin.joints[static_cast<size_t>(j)];
-      fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10.3f} {:>12}\n", j + 1, report.samples_used[static_cast<size_t>(j)], m.rmse, m.r2,
-                 m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
+      const size_t J = static_cast<size_t>(j);
+      const auto& m = twin.joints[J];
+      // back-driven share of the samples; '*' marks a c_gen the data did not fit (kept or pinned)
+      const bool fitted = J < report.c_gen_identified.size() && report.c_gen_identified[J];
+      const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
+      fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7.1f} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
+                 fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), gen,
+                 twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
