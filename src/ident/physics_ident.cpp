@@ -202,170 +202,349 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   std::vector<std::vector<VectorJ>> qdds;
   for (const TrainingRun& r : runs) qdds.push_back(joint_accelerations(*r.recording));
 
-  // sufficient statistics of one pass over the data, per joint and per drive direction (group 0
-  // motoring, group 1 back-driven): the bilinear current-domain model
-  //   i_jk = h_jg (r_jk . theta + tau_payload_jk),  h_j0 = 1 / g_j,  h_j1 = c_gen_j / g_j
-  // is fitted jointly in (theta, h) by Levenberg-Marquardt on these sums, without revisiting the
-  // samples. Fitting c_gen jointly matters: with theta fixed, a wrong c_gen is almost compensated
-  // by the Coulomb and gravity terms (i_down / i_up = c (G - Fc) / (G + Fc)), so alternating
-  // between the two (the first version) crawled from 1 towards the truth by a few % per pass.
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
-  model::RegressorMatrix Y;
-  VectorJ tau_p;
-  Eigen::VectorXd r(p);
-  Eigen::Matrix<double, kFrictionColumns, 1> f;
-  const int passes = 1 + o.efficiency_passes;
-  report = IdentReport{};
-  report.samples_used.assign(static_cast<size_t>(n), 0);
-  report.rmse.assign(static_cast<size_t>(n), 0.0);
-  report.r2.assign(static_cast<size_t>(n), 0.0);
-  report.generating_fraction.assign(static_cast<size_t>(n), 0.0);
-  report.c_gen_identified.assign(static_cast<size_t>(n), false);
-  for (int pass = 0; pass <= passes; ++pass) {
-    const bool final_stats = pass == passes;
-    std::vector<Stats> st(static_cast<size_t>(2 * n));
-    for (Stats& x : st) {
-      x.A = Eigen::MatrixXd::Zero(p, p);
-      x.cp = Eigen::VectorXd::Zero(p);
-      x.b = Eigen::VectorXd::Zero(p);
-    }
-    std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
-    std::vector<long> cnt(static_cast<size_t>(n), 0), gen_cnt(static_cast<size_t>(n), 0);
-    long done = 0;
-    for (size_t ri = 0; ri < runs.size(); ++ri) {
-      const device::Recording& rec = *runs[ri].recording;
-      twin.set_payload(runs[ri].payload);
-      for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
-        const RobotSample& s = rec.samples[k];
-        const VectorJ& qdd = qdds[ri][k];
-        twin.regress(s.q, s.qd, qdd, Y, tau_p);
-        for (int j = 0; j < n; ++j) {
-          if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
-          const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
-          r.setZero();
-          for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
-          twin.friction_row(j, s.qd, qdd, s.temperature, f);
-          r.segment(nb + nf * j, nf) = f;
-          const double i = s.current[j];
-          // the previous pass's torque decides the drive direction (first pass: all motoring);
-          // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
-          const double tau_hat = r.dot(theta) + tau_p[j];
-          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
-          gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
-          if (final_stats) {
-            const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
-            sse[static_cast<size_t>(j)] += err * err;
-            si[static_cast<size_t>(j)] += i;
-            si2[static_cast<size_t>(j)] += i * i;
-            ++cnt[static_cast<size_t>(j)];
-            continue;
+  if (o.efficiency_fit == EfficiencyFit::Alternating) {
+    // the first version: c_gen re-estimated between passes with theta fixed (kept for the
+    // monitor's gain fallback, see IdentOptions::efficiency_fit)
+    // sufficient statistics of one pass over the data: the linear step in (beta, friction) and the
+    // per-joint gain step only need these sums, so the alternating least squares of the bilinear
+    // model  g_j i_j / c_jk = r_jk . theta + tau_payload_jk  runs without revisiting the samples
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
+    model::RegressorMatrix Y;
+    VectorJ tau_p;
+    Eigen::VectorXd r(p);
+    Eigen::Matrix<double, kFrictionColumns, 1> f;
+    const int passes = 1 + o.efficiency_passes;
+    report = IdentReport{};
+    report.samples_used.assign(static_cast<size_t>(n), 0);
+    report.rmse.assign(static_cast<size_t>(n), 0.0);
+    report.r2.assign(static_cast<size_t>(n), 0.0);
+    report.generating_fraction.assign(static_cast<size_t>(n), std::nan(""));
+    report.c_gen_identified.assign(static_cast<size_t>(n), true);
+    for (int pass = 0; pass <= passes; ++pass) {
+      const bool final_stats = pass == passes;
+      std::vector<Eigen::MatrixXd> A(static_cast<size_t>(n), Eigen::MatrixXd::Zero(p, p));
+      std::vector<Eigen::VectorXd> cp(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
+      std::vector<Eigen::VectorXd> b(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
+      std::vector<double> d(static_cast<size_t>(n), 0.0), e(static_cast<size_t>(n), 0.0), pp(static_cast<size_t>(n), 0.0);
+      std::vector<double> gen_num(static_cast<size_t>(n), 0.0), gen_den(static_cast<size_t>(n), 0.0);
+      std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
+      std::vector<long> cnt(static_cast<size_t>(n), 0);
+      long done = 0;
+      for (size_t ri = 0; ri < runs.size(); ++ri) {
+        const device::Recording& rec = *runs[ri].recording;
+        twin.set_payload(runs[ri].payload);
+        for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
+          const RobotSample& s = rec.samples[k];
+          const VectorJ& qdd = qdds[ri][k];
+          twin.regress(s.q, s.qd, qdd, Y, tau_p);
+          for (int j = 0; j < n; ++j) {
+            if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
+            JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+            r.setZero();
+            for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
+            twin.friction_row(j, s.qd, qdd, s.temperature, f);
+            r.segment(nb + nf * j, nf) = f;
+            const double i = s.current[j];
+            // the previous pass's torque decides the drive direction (first pass: motoring)
+            const double tau_hat = r.dot(theta) + tau_p[j];
+            const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+            const double c = gen ? jd.c_gen : 1.0;
+            if (final_stats) {
+              const double err = i - c * tau_hat / jd.gain;
+              sse[static_cast<size_t>(j)] += err * err;
+              si[static_cast<size_t>(j)] += i;
+              si2[static_cast<size_t>(j)] += i * i;
+              ++cnt[static_cast<size_t>(j)];
+              continue;
+            }
+            if (gen) {
+              gen_num[static_cast<size_t>(j)] += i * tau_hat / jd.gain;
+              gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
+            }
+            const double w = i / c;  // current as the motoring drive would draw it
+            A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(r);
+            b[static_cast<size_t>(j)] += r * w;
+            cp[static_cast<size_t>(j)] += r * tau_p[j];
+            d[static_cast<size_t>(j)] += w * tau_p[j];
+            e[static_cast<size_t>(j)] += w * w;
+            pp[static_cast<size_t>(j)] += tau_p[j] * tau_p[j];
           }
-          Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
-          x.A.selfadjointView<Eigen::Lower>().rankUpdate(r);
-          x.b += r * i;
-          x.cp += r * tau_p[j];
-          x.d += i * tau_p[j];
-          x.e += i * i;
-          x.pp += tau_p[j] * tau_p[j];
-          ++x.count;
-        }
-        if (progress && (++done % 20000) == 0)
-          progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
-      }
-    }
-    if (final_stats) {
-      for (int j = 0; j < n; ++j) {
-        const size_t J = static_cast<size_t>(j);
-        auto& m = twin.joints[J];
-        const double N = std::max<double>(1.0, static_cast<double>(cnt[J]));
-        m.rmse = std::sqrt(sse[J] / N);
-        const double sst = si2[J] - si[J] * si[J] / N;
-        m.r2 = sst > 0 ? 1.0 - sse[J] / sst : 0.0;
-        report.rmse[J] = m.rmse;
-        report.r2[J] = m.r2;
-        report.samples_used[J] = cnt[J];
-        report.generating_fraction[J] = static_cast<double>(gen_cnt[J]) / N;
-      }
-      break;
-    }
-    for (Stats& x : st) x.A = x.A.selfadjointView<Eigen::Lower>();
-    // which joints' back-driven factor the data can carry: enough back-driven samples; the others
-    // keep c_gen = 1 and their back-driven samples join the motoring group
-    std::vector<bool> free_gen(static_cast<size_t>(n), false);
-    for (int j = 0; j < n; ++j) {
-      const Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
-      const long all = g1.count + st[static_cast<size_t>(2 * j)].count;
-      free_gen[static_cast<size_t>(j)] =
-          pass > 0 && g1.count >= kMinGeneratingSamples && g1.count >= kMinGeneratingFraction * static_cast<double>(all);
-    }
-    // a fixed factor c folds the back-driven group into the motoring one:
-    // sum (i - c h t)^2 has the statistics (A c², cp c², b c, d c, e, pp c²)
-    auto fold = [&](int j, double c) {
-      Stats& g0 = st[static_cast<size_t>(2 * j)];
-      Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
-      g0.A += c * c * g1.A;
-      g0.cp += c * c * g1.cp;
-      g0.b += c * g1.b;
-      g0.d += c * g1.d;
-      g0.e += g1.e;
-      g0.pp += c * c * g1.pp;
-      g0.count += g1.count;
-      g1 = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
-    };
-    // h per group: h[2j] = 1 / g_j, h[2j + 1] = c_gen_j / g_j
-    std::vector<double> h(static_cast<size_t>(2 * n));
-    for (int j = 0; j < n; ++j) {
-      h[static_cast<size_t>(2 * j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
-      h[static_cast<size_t>(2 * j + 1)] = twin.joints[static_cast<size_t>(j)].c_gen * h[static_cast<size_t>(2 * j)];
-    }
-    if (pass == 0) {
-      // start: theta from the torque-domain LS with the initial gains
-      Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
-      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
-      for (int j = 0; j < n; ++j) {
-        const Stats& g0 = st[static_cast<size_t>(2 * j)];
-        Aw += g0.A;
-        rhs += g0.b / h[static_cast<size_t>(2 * j)] - g0.cp;
-      }
-      const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
-      Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
-      As.diagonal().array() += kRidge;
-      theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
-    }
-    for (int j = 0; j < n; ++j)
-      if (!free_gen[static_cast<size_t>(j)]) fold(j, twin.joints[static_cast<size_t>(j)].c_gen);
-    // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
-    // the joint fitted again with it
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      fit_bilinear(st, free_gen, any_payload, theta, h);
-      bool refit = false;
-      for (int j = 0; j < n; ++j) {
-        const size_t J = static_cast<size_t>(j);
-        if (!free_gen[J]) continue;
-        const double c = h[2 * J + 1] / h[2 * J];
-        const double cb = std::clamp(c, kCGenMin, kCGenMax);
-        if (cb != c) {
-          if (pass == passes - 1)
-            report.notes.push_back(fmt::format("J{}: back-driven factor fitted {:.3f}, outside [{}, {}]: pinned to {}", j + 1, c,
-                                               kCGenMin, kCGenMax, cb));
-          free_gen[J] = false;
-          fold(j, cb);
-          twin.joints[J].c_gen = cb;
-          refit = true;
+          if (progress && (++done % 20000) == 0)
+            progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
         }
       }
-      if (!refit) break;
+      if (final_stats) {
+        for (int j = 0; j < n; ++j) {
+          auto& m = twin.joints[static_cast<size_t>(j)];
+          const double N = std::max<double>(1.0, static_cast<double>(cnt[static_cast<size_t>(j)]));
+          m.rmse = std::sqrt(sse[static_cast<size_t>(j)] / N);
+          const double sst = si2[static_cast<size_t>(j)] - si[static_cast<size_t>(j)] * si[static_cast<size_t>(j)] / N;
+          m.r2 = sst > 0 ? 1.0 - sse[static_cast<size_t>(j)] / sst : 0.0;
+          report.rmse[static_cast<size_t>(j)] = m.rmse;
+          report.r2[static_cast<size_t>(j)] = m.r2;
+          report.samples_used[static_cast<size_t>(j)] = cnt[static_cast<size_t>(j)];
+        }
+        break;
+      }
+      // update the back-driven factor from this pass's directions
+      for (int j = 0; j < n; ++j)
+        if (pass > 0 && gen_den[static_cast<size_t>(j)] > 0)
+          twin.joints[static_cast<size_t>(j)].c_gen = gen_num[static_cast<size_t>(j)] / gen_den[static_cast<size_t>(j)];
+      // Levenberg-Marquardt on the bilinear current-domain model, entirely on the sufficient
+      // statistics: unknowns x = (theta, h_j = 1 / g_j), residual w_jk - h_j (r_jk theta + tau_p_jk)
+      for (int j = 0; j < n; ++j) A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
+      std::vector<double> h(static_cast<size_t>(n));
+      for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
+      auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
+        double sum = 0.0;
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          const double num = b[J].dot(th) + d[J];
+          const double den = th.dot(A[J] * th) + 2.0 * th.dot(cp[J]) + pp[J];
+          sum += e[J] - 2.0 * hh[J] * num + hh[J] * hh[J] * den;
+        }
+        return sum;
+      };
+      if (pass == 0) {
+        // start: theta from the torque-domain LS with the initial gains
+        Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
+        for (int j = 0; j < n; ++j) {
+          Aw += A[static_cast<size_t>(j)];
+          rhs += b[static_cast<size_t>(j)] / h[static_cast<size_t>(j)] - cp[static_cast<size_t>(j)];
+        }
+        const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
+        As.diagonal().array() += kRidge;
+        theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
+      }
+      double mu = 1e-3, obj = sse_of(theta, h);
+      for (int it = 0; it < 100; ++it) {
+        const int m = p + n;
+        Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
+        Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);  // half gradient of the SSE
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          const Eigen::VectorXd At = A[J] * theta + cp[J];  // sum r tau_hat
+          const double num = b[J].dot(theta) + d[J];
+          const double den = theta.dot(At) + theta.dot(cp[J]) + pp[J];
+          H.topLeftCorner(p, p) += h[J] * h[J] * A[J];
+          H.block(0, p + j, p, 1) = h[J] * At;
+          H.block(p + j, 0, 1, p) = h[J] * At.transpose();
+          H(p + j, p + j) = den;
+          grad.head(p) += -h[J] * b[J] + h[J] * h[J] * At;
+          grad(p + j) = -num + h[J] * den;
+        }
+        const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        bool accepted = false;
+        for (int tries = 0; tries < 20 && !accepted; ++tries) {
+          Eigen::MatrixXd Hs = D.asDiagonal().inverse() * H * D.asDiagonal().inverse();
+          Hs.diagonal().array() += mu + kRidge;
+          const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
+          Eigen::VectorXd th2 = theta + step.head(p);
+          std::vector<double> h2 = h;
+          for (int j = 0; j < n; ++j) h2[static_cast<size_t>(j)] += step(p + j);
+          if (!any_payload) {
+            // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
+            double lh = 0.0;
+            bool ok = true;
+            for (double v : h2) ok &= v > 0.0, lh += std::log(std::abs(v));
+            if (ok) {
+              const double sc = std::exp(lh / n);
+              for (double& v : h2) v /= sc;
+              th2 *= sc;
+            }
+          }
+          // drive gains are positive: a step that flips one is rejected like a worse one
+          bool positive = true;
+          for (double v : h2) positive &= v > 0.0;
+          const double obj2 = positive ? sse_of(th2, h2) : std::numeric_limits<double>::infinity();
+          if (obj2 <= obj) {
+            const double gain = obj - obj2;
+            theta = th2;
+            h = h2;
+            obj = obj2;
+            mu = std::max(mu / 3.0, 1e-9);
+            accepted = true;
+            if (gain < 1e-12 * std::max(obj, 1e-30)) it = 100;  // converged
+          } else {
+            mu *= 5.0;
+          }
+        }
+        if (!accepted) break;
+      }
+      std::vector<double> g(static_cast<size_t>(n));
+      for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].gain = g[static_cast<size_t>(j)];
+      twin.beta = theta.head(nb);
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
     }
-    for (int j = 0; j < n; ++j) {
-      const size_t J = static_cast<size_t>(j);
-      twin.joints[J].gain = 1.0 / h[2 * J];
-      if (free_gen[J]) twin.joints[J].c_gen = h[2 * J + 1] / h[2 * J];
-      report.c_gen_identified[J] = free_gen[J];
+  } else {
+    // sufficient statistics of one pass over the data, per joint and per drive direction (group 0
+    // motoring, group 1 back-driven): the bilinear current-domain model
+    //   i_jk = h_jg (r_jk . theta + tau_payload_jk),  h_j0 = 1 / g_j,  h_j1 = c_gen_j / g_j
+    // is fitted jointly in (theta, h) by Levenberg-Marquardt on these sums, without revisiting the
+    // samples. Fitting c_gen jointly matters: with theta fixed, a wrong c_gen is almost compensated
+    // by the Coulomb and gravity terms (i_down / i_up = c (G - Fc) / (G + Fc)), so alternating
+    // between the two (the first version) crawled from 1 towards the truth by a few % per pass.
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
+    model::RegressorMatrix Y;
+    VectorJ tau_p;
+    Eigen::VectorXd r(p);
+    Eigen::Matrix<double, kFrictionColumns, 1> f;
+    const int passes = 1 + o.efficiency_passes;
+    report = IdentReport{};
+    report.samples_used.assign(static_cast<size_t>(n), 0);
+    report.rmse.assign(static_cast<size_t>(n), 0.0);
+    report.r2.assign(static_cast<size_t>(n), 0.0);
+    report.generating_fraction.assign(static_cast<size_t>(n), 0.0);
+    report.c_gen_identified.assign(static_cast<size_t>(n), false);
+    for (int pass = 0; pass <= passes; ++pass) {
+      const bool final_stats = pass == passes;
+      std::vector<Stats> st(static_cast<size_t>(2 * n));
+      for (Stats& x : st) {
+        x.A = Eigen::MatrixXd::Zero(p, p);
+        x.cp = Eigen::VectorXd::Zero(p);
+        x.b = Eigen::VectorXd::Zero(p);
+      }
+      std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
+      std::vector<long> cnt(static_cast<size_t>(n), 0), gen_cnt(static_cast<size_t>(n), 0);
+      long done = 0;
+      for (size_t ri = 0; ri < runs.size(); ++ri) {
+        const device::Recording& rec = *runs[ri].recording;
+        twin.set_payload(runs[ri].payload);
+        for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
+          const RobotSample& s = rec.samples[k];
+          const VectorJ& qdd = qdds[ri][k];
+          twin.regress(s.q, s.qd, qdd, Y, tau_p);
+          for (int j = 0; j < n; ++j) {
+            if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
+            const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+            r.setZero();
+            for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
+            twin.friction_row(j, s.qd, qdd, s.temperature, f);
+            r.segment(nb + nf * j, nf) = f;
+            const double i = s.current[j];
+            // the previous pass's torque decides the drive direction (first pass: all motoring);
+            // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
+            const double tau_hat = r.dot(theta) + tau_p[j];
+            const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+            gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
+            if (final_stats) {
+              const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
+              sse[static_cast<size_t>(j)] += err * err;
+              si[static_cast<size_t>(j)] += i;
+              si2[static_cast<size_t>(j)] += i * i;
+              ++cnt[static_cast<size_t>(j)];
+              continue;
+            }
+            Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
+            x.A.selfadjointView<Eigen::Lower>().rankUpdate(r);
+            x.b += r * i;
+            x.cp += r * tau_p[j];
+            x.d += i * tau_p[j];
+            x.e += i * i;
+            x.pp += tau_p[j] * tau_p[j];
+            ++x.count;
+          }
+          if (progress && (++done % 20000) == 0)
+            progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+        }
+      }
+      if (final_stats) {
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          auto& m = twin.joints[J];
+          const double N = std::max<double>(1.0, static_cast<double>(cnt[J]));
+          m.rmse = std::sqrt(sse[J] / N);
+          const double sst = si2[J] - si[J] * si[J] / N;
+          m.r2 = sst > 0 ? 1.0 - sse[J] / sst : 0.0;
+          report.rmse[J] = m.rmse;
+          report.r2[J] = m.r2;
+          report.samples_used[J] = cnt[J];
+          report.generating_fraction[J] = static_cast<double>(gen_cnt[J]) / N;
+        }
+        break;
+      }
+      for (Stats& x : st) x.A = x.A.selfadjointView<Eigen::Lower>();
+      // which joints' back-driven factor the data can carry: enough back-driven samples; the others
+      // keep c_gen = 1 and their back-driven samples join the motoring group
+      std::vector<bool> free_gen(static_cast<size_t>(n), false);
+      for (int j = 0; j < n; ++j) {
+        const Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
+        const long all = g1.count + st[static_cast<size_t>(2 * j)].count;
+        free_gen[static_cast<size_t>(j)] =
+            pass > 0 && g1.count >= kMinGeneratingSamples && g1.count >= kMinGeneratingFraction * static_cast<double>(all);
+      }
+      // a fixed factor c folds the back-driven group into the motoring one:
+      // sum (i - c h t)^2 has the statistics (A c², cp c², b c, d c, e, pp c²)
+      auto fold = [&](int j, double c) {
+        Stats& g0 = st[static_cast<size_t>(2 * j)];
+        Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
+        g0.A += c * c * g1.A;
+        g0.cp += c * c * g1.cp;
+        g0.b += c * g1.b;
+        g0.d += c * g1.d;
+        g0.e += g1.e;
+        g0.pp += c * c * g1.pp;
+        g0.count += g1.count;
+        g1 = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
+      };
+      // h per group: h[2j] = 1 / g_j, h[2j + 1] = c_gen_j / g_j
+      std::vector<double> h(static_cast<size_t>(2 * n));
+      for (int j = 0; j < n; ++j) {
+        h[static_cast<size_t>(2 * j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
+        h[static_cast<size_t>(2 * j + 1)] = twin.joints[static_cast<size_t>(j)].c_gen * h[static_cast<size_t>(2 * j)];
+      }
+      if (pass == 0) {
+        // start: theta from the torque-domain LS with the initial gains
+        Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
+        for (int j = 0; j < n; ++j) {
+          const Stats& g0 = st[static_cast<size_t>(2 * j)];
+          Aw += g0.A;
+          rhs += g0.b / h[static_cast<size_t>(2 * j)] - g0.cp;
+        }
+        const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
+        As.diagonal().array() += kRidge;
+        theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
+      }
+      for (int j = 0; j < n; ++j)
+        if (!free_gen[static_cast<size_t>(j)]) fold(j, twin.joints[static_cast<size_t>(j)].c_gen);
+      // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
+      // the joint fitted again with it
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        fit_bilinear(st, free_gen, any_payload, theta, h);
+        bool refit = false;
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          if (!free_gen[J]) continue;
+          const double c = h[2 * J + 1] / h[2 * J];
+          const double cb = std::clamp(c, kCGenMin, kCGenMax);
+          if (cb != c) {
+            if (pass == passes - 1)
+              report.notes.push_back(fmt::format("J{}: back-driven factor fitted {:.3f}, outside [{}, {}]: pinned to {}", j + 1, c,
+                                                 kCGenMin, kCGenMax, cb));
+            free_gen[J] = false;
+            fold(j, cb);
+            twin.joints[J].c_gen = cb;
+            refit = true;
+          }
+        }
+        if (!refit) break;
+      }
+      for (int j = 0; j < n; ++j) {
+        const size_t J = static_cast<size_t>(j);
+        twin.joints[J].gain = 1.0 / h[2 * J];
+        if (free_gen[J]) twin.joints[J].c_gen = h[2 * J + 1] / h[2 * J];
+        report.c_gen_identified[J] = free_gen[J];
+      }
+      twin.beta = theta.head(nb);
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
     }
-    twin.beta = theta.head(nb);
-    for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
   }
-  for (int j = 0; j < n; ++j)
+  for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
                                          100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
