@@ -95,6 +95,23 @@ TEST_F(Fixture, RecoversTheBackDrivenEfficiencyOfTheSimulatedDrives) {
   }
 }
 
+// the joint fit flags the gains the known payload does not fix: the payload's COM lies on the J6
+// axis (no torque), J1 sees only its small inertia; the flag survives the twin file
+TEST_F(Fixture, GainsTheKnownPayloadDoesNotLoadAreFlagged) {
+  const sim::PlantTruth truth = sim::default_truth(twin->robot(), 1);
+  for (int j = 1; j <= 2; ++j) {
+    const auto& jt = truth.joints[static_cast<size_t>(j)];
+    const double g_true = jt.kt * jt.gear_ratio * jt.eta;
+    EXPECT_TRUE(twin_joint->joints[static_cast<size_t>(j)].gain_identified) << "joint " << j;
+    EXPECT_NEAR(twin_joint->joints[static_cast<size_t>(j)].gain, g_true, 0.03 * g_true) << "joint " << j;
+  }
+  EXPECT_FALSE(twin_joint->joints[0].gain_identified);
+  EXPECT_FALSE(twin_joint->joints[5].gain_identified);
+  const TwinModel back = TwinModel::from_json(twin_joint->to_json(), "twin.json");
+  for (int j = 0; j < 6; ++j)
+    EXPECT_EQ(back.joints[static_cast<size_t>(j)].gain_identified, twin_joint->joints[static_cast<size_t>(j)].gain_identified) << j;
+}
+
 // a synthetic recording made by a known twin (the twin's own model, other c_gen, gains and
 // Gaussian current noise) on the states of the fixture's runs: the fit returns the factors it
 // was made with, including a drive without loss (c_gen = 1)

@@ -50,6 +50,7 @@ struct IdentReport {
   std::vector<long> samples_used;   ///< per joint
   std::vector<double> rmse, r2;     ///< training fit per joint
   std::vector<double> generating_fraction;  ///< per joint: share of samples classed back-driven (tau qd < 0)
+  std::vector<double> payload_current_rms;  ///< per joint: rms of the known payload's current [A] (joint fit only)
   std::vector<bool> c_gen_identified;       ///< per joint: c_gen fitted (false: too few back-driven samples, or pinned to its range)
   std::vector<std::string> notes;
 };
