@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -24,11 +25,116 @@ constexpr double kRidge = 1e-10;
 // half-width of the centred moving average applied to qd before differentiating [samples]
 constexpr int kSmoothHalfWidth = 3;
 
+// a joint's back-driven factor is fitted only with at least this many back-driven samples, and
+// this fraction of its samples (fewer: c_gen stays 1, the direction makes no measurable difference)
+constexpr long kMinGeneratingSamples = 500;
+constexpr double kMinGeneratingFraction = 0.02;
+// physical range of c_gen = eta_motoring * eta_back-driven (each <= 1; harmonic drives reach
+// 0.6-0.9 each, so c below 0.25 would mean a model error rather than a drive)
+constexpr double kCGenMin = 0.25;
+constexpr double kCGenMax = 1.0;
+// a drive gain counts as identified when the known payload's current on the joint (rms) is at
+// least this multiple of the joint's fit RMSE. Set on the simulated UR3e (docs/validation.md):
+// ratios J2 4.2, J3 5.7, J4 1.9 (gains within 1, 0.3, 12 %) against J5 1.4, J1 0.02, J6 0
+// (off by -22, +183, +58 %)
+constexpr double kPayloadSignalMin = 1.5;
+// Levenberg-Marquardt of the bilinear fit: iteration cap and relative decrease that counts as converged
+constexpr int kLmIterations = 200;
+constexpr double kLmTolerance = 1e-12;
+
 std::string now_iso() {
   const std::time_t t = std::time(nullptr);
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
   return buf;
+}
+
+// sufficient statistics of one joint's samples of one drive direction
+struct Stats {
+  Eigen::MatrixXd A;        // sum r r^T
+  Eigen::VectorXd cp, b;    // sum r tau_p, sum r i
+  double d = 0.0, e = 0.0, pp = 0.0;  // sum i tau_p, sum i^2, sum tau_p^2
+  long count = 0;
+};
+
+// Levenberg-Marquardt (Gauss-Newton Hessian) of
+//   SSE(theta, h) = sum_groups sum_k (i_k - h_g (r_k theta + tau_p,k))^2
+// on the groups' statistics; group 2j is joint j motoring, 2j + 1 back-driven (fitted only when
+// free_gen[j]; a folded group is empty). Without a known payload the scale of theta and h is
+// not identifiable and is fixed by prod_j h_2j = 1.
+void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload, Eigen::VectorXd& theta,
+                  std::vector<double>& h) {
+  const int p = static_cast<int>(theta.size());
+  const int n = static_cast<int>(free_gen.size());
+  std::vector<int> active;  // fitted groups
+  for (int g = 0; g < 2 * n; ++g)
+    if (g % 2 == 0 || free_gen[static_cast<size_t>(g / 2)]) active.push_back(g);
+  const int m = p + static_cast<int>(active.size());
+  auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
+    double sum = 0.0;
+    for (int g : active) {
+      const Stats& x = st[static_cast<size_t>(g)];
+      const double hg = hh[static_cast<size_t>(g)];
+      const double num = x.b.dot(th) + x.d;
+      const double den = th.dot(x.A * th) + 2.0 * th.dot(x.cp) + x.pp;
+      sum += x.e - 2.0 * hg * num + hg * hg * den;
+    }
+    return sum;
+  };
+  double mu = 1e-3, obj = sse_of(theta, h);
+  for (int it = 0; it < kLmIterations; ++it) {
+    // normal equations J^T J and J^T res of the residuals i - h_g t, t = r theta + tau_p
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
+    Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);  // half gradient of the SSE
+    for (size_t a = 0; a < active.size(); ++a) {
+      const Stats& x = st[static_cast<size_t>(active[a])];
+      const double hg = h[static_cast<size_t>(active[a])];
+      const int col = p + static_cast<int>(a);
+      const Eigen::VectorXd At = x.A * theta + x.cp;  // sum r t
+      const double num = x.b.dot(theta) + x.d;        // sum i t
+      const double den = theta.dot(At) + theta.dot(x.cp) + x.pp;  // sum t^2
+      H.topLeftCorner(p, p) += hg * hg * x.A;
+      H.block(0, col, p, 1) = hg * At;
+      H.block(col, 0, 1, p) = hg * At.transpose();
+      H(col, col) = den;
+      grad.head(p) += -hg * x.b + hg * hg * At;
+      grad(col) = -num + hg * den;
+    }
+    // damped, column-scaled step; a step that makes a drive gain or factor <= 0 counts as worse
+    const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
+    bool accepted = false;
+    for (int tries = 0; tries < 20 && !accepted; ++tries) {
+      Eigen::MatrixXd Hs = D.asDiagonal().inverse() * H * D.asDiagonal().inverse();
+      Hs.diagonal().array() += mu + kRidge;
+      const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
+      Eigen::VectorXd th2 = theta + step.head(p);
+      std::vector<double> h2 = h;
+      for (size_t a = 0; a < active.size(); ++a) h2[static_cast<size_t>(active[a])] += step(p + static_cast<int>(a));
+      bool positive = true;
+      for (int g : active) positive &= h2[static_cast<size_t>(g)] > 0.0;
+      if (!any_payload && positive) {
+        // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
+        double lh = 0.0;
+        for (int j = 0; j < n; ++j) lh += std::log(h2[static_cast<size_t>(2 * j)]);
+        const double sc = std::exp(lh / n);
+        for (double& v : h2) v /= sc;
+        th2 *= sc;
+      }
+      const double obj2 = positive ? sse_of(th2, h2) : std::numeric_limits<double>::infinity();
+      if (obj2 <= obj) {
+        const double gain = obj - obj2;
+        theta = th2;
+        h = h2;
+        obj = obj2;
+        mu = std::max(mu / 3.0, 1e-9);
+        accepted = true;
+        if (gain < kLmTolerance * std::max(obj, 1e-30)) return;  // converged
+      } else {
+        mu *= 5.0;
+      }
+    }
+    if (!accepted) return;
+  }
 }
 }  // namespace
 
@@ -101,178 +207,367 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   std::vector<std::vector<VectorJ>> qdds;
   for (const TrainingRun& r : runs) qdds.push_back(joint_accelerations(*r.recording));
 
-  // sufficient statistics of one pass over the data: the linear step in (beta, friction) and the
-  // per-joint gain step only need these sums, so the alternating least squares of the bilinear
-  // model  g_j i_j / c_jk = r_jk . theta + tau_payload_jk  runs without revisiting the samples
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
-  model::RegressorMatrix Y;
-  VectorJ tau_p;
-  Eigen::VectorXd r(p);
-  Eigen::Matrix<double, kFrictionColumns, 1> f;
-  const int passes = 1 + o.efficiency_passes;
-  report = IdentReport{};
-  report.samples_used.assign(static_cast<size_t>(n), 0);
-  report.rmse.assign(static_cast<size_t>(n), 0.0);
-  report.r2.assign(static_cast<size_t>(n), 0.0);
-  for (int pass = 0; pass <= passes; ++pass) {
-    const bool final_stats = pass == passes;
-    std::vector<Eigen::MatrixXd> A(static_cast<size_t>(n), Eigen::MatrixXd::Zero(p, p));
-    std::vector<Eigen::VectorXd> cp(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
-    std::vector<Eigen::VectorXd> b(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
-    std::vector<double> d(static_cast<size_t>(n), 0.0), e(static_cast<size_t>(n), 0.0), pp(static_cast<size_t>(n), 0.0);
-    std::vector<double> gen_num(static_cast<size_t>(n), 0.0), gen_den(static_cast<size_t>(n), 0.0);
-    std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
-    std::vector<long> cnt(static_cast<size_t>(n), 0);
-    long done = 0;
-    for (size_t ri = 0; ri < runs.size(); ++ri) {
-      const device::Recording& rec = *runs[ri].recording;
-      twin.set_payload(runs[ri].payload);
-      for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
-        const RobotSample& s = rec.samples[k];
-        const VectorJ& qdd = qdds[ri][k];
-        twin.regress(s.q, s.qd, qdd, Y, tau_p);
+  if (o.efficiency_fit == EfficiencyFit::Alternating) {
+    // the first version: c_gen re-estimated between passes with theta fixed (kept for the
+    // monitor's gain fallback, see IdentOptions::efficiency_fit)
+    // sufficient statistics of one pass over the data: the linear step in (beta, friction) and the
+    // per-joint gain step only need these sums, so the alternating least squares of the bilinear
+    // model  g_j i_j / c_jk = r_jk . theta + tau_payload_jk  runs without revisiting the samples
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
+    model::RegressorMatrix Y;
+    VectorJ tau_p;
+    Eigen::VectorXd r(p);
+    Eigen::Matrix<double, kFrictionColumns, 1> f;
+    const int passes = 1 + o.efficiency_passes;
+    report = IdentReport{};
+    report.samples_used.assign(static_cast<size_t>(n), 0);
+    report.rmse.assign(static_cast<size_t>(n), 0.0);
+    report.r2.assign(static_cast<size_t>(n), 0.0);
+    report.generating_fraction.assign(static_cast<size_t>(n), std::nan(""));
+    report.c_gen_identified.assign(static_cast<size_t>(n), true);
+    for (int pass = 0; pass <= passes; ++pass) {
+      const bool final_stats = pass == passes;
+      std::vector<Eigen::MatrixXd> A(static_cast<size_t>(n), Eigen::MatrixXd::Zero(p, p));
+      std::vector<Eigen::VectorXd> cp(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
+      std::vector<Eigen::VectorXd> b(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
+      std::vector<double> d(static_cast<size_t>(n), 0.0), e(static_cast<size_t>(n), 0.0), pp(static_cast<size_t>(n), 0.0);
+      std::vector<double> gen_num(static_cast<size_t>(n), 0.0), gen_den(static_cast<size_t>(n), 0.0);
+      std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
+      std::vector<long> cnt(static_cast<size_t>(n), 0);
+      long done = 0;
+      for (size_t ri = 0; ri < runs.size(); ++ri) {
+        const device::Recording& rec = *runs[ri].recording;
+        twin.set_payload(runs[ri].payload);
+        for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
+          const RobotSample& s = rec.samples[k];
+          const VectorJ& qdd = qdds[ri][k];
+          twin.regress(s.q, s.qd, qdd, Y, tau_p);
+          for (int j = 0; j < n; ++j) {
+            if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
+            JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+            r.setZero();
+            for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
+            twin.friction_row(j, s.qd, qdd, s.temperature, f);
+            r.segment(nb + nf * j, nf) = f;
+            const double i = s.current[j];
+            // the previous pass's torque decides the drive direction (first pass: motoring)
+            const double tau_hat = r.dot(theta) + tau_p[j];
+            const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+            const double c = gen ? jd.c_gen : 1.0;
+            if (final_stats) {
+              const double err = i - c * tau_hat / jd.gain;
+              sse[static_cast<size_t>(j)] += err * err;
+              si[static_cast<size_t>(j)] += i;
+              si2[static_cast<size_t>(j)] += i * i;
+              ++cnt[static_cast<size_t>(j)];
+              continue;
+            }
+            if (gen) {
+              gen_num[static_cast<size_t>(j)] += i * tau_hat / jd.gain;
+              gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
+            }
+            const double w = i / c;  // current as the motoring drive would draw it
+            A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(r);
+            b[static_cast<size_t>(j)] += r * w;
+            cp[static_cast<size_t>(j)] += r * tau_p[j];
+            d[static_cast<size_t>(j)] += w * tau_p[j];
+            e[static_cast<size_t>(j)] += w * w;
+            pp[static_cast<size_t>(j)] += tau_p[j] * tau_p[j];
+          }
+          if (progress && (++done % 20000) == 0)
+            progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+        }
+      }
+      if (final_stats) {
         for (int j = 0; j < n; ++j) {
-          if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
-          JointDrive& jd = twin.joints[static_cast<size_t>(j)];
-          r.setZero();
-          for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
-          twin.friction_row(j, s.qd, qdd, s.temperature, f);
-          r.segment(nb + nf * j, nf) = f;
-          const double i = s.current[j];
-          // the previous pass's torque decides the drive direction (first pass: motoring)
-          const double tau_hat = r.dot(theta) + tau_p[j];
-          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
-          const double c = gen ? jd.c_gen : 1.0;
-          if (final_stats) {
-            const double err = i - c * tau_hat / jd.gain;
-            sse[static_cast<size_t>(j)] += err * err;
-            si[static_cast<size_t>(j)] += i;
-            si2[static_cast<size_t>(j)] += i * i;
-            ++cnt[static_cast<size_t>(j)];
-            continue;
-          }
-          if (gen) {
-            gen_num[static_cast<size_t>(j)] += i * tau_hat / jd.gain;
-            gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
-          }
-          const double w = i / c;  // current as the motoring drive would draw it
-          A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(r);
-          b[static_cast<size_t>(j)] += r * w;
-          cp[static_cast<size_t>(j)] += r * tau_p[j];
-          d[static_cast<size_t>(j)] += w * tau_p[j];
-          e[static_cast<size_t>(j)] += w * w;
-          pp[static_cast<size_t>(j)] += tau_p[j] * tau_p[j];
+          auto& m = twin.joints[static_cast<size_t>(j)];
+          const double N = std::max<double>(1.0, static_cast<double>(cnt[static_cast<size_t>(j)]));
+          m.rmse = std::sqrt(sse[static_cast<size_t>(j)] / N);
+          const double sst = si2[static_cast<size_t>(j)] - si[static_cast<size_t>(j)] * si[static_cast<size_t>(j)] / N;
+          m.r2 = sst > 0 ? 1.0 - sse[static_cast<size_t>(j)] / sst : 0.0;
+          report.rmse[static_cast<size_t>(j)] = m.rmse;
+          report.r2[static_cast<size_t>(j)] = m.r2;
+          report.samples_used[static_cast<size_t>(j)] = cnt[static_cast<size_t>(j)];
         }
-        if (progress && (++done % 20000) == 0)
-          progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+        break;
       }
+      // update the back-driven factor from this pass's directions
+      for (int j = 0; j < n; ++j)
+        if (pass > 0 && gen_den[static_cast<size_t>(j)] > 0)
+          twin.joints[static_cast<size_t>(j)].c_gen = gen_num[static_cast<size_t>(j)] / gen_den[static_cast<size_t>(j)];
+      // Levenberg-Marquardt on the bilinear current-domain model, entirely on the sufficient
+      // statistics: unknowns x = (theta, h_j = 1 / g_j), residual w_jk - h_j (r_jk theta + tau_p_jk)
+      for (int j = 0; j < n; ++j) A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
+      std::vector<double> h(static_cast<size_t>(n));
+      for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
+      auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
+        double sum = 0.0;
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          const double num = b[J].dot(th) + d[J];
+          const double den = th.dot(A[J] * th) + 2.0 * th.dot(cp[J]) + pp[J];
+          sum += e[J] - 2.0 * hh[J] * num + hh[J] * hh[J] * den;
+        }
+        return sum;
+      };
+      if (pass == 0) {
+        // start: theta from the torque-domain LS with the initial gains
+        Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
+        for (int j = 0; j < n; ++j) {
+          Aw += A[static_cast<size_t>(j)];
+          rhs += b[static_cast<size_t>(j)] / h[static_cast<size_t>(j)] - cp[static_cast<size_t>(j)];
+        }
+        const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
+        As.diagonal().array() += kRidge;
+        theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
+      }
+      double mu = 1e-3, obj = sse_of(theta, h);
+      for (int it = 0; it < 100; ++it) {
+        const int m = p + n;
+        Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
+        Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);  // half gradient of the SSE
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          const Eigen::VectorXd At = A[J] * theta + cp[J];  // sum r tau_hat
+          const double num = b[J].dot(theta) + d[J];
+          const double den = theta.dot(At) + theta.dot(cp[J]) + pp[J];
+          H.topLeftCorner(p, p) += h[J] * h[J] * A[J];
+          H.block(0, p + j, p, 1) = h[J] * At;
+          H.block(p + j, 0, 1, p) = h[J] * At.transpose();
+          H(p + j, p + j) = den;
+          grad.head(p) += -h[J] * b[J] + h[J] * h[J] * At;
+          grad(p + j) = -num + h[J] * den;
+        }
+        const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        bool accepted = false;
+        for (int tries = 0; tries < 20 && !accepted; ++tries) {
+          Eigen::MatrixXd Hs = D.asDiagonal().inverse() * H * D.asDiagonal().inverse();
+          Hs.diagonal().array() += mu + kRidge;
+          const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
+          Eigen::VectorXd th2 = theta + step.head(p);
+          std::vector<double> h2 = h;
+          for (int j = 0; j < n; ++j) h2[static_cast<size_t>(j)] += step(p + j);
+          if (!any_payload) {
+            // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
+            double lh = 0.0;
+            bool ok = true;
+            for (double v : h2) ok &= v > 0.0, lh += std::log(std::abs(v));
+            if (ok) {
+              const double sc = std::exp(lh / n);
+              for (double& v : h2) v /= sc;
+              th2 *= sc;
+            }
+          }
+          // drive gains are positive: a step that flips one is rejected like a worse one
+          bool positive = true;
+          for (double v : h2) positive &= v > 0.0;
+          const double obj2 = positive ? sse_of(th2, h2) : std::numeric_limits<double>::infinity();
+          if (obj2 <= obj) {
+            const double gain = obj - obj2;
+            theta = th2;
+            h = h2;
+            obj = obj2;
+            mu = std::max(mu / 3.0, 1e-9);
+            accepted = true;
+            if (gain < 1e-12 * std::max(obj, 1e-30)) it = 100;  // converged
+          } else {
+            mu *= 5.0;
+          }
+        }
+        if (!accepted) break;
+      }
+      std::vector<double> g(static_cast<size_t>(n));
+      for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].gain = g[static_cast<size_t>(j)];
+      twin.beta = theta.head(nb);
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
     }
-    if (final_stats) {
+  } else {
+    // sufficient statistics of one pass over the data, per joint and per drive direction (group 0
+    // motoring, group 1 back-driven): the bilinear current-domain model
+    //   i_jk = h_jg (r_jk . theta + tau_payload_jk),  h_j0 = 1 / g_j,  h_j1 = c_gen_j / g_j
+    // is fitted jointly in (theta, h) by Levenberg-Marquardt on these sums, without revisiting the
+    // samples. Fitting c_gen jointly matters: with theta fixed, a wrong c_gen is almost compensated
+    // by the Coulomb and gravity terms (i_down / i_up = c (G - Fc) / (G + Fc)), so alternating
+    // between the two (the first version) crawled from 1 towards the truth by a few % per pass.
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
+    model::RegressorMatrix Y;
+    VectorJ tau_p;
+    Eigen::VectorXd r(p);
+    Eigen::Matrix<double, kFrictionColumns, 1> f;
+    const int passes = 1 + o.efficiency_passes;
+    report = IdentReport{};
+    report.samples_used.assign(static_cast<size_t>(n), 0);
+    report.rmse.assign(static_cast<size_t>(n), 0.0);
+    report.r2.assign(static_cast<size_t>(n), 0.0);
+    report.generating_fraction.assign(static_cast<size_t>(n), 0.0);
+    report.c_gen_identified.assign(static_cast<size_t>(n), false);
+    report.payload_current_rms.assign(static_cast<size_t>(n), 0.0);
+    for (int pass = 0; pass <= passes; ++pass) {
+      const bool final_stats = pass == passes;
+      std::vector<Stats> st(static_cast<size_t>(2 * n));
+      for (Stats& x : st) {
+        x.A = Eigen::MatrixXd::Zero(p, p);
+        x.cp = Eigen::VectorXd::Zero(p);
+        x.b = Eigen::VectorXd::Zero(p);
+      }
+      std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
+      std::vector<long> cnt(static_cast<size_t>(n), 0), gen_cnt(static_cast<size_t>(n), 0);
+      std::vector<double> pay2(static_cast<size_t>(n), 0.0);  // sum (tau_payload / g)^2 over runs with a known payload
+      std::vector<long> pay_cnt(static_cast<size_t>(n), 0);
+      long done = 0;
+      for (size_t ri = 0; ri < runs.size(); ++ri) {
+        const device::Recording& rec = *runs[ri].recording;
+        twin.set_payload(runs[ri].payload);
+        for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
+          const RobotSample& s = rec.samples[k];
+          const VectorJ& qdd = qdds[ri][k];
+          twin.regress(s.q, s.qd, qdd, Y, tau_p);
+          for (int j = 0; j < n; ++j) {
+            if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
+            const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+            r.setZero();
+            for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
+            twin.friction_row(j, s.qd, qdd, s.temperature, f);
+            r.segment(nb + nf * j, nf) = f;
+            const double i = s.current[j];
+            // the previous pass's torque decides the drive direction (first pass: all motoring);
+            // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
+            const double tau_hat = r.dot(theta) + tau_p[j];
+            const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+            gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
+            if (final_stats) {
+              const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
+              sse[static_cast<size_t>(j)] += err * err;
+              si[static_cast<size_t>(j)] += i;
+              si2[static_cast<size_t>(j)] += i * i;
+              ++cnt[static_cast<size_t>(j)];
+              if (runs[ri].payload.mass > 0.0) {
+                pay2[static_cast<size_t>(j)] += (tau_p[j] / jd.gain) * (tau_p[j] / jd.gain);
+                ++pay_cnt[static_cast<size_t>(j)];
+              }
+              continue;
+            }
+            Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
+            x.A.selfadjointView<Eigen::Lower>().rankUpdate(r);
+            x.b += r * i;
+            x.cp += r * tau_p[j];
+            x.d += i * tau_p[j];
+            x.e += i * i;
+            x.pp += tau_p[j] * tau_p[j];
+            ++x.count;
+          }
+          if (progress && (++done % 20000) == 0)
+            progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+        }
+      }
+      if (final_stats) {
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          auto& m = twin.joints[J];
+          const double N = std::max<double>(1.0, static_cast<double>(cnt[J]));
+          m.rmse = std::sqrt(sse[J] / N);
+          const double sst = si2[J] - si[J] * si[J] / N;
+          m.r2 = sst > 0 ? 1.0 - sse[J] / sst : 0.0;
+          report.rmse[J] = m.rmse;
+          report.r2[J] = m.r2;
+          report.samples_used[J] = cnt[J];
+          report.generating_fraction[J] = static_cast<double>(gen_cnt[J]) / N;
+          // the gain is fixed by the known payload only where the payload's current stands out
+          // of what the model leaves unexplained
+          report.payload_current_rms[J] = pay_cnt[J] > 0 ? std::sqrt(pay2[J] / static_cast<double>(pay_cnt[J])) : 0.0;
+          m.gain_identified = any_payload && report.payload_current_rms[J] >= kPayloadSignalMin * m.rmse;
+          if (any_payload && !m.gain_identified)
+            report.notes.push_back(fmt::format("J{}: the known payload's current on this joint (rms {:.4f} A) is below {} x the fit RMSE "
+                                               "({:.4f} A): its gain {:.3f} N·m/A is not identified (gain_identified false in the twin)",
+                                               j + 1, report.payload_current_rms[J], kPayloadSignalMin, m.rmse, m.gain));
+        }
+        break;
+      }
+      for (Stats& x : st) x.A = x.A.selfadjointView<Eigen::Lower>();
+      // which joints' back-driven factor the data can carry: enough back-driven samples; the others
+      // keep c_gen = 1 and their back-driven samples join the motoring group
+      std::vector<bool> free_gen(static_cast<size_t>(n), false);
       for (int j = 0; j < n; ++j) {
-        auto& m = twin.joints[static_cast<size_t>(j)];
-        const double N = std::max<double>(1.0, static_cast<double>(cnt[static_cast<size_t>(j)]));
-        m.rmse = std::sqrt(sse[static_cast<size_t>(j)] / N);
-        const double sst = si2[static_cast<size_t>(j)] - si[static_cast<size_t>(j)] * si[static_cast<size_t>(j)] / N;
-        m.r2 = sst > 0 ? 1.0 - sse[static_cast<size_t>(j)] / sst : 0.0;
-        report.rmse[static_cast<size_t>(j)] = m.rmse;
-        report.r2[static_cast<size_t>(j)] = m.r2;
-        report.samples_used[static_cast<size_t>(j)] = cnt[static_cast<size_t>(j)];
+        const Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
+        const long all = g1.count + st[static_cast<size_t>(2 * j)].count;
+        free_gen[static_cast<size_t>(j)] =
+            pass > 0 && g1.count >= kMinGeneratingSamples && g1.count >= kMinGeneratingFraction * static_cast<double>(all);
       }
-      break;
-    }
-    // update the back-driven factor from this pass's directions
-    for (int j = 0; j < n; ++j)
-      if (pass > 0 && gen_den[static_cast<size_t>(j)] > 0)
-        twin.joints[static_cast<size_t>(j)].c_gen = gen_num[static_cast<size_t>(j)] / gen_den[static_cast<size_t>(j)];
-    // Levenberg-Marquardt on the bilinear current-domain model, entirely on the sufficient
-    // statistics: unknowns x = (theta, h_j = 1 / g_j), residual w_jk - h_j (r_jk theta + tau_p_jk)
-    for (int j = 0; j < n; ++j) A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
-    std::vector<double> h(static_cast<size_t>(n));
-    for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
-    auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
-      double sum = 0.0;
+      // a fixed factor c folds the back-driven group into the motoring one:
+      // sum (i - c h t)^2 has the statistics (A c², cp c², b c, d c, e, pp c²)
+      auto fold = [&](int j, double c) {
+        Stats& g0 = st[static_cast<size_t>(2 * j)];
+        Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
+        g0.A += c * c * g1.A;
+        g0.cp += c * c * g1.cp;
+        g0.b += c * g1.b;
+        g0.d += c * g1.d;
+        g0.e += g1.e;
+        g0.pp += c * c * g1.pp;
+        g0.count += g1.count;
+        g1 = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
+      };
+      // h per group: h[2j] = 1 / g_j, h[2j + 1] = c_gen_j / g_j
+      std::vector<double> h(static_cast<size_t>(2 * n));
+      for (int j = 0; j < n; ++j) {
+        h[static_cast<size_t>(2 * j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
+        h[static_cast<size_t>(2 * j + 1)] = twin.joints[static_cast<size_t>(j)].c_gen * h[static_cast<size_t>(2 * j)];
+      }
+      if (pass == 0) {
+        // start: theta from the torque-domain LS with the initial gains
+        Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
+        for (int j = 0; j < n; ++j) {
+          const Stats& g0 = st[static_cast<size_t>(2 * j)];
+          Aw += g0.A;
+          rhs += g0.b / h[static_cast<size_t>(2 * j)] - g0.cp;
+        }
+        const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
+        Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
+        As.diagonal().array() += kRidge;
+        theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
+      }
+      for (int j = 0; j < n; ++j)
+        if (!free_gen[static_cast<size_t>(j)]) fold(j, twin.joints[static_cast<size_t>(j)].c_gen);
+      // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
+      // the joint fitted again with it
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        fit_bilinear(st, free_gen, any_payload, theta, h);
+        bool refit = false;
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          if (!free_gen[J]) continue;
+          const double c = h[2 * J + 1] / h[2 * J];
+          const double cb = std::clamp(c, kCGenMin, kCGenMax);
+          if (cb != c) {
+            if (pass == passes - 1)
+              report.notes.push_back(fmt::format("J{}: back-driven factor fitted {:.3f}, outside [{}, {}]: pinned to {}", j + 1, c,
+                                                 kCGenMin, kCGenMax, cb));
+            free_gen[J] = false;
+            fold(j, cb);
+            twin.joints[J].c_gen = cb;
+            refit = true;
+          }
+        }
+        if (!refit) break;
+      }
       for (int j = 0; j < n; ++j) {
         const size_t J = static_cast<size_t>(j);
-        const double num = b[J].dot(th) + d[J];
-        const double den = th.dot(A[J] * th) + 2.0 * th.dot(cp[J]) + pp[J];
-        sum += e[J] - 2.0 * hh[J] * num + hh[J] * hh[J] * den;
+        twin.joints[J].gain = 1.0 / h[2 * J];
+        if (free_gen[J]) twin.joints[J].c_gen = h[2 * J + 1] / h[2 * J];
+        report.c_gen_identified[J] = free_gen[J];
       }
-      return sum;
-    };
-    if (pass == 0) {
-      // start: theta from the torque-domain LS with the initial gains
-      Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
-      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(p);
-      for (int j = 0; j < n; ++j) {
-        Aw += A[static_cast<size_t>(j)];
-        rhs += b[static_cast<size_t>(j)] / h[static_cast<size_t>(j)] - cp[static_cast<size_t>(j)];
-      }
-      const Eigen::VectorXd D = Aw.diagonal().cwiseMax(1e-300).cwiseSqrt();
-      Eigen::MatrixXd As = D.asDiagonal().inverse() * Aw * D.asDiagonal().inverse();
-      As.diagonal().array() += kRidge;
-      theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
+      twin.beta = theta.head(nb);
+      for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
     }
-    double mu = 1e-3, obj = sse_of(theta, h);
-    for (int it = 0; it < 100; ++it) {
-      const int m = p + n;
-      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
-      Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);  // half gradient of the SSE
-      for (int j = 0; j < n; ++j) {
-        const size_t J = static_cast<size_t>(j);
-        const Eigen::VectorXd At = A[J] * theta + cp[J];  // sum r tau_hat
-        const double num = b[J].dot(theta) + d[J];
-        const double den = theta.dot(At) + theta.dot(cp[J]) + pp[J];
-        H.topLeftCorner(p, p) += h[J] * h[J] * A[J];
-        H.block(0, p + j, p, 1) = h[J] * At;
-        H.block(p + j, 0, 1, p) = h[J] * At.transpose();
-        H(p + j, p + j) = den;
-        grad.head(p) += -h[J] * b[J] + h[J] * h[J] * At;
-        grad(p + j) = -num + h[J] * den;
-      }
-      const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
-      bool accepted = false;
-      for (int tries = 0; tries < 20 && !accepted; ++tries) {
-        Eigen::MatrixXd Hs = D.asDiagonal().inverse() * H * D.asDiagonal().inverse();
-        Hs.diagonal().array() += mu + kRidge;
-        const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
-        Eigen::VectorXd th2 = theta + step.head(p);
-        std::vector<double> h2 = h;
-        for (int j = 0; j < n; ++j) h2[static_cast<size_t>(j)] += step(p + j);
-        if (!any_payload) {
-          // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
-          double lh = 0.0;
-          bool ok = true;
-          for (double v : h2) ok &= v > 0.0, lh += std::log(std::abs(v));
-          if (ok) {
-            const double sc = std::exp(lh / n);
-            for (double& v : h2) v /= sc;
-            th2 *= sc;
-          }
-        }
-        // drive gains are positive: a step that flips one is rejected like a worse one
-        bool positive = true;
-        for (double v : h2) positive &= v > 0.0;
-        const double obj2 = positive ? sse_of(th2, h2) : std::numeric_limits<double>::infinity();
-        if (obj2 <= obj) {
-          const double gain = obj - obj2;
-          theta = th2;
-          h = h2;
-          obj = obj2;
-          mu = std::max(mu / 3.0, 1e-9);
-          accepted = true;
-          if (gain < 1e-12 * std::max(obj, 1e-30)) it = 100;  // converged
-        } else {
-          mu *= 5.0;
-        }
-      }
-      if (!accepted) break;
-    }
-    std::vector<double> g(static_cast<size_t>(n));
-    for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
-    for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].gain = g[static_cast<size_t>(j)];
-    twin.beta = theta.head(nb);
-    for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].friction = theta.segment(nb + nf * j, nf);
   }
+  for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
+    if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
+      report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
+                                         100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
   twin.gains_absolute = any_payload;
   for (const auto& jd : twin.joints)
     if (!(jd.gain > 0.0)) throw InvalidArgument("identify: a drive gain came out <= 0; the recordings do not excite that joint enough");

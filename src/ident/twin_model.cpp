@@ -246,6 +246,7 @@ std::string TwinModel::to_json() const {
     nlohmann::json e;
     e["gain"] = m.gain;
     e["c_gen"] = m.c_gen;
+    e["gain_identified"] = m.gain_identified;
     e["friction"] = numbers(Eigen::VectorXd(m.friction));
     e["friction_columns"] = {"coulomb", "viscous", "offset", "armature", "viscous_temperature"};
     e["train_rmse"] = m.rmse;
@@ -296,6 +297,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       m.gain = need(js[k], "gain", p).get<double>();
       if (!(m.gain > 0.0)) throw ParseError(origin, 0, p + "gain", fmt::format("must be > 0, got {}", m.gain));
       m.c_gen = js[k].value("c_gen", 1.0);
+      m.gain_identified = js[k].value("gain_identified", true);
       const Eigen::VectorXd f = numbers(need(js[k], "friction", p), origin, p + "friction");
       if (f.size() != kFrictionColumns)
         throw ParseError(origin, 0, p + "friction", fmt::format("expected {} values, got {}", int(kFrictionColumns), f.size()));

@@ -17,3 +17,12 @@ add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.y
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)
 set_tests_properties(cli.validate_missing_file PROPERTIES WILL_FAIL TRUE)
+# the back-driven factor fitted jointly with the rest: J2-J4 get a c_gen below 1 and the table
+# shows their back-driven share; a bad value of the option is named
+add_test(NAME cli.identify_efficiency_joint COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5,0,0,0.04
+         --efficiency-fit joint -o ${d}/twin_joint.json)
+set_tests_properties(cli.identify_efficiency_joint PROPERTIES FIXTURES_REQUIRED recordings
+                     PASS_REGULAR_EXPRESSION "J2 +[0-9]+ +[0-9.]+ +[0-9.]+ +0\\.[0-9]+ +[0-9]+\\.[0-9]")
+add_test(NAME cli.identify_efficiency_bad COMMAND twinwatch identify ${d}/exc.csv --efficiency-fit sometimes -o ${d}/twin_bad.json)
+set_tests_properties(cli.identify_efficiency_bad PROPERTIES FIXTURES_REQUIRED recordings
+                     PASS_REGULAR_EXPRESSION "--efficiency-fit sometimes: expected joint or alternating")

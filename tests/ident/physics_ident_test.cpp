@@ -34,19 +34,25 @@ struct Fixture : ::testing::Test {
     p.com = Eigen::Vector3d(0, 0, 0.04);
     IdentReport report;
     twin = new TwinModel(identify_physics("ur3e", {{excitation, {}}, {figure8, p}}, IdentOptions{}, report));
+    IdentOptions joint;
+    joint.efficiency_fit = EfficiencyFit::Joint;
+    twin_joint = new TwinModel(identify_physics("ur3e", {{excitation, {}}, {figure8, p}}, joint, report));
   }
   static void TearDownTestSuite() {
     delete excitation;
     delete figure8;
     delete twin;
+    delete twin_joint;
   }
   static device::Recording* excitation;
   static device::Recording* figure8;
   static TwinModel* twin;
+  static TwinModel* twin_joint;  // c_gen fitted jointly (EfficiencyFit::Joint)
 };
 device::Recording* Fixture::excitation = nullptr;
 device::Recording* Fixture::figure8 = nullptr;
 TwinModel* Fixture::twin = nullptr;
+TwinModel* Fixture::twin_joint = nullptr;
 
 // the training fit gets close to the measurement noise of each joint (DESIGN.md rule 4 levels);
 // what is left is the truth the twin does not model (Stribeck, pre-sliding, ripple: DESIGN.md rule 2)
@@ -67,6 +73,102 @@ TEST_F(Fixture, KnownPayloadIdentifiesTheDriveGains) {
     const double g_true = jt.kt * jt.gear_ratio * jt.eta;
     EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].gain, g_true, 0.25 * g_true) << "joint " << j;
   }
+}
+
+// the back-driven factor c_gen = eta * eta_rev of the simulator's drive (UR3e eq. 3) is recovered
+// on the joints that are back-driven often (gravity-loaded J2-J4: 40-55 % of the samples); an
+// alternating fit of c_gen and theta (the first version, still the default) stops at 0.98 on J2
+// against 0.765
+TEST_F(Fixture, RecoversTheBackDrivenEfficiencyOfTheSimulatedDrives) {
+  const sim::PlantTruth truth = sim::default_truth(twin->robot(), 1);
+  EXPECT_GT(twin->joints[1].c_gen, 0.95);  // the alternating fit's known bias (documented, not a goal)
+  for (int j = 1; j <= 3; ++j) {
+    const auto& jt = truth.joints[static_cast<size_t>(j)];
+    const double c_true = jt.eta * jt.eta_rev;
+    // J4's wrist load is small next to its friction: wider band
+    const double tol = j == 3 ? 0.12 : 0.04;
+    EXPECT_NEAR(twin_joint->joints[static_cast<size_t>(j)].c_gen, c_true, tol * c_true) << "joint " << j;
+  }
+  // and the joint fit predicts the training runs better on the back-driven joints J2-J4
+  for (int j = 1; j <= 3; ++j) {
+    EXPECT_LT(twin_joint->joints[static_cast<size_t>(j)].rmse, 0.97 * twin->joints[static_cast<size_t>(j)].rmse) << "joint " << j;
+  }
+}
+
+// the joint fit flags the gains the known payload does not fix: the payload's COM lies on the J6
+// axis (no torque), J1 sees only its small inertia; the flag survives the twin file
+TEST_F(Fixture, GainsTheKnownPayloadDoesNotLoadAreFlagged) {
+  const sim::PlantTruth truth = sim::default_truth(twin->robot(), 1);
+  for (int j = 1; j <= 2; ++j) {
+    const auto& jt = truth.joints[static_cast<size_t>(j)];
+    const double g_true = jt.kt * jt.gear_ratio * jt.eta;
+    EXPECT_TRUE(twin_joint->joints[static_cast<size_t>(j)].gain_identified) << "joint " << j;
+    EXPECT_NEAR(twin_joint->joints[static_cast<size_t>(j)].gain, g_true, 0.03 * g_true) << "joint " << j;
+  }
+  EXPECT_FALSE(twin_joint->joints[0].gain_identified);
+  EXPECT_FALSE(twin_joint->joints[5].gain_identified);
+  const TwinModel back = TwinModel::from_json(twin_joint->to_json(), "twin.json");
+  for (int j = 0; j < 6; ++j)
+    EXPECT_EQ(back.joints[static_cast<size_t>(j)].gain_identified, twin_joint->joints[static_cast<size_t>(j)].gain_identified) << j;
+}
+
+// a synthetic recording made by a known twin (the twin's own model, other c_gen, gains and
+// Gaussian current noise) on the states of the fixture's runs: the fit returns the factors it
+// was made with, including a drive without loss (c_gen = 1)
+device::Recording with_currents_of(const device::Recording& rec, const TwinModel& truth_twin, const model::RigidBodyInertia& payload,
+                                   double sigma, unsigned seed) {
+  device::Recording out = rec;
+  TwinModel t = truth_twin;
+  t.set_payload(payload);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  const std::vector<VectorJ> qdd = joint_accelerations(rec);
+  VectorJ i;
+  for (size_t k = 0; k < out.samples.size(); ++k) {
+    RobotSample& s = out.samples[k];
+    t.predict_current(s.q, s.qd, qdd[k], s.temperature, i);
+    for (int j = 0; j < 6; ++j) s.current[j] = i[j] + noise(rng);
+  }
+  return out;
+}
+
+TEST_F(Fixture, RecoversAKnownBackDrivenFactorFromASyntheticRecording) {
+  constexpr unsigned kSeed = 17;
+  constexpr double kSigma = 0.02;  // [A] DESIGN.md rule 4 level
+  TwinModel truth_twin = *twin_joint;
+  truth_twin.learned.reset();
+  const double c_set[6] = {1.0, 0.62, 1.0, 0.8, 1.0, 1.0};
+  const double g_set[6] = {11.0, 12.0, 9.0, 9.0, 7.0, 7.0};
+  for (int j = 0; j < 6; ++j) {
+    truth_twin.joints[static_cast<size_t>(j)].c_gen = c_set[j];
+    truth_twin.joints[static_cast<size_t>(j)].gain = g_set[j];
+  }
+  model::RigidBodyInertia p;
+  p.mass = 0.5;
+  p.com = Eigen::Vector3d(0, 0, 0.04);
+  const device::Recording ex = with_currents_of(*excitation, truth_twin, {}, kSigma, kSeed);
+  const device::Recording f8 = with_currents_of(*figure8, truth_twin, p, kSigma, kSeed + 1);
+  IdentOptions o;
+  o.decimate = 2;
+  o.efficiency_fit = EfficiencyFit::Joint;
+  IdentReport report;
+  const TwinModel fit = identify_physics("ur3e", {{&ex, {}}, {&f8, p}}, o, report);
+  // J2 (strongly back-driven, 0.62) and J3 (lossless, 1.0) to 2 %, J4 (small load) to 5 %
+  const double tol[6] = {0, 0.02, 0.02, 0.05, 0, 0};
+  for (int j = 1; j <= 3; ++j) {
+    // a lossless drive may fit a hair above 1 and is then pinned to the bound 1
+    if (c_set[j] < 1.0) {
+      ASSERT_TRUE(report.c_gen_identified[static_cast<size_t>(j)]) << "joint " << j << ", seed " << kSeed;
+    }
+    EXPECT_NEAR(fit.joints[static_cast<size_t>(j)].c_gen, c_set[j], tol[j] * c_set[j]) << "joint " << j << ", seed " << kSeed;
+    // the payload fixes the gains of the joints it loads
+    EXPECT_NEAR(fit.joints[static_cast<size_t>(j)].gain, g_set[j], 0.05 * g_set[j]) << "joint " << j << ", seed " << kSeed;
+    // and the fit reaches the noise it was given
+    EXPECT_LT(fit.joints[static_cast<size_t>(j)].rmse, 1.1 * kSigma) << "joint " << j;
+  }
+  // J1 and J6 are (almost) never back-driven on these runs: c_gen is not fitted and says so
+  EXPECT_FALSE(report.c_gen_identified[5]);
+  EXPECT_LT(report.generating_fraction[5], 0.02);
 }
 
 TEST_F(Fixture, PredictsAnUntrainedRunWithAnotherSeed) {

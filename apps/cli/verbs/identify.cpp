@@ -55,6 +55,7 @@ struct IdentifyOptions {
   std::string output, robot = "ur3e", method = "physics", column_map;
   double reversal_screen = 0.0;
   int decimate = 1;
+  std::string efficiency_fit = "alternating";
   bool quiet = false;
   // --method sequential (Cao): the recordings of the gravity and friction steps, the library
   std::vector<std::string> quasi_static, sine;
@@ -69,6 +70,13 @@ struct IdentifyOptions {
   std::string inputs;
 };
 
+// --efficiency-fit
+ident::EfficiencyFit efficiency_fit_of(const std::string& v) {
+  if (v == "joint") return ident::EfficiencyFit::Joint;
+  if (v == "alternating") return ident::EfficiencyFit::Alternating;
+  throw InvalidArgument(fmt::format("--efficiency-fit {}: expected joint or alternating", v));
+}
+
 // options of the learned methods: the method's defaults, then what the command line sets
 ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   ident::LearnedIdentOptions lo = ident::LearnedIdentOptions::defaults(o.method);
@@ -79,6 +87,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   if (!o.inputs.empty()) lo.inputs = ident::LearnedInputs::parse(o.inputs);
   lo.physics.reversal_screen = o.reversal_screen;
   lo.physics.decimate = o.decimate;
+  lo.physics.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -115,6 +124,7 @@ int run_identify(const IdentifyOptions& o) {
   ident::IdentOptions io;
   io.reversal_screen = o.reversal_screen;
   io.decimate = o.decimate;
+  io.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
   auto show = [&](double f) {
@@ -137,11 +147,16 @@ int run_identify(const IdentifyOptions& o) {
   twin.save(o.output);
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);
-    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gain N·m/A");
+    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gen %", "gain N·m/A");
     for (int j = 0; j < twin.n_dof(); ++j) {
-      const auto& m = twin.joints[static_cast<size_t>(j)];
-      fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10.3f} {:>12}\n", j + 1, report.samples_used[static_cast<size_t>(j)], m.rmse, m.r2,
-                 m.c_gen, twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
+      const size_t J = static_cast<size_t>(j);
+      const auto& m = twin.joints[J];
+      // back-driven share of the samples; '*' marks a c_gen the data did not fit (kept or pinned)
+      const bool fitted = J < report.c_gen_identified.size() && report.c_gen_identified[J];
+      const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
+      fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
+                 fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
+                 twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
@@ -334,6 +349,11 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+  sub->add_option("--efficiency-fit", o->efficiency_fit,
+                  "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
+                  "parameters; recovers it) or 'alternating' (the first version, between passes; biased towards 1, kept as the default "
+                  "because the monitor's torque fallback relies on the gains it leaves out of range)")
+      ->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");

@@ -32,6 +32,7 @@ nlohmann::json to_json(const RobotModel& m) {
                            {"q_min", num(jt.limits.q_min)},
                            {"q_max", num(jt.limits.q_max)},
                            {"qd_max", num(jt.limits.qd_max)},
+                           {"qdd_max", num(jt.limits.qdd_max)},  // null: not published
                            {"torque_max", num(jt.limits.torque_max)},
                            {"gear_ratio", num(jt.drive.gear_ratio)},
                            {"torque_constant", num(jt.drive.torque_constant)},

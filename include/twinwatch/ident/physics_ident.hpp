@@ -2,9 +2,10 @@
 /// @file physics_ident.hpp
 /// Identification of the current-domain physics twin from recordings only (DESIGN.md rule 1).
 ///
-/// Per joint, ordinary least squares of the measured current on the design row of
-/// twin_model.hpp, then the direction-dependent efficiency factor and a re-fit with it
-/// (two passes). Velocity reversals (|qd_j| < reversal_screen) can be left out of the fit
+/// Per joint, least squares of the measured current on the design row of twin_model.hpp, with
+/// the drive gain and the back-driven factor c_gen fitted jointly with the rigid-body and
+/// friction parameters (Levenberg-Marquardt on sufficient statistics); the drive direction of
+/// each sample comes from the previous pass's torque, so every pass re-splits the samples. Velocity reversals (|qd_j| < reversal_screen) can be left out of the fit
 /// [HESR §III-E]. The drive gain g_j comes out as 1 / (payload coefficient) when some recordings
 /// were made with a known payload.
 #include <functional>
@@ -16,9 +17,24 @@
 
 namespace twinwatch::ident {
 
+/// How the back-driven factor c_gen is fitted.
+enum class EfficiencyFit {
+  /// Jointly with theta and the gains (Levenberg-Marquardt on per-direction statistics): recovers
+  /// c_gen (J2 of the simulated UR3e: 0.765 for 0.765). The gains of joints the known payload
+  /// hardly loads (UR3e J1, J5, J6) then converge to finite values that look plausible but are
+  /// not (J1 31.6 N·m/A for 11.4).
+  Joint,
+  /// The first version: c_gen re-estimated between passes with theta fixed, which crawls from 1
+  /// (J2 0.98 after two passes) and lets the unloaded joints' gains drift far out of range; the
+  /// monitor (src/monitor, plausible_gain) relies on that drift to fall back to the median gain,
+  /// so this stays the default until the monitor is told which gains are identified.
+  Alternating,
+};
+
 struct IdentOptions {
   double reversal_screen = 0.0;  ///< [rad/s] leave |qd_j| below this out of the fit (0: keep all)
-  int efficiency_passes = 2;     ///< re-fits with the direction-dependent factor
+  EfficiencyFit efficiency_fit = EfficiencyFit::Alternating;
+  int efficiency_passes = 2;     ///< re-fits with the samples re-split into motoring/back-driven (alternating: and c_gen updated)
   int decimate = 1;              ///< use every k-th sample
   double temperature_ref = 35.0; ///< [°C]
   void validate() const;
@@ -33,6 +49,9 @@ struct TrainingRun {
 struct IdentReport {
   std::vector<long> samples_used;   ///< per joint
   std::vector<double> rmse, r2;     ///< training fit per joint
+  std::vector<double> generating_fraction;  ///< per joint: share of samples classed back-driven (tau qd < 0)
+  std::vector<double> payload_current_rms;  ///< per joint: rms of the known payload's current [A] (joint fit only)
+  std::vector<bool> c_gen_identified;       ///< per joint: c_gen fitted (false: too few back-driven samples, or pinned to its range)
   std::vector<std::string> notes;
 };
 

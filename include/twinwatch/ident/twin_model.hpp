@@ -31,6 +31,9 @@ enum FrictionColumn : int { kCoulomb = 0, kViscous, kOffset, kArmature, kViscous
 struct JointDrive {
   double gain = 1.0;             ///< g_j [N·m/A] (arbitrary common scale when !gains_known)
   double c_gen = 1.0;            ///< current factor when back-driven
+  /// false when the recordings did not fix g_j (the known payload hardly loads the joint): g_j
+  /// still scales the predicted current, but torque from it is not trustworthy
+  bool gain_identified = true;
   Eigen::Matrix<double, kFrictionColumns, 1> friction = Eigen::Matrix<double, kFrictionColumns, 1>::Zero();  ///< [N·m, N·m·s/rad, N·m, kg·m², N·m·s/rad/°C]
   double rmse = 0.0, r2 = 0.0;   ///< current fit on the training data
 };
