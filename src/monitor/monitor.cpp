@@ -300,6 +300,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   }
   window_.reserve(cap);
   events_.reserve(64);
+  tau_gain_ = VectorJ::Ones(n_);
+  for (int j = 0; j < n_; ++j) tau_gain_[j] = trusted_gain(j);
   // slow-wear trend in torque units when the drive gains are known
   VectorJ g = VectorJ::Ones(n_);
   if (twin_.gains_known())
@@ -311,13 +313,17 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twi
   trend_ = TrendDetector(twin_, tc, g, twin_.gains_known() ? "N·m" : "A");
 }
 
-double Monitor::torque_gain(int j) const {
+double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
+
+double Monitor::trusted_gain(int j) const {
+  // a gain the recordings did not fix (JointDrive::gain_identified) or outside the plausible range
+  // is not trusted: the median of the trusted ones converts that joint's residual to torque
+  const auto trusted = [](const ident::JointDrive& d) { return d.gain_identified && d.gain >= kGainMin && d.gain <= kGainMax; };
   const auto& js = twin_.joints;
-  const double g = js[static_cast<size_t>(j)].gain;
-  if (g >= kGainMin && g <= kGainMax) return g;
+  if (trusted(js[static_cast<size_t>(j)])) return js[static_cast<size_t>(j)].gain;
   std::vector<double> ok;
   for (const auto& d : js)
-    if (d.gain >= kGainMin && d.gain <= kGainMax) ok.push_back(d.gain);
+    if (trusted(d)) ok.push_back(d.gain);
   if (ok.empty()) return 1.0;
   std::nth_element(ok.begin(), ok.begin() + static_cast<long>(ok.size() / 2), ok.end());
   return ok[ok.size() / 2];

@@ -121,7 +121,8 @@ class Monitor {
  private:
   void open_event(int joint, double start, double t);
   void run_diagnosis(double t);
-  double torque_gain(int j) const;
+  double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
+  double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
 
   ident::TwinModel twin_;
   MonitorConfig cfg_;
@@ -144,6 +145,7 @@ class Monitor {
   std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
+  VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
   VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
 };
 
