@@ -64,7 +64,8 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
                                       desired.duration, o.dt));
   MaxwellSlipFriction plant_friction(truth);
   MaxwellSlipFriction desired_friction(truth);  // the truth along qd_d: scores f_hat (evaluation only)
-  double ff_sse = 0.0;
+  double ff_sse = 0.0, slow_sse = 0.0;
+  long slow_n = 0;
   if (model) model->start(o.dt);
   ClosedLoopRun run;
   run.compensation = !feedforward ? "None" : (model ? std::string(model->name()) : "Baseline");
@@ -77,6 +78,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   const double h = o.dt / o.substeps;
   constexpr double kAccStep = 1e-5;  // [s] central difference of the desired velocity
   constexpr double kRampIn = 1.0;    // [s] from rest to the profile's start, not scored
+  constexpr double kSlow = 0.1;      // [rad/s] the slow band of feedforward_rmse_slow
   // The trial starts from rest: a ramp-in of kRampIn seconds before t = 0 (a cubic Hermite in
   // velocity matching qd_d(0) and qdd_d(0)) runs the same controller but is not scored. Starting the
   // 10 s profile from rest at a nonzero qd_d(0) would put a velocity step at t = 0 whose transient,
@@ -124,7 +126,13 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
       const double f_hat = model ? model->step(v_mid) : 0.0;
       if (model) {
         const double f_true = desired_friction.step(v_mid, o.dt);
-        if (scored) ff_sse += (f_hat - f_true) * (f_hat - f_true);
+        if (scored) {
+          ff_sse += (f_hat - f_true) * (f_hat - f_true);
+          if (std::abs(v_mid) < kSlow) {
+            slow_sse += (f_hat - f_true) * (f_hat - f_true);
+            ++slow_n;
+          }
+        }
       }
       const double tau_d = o.inertia * acc(t + 0.5 * o.dt) + f_hat;
       // the current-based torque estimate of the last period (its mean motor torque, noisy), compared
@@ -172,6 +180,8 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   run.rmse = std::sqrt(s_all / static_cast<double>(n));
   run.feedforward_rmse = model && feedforward ? std::sqrt(ff_sse / static_cast<double>(n))
                                               : std::numeric_limits<double>::quiet_NaN();
+  run.feedforward_rmse_slow = model && feedforward && slow_n ? std::sqrt(slow_sse / static_cast<double>(slow_n))
+                                                             : std::numeric_limits<double>::quiet_NaN();
   const auto seg = static_cast<std::size_t>(std::lround(o.segment / o.dt));
   double seg_sum = 0.0;
   int segs = 0;

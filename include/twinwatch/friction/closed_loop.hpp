@@ -80,6 +80,8 @@ struct ClosedLoopRun {
   /// RMSE of the model's f_hat(qd_d) against the truth friction along the desired trajectory
   /// [N·m] (evaluation only: explains the tracking figures); NaN without a model.
   double feedforward_rmse = 0.0;
+  /// The same within |qd_d| < 0.1 rad/s, where eq. 20's gains are highest [N·m]; NaN without a model.
+  double feedforward_rmse_slow = 0.0;
 };
 
 /// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0 after a 1 s ramp-in from
