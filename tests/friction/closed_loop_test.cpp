@@ -145,6 +145,15 @@ TEST(ClosedLoop, WithoutFrictionTheRigidBodyIsTheExactModel) {
   const ClosedLoopRun none = run_closed_loop(smooth, desired, nullptr, o, false);
   const ClosedLoopRun baseline = run_closed_loop(smooth, desired, nullptr, o, true);
   EXPECT_LT(baseline.rmse, 0.1 * none.rmse);
+  // and with the exact model and no noise e_tau is zero on the path: the eq. 19 PD changes nothing,
+  // unless tau_d skips the filter that tau_meas goes through (then e_tau = tau_d - LP(tau_d) != 0)
+  ClosedLoopOptions off = o, unaligned = o;
+  off.gains.kp_min = off.gains.kp_max = off.gains.kd_max = 0.0;
+  unaligned.matched_filter = false;
+  const ClosedLoopRun ff_only = run_closed_loop(smooth, desired, nullptr, off, true);
+  const ClosedLoopRun lagged = run_closed_loop(smooth, desired, nullptr, unaligned, true);
+  EXPECT_NEAR(baseline.rmse, ff_only.rmse, 0.05 * ff_only.rmse);
+  EXPECT_GT(lagged.rmse, 2.0 * ff_only.rmse);
 }
 
 TEST(ClosedLoop, InvalidOptionsAreNamed) {
