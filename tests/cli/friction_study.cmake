@@ -30,3 +30,6 @@ set_tests_properties(cli.friction_study_bad_remove_viscous PROPERTIES PASS_REGUL
 add_test(NAME cli.friction_study_predictions
          COMMAND twinwatch friction-study --simulated --joint 3 --trials 1 --hops 2 -q
                  --predictions ${CMAKE_CURRENT_BINARY_DIR}/friction_predictions.csv)
+add_test(NAME cli.friction_study_bad_pd_scale COMMAND twinwatch friction-study --closed-loop --pd-scale -1 -q)
+set_tests_properties(cli.friction_study_bad_pd_scale PROPERTIES PASS_REGULAR_EXPRESSION
+  "--pd-scale is -1, must be >= 0")

@@ -45,6 +45,8 @@ struct StudyOptions {
   unsigned seed = 1;
   double screening = 0.1;
   bool json = false, quiet = false;
+  double pd_scale = 1.0;       // multiplies the eq. 20 gains of the closed loop
+  bool literal_eq19 = false;   // closed loop without the inner-loop inverse feed-forward
 };
 
 // joint j of a recording as a JointRecord (every k-th sample), torque = gain * current or target_moment
@@ -263,6 +265,8 @@ nlohmann::json to_json(const std::vector<ProtocolResult>& res) {
 int run_closed_loop_study(const StudyOptions& o) {
   if (!o.recordings.empty())
     throw InvalidArgument("--closed-loop runs on the simulated joints; give no recordings");
+  if (!std::isfinite(o.pd_scale) || o.pd_scale < 0.0)
+    throw InvalidArgument(fmt::format("--pd-scale is {}, must be >= 0", o.pd_scale));
   const std::vector<std::string> comps = {"None", "Baseline", "LuGre", "RBFNN-H", "ParFam-H", "True friction"};
   struct JointRuns {
     std::string joint;
@@ -283,6 +287,11 @@ int run_closed_loop_study(const StudyOptions& o) {
     const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
+    co.gains.kp_min *= o.pd_scale;
+    co.gains.kp_max *= o.pd_scale;
+    co.gains.kd_min *= o.pd_scale;
+    co.gains.kd_max *= o.pd_scale;
+    co.inverse_feedforward = !o.literal_eq19;
     const VelocityProfile desired = closed_loop_profile(o.seed);
     JointRuns jr{j.name, {}};
     say(fmt::format("{}: closed loop, {} compensations", j.name, comps.size()));
@@ -305,14 +314,16 @@ int run_closed_loop_study(const StudyOptions& o) {
       for (const auto& r : jr.runs)
         j["runs"].push_back({{"compensation", r.compensation}, {"rmse", r.rmse}, {"segment_average", r.segment_average},
                              {"reversal_rmse", r.reversal_rmse}, {"reversals", r.reversals},
-                             {"feedforward_rmse", jnum(r.feedforward_rmse)}});
+                             {"feedforward_rmse", jnum(r.feedforward_rmse)},
+                             {"feedforward_rmse_slow", jnum(r.feedforward_rmse_slow)}});
       out["joints"].push_back(j);
     }
     fmt::print("{}\n", out.dump());
     return 0;
   }
-  fmt::print("HESR closed loop (§V-G): velocity-command joint, adaptive PD torque-error feed-forward (eq. 19-20),\n"
-             "10 s untrained Fourier trajectory; tracking error q_d - q [rad]\n");
+  fmt::print("HESR closed loop (§V-G): velocity-command joint, {}adaptive PD on the torque error (eq. 19-20),\n"
+             "10 s untrained Fourier trajectory; tracking error q_d - q [rad]\n",
+             o.literal_eq19 ? "" : "tau_d fed forward through the inner loop's inverse + ");
   fmt::print("\nTable X: tracking RMSE [rad]\n{:<14}", "Compensation");
   for (const auto& jr : all) fmt::print("{:>11}", jr.joint);
   fmt::print("\n");
@@ -332,18 +343,19 @@ int run_closed_loop_study(const StudyOptions& o) {
     for (const auto& jr : all) fmt::print("{:>11.5f}", jr.runs[c].reversal_rmse);
     fmt::print("\n");
   }
-  fmt::print("\nFeed-forward model error along the desired trajectory, RMSE of f_hat(qd_d) - tau_f,true(qd_d) [N·m]\n"
-             "{:<14}", "Compensation");
-  for (const auto& jr : all) fmt::print("{:>11}", jr.joint);
+  fmt::print("\nFeed-forward model error along the desired trajectory, RMSE of f_hat(qd_d) - tau_f,true(qd_d) [N·m]:"
+             " all / |qd_d| < 0.1 rad/s\n{:<14}", "Compensation");
+  for (const auto& jr : all) fmt::print("{:>16}", jr.joint);
   fmt::print("\n");
   for (std::size_t c = 0; c < comps.size(); ++c) {
     if (!std::isfinite(all.empty() ? 0.0 : all[0].runs[c].feedforward_rmse)) continue;
     fmt::print("{:<14}", comps[c]);
-    for (const auto& jr : all) fmt::print("{:>11.4f}", jr.runs[c].feedforward_rmse);
+    for (const auto& jr : all)
+      fmt::print("{:>16}", fmt::format("{:.4f} / {:.4f}", jr.runs[c].feedforward_rmse, jr.runs[c].feedforward_rmse_slow));
     fmt::print("\n");
   }
-  fmt::print("(None: qd_cmd = qd_d; Baseline: eq. 19 with the rigid body only; True friction: the simulator's "
-             "Maxwell-slip truth as the model, an oracle reference)\n");
+  fmt::print("(None: qd_cmd = qd_d; Baseline: tau_d = I qdd_d, the rigid body only; True friction: the simulator's "
+             "Maxwell-slip truth as the model, an oracle reference; gains x{})\n", o.pd_scale);
   return 0;
 }
 
@@ -448,6 +460,13 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_flag("--closed-loop", o->closed_loop,
                 "HESR §V-G instead: velocity-command simulated joints with the eq. 19-20 feed-forward of each model "
                 "(Tables X-XI)");
+  sub->add_option("--pd-scale", o->pd_scale,
+                  "--closed-loop: multiply the eq. 20 PD gains (K_p, K_d min and max) by this factor, >= 0 "
+                  "(0: the model feed-forward alone)")
+      ->capture_default_str();
+  sub->add_flag("--literal-eq19", o->literal_eq19,
+                "--closed-loop: the model enters only through e_tau of eq. 19 (no inner-loop inverse feed-forward of "
+                "tau_d); with a time-aligned e_tau even the true friction then cannot beat no feed-forward");
   sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs")
       ->check(CLI::ExistingFile);

@@ -1,14 +1,23 @@
 #pragma once
 /// @file closed_loop.hpp
 /// The closed-loop application of HESR §V-G on a simulated joint: a commercial-style
-/// velocity-command interface (inner PI velocity loop, no torque command), and the torque-error
-/// adaptive PD velocity feed-forward of HESR eq. 19-20:
+/// velocity-command interface (inner PI velocity loop, no torque command), the model torque fed
+/// forward through that interface, and the torque-error adaptive PD of HESR eq. 19-20:
 ///
 ///   tau_d   = I qdd_d + f_hat(qd_d)            (rigid body + the residual-torque model)
-///   e_tau   = tau_d - tau_meas                 (tau_meas: noisy current-based torque, low-passed)
+///   qd_ff   : kv qd_ff + ki int qd_ff dt = tau_d   (the velocity offset that makes the inner PI
+///             loop deliver tau_d while the joint follows qd_d; the inner loop's inverse)
+///   e_tau   = LP(tau_d) - LP(tau_meas)         (tau_meas: noisy current-based torque; both low-passed
+///                                               by the same filter so that e_tau = 0 when the joint
+///                                               follows qd_d with an exact model)
 ///   qd_comp = K_p(|qd_d|) e_tau + K_d(|qd_d|) de_tau/dt                          (eq. 19)
 ///   K_{p,d}(|qd_d|) = K^min + (K^max - K^min) exp(-lambda |qd_d|)                   (eq. 20)
-///   qd_cmd  = qd_d + qd_comp
+///   qd_cmd  = qd_d + qd_ff + qd_comp
+///
+/// Why qd_ff: with a time-aligned e_tau and an exact model, e_tau = I (qdd_d - qdd) + f(qd_d) - f(qd)
+/// carries only the tracking error, so eq. 19 alone is feedback and cannot feed the model forward
+/// (with it alone even the true friction tracks no better than no compensation; `inverse_feedforward`
+/// false reproduces that). The trial starts from rest with a 1 s ramp-in (not scored).
 ///
 /// The plant: I qdd = u - tau_f, tau_f from a generalized Maxwell-slip truth (maxwell_slip.hpp),
 /// u = kv (qd_cmd - qd) + ki int (qd_cmd - qd) dt, integrated on substeps. Evaluation code:
@@ -47,6 +56,11 @@ struct ClosedLoopOptions {
   /// before it enters e_tau [s], >= 0 (0: raw). HESR §V-G: the current-derived torque is noisy;
   /// a controller cannot use it unfiltered.
   double torque_filter = 0.1;
+  /// Low-pass tau_d with the same filter as tau_meas before e_tau (true: time-aligned; false: the
+  /// filter's lag alone makes e_tau = tau_d - LP(tau_d) != 0 on a perfectly tracked trajectory).
+  bool matched_filter = true;
+  /// Feed tau_d forward through the inverse of the inner PI loop (qd_ff); false: eq. 19 alone.
+  bool inverse_feedforward = true;
   double reversal_window = 0.1; ///< +-window around desired-velocity zero crossings [s], > 0
   double segment = 1.0;         ///< segment length of the segment-wise RMSE [s], > 0
   AdaptivePdGains gains;
@@ -66,9 +80,13 @@ struct ClosedLoopRun {
   /// RMSE of the model's f_hat(qd_d) against the truth friction along the desired trajectory
   /// [N·m] (evaluation only: explains the tracking figures); NaN without a model.
   double feedforward_rmse = 0.0;
+  /// The same within |qd_d| < 0.1 rad/s, where eq. 20's gains are highest [N·m]; NaN without a model.
+  double feedforward_rmse_slow = 0.0;
 };
 
-/// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0). `model` predicts the
+/// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0 after a 1 s ramp-in from
+/// rest that is not scored; the held command of each period is its mean desired velocity, tau_d is
+/// taken at its midpoint and compared with the mean motor torque it produced). `model` predicts the
 /// residual torque along qd_d for tau_d; null means "Baseline" (tau_d = I qdd_d). With
 /// `feedforward` false the command is qd_d alone ("None"). Throws InvalidArgument on bad options.
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
@@ -76,9 +94,9 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
 
 /// Closed-loop options for a simulated study joint: its inertia (the rigid body of
 /// simulated_protocol_records), an inner velocity loop of 55 rad/s bandwidth (kv = 55 I,
-/// ki = 6 kv), eq. 20 gains relative to 1/kv (K_p 0.13/kv .. 1.3/kv, K_d 0 .. 0.01/kv, lambda 4 s/rad,
-/// chosen on the true-friction feed-forward: larger K_p oscillates, smaller does little),
-/// the joint's torque noise.
+/// ki = 6 kv), eq. 20 gains from the torque loop's stability alone (K_p^max = 0.5/kv: a gain margin
+/// of 2 on the sampled unfiltered loop qd_comp = K_p e_tau, unstable at kv K_p = 1; K_p^min =
+/// K_p^max/10, K_d 0 .. K_p^max/130 s, lambda 4 s/rad), the joint's torque noise.
 ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint);
 
 /// The closed-loop desired trajectory: 10 s, five harmonics of 0.1 Hz, peak 1.0 rad/s,
