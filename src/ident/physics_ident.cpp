@@ -142,6 +142,8 @@ void IdentOptions::validate() const {
   if (!(reversal_screen >= 0.0)) throw InvalidArgument(fmt::format("reversal_screen is {}, must be >= 0", reversal_screen));
   if (efficiency_passes < 0) throw InvalidArgument(fmt::format("efficiency_passes is {}, must be >= 0", efficiency_passes));
   if (decimate < 1) throw InvalidArgument(fmt::format("decimate is {}, must be >= 1", decimate));
+  if (!(direction_blend >= 0.0) || !std::isfinite(direction_blend))
+    throw InvalidArgument(fmt::format("direction_blend is {} rad/s, must be finite and >= 0", direction_blend));
 }
 
 std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
@@ -192,6 +194,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
 
   TwinModel twin(robot, rm);
   twin.temperature_ref = o.temperature_ref;
+  twin.direction_blend = o.direction_blend;
   twin.created = now_iso();
   for (const TrainingRun& r : runs) twin.recordings.push_back(r.recording->path);
   const model::BaseParameters base = model::compute_base_parameters(rm);

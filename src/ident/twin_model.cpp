@@ -118,6 +118,17 @@ SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::
       throw ParseError(origin, 0, fmt::format("sequential.joints[{}].payload", k), "present on some joints only");
   return m;
 }
+// Current factor of a joint for its power direction: 1 motoring, c_gen back-driven (tau qd < 0).
+// Within |qd| of a few blend widths the switch is smooth: the measured velocity's sign there is no
+// better than its resolution (a finite difference of encoder counts), and the drive switches on
+// the true velocity, so a hard switch on the measured one puts a jump of (1 - c_gen) tau / g into
+// the residual at every reversal of a loaded joint. blend <= 0: the hard switch.
+double direction_factor(double c_gen, double tau, double qd, double blend) {
+  if (!(blend > 0.0)) return tau * qd < 0.0 ? c_gen : 1.0;
+  const double w = 0.5 * (1.0 - std::tanh((tau >= 0.0 ? qd : -qd) / blend));  // 1 back-driven, 0 motoring
+  return 1.0 + (c_gen - 1.0) * w;
+}
+
 }  // namespace
 
 TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
@@ -195,7 +206,7 @@ void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
     friction_row(j, qd, qdd, temperature, f);
     tau += f.dot(d.friction);
     torque[j] = tau;
-    current[j] = (tau * qd[j] < 0.0 ? d.c_gen : 1.0) * tau / d.gain;
+    current[j] = direction_factor(d.c_gen, tau, qd[j], direction_blend) * tau / d.gain;
   }
   if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
 }
@@ -211,9 +222,9 @@ void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ
     const JointDrive& d = joints[static_cast<size_t>(j)];
     if (learned->role == LearnedRole::Current) {
       current[j] = y[j];
-      torque[j] = d.gain * y[j] / (y[j] * qd[j] < 0.0 ? d.c_gen : 1.0);
+      torque[j] = d.gain * y[j] / direction_factor(d.c_gen, y[j], qd[j], direction_blend);
     } else {
-      const double c = torque[j] * qd[j] < 0.0 ? d.c_gen : 1.0;
+      const double c = direction_factor(d.c_gen, torque[j], qd[j], direction_blend);
       current[j] += y[j];
       torque[j] += d.gain * y[j] / c;
     }
@@ -235,6 +246,7 @@ std::string TwinModel::to_json() const {
   j["created"] = created;
   j["recordings"] = recordings;
   j["temperature_ref"] = temperature_ref;
+  j["direction_blend"] = direction_blend;
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
@@ -277,6 +289,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     t.created = j.value("created", "");
     t.recordings = j.value("recordings", std::vector<std::string>{});
     t.temperature_ref = j.value("temperature_ref", 35.0);
+    t.direction_blend = j.value("direction_blend", 0.0);  // files before it: the hard switch
     const auto& js = need(j, "joints", "");
     if (!js.is_array() || static_cast<int>(js.size()) != t.n_dof())
       throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));

@@ -22,6 +22,9 @@ constexpr double kLongWindow = 2.5;
 constexpr double kPulseMax = 0.5;
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
+// samples at the start of a run (residual filter and acceleration estimate settling, the joint
+// breaking away from rest) that neither the threshold learning nor the decision uses: 0.1 s at 500 Hz
+constexpr long kSettleSamples = 50;
 // Cao's static rule: a margin above the largest healthy residual
 constexpr double kStaticPeakMargin = 1.1;
 // the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
@@ -251,7 +254,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     std::vector<VectorJ> qdds;
     auto rf = filtered_residuals(t, *h.recording, alpha, qdds, c);
     // skip the filter's start-up
-    const size_t skip = std::min<size_t>(rf.size(), 50);
+    const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
     for (size_t k = skip; k < rf.size(); ++k) {
       peak = peak.cwiseMax(rf[k].cwiseAbs());
       for (int j = 0; j < n; ++j) {
@@ -478,7 +481,9 @@ void Monitor::push(const RobotSample& s) {
   // decisions
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
-    const auto ch = deb_[static_cast<size_t>(j)].update(std::abs(rf_[j]) > level_[j], t);
+    // the first kSettleSamples of a run are left out of the decision, as they are of the learning
+    const bool over = n_samples_ > kSettleSamples && std::abs(rf_[j]) > level_[j];
+    const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
     if (ch == Debouncer::Change::Raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
       // the last alert closed continues that alert instead of opening a new one

@@ -54,8 +54,9 @@ struct IdentifyOptions {
   std::vector<std::string> recordings, payloads;
   std::string output, robot = "ur3e", method = "physics", column_map;
   double reversal_screen = 0.0;
+  double direction_blend = ident::IdentOptions{}.direction_blend;
   int decimate = 1;
-  std::string efficiency_fit = "alternating";
+  std::string efficiency_fit = "joint";
   bool quiet = false;
   // --method sequential (Cao): the recordings of the gravity and friction steps, the library
   std::vector<std::string> quasi_static, sine;
@@ -88,6 +89,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.reversal_screen = o.reversal_screen;
   lo.physics.decimate = o.decimate;
   lo.physics.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
+  lo.physics.direction_blend = o.direction_blend;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -125,6 +127,7 @@ int run_identify(const IdentifyOptions& o) {
   io.reversal_screen = o.reversal_screen;
   io.decimate = o.decimate;
   io.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
+  io.direction_blend = o.direction_blend;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
   auto show = [&](double f) {
@@ -349,10 +352,14 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+  sub->add_option("--direction-blend", o->direction_blend,
+                  "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
+                  "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")
+      ->capture_default_str();
   sub->add_option("--efficiency-fit", o->efficiency_fit,
                   "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
-                  "parameters; recovers it) or 'alternating' (the first version, between passes; biased towards 1, kept as the default "
-                  "because the monitor's torque fallback relies on the gains it leaves out of range)")
+                  "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "
+                  "between passes; biased towards 1)")
       ->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");

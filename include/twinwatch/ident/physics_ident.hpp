@@ -21,22 +21,24 @@ namespace twinwatch::ident {
 enum class EfficiencyFit {
   /// Jointly with theta and the gains (Levenberg-Marquardt on per-direction statistics): recovers
   /// c_gen (J2 of the simulated UR3e: 0.765 for 0.765). The gains of joints the known payload
-  /// hardly loads (UR3e J1, J5, J6) then converge to finite values that look plausible but are
-  /// not (J1 31.6 N·m/A for 11.4).
+  /// hardly loads (UR3e J1, J5, J6 with an on-axis payload) converge to finite values that look
+  /// plausible but are not (J1 31.6 N·m/A for 11.4): they are flagged !gain_identified and the
+  /// monitor does not convert residuals to torque with them. The default.
   Joint,
   /// The first version: c_gen re-estimated between passes with theta fixed, which crawls from 1
-  /// (J2 0.98 after two passes) and lets the unloaded joints' gains drift far out of range; the
-  /// monitor (src/monitor, plausible_gain) relies on that drift to fall back to the median gain,
-  /// so this stays the default until the monitor is told which gains are identified.
+  /// (J2 0.98 after two passes) and lets the unloaded joints' gains drift far out of range.
   Alternating,
 };
 
 struct IdentOptions {
   double reversal_screen = 0.0;  ///< [rad/s] leave |qd_j| below this out of the fit (0: keep all)
-  EfficiencyFit efficiency_fit = EfficiencyFit::Alternating;
+  EfficiencyFit efficiency_fit = EfficiencyFit::Joint;
   int efficiency_passes = 2;     ///< re-fits with the samples re-split into motoring/back-driven (alternating: and c_gen updated)
   int decimate = 1;              ///< use every k-th sample
   double temperature_ref = 35.0; ///< [°C]
+  /// [rad/s] TwinModel::direction_blend of the identified twin: two velocity quanta of a 20-bit
+  /// encoder differenced at 500 Hz (2 x 6e-6 rad / 2 ms = 6e-3 rad/s), rounded
+  double direction_blend = 0.005;
   void validate() const;
 };
 

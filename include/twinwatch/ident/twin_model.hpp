@@ -53,6 +53,9 @@ class TwinModel {
   std::vector<JointDrive> joints;
   bool gains_absolute = false;     ///< true when a known payload fixed the torque scale
   double temperature_ref = 35.0;        ///< [°C] reference of the temperature column
+  /// [rad/s] width of the smooth motoring/back-driven switch of the current factor (0: hard switch
+  /// at qd = 0); about the resolution of the measured velocity (twin_model.cpp, direction_factor)
+  double direction_blend = 0.0;
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
   std::string created;                  ///< ISO time
