@@ -18,6 +18,7 @@
 #include "twinwatch/monitor/debounce.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
+#include "twinwatch/monitor/momentum_observer.hpp"
 #include "twinwatch/monitor/threshold.hpp"
 #include "twinwatch/signal/fir.hpp"
 #include "twinwatch/monitor/trend.hpp"
@@ -44,6 +45,11 @@ struct MonitorConfig {
   /// else one entry per joint. Thresholds must be learned with the same filters.
   std::vector<std::string> residual_filter;
   TrendConfig trend;                          ///< slow-wear trend per cycle window (trend.hpp)
+  /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
+  /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
+  double observer_gain = 150.0;
+  VectorJ observer_level;                              ///< [N·m] static threshold per joint (empty: off)
+  std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] Cao eq. 24 on the observer output
 
   void validate(int n_dof) const;
   std::string to_json() const;
@@ -83,6 +89,9 @@ class Monitor {
   const VectorJ& residual() const { return r_; }
   const VectorJ& filtered_residual() const { return rf_; }
   const VectorJ& level() const { return level_; }
+  /// Momentum-observer estimate of the external joint torque [N·m] and its threshold (zero when off).
+  const VectorJ& observer_residual() const { return obs_.residual(); }
+  const VectorJ& observer_threshold() const { return obs_level_; }
   double total_current() const { return i_total_; }
   /// All events so far (closed and open).
   const std::vector<Event>& events() const { return events_; }
@@ -103,6 +112,9 @@ class Monitor {
   int n_;
   double alpha_ = 1.0;  // IIR coefficient
   std::vector<Debouncer> deb_;
+  TwinMomentumObserver obs_;
+  bool obs_on_ = false;
+  VectorJ obs_level_, obs_to_nm_;
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
   std::vector<int> frozen_run_;
   double i_total_ = 0.0, t_prev_ = 0.0;
@@ -116,10 +128,11 @@ class Monitor {
   int last_closed_ = -1;      // index of the last closed alert (for merging re-raises)
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
-  std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
+  std::vector<DiagnosisSample> window_;     // scratch for diagnosis (reserved once)
+  std::vector<DiagnosisSample> reference_;  // observer history before the window (contact isolation)
 };
 
 }  // namespace twinwatch::monitor
