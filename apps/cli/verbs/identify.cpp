@@ -55,6 +55,7 @@ struct IdentifyOptions {
   std::string output, robot = "ur3e", method = "physics", column_map;
   double reversal_screen = 0.0;
   int decimate = 1;
+  int efficiency_passes = 2;
   bool quiet = false;
   // --method sequential (Cao): the recordings of the gravity and friction steps, the library
   std::vector<std::string> quasi_static, sine;
@@ -115,6 +116,7 @@ int run_identify(const IdentifyOptions& o) {
   ident::IdentOptions io;
   io.reversal_screen = o.reversal_screen;
   io.decimate = o.decimate;
+  io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
   auto show = [&](double f) {
@@ -333,6 +335,10 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
+  sub->add_option("--efficiency-passes", o->efficiency_passes,
+                  "physics: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
+                  "(scenarios/ur3e/train/swing_train*.yaml)")
+      ->capture_default_str();
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
