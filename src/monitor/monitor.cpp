@@ -21,6 +21,9 @@ constexpr double kPulseMax = 0.5;
 // observer history before the diagnosis window that the contact isolation uses as its healthy
 // reference (the noise of a pulse-long impulse just before the contact) [s]
 constexpr double kContactReference = 0.5;
+// samples the observer runs before its threshold may raise an alert (its start-up transient; the
+// threshold learning skips as many)
+constexpr int kObserverSettle = 50;
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
 // Cao's static rule: a margin above the largest healthy residual
@@ -160,6 +163,7 @@ std::string MonitorConfig::to_json() const {
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
   j["trend"] = trend_json(trend);
   j["observer_gain"] = observer_gain;
+  j["observer_alerts"] = observer_alerts;
   if (observer_level.size()) j["observer_level_Nm"] = vec_json(observer_level);
   for (const auto& d : observer_dynamic)
     j["observer_dynamic"].push_back({{"psi_qdd", d.psi_qdd}, {"psi_qd", d.psi_qd}, {"psi_rev", d.psi_rev}, {"upsilon", d.upsilon},
@@ -185,6 +189,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
     if (j.contains("trend")) c.trend = trend_from_json(j["trend"]);
     c.observer_gain = j.value("observer_gain", c.observer_gain);
+    c.observer_alerts = j.value("observer_alerts", c.observer_alerts);
     if (j.contains("observer_level_Nm")) c.observer_level = json_vec(j["observer_level_Nm"]);
     if (j.contains("observer_dynamic"))
       for (const auto& d : j["observer_dynamic"])
@@ -413,7 +418,10 @@ void Monitor::push(const RobotSample& s) {
     if (!fir_[j].taps().empty()) rf_[static_cast<int>(j)] = fir_[j].push(r_[static_cast<int>(j)]);
   i_total_ = s.current.cwiseAbs().sum();
   // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
-  if (obs_on_) obs_.update(twin_, s, dt);
+  if (obs_on_) {
+    obs_.update(twin_, s, dt);
+    if (obs_samples_ < kObserverSettle) ++obs_samples_;
+  }
   // thresholds
   const bool obs_dynamic = cfg_.use_dynamic && !cfg_.observer_dynamic.empty();
   for (int j = 0; j < n_; ++j) {
@@ -464,7 +472,8 @@ void Monitor::push(const RobotSample& s) {
   // decisions
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
-    const bool over = std::abs(rf_[j]) > level_[j] || (obs_on_ && std::abs(obs_.residual()[j]) > obs_level_[j]);
+    const bool over = std::abs(rf_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
+                                                             std::abs(obs_.residual()[j]) > obs_level_[j]);
     const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
     if (ch == Debouncer::Change::Raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after

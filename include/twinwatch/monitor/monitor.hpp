@@ -48,6 +48,9 @@ struct MonitorConfig {
   /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
   /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
   double observer_gain = 150.0;
+  /// the observer's threshold raises alerts too (else the observer only feeds the contact isolation);
+  /// off by default: it trips on a +50 % friction ramp before the wear trend warns (trend_test)
+  bool observer_alerts = false;
   VectorJ observer_level;                              ///< [N·m] static threshold per joint (empty: off)
   std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] Cao eq. 24 on the observer output
 
@@ -114,6 +117,7 @@ class Monitor {
   std::vector<Debouncer> deb_;
   TwinMomentumObserver obs_;
   bool obs_on_ = false;
+  int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
   VectorJ obs_level_, obs_to_nm_;
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
   std::vector<int> frozen_run_;
