@@ -86,7 +86,11 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   qdd_ = (s.qd - qd_prev_) / dt;
   twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_);
   // first-order lag with bandwidth K (exact for a held input)
-  const double a = 1.0 - std::exp(-gain_ * dt);
+  if (dt != dt_) {
+    dt_ = dt;
+    a_ = 1.0 - std::exp(-gain_ * dt);
+  }
+  const double a = a_;
   for (int j = 0; j < n_; ++j) {
     const double tau_ext = tau_twin_[j] - 0.5 * (tau_m_[j] + tau_m_prev_[j]);
     r_[j] += a * (tau_ext - r_[j]);

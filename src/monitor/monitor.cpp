@@ -427,7 +427,7 @@ void Monitor::push(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     const double base = cfg_.use_dynamic ? cfg_.dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j]) : cfg_.static_level[j];
     level_[j] = base * cfg_.sensitivity[j];
-    if (obs_on_)
+    if (obs_on_ && cfg_.observer_alerts)
       obs_level_[j] = cfg_.sensitivity[j] * (obs_dynamic ? cfg_.observer_dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j])
                                                          : cfg_.observer_level[j]);
   }

@@ -29,10 +29,10 @@ const char* kSwing =
 
 struct Collisions : ::testing::Test {
   static void SetUpTestSuite() {
-    const auto exc = run("robot: ur3e\nseed: 701\nduration: 60\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
-    const auto fig = run(scenario(702, 40, 0.5));
-    const auto sw0 = run(std::string("robot: ur3e\nseed: 703\nduration: 40\ntrajectory: ") + kSwing + "\n");
-    const auto sw1 = run(std::string("robot: ur3e\nseed: 704\nduration: 40\ntrajectory: ") + kSwing +
+    const auto exc = run("robot: ur3e\nseed: 701\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
+    const auto fig = run(scenario(702, 24, 0.5));
+    const auto sw0 = run(std::string("robot: ur3e\nseed: 703\nduration: 30\ntrajectory: ") + kSwing + "\n");
+    const auto sw1 = run(std::string("robot: ur3e\nseed: 704\nduration: 30\ntrajectory: ") + kSwing +
                          "\npayload: {mass: 2.0, com: [0.06, 0.04, 0.05]}\n");
     payload.mass = 0.5;
     payload.com = Eigen::Vector3d(0, 0, 0.04);
@@ -41,10 +41,11 @@ struct Collisions : ::testing::Test {
     weight.com = Eigen::Vector3d(0.06, 0.04, 0.05);
     ident::IdentOptions io;
     io.efficiency_passes = 20;
+    io.decimate = 3;  // test time
     ident::IdentReport rep;
     twin = new ident::TwinModel(ident::identify_physics("ur3e", {{&exc, {}}, {&fig, payload}, {&sw0, {}}, {&sw1, weight}}, io, rep));
-    const auto h1 = run(scenario(705, 24, 0.5));
-    const auto h2 = run(scenario(706, 16, 0.0));
+    const auto h1 = run(scenario(705, 16, 0.5));
+    const auto h2 = run(scenario(706, 10, 0.0));
     MonitorConfig settings;
     settings.observer_alerts = true;
     config = new MonitorConfig(learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}}, settings));

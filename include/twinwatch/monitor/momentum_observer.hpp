@@ -83,6 +83,7 @@ class TwinMomentumObserver {
   double gain_;
   bool started_ = false;
   VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_, i_twin_;
+  double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
 
 /// Measured drive torque of a sample through the twin's drive model: tau_j = g_j i_j when the
