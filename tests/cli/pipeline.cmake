@@ -17,3 +17,6 @@ add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.y
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)
 set_tests_properties(cli.validate_missing_file PROPERTIES WILL_FAIL TRUE)
+# --efficiency-passes: a negative count is refused with the field and value
+add_test(NAME cli.identify_bad_efficiency_passes COMMAND twinwatch identify ${d}/exc.csv --efficiency-passes -1 -o ${d}/bad.json)
+set_tests_properties(cli.identify_bad_efficiency_passes PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "efficiency_passes is -1, must be >= 0")
