@@ -174,7 +174,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   }
   monitor::MonitorConfig settings;
   settings.residual_filter = residual_filter;
-  settings.observer_alerts = true; settings.observer_gain = 300;  // the momentum observer is a second collision detector (docs/validation.md)
+  settings.observer_alerts = true;  // the momentum observer is a second collision detector (docs/validation.md)
   monitor::MonitorConfig cfg = monitor::learn_thresholds(twin, runs, settings);
   // slow-wear trend: the viscous friction's temperature slope on a healthy warm-up from cold and a
   // cool-down from warm of one program (the twin's training runs barely change temperature)
