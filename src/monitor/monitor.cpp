@@ -472,8 +472,11 @@ void Monitor::push(const RobotSample& s) {
   // decisions
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
-    const bool over = std::abs(rf_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
-                                                             std::abs(obs_.residual()[j]) > obs_level_[j]);
+    // the thresholds were learned without each run's first kObserverSettle samples (filter and
+    // observer start-up), so they do not apply there
+    const bool over = n_samples_ > kObserverSettle &&
+                      (std::abs(rf_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
+                                                         std::abs(obs_.residual()[j]) > obs_level_[j]));
     const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
     if (ch == Debouncer::Change::Raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
