@@ -39,9 +39,14 @@ const Setup& setup() {
   return s;
 }
 
+// range(0): 1 with the momentum observer on the sample path and its threshold raising alerts (as
+// evaluate runs it), 0 without the observer (observer_level cleared: the current residual alone, as before issue 7's observer)
 void BM_MonitorLoop(benchmark::State& st) {
   const Setup& s = setup();
-  monitor::Monitor mon(s.twin, s.cfg);
+  monitor::MonitorConfig cfg = s.cfg;
+  if (st.range(0) == 0) cfg.observer_level.resize(0);
+  cfg.observer_alerts = st.range(0) == 1;
+  monitor::Monitor mon(s.twin, cfg);
   size_t k = 0;
   std::vector<double> lat;
   lat.reserve(1 << 20);
@@ -52,7 +57,7 @@ void BM_MonitorLoop(benchmark::State& st) {
     if (++k == s.rec.samples.size()) {
       k = 0;
       st.PauseTiming();
-      mon = monitor::Monitor(s.twin, s.cfg);
+      mon = monitor::Monitor(s.twin, cfg);
       st.ResumeTiming();
     }
   }
@@ -62,7 +67,7 @@ void BM_MonitorLoop(benchmark::State& st) {
   st.counters["p99_us"] = lat[lat.size() * 99 / 100];
   st.counters["max_us"] = lat.back();
 }
-BENCHMARK(BM_MonitorLoop)->MinTime(2.0);
+BENCHMARK(BM_MonitorLoop)->Arg(0)->Arg(1)->MinTime(2.0);
 
 // the twin prediction alone (the regressor dominates)
 void BM_TwinPredict(benchmark::State& st) {

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::monitor {
@@ -46,6 +48,55 @@ const VectorJ& MomentumObserver::update(const VectorJ& q, const VectorJ& qd, con
   integral_ += (tau_m - beta_ + r_) * dt;
   model::crba(model_, data_, q);
   r_ = gain_ * (data_.M * qd - p0_ - integral_);
+  return r_;
+}
+
+void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau) {
+  const int n = twin.n_dof();
+  for (int j = 0; j < n; ++j) {
+    const ident::JointDrive& d = twin.joints[static_cast<size_t>(j)];
+    // inverse of the twin's current model: i = c tau / g with c = c_gen when back-driven
+    const double tau_motoring = d.gain * current[j];
+    tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
+  }
+}
+
+TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), gain_(gain) {
+  if (n_dof < 1) throw InvalidArgument(fmt::format("momentum observer: n_dof is {}, must be >= 1", n_dof));
+  if (!(gain > 0.0)) throw InvalidArgument(fmt::format("momentum observer gain is {}, must be > 0", gain));
+  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = i_twin_ = VectorJ::Zero(n_dof);
+}
+
+void TwinMomentumObserver::reset() {
+  started_ = false;
+  r_.setZero();
+}
+
+const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt) {
+  // measured drive torque through the identified drive model
+  measured_drive_torque(twin, s.current, s.qd, tau_m_);
+  if (!started_ || !(dt > 0.0)) {
+    // first sample (or a non-increasing timestamp): nothing to difference yet
+    qd_prev_ = s.qd;
+    tau_m_prev_ = tau_m_;
+    started_ = true;
+    return r_;
+  }
+  // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
+  qdd_ = (s.qd - qd_prev_) / dt;
+  twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_);
+  // first-order lag with bandwidth K (exact for a held input)
+  if (dt != dt_) {
+    dt_ = dt;
+    a_ = 1.0 - std::exp(-gain_ * dt);
+  }
+  const double a = a_;
+  for (int j = 0; j < n_; ++j) {
+    const double tau_ext = tau_twin_[j] - 0.5 * (tau_m_[j] + tau_m_prev_[j]);
+    r_[j] += a * (tau_ext - r_[j]);
+  }
+  qd_prev_ = s.qd;
+  tau_m_prev_ = tau_m_;
   return r_;
 }
 

@@ -20,6 +20,12 @@ namespace {
 constexpr double kLongWindow = 2.5;
 // an exceedance longer than this [s] is no collision pulse (50 ms pulse + filter + debounce tail)
 constexpr double kPulseMax = 0.5;
+// observer history before the diagnosis window that the contact isolation uses as its healthy
+// reference (the noise of a pulse-long impulse just before the contact) [s]
+constexpr double kContactReference = 0.5;
+// samples the observer runs before its threshold may raise an alert (its start-up transient; the
+// threshold learning skips as many)
+constexpr int kObserverSettle = 50;
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
 // samples at the start of a run (residual filter and acceleration estimate settling, the joint
@@ -174,6 +180,10 @@ void MonitorConfig::select_program(const std::string& name) {
   }
   static_level = it->second.static_level;
   dynamic = it->second.dynamic;
+  if (it->second.observer_level.size() != 0) {
+    observer_level = it->second.observer_level;
+    observer_dynamic = it->second.observer_dynamic;
+  }
   program = name;
 }
 
@@ -190,6 +200,13 @@ void MonitorConfig::validate(int n) const {
   if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
   check_residual_filter(*this, n);
   trend.validate(n);
+  if (observer_level.size() != 0) {
+    if (!(observer_gain > 0.0)) throw InvalidArgument(fmt::format("observer_gain is {} 1/s, must be > 0", observer_gain));
+    if (observer_level.size() != n)
+      throw InvalidArgument(fmt::format("monitor observer_level has size {}, expected {}", observer_level.size(), n));
+    if (use_dynamic && !observer_dynamic.empty() && static_cast<int>(observer_dynamic.size()) != n)
+      throw InvalidArgument(fmt::format("monitor observer_dynamic thresholds: {} joints, expected {}", observer_dynamic.size(), n));
+  }
 }
 
 std::string MonitorConfig::to_json() const {
@@ -207,6 +224,17 @@ std::string MonitorConfig::to_json() const {
   for (const auto& [name, set] : programs)
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
+  for (const auto& [name, set] : programs)
+    if (set.observer_level.size() != 0) {
+      j["programs"][name]["observer_level_Nm"] = vec_json(set.observer_level);
+      j["programs"][name]["observer_dynamic"] = dynamic_json(set.observer_dynamic);
+    }
+  j["observer_gain"] = observer_gain;
+  j["observer_alerts"] = observer_alerts;
+  if (observer_level.size()) j["observer_level_Nm"] = vec_json(observer_level);
+  for (const auto& d : observer_dynamic)
+    j["observer_dynamic"].push_back({{"psi_qdd", d.psi_qdd}, {"psi_qd", d.psi_qd}, {"psi_rev", d.psi_rev}, {"upsilon", d.upsilon},
+                                     {"rho", d.rho}, {"margin", d.margin}, {"alpha", d.alpha}});
   return j.dump();
 }
 
@@ -229,10 +257,19 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         ThresholdSet set;
         set.static_level = json_vec(p.at("static_level_A"));
         if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
+        if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"]);
+        if (p.contains("observer_dynamic")) set.observer_dynamic = json_dynamic(p["observer_dynamic"]);
         set.runs = p.value("runs", 0);
         set.seconds = p.value("seconds", 0.0);
         c.programs[name] = std::move(set);
       }
+    c.observer_gain = j.value("observer_gain", c.observer_gain);
+    c.observer_alerts = j.value("observer_alerts", c.observer_alerts);
+    if (j.contains("observer_level_Nm")) c.observer_level = json_vec(j["observer_level_Nm"]);
+    if (j.contains("observer_dynamic"))
+      for (const auto& d : j["observer_dynamic"])
+        c.observer_dynamic.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"),
+                                      d.value("margin", 0.0), d.value("alpha", 0.0)});
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
   }
@@ -245,9 +282,11 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   const int n = twin.n_dof();
   MonitorConfig c = settings;
   const double alpha = iir_alpha(c.filter_cutoff_hz, c.nominal_period);
-  std::vector<std::vector<VectorJ>> res;
-  std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n));
-  VectorJ peak = VectorJ::Zero(n);
+  std::vector<std::vector<VectorJ>> res, obs_res;
+  std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
+      ro(static_cast<size_t>(n));
+  VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n);
+  const bool with_observer = c.observer_gain > 0.0;
   for (const HealthyRun& h : runs) {
     ident::TwinModel t = twin;
     t.set_payload(h.payload);
@@ -264,6 +303,21 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       }
     }
     res.emplace_back(rf.begin() + static_cast<long>(skip), rf.end());
+    // the momentum observer, run sample by sample exactly as the monitor runs it
+    if (with_observer) {
+      TwinMomentumObserver obs(n, c.observer_gain);
+      std::vector<VectorJ> ro_run;
+      const auto& smp = h.recording->samples;
+      for (size_t k = 0; k < smp.size(); ++k) {
+        const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
+        const VectorJ& o = obs.update(t, smp[k], dt);
+        if (k < skip) continue;
+        obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
+        for (int j = 0; j < n; ++j) ro[static_cast<size_t>(j)].push_back(o[j]);
+        ro_run.push_back(o);
+      }
+      obs_res.push_back(std::move(ro_run));
+    }
   }
   c.static_level = StaticThreshold::learn(res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
   c.dynamic.clear();
@@ -271,6 +325,16 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     const auto fit = fit_dynamic_threshold(r[static_cast<size_t>(j)], qd[static_cast<size_t>(j)], qdd[static_cast<size_t>(j)], options.dynamic);
     if (!fit.ok) throw InvalidArgument(fmt::format("dynamic threshold of joint {}: {}", j + 1, fit.message));
     c.dynamic.push_back(fit.params);
+  }
+  c.observer_level.resize(0);
+  c.observer_dynamic.clear();
+  if (with_observer) {
+    c.observer_level = StaticThreshold::learn(obs_res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * obs_peak);
+    for (int j = 0; j < n; ++j) {
+      const auto fit = fit_dynamic_threshold(ro[static_cast<size_t>(j)], qd[static_cast<size_t>(j)], qdd[static_cast<size_t>(j)], options.dynamic);
+      if (!fit.ok) throw InvalidArgument(fmt::format("observer dynamic threshold of joint {}: {}", j + 1, fit.message));
+      c.observer_dynamic.push_back(fit.params);
+    }
   }
   return c;
 }
@@ -282,29 +346,39 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   ThresholdSet set;
   set.static_level = learned.static_level;
   set.dynamic = learned.dynamic;
+  set.observer_level = learned.observer_level;
+  set.observer_dynamic = learned.observer_dynamic;
   set.runs = static_cast<int>(runs.size());
   for (const auto& r : runs)
     if (r.recording->samples.size() > 1) set.seconds += r.recording->samples.back().timestamp - r.recording->samples.front().timestamp;
   config.programs[name] = std::move(set);
 }
 
-Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config) : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()) {
+Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
+    : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()), obs_(std::max(1, twin.n_dof()), cfg_.observer_gain > 0.0 ? cfg_.observer_gain : 1.0) {
   cfg_.validate(n_);
+  obs_on_ = cfg_.observer_level.size() == n_;
+  obs_level_ = VectorJ::Zero(n_);
+  // the observer runs in the twin's torque units; the diagnosis needs N·m (implausible gains, see
+  // torque_gain, are replaced there as for the current residual)
+  tau_gain_ = VectorJ::Ones(n_);
+  for (int j = 0; j < n_; ++j) tau_gain_[j] = trusted_gain(j);
+  obs_to_nm_ = VectorJ::Ones(n_);
+  for (int j = 0; j < n_; ++j) obs_to_nm_[j] = torque_gain(j) / twin_.joints[static_cast<size_t>(j)].gain;
   if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
-  const size_t cap = static_cast<size_t>(std::ceil((cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
+  const size_t cap = static_cast<size_t>(std::ceil((kContactReference + cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
   ring_.resize(cap);
   for (auto& d : ring_) {
-    d.q = d.qd = d.qdd = d.r_tau = d.current = VectorJ::Zero(n_);
+    d.q = d.qd = d.qdd = d.r_tau = d.current = d.tau_ext = d.tau_ext_level = VectorJ::Zero(n_);
   }
   window_.reserve(cap);
+  reference_.reserve(cap);
   events_.reserve(64);
-  tau_gain_ = VectorJ::Ones(n_);
-  for (int j = 0; j < n_; ++j) tau_gain_[j] = trusted_gain(j);
   // slow-wear trend in torque units when the drive gains are known
   VectorJ g = VectorJ::Ones(n_);
   if (twin_.gains_known())
@@ -352,10 +426,12 @@ void Monitor::open_event(int joint, double start, double t) {
 void Monitor::run_diagnosis(double t) {
   Event& e = events_[static_cast<size_t>(open_)];
   window_.clear();
+  reference_.clear();
   const double from = e.t_start - cfg_.diagnosis_pre;
   for (size_t k = 0; k < ring_count_; ++k) {
     const size_t idx = (ring_head_ + ring_.size() - ring_count_ + k) % ring_.size();
     if (ring_[idx].t >= from) window_.push_back(ring_[idx]);
+    else if (obs_on_ && ring_[idx].t >= from - kContactReference) reference_.push_back(ring_[idx]);
   }
   // the window is complete, so the residual can use the actual (not the target) acceleration:
   // a centred difference of qd over +-kDiagHalfWidth samples. Then r = tau_meas - tau_hat is the
@@ -382,7 +458,7 @@ void Monitor::run_diagnosis(double t) {
   bool any_active = false;
   for (const auto& d : deb_) any_active |= d.active();
   const double duration = t - e.t_start;
-  const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o);
+  const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
   const Hypothesis& h = hyps.front();
   e.fault = h.fault;
   if (h.joint >= 0) e.joint = h.joint;
@@ -437,10 +513,19 @@ void Monitor::push(const RobotSample& s) {
   for (size_t j = 0; j < fir_.size(); ++j)
     if (!fir_[j].taps().empty()) rf_[static_cast<int>(j)] = fir_[j].push(r_[static_cast<int>(j)]);
   i_total_ = s.current.cwiseAbs().sum();
+  // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
+  if (obs_on_) {
+    obs_.update(twin_, s, dt);
+    if (obs_samples_ < kObserverSettle) ++obs_samples_;
+  }
   // thresholds
+  const bool obs_dynamic = cfg_.use_dynamic && !cfg_.observer_dynamic.empty();
   for (int j = 0; j < n_; ++j) {
     const double base = cfg_.use_dynamic ? cfg_.dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j]) : cfg_.static_level[j];
     level_[j] = base * cfg_.sensitivity[j];
+    if (obs_on_ && cfg_.observer_alerts)
+      obs_level_[j] = cfg_.sensitivity[j] * (obs_dynamic ? cfg_.observer_dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j])
+                                                         : cfg_.observer_level[j]);
   }
   // ring buffer for the diagnosis (torque-domain residual through the drive gains)
   DiagnosisSample& ds = ring_[ring_head_];
@@ -450,6 +535,8 @@ void Monitor::push(const RobotSample& s) {
   ds.qdd = qdd_;
   for (int j = 0; j < n_; ++j) ds.r_tau[j] = torque_gain(j) * rf_[j];
   ds.current = s.current;
+  ds.tau_ext = obs_.residual().cwiseProduct(obs_to_nm_);
+  ds.tau_ext_level = obs_level_.cwiseProduct(obs_to_nm_);
   ds.digital_outputs = s.digital_outputs;
   ds.gap_before = false;  // gaps are reported as their own events
   ring_head_ = (ring_head_ + 1) % ring_.size();
@@ -481,8 +568,11 @@ void Monitor::push(const RobotSample& s) {
   // decisions
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
-    // the first kSettleSamples of a run are left out of the decision, as they are of the learning
-    const bool over = n_samples_ > kSettleSamples && std::abs(rf_[j]) > level_[j];
+    // the thresholds were learned without each run's first kObserverSettle samples (filter and
+    // observer start-up), so they do not apply there
+    const bool over = n_samples_ > kObserverSettle &&
+                      (std::abs(rf_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
+                                                         std::abs(obs_.residual()[j]) > obs_level_[j]));
     const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
     if (ch == Debouncer::Change::Raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after

@@ -26,3 +26,6 @@ set_tests_properties(cli.identify_efficiency_joint PROPERTIES FIXTURES_REQUIRED 
 add_test(NAME cli.identify_efficiency_bad COMMAND twinwatch identify ${d}/exc.csv --efficiency-fit sometimes -o ${d}/twin_bad.json)
 set_tests_properties(cli.identify_efficiency_bad PROPERTIES FIXTURES_REQUIRED recordings
                      PASS_REGULAR_EXPRESSION "--efficiency-fit sometimes: expected joint or alternating")
+# --efficiency-passes: a negative count is refused with the field and value
+add_test(NAME cli.identify_bad_efficiency_passes COMMAND twinwatch identify ${d}/exc.csv --efficiency-passes -1 -o ${d}/bad.json)
+set_tests_properties(cli.identify_bad_efficiency_passes PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "efficiency_passes is -1, must be >= 0")

@@ -57,6 +57,7 @@ struct IdentifyOptions {
   double direction_blend = ident::IdentOptions{}.direction_blend;
   int decimate = 1;
   std::string efficiency_fit = "joint";
+  int efficiency_passes = 2;
   bool quiet = false;
   // --method sequential (Cao): the recordings of the gravity and friction steps, the library
   std::vector<std::string> quasi_static, sine;
@@ -128,6 +129,7 @@ int run_identify(const IdentifyOptions& o) {
   io.decimate = o.decimate;
   io.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   io.direction_blend = o.direction_blend;
+  io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
   auto show = [&](double f) {
@@ -351,6 +353,10 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains");
+  sub->add_option("--efficiency-passes", o->efficiency_passes,
+                  "physics: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
+                  "(scenarios/ur3e/train/swing_train*.yaml)")
+      ->capture_default_str();
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
   sub->add_option("--direction-blend", o->direction_blend,
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "

@@ -26,6 +26,8 @@ struct DiagnosisSample {
   VectorJ q, qd, qdd;
   VectorJ r_tau;       ///< residual torque [N·m]
   VectorJ current;     ///< measured current [A] (for frozen-channel checks)
+  VectorJ tau_ext;     ///< momentum-observer estimate of the external torque [N·m] (empty: none)
+  VectorJ tau_ext_level;  ///< the observer's healthy bound (its threshold) at this sample [N·m]
   std::uint64_t digital_outputs = 0;
   bool gap_before = false;
 };
@@ -56,7 +58,8 @@ struct DiagnosisOptions {
 /// @param alert_joint joint whose threshold tripped first
 /// @return hypotheses sorted best first (never empty: the last resort is Unknown)
 std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vector<DiagnosisSample>& window,
-                                 double alert_duration, int alert_joint, const DiagnosisOptions& options = {});
+                                 double alert_duration, int alert_joint, const DiagnosisOptions& options = {},
+                                 const std::vector<DiagnosisSample>* reference = nullptr);
 
 /// Cross-correlation matrix between residuals (rows) and joint velocities (columns) over a
 /// window, as printed in [UR3e] Table 5 (Pearson coefficients at lag 0).

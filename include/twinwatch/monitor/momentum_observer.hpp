@@ -10,7 +10,9 @@
 /// In the Laplace domain r = K_O / (s + K_O) tau_ext: a first-order low-pass of the external
 /// torque with bandwidth K_O [1/s]. C^T qd is obtained from  Mdot = C + C^T  as
 ///   C^T qd = Mdot qd - C qd,  Mdot qd = (M(q + e qd) - M(q - e qd)) / (2 e) qd.
+#include "twinwatch/core/sample.hpp"
 #include "twinwatch/core/types.hpp"
+#include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/model/dynamics.hpp"
 
 namespace twinwatch::monitor {
@@ -37,5 +39,55 @@ class MomentumObserver {
   bool started_ = false;
   VectorJ p0_, integral_, r_, beta_, q_tmp_, mdot_qd_, c_qd_;
 };
+
+/// The generalized-momentum observer [DeLuca2003, Haddadin2017] on the identified twin,
+/// discretised for the monitor's per-sample path (one inverse-dynamics evaluation per sample).
+///
+/// With p = M(q) qd the continuous observer is  r' = K (p' - (tau_m - tau_f + C^T qd - g + r)),
+/// i.e. r = K / (s + K) tau_ext. Over one sample period dt, with C^T qd = Mdot qd - C qd and the
+/// rectangle rule for the Mdot qd integral,  p_k - p_{k-1} - (M_k - M_{k-1}) qd_k = M_{k-1} (qd_k - qd_{k-1}),
+/// so the observer update is, up to evaluating M at q_k instead of q_{k-1},
+///   r_k = r_{k-1} + a (tau_twin(q_k, qd_k, (qd_k - qd_{k-1}) / dt) - tau_m,k - r_{k-1}),
+///   a = 1 - exp(-K dt)   (the exact zero-order-hold discretisation of the first-order lag),
+/// where tau_twin is the twin's joint torque (rigid body + friction + rotor inertia) and tau_m the
+/// drive torque measured through the identified drive model (g_j i_j, divided by c_gen_j when the
+/// joint is back-driven). The velocity difference is the only "derivative": no second difference
+/// and no acceleration filter, the observer gain alone sets the bandwidth.
+///
+/// Timing: a streamed velocity is the mean over the last sample period, so the difference of two is
+/// the acceleration at the previous sample instant, where the drive torques of the previous and
+/// the current period meet; tau_m,k is therefore the mean of the two measured drive torques.
+class TwinMomentumObserver {
+ public:
+  /// @param n_dof joints; @param gain K [1/s], > 0 (bandwidth; 1/K is the time constant)
+  /// Throws InvalidArgument when gain <= 0 or n_dof < 1.
+  TwinMomentumObserver(int n_dof, double gain);
+
+  /// Forgets the state; the next update restarts the observer (r = 0).
+  void reset();
+
+  /// One sample. Allocation-free after construction.
+  /// @param twin the reference model (its payload included); @param s q [rad], qd [rad/s],
+  /// current [A], temperature [°C] of n_dof joints; @param dt time since the previous sample [s]
+  /// @return r, the estimate of the external joint torque [N·m] (twin torque units)
+  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt);
+
+  /// Estimate of the external joint torque after the last update [N·m].
+  const VectorJ& residual() const { return r_; }
+  /// Measured drive torque of the last sample [N·m].
+  const VectorJ& drive_torque() const { return tau_m_; }
+  double gain() const { return gain_; }
+
+ private:
+  int n_;
+  double gain_;
+  bool started_ = false;
+  VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_, i_twin_;
+  double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
+};
+
+/// Measured drive torque of a sample through the twin's drive model: tau_j = g_j i_j when the
+/// joint is motoring (i_j qd_j >= 0), g_j i_j / c_gen_j when it is back-driven [N·m].
+void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau);
 
 }  // namespace twinwatch::monitor

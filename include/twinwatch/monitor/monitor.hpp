@@ -19,6 +19,7 @@
 #include "twinwatch/monitor/debounce.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
+#include "twinwatch/monitor/momentum_observer.hpp"
 #include "twinwatch/monitor/threshold.hpp"
 #include "twinwatch/signal/fir.hpp"
 #include "twinwatch/monitor/trend.hpp"
@@ -31,6 +32,8 @@ namespace twinwatch::monitor {
 struct ThresholdSet {
   VectorJ static_level;                       ///< [A] per joint (UR3e §4.1)
   std::vector<DynamicThresholdJoint> dynamic; ///< [A] per joint (Cao eq. 24)
+  VectorJ observer_level;                              ///< [N·m] momentum observer, static (empty: the default set's)
+  std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] momentum observer, Cao eq. 24
   int runs = 0;                               ///< healthy runs it was learned on
   double seconds = 0.0;                       ///< their total duration [s]
 };
@@ -59,6 +62,14 @@ struct MonitorConfig {
   /// robot program); static_level/dynamic above are the default set for any other program.
   std::map<std::string, ThresholdSet> programs;
   std::string program;                        ///< the set in use ("": the default); not stored
+  /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
+  /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
+  double observer_gain = 150.0;
+  /// the observer's threshold raises alerts too (else the observer only feeds the contact isolation);
+  /// off by default: it trips on a +50 % friction ramp before the wear trend warns (trend_test)
+  bool observer_alerts = false;
+  VectorJ observer_level;                              ///< [N·m] static threshold per joint (empty: off)
+  std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] Cao eq. 24 on the observer output
 
   /// Makes the set learned for `name` the active one (static_level, dynamic). Empty: keep the
   /// default. Throws InvalidArgument naming the known programs when there is no such set.
@@ -108,6 +119,9 @@ class Monitor {
   const VectorJ& residual() const { return r_; }
   const VectorJ& filtered_residual() const { return rf_; }
   const VectorJ& level() const { return level_; }
+  /// Momentum-observer estimate of the external joint torque [N·m] and its threshold (zero when off).
+  const VectorJ& observer_residual() const { return obs_.residual(); }
+  const VectorJ& observer_threshold() const { return obs_level_; }
   double total_current() const { return i_total_; }
   /// All events so far (closed and open).
   const std::vector<Event>& events() const { return events_; }
@@ -129,6 +143,10 @@ class Monitor {
   int n_;
   double alpha_ = 1.0;  // IIR coefficient
   std::vector<Debouncer> deb_;
+  TwinMomentumObserver obs_;
+  bool obs_on_ = false;
+  int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
+  VectorJ obs_level_, obs_to_nm_;
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
   std::vector<int> frozen_run_;
   double i_total_ = 0.0, t_prev_ = 0.0;
@@ -142,11 +160,12 @@ class Monitor {
   int last_closed_ = -1;      // index of the last closed alert (for merging re-raises)
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
-  std::vector<DiagnosisSample> window_;  // scratch for diagnosis (reserved once)
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
   VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
+  std::vector<DiagnosisSample> window_;     // scratch for diagnosis (reserved once)
+  std::vector<DiagnosisSample> reference_;  // observer history before the window (contact isolation)
 };
 
 }  // namespace twinwatch::monitor

@@ -1,0 +1,199 @@
+// Collision physics of the monitor (issue 7): drive gains of every joint from a payload pair, the
+// generalized-momentum observer on the identified twin, and contact isolation on links.
+// The twin is identified from recordings only; the simulator's truth (drive constants, the contact's
+// force) is read here, by the test, to score it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "monitor/simulated_run.hpp"
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/model/dynamics.hpp"
+#include "twinwatch/monitor/momentum_observer.hpp"
+#include "twinwatch/monitor/monitor.hpp"
+#include "twinwatch/sim/simulator.hpp"
+
+namespace twinwatch::monitor {
+namespace {
+
+using test::run;
+using test::scenario;
+
+// the payload-pair program of scenarios/ur3e/train/swing_train*.yaml
+const char* kSwing =
+    "{type: sine, start: [0, -1.0, 1.0, -1.57, 0, 0], amplitude: [1.2, 0.3, 0.3, 0.8, 1.0, 1.5], "
+    "frequency: [0.35, 0.23, 0.29, 0.19, 0.27, 0.31]}";
+
+struct Collisions : ::testing::Test {
+  static void SetUpTestSuite() {
+    const auto exc = run("robot: ur3e\nseed: 701\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
+    const auto fig = run(scenario(702, 24, 0.5));
+    const auto sw0 = run(std::string("robot: ur3e\nseed: 703\nduration: 30\ntrajectory: ") + kSwing + "\n");
+    const auto sw1 = run(std::string("robot: ur3e\nseed: 704\nduration: 30\ntrajectory: ") + kSwing +
+                         "\npayload: {mass: 2.0, com: [0.06, 0.04, 0.05]}\n");
+    payload.mass = 0.5;
+    payload.com = Eigen::Vector3d(0, 0, 0.04);
+    model::RigidBodyInertia weight;  // the known test weight
+    weight.mass = 2.0;
+    weight.com = Eigen::Vector3d(0.06, 0.04, 0.05);
+    ident::IdentOptions io;
+    io.efficiency_passes = 20;
+    io.decimate = 3;  // test time
+    ident::IdentReport rep;
+    twin = new ident::TwinModel(ident::identify_physics("ur3e", {{&exc, {}}, {&fig, payload}, {&sw0, {}}, {&sw1, weight}}, io, rep));
+    const auto h1 = run(scenario(705, 16, 0.5));
+    const auto h2 = run(scenario(706, 10, 0.0));
+    MonitorConfig settings;
+    settings.observer_alerts = true;
+    config = new MonitorConfig(learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}}, settings));
+  }
+  static void TearDownTestSuite() {
+    delete twin;
+    delete config;
+  }
+  static ident::TwinModel* twin;
+  static MonitorConfig* config;
+  static model::RigidBodyInertia payload;
+};
+ident::TwinModel* Collisions::twin = nullptr;
+MonitorConfig* Collisions::config = nullptr;
+model::RigidBodyInertia Collisions::payload;
+
+// The payload pair makes every drive gain identifiable: within 8 % of the simulator's kt N eta
+// (without it J1, J5, J6 came out at 2.7e5, 60 and 150 N·m/A, truth 8.6-11.4).
+TEST_F(Collisions, PayloadPairIdentifiesEveryDriveGain) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  const sim::PlantTruth truth = sim::default_truth(m, 0);
+  for (int j = 0; j < 6; ++j) {
+    const sim::JointTruth& jt = truth.joints[static_cast<size_t>(j)];
+    const double g = jt.kt * jt.gear_ratio * jt.eta;
+    EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].gain / g, 1.0, 0.08) << "J" << j + 1 << " truth " << g;
+    // back-driven current factor: eta * eta_rev
+    EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].c_gen, jt.eta * jt.eta_rev, 0.15) << "J" << j + 1;
+  }
+}
+
+// At rest the observer is a first-order lag of the external torque with time constant 1/K: the
+// drive torque steps by -tau_ext (the drives hold the pose against it), r follows 1 - exp(-K t).
+TEST_F(Collisions, ObserverConvergesToAConstantExternalTorqueWithTimeConstantOneOverK) {
+  ident::TwinModel t = *twin;
+  const int n = t.n_dof();
+  const double K = 100.0, dt = 0.002;
+  TwinMomentumObserver obs(n, K);
+  RobotSample s = RobotSample::empty(n);
+  s.q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
+  s.qd.setZero();
+  s.temperature.setConstant(t.temperature_ref);
+  VectorJ tau0(n), i0(n);
+  t.predict(s.q, s.qd, VectorJ::Zero(n), s.temperature, tau0, i0);
+  VectorJ tau_ext(n);
+  tau_ext << 2.0, -3.0, 1.5, 0.8, -0.5, 0.3;
+  const int k0 = 50;  // the external torque starts at sample k0 (t = 0.1 s)
+  const double a = 1.0 - std::exp(-K * dt);
+  for (int k = 0; k <= 300; ++k) {
+    s.timestamp = k * dt;
+    for (int j = 0; j < n; ++j) s.current[j] = (tau0[j] - (k >= k0 ? tau_ext[j] : 0.0)) / t.joints[static_cast<size_t>(j)].gain;
+    const VectorJ& r = obs.update(t, s, dt);
+    if (k < k0) {
+      EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-9) << "no external torque, no residual (k = " << k << ")";
+      continue;
+    }
+    // the measured drive torque enters as the mean of two samples, so the step counts half at k0;
+    // from there r decays towards tau_ext as exp(-K t) (zero-order-hold discretisation)
+    const double expect = 1.0 - (1.0 - 0.5 * a) * std::exp(-K * (k - k0) * dt);
+    for (int j = 0; j < n; ++j) EXPECT_NEAR(r[j] / tau_ext[j], expect, 1e-9) << "J" << j + 1 << " k - k0 = " << k - k0;
+    // one time constant 1/K after the step: 1 - 1/e of the way (up to the half-sample start)
+    if (k - k0 == static_cast<int>(std::lround(1.0 / (K * dt)))) {
+      for (int j = 0; j < n; ++j) EXPECT_NEAR(r[j] / tau_ext[j], 1.0 - std::exp(-1.0), 0.5 * a);
+    }
+  }
+}
+
+// The same on the moving robot: a long contact (1 s half-sine) on link 3 during the figure-eight;
+// near the pulse's peak the observer's estimate equals J^T F of the simulated force.
+TEST_F(Collisions, ObserverEstimatesTheSimulatedContactTorqueWhileMoving) {
+  const double onset = 6.0, dur = 1.0, mag = 8.0;
+  const Eigen::Vector3d point(-0.1, 0.0, 0.03), dir = Eigen::Vector3d(0.3, 1.0, -0.2).normalized();
+  const auto rec = run(scenario(707, 8, 0.5,
+                                "  - {type: collision, link: 3, onset: 6.0, magnitude: 8, duration: 1.0, point: [-0.1, 0.0, 0.03], "
+                                "direction: [0.3, 1.0, -0.2]}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  TwinMomentumObserver obs(t.n_dof(), 150.0);
+  const model::RobotModel m = model::load_robot("ur3e");
+  model::DynamicsData d(m);
+  Matrix6J J;
+  double worst = 0.0;
+  int checked = 0;
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    const VectorJ& r = obs.update(t, s, k == 0 ? 0.002 : s.timestamp - rec.samples[k - 1].timestamp);
+    const double phase = (s.timestamp - onset) / dur;
+    if (phase < 0.35 || phase > 0.65) continue;  // the flat top of the half-sine (>= 89 % of the peak)
+    model::forward_kinematics(m, d, s.q);
+    model::point_jacobian(m, d, 2, point, J);
+    const VectorJ unit = J.topRows<3>().transpose() * dir;
+    const VectorJ truth = mag * std::sin(M_PI * phase) / unit.cwiseAbs().maxCoeff() * unit;
+    worst = std::max(worst, (r - truth).cwiseAbs().maxCoeff());
+    ++checked;
+  }
+  ASSERT_GT(checked, 100);
+  // 8 N·m peak: the estimate is within 1.2 N·m on every joint (model error and noise)
+  EXPECT_LT(worst, 1.2);
+}
+
+// A contact on link k is named on link k with its force; links 2 and 3 (the upper and fore arm) at
+// 10 N·m. Wrist links: see docs/validation.md (not isolated reliably yet).
+TEST_F(Collisions, ContactIsIsolatedToItsLinkWithItsForce) {
+  struct Case {
+    int link;
+    const char* point;
+    Eigen::Vector3d p;
+  };
+  const Case cases[] = {{2, "[-0.12, 0.0, 0.1]", {-0.12, 0.0, 0.1}}, {3, "[-0.1, 0.0, 0.03]", {-0.1, 0.0, 0.03}}};
+  const model::RobotModel m = model::load_robot("ur3e");
+  model::DynamicsData d(m);
+  Matrix6J J;
+  unsigned seed = 710;
+  for (const Case& c : cases) {
+    const double onset = 7.3, mag = 10.0;
+    const auto rec = run(scenario(seed++, 9, 0.5,
+                                  "  - {type: collision, link: " + std::to_string(c.link) + ", onset: 7.3, magnitude: 10, duration: 0.05, point: " +
+                                      c.point + ", direction: [0.3, 1.0, -0.2]}\n"));
+    ident::TwinModel t = *twin;
+    t.set_payload(payload);
+    Monitor mon(t, *config);
+    double force = 0.0;
+    for (const auto& s : rec.samples) {
+      mon.push(s);
+      if (std::abs(s.timestamp - (onset + 0.025)) < 1e-3) {
+        // truth: the peak force of the pulse, |F| = magnitude / max |J^T dir|
+        model::forward_kinematics(m, d, s.q);
+        model::point_jacobian(m, d, c.link - 1, c.p, J);
+        force = mag / (J.topRows<3>().transpose() * Eigen::Vector3d(0.3, 1.0, -0.2).normalized()).cwiseAbs().maxCoeff();
+      }
+    }
+    mon.finish();
+    // one event: the contact's (none at start-up, see Monitor::push)
+    const std::vector<Event>& ev = mon.events();
+    ASSERT_EQ(ev.size(), 1u) << "link " << c.link << ": " << (ev.empty() ? "" : ev.front().detail);
+    const Event& e = ev.front();
+    EXPECT_EQ(e.fault, FaultClass::Collision) << e.detail;
+    EXPECT_EQ(e.link, c.link - 1) << e.detail;
+    EXPECT_LT(e.t_detected - onset, 0.03) << e.detail;
+    ASSERT_GT(force, 0.0);
+    EXPECT_NEAR(e.magnitude / force, 1.0, 0.35) << e.detail << " truth " << force << " N";
+  }
+}
+
+TEST(TwinMomentumObserver, RejectsBadGainAndJointCount) {
+  EXPECT_THROW(TwinMomentumObserver(6, 0.0), InvalidArgument);
+  EXPECT_THROW(TwinMomentumObserver(6, -5.0), InvalidArgument);
+  EXPECT_THROW(TwinMomentumObserver(0, 100.0), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
