@@ -71,8 +71,11 @@ TEST_F(Collisions, PayloadPairIdentifiesEveryDriveGain) {
     const sim::JointTruth& jt = truth.joints[static_cast<size_t>(j)];
     const double g = jt.kt * jt.gear_ratio * jt.eta;
     EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].gain / g, 1.0, 0.08) << "J" << j + 1 << " truth " << g;
-    // back-driven current factor: eta * eta_rev
-    EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].c_gen, jt.eta * jt.eta_rev, 0.15) << "J" << j + 1;
+    // back-driven current factor: eta * eta_rev; J6 (gravity-free, its torque is friction, which
+    // never back-drives) has no back-driven samples to fit it from: the joint fit leaves it at 1
+    if (j < 5) {
+      EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].c_gen, jt.eta * jt.eta_rev, 0.15) << "J" << j + 1;
+    }
   }
 }
 
