@@ -72,7 +72,7 @@ void TwinMomentumObserver::reset() {
   r_.setZero();
 }
 
-const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt) {
+const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
   // measured drive torque through the identified drive model
   measured_drive_torque(twin, s.current, s.qd, tau_m_);
   if (!started_ || !(dt > 0.0)) {
@@ -85,6 +85,7 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
   qdd_ = (s.qd - qd_prev_) / dt;
   twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_);
+  if (extra_torque != nullptr) tau_twin_ += *extra_torque;
   // first-order lag with bandwidth K (exact for a held input)
   if (dt != dt_) {
     dt_ = dt;

@@ -108,6 +108,19 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   return out;
 }
 
+// The drive torque of the viscous friction's temperature dependence that the twin leaves out:
+// g_j s_j qd_j (T_j - T_ref), with s the slope learned on a healthy warm-up [A·s/rad/°C] (trend.hpp)
+// and g_j the twin's gain (the momentum observer works in the twin's torque units). Zero for a
+// joint without a temperature reading or without a slope. Allocation-free.
+void temperature_drive_torque(const ident::TwinModel& twin, const VectorJ& slope, double t_ref, const RobotSample& s,
+                              VectorJ& out) {
+  const int n = twin.n_dof();
+  for (int j = 0; j < n; ++j) {
+    const bool known = slope.size() == n && s.temperature.size() > j && std::isfinite(s.temperature[j]);
+    out[j] = known ? twin.joints[static_cast<size_t>(j)].gain * slope[j] * s.qd[j] * (s.temperature[j] - t_ref) : 0.0;
+  }
+}
+
 nlohmann::json trend_json(const TrendConfig& t) {
   nlohmann::json j{{"enabled", t.enabled}, {"window_s", t.window_s}, {"cycle_period", t.cycle_period}, {"v_min", t.v_min},
                    {"min_moving_fraction", t.min_moving_fraction}, {"baseline_windows", t.baseline_windows},
@@ -308,9 +321,11 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       TwinMomentumObserver obs(n, c.observer_gain);
       std::vector<VectorJ> ro_run;
       const auto& smp = h.recording->samples;
+      VectorJ warm = VectorJ::Zero(n);
       for (size_t k = 0; k < smp.size(); ++k) {
         const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
-        const VectorJ& o = obs.update(t, smp[k], dt);
+        temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
+        const VectorJ& o = obs.update(t, smp[k], dt, &warm);
         if (k < skip) continue;
         obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
         for (int j = 0; j < n; ++j) ro[static_cast<size_t>(j)].push_back(o[j]);
@@ -358,7 +373,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
     : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()), obs_(std::max(1, twin.n_dof()), cfg_.observer_gain > 0.0 ? cfg_.observer_gain : 1.0) {
   cfg_.validate(n_);
   obs_on_ = cfg_.observer_level.size() == n_;
-  obs_level_ = VectorJ::Zero(n_);
+  obs_level_ = obs_warm_ = VectorJ::Zero(n_);
   // the observer runs in the twin's torque units; the diagnosis needs N·m (implausible gains, see
   // torque_gain, are replaced there as for the current residual)
   tau_gain_ = VectorJ::Ones(n_);
@@ -515,7 +530,8 @@ void Monitor::push(const RobotSample& s) {
   i_total_ = s.current.cwiseAbs().sum();
   // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
   if (obs_on_) {
-    obs_.update(twin_, s, dt);
+    temperature_drive_torque(twin_, temp_slope_, cfg_.trend.temperature_ref, s, obs_warm_);
+    obs_.update(twin_, s, dt, &obs_warm_);
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds
@@ -523,7 +539,9 @@ void Monitor::push(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     const double base = cfg_.use_dynamic ? cfg_.dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j]) : cfg_.static_level[j];
     level_[j] = base * cfg_.sensitivity[j];
-    if (obs_on_ && cfg_.observer_alerts)
+    // the observer's threshold is evaluated even when it raises no alert (the trace and the
+    // diagnosis show it); only the decisions below depend on observer_alerts
+    if (obs_on_)
       obs_level_[j] = cfg_.sensitivity[j] * (obs_dynamic ? cfg_.observer_dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j])
                                                          : cfg_.observer_level[j]);
   }

@@ -26,6 +26,7 @@ using namespace twinwatch;
 
 struct MonitorOptions {
   std::string twin, recording, events_path, db_path = "events.db";
+  std::string trace;  // per-sample residuals and thresholds as CSV
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
   double duration = 0.0, wait = 0.0;
   double payload_mass = 0.0, cycle_period = 0.0;
@@ -135,8 +136,27 @@ int run_monitor(const MonitorOptions& o) {
     if (o.json) fmt::print("{}\n", e.to_json_line());
     if (store) store->insert(e, source);
   };
+  // --trace: what the decision saw, per sample and joint (to plot a false alarm or a late detection)
+  std::ofstream trace;
+  if (!o.trace.empty()) {
+    trace.open(o.trace);
+    if (!trace) throw std::runtime_error(o.trace + ": cannot open for writing");
+    trace << "timestamp";
+    for (int j = 1; j <= twin.n_dof(); ++j)
+      trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
+    trace << '\n';
+  }
+  const auto push = [&](const RobotSample& s) {
+    mon.push(s);
+    if (!trace.is_open()) return;
+    trace << fmt::format("{:.6f}", s.timestamp);
+    for (int j = 0; j < twin.n_dof(); ++j)
+      trace << fmt::format(",{:.6g},{:.6g},{:.6g},{:.6g}", mon.filtered_residual()[j], mon.level()[j], mon.observer_residual()[j],
+                           mon.observer_threshold()[j]);
+    trace << '\n';
+  };
   if (!client) {
-    for (const auto& s : rec.samples) mon.push(s);
+    for (const auto& s : rec.samples) push(s);
   } else {
     std::unique_ptr<device::RecordingWriter> copy;
     if (!o.record_to.empty()) copy = std::make_unique<device::RecordingWriter>(o.record_to, 6, client->sample_fields());
@@ -144,7 +164,7 @@ int run_monitor(const MonitorOptions& o) {
     RobotSample s;
     while (!cli::interrupted() && std::chrono::steady_clock::now() < end) {
       if (client->pop(s, std::chrono::milliseconds(50))) {
-        mon.push(s);
+        push(s);
         if (copy) copy->write(s);
       } else if (client->finished()) {
         break;
@@ -152,7 +172,7 @@ int run_monitor(const MonitorOptions& o) {
     }
     client->stop();
     while (client->pop(s, std::chrono::nanoseconds(0))) {  // what was received is still analysed
-      mon.push(s);
+      push(s);
       if (copy) copy->write(s);
     }
     if (copy) copy->close();
@@ -242,6 +262,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
                   "trend.window_s)");
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only");
+  sub->add_option("--trace", o->trace,
+                  "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
+                  "per joint to this CSV (to see why an alert was raised or late)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_monitor(*o)); });
 }};

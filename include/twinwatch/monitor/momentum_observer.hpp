@@ -69,8 +69,10 @@ class TwinMomentumObserver {
   /// One sample. Allocation-free after construction.
   /// @param twin the reference model (its payload included); @param s q [rad], qd [rad/s],
   /// current [A], temperature [°C] of n_dof joints; @param dt time since the previous sample [s]
+  /// @param extra_torque optional drive torque the twin does not predict, added to its prediction
+  /// (the monitor's temperature compensation of the viscous friction) [N·m]; null: none
   /// @return r, the estimate of the external joint torque [N·m] (twin torque units)
-  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt);
+  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr);
 
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }
