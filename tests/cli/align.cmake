@@ -52,3 +52,13 @@ add_test(NAME cli.monitor_unknown_program COMMAND twinwatch monitor --twin ${PRO
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --program palletizing)
 set_tests_properties(cli.monitor_unknown_program PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "no thresholds learned for program 'palletizing' \\(known: none\\)")
+# monitor --trace: one row per sample (5000), residual, threshold, observer residual and observer
+# threshold per joint; the thresholds are positive (the observer's too, even on the first row after
+# the start-up)
+add_test(NAME cli.monitor_trace
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv \
+--payload-mass 0.5 --payload-com 0 0 0.04 --db '' -q --trace ${da}/trace.csv && head -1 ${da}/trace.csv && \
+echo rows $(wc -l < ${da}/trace.csv) && \
+awk -F, 'NR > 1 && ($3 <= 0 || $5 <= 0) { bad++ } END { print \"non-positive thresholds:\", bad + 0 }' ${da}/trace.csv")
+set_tests_properties(cli.monitor_trace PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "^timestamp,residual_1_A,threshold_1_A,observer_1_Nm,observer_threshold_1_Nm,residual_2_A,[^\n]*observer_threshold_6_Nm\nrows 5001\nnon-positive thresholds: 0\n$")
