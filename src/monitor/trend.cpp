@@ -21,7 +21,7 @@ constexpr double kRidge = 1e-9;
 // a joint needs this many moving samples in a window for a fit (3 unknowns, noisy samples)
 constexpr long kMinFitSamples = 50;
 // consecutive exceedances the monitor needs to raise an alert (MonitorConfig::raise_after default)
-constexpr int kDebounce = 3;
+constexpr int kDebounce = 2;
 // temperature span [°C] a learning run must cover for a slope to be learnable
 constexpr double kMinTemperatureSpan = 1.0;
 
