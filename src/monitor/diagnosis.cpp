@@ -43,6 +43,8 @@ constexpr double kMinPulse = 0.01;
 constexpr double kLinkPenalty = 0.5;
 // relative singular-value threshold of the J^T F fit (a point on the joint axis has no lever arm)
 constexpr double kRankTolerance = 1e-8;
+// candidate contact points whose largest Jacobian entry is below this [m] lie on the joint axis
+constexpr double kMinLever = 1e-4;
 // the residual at the end of the window, relative to its peak, above which a fault persists
 constexpr double kPersistentFraction = 0.35;
 // a hypothesis with one more parameter must explain this much more to win a tie
@@ -273,6 +275,9 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
       Eigen::Vector3d p = m.joint(l).body.com;
       if (c > 0) p[(c - 1) / 2] += (c % 2 ? 1.0 : -1.0) * kContactOffset;
       model::point_jacobian(m, d, l, p, J);
+      // a point on the joint axis (the UR base link's centre of mass) has no lever arm: its
+      // Jacobian is round-off, and the rank-revealing solve would turn that into a huge force
+      if (J.topRows<3>().cwiseAbs().maxCoeff() < kMinLever) continue;
       const Eigen::MatrixXd A = wgt.asDiagonal() * J.topRows<3>().transpose();  // n x 3, rows > l are zero
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(A);
       cod.setThreshold(kRankTolerance);
