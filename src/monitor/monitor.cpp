@@ -45,6 +45,31 @@ double iir_alpha(double cutoff_hz, double period) {
   return 1.0 - std::exp(-2.0 * M_PI * cutoff_hz * period);
 }
 
+}  // namespace
+
+RestBaseline::RestBaseline(int n) : run_(static_cast<size_t>(n), 0), sum_(VectorJ::Zero(n)), base_(VectorJ::Zero(n)) {}
+
+void RestBaseline::apply(const RobotSample& s, VectorJ& value) {
+  const bool target = s.has(kFieldTargetQd) && s.target_qd.size() == value.size();
+  for (int j = 0; j < value.size(); ++j) {
+    int& run = run_[static_cast<size_t>(j)];
+    const bool rest = target && std::abs(s.target_qd[j]) < kTargetRest && std::abs(s.qd[j]) < kMeasuredRest;
+    if (!rest) {
+      run = 0;
+      sum_[j] = 0.0;
+      continue;
+    }
+    if (run < kSettle) {
+      sum_[j] += value[j];
+      if (++run == kSettle) base_[j] = sum_[j] / kSettle;
+      continue;
+    }
+    value[j] -= base_[j];
+  }
+}
+
+namespace {
+
 nlohmann::json vec_json(const VectorJ& v) {
   nlohmann::json a = nlohmann::json::array();
   for (int i = 0; i < v.size(); ++i) a.push_back(v[i]);
@@ -89,6 +114,7 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   std::vector<VectorJ> out;
   out.reserve(rec.samples.size());
   VectorJ i, rf;
+  RestBaseline rest(twin.n_dof());
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
     twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i);
@@ -103,7 +129,9 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
     else rf += alpha * (r - rf);
     for (size_t j = 0; j < fir.size(); ++j)
       if (!fir[j].taps().empty()) rf[static_cast<int>(j)] = fir[j].push(r[static_cast<int>(j)]);
-    out.push_back(rf);
+    VectorJ decided = rf;  // what the decision sees (Monitor::push)
+    rest.apply(rec.samples[k], decided);
+    out.push_back(decided);
   }
   return out;
 }
@@ -322,10 +350,12 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       std::vector<VectorJ> ro_run;
       const auto& smp = h.recording->samples;
       VectorJ warm = VectorJ::Zero(n);
+      RestBaseline rest(n);
       for (size_t k = 0; k < smp.size(); ++k) {
         const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
         temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
-        const VectorJ& o = obs.update(t, smp[k], dt, &warm);
+        VectorJ o = obs.update(t, smp[k], dt, &warm);
+        rest.apply(smp[k], o);
         if (k < skip) continue;
         obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
         for (int j = 0; j < n; ++j) ro[static_cast<size_t>(j)].push_back(o[j]);
@@ -373,7 +403,9 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
     : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()), obs_(std::max(1, twin.n_dof()), cfg_.observer_gain > 0.0 ? cfg_.observer_gain : 1.0) {
   cfg_.validate(n_);
   obs_on_ = cfg_.observer_level.size() == n_;
-  obs_level_ = obs_warm_ = VectorJ::Zero(n_);
+  obs_level_ = obs_warm_ = rf_dec_ = obs_dec_ = VectorJ::Zero(n_);
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
   // the observer runs in the twin's torque units; the diagnosis needs N·m (implausible gains, see
   // torque_gain, are replaced there as for the current residual)
   tau_gain_ = VectorJ::Ones(n_);
@@ -583,14 +615,18 @@ void Monitor::push(const RobotSample& s) {
     }
   }
 
-  // decisions
+  // decisions, on the residuals less what a resting joint is held at (RestBaseline)
+  rf_dec_ = rf_;
+  rest_rf_.apply(s, rf_dec_);
+  obs_dec_ = obs_.residual();
+  rest_obs_.apply(s, obs_dec_);
   bool any_active = false;
   for (int j = 0; j < n_; ++j) {
     // the thresholds were learned without each run's first kObserverSettle samples (filter and
     // observer start-up), so they do not apply there
     const bool over = n_samples_ > kObserverSettle &&
-                      (std::abs(rf_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
-                                                         std::abs(obs_.residual()[j]) > obs_level_[j]));
+                      (std::abs(rf_dec_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
+                                                         std::abs(obs_dec_[j]) > obs_level_[j]));
     const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
     if (ch == Debouncer::Change::Raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after

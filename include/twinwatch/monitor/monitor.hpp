@@ -83,6 +83,28 @@ struct MonitorConfig {
   static MonitorConfig from_json(const std::string& text, const std::string& origin);
 };
 
+/// A joint held at rest by its controller (target velocity ~0) keeps whatever current the static
+/// friction leaves it: after a stop, or after a contact pushed it and friction now holds it off its
+/// target (measured: a 6 N·m contact on a resting UR3e wrist left J5 1.2 mrad off target and 0.03 A
+/// held for the rest of the run, re-raised as new "contacts" every few hundred ms). Once a joint has
+/// rested kSettle samples, the residual's mean over those samples is frozen as a baseline and the
+/// decision sees the residual minus it; the baseline is dropped when the joint moves. A step while
+/// resting (a dropped payload, a contact) still shows against the frozen baseline. Learning and
+/// monitor apply it alike. Allocation-free after construction.
+class RestBaseline {
+ public:
+  static constexpr int kSettle = 50;                 ///< samples at rest before the baseline freezes (0.1 s at 500 Hz)
+  static constexpr double kTargetRest = 1e-3;        ///< |target qd| below this: commanded to rest [rad/s]
+  static constexpr double kMeasuredRest = 0.01;      ///< |qd| below this: not moving (encoder flicker 0.003 rad/s)
+  explicit RestBaseline(int n = 0);
+  /// Returns value minus the frozen baseline of each settled joint (value unchanged elsewhere).
+  /// Joints without a streamed target velocity are never at rest here.
+  void apply(const RobotSample& s, VectorJ& value);
+ private:
+  std::vector<int> run_;
+  VectorJ sum_, base_;
+};
+
 struct LearnOptions {
   double k_sigma = 3.0;   ///< UR3e §4.1
   DynamicThresholdOptions dynamic;
@@ -153,6 +175,8 @@ class Monitor {
   int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
   VectorJ obs_level_, obs_to_nm_;
   VectorJ obs_warm_;  // the observer's temperature compensation of the sample [N·m] (scratch)
+  RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
+  VectorJ rf_dec_, obs_dec_;         // the residuals the decision compares with the thresholds
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
   std::vector<int> frozen_run_;
   double i_total_ = 0.0, t_prev_ = 0.0;
