@@ -1,6 +1,7 @@
 #include "evaluate.hpp"
 
 #include <fmt/format.h>
+#include "twinwatch/model/dynamics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -225,7 +226,24 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     auto simulator = sim::make_simulator(s);
     const bool long_run = s.options.duration > 300;
     double shown = 0.0;
-    simulator->run([&](const RobotSample& x) { mon.push(x); },
+    // evaluation only: how much of each contact's joint torque falls on its own link's joint (the
+    // joint that link hangs on). A contact whose own joint takes almost none of it acts like one on
+    // the link before, and no joint-torque signature can tell the two apart.
+    std::vector<double> own_share(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
+    const model::RobotModel& truth_kin = t.robot();
+    model::DynamicsData dkin(truth_kin);
+    simulator->run([&](const RobotSample& x) {
+                     mon.push(x);
+                     for (size_t fi = 0; fi < s.faults.size(); ++fi) {
+                       const sim::FaultSpec& f = s.faults[fi];
+                       if (f.type != sim::FaultType::Collision || std::isfinite(own_share[fi]) || x.timestamp < f.onset + 0.5 * f.duration) continue;
+                       model::forward_kinematics(truth_kin, dkin, x.q);
+                       Matrix6J J;
+                       model::point_jacobian(truth_kin, dkin, f.link, f.point, J);
+                       const VectorJ tau = J.topRows<3>().transpose() * f.direction.normalized();
+                       own_share[fi] = tau.cwiseAbs().maxCoeff() > 0.0 ? std::abs(tau[f.link]) / tau.cwiseAbs().maxCoeff() : 0.0;
+                     }
+                   },
                    [&](double f) {
                      if (quiet || !long_run || f < shown + 0.25) return;
                      shown = f;
@@ -237,8 +255,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // events matching no fault window are false alarms
     std::vector<bool> used(mon.events().size(), false);
     std::vector<ScenarioScore> scs;
-    for (const auto& lf : labels["faults"]) {
+    for (size_t fi = 0; fi < labels["faults"].size(); ++fi) {
+      const auto& lf = labels["faults"][fi];
       ScenarioScore sc;
+      if (fi < own_share.size()) sc.own_joint_share = own_share[fi];
       sc.name = s.name;
       sc.duration_s = s.options.duration;
       sc.has_fault = true;
@@ -262,6 +282,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         const int lj = lf["joint"].is_null() ? -1 : lf["joint"].get<int>() - 1;
         const int ll = lf["link"].is_null() ? -1 : lf["link"].get<int>() - 1;
         sc.joint_ok = ll >= 0 ? e.link == ll : (lj >= 0 ? e.joint == lj : true);
+        sc.predicted_link = e.link;
         sc.magnitude = e.magnitude;
         sc.detail = e.detail;
       }
@@ -467,6 +488,8 @@ std::string evaluation_json(const Evaluation& e) {
                               {"class", s.predicted_class},
                               {"class_ok", s.class_ok},
                               {"joint_ok", s.joint_ok},
+                              {"link", s.predicted_link >= 0 ? nlohmann::json(s.predicted_link + 1) : nlohmann::json(nullptr)},
+                              {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
                               {"magnitude", s.magnitude},
                               {"false_alarms", s.false_alarms},
                               {"wear_false_alarms", s.wear_false_alarms},
