@@ -1,7 +1,6 @@
 #include "evaluate.hpp"
 
 #include <fmt/format.h>
-#include "twinwatch/model/dynamics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +14,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "twinwatch/sim/scenario.hpp"
@@ -230,17 +230,15 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // joint that link hangs on). A contact whose own joint takes almost none of it acts like one on
     // the link before, and no joint-torque signature can tell the two apart.
     std::vector<double> own_share(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
-    const model::RobotModel& truth_kin = t.robot();
-    model::DynamicsData dkin(truth_kin);
+    const model::RobotModel& kin = t.robot();  // the arm's kinematics (the twin's inertia is not used)
+    model::DynamicsData dkin(kin);
     simulator->run([&](const RobotSample& x) {
                      mon.push(x);
                      for (size_t fi = 0; fi < s.faults.size(); ++fi) {
                        const sim::FaultSpec& f = s.faults[fi];
                        if (f.type != sim::FaultType::Collision || std::isfinite(own_share[fi]) || x.timestamp < f.onset + 0.5 * f.duration) continue;
-                       model::forward_kinematics(truth_kin, dkin, x.q);
-                       Matrix6J J;
-                       model::point_jacobian(truth_kin, dkin, f.link, f.point, J);
-                       const VectorJ tau = J.topRows<3>().transpose() * f.direction.normalized();
+                       model::forward_kinematics(kin, dkin, x.q);
+                       const VectorJ tau = sim::collision_torque_per_newton(kin, dkin, f);
                        own_share[fi] = tau.cwiseAbs().maxCoeff() > 0.0 ? std::abs(tau[f.link]) / tau.cwiseAbs().maxCoeff() : 0.0;
                      }
                    },

@@ -234,40 +234,41 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   last = std::min(W - 1, last + kPulsePost);
   const long len = last - first + 1;
   const double period = (w.back().t - w.front().t) / static_cast<double>(W - 1);  // [s]
+  // (mean speed per joint over the pulse: the rest test of the weights below)
   size_t k_peak = static_cast<size_t>(first);
+  VectorJ mean_speed = VectorJ::Zero(n);
   for (long k = first; k <= last; ++k) {
     const DiagnosisSample& s = w[static_cast<size_t>(k)];
     if (s.tau_ext.norm() > w[k_peak].tau_ext.norm()) k_peak = static_cast<size_t>(k);
     out.joint_torque = std::max(out.joint_torque, s.tau_ext.cwiseAbs().maxCoeff());
+    mean_speed += s.qd.cwiseAbs() / static_cast<double>(len);
   }
-  auto series = [&](const std::vector<DiagnosisSample>& v, long k) -> const VectorJ& { return v[static_cast<size_t>(k)].tau_ext; };
-  // detrended pulse [a, b] of series v (T x n): a line per joint through up to kBaseline samples
-  // on each side that exist in [lo, hi]
-  auto detrend = [&](const std::vector<DiagnosisSample>& v, long a, long b, long lo, long hi) {
-    Eigen::MatrixXd D(b - a + 1, n);
+  // samples [a, b] of v's estimate less a line per joint through up to kBaseline samples on each
+  // side (a constant when only one side exists, nothing when none does); (b - a + 1) x n
+  auto detrend = [&](const std::vector<DiagnosisSample>& v, long a, long b) {
     std::vector<long> idx;
-    for (long k = std::max(lo, a - kBaseline); k < a; ++k) idx.push_back(k);
-    for (long k = b + 1; k <= std::min(hi, b + kBaseline); ++k) idx.push_back(k);
+    for (long k = std::max(0L, a - kBaseline); k < a; ++k) idx.push_back(k);
+    for (long k = b + 1; k <= std::min(static_cast<long>(v.size()) - 1, b + kBaseline); ++k) idx.push_back(k);
+    const bool sides = !idx.empty() && idx.front() < a && idx.back() > b;
     const double tc = 0.5 * (v[static_cast<size_t>(a)].t + v[static_cast<size_t>(b)].t);
-    bool sides = false;
-    if (!idx.empty()) sides = idx.front() < a && idx.back() > b;
-    Eigen::MatrixXd X(static_cast<Eigen::Index>(idx.size()), sides ? 2 : 1);
-    Eigen::MatrixXd Y(static_cast<Eigen::Index>(idx.size()), n);
-    for (size_t i = 0; i < idx.size(); ++i) {
-      X(static_cast<Eigen::Index>(i), 0) = 1.0;
-      if (sides) X(static_cast<Eigen::Index>(i), 1) = v[static_cast<size_t>(idx[i])].t - tc;
-      Y.row(static_cast<Eigen::Index>(i)) = series(v, idx[i]).transpose();
+    const auto N = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd X(N, sides ? 2 : 1), Y(N, n);
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const DiagnosisSample& s = v[static_cast<size_t>(idx[static_cast<size_t>(i)])];
+      X(i, 0) = 1.0;
+      if (sides) X(i, 1) = s.t - tc;
+      Y.row(i) = s.tau_ext.transpose();
     }
-    Eigen::MatrixXd coef = Eigen::MatrixXd::Zero(X.cols(), n);
-    if (!idx.empty()) coef = X.colPivHouseholderQr().solve(Y);
+    const Eigen::MatrixXd coef = N > 0 ? Eigen::MatrixXd(X.colPivHouseholderQr().solve(Y)) : Eigen::MatrixXd::Zero(1, n);
+    Eigen::MatrixXd D(b - a + 1, n);
     for (long k = a; k <= b; ++k) {
-      const double dt = v[static_cast<size_t>(k)].t - tc;
-      D.row(k - a) = series(v, k).transpose() - coef.row(0);
-      if (sides) D.row(k - a) -= dt * coef.row(1);
+      const DiagnosisSample& s = v[static_cast<size_t>(k)];
+      D.row(k - a) = s.tau_ext.transpose() - coef.row(0);
+      if (sides) D.row(k - a) -= (s.t - tc) * coef.row(1);
     }
     return D;
   };
-  const Eigen::MatrixXd D = detrend(w, first, last, 0, W - 1);
+  const Eigen::MatrixXd D = detrend(w, first, last);
   // common profile: leading left singular vector of the noise-scaled detrended pulse
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(D * rms.cwiseInverse().asDiagonal(), Eigen::ComputeThinU);
   Eigen::VectorXd prof = svd.matrixU().col(0);
@@ -280,7 +281,7 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   int cnt = 0;
   const long R = static_cast<long>(ref.size());
   for (long a0 = kBaseline; a0 + len + kBaseline <= R; a0 += std::max(1L, len / 4)) {
-    var += project(detrend(ref, a0, a0 + len - 1, 0, R - 1)).cwiseAbs2();
+    var += project(detrend(ref, a0, a0 + len - 1)).cwiseAbs2();
     ++cnt;
   }
   if (cnt == 0) {
@@ -302,8 +303,6 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   // breakaway level does not move it and does not show in its current, and the twin's friction
   // flips sign with the velocity's encoder-step toggling. Its row carries no information (it
   // named the contact link wrongly on a resting wrist, docs/validation.md) and is left out.
-  VectorJ mean_speed = VectorJ::Zero(n);
-  for (long k = first; k <= last; ++k) mean_speed += w[static_cast<size_t>(k)].qd.cwiseAbs() / static_cast<double>(len);
   VectorJ wgt(n), b(n);
   for (int j = 0; j < n; ++j) {
     const double sigma =

@@ -130,7 +130,7 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
     for (size_t j = 0; j < fir.size(); ++j)
       if (!fir[j].taps().empty()) rf[static_cast<int>(j)] = fir[j].push(r[static_cast<int>(j)]);
     VectorJ decided = rf;  // what the decision sees (Monitor::push)
-    rest.apply(rec.samples[k], decided);
+    rest.apply(s, decided);
     out.push_back(decided);
   }
   return out;
@@ -349,12 +349,12 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       TwinMomentumObserver obs(n, c.observer_gain);
       std::vector<VectorJ> ro_run;
       const auto& smp = h.recording->samples;
-      VectorJ warm = VectorJ::Zero(n);
+      VectorJ warm = VectorJ::Zero(n), o(n);
       RestBaseline rest(n);
       for (size_t k = 0; k < smp.size(); ++k) {
         const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
         temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
-        VectorJ o = obs.update(t, smp[k], dt, &warm);
+        o = obs.update(t, smp[k], dt, &warm);
         rest.apply(smp[k], o);
         if (k < skip) continue;
         obs_peak = obs_peak.cwiseMax(o.cwiseAbs());

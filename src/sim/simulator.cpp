@@ -39,6 +39,12 @@ double FaultSpec::level(double t) const {
   return std::min(1.0, (t - onset) / ramp);
 }
 
+VectorJ collision_torque_per_newton(const model::RobotModel& m, const model::DynamicsData& d, const FaultSpec& f) {
+  Matrix6J J;
+  model::point_jacobian(m, d, f.link, f.point, J);
+  return J.topRows<3>().transpose() * f.direction.normalized();
+}
+
 PlantTruth default_truth(const model::RobotModel& m, unsigned serial) {
   PlantTruth p;
   p.serial = serial;
@@ -251,10 +257,8 @@ bool Simulator::step(RobotSample& s) {
     for (int j = 0; j < n_; ++j) tau[j] -= friction_torque(j, qd_[j], h);
     if (!pulses.empty()) {
       model::forward_kinematics(truth_model_, dtruth_, q_);
-      Matrix6J J;
       for (const auto& [f, shape] : pulses) {
-        model::point_jacobian(truth_model_, dtruth_, f->link, f->point, J);
-        const VectorJ unit = J.topRows<3>().transpose() * f->direction.normalized();
+        const VectorJ unit = collision_torque_per_newton(truth_model_, dtruth_, *f);
         const double scale = unit.cwiseAbs().maxCoeff();
         if (scale > 1e-9) tau += (f->magnitude * shape / scale) * unit;
       }

@@ -293,13 +293,12 @@ TEST(ContactIsolation, ADriftOnAReversingWristAndAStuckJointDoNotMoveTheContactL
   std::vector<DiagnosisSample> ref, win;
   for (int k = 0; k < 250; ++k) ref.push_back(sample(k * dt, VectorJ::Zero(6)));
   const double t0 = 250 * dt, onset = t0 + 0.03, pulse = 0.05;
+  double lagged = 0.0;
   for (int k = 0; k < 80; ++k) {
     const double t = t0 + k * dt;
     VectorJ tau = VectorJ::Zero(6);
     // the contact through a first-order observer of bandwidth 150/s: a lagged half-sine
     const double shape = (t >= onset && t < onset + pulse) ? std::sin(M_PI * (t - onset) / pulse) : 0.0;
-    static double lagged = 0.0;
-    if (k == 0) lagged = 0.0;
     lagged += 150.0 * dt * (shape - lagged);
     tau += lagged * contact;
     // (1) J5 reverses: the misfit rises smoothly by 0.8 N·m over 0.16 s around the contact

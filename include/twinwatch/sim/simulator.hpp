@@ -115,6 +115,11 @@ struct FaultSpec {
   double level(double t) const;
 };
 
+/// Joint torque per newton of a collision fault's force, J_link(point)^T direction [N·m/N], at the
+/// configuration `d` holds (forward_kinematics done). The simulator scales it so that its largest
+/// entry is the fault's magnitude; evaluation reads it to score the contact isolation.
+VectorJ collision_torque_per_newton(const model::RobotModel& m, const model::DynamicsData& d, const FaultSpec& f);
+
 struct SimOptions {
   double rate = 500.0;          ///< controller and recording rate [Hz]
   int substeps = 4;             ///< physics steps per control step (rate * substeps >= 2000 Hz)
