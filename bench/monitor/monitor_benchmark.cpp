@@ -69,14 +69,16 @@ void BM_MonitorLoop(benchmark::State& st) {
 }
 BENCHMARK(BM_MonitorLoop)->Arg(0)->Arg(1)->MinTime(2.0);
 
-// the twin prediction alone (the regressor dominates)
+// the twin prediction alone (the regressor dominates), with its friction memory
 void BM_TwinPredict(benchmark::State& st) {
   const Setup& s = setup();
   VectorJ tau, i;
+  ident::FrictionMemory memory;
   size_t k = 0;
   for (auto _ : st) {
     const auto& x = s.rec.samples[k];
-    s.twin.predict(x.q, x.qd, x.target_qdd, x.temperature, tau, i);
+    s.twin.advance(memory, x.q);
+    s.twin.predict(x.q, x.qd, x.target_qdd, x.temperature, tau, i, &memory);
     benchmark::DoNotOptimize(i.data());
     k = (k + 1) % s.rec.samples.size();
   }

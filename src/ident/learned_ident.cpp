@@ -81,12 +81,15 @@ TwinModel identify_learned(const std::string& robot, const std::vector<TrainingR
       }
     }
     twin.set_payload(r.payload);
-    for (size_t k = 0; k < K; k += static_cast<size_t>(o.decimate)) {
+    ident::FrictionMemory memory;  // advanced over every sample, used on the kept ones
+    for (size_t k = 0; k < K; ++k) {
       const RobotSample& s = rec.samples[k];
+      twin.advance(memory, s.q);
+      if (k % static_cast<size_t>(o.decimate) != 0) continue;
       VectorJ qd = s.qd;
       for (int j = 0; j < n; ++j) qd[j] = qd_s[static_cast<size_t>(j)][k];
       o.inputs.build(s.q, qd, qdd[k], s.temperature, o.physics.temperature_ref, X.col(col).data());
-      twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i_phys);
+      twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i_phys, &memory);
       I.col(col) = s.current.head(n);
       P.col(col) = i_phys.head(n);
       Y.col(col) = role == LearnedRole::Current ? I.col(col) : Eigen::VectorXd(I.col(col) - P.col(col));

@@ -192,7 +192,7 @@ void TwinModel::predict_sequential(const VectorJ& q, const VectorJ& qd, const Ve
 }
 
 void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                        VectorJ& current) const {
+                        VectorJ& current, const FrictionMemory* memory) const {
   if (sequential) return predict_sequential(q, qd, qdd, torque, current);
   sync_fitted();
   const VectorJ& tau_rb = model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
@@ -205,6 +205,10 @@ void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
     double tau = tau_rb[j];
     friction_row(j, qd, qdd, temperature, f);
     tau += f.dot(d.friction);
+    // low-speed friction: the memory's departure from steady sliding, and the Stribeck rise
+    const double s = qd[j] > 0.0 ? 1.0 : (qd[j] < 0.0 ? -1.0 : 0.0);
+    if (memory != nullptr && d.presliding_alpha > 0.0 && memory->primed) tau += d.presliding * (memory->h[j] - s);
+    if (d.stribeck_velocity > 0.0) tau += d.stribeck * stribeck_shape(qd[j], d.stribeck_velocity);
     torque[j] = tau;
     current[j] = direction_factor(d.c_gen, tau, qd[j], direction_blend) * tau / d.gain;
   }
@@ -232,9 +236,37 @@ void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ
 }
 
 void TwinModel::predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
-                                VectorJ& current) const {
+                                VectorJ& current, const FrictionMemory* memory) const {
   VectorJ tau;
-  predict(q, qd, qdd, temperature, tau, current);
+  predict(q, qd, qdd, temperature, tau, current, memory);
+}
+
+// Low-speed friction. Coulomb sign(qd) is the friction of steady sliding. A harmonic drive's
+// friction has a memory instead [HESR §II; Dahl]: through a reversal it turns over a pre-sliding
+// distance 1/alpha, not in one sample, and a joint that stops keeps the friction of the direction it
+// came from (static friction holding the controller's error) -- a stateless twin predicts none
+// there, which left the triangle's stops 2-9 sigma off (docs/validation.md). The state h follows the
+// Dahl law in the displacement clock (presliding_step) and enters as presliding * (h - sign(qd)),
+// zero in steady motion, so the main fit's Coulomb term keeps its meaning. The Stribeck rise is
+// stateless: stribeck * sign(qd) exp(-(qd/vs)^2).
+void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
+  const int n = robot_->n_dof();
+  if (!m.primed) {
+    m.h = VectorJ::Zero(n);
+    m.q_prev = q;
+    m.primed = true;
+    return;
+  }
+  for (int j = 0; j < n; ++j) {
+    m.h[j] = presliding_step(m.h[j], q[j] - m.q_prev[j], joints[static_cast<size_t>(j)].presliding_alpha);
+    m.q_prev[j] = q[j];
+  }
+}
+
+bool TwinModel::has_memory() const {
+  for (const JointDrive& d : joints)
+    if (d.presliding_alpha > 0.0 && d.presliding != 0.0) return true;
+  return false;
 }
 
 std::string TwinModel::to_json() const {
@@ -261,6 +293,11 @@ std::string TwinModel::to_json() const {
     e["gain_identified"] = m.gain_identified;
     e["friction"] = numbers(Eigen::VectorXd(m.friction));
     e["friction_columns"] = {"coulomb", "viscous", "offset", "armature", "viscous_temperature"};
+    if (m.presliding_alpha > 0.0 || m.stribeck_velocity > 0.0)
+      e["low_speed_friction"] = {{"presliding_alpha", m.presliding_alpha},
+                                 {"presliding", m.presliding},
+                                 {"stribeck_velocity", m.stribeck_velocity},
+                                 {"stribeck", m.stribeck}};
     e["train_rmse"] = m.rmse;
     e["train_r2"] = m.r2;
     j["joints"].push_back(e);
@@ -315,6 +352,22 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       if (f.size() != kFrictionColumns)
         throw ParseError(origin, 0, p + "friction", fmt::format("expected {} values, got {}", int(kFrictionColumns), f.size()));
       m.friction = f;
+      if (js[k].contains("low_speed_friction")) {
+        // files before it: none (plain Coulomb)
+        const auto& l = js[k]["low_speed_friction"];
+        const std::string lp = p + "low_speed_friction.";
+        auto nonneg = [&](const char* key) {
+          const double v = need(l, key, lp).get<double>();
+          if (!std::isfinite(v) || v < 0.0) throw ParseError(origin, 0, lp + key, fmt::format("must be a finite number >= 0, got {}", v));
+          return v;
+        };
+        m.presliding_alpha = nonneg("presliding_alpha");
+        m.stribeck_velocity = nonneg("stribeck_velocity");
+        m.presliding = need(l, "presliding", lp).get<double>();
+        m.stribeck = need(l, "stribeck", lp).get<double>();
+        if (!std::isfinite(m.presliding) || !std::isfinite(m.stribeck))
+          throw ParseError(origin, 0, lp + "presliding", "presliding and stribeck must be finite numbers");
+      }
       m.rmse = js[k].value("train_rmse", 0.0);
       m.r2 = js[k].value("train_r2", 0.0);
       t.joints.push_back(m);

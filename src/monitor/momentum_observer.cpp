@@ -70,11 +70,13 @@ TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), 
 void TwinMomentumObserver::reset() {
   started_ = false;
   r_.setZero();
+  memory_ = ident::FrictionMemory{};
 }
 
 const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
   // measured drive torque through the identified drive model
   measured_drive_torque(twin, s.current, s.qd, tau_m_);
+  twin.advance(memory_, s.q);
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;
@@ -84,7 +86,7 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   }
   // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
   qdd_ = (s.qd - qd_prev_) / dt;
-  twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_);
+  twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_, &memory_);
   if (extra_torque != nullptr) tau_twin_ += *extra_torque;
   // first-order lag with bandwidth K (exact for a held input)
   if (dt != dt_) {

@@ -115,9 +115,11 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   out.reserve(rec.samples.size());
   VectorJ i, rf;
   RestBaseline rest(twin.n_dof());
+  ident::FrictionMemory memory;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
-    twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i);
+    twin.advance(memory, s.q);
+    twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i, &memory);
     VectorJ r = s.current - i;
     // the monitor's temperature compensation (Monitor::push), so thresholds learned on a warm-up
     // from cold see the residual the monitor will see
@@ -421,7 +423,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   const size_t cap = static_cast<size_t>(std::ceil((kContactReference + cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
   ring_.resize(cap);
   for (auto& d : ring_) {
-    d.q = d.qd = d.qdd = d.r_tau = d.current = d.tau_ext = d.tau_ext_level = VectorJ::Zero(n_);
+    d.q = d.qd = d.qdd = d.r_tau = d.current = d.tau_ext = d.tau_ext_level = d.presliding = VectorJ::Zero(n_);
   }
   window_.reserve(cap);
   reference_.reserve(cap);
@@ -492,8 +494,11 @@ void Monitor::run_diagnosis(double t) {
     const double span = window_[static_cast<size_t>(b)].t - window_[static_cast<size_t>(a)].t;
     if (span > 0.0) window_[static_cast<size_t>(k)].qdd = (window_[static_cast<size_t>(b)].qd - window_[static_cast<size_t>(a)].qd) / span;
   }
+  ident::FrictionMemory at;  // the stream's memory as it was at each window sample
+  at.primed = true;
   for (auto& d : window_) {
-    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur);
+    at.h = d.presliding;
+    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur, d.presliding.size() == n_ ? &at : nullptr);
     for (int j = 0; j < n_; ++j) d.r_tau[j] = torque_gain(j) * (d.current[j] - cur[j]);
   }
   DiagnosisOptions o;
@@ -544,7 +549,8 @@ void Monitor::push(const RobotSample& s) {
   } else if (have_prev_ && dt > 0.0) {
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }
-  twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_);
+  twin_.advance(memory_, s.q);
+  twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_, &memory_);
   r_ = s.current - i_hat_;
   // temperature: the viscous friction's slope learned on a healthy warm-up (trend.hpp), so that
   // neither the thresholds nor the wear trend see a cooling or warming joint as a fault
@@ -587,6 +593,7 @@ void Monitor::push(const RobotSample& s) {
   ds.current = s.current;
   ds.tau_ext = obs_.residual().cwiseProduct(obs_to_nm_);
   ds.tau_ext_level = obs_level_.cwiseProduct(obs_to_nm_);
+  ds.presliding = memory_.h;
   ds.digital_outputs = s.digital_outputs;
   ds.gap_before = false;  // gaps are reported as their own events
   ring_head_ = (ring_head_ + 1) % ring_.size();

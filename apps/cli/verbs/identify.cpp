@@ -54,6 +54,7 @@ struct IdentifyOptions {
   std::vector<std::string> recordings, payloads;
   std::string output, robot = "ur3e", method = "physics", column_map;
   double reversal_screen = 0.0;
+  bool no_low_speed_friction = false;
   double direction_blend = ident::IdentOptions{}.direction_blend;
   int decimate = 1;
   std::string efficiency_fit = "joint";
@@ -91,6 +92,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.decimate = o.decimate;
   lo.physics.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   lo.physics.direction_blend = o.direction_blend;
+  lo.physics.low_speed_friction = !o.no_low_speed_friction;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -129,6 +131,7 @@ int run_identify(const IdentifyOptions& o) {
   io.decimate = o.decimate;
   io.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   io.direction_blend = o.direction_blend;
+  io.low_speed_friction = !o.no_low_speed_friction;
   io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
   const bool bar = !o.quiet && isatty(STDERR_FILENO);
@@ -264,9 +267,11 @@ int run_validate(const ValidateOptions& o) {
   const int n = twin.n_dof();
   std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
   VectorJ i;
+  ident::FrictionMemory memory;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
-    twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i);
+    twin.advance(memory, s.q);
+    twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i, &memory);
     for (int j = 0; j < n; ++j) {
       meas[static_cast<size_t>(j)].push_back(s.current[j]);
       pred[static_cast<size_t>(j)].push_back(i[j]);
@@ -358,6 +363,9 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "(scenarios/ur3e/train/swing_train*.yaml)")
       ->capture_default_str();
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+  sub->add_flag("--no-low-speed-friction", o->no_low_speed_friction,
+                "physics/mlp/hybrid: leave out the low-speed friction (pre-sliding memory and Stribeck rise, fitted on the main "
+                "fit's residual); the twin then has plain Coulomb sign(qd) friction");
   sub->add_option("--direction-blend", o->direction_blend,
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
                   "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")

@@ -13,6 +13,7 @@
 /// common scale of beta and g is arbitrary (fixed so that prod g_j = 1) and only currents are
 /// meaningful (gains_known() is false).
 #include <Eigen/Core>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -36,7 +37,37 @@ struct JointDrive {
   bool gain_identified = true;
   Eigen::Matrix<double, kFrictionColumns, 1> friction = Eigen::Matrix<double, kFrictionColumns, 1>::Zero();  ///< [N·m, N·m·s/rad, N·m, kg·m², N·m·s/rad/°C]
   double rmse = 0.0, r2 = 0.0;   ///< current fit on the training data
+  /// Low-speed friction (twin_model.cpp, "Low-speed friction"): pre-sliding memory and Stribeck
+  /// rise, fitted after the main fit on its residual; all zero = plain Coulomb sign(qd).
+  double presliding_alpha = 0.0;   ///< [1/rad] 1 / pre-sliding distance of the memory state h (0: no memory)
+  double presliding = 0.0;         ///< [N·m] coefficient of (h - sign(qd)): the friction held at rest
+  double stribeck_velocity = 0.0;  ///< [rad/s] v_s of the Stribeck term (0: none)
+  double stribeck = 0.0;           ///< [N·m] Fs - Fc: the extra friction at |qd| << v_s
 };
+
+/// Per-stream memory of a twin: the pre-sliding state h_j of each joint, driven by the measured
+/// joint displacement (twin_model.cpp). One per robot stream; a new recording starts a new one.
+struct FrictionMemory {
+  VectorJ h;        ///< [-] in [-1, 1]
+  VectorJ q_prev;   ///< [rad] last position seen
+  bool primed = false;
+};
+
+/// Pre-sliding state after a measured displacement dq [rad]: the Dahl law in the displacement
+/// clock, dh/ds = alpha (sign(dq) - h), stepped exactly (friction/hysteresis.hpp,
+/// HysteresisDrive::Displacement, with tanh(beta qd) -> sign: the twin drives it with encoder
+/// increments, not with a velocity). Standing still (dq = 0) keeps h.
+inline double presliding_step(double h, double dq, double alpha) {
+  if (dq == 0.0 || !(alpha > 0.0)) return h;
+  const double s = dq > 0.0 ? 1.0 : -1.0;
+  return s + (h - s) * std::exp(-alpha * std::abs(dq));
+}
+/// Stribeck shape sign(qd) exp(-(qd/vs)^2) (0 when vs <= 0).
+inline double stribeck_shape(double qd, double vs) {
+  if (!(vs > 0.0) || qd == 0.0) return 0.0;
+  const double x = qd / vs;
+  return (qd > 0.0 ? 1.0 : -1.0) * std::exp(-x * x);
+}
 
 class TwinModel {
  public:
@@ -81,11 +112,20 @@ class TwinModel {
 
   /// Predicted joint torque [N·m] (incl. friction) and current [A] for one state; temperature
   /// may be NaN (then T_ref is used). Torque is in arbitrary units unless gains_known().
+  /// `memory`: the stream's pre-sliding state, already advanced to this sample (advance()); without
+  /// it the state is taken at its steady value sign(qd) (the friction of a joint in steady motion,
+  /// and none held at rest).
   void predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-               VectorJ& current) const;
+               VectorJ& current, const FrictionMemory* memory = nullptr) const;
   /// Only the current.
   void predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
-                       VectorJ& current) const;
+                       VectorJ& current, const FrictionMemory* memory = nullptr) const;
+
+  /// Advances the pre-sliding memory to the measured position q of the next sample (O(n), no
+  /// allocation once primed). Call once per sample, before predict().
+  void advance(FrictionMemory& memory, const VectorJ& q) const;
+  /// True when some joint has a pre-sliding memory (then predict() wants a FrictionMemory).
+  bool has_memory() const;
 
   /// Friction design row of joint j (kFrictionColumns values).
   void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,

@@ -63,7 +63,7 @@ class TwinMomentumObserver {
   /// Throws InvalidArgument when gain <= 0 or n_dof < 1.
   TwinMomentumObserver(int n_dof, double gain);
 
-  /// Forgets the state; the next update restarts the observer (r = 0).
+  /// Forgets the state; the next update restarts the observer (r = 0) and the twin's friction memory.
   void reset();
 
   /// One sample. Allocation-free after construction.
@@ -85,6 +85,7 @@ class TwinMomentumObserver {
   double gain_;
   bool started_ = false;
   VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_, i_twin_;
+  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream
   double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
 

@@ -178,6 +178,7 @@ class Monitor {
   RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
   VectorJ rf_dec_, obs_dec_;         // the residuals the decision compares with the thresholds
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
+  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream
   std::vector<int> frozen_run_;
   double i_total_ = 0.0, t_prev_ = 0.0;
   bool have_prev_ = false, filter_started_ = false;
