@@ -360,6 +360,23 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     row(at) = d.presliding_alpha > 0.0 ? hs[ri][k][j] - sg : 0.0;
     row(at + 1) = stribeck_shape(qd[j], d.stribeck_velocity);
   };
+  // A row of joint j is zero outside the base columns and the joint's own friction block, so its
+  // outer product is accumulated on the compact row [base; own block] (nb + nfx values instead of
+  // p = nb + nfx n: 4x fewer operations on the UR3e, where it was 60 % of the identification time)
+  // and scattered into the p x p statistics once per pass.
+  const int pc = nb + nfx;
+  Eigen::VectorXd rc(pc);
+  auto compact = [&](const Eigen::VectorXd& row, int j) -> const Eigen::VectorXd& {
+    rc.head(nb) = row.head(nb);
+    rc.tail(nfx) = row.segment(nb + nfx * j, nfx);
+    return rc;
+  };
+  auto scatter = [&](const Eigen::MatrixXd& Ac, int j, Eigen::MatrixXd& A) {  // lower triangles
+    const int at = nb + nfx * j;
+    A.topLeftCorner(nb, nb).triangularView<Eigen::Lower>() += Ac.topLeftCorner(nb, nb);
+    A.block(at, 0, nfx, nb) += Ac.block(nb, 0, nfx, nb);
+    A.block(at, at, nfx, nfx).triangularView<Eigen::Lower>() += Ac.block(nb, nb, nfx, nfx);
+  };
 
   // stage 0: the fit with plain Coulomb friction; stage 1 (low_speed_friction): the low-speed
   // shapes chosen on stage 0's residual, then the whole fit again with their two columns per joint
@@ -393,6 +410,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       for (int pass = 0; pass <= passes; ++pass) {
         const bool final_stats = pass == passes;
         std::vector<Eigen::MatrixXd> A(static_cast<size_t>(n), Eigen::MatrixXd::Zero(p, p));
+        std::vector<Eigen::MatrixXd> Ac(static_cast<size_t>(n), Eigen::MatrixXd::Zero(pc, pc));  // compact, see scatter
         std::vector<Eigen::VectorXd> cp(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
         std::vector<Eigen::VectorXd> b(static_cast<size_t>(n), Eigen::VectorXd::Zero(p));
         std::vector<double> d(static_cast<size_t>(n), 0.0), e(static_cast<size_t>(n), 0.0), pp(static_cast<size_t>(n), 0.0);
@@ -433,7 +451,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
                 gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
               }
               const double w = i / c;  // current as the motoring drive would draw it
-              A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(r);
+              Ac[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
               b[static_cast<size_t>(j)] += r * w;
               cp[static_cast<size_t>(j)] += r * tau_p[j];
               d[static_cast<size_t>(j)] += w * tau_p[j];
@@ -463,7 +481,10 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
             twin.joints[static_cast<size_t>(j)].c_gen = gen_num[static_cast<size_t>(j)] / gen_den[static_cast<size_t>(j)];
         // Levenberg-Marquardt on the bilinear current-domain model, entirely on the sufficient
         // statistics: unknowns x = (theta, h_j = 1 / g_j), residual w_jk - h_j (r_jk theta + tau_p_jk)
-        for (int j = 0; j < n; ++j) A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
+        for (int j = 0; j < n; ++j) {
+          scatter(Ac[static_cast<size_t>(j)], j, A[static_cast<size_t>(j)]);
+          A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
+        }
         std::vector<double> h(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
         auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
@@ -579,6 +600,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       for (int pass = 0; pass <= passes; ++pass) {
         const bool final_stats = pass == passes;
         std::vector<Stats> st(static_cast<size_t>(2 * n));
+        std::vector<Eigen::MatrixXd> stc(static_cast<size_t>(2 * n), Eigen::MatrixXd::Zero(pc, pc));  // compact A per group
         for (Stats& x : st) {
           x.A = Eigen::MatrixXd::Zero(p, p);
           x.cp = Eigen::VectorXd::Zero(p);
@@ -623,7 +645,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
                 continue;
               }
               Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
-              x.A.selfadjointView<Eigen::Lower>().rankUpdate(r);
+              stc[static_cast<size_t>(2 * j + (gen ? 1 : 0))].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
               x.b += r * i;
               x.cp += r * tau_p[j];
               x.d += i * tau_p[j];
@@ -658,7 +680,11 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           }
           break;
         }
-        for (Stats& x : st) x.A = x.A.selfadjointView<Eigen::Lower>();
+        for (int g = 0; g < 2 * n; ++g) {
+          Stats& x = st[static_cast<size_t>(g)];
+          scatter(stc[static_cast<size_t>(g)], g / 2, x.A);
+          x.A = x.A.selfadjointView<Eigen::Lower>();
+        }
         // which joints' back-driven factor the data can carry: enough back-driven samples; the others
         // keep c_gen = 1 and their back-driven samples join the motoring group
         std::vector<bool> free_gen(static_cast<size_t>(n), false);

@@ -191,26 +191,43 @@ void TwinModel::predict_sequential(const VectorJ& q, const VectorJ& qd, const Ve
   for (int j = 0; j < n; ++j) torque[j] = current[j] * joints[static_cast<size_t>(j)].gain;
 }
 
-void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                        VectorJ& current, const FrictionMemory* memory) const {
-  if (sequential) return predict_sequential(q, qd, qdd, torque, current);
+void TwinModel::predict_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                               const FrictionMemory* memory) const {
+  if (sequential || learned) {
+    VectorJ current;
+    return predict(q, qd, qdd, temperature, torque, current, memory);
+  }
+  physics_torque(q, qd, qdd, temperature, torque, memory);
+}
+
+void TwinModel::physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                               const FrictionMemory* memory) const {
   sync_fitted();
   const VectorJ& tau_rb = model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
   const int n = robot_->n_dof();
   torque.resize(n);
-  current.resize(n);
   Eigen::Matrix<double, kFrictionColumns, 1> f;
   for (int j = 0; j < n; ++j) {
     const JointDrive& d = joints[static_cast<size_t>(j)];
-    double tau = tau_rb[j];
     friction_row(j, qd, qdd, temperature, f);
-    tau += f.dot(d.friction);
+    double tau = tau_rb[j] + f.dot(d.friction);
     // low-speed friction: the memory's departure from steady sliding, and the Stribeck rise
     const double s = qd[j] > 0.0 ? 1.0 : (qd[j] < 0.0 ? -1.0 : 0.0);
     if (memory != nullptr && d.presliding_alpha > 0.0 && memory->primed) tau += d.presliding * (memory->h[j] - s);
     if (d.stribeck_velocity > 0.0) tau += d.stribeck * stribeck_shape(qd[j], d.stribeck_velocity);
     torque[j] = tau;
-    current[j] = direction_factor(d.c_gen, tau, qd[j], direction_blend) * tau / d.gain;
+  }
+}
+
+void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                        VectorJ& current, const FrictionMemory* memory) const {
+  if (sequential) return predict_sequential(q, qd, qdd, torque, current);
+  physics_torque(q, qd, qdd, temperature, torque, memory);
+  const int n = robot_->n_dof();
+  current.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const JointDrive& d = joints[static_cast<size_t>(j)];
+    current[j] = direction_factor(d.c_gen, torque[j], qd[j], direction_blend) * torque[j] / d.gain;
   }
   if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
 }

@@ -64,7 +64,7 @@ void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current,
 TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), gain_(gain) {
   if (n_dof < 1) throw InvalidArgument(fmt::format("momentum observer: n_dof is {}, must be >= 1", n_dof));
   if (!(gain > 0.0)) throw InvalidArgument(fmt::format("momentum observer gain is {}, must be > 0", gain));
-  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = i_twin_ = VectorJ::Zero(n_dof);
+  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = VectorJ::Zero(n_dof);
 }
 
 void TwinMomentumObserver::reset() {
@@ -86,7 +86,7 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   }
   // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
   qdd_ = (s.qd - qd_prev_) / dt;
-  twin.predict(s.q, s.qd, qdd_, s.temperature, tau_twin_, i_twin_, &memory_);
+  twin.predict_torque(s.q, s.qd, qdd_, s.temperature, tau_twin_, &memory_);
   if (extra_torque != nullptr) tau_twin_ += *extra_torque;
   // first-order lag with bandwidth K (exact for a held input)
   if (dt != dt_) {

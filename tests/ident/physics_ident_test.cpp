@@ -336,7 +336,7 @@ TEST(FrictionMemory, HoldsTheLastDirectionAtRestAndTurnsOverWithDisplacement) {
   EXPECT_NEAR(h, 1.0 - 2.0 * 2000.0 * lsb, 0.05 * 2.0 * 2000.0 * lsb);
   // reversal: after 1/alpha of travel back h = -1 + 2/e (crossed zero), after 10/alpha it is -1
   h = presliding_step(1.0, -0.5e-3, 2000.0);
-  EXPECT_NEAR(h, -1.0 + 2.0 * std::exp(-1.0), 1e-12);
+  EXPECT_NEAR(h, -1.0 + 2.0 * std::exp(-1.0), 1e-6);  // the step uses a single-precision exp
   h = presliding_step(h, -5e-3, 2000.0);  // 10 distances more: slid
   EXPECT_NEAR(h, -1.0, 1e-4);
 }

@@ -60,13 +60,17 @@ struct FrictionMemory {
 inline double presliding_step(double h, double dq, double alpha) {
   if (dq == 0.0 || !(alpha > 0.0)) return h;
   const double s = dq > 0.0 ? 1.0 : -1.0;
-  return s + (h - s) * std::exp(-alpha * std::abs(dq));
+  if (h == s) return s;  // sliding on: the state has reached s exactly (most samples at speed; no exp)
+  // single-precision exp: 1e-7 relative on a factor in (0, 1), far below the state's meaning, and
+  // half the cost of the double one on the per-sample path (twice per sample in the monitor)
+  return s + (h - s) * static_cast<double>(std::exp(static_cast<float>(-alpha * std::abs(dq))));
 }
 /// Stribeck shape sign(qd) exp(-(qd/vs)^2) (0 when vs <= 0).
 inline double stribeck_shape(double qd, double vs) {
   if (!(vs > 0.0) || qd == 0.0) return 0.0;
-  const double x = qd / vs;
-  return (qd > 0.0 ? 1.0 : -1.0) * std::exp(-x * x);
+  const double x2 = (qd / vs) * (qd / vs);
+  if (x2 > 40.0) return 0.0;  // exp(-40) = 4e-18: below a double's resolution of any level it scales
+  return (qd > 0.0 ? 1.0 : -1.0) * static_cast<double>(std::exp(static_cast<float>(-x2)));  // float: see presliding_step
 }
 
 class TwinModel {
@@ -117,6 +121,9 @@ class TwinModel {
   /// and none held at rest).
   void predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                VectorJ& current, const FrictionMemory* memory = nullptr) const;
+  /// Only the torque (skips the drive's current factor: the momentum observer's per-sample call).
+  void predict_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                      const FrictionMemory* memory = nullptr) const;
   /// Only the current.
   void predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
                        VectorJ& current, const FrictionMemory* memory = nullptr) const;
@@ -151,6 +158,9 @@ class TwinModel {
   // exactly, at the cost of one RNEA (≈ 0.6 µs) instead of the full regressor plus a 36-term
   // product (≈ 1.8 µs). Re-synced whenever beta, base_columns or the payload change.
   void sync_fitted() const;
+  // rigid body + friction torque of the physics model
+  void physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
+                      const FrictionMemory* memory) const;
   void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
   // adds (hybrid) or substitutes (mlp) the learned block's output
   void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
