@@ -377,6 +377,35 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     A.block(at, 0, nfx, nb) += Ac.block(nb, 0, nfx, nb);
     A.block(at, at, nfx, nfx).triangularView<Eigen::Lower>() += Ac.block(nb, nb, nfx, nfx);
   };
+  // Every design row of a pass: fn(run index, sample, joint, row, payload torque of the sample) for
+  // every used sample (decimated, reversal-screened) and joint, with the progress report.
+  model::RegressorMatrix Y;
+  VectorJ tau_p;
+  Eigen::VectorXd r(p);
+  Eigen::Matrix<double, kFrictionColumns, 1> f;
+  auto for_each_row = [&](int pass, int passes, auto&& fn) {
+    long done = 0;
+    for (size_t ri = 0; ri < runs.size(); ++ri) {
+      const device::Recording& rec = *runs[ri].recording;
+      twin.set_payload(runs[ri].payload);
+      for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
+        const RobotSample& s = rec.samples[k];
+        const VectorJ& qdd = qdds[ri][k];
+        twin.regress(s.q, s.qd, qdd, Y, tau_p);
+        for (int j = 0; j < n; ++j) {
+          if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
+          r.setZero();
+          for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
+          twin.friction_row(j, s.qd, qdd, s.temperature, f);
+          r.segment(nb + nfx * j, nf) = f;
+          low_speed_row(ri, k, s.qd, j, r);
+          fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p));
+        }
+        if (progress && (++done % 20000) == 0)
+          progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+      }
+    }
+  };
 
   // stage 0: the fit with plain Coulomb friction; stage 1 (low_speed_friction): the low-speed
   // shapes chosen on stage 0's residual, then the whole fit again with their two columns per joint
@@ -388,23 +417,23 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         if (!(jd.gain > 0.0)) throw InvalidArgument("identify: a drive gain came out <= 0; the recordings do not excite that joint enough");
       choose_low_speed_shapes(twin, runs, qdds);
       hs = presliding_states(twin, runs);
+      // the second fit starts where the first did (gains and c_gen 1): the first fit's gains of
+      // joints the payload does not load can be far off (10^6 N·m/A with the alternating fit), and
+      // its start (the torque-domain LS with b / h) would inherit them
+      for (JointDrive& jd : twin.joints) jd.gain = jd.c_gen = 1.0;
     }
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
+    const int passes = 1 + o.efficiency_passes;
+    report = IdentReport{};
+    report.samples_used.assign(static_cast<size_t>(n), 0);
+    report.rmse.assign(static_cast<size_t>(n), 0.0);
+    report.r2.assign(static_cast<size_t>(n), 0.0);
     if (o.efficiency_fit == EfficiencyFit::Alternating) {
       // the first version: c_gen re-estimated between passes with theta fixed (kept for the
       // monitor's gain fallback, see IdentOptions::efficiency_fit)
       // sufficient statistics of one pass over the data: the linear step in (beta, friction) and the
       // per-joint gain step only need these sums, so the alternating least squares of the bilinear
       // model  g_j i_j / c_jk = r_jk . theta + tau_payload_jk  runs without revisiting the samples
-      Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
-      model::RegressorMatrix Y;
-      VectorJ tau_p;
-      Eigen::VectorXd r(p);
-      Eigen::Matrix<double, kFrictionColumns, 1> f;
-      const int passes = 1 + o.efficiency_passes;
-      report = IdentReport{};
-      report.samples_used.assign(static_cast<size_t>(n), 0);
-      report.rmse.assign(static_cast<size_t>(n), 0.0);
-      report.r2.assign(static_cast<size_t>(n), 0.0);
       report.generating_fraction.assign(static_cast<size_t>(n), std::nan(""));
       report.c_gen_identified.assign(static_cast<size_t>(n), true);
       for (int pass = 0; pass <= passes; ++pass) {
@@ -417,51 +446,33 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         std::vector<double> gen_num(static_cast<size_t>(n), 0.0), gen_den(static_cast<size_t>(n), 0.0);
         std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
         std::vector<long> cnt(static_cast<size_t>(n), 0);
-        long done = 0;
-        for (size_t ri = 0; ri < runs.size(); ++ri) {
-          const device::Recording& rec = *runs[ri].recording;
-          twin.set_payload(runs[ri].payload);
-          for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
-            const RobotSample& s = rec.samples[k];
-            const VectorJ& qdd = qdds[ri][k];
-            twin.regress(s.q, s.qd, qdd, Y, tau_p);
-            for (int j = 0; j < n; ++j) {
-              if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
-              JointDrive& jd = twin.joints[static_cast<size_t>(j)];
-              r.setZero();
-              for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
-              twin.friction_row(j, s.qd, qdd, s.temperature, f);
-              r.segment(nb + nfx * j, nf) = f;
-              low_speed_row(ri, k, s.qd, j, r);
-              const double i = s.current[j];
-              // the previous pass's torque decides the drive direction (first pass: motoring)
-              const double tau_hat = r.dot(theta) + tau_p[j];
-              const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
-              const double c = gen ? jd.c_gen : 1.0;
-              if (final_stats) {
-                const double err = i - c * tau_hat / jd.gain;
-                sse[static_cast<size_t>(j)] += err * err;
-                si[static_cast<size_t>(j)] += i;
-                si2[static_cast<size_t>(j)] += i * i;
-                ++cnt[static_cast<size_t>(j)];
-                continue;
-              }
-              if (gen) {
-                gen_num[static_cast<size_t>(j)] += i * tau_hat / jd.gain;
-                gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
-              }
-              const double w = i / c;  // current as the motoring drive would draw it
-              Ac[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
-              b[static_cast<size_t>(j)] += r * w;
-              cp[static_cast<size_t>(j)] += r * tau_p[j];
-              d[static_cast<size_t>(j)] += w * tau_p[j];
-              e[static_cast<size_t>(j)] += w * w;
-              pp[static_cast<size_t>(j)] += tau_p[j] * tau_p[j];
-            }
-            if (progress && (++done % 20000) == 0)
-              progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+        for_each_row(pass, passes, [&](size_t /*ri*/, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p) {
+          JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+          const double i = s.current[j];
+          // the previous pass's torque decides the drive direction (first pass: motoring)
+          const double tau_hat = r.dot(theta) + tau_p[j];
+          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+          const double c = gen ? jd.c_gen : 1.0;
+          if (final_stats) {
+            const double err = i - c * tau_hat / jd.gain;
+            sse[static_cast<size_t>(j)] += err * err;
+            si[static_cast<size_t>(j)] += i;
+            si2[static_cast<size_t>(j)] += i * i;
+            ++cnt[static_cast<size_t>(j)];
+            return;
           }
-        }
+          if (gen) {
+            gen_num[static_cast<size_t>(j)] += i * tau_hat / jd.gain;
+            gen_den[static_cast<size_t>(j)] += (tau_hat / jd.gain) * (tau_hat / jd.gain);
+          }
+          const double w = i / c;  // current as the motoring drive would draw it
+          Ac[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
+          b[static_cast<size_t>(j)] += r * w;
+          cp[static_cast<size_t>(j)] += r * tau_p[j];
+          d[static_cast<size_t>(j)] += w * tau_p[j];
+          e[static_cast<size_t>(j)] += w * w;
+          pp[static_cast<size_t>(j)] += tau_p[j] * tau_p[j];
+        });
         if (final_stats) {
           for (int j = 0; j < n; ++j) {
             auto& m = twin.joints[static_cast<size_t>(j)];
@@ -487,16 +498,6 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         }
         std::vector<double> h(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = 1.0 / twin.joints[static_cast<size_t>(j)].gain;
-        auto sse_of = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
-          double sum = 0.0;
-          for (int j = 0; j < n; ++j) {
-            const size_t J = static_cast<size_t>(j);
-            const double num = b[J].dot(th) + d[J];
-            const double den = th.dot(A[J] * th) + 2.0 * th.dot(cp[J]) + pp[J];
-            sum += e[J] - 2.0 * hh[J] * num + hh[J] * hh[J] * den;
-          }
-          return sum;
-        };
         if (pass == 0) {
           // start: theta from the torque-domain LS with the initial gains
           Eigen::MatrixXd Aw = Eigen::MatrixXd::Zero(p, p);
@@ -510,61 +511,17 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           As.diagonal().array() += kRidge;
           theta = D.asDiagonal().inverse() * As.ldlt().solve(D.asDiagonal().inverse() * rhs);
         }
-        double mu = 1e-3, obj = sse_of(theta, h);
-        for (int it = 0; it < 100; ++it) {
-          const int m = p + n;
-          Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
-          Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);  // half gradient of the SSE
-          for (int j = 0; j < n; ++j) {
-            const size_t J = static_cast<size_t>(j);
-            const Eigen::VectorXd At = A[J] * theta + cp[J];  // sum r tau_hat
-            const double num = b[J].dot(theta) + d[J];
-            const double den = theta.dot(At) + theta.dot(cp[J]) + pp[J];
-            H.topLeftCorner(p, p) += h[J] * h[J] * A[J];
-            H.block(0, p + j, p, 1) = h[J] * At;
-            H.block(p + j, 0, 1, p) = h[J] * At.transpose();
-            H(p + j, p + j) = den;
-            grad.head(p) += -h[J] * b[J] + h[J] * h[J] * At;
-            grad(p + j) = -num + h[J] * den;
-          }
-          const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
-          bool accepted = false;
-          for (int tries = 0; tries < 20 && !accepted; ++tries) {
-            Eigen::MatrixXd Hs = D.asDiagonal().inverse() * H * D.asDiagonal().inverse();
-            Hs.diagonal().array() += mu + kRidge;
-            const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
-            Eigen::VectorXd th2 = theta + step.head(p);
-            std::vector<double> h2 = h;
-            for (int j = 0; j < n; ++j) h2[static_cast<size_t>(j)] += step(p + j);
-            if (!any_payload) {
-              // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
-              double lh = 0.0;
-              bool ok = true;
-              for (double v : h2) ok &= v > 0.0, lh += std::log(std::abs(v));
-              if (ok) {
-                const double sc = std::exp(lh / n);
-                for (double& v : h2) v /= sc;
-                th2 *= sc;
-              }
-            }
-            // drive gains are positive: a step that flips one is rejected like a worse one
-            bool positive = true;
-            for (double v : h2) positive &= v > 0.0;
-            const double obj2 = positive ? sse_of(th2, h2) : std::numeric_limits<double>::infinity();
-            if (obj2 <= obj) {
-              const double gain = obj - obj2;
-              theta = th2;
-              h = h2;
-              obj = obj2;
-              mu = std::max(mu / 3.0, 1e-9);
-              accepted = true;
-              if (gain < 1e-12 * std::max(obj, 1e-30)) it = 100;  // converged
-            } else {
-              mu *= 5.0;
-            }
-          }
-          if (!accepted) break;
+        // the joint fit's Levenberg-Marquardt with only the motoring groups (c_gen folded into w)
+        std::vector<Stats> st(static_cast<size_t>(2 * n));
+        std::vector<double> hg(static_cast<size_t>(2 * n), 1.0);
+        for (int j = 0; j < n; ++j) {
+          const size_t J = static_cast<size_t>(j);
+          st[2 * J] = Stats{std::move(A[J]), std::move(cp[J]), std::move(b[J]), d[J], e[J], pp[J], cnt[J]};
+          st[2 * J + 1] = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
+          hg[2 * J] = h[J];
         }
+        fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), any_payload, theta, hg);
+        for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = hg[static_cast<size_t>(2 * j)];
         std::vector<double> g(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
         for (int j = 0; j < n; ++j) twin.joints[static_cast<size_t>(j)].gain = g[static_cast<size_t>(j)];
@@ -584,16 +541,6 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       // samples. Fitting c_gen jointly matters: with theta fixed, a wrong c_gen is almost compensated
       // by the Coulomb and gravity terms (i_down / i_up = c (G - Fc) / (G + Fc)), so alternating
       // between the two (the first version) crawled from 1 towards the truth by a few % per pass.
-      Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
-      model::RegressorMatrix Y;
-      VectorJ tau_p;
-      Eigen::VectorXd r(p);
-      Eigen::Matrix<double, kFrictionColumns, 1> f;
-      const int passes = 1 + o.efficiency_passes;
-      report = IdentReport{};
-      report.samples_used.assign(static_cast<size_t>(n), 0);
-      report.rmse.assign(static_cast<size_t>(n), 0.0);
-      report.r2.assign(static_cast<size_t>(n), 0.0);
       report.generating_fraction.assign(static_cast<size_t>(n), 0.0);
       report.c_gen_identified.assign(static_cast<size_t>(n), false);
       report.payload_current_rms.assign(static_cast<size_t>(n), 0.0);
@@ -610,53 +557,35 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         std::vector<long> cnt(static_cast<size_t>(n), 0), gen_cnt(static_cast<size_t>(n), 0);
         std::vector<double> pay2(static_cast<size_t>(n), 0.0);  // sum (tau_payload / g)^2 over runs with a known payload
         std::vector<long> pay_cnt(static_cast<size_t>(n), 0);
-        long done = 0;
-        for (size_t ri = 0; ri < runs.size(); ++ri) {
-          const device::Recording& rec = *runs[ri].recording;
-          twin.set_payload(runs[ri].payload);
-          for (size_t k = 0; k < rec.samples.size(); k += static_cast<size_t>(o.decimate)) {
-            const RobotSample& s = rec.samples[k];
-            const VectorJ& qdd = qdds[ri][k];
-            twin.regress(s.q, s.qd, qdd, Y, tau_p);
-            for (int j = 0; j < n; ++j) {
-              if (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen) continue;
-              const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
-              r.setZero();
-              for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
-              twin.friction_row(j, s.qd, qdd, s.temperature, f);
-              r.segment(nb + nfx * j, nf) = f;
-              low_speed_row(ri, k, s.qd, j, r);
-              const double i = s.current[j];
-              // the previous pass's torque decides the drive direction (first pass: all motoring);
-              // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
-              const double tau_hat = r.dot(theta) + tau_p[j];
-              const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
-              gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
-              if (final_stats) {
-                const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
-                sse[static_cast<size_t>(j)] += err * err;
-                si[static_cast<size_t>(j)] += i;
-                si2[static_cast<size_t>(j)] += i * i;
-                ++cnt[static_cast<size_t>(j)];
-                if (runs[ri].payload.mass > 0.0) {
-                  pay2[static_cast<size_t>(j)] += (tau_p[j] / jd.gain) * (tau_p[j] / jd.gain);
-                  ++pay_cnt[static_cast<size_t>(j)];
-                }
-                continue;
-              }
-              Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
-              stc[static_cast<size_t>(2 * j + (gen ? 1 : 0))].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
-              x.b += r * i;
-              x.cp += r * tau_p[j];
-              x.d += i * tau_p[j];
-              x.e += i * i;
-              x.pp += tau_p[j] * tau_p[j];
-              ++x.count;
+        for_each_row(pass, passes, [&](size_t ri, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p) {
+          const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+          const double i = s.current[j];
+          // the previous pass's torque decides the drive direction (first pass: all motoring);
+          // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
+          const double tau_hat = r.dot(theta) + tau_p[j];
+          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+          gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
+          if (final_stats) {
+            const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
+            sse[static_cast<size_t>(j)] += err * err;
+            si[static_cast<size_t>(j)] += i;
+            si2[static_cast<size_t>(j)] += i * i;
+            ++cnt[static_cast<size_t>(j)];
+            if (runs[ri].payload.mass > 0.0) {
+              pay2[static_cast<size_t>(j)] += (tau_p[j] / jd.gain) * (tau_p[j] / jd.gain);
+              ++pay_cnt[static_cast<size_t>(j)];
             }
-            if (progress && (++done % 20000) == 0)
-              progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+            return;
           }
-        }
+          Stats& x = st[static_cast<size_t>(2 * j + (gen ? 1 : 0))];
+          stc[static_cast<size_t>(2 * j + (gen ? 1 : 0))].selfadjointView<Eigen::Lower>().rankUpdate(compact(r, j));
+          x.b += r * i;
+          x.cp += r * tau_p[j];
+          x.d += i * tau_p[j];
+          x.e += i * i;
+          x.pp += tau_p[j] * tau_p[j];
+          ++x.count;
+        });
         if (final_stats) {
           for (int j = 0; j < n; ++j) {
             const size_t J = static_cast<size_t>(j);
