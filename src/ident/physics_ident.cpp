@@ -383,6 +383,13 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   VectorJ tau_p;
   Eigen::VectorXd r(p);
   Eigen::Matrix<double, kFrictionColumns, 1> f;
+  // the fit's stages (the loop below); the progress report spans them
+  const int stages = o.low_speed_friction ? 2 : 1;
+  int stage = 0;
+  auto check_gains = [&] {
+    for (const auto& jd : twin.joints)
+      if (!(jd.gain > 0.0)) throw InvalidArgument("identify: a drive gain came out <= 0; the recordings do not excite that joint enough");
+  };
   auto for_each_row = [&](int pass, int passes, auto&& fn) {
     long done = 0;
     for (size_t ri = 0; ri < runs.size(); ++ri) {
@@ -402,7 +409,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p));
         }
         if (progress && (++done % 20000) == 0)
-          progress((pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1));
+          progress((stage + (pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1)) / stages);
       }
     }
   };
@@ -411,10 +418,9 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   // shapes chosen on stage 0's residual, then the whole fit again with their two columns per joint
   // (the Coulomb and offset terms absorb part of the low-speed friction when it is left out, so a
   // fit of the two levels on the residual alone comes out low: 0.56 for 0.70 N·m on a synthetic twin)
-  for (int stage = 0; stage < (o.low_speed_friction ? 2 : 1); ++stage) {
+  for (stage = 0; stage < stages; ++stage) {
     if (stage == 1) {
-      for (const auto& jd : twin.joints)
-        if (!(jd.gain > 0.0)) throw InvalidArgument("identify: a drive gain came out <= 0; the recordings do not excite that joint enough");
+      check_gains();
       choose_low_speed_shapes(twin, runs, qdds);
       hs = presliding_states(twin, runs);
       // the second fit starts where the first did (gains and c_gen 1): the first fit's gains of
@@ -702,8 +708,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
                                          100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
   twin.gains_absolute = any_payload;
-  for (const auto& jd : twin.joints)
-    if (!(jd.gain > 0.0)) throw InvalidArgument("identify: a drive gain came out <= 0; the recordings do not excite that joint enough");
+  check_gains();
   for (int j = 0; j < n && o.low_speed_friction; ++j) {
     const JointDrive& d = twin.joints[static_cast<size_t>(j)];
     // levels in the joint's torque scale: N·m only where the known payload fixed its gain

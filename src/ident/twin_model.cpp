@@ -280,12 +280,6 @@ void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
   }
 }
 
-bool TwinModel::has_memory() const {
-  for (const JointDrive& d : joints)
-    if (d.presliding_alpha > 0.0 && d.presliding != 0.0) return true;
-  return false;
-}
-
 std::string TwinModel::to_json() const {
   nlohmann::json j;
   j["format"] = "twinwatch-twin";

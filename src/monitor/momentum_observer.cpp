@@ -73,10 +73,14 @@ void TwinMomentumObserver::reset() {
   memory_ = ident::FrictionMemory{};
 }
 
-const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
+const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque,
+                                            const ident::FrictionMemory* memory) {
   // measured drive torque through the identified drive model
   measured_drive_torque(twin, s.current, s.qd, tau_m_);
-  twin.advance(memory_, s.q);
+  if (memory == nullptr) {
+    twin.advance(memory_, s.q);
+    memory = &memory_;
+  }
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;
@@ -86,7 +90,7 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   }
   // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
   qdd_ = (s.qd - qd_prev_) / dt;
-  twin.predict_torque(s.q, s.qd, qdd_, s.temperature, tau_twin_, &memory_);
+  twin.predict_torque(s.q, s.qd, qdd_, s.temperature, tau_twin_, memory);
   if (extra_torque != nullptr) tau_twin_ += *extra_torque;
   // first-order lag with bandwidth K (exact for a held input)
   if (dt != dt_) {

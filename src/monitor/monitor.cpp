@@ -498,7 +498,7 @@ void Monitor::run_diagnosis(double t) {
   at.primed = true;
   for (auto& d : window_) {
     at.h = d.presliding;
-    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur, d.presliding.size() == n_ ? &at : nullptr);
+    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur, &at);
     for (int j = 0; j < n_; ++j) d.r_tau[j] = torque_gain(j) * (d.current[j] - cur[j]);
   }
   DiagnosisOptions o;
@@ -569,7 +569,7 @@ void Monitor::push(const RobotSample& s) {
   // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
   if (obs_on_) {
     temperature_drive_torque(twin_, temp_slope_, cfg_.trend.temperature_ref, s, obs_warm_);
-    obs_.update(twin_, s, dt, &obs_warm_);
+    obs_.update(twin_, s, dt, &obs_warm_, &memory_);
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds

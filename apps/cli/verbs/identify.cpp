@@ -364,8 +364,9 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
   sub->add_flag("--no-low-speed-friction", o->no_low_speed_friction,
-                "physics/mlp/hybrid: leave out the low-speed friction (pre-sliding memory and Stribeck rise, fitted on the main "
-                "fit's residual); the twin then has plain Coulomb sign(qd) friction");
+                "physics/mlp/hybrid: leave out the low-speed friction (pre-sliding memory and Stribeck rise; shapes chosen on the "
+                "plain fit's residual, then the whole fit again with them, which takes about twice as long); the twin then has "
+                "plain Coulomb sign(qd) friction");
   sub->add_option("--direction-blend", o->direction_blend,
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
                   "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")

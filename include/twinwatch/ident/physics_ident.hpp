@@ -39,8 +39,8 @@ struct IdentOptions {
   /// [rad/s] TwinModel::direction_blend of the identified twin: two velocity quanta of a 20-bit
   /// encoder differenced at 500 Hz (2 x 6e-6 rad / 2 ms = 6e-3 rad/s), rounded
   double direction_blend = 0.005;
-  /// fit the low-speed friction (pre-sliding memory and Stribeck rise, twin_model.cpp) on the main
-  /// fit's residual; false: plain Coulomb sign(qd), the twin of before
+  /// fit the low-speed friction (pre-sliding memory and Stribeck rise, twin_model.cpp): shapes on the
+  /// plain fit's residual, then the whole fit again with them; false: plain Coulomb sign(qd), the twin of before
   bool low_speed_friction = true;
   void validate() const;
 };

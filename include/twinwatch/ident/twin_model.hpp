@@ -38,7 +38,8 @@ struct JointDrive {
   Eigen::Matrix<double, kFrictionColumns, 1> friction = Eigen::Matrix<double, kFrictionColumns, 1>::Zero();  ///< [N·m, N·m·s/rad, N·m, kg·m², N·m·s/rad/°C]
   double rmse = 0.0, r2 = 0.0;   ///< current fit on the training data
   /// Low-speed friction (twin_model.cpp, "Low-speed friction"): pre-sliding memory and Stribeck
-  /// rise, fitted after the main fit on its residual; all zero = plain Coulomb sign(qd).
+  /// rise, shapes chosen on the plain fit's residual, levels fitted with everything else (physics_ident.cpp);
+  /// all zero = plain Coulomb sign(qd).
   double presliding_alpha = 0.0;   ///< [1/rad] 1 / pre-sliding distance of the memory state h (0: no memory)
   double presliding = 0.0;         ///< [N·m] coefficient of (h - sign(qd)): the friction held at rest
   double stribeck_velocity = 0.0;  ///< [rad/s] v_s of the Stribeck term (0: none)
@@ -131,8 +132,6 @@ class TwinModel {
   /// Advances the pre-sliding memory to the measured position q of the next sample (O(n), no
   /// allocation once primed). Call once per sample, before predict().
   void advance(FrictionMemory& memory, const VectorJ& q) const;
-  /// True when some joint has a pre-sliding memory (then predict() wants a FrictionMemory).
-  bool has_memory() const;
 
   /// Friction design row of joint j (kFrictionColumns values).
   void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,

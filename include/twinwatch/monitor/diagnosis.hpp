@@ -28,7 +28,7 @@ struct DiagnosisSample {
   VectorJ current;     ///< measured current [A] (for frozen-channel checks)
   VectorJ tau_ext;     ///< momentum-observer estimate of the external torque [N·m] (empty: none)
   VectorJ tau_ext_level;  ///< the observer's healthy bound (its threshold) at this sample [N·m]
-  VectorJ presliding;  ///< the twin's pre-sliding state h at this sample (ident::FrictionMemory; empty: none)
+  VectorJ presliding;  ///< the twin's pre-sliding state h at this sample (ident::FrictionMemory::h)
   std::uint64_t digital_outputs = 0;
   bool gap_before = false;
 };

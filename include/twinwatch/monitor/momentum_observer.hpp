@@ -71,8 +71,11 @@ class TwinMomentumObserver {
   /// current [A], temperature [°C] of n_dof joints; @param dt time since the previous sample [s]
   /// @param extra_torque optional drive torque the twin does not predict, added to its prediction
   /// (the monitor's temperature compensation of the viscous friction) [N·m]; null: none
+  /// @param memory the stream's twin friction memory, already advanced to this sample by its owner
+  /// (the monitor's, so that one memory is advanced per sample); null: the observer keeps its own
   /// @return r, the estimate of the external joint torque [N·m] (twin torque units)
-  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr);
+  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr,
+                        const ident::FrictionMemory* memory = nullptr);
 
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }
@@ -85,7 +88,7 @@ class TwinMomentumObserver {
   double gain_;
   bool started_ = false;
   VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_;
-  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream
+  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream (when no owner passes one)
   double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
 
