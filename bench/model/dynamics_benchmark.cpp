@@ -61,6 +61,33 @@ void BM_Rnea_twinwatch(benchmark::State& st) {
     k = (k + 1) & (kStates - 1);
   }
 }
+// two accelerations of one state: rnea_pair against two rnea calls (the monitor's current residual
+// and its momentum observer, docs/benchmarks.md issue 7)
+void BM_RneaTwoAccelerations_pair(benchmark::State& st) {
+  model::DynamicsData d(ur3e());
+  const auto& s = states();
+  VectorJ tau2(6);
+  int k = 0;
+  for (auto _ : st) {
+    const int k2 = (k + 1) & (kStates - 1);
+    benchmark::DoNotOptimize(model::rnea_pair(ur3e(), d, s.q[k], s.qd[k], s.qdd[k], s.qdd[k2], tau2).data());
+    benchmark::DoNotOptimize(tau2.data());
+    k = k2;
+  }
+}
+void BM_RneaTwoAccelerations_two(benchmark::State& st) {
+  model::DynamicsData d(ur3e());
+  const auto& s = states();
+  VectorJ tau(6);
+  int k = 0;
+  for (auto _ : st) {
+    const int k2 = (k + 1) & (kStates - 1);
+    tau = model::rnea(ur3e(), d, s.q[k], s.qd[k], s.qdd[k]);
+    benchmark::DoNotOptimize(tau.data());
+    benchmark::DoNotOptimize(model::rnea(ur3e(), d, s.q[k], s.qd[k], s.qdd[k2]).data());
+    k = k2;
+  }
+}
 void BM_Rnea_baseline(benchmark::State& st) {
   model::DynamicsData d(ur3e());
   const auto& s = states();
@@ -153,6 +180,8 @@ void BM_Regressor_baseline(benchmark::State& st) {
 BENCHMARK(BM_Rnea_twinwatch)->Name("BM_Rnea/twinwatch");
 BENCHMARK(BM_Rnea_baseline)->Name("BM_Rnea/baseline");
 BENCHMARK(BM_Rnea_kdl)->Name("BM_Rnea/kdl");
+BENCHMARK(BM_RneaTwoAccelerations_pair)->Name("BM_RneaTwoAccelerations/rnea_pair");
+BENCHMARK(BM_RneaTwoAccelerations_two)->Name("BM_RneaTwoAccelerations/two_rnea");
 BENCHMARK(BM_MassMatrix_twinwatch)->Name("BM_MassMatrix/twinwatch");
 BENCHMARK(BM_MassMatrix_kdl)->Name("BM_MassMatrix/kdl");
 BENCHMARK(BM_ForwardDynamics_twinwatch)->Name("BM_ForwardDynamics/twinwatch");

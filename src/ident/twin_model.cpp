@@ -201,21 +201,34 @@ void TwinModel::predict_torque(const VectorJ& q, const VectorJ& qd, const Vector
 }
 
 void TwinModel::physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                               const FrictionMemory* memory) const {
+                               const FrictionMemory* memory, const VectorJ* qdd2, VectorJ* torque2) const {
   sync_fitted();
-  const VectorJ& tau_rb = model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
   const int n = robot_->n_dof();
+  const bool pair = qdd2 != nullptr && torque2 != nullptr;
+  const VectorJ& tau_rb = pair ? model::rnea_pair(*fitted_, *fitted_data_, q, qd, qdd, *qdd2, *torque2)
+                               : model::rnea(*fitted_, *fitted_data_, q, qd, qdd);
   torque.resize(n);
   Eigen::Matrix<double, kFrictionColumns, 1> f;
   for (int j = 0; j < n; ++j) {
     const JointDrive& d = joints[static_cast<size_t>(j)];
     friction_row(j, qd, qdd, temperature, f);
-    double tau = tau_rb[j] + f.dot(d.friction);
+    double tau_f = f.dot(d.friction);
     // low-speed friction: the memory's departure from steady sliding, and the Stribeck rise
     const double s = qd[j] > 0.0 ? 1.0 : (qd[j] < 0.0 ? -1.0 : 0.0);
-    if (memory != nullptr && d.presliding_alpha > 0.0 && memory->primed) tau += d.presliding * (memory->h[j] - s);
-    if (d.stribeck_velocity > 0.0) tau += d.stribeck * stribeck_shape(qd[j], d.stribeck_velocity);
-    torque[j] = tau;
+    if (memory != nullptr && d.presliding_alpha > 0.0 && memory->primed) tau_f += d.presliding * (memory->h[j] - s);
+    if (d.stribeck_velocity > 0.0) tau_f += d.stribeck * stribeck_shape(qd[j], d.stribeck_velocity);
+    torque[j] = tau_rb[j] + tau_f;
+    // the second acceleration changes the rigid body (rnea_pair) and the armature term only
+    if (pair) (*torque2)[j] += tau_f + d.friction(kArmature) * ((*qdd2)[j] - qdd[j]);
+  }
+}
+
+void TwinModel::drive_current(const VectorJ& qd, const VectorJ& torque, VectorJ& current) const {
+  const int n = robot_->n_dof();
+  current.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const JointDrive& d = joints[static_cast<size_t>(j)];
+    current[j] = direction_factor(d.c_gen, torque[j], qd[j], direction_blend) * torque[j] / d.gain;
   }
 }
 
@@ -223,13 +236,18 @@ void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
                         VectorJ& current, const FrictionMemory* memory) const {
   if (sequential) return predict_sequential(q, qd, qdd, torque, current);
   physics_torque(q, qd, qdd, temperature, torque, memory);
-  const int n = robot_->n_dof();
-  current.resize(n);
-  for (int j = 0; j < n; ++j) {
-    const JointDrive& d = joints[static_cast<size_t>(j)];
-    current[j] = direction_factor(d.c_gen, torque[j], qd[j], direction_blend) * torque[j] / d.gain;
-  }
+  drive_current(qd, torque, current);
   if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
+}
+
+void TwinModel::predict_pair(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& qdd2, const VectorJ& temperature,
+                             VectorJ& torque, VectorJ& current, VectorJ& torque2, const FrictionMemory* memory) const {
+  if (sequential || learned) {
+    predict(q, qd, qdd, temperature, torque, current, memory);
+    return predict_torque(q, qd, qdd2, temperature, torque2, memory);
+  }
+  physics_torque(q, qd, qdd, temperature, torque, memory, &qdd2, &torque2);
+  drive_current(qd, torque, current);
 }
 
 void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,

@@ -122,6 +122,68 @@ const VectorJ& rnea(const RobotModel& model, DynamicsData& d, const VectorJ& q, 
   return d.tau;
 }
 
+// Two accelerations in one sweep. tau is linear in qdd: tau(qdd2) = tau(qdd) + M(q) (qdd2 - qdd), and
+// M(q) dqdd is itself a Newton-Euler pass with qd = 0 and no gravity over the same rotations:
+//   dwd_i = R_i^T dwd_{i-1} + dqdd_i z,   da_i = R_i^T (da_{i-1} + dwd_{i-1} x p_i)
+//   df_i  = m da_i + dwd_i x h + R_{i+1} df_{i+1}
+//   dn_i  = I_o dwd_i + h x da_i + R_{i+1} dn_{i+1} + p_{i+1} x (R_{i+1} df_{i+1})
+// It reuses the sines, cosines, rotations and every velocity term of the first pass, so the second
+// torque costs about half an RNEA (the monitor needs both: its current residual at the filtered
+// acceleration, the momentum observer at the finite-difference one; docs/benchmarks.md).
+const VectorJ& rnea_pair(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
+                         const VectorJ& qdd2, VectorJ& tau2) {
+  using detail::V3;
+  using detail::M3;
+  check_q(model, q);
+  const int n = model.n_dof();
+  check_size("qd", qd.size(), n, "model.n_dof");
+  check_size("qdd", qdd.size(), n, "model.n_dof");
+  check_size("qdd2", qdd2.size(), n, "model.n_dof");
+  M3 R[kMaxDof];
+  V3 W[kMaxDof], WD[kMaxDof], A[kMaxDof], DWD[kMaxDof], DA[kMaxDof];
+  detail::forward_pass(model, q, &qd, &qdd, true, R, W, WD, A);
+  V3 dwd_prev{0, 0, 0}, da_prev{0, 0, 0};
+  for (int i = 0; i < n; ++i) {
+    const V3 p = detail::load(model.link_cache(i).p);
+    V3 dwd = detail::mul_t(R[i], dwd_prev);
+    dwd.z += qdd2[i] - qdd[i];
+    da_prev = detail::mul_t(R[i], da_prev + cross(dwd_prev, p));
+    DA[i] = da_prev;
+    DWD[i] = dwd;
+    dwd_prev = dwd;
+  }
+  // backward pass of both (rnea_impl's, plus the step's wrenches)
+  d.tau.resize(n);
+  tau2.resize(n);
+  V3 f_child{0, 0, 0}, n_child{0, 0, 0}, df_child{0, 0, 0}, dn_child{0, 0, 0};
+  for (int i = n - 1; i >= 0; --i) {
+    const detail::LinkCache& c = model.link_cache(i);
+    const V3 w = W[i], wd = WD[i], a = A[i];
+    const V3 h = detail::load(c.h);
+    const detail::S3 I = detail::load_sym(c.I_o);
+    const V3 f = c.m * a + cross(wd, h) + cross(w, cross(w, h)) + f_child;
+    const V3 nn = mul(I, wd) + cross(w, mul(I, w)) + cross(h, a) + n_child;
+    const V3 df = c.m * DA[i] + cross(DWD[i], h) + df_child;
+    const V3 dn = mul(I, DWD[i]) + cross(h, DA[i]) + dn_child;
+    d.tau[i] = nn.z;
+    tau2[i] = nn.z + dn.z;
+    detail::store(R[i], d.R[i]);
+    detail::store(w, d.w[i]);
+    detail::store(wd, d.wd[i]);
+    detail::store(a, d.a[i]);
+    detail::store(f, d.f[i]);
+    detail::store(nn, d.n[i]);
+    if (i > 0) {
+      const V3 p = detail::load(c.p);
+      f_child = mul(R[i], f);
+      n_child = mul(R[i], nn) + cross(p, f_child);
+      df_child = mul(R[i], df);
+      dn_child = mul(R[i], dn) + cross(p, df_child);
+    }
+  }
+  return d.tau;
+}
+
 const VectorJ& gravity_torque(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
   check_q(model, q);
   rnea_impl(model, d, q, nullptr, nullptr, true);

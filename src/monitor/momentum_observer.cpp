@@ -75,12 +75,25 @@ void TwinMomentumObserver::reset() {
 
 const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque,
                                             const ident::FrictionMemory* memory) {
-  // measured drive torque through the identified drive model
-  measured_drive_torque(twin, s.current, s.qd, tau_m_);
   if (memory == nullptr) {
     twin.advance(memory_, s.q);
     memory = &memory_;
   }
+  if (const VectorJ* qdd = acceleration(s, dt)) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, memory);
+  return update_with_torque(twin, s, dt, tau_twin_, extra_torque);
+}
+
+const VectorJ* TwinMomentumObserver::acceleration(const RobotSample& s, double dt) {
+  if (!started_ || !(dt > 0.0)) return nullptr;
+  // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
+  qdd_ = (s.qd - qd_prev_) / dt;
+  return &qdd_;
+}
+
+const VectorJ& TwinMomentumObserver::update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt,
+                                                        const VectorJ& twin_torque, const VectorJ* extra_torque) {
+  // measured drive torque through the identified drive model
+  measured_drive_torque(twin, s.current, s.qd, tau_m_);
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;
@@ -88,10 +101,6 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
     started_ = true;
     return r_;
   }
-  // momentum balance over the period: tau_ext ~ M (qd_k - qd_{k-1}) / dt + h + tau_f - tau_m
-  qdd_ = (s.qd - qd_prev_) / dt;
-  twin.predict_torque(s.q, s.qd, qdd_, s.temperature, tau_twin_, memory);
-  if (extra_torque != nullptr) tau_twin_ += *extra_torque;
   // first-order lag with bandwidth K (exact for a held input)
   if (dt != dt_) {
     dt_ = dt;
@@ -99,7 +108,8 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   }
   const double a = a_;
   for (int j = 0; j < n_; ++j) {
-    const double tau_ext = tau_twin_[j] - 0.5 * (tau_m_[j] + tau_m_prev_[j]);
+    const double tau_twin = twin_torque[j] + (extra_torque != nullptr ? (*extra_torque)[j] : 0.0);
+    const double tau_ext = tau_twin - 0.5 * (tau_m_[j] + tau_m_prev_[j]);
     r_[j] += a * (tau_ext - r_[j]);
   }
   qd_prev_ = s.qd;

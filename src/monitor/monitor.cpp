@@ -405,7 +405,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
     : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()), obs_(std::max(1, twin.n_dof()), cfg_.observer_gain > 0.0 ? cfg_.observer_gain : 1.0) {
   cfg_.validate(n_);
   obs_on_ = cfg_.observer_level.size() == n_;
-  obs_level_ = obs_warm_ = rf_dec_ = obs_dec_ = VectorJ::Zero(n_);
+  obs_level_ = obs_warm_ = tau_obs_ = rf_dec_ = obs_dec_ = VectorJ::Zero(n_);
   rest_rf_ = RestBaseline(n_);
   rest_obs_ = RestBaseline(n_);
   // the observer runs in the twin's torque units; the diagnosis needs N·m (implausible gains, see
@@ -550,7 +550,12 @@ void Monitor::push(const RobotSample& s) {
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }
   twin_.advance(memory_, s.q);
-  twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_, &memory_);
+  // the observer's twin torque (at its own, unfiltered acceleration) comes with the prediction
+  const VectorJ* qdd_obs = obs_on_ ? obs_.acceleration(s, dt) : nullptr;
+  if (qdd_obs != nullptr)
+    twin_.predict_pair(s.q, s.qd, qdd_, *qdd_obs, s.temperature, tau_hat_, i_hat_, tau_obs_, &memory_);
+  else
+    twin_.predict(s.q, s.qd, qdd_, s.temperature, tau_hat_, i_hat_, &memory_);
   r_ = s.current - i_hat_;
   // temperature: the viscous friction's slope learned on a healthy warm-up (trend.hpp), so that
   // neither the thresholds nor the wear trend see a cooling or warming joint as a fault
@@ -569,7 +574,7 @@ void Monitor::push(const RobotSample& s) {
   // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
   if (obs_on_) {
     temperature_drive_torque(twin_, temp_slope_, cfg_.trend.temperature_ref, s, obs_warm_);
-    obs_.update(twin_, s, dt, &obs_warm_, &memory_);
+    obs_.update_with_torque(twin_, s, dt, tau_obs_, &obs_warm_);
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds

@@ -279,6 +279,39 @@ TEST_F(Fixture, PredictionEqualsTheRegressorForm) {
   }
 }
 
+// predict_pair (the monitor's prediction and its observer's torque in one call) is predict() at the
+// first acceleration and predict_torque() at the second, with payload, memory and armature
+TEST_F(Fixture, PairedPredictionEqualsTwoPredictions) {
+  TwinModel t = *twin;
+  for (auto& d : t.joints) d.friction(kArmature) = 0.02;  // the armature term changes with the acceleration
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> N(0.0, 1.0);
+  FrictionMemory mem;
+  VectorJ q = VectorJ::Zero(6);
+  t.advance(mem, q);
+  for (int trial = 0; trial < 30; ++trial) {
+    model::RigidBodyInertia p;
+    if (trial % 2) {
+      p.mass = 0.3 + 0.1 * trial;
+      p.com = Eigen::Vector3d(0.02, 0.01, 0.05);
+    }
+    t.set_payload(p);
+    VectorJ qd(6), qdd(6), qdd2(6), temp = VectorJ::Constant(6, 35.0);
+    for (int j = 0; j < 6; ++j) q[j] += 1e-4 * N(rng), qd[j] = 0.2 * N(rng), qdd[j] = 3 * N(rng), qdd2[j] = qdd[j] + 2 * N(rng);
+    t.advance(mem, q);
+    VectorJ tau, cur, tau2, tau_ref, cur_ref, tau2_ref;
+    t.predict_pair(q, qd, qdd, qdd2, temp, tau, cur, tau2, &mem);
+    t.predict(q, qd, qdd, temp, tau_ref, cur_ref, &mem);
+    t.predict_torque(q, qd, qdd2, temp, tau2_ref, &mem);
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_NEAR(tau[j], tau_ref[j], 1e-12 * (1 + std::abs(tau_ref[j]))) << "trial " << trial << " joint " << j;
+      EXPECT_NEAR(cur[j], cur_ref[j], 1e-12 * (1 + std::abs(cur_ref[j]))) << "trial " << trial << " joint " << j;
+      EXPECT_NEAR(tau2[j], tau2_ref[j], 1e-10 * (1 + std::abs(tau2_ref[j]))) << "trial " << trial << " joint " << j;
+    }
+    EXPECT_GT((tau2 - tau).cwiseAbs().maxCoeff(), 1e-3);
+  }
+}
+
 // The low-speed friction the twin fits on its main fit's residual, on a recording whose currents a
 // known twin made (pre-sliding 0.6 N·m over 0.5 mrad and a Stribeck rise of 0.25 N·m below
 // 0.04 rad/s, both on the fitting grid): on J2-J4 identify picks those shapes (v_s to one grid step)

@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
 
 namespace twinwatch::model {
@@ -61,6 +62,37 @@ TEST(Dynamics, MassMatrixTimesAccelerationPlusBiasEqualsRnea) {
     const VectorJ qdd2 = forward_dynamics(m, d, q, qd, tau);
     EXPECT_LT((qdd2 - qdd).cwiseAbs().maxCoeff(), 1e-8) << "seed " << seed << " trial " << trial;
   }
+}
+
+// rnea_pair: the second torque through the first pass's rotations, tau2 = tau + M (qdd2 - qdd), on
+// general placements and on the UR3e's DH placements (the forward pass's about-x branch)
+TEST(Dynamics, PairedRneaEqualsTwoRneasAndDiffersByTheMassMatrixTimesTheAccelerationStep) {
+  std::mt19937 rng(4321);
+  std::vector<RobotModel> models;
+  for (int k = 0; k < 50; ++k) models.push_back(random_chain(rng, 6));
+  models.push_back(load_robot("ur3e"));
+  ASSERT_TRUE(models.back().placements_about_x());
+  for (size_t k = 0; k < models.size(); ++k) {
+    const RobotModel& m = models[k];
+    DynamicsData d(m), d2(m);
+    const VectorJ q = random_vec(rng, 6, 3.0), qd = random_vec(rng, 6, 2.0), qdd = random_vec(rng, 6, 5.0),
+                  qdd2 = random_vec(rng, 6, 5.0);
+    VectorJ tau2;
+    const VectorJ tau = rnea_pair(m, d, q, qd, qdd, qdd2, tau2);
+    const VectorJ tau_ref = rnea(m, d2, q, qd, qdd);
+    const VectorJ tau2_ref = rnea(m, d2, q, qd, qdd2);
+    EXPECT_LT((tau - tau_ref).cwiseAbs().maxCoeff(), 1e-12) << "model " << k;
+    EXPECT_LT((tau2 - tau2_ref).cwiseAbs().maxCoeff(), kTol) << "model " << k;
+    // the step is the inertia's: independent of velocity and gravity
+    const MatrixJ M = crba(m, d2, q);
+    EXPECT_LT((tau2 - tau - M * (qdd2 - qdd)).cwiseAbs().maxCoeff(), kTol) << "model " << k;
+    EXPECT_GT((tau2 - tau).cwiseAbs().maxCoeff(), 0.01) << "model " << k;  // the step is not trivially zero
+    // the workspace holds the first acceleration's pass, as after rnea()
+    EXPECT_LT((d.tau - tau_ref).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  DynamicsData d(models[0]);
+  VectorJ tau2;
+  EXPECT_THROW(rnea_pair(models[0], d, VectorJ::Zero(6), VectorJ::Zero(6), VectorJ::Zero(6), VectorJ::Zero(5), tau2), InvalidArgument);
 }
 
 TEST(Dynamics, WrongSizeNamesArgumentAndExpectedSize) {

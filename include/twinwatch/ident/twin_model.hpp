@@ -125,6 +125,12 @@ class TwinModel {
   /// Only the torque (skips the drive's current factor: the momentum observer's per-sample call).
   void predict_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                       const FrictionMemory* memory = nullptr) const;
+  /// predict() at acceleration qdd, and in the same call the torque at a second acceleration qdd2
+  /// of the same state (the monitor's current residual and its momentum observer). For the physics
+  /// twin the second torque costs about half a prediction (model::rnea_pair); sequential and learned
+  /// twins evaluate it by a second predict_torque().
+  void predict_pair(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& qdd2, const VectorJ& temperature,
+                    VectorJ& torque, VectorJ& current, VectorJ& torque2, const FrictionMemory* memory = nullptr) const;
   /// Only the current.
   void predict_current(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
                        VectorJ& current, const FrictionMemory* memory = nullptr) const;
@@ -158,8 +164,11 @@ class TwinModel {
   // product (≈ 1.8 µs). Re-synced whenever beta, base_columns or the payload change.
   void sync_fitted() const;
   // rigid body + friction torque of the physics model
+  // (qdd2, torque2 not null: also the torque at the acceleration qdd2)
   void physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                      const FrictionMemory* memory) const;
+                      const FrictionMemory* memory, const VectorJ* qdd2 = nullptr, VectorJ* torque2 = nullptr) const;
+  // the drive's current of a physics torque
+  void drive_current(const VectorJ& qd, const VectorJ& torque, VectorJ& current) const;
   void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
   // adds (hybrid) or substitutes (mlp) the learned block's output
   void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,

@@ -67,6 +67,12 @@ void point_jacobian(const RobotModel& model, const DynamicsData& data, int link,
 const VectorJ& rnea(const RobotModel& model, DynamicsData& data, const VectorJ& q, const VectorJ& qd,
                     const VectorJ& qdd);
 
+/// Inverse dynamics at two accelerations of the same state: returns data.tau = rnea(q, qd, qdd)
+/// (workspace filled as rnea does) and writes tau2 = rnea(q, qd, qdd2), for about 1.5 RNEAs
+/// (tau2 = tau + M(q) (qdd2 - qdd) by a Newton-Euler pass over the first pass's rotations).
+const VectorJ& rnea_pair(const RobotModel& model, DynamicsData& data, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
+                         const VectorJ& qdd2, VectorJ& tau2);
+
 /// Gravity torque g(q) [N·m] (RNEA with qd = qdd = 0). @return data.tau
 const VectorJ& gravity_torque(const RobotModel& model, DynamicsData& data, const VectorJ& q);
 

@@ -77,6 +77,15 @@ class TwinMomentumObserver {
   const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr,
                         const ident::FrictionMemory* memory = nullptr);
 
+  /// The same sample in two steps, for an owner that evaluates the twin itself (the monitor, with
+  /// its own prediction in one TwinModel::predict_pair). acceleration(): the acceleration the twin's
+  /// torque is needed at for sample s, the finite difference (qd - qd_prev) / dt; null when this
+  /// sample needs no twin torque (the first one, or dt <= 0). Then update_with_torque() with the
+  /// twin's torque at that acceleration (ignored when acceleration() returned null).
+  const VectorJ* acceleration(const RobotSample& s, double dt);
+  const VectorJ& update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ& twin_torque,
+                                    const VectorJ* extra_torque = nullptr);
+
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }
   /// Measured drive torque of the last sample [N·m].

@@ -175,6 +175,7 @@ class Monitor {
   int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
   VectorJ obs_level_, obs_to_nm_;
   VectorJ obs_warm_;  // the observer's temperature compensation of the sample [N·m] (scratch)
+  VectorJ tau_obs_;   // the twin's torque at the observer's acceleration (scratch)
   RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
   VectorJ rf_dec_, obs_dec_;         // the residuals the decision compares with the thresholds
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
