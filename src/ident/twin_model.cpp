@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -125,7 +126,12 @@ SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::
 // the residual at every reversal of a loaded joint. blend <= 0: the hard switch.
 double direction_factor(double c_gen, double tau, double qd, double blend) {
   if (!(blend > 0.0)) return tau * qd < 0.0 ? c_gen : 1.0;
-  const double w = 0.5 * (1.0 - std::tanh((tau >= 0.0 ? qd : -qd) / blend));  // 1 back-driven, 0 motoring
+  const double x = (tau >= 0.0 ? qd : -qd) / blend;
+  // beyond |x| = 20, tanh(x) is +-1 to the last bit (1 - tanh < 1e-17): skip the call (per sample
+  // and joint in the monitor, where most samples are far from a reversal)
+  if (x > 20.0) return 1.0;
+  if (x < -20.0) return c_gen;
+  const double w = 0.5 * (1.0 - std::tanh(x));  // 1 back-driven, 0 motoring
   return 1.0 + (c_gen - 1.0) * w;
 }
 
@@ -162,9 +168,15 @@ void TwinModel::friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const
 }
 
 void TwinModel::sync_fitted() const {
+  // per sample: one byte compare of what the fitted copy was made from (bitwise: a NaN in beta
+  // compares equal to itself here, so it does not re-sync on every call)
+  const auto bytes_equal = [](const double* a, const double* b, Eigen::Index n) {
+    return std::memcmp(a, b, static_cast<size_t>(n) * sizeof(double)) == 0;
+  };
   const bool same = fitted_ && fitted_columns_ == base_columns && fitted_beta_.size() == beta.size() &&
-                    fitted_beta_ == beta && fitted_payload_.mass == payload_.mass && fitted_payload_.com == payload_.com &&
-                    fitted_payload_.inertia_com == payload_.inertia_com;
+                    bytes_equal(fitted_beta_.data(), beta.data(), beta.size()) && fitted_payload_.mass == payload_.mass &&
+                    bytes_equal(fitted_payload_.com.data(), payload_.com.data(), 3) &&
+                    bytes_equal(fitted_payload_.inertia_com.data(), payload_.inertia_com.data(), 9);
   if (same) return;
   const int n = robot_->n_dof();
   Eigen::VectorXd pi = Eigen::VectorXd::Zero(10 * n);

@@ -75,15 +75,6 @@ void DynamicThresholdOptions::validate() const {
     throw InvalidArgument(fmt::format("mean_gap_weight is {}, must be >= 0", mean_gap_weight));
 }
 
-double DynamicThresholdJoint::evaluate(double qd, double qdd) const {
-  const double aqd = std::abs(qd);
-  // the reversal term in single precision: the monitor evaluates it twice per joint and sample
-  // (current residual and observer), and the double exp was ~6 % of the loop; its 1e-7 relative
-  // error is far inside the margin xi the thresholds are learned with
-  const double rev = psi_rev != 0.0 ? psi_rev * static_cast<double>(std::exp(static_cast<float>(-rho * aqd))) : 0.0;
-  return psi_qdd * std::abs(qdd) + psi_qd * aqd + rev + upsilon;
-}
-
 void DynamicThreshold::evaluate(const VectorJ& qd, const VectorJ& qdd, VectorJ& level) const {
   for (size_t i = 0; i < joints.size(); ++i) {
     const auto j = static_cast<Eigen::Index>(i);
