@@ -33,3 +33,6 @@ add_test(NAME cli.friction_study_predictions
 add_test(NAME cli.friction_study_bad_pd_scale COMMAND twinwatch friction-study --closed-loop --pd-scale -1 -q)
 set_tests_properties(cli.friction_study_bad_pd_scale PROPERTIES PASS_REGULAR_EXPRESSION
   "--pd-scale is -1, must be >= 0")
+add_test(NAME cli.friction_study_bad_truth_lag_scale COMMAND twinwatch friction-study --closed-loop --truth-lag-scale -1 -q)
+set_tests_properties(cli.friction_study_bad_truth_lag_scale PROPERTIES PASS_REGULAR_EXPRESSION
+  "--truth-lag-scale is -1, must be >= 0")

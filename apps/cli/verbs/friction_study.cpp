@@ -48,6 +48,7 @@ struct StudyOptions {
   bool json = false, quiet = false;
   double pd_scale = 1.0;       // multiplies the eq. 20 gains of the closed loop
   bool literal_eq19 = false;   // closed loop without the inner-loop inverse feed-forward
+  double truth_lag_scale = 1.0;  // --closed-loop diagnosis: multiplies the truth's frictional-lag time
 };
 
 // joint j of a recording as a JointRecord (every k-th sample), torque = gain * current or target_moment
@@ -271,6 +272,8 @@ int run_closed_loop_study(const StudyOptions& o) {
     throw InvalidArgument("--closed-loop runs on the simulated joints; give no recordings");
   if (!std::isfinite(o.pd_scale) || o.pd_scale < 0.0)
     throw InvalidArgument(fmt::format("--pd-scale is {}, must be >= 0", o.pd_scale));
+  if (!std::isfinite(o.truth_lag_scale) || o.truth_lag_scale < 0.0)
+    throw InvalidArgument(fmt::format("--truth-lag-scale is {}, must be >= 0", o.truth_lag_scale));
   const std::vector<std::string> comps = {"None", "Baseline", "LuGre", "RBFNN-H", "ParFam-H", "True friction"};
   struct JointRuns {
     std::string joint;
@@ -284,8 +287,10 @@ int run_closed_loop_study(const StudyOptions& o) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
   };
-  for (const SimulatedJoint& j : simulated_study_joints()) {
+  for (SimulatedJoint j : simulated_study_joints()) {
     if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
+    // a diagnosis only: the same truth (records and plant) with its frictional lag scaled
+    j.truth.lag_time *= o.truth_lag_scale;
     say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
     FrictionStudyOptions so;
     apply_parfam_options(so.parfam, o);
@@ -470,6 +475,10 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--pd-scale", o->pd_scale,
                   "--closed-loop: multiply the eq. 20 PD gains (K_p, K_d min and max) by this factor, >= 0 "
                   "(0: the model feed-forward alone)")
+      ->capture_default_str();
+  sub->add_option("--truth-lag-scale", o->truth_lag_scale,
+                  "--closed-loop diagnosis: multiply the simulated truth's frictional-lag time (training records and "
+                  "plant alike) by this factor, >= 0 (0: no lag); not a model or loop setting")
       ->capture_default_str();
   sub->add_flag("--literal-eq19", o->literal_eq19,
                 "--closed-loop: the model enters only through e_tau of eq. 19 (no inner-loop inverse feed-forward of "
