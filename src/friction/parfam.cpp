@@ -113,9 +113,15 @@ double local_lbfgs(LossContext& ctx, std::vector<double>& z, double bound, int m
 /// Stage 2 basin hopping [Wales1997] over every coefficient (the denominator's only when
 /// ctx.rational); returns the best full theta.
 std::vector<double> basin_hopping(LossContext& ctx, const ParFamOptions& o, double& best_loss) {
-  const int P = ctx.rational ? ctx.L.size() : ctx.L.den();
-  ctx.active.resize(static_cast<std::size_t>(P));
-  for (int i = 0; i < P; ++i) ctx.active[static_cast<std::size_t>(i)] = i;
+  const int P_all = ctx.rational ? ctx.L.size() : ctx.L.den();
+  // odd symmetry: the constant c_0 and the offsets b_j stay 0
+  ctx.active.clear();
+  for (int i = 0; i < P_all; ++i) {
+    bool offset = i == ctx.L.num();
+    for (int j = 0; j < ctx.L.k; ++j) offset = offset || i == ctx.L.inner(j) + ctx.L.d;
+    if (!(o.odd && offset)) ctx.active.push_back(i);
+  }
+  const auto P = static_cast<int>(ctx.active.size());
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), accept(0.0, 1.0);
   std::vector<double> best;
@@ -146,7 +152,7 @@ std::vector<double> basin_hopping(LossContext& ctx, const ParFamOptions& o, doub
     }
   }
   std::vector<double> theta(static_cast<std::size_t>(ctx.L.size()), 0.0);
-  std::copy(best.begin(), best.end(), theta.begin());
+  for (std::size_t a = 0; a < best.size(); ++a) theta[static_cast<std::size_t>(ctx.active[a])] = best[a];
   return theta;
 }
 
@@ -233,6 +239,14 @@ void ParFamOptions::validate() const {
   if (!std::isfinite(refine_ridge) || refine_ridge < 0.0)
     throw InvalidArgument(fmt::format("ParFam refine_ridge is {}, must be >= 0", refine_ridge));
   if (lm_iterations < 1) throw InvalidArgument(fmt::format("ParFam lm_iterations is {}, must be >= 1", lm_iterations));
+  if (odd) {
+    for (std::size_t j = 0; j < functions.size(); ++j)
+      if (!is_odd(functions[j]))
+        throw InvalidArgument(fmt::format("ParFam odd is set but functions[{}] is {}, expected an odd function "
+                                          "(sin, tanh, stribeck)",
+                                          j, to_string(functions[j])));
+    if (rational) throw InvalidArgument("ParFam odd is set with rational = true, expected rational = false");
+  }
   if (input == ParFamInput::Hysteresis) {
     if (hysteresis) hysteresis->validate();
     prior.validate();

@@ -41,9 +41,13 @@ std::string_view to_string(UnaryOp op) noexcept {
       return "exp";
     case UnaryOp::Tanh:
       return "tanh";
+    case UnaryOp::Stribeck:
+      return "stribeck";
   }
   return "?";
 }
+
+bool is_odd(UnaryOp op) noexcept { return op == UnaryOp::Sin || op == UnaryOp::Tanh || op == UnaryOp::Stribeck; }
 
 void ParFamExpression::validate() const {
   if (dim != 1 && dim != 3) throw InvalidArgument(fmt::format("ParFam expression dim is {}, must be 1 or 3", dim));
@@ -172,6 +176,9 @@ double CompiledExpression::operator()(double qd, double h, double hd) const noex
         break;
       case UnaryOp::Exp:
         g = std::exp(std::min(arg, detail::kExpCap));
+        break;
+      case UnaryOp::Stribeck:
+        g = detail::stribeck_unit(arg);
         break;
       default:
         g = std::tanh(arg);

@@ -32,6 +32,9 @@ struct Cache {
   bool clamped = false;  ///< the denominator hit the floor (no derivative through it)
 };
 
+/// Stribeck unit sgn(u) (1 - exp(-u^2)) (parfam.hpp), the deployed evaluator's form.
+inline double stribeck_unit(double u) noexcept { return std::copysign(-std::expm1(-u * u), u); }
+
 inline void unary(UnaryOp op, double u, double& g, double& gp) {
   switch (op) {
     case UnaryOp::Sin:
@@ -55,6 +58,13 @@ inline void unary(UnaryOp op, double u, double& g, double& gp) {
       g = std::tanh(u);
       gp = 1.0 - g * g;
       return;
+    case UnaryOp::Stribeck: {
+      // sgn(u) (1 - exp(-u^2)), derivative 2 |u| exp(-u^2)
+      const double e = std::exp(-u * u);
+      g = std::copysign(-std::expm1(-u * u), u);
+      gp = 2.0 * std::abs(u) * e;
+      return;
+    }
   }
 }
 

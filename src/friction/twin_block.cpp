@@ -12,9 +12,9 @@ namespace twinwatch::friction {
 namespace {
 
 UnaryOp parse_op(const std::string& s, const std::string& origin, const std::string& field) {
-  for (UnaryOp op : {UnaryOp::Sin, UnaryOp::Cos, UnaryOp::Exp, UnaryOp::Tanh})
+  for (UnaryOp op : {UnaryOp::Sin, UnaryOp::Cos, UnaryOp::Exp, UnaryOp::Tanh, UnaryOp::Stribeck})
     if (to_string(op) == s) return op;
-  throw ParseError(origin, 0, field, fmt::format("unknown function '{}', expected sin, cos, exp or tanh", s));
+  throw ParseError(origin, 0, field, fmt::format("unknown function '{}', expected sin, cos, exp, tanh or stribeck", s));
 }
 
 const nlohmann::json& need(const nlohmann::json& j, const char* key, const std::string& prefix, const std::string& origin) {

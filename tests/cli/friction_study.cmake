@@ -18,7 +18,7 @@ set_tests_properties(cli.friction_study_bad_memory PROPERTIES PASS_REGULAR_EXPRE
   "--memory is 'distance', expected 'time' or 'displacement'")
 add_test(NAME cli.friction_study_bad_functions COMMAND twinwatch friction-study --simulated --functions tanh,log -q)
 set_tests_properties(cli.friction_study_bad_functions PROPERTIES PASS_REGULAR_EXPRESSION
-  "--functions has 'log', expected a comma list of sin, cos, exp, tanh")
+  "--functions has 'log', expected a comma list of sin, cos, exp, tanh, stribeck")
 add_test(NAME cli.friction_study_time_clock
          COMMAND twinwatch friction-study --simulated --joint 3 --trials 2 --hops 2 --memory time -q)
 set_tests_properties(cli.friction_study_time_clock PROPERTIES PASS_REGULAR_EXPRESSION
@@ -33,3 +33,6 @@ add_test(NAME cli.friction_study_predictions
 add_test(NAME cli.friction_study_bad_pd_scale COMMAND twinwatch friction-study --closed-loop --pd-scale -1 -q)
 set_tests_properties(cli.friction_study_bad_pd_scale PROPERTIES PASS_REGULAR_EXPRESSION
   "--pd-scale is -1, must be >= 0")
+add_test(NAME cli.friction_study_bad_truth_lag_scale COMMAND twinwatch friction-study --closed-loop --truth-lag-scale -1 -q)
+set_tests_properties(cli.friction_study_bad_truth_lag_scale PROPERTIES PASS_REGULAR_EXPRESSION
+  "--truth-lag-scale is -1, must be >= 0")

@@ -401,3 +401,106 @@ TEST(ParFam, ReversalWeightBelowOneIsNamed) {
 
 }  // namespace
 }  // namespace twinwatch::friction
+
+namespace twinwatch::friction {
+namespace {
+
+// the Stribeck unit sgn(u) (1 - exp(-u^2)): odd, bounded by 1, flat at 0 (~ u |u|, where tanh is
+// linear), its derivative 2 |u| exp(-u^2) against central differences, on seeded random arguments
+TEST(ParFamStribeckUnit, IsOddBoundedFlatAtZeroAndMatchesItsDerivative) {
+  constexpr unsigned kSeed = 31;
+  std::mt19937 rng(kSeed);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  constexpr double kStep = 1e-6, kTol = 1e-8;
+  for (int i = 0; i < 500; ++i) {
+    const double x = u(rng);
+    double g = 0.0, gp = 0.0, gm = 0.0, gpm = 0.0, ga = 0.0, gb = 0.0, unused = 0.0;
+    detail::unary(UnaryOp::Stribeck, x, g, gp);
+    detail::unary(UnaryOp::Stribeck, -x, gm, gpm);
+    EXPECT_DOUBLE_EQ(gm, -g) << "seed " << kSeed << " u " << x;
+    EXPECT_DOUBLE_EQ(gpm, gp) << "seed " << kSeed << " u " << x;  // even derivative of an odd function
+    EXPECT_LT(std::abs(g), 1.0);
+    detail::unary(UnaryOp::Stribeck, x + kStep, ga, unused);
+    detail::unary(UnaryOp::Stribeck, x - kStep, gb, unused);
+    EXPECT_NEAR(gp, (ga - gb) / (2.0 * kStep), kTol) << "seed " << kSeed << " u " << x;
+    EXPECT_DOUBLE_EQ(detail::stribeck_unit(x), g);
+  }
+  // flat at zero: g(u) = u |u| - u^3 |u| / 2 + ..., slope 0; tanh has slope 1 there
+  for (double x : {1e-3, 1e-2, 0.1}) {
+    double g = 0.0, gp = 0.0;
+    detail::unary(UnaryOp::Stribeck, x, g, gp);
+    EXPECT_NEAR(g, x * x, 0.5 * std::pow(x, 4) + 1e-18) << x;
+    EXPECT_NEAR(gp, 2.0 * x, 1e-12 + 2.0 * std::pow(x, 3)) << x;
+  }
+  double g0 = 1.0, gp0 = 1.0;
+  detail::unary(UnaryOp::Stribeck, 0.0, g0, gp0);
+  EXPECT_EQ(g0, 0.0);
+  EXPECT_EQ(gp0, 0.0);
+  // saturates: 1 - g(3) = exp(-9)
+  double g3 = 0.0, gp3 = 0.0;
+  detail::unary(UnaryOp::Stribeck, 3.0, g3, gp3);
+  EXPECT_NEAR(1.0 - g3, std::exp(-9.0), 1e-15);
+}
+
+// the family's reverse pass through a Stribeck unit against finite differences, and the compiled
+// evaluator against the expression
+TEST(ParFamStribeckUnit, FamilyGradientAndCompiledEvaluatorIncludeIt) {
+  const std::vector<UnaryOp> ops{UnaryOp::Tanh, UnaryOp::Stribeck, UnaryOp::Sin};
+  const detail::Layout L{3, 3};
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const std::vector<double> th = random_theta(L.size(), seed + 40, 0.8);
+    const std::vector<double> xv = random_theta(3, seed + 140, 1.0);
+    detail::Cache c;
+    detail::forward(L, ops.data(), th.data(), xv.data(), true, 1e-3, c);
+    std::vector<double> grad(static_cast<std::size_t>(L.size()), 0.0);
+    double gx[3] = {0.0, 0.0, 0.0};
+    detail::backward(L, th.data(), xv.data(), true, c, 1.0, grad.data(), gx);
+    constexpr double kStep = 1e-6, kTol = 1e-6;
+    for (int i = 0; i < L.size(); ++i) {
+      std::vector<double> tp = th, tm = th;
+      tp[static_cast<std::size_t>(i)] += kStep;
+      tm[static_cast<std::size_t>(i)] -= kStep;
+      detail::Cache cp, cm;
+      const double fd = (detail::forward(L, ops.data(), tp.data(), xv.data(), true, 1e-3, cp) -
+                         detail::forward(L, ops.data(), tm.data(), xv.data(), true, 1e-3, cm)) /
+                        (2.0 * kStep);
+      EXPECT_NEAR(grad[static_cast<std::size_t>(i)], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " theta " << i;
+    }
+    for (int i = 0; i < 3; ++i) {
+      std::vector<double> xp = xv, xm = xv;
+      xp[static_cast<std::size_t>(i)] += kStep;
+      xm[static_cast<std::size_t>(i)] -= kStep;
+      detail::Cache cp, cm;
+      const double fd = (detail::forward(L, ops.data(), th.data(), xp.data(), true, 1e-3, cp) -
+                         detail::forward(L, ops.data(), th.data(), xm.data(), true, 1e-3, cm)) /
+                        (2.0 * kStep);
+      EXPECT_NEAR(gx[i], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " x " << i;
+    }
+    ParFamExpression e;
+    e.functions = ops;
+    e.theta = th;
+    const CompiledExpression ce(e);
+    EXPECT_NEAR(ce(xv[0], xv[1], xv[2]), e(xv.data()), 1e-12) << "seed " << seed;
+  }
+  ParFamExpression e;
+  e.functions = {UnaryOp::Stribeck};
+  e.dim = 1;
+  e.theta.assign(static_cast<std::size_t>(ParFamExpression::parameter_count(1, 1)), 0.0);
+  e.theta[0] = 12.5;  // a_1 qd
+  e.theta[4] = -2.0;  // w_1 (d = 1, k = 1: a at 0, b at 1, c_0 at 2, c at 3, w at 4)
+  EXPECT_EQ(e.to_string(), "-2*stribeck(12.5*qd)");
+}
+
+TEST(ParFam, OddSymmetryNeedsOddFunctionsAndNoDenominator) {
+  ParFamOptions o;
+  o.odd = true;  // the library's sin, cos, exp, tanh
+  EXPECT_THAT([&] { o.validate(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam odd is set but functions[1] is cos")));
+  o.functions = {UnaryOp::Tanh, UnaryOp::Stribeck, UnaryOp::Sin};
+  EXPECT_NO_THROW(o.validate());
+  o.rational = true;
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("ParFam odd is set with rational = true")));
+}
+
+}  // namespace
+}  // namespace twinwatch::friction

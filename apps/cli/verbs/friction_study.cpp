@@ -41,12 +41,14 @@ struct StudyOptions {
   std::string functions;  // empty: the library's operator set
   double l1 = -1.0;       // < 0: the study's gamma
   int starts = -1;        // < 0: the library's
+  int odd = -1;           // < 0: the study's; 0 off, 1 on (ParFam odd symmetry)
   double fixed_alpha = 0.0, fixed_beta = 0.0;  // > 0 both: Stage 1 skipped
   unsigned seed = 1;
   double screening = 0.1;
   bool json = false, quiet = false;
   double pd_scale = 1.0;       // multiplies the eq. 20 gains of the closed loop
   bool literal_eq19 = false;   // closed loop without the inner-loop inverse feed-forward
+  double truth_lag_scale = 1.0;  // --closed-loop diagnosis: multiplies the truth's frictional-lag time
 };
 
 // joint j of a recording as a JointRecord (every k-th sample), torque = gain * current or target_moment
@@ -147,6 +149,8 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
     p.hysteresis = HysteresisParams{o.fixed_alpha, o.fixed_beta, p.prior.drive};
     p.hysteresis->validate();
   }
+  if (o.odd > 1) throw InvalidArgument(fmt::format("--odd is {}, expected 0 or 1", o.odd));
+  if (o.odd >= 0) p.odd = o.odd == 1;
   if (!o.functions.empty()) {
     p.functions.clear();
     std::size_t a = 0;
@@ -157,7 +161,8 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
       else if (f == "cos") p.functions.push_back(UnaryOp::Cos);
       else if (f == "exp") p.functions.push_back(UnaryOp::Exp);
       else if (f == "tanh") p.functions.push_back(UnaryOp::Tanh);
-      else throw InvalidArgument(fmt::format("--functions has '{}', expected a comma list of sin, cos, exp, tanh", f));
+      else if (f == "stribeck") p.functions.push_back(UnaryOp::Stribeck);
+      else throw InvalidArgument(fmt::format("--functions has '{}', expected a comma list of sin, cos, exp, tanh, stribeck", f));
       a = b + 1;
     }
   }
@@ -267,10 +272,13 @@ int run_closed_loop_study(const StudyOptions& o) {
     throw InvalidArgument("--closed-loop runs on the simulated joints; give no recordings");
   if (!std::isfinite(o.pd_scale) || o.pd_scale < 0.0)
     throw InvalidArgument(fmt::format("--pd-scale is {}, must be >= 0", o.pd_scale));
+  if (!std::isfinite(o.truth_lag_scale) || o.truth_lag_scale < 0.0)
+    throw InvalidArgument(fmt::format("--truth-lag-scale is {}, must be >= 0", o.truth_lag_scale));
   const std::vector<std::string> comps = {"None", "Baseline", "LuGre", "RBFNN-H", "ParFam-H", "True friction"};
   struct JointRuns {
     std::string joint;
     std::vector<ClosedLoopRun> runs;
+    std::string parfam_equation;  // ParFam-H as fitted on the joint's sweep
   };
   std::vector<JointRuns> all;
   const auto t0 = std::chrono::steady_clock::now();
@@ -279,8 +287,10 @@ int run_closed_loop_study(const StudyOptions& o) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
   };
-  for (const SimulatedJoint& j : simulated_study_joints()) {
+  for (SimulatedJoint j : simulated_study_joints()) {
     if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
+    // a diagnosis only: the same truth (records and plant) with its frictional lag scaled
+    j.truth.lag_time *= o.truth_lag_scale;
     say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
     FrictionStudyOptions so;
     apply_parfam_options(so.parfam, o);
@@ -293,7 +303,7 @@ int run_closed_loop_study(const StudyOptions& o) {
     co.gains.kd_max *= o.pd_scale;
     co.inverse_feedforward = !o.literal_eq19;
     const VelocityProfile desired = closed_loop_profile(o.seed);
-    JointRuns jr{j.name, {}};
+    JointRuns jr{j.name, {}, study.model("ParFam-H").equation};
     say(fmt::format("{}: closed loop, {} compensations", j.name, comps.size()));
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, false));
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, true));
@@ -356,6 +366,8 @@ int run_closed_loop_study(const StudyOptions& o) {
   }
   fmt::print("(None: qd_cmd = qd_d; Baseline: tau_d = I qdd_d, the rigid body only; True friction: the simulator's "
              "Maxwell-slip truth as the model, an oracle reference; gains x{})\n", o.pd_scale);
+  fmt::print("\nParFam-H as fitted on the sweep\n");
+  for (const auto& jr : all) fmt::print("{} {}\n", jr.joint, jr.parfam_equation);
   return 0;
 }
 
@@ -464,6 +476,10 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                   "--closed-loop: multiply the eq. 20 PD gains (K_p, K_d min and max) by this factor, >= 0 "
                   "(0: the model feed-forward alone)")
       ->capture_default_str();
+  sub->add_option("--truth-lag-scale", o->truth_lag_scale,
+                  "--closed-loop diagnosis: multiply the simulated truth's frictional-lag time (training records and "
+                  "plant alike) by this factor, >= 0 (0: no lag); not a model or loop setting")
+      ->capture_default_str();
   sub->add_flag("--literal-eq19", o->literal_eq19,
                 "--closed-loop: the model enters only through e_tau of eq. 19 (no inner-loop inverse feed-forward of "
                 "tau_d); with a time-aligned e_tau even the true friction then cannot beat no feed-forward");
@@ -494,8 +510,10 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                   "Write CSV joint,t,qd,tau,reversal,<model>... of the validation record (residual torque) and every "
                   "model's prediction, for plots; the training record follows as joint '<J>-train' without predictions");
   sub->add_option("--functions", o->functions,
-                  "ParFam operator set, a comma list of sin, cos, exp, tanh, one unit each (default: the study's tanh,tanh; "
-                  "HESR's library is sin,cos,exp,tanh)");
+                  "ParFam operator set, a comma list of sin, cos, exp, tanh, stribeck (sgn(u) (1 - exp(-u^2))), one unit "
+                  "each (default: the study's; HESR's library is sin,cos,exp,tanh)");
+  sub->add_option("--odd", o->odd,
+                  "ParFam odd symmetry f(-x) = -f(x) (no constant, no unit offsets), 1 or 0 (default: the study's)");
   sub->add_option("--prior-remove-viscous", o->remove_viscous,
                   "Stage 1: remove the viscous slope of tau_f before the loop descriptors, 1 or 0 (default: the study's, 1)");
   sub->add_option("--alpha", o->fixed_alpha, "Fix the hysteresis alpha (with --beta; skips Stage 1, Stage 3 still refines)");

@@ -8,8 +8,9 @@
 ///   u_j  = a_j . x + b_j                              j = 1..k, one unit per function g_j
 ///   f(x) = (c_0 + c . x + sum_j w_j g_j(u_j)) / (1 + e . x + sum_j v_j g_j(u_j))
 ///
-/// with g_j from {sin, cos, exp, tanh} and the arithmetic {+, -, x, /} of the rational outer
-/// layer. Degree 1 means no products of inputs (no cross-unit terms such as qd * h). Protection:
+/// with g_j from {sin, cos, exp, tanh} (HESR's library) or the flat-at-zero Stribeck unit
+/// stribeck(u) = sgn(u) (1 - exp(-u^2)) (not in HESR; see UnaryOp), and the arithmetic {+, -, x, /}
+/// of the rational outer layer. Degree 1 means no products of inputs (no cross-unit terms such as qd * h). Protection:
 /// exp(u) uses min(u, 30); a denominator D with |D| < floor is replaced by sign(D) * floor.
 /// Identification, three stages:
 ///
@@ -36,11 +37,22 @@
 
 namespace twinwatch::friction {
 
-/// The unary functions of the ParFam operator library.
-enum class UnaryOp { Sin, Cos, Exp, Tanh };
+/// The unary functions of the ParFam operator library. Sin, Cos, Exp, Tanh are HESR's; Stribeck is
+/// an addition of this library:
+///
+///   stribeck(u) = sgn(u) (1 - exp(-u^2)),   stribeck'(u) = 2 |u| exp(-u^2)
+///
+/// odd, C^1, bounded by 1 and flat at u = 0 (stribeck(u) ~ u |u|), so that c h - w stribeck(qd / vs)
+/// is the Gaussian Stribeck drop sgn(qd) (Fs - Fc) exp(-(qd/vs)^2) of [Armstrong1994] with h ~ sgn(qd)
+/// in sliding. tanh, linear at 0, can only approximate that flat top: a sustained error in slow
+/// motion, which a closed loop integrates (docs/validation.md, "Closed loop").
+enum class UnaryOp { Sin, Cos, Exp, Tanh, Stribeck };
 
-/// Lower-case name ("sin", "cos", "exp", "tanh").
+/// Lower-case name ("sin", "cos", "exp", "tanh", "stribeck").
 std::string_view to_string(UnaryOp op) noexcept;
+
+/// Whether g(-u) = -g(u) (sin, tanh, stribeck).
+bool is_odd(UnaryOp op) noexcept;
 
 /// One member of the family: the functions and the coefficients theta (physical units).
 ///
@@ -122,6 +134,12 @@ struct ParFamOptions {
   /// layer bloated the expressions (large cancelling numerator/denominator coefficients) and
   /// extrapolated worse; HESR Table VII's equations have no division either.
   bool rational = false;
+  /// Odd symmetry f(-x) = -f(x): the constant c_0 and the unit offsets b_j are fixed at 0 (with odd
+  /// g_j and the odd inputs qd, h, hd of a symmetric memory the family is then odd). A friction law
+  /// is odd in the velocity and the memory unless something breaks the symmetry; without the
+  /// constraint the offsets fit noise and record asymmetries into a direction-independent bias.
+  /// Needs odd functions only (is_odd) and rational = false.
+  bool odd = false;
   double l1 = 1e-5;                   ///< gamma of eq. 15 (on unit-RMS data), >= 0
   double l1_smoothing = 1e-3;         ///< eps of the smoothed |theta|, > 0
   double coefficient_bound = 30.0;    ///< box |theta_i| <= bound during the search (unit-RMS data), > 0
