@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
@@ -39,37 +40,53 @@ const Setup& setup() {
   return s;
 }
 
-// range(0): 1 with the momentum observer on the sample path and its threshold raising alerts (as
-// evaluate runs it), 0 without the observer (observer_level cleared: the current residual alone, as before issue 7's observer)
+// one healthy replay after another, a fresh monitor per replay (made outside the timing); observer
+// 1: the momentum observer on the sample path with its alerts (as evaluate runs it), 0: without it
+// (observer_level cleared: the current residual alone, as before issue 7's observer)
+struct Replayer {
+  const Setup& s;
+  const monitor::MonitorConfig cfg;
+  monitor::Monitor mon;
+  size_t k = 0, events = 0, replays = 0;  // alerts raised on the healthy replays (each runs a diagnosis)
+  static monitor::MonitorConfig config(const Setup& s, std::int64_t observer) {
+    monitor::MonitorConfig c = s.cfg;
+    if (observer == 0) c.observer_level.resize(0);
+    c.observer_alerts = observer == 1;
+    return c;
+  }
+  Replayer(const Setup& setup, std::int64_t observer) : s(setup), cfg(config(setup, observer)), mon(setup.twin, cfg) {}
+  void push() { mon.push(s.rec.samples[k]); }
+  void next(benchmark::State& st) {
+    if (++k < s.rec.samples.size()) return;
+    k = 0;
+    st.PauseTiming();
+    events += mon.events().size();
+    ++replays;
+    mon = monitor::Monitor(s.twin, cfg);
+    st.ResumeTiming();
+  }
+  void count(benchmark::State& st) const {
+    st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+    st.counters["events_per_replay"] = replays ? static_cast<double>(events) / static_cast<double>(replays) : 0.0;
+  }
+};
+
+// per-sample latency (p50, p99, max) and throughput; range(0): observer on (1) or off (0)
 void BM_MonitorLoop(benchmark::State& st) {
-  const Setup& s = setup();
-  monitor::MonitorConfig cfg = s.cfg;
-  if (st.range(0) == 0) cfg.observer_level.resize(0);
-  cfg.observer_alerts = st.range(0) == 1;
-  monitor::Monitor mon(s.twin, cfg);
-  size_t k = 0;
+  Replayer r(setup(), st.range(0));
   std::vector<double> lat;
   lat.reserve(1 << 20);
-  size_t events = 0, replays = 0;  // alerts raised on the healthy replay (each runs a diagnosis)
   for (auto _ : st) {
     const auto t0 = std::chrono::steady_clock::now();
-    mon.push(s.rec.samples[k]);
+    r.push();
     lat.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-    if (++k == s.rec.samples.size()) {
-      k = 0;
-      st.PauseTiming();
-      events += mon.events().size();
-      ++replays;
-      mon = monitor::Monitor(s.twin, cfg);
-      st.ResumeTiming();
-    }
+    r.next(st);
   }
   std::sort(lat.begin(), lat.end());
-  st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+  r.count(st);
   st.counters["p50_us"] = lat[lat.size() / 2];
   st.counters["p99_us"] = lat[lat.size() * 99 / 100];
   st.counters["max_us"] = lat.back();
-  st.counters["events_per_replay"] = replays ? static_cast<double>(events) / static_cast<double>(replays) : 0.0;
 }
 BENCHMARK(BM_MonitorLoop)->Arg(0)->Arg(1)->MinTime(2.0);
 
@@ -77,26 +94,13 @@ BENCHMARK(BM_MonitorLoop)->Arg(0)->Arg(1)->MinTime(2.0);
 // (about 50-70 ns of BM_MonitorLoop's per-sample time is its own latency measurement). range(0) as
 // for BM_MonitorLoop.
 void BM_MonitorThroughput(benchmark::State& st) {
-  const Setup& s = setup();
-  monitor::MonitorConfig cfg = s.cfg;
-  if (st.range(0) == 0) cfg.observer_level.resize(0);
-  cfg.observer_alerts = st.range(0) == 1;
-  monitor::Monitor mon(s.twin, cfg);
-  size_t k = 0, events = 0, replays = 0;
+  Replayer r(setup(), st.range(0));
   for (auto _ : st) {
-    mon.push(s.rec.samples[k]);
-    if (++k == s.rec.samples.size()) {
-      k = 0;
-      st.PauseTiming();
-      events += mon.events().size();
-      ++replays;
-      mon = monitor::Monitor(s.twin, cfg);
-      st.ResumeTiming();
-    }
+    r.push();
+    r.next(st);
   }
-  benchmark::DoNotOptimize(mon.observer_residual().data());
-  st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
-  st.counters["events_per_replay"] = replays ? static_cast<double>(events) / static_cast<double>(replays) : 0.0;
+  benchmark::DoNotOptimize(r.mon.observer_residual().data());
+  r.count(st);
 }
 BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->MinTime(2.0);
 

@@ -18,8 +18,17 @@ inline void check_q(const RobotModel& model, const VectorJ& q) { check_size("q",
 // locals (vec3.hpp); the workspace only receives copies.
 // (The backward pass rotates with the full R even for DH placements: the Rx(alpha) form saved
 // 2 % of the instructions there and nothing measurable in time.)
+// kPair (rnea_pair): also tau2 at the acceleration qdd2. tau is linear in qdd, tau(qdd2) = tau(qdd)
+// + M(q) (qdd2 - qdd), and M(q) dqdd is a Newton-Euler pass with qd = 0 and no gravity over the
+// same rotations:
+//   dwd_i = R_i^T dwd_{i-1} + dqdd_i z,   da_i = R_i^T (da_{i-1} + dwd_{i-1} x p_i)
+//   df_i  = m da_i + dwd_i x h + R_{i+1} df_{i+1}
+//   dn_i  = I_o dwd_i + h x da_i + R_{i+1} dn_{i+1} + p_{i+1} x (R_{i+1} df_{i+1})
+// reusing the sines, cosines, rotations and every velocity term, so the second torque costs about
+// half an RNEA (docs/benchmarks.md, issue 7: the monitor's current residual and its observer).
+template <bool kPair>
 void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ* qd, const VectorJ* qdd,
-               bool with_gravity) {
+               bool with_gravity, const VectorJ* qdd2 = nullptr, VectorJ* tau2 = nullptr) {
   using detail::V3;
   using detail::M3;
   const int n = model.n_dof();
@@ -28,6 +37,18 @@ void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
   M3 R[kMaxDof];
   V3 W[kMaxDof], WD[kMaxDof], A[kMaxDof];
   detail::forward_pass(model, q, qd, qdd, with_gravity, R, W, WD, A);
+  [[maybe_unused]] V3 DWD[kMaxDof], DA[kMaxDof];  // the acceleration step's motion (kPair)
+  if constexpr (kPair) {
+    V3 dwd_prev{0, 0, 0}, da_prev{0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+      V3 dwd = detail::mul_t(R[i], dwd_prev);
+      dwd.z += (*qdd2)[i] - (*qdd)[i];
+      da_prev = detail::mul_t(R[i], da_prev + cross(dwd_prev, detail::load(model.link_cache(i).p)));
+      DA[i] = da_prev;
+      DWD[i] = dwd_prev = dwd;
+    }
+    tau2->resize(n);
+  }
 
   // backward pass: body wrenches about the body origin, accumulated towards the base
   //   F_i = m a_i + wd_i x h + w_i x (w_i x h)
@@ -35,7 +56,7 @@ void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
   //   f_i = F_i + R_{i+1} f_{i+1};  n_i = N_i + R_{i+1} n_{i+1} + p_{i+1} x (R_{i+1} f_{i+1})
   //   tau_i = z . n_i
   d.tau.resize(n);
-  V3 f_child{0, 0, 0}, n_child{0, 0, 0};
+  V3 f_child{0, 0, 0}, n_child{0, 0, 0}, df_child{0, 0, 0}, dn_child{0, 0, 0};
   for (int i = n - 1; i >= 0; --i) {
     const detail::LinkCache& c = model.link_cache(i);
     const V3 w = W[i], wd = WD[i], a = A[i];
@@ -44,6 +65,12 @@ void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
     const V3 f = c.m * a + cross(wd, h) + cross(w, cross(w, h)) + f_child;
     const V3 nn = mul(I, wd) + cross(w, mul(I, w)) + cross(h, a) + n_child;
     d.tau[i] = nn.z;
+    [[maybe_unused]] V3 df{0, 0, 0}, dn{0, 0, 0};
+    if constexpr (kPair) {
+      df = c.m * DA[i] + cross(DWD[i], h) + df_child;
+      dn = mul(I, DWD[i]) + cross(h, DA[i]) + dn_child;
+      (*tau2)[i] = nn.z + dn.z;
+    }
     // the workspace keeps every body's motion and wrench (documented in DynamicsData)
     detail::store(R[i], d.R[i]);
     detail::store(w, d.w[i]);
@@ -53,8 +80,13 @@ void rnea_impl(const RobotModel& model, DynamicsData& d, const VectorJ& q, const
     detail::store(nn, d.n[i]);
     if (i > 0) {
       // express this body's wrench in the parent frame, moment about the parent origin
+      const V3 p = detail::load(c.p);
       f_child = mul(R[i], f);
-      n_child = mul(R[i], nn) + cross(detail::load(c.p), f_child);
+      n_child = mul(R[i], nn) + cross(p, f_child);
+      if constexpr (kPair) {
+        df_child = mul(R[i], df);
+        dn_child = mul(R[i], dn) + cross(p, df_child);
+      }
     }
   }
 }
@@ -118,89 +150,37 @@ const VectorJ& rnea(const RobotModel& model, DynamicsData& d, const VectorJ& q, 
   check_q(model, q);
   check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
   check_size("qdd", qdd.size(), model.n_dof(), "model.n_dof");
-  rnea_impl(model, d, q, &qd, &qdd, true);
+  rnea_impl<false>(model, d, q, &qd, &qdd, true);
   return d.tau;
 }
 
-// Two accelerations in one sweep. tau is linear in qdd: tau(qdd2) = tau(qdd) + M(q) (qdd2 - qdd), and
-// M(q) dqdd is itself a Newton-Euler pass with qd = 0 and no gravity over the same rotations:
-//   dwd_i = R_i^T dwd_{i-1} + dqdd_i z,   da_i = R_i^T (da_{i-1} + dwd_{i-1} x p_i)
-//   df_i  = m da_i + dwd_i x h + R_{i+1} df_{i+1}
-//   dn_i  = I_o dwd_i + h x da_i + R_{i+1} dn_{i+1} + p_{i+1} x (R_{i+1} df_{i+1})
-// It reuses the sines, cosines, rotations and every velocity term of the first pass, so the second
-// torque costs about half an RNEA (the monitor needs both: its current residual at the filtered
-// acceleration, the momentum observer at the finite-difference one; docs/benchmarks.md).
 const VectorJ& rnea_pair(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
                          const VectorJ& qdd2, VectorJ& tau2) {
-  using detail::V3;
-  using detail::M3;
   check_q(model, q);
-  const int n = model.n_dof();
-  check_size("qd", qd.size(), n, "model.n_dof");
-  check_size("qdd", qdd.size(), n, "model.n_dof");
-  check_size("qdd2", qdd2.size(), n, "model.n_dof");
-  M3 R[kMaxDof];
-  V3 W[kMaxDof], WD[kMaxDof], A[kMaxDof], DWD[kMaxDof], DA[kMaxDof];
-  detail::forward_pass(model, q, &qd, &qdd, true, R, W, WD, A);
-  V3 dwd_prev{0, 0, 0}, da_prev{0, 0, 0};
-  for (int i = 0; i < n; ++i) {
-    const V3 p = detail::load(model.link_cache(i).p);
-    V3 dwd = detail::mul_t(R[i], dwd_prev);
-    dwd.z += qdd2[i] - qdd[i];
-    da_prev = detail::mul_t(R[i], da_prev + cross(dwd_prev, p));
-    DA[i] = da_prev;
-    DWD[i] = dwd;
-    dwd_prev = dwd;
-  }
-  // backward pass of both (rnea_impl's, plus the step's wrenches)
-  d.tau.resize(n);
-  tau2.resize(n);
-  V3 f_child{0, 0, 0}, n_child{0, 0, 0}, df_child{0, 0, 0}, dn_child{0, 0, 0};
-  for (int i = n - 1; i >= 0; --i) {
-    const detail::LinkCache& c = model.link_cache(i);
-    const V3 w = W[i], wd = WD[i], a = A[i];
-    const V3 h = detail::load(c.h);
-    const detail::S3 I = detail::load_sym(c.I_o);
-    const V3 f = c.m * a + cross(wd, h) + cross(w, cross(w, h)) + f_child;
-    const V3 nn = mul(I, wd) + cross(w, mul(I, w)) + cross(h, a) + n_child;
-    const V3 df = c.m * DA[i] + cross(DWD[i], h) + df_child;
-    const V3 dn = mul(I, DWD[i]) + cross(h, DA[i]) + dn_child;
-    d.tau[i] = nn.z;
-    tau2[i] = nn.z + dn.z;
-    detail::store(R[i], d.R[i]);
-    detail::store(w, d.w[i]);
-    detail::store(wd, d.wd[i]);
-    detail::store(a, d.a[i]);
-    detail::store(f, d.f[i]);
-    detail::store(nn, d.n[i]);
-    if (i > 0) {
-      const V3 p = detail::load(c.p);
-      f_child = mul(R[i], f);
-      n_child = mul(R[i], nn) + cross(p, f_child);
-      df_child = mul(R[i], df);
-      dn_child = mul(R[i], dn) + cross(p, df_child);
-    }
-  }
+  check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
+  check_size("qdd", qdd.size(), model.n_dof(), "model.n_dof");
+  check_size("qdd2", qdd2.size(), model.n_dof(), "model.n_dof");
+  rnea_impl<true>(model, d, q, &qd, &qdd, true, &qdd2, &tau2);
   return d.tau;
 }
 
 const VectorJ& gravity_torque(const RobotModel& model, DynamicsData& d, const VectorJ& q) {
   check_q(model, q);
-  rnea_impl(model, d, q, nullptr, nullptr, true);
+  rnea_impl<false>(model, d, q, nullptr, nullptr, true);
   return d.tau;
 }
 
 const VectorJ& nonlinear_effects(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd) {
   check_q(model, q);
   check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
-  rnea_impl(model, d, q, &qd, nullptr, true);
+  rnea_impl<false>(model, d, q, &qd, nullptr, true);
   return d.tau;
 }
 
 const VectorJ& coriolis_torque(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd) {
   check_q(model, q);
   check_size("qd", qd.size(), model.n_dof(), "model.n_dof");
-  rnea_impl(model, d, q, &qd, nullptr, false);
+  rnea_impl<false>(model, d, q, &qd, nullptr, false);
   return d.tau;
 }
 

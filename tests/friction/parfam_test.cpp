@@ -35,38 +35,44 @@ std::vector<double> random_theta(int size, unsigned seed, double scale) {
   return t;
 }
 
+// the family's reverse pass (parameters theta and inputs x) against central differences at one point
+void expect_gradient_matches_differences(const detail::Layout& L, const UnaryOp* ops, const std::vector<double>& th,
+                                         const std::vector<double>& xv, unsigned seed) {
+  detail::Cache c;
+  detail::forward(L, ops, th.data(), xv.data(), true, 1e-3, c);
+  std::vector<double> grad(static_cast<std::size_t>(L.size()), 0.0);
+  double gx[3] = {0.0, 0.0, 0.0};
+  detail::backward(L, th.data(), xv.data(), true, c, 1.0, grad.data(), gx);
+  constexpr double kStep = 1e-6, kTol = 1e-6;
+  for (int i = 0; i < L.size(); ++i) {
+    std::vector<double> tp = th, tm = th;
+    tp[static_cast<std::size_t>(i)] += kStep;
+    tm[static_cast<std::size_t>(i)] -= kStep;
+    detail::Cache cp, cm;
+    const double fd = (detail::forward(L, ops, tp.data(), xv.data(), true, 1e-3, cp) -
+                       detail::forward(L, ops, tm.data(), xv.data(), true, 1e-3, cm)) /
+                      (2.0 * kStep);
+    EXPECT_NEAR(grad[static_cast<std::size_t>(i)], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " theta " << i;
+  }
+  for (int i = 0; i < 3; ++i) {
+    std::vector<double> xp = xv, xm = xv;
+    xp[static_cast<std::size_t>(i)] += kStep;
+    xm[static_cast<std::size_t>(i)] -= kStep;
+    detail::Cache cp, cm;
+    const double fd = (detail::forward(L, ops, th.data(), xp.data(), true, 1e-3, cp) -
+                       detail::forward(L, ops, th.data(), xm.data(), true, 1e-3, cm)) /
+                      (2.0 * kStep);
+    EXPECT_NEAR(gx[i], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " x " << i;
+  }
+}
+
 TEST(ParFamFamily, ReverseModeMatchesFiniteDifferences) {
   // d f / d theta and d f / d x of the rational family at random points
   const detail::Layout L{3, 4};
   for (unsigned seed = 1; seed <= 5; ++seed) {
     std::vector<double> th = random_theta(L.size(), seed, 0.6);
     const std::vector<double> xv = random_theta(3, seed + 100, 1.0);
-    detail::Cache c;
-    detail::forward(L, kAllOps.data(), th.data(), xv.data(), true, 1e-3, c);
-    std::vector<double> grad(static_cast<std::size_t>(L.size()), 0.0);
-    double gx[3] = {0.0, 0.0, 0.0};
-    detail::backward(L, th.data(), xv.data(), true, c, 1.0, grad.data(), gx);
-    constexpr double kStep = 1e-6, kTol = 1e-6;
-    for (int i = 0; i < L.size(); ++i) {
-      std::vector<double> tp = th, tm = th;
-      tp[static_cast<std::size_t>(i)] += kStep;
-      tm[static_cast<std::size_t>(i)] -= kStep;
-      detail::Cache cp, cm;
-      const double fd = (detail::forward(L, kAllOps.data(), tp.data(), xv.data(), true, 1e-3, cp) -
-                         detail::forward(L, kAllOps.data(), tm.data(), xv.data(), true, 1e-3, cm)) /
-                        (2.0 * kStep);
-      EXPECT_NEAR(grad[static_cast<std::size_t>(i)], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " theta " << i;
-    }
-    for (int i = 0; i < 3; ++i) {
-      std::vector<double> xp = xv, xm = xv;
-      xp[static_cast<std::size_t>(i)] += kStep;
-      xm[static_cast<std::size_t>(i)] -= kStep;
-      detail::Cache cp, cm;
-      const double fd = (detail::forward(L, kAllOps.data(), th.data(), xp.data(), true, 1e-3, cp) -
-                         detail::forward(L, kAllOps.data(), th.data(), xm.data(), true, 1e-3, cm)) /
-                        (2.0 * kStep);
-      EXPECT_NEAR(gx[i], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " x " << i;
-    }
+    expect_gradient_matches_differences(L, kAllOps.data(), th, xv, seed);
   }
 }
 
@@ -450,32 +456,7 @@ TEST(ParFamStribeckUnit, FamilyGradientAndCompiledEvaluatorIncludeIt) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     const std::vector<double> th = random_theta(L.size(), seed + 40, 0.8);
     const std::vector<double> xv = random_theta(3, seed + 140, 1.0);
-    detail::Cache c;
-    detail::forward(L, ops.data(), th.data(), xv.data(), true, 1e-3, c);
-    std::vector<double> grad(static_cast<std::size_t>(L.size()), 0.0);
-    double gx[3] = {0.0, 0.0, 0.0};
-    detail::backward(L, th.data(), xv.data(), true, c, 1.0, grad.data(), gx);
-    constexpr double kStep = 1e-6, kTol = 1e-6;
-    for (int i = 0; i < L.size(); ++i) {
-      std::vector<double> tp = th, tm = th;
-      tp[static_cast<std::size_t>(i)] += kStep;
-      tm[static_cast<std::size_t>(i)] -= kStep;
-      detail::Cache cp, cm;
-      const double fd = (detail::forward(L, ops.data(), tp.data(), xv.data(), true, 1e-3, cp) -
-                         detail::forward(L, ops.data(), tm.data(), xv.data(), true, 1e-3, cm)) /
-                        (2.0 * kStep);
-      EXPECT_NEAR(grad[static_cast<std::size_t>(i)], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " theta " << i;
-    }
-    for (int i = 0; i < 3; ++i) {
-      std::vector<double> xp = xv, xm = xv;
-      xp[static_cast<std::size_t>(i)] += kStep;
-      xm[static_cast<std::size_t>(i)] -= kStep;
-      detail::Cache cp, cm;
-      const double fd = (detail::forward(L, ops.data(), th.data(), xp.data(), true, 1e-3, cp) -
-                         detail::forward(L, ops.data(), th.data(), xm.data(), true, 1e-3, cm)) /
-                        (2.0 * kStep);
-      EXPECT_NEAR(gx[i], fd, kTol * std::max(1.0, std::abs(fd))) << "seed " << seed << " x " << i;
-    }
+    expect_gradient_matches_differences(L, ops.data(), th, xv, seed);
     ParFamExpression e;
     e.functions = ops;
     e.theta = th;
