@@ -47,6 +47,12 @@ std::string_view to_string(UnaryOp op) noexcept {
   return "?";
 }
 
+std::optional<UnaryOp> unary_op_from_string(std::string_view name) noexcept {
+  for (UnaryOp op : {UnaryOp::Sin, UnaryOp::Cos, UnaryOp::Exp, UnaryOp::Tanh, UnaryOp::Stribeck})
+    if (to_string(op) == name) return op;
+  return std::nullopt;
+}
+
 bool is_odd(UnaryOp op) noexcept { return op == UnaryOp::Sin || op == UnaryOp::Tanh || op == UnaryOp::Stribeck; }
 
 void ParFamExpression::validate() const {

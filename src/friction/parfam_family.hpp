@@ -58,13 +58,11 @@ inline void unary(UnaryOp op, double u, double& g, double& gp) {
       g = std::tanh(u);
       gp = 1.0 - g * g;
       return;
-    case UnaryOp::Stribeck: {
-      // sgn(u) (1 - exp(-u^2)), derivative 2 |u| exp(-u^2)
-      const double e = std::exp(-u * u);
-      g = std::copysign(-std::expm1(-u * u), u);
-      gp = 2.0 * std::abs(u) * e;
+    case UnaryOp::Stribeck:
+      // sgn(u) (1 - exp(-u^2)), derivative 2 |u| exp(-u^2) = 2 |u| (1 - |g|)
+      g = stribeck_unit(u);
+      gp = 2.0 * std::abs(u) * (1.0 - std::abs(g));
       return;
-    }
   }
 }
 

@@ -12,8 +12,7 @@ namespace twinwatch::friction {
 namespace {
 
 UnaryOp parse_op(const std::string& s, const std::string& origin, const std::string& field) {
-  for (UnaryOp op : {UnaryOp::Sin, UnaryOp::Cos, UnaryOp::Exp, UnaryOp::Tanh, UnaryOp::Stribeck})
-    if (to_string(op) == s) return op;
+  if (const auto op = unary_op_from_string(s)) return *op;
   throw ParseError(origin, 0, field, fmt::format("unknown function '{}', expected sin, cos, exp, tanh or stribeck", s));
 }
 

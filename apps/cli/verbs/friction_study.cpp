@@ -157,12 +157,9 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
     while (a <= o.functions.size()) {
       const std::size_t b = std::min(o.functions.find(',', a), o.functions.size());
       const std::string f = o.functions.substr(a, b - a);
-      if (f == "sin") p.functions.push_back(UnaryOp::Sin);
-      else if (f == "cos") p.functions.push_back(UnaryOp::Cos);
-      else if (f == "exp") p.functions.push_back(UnaryOp::Exp);
-      else if (f == "tanh") p.functions.push_back(UnaryOp::Tanh);
-      else if (f == "stribeck") p.functions.push_back(UnaryOp::Stribeck);
-      else throw InvalidArgument(fmt::format("--functions has '{}', expected a comma list of sin, cos, exp, tanh, stribeck", f));
+      const auto op = unary_op_from_string(f);
+      if (!op) throw InvalidArgument(fmt::format("--functions has '{}', expected a comma list of sin, cos, exp, tanh, stribeck", f));
+      p.functions.push_back(*op);
       a = b + 1;
     }
   }

@@ -51,6 +51,9 @@ enum class UnaryOp { Sin, Cos, Exp, Tanh, Stribeck };
 /// Lower-case name ("sin", "cos", "exp", "tanh", "stribeck").
 std::string_view to_string(UnaryOp op) noexcept;
 
+/// The operator named `name` (to_string's inverse); nullopt for any other text.
+std::optional<UnaryOp> unary_op_from_string(std::string_view name) noexcept;
+
 /// Whether g(-u) = -g(u) (sin, tanh, stribeck).
 bool is_odd(UnaryOp op) noexcept;
 

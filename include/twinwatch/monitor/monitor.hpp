@@ -95,12 +95,12 @@ struct MonitorConfig {
 /// monitor apply it alike. Allocation-free after construction.
 class RestBaseline {
  public:
-  static constexpr int kSettle = 50;                 ///< samples at rest before the baseline freezes (0.1 s at 500 Hz)
+  static constexpr int kSettle = 50;                 ///< samples at rest before the baseline is set (0.1 s at 500 Hz)
   static constexpr double kTargetRest = 1e-3;        ///< |target qd| below this: commanded to rest [rad/s]
   static constexpr double kMeasuredRest = 0.01;      ///< |qd| below this: not moving (encoder flicker 0.003 rad/s)
   static constexpr double kTrackSamples = 250.0;     ///< after settling, the baseline follows with this time constant [samples] (0.5 s at 500 Hz)
   explicit RestBaseline(int n = 0);
-  /// Returns value minus the frozen baseline of each settled joint (value unchanged elsewhere).
+  /// Returns value minus the baseline of each settled joint (value unchanged elsewhere).
   /// Joints without a streamed target velocity are never at rest here.
   void apply(const RobotSample& s, VectorJ& value);
  private:
