@@ -281,6 +281,9 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         const int ll = lf["link"].is_null() ? -1 : lf["link"].get<int>() - 1;
         sc.joint_ok = ll >= 0 ? e.link == ll : (lj >= 0 ? e.joint == lj : true);
         sc.predicted_link = e.link;
+        sc.other_links = e.other_links;
+        sc.link_in_candidates =
+            ll >= 0 && (e.link == ll || std::find(e.other_links.begin(), e.other_links.end(), ll) != e.other_links.end());
         sc.magnitude = e.magnitude;
         sc.detail = e.detail;
       }
@@ -471,6 +474,17 @@ void print_evaluation(const Evaluation& e) {
         fmt::print("{:<28} {:>18} {:>22}   {}\n", s.name, std::isfinite(s.t_first_wear) ? fmt::format("{:.0f}", s.t_first_wear) : "-",
                    std::isfinite(s.t_first_alert) ? fmt::format("{:.1f}", s.t_first_alert) : "-", s.wear_detail);
   }
+  int contacts = 0, named = 0, among = 0, ambiguous = 0;
+  for (const auto& s : e.scores)
+    if (s.has_fault && s.fault == "collision" && s.detected) {
+      ++contacts;
+      named += s.joint_ok;
+      among += s.link_in_candidates;
+      ambiguous += !s.other_links.empty();
+    }
+  if (contacts > 0)
+    fmt::print("contact link: named {}/{}; the true link among the named and the equally fitting ones {}/{} ({} events named more than one)\n",
+               named, contacts, among, contacts, ambiguous);
   fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
              e.false_alarms_per_hour(), e.wear_false_alarms);
 }
@@ -487,6 +501,12 @@ std::string evaluation_json(const Evaluation& e) {
                               {"class_ok", s.class_ok},
                               {"joint_ok", s.joint_ok},
                               {"link", s.predicted_link >= 0 ? nlohmann::json(s.predicted_link + 1) : nlohmann::json(nullptr)},
+                              {"other_links", [&] {
+                                 nlohmann::json a = nlohmann::json::array();
+                                 for (int l : s.other_links) a.push_back(l + 1);
+                                 return a;
+                               }()},
+                              {"link_in_candidates", s.link_in_candidates},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
                               {"magnitude", s.magnitude},
                               {"false_alarms", s.false_alarms},

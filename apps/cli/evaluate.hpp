@@ -27,6 +27,10 @@ struct ScenarioScore {
   double t_first_alert = std::numeric_limits<double>::quiet_NaN();  ///< [s] first threshold alert (no stream gaps)
   std::string wear_detail;
   int predicted_link = -1;  ///< contact link of the detecting event (0-based; -1: none)
+  /// other links the event says fit the joint torques as well (Event::other_links, 0-based)
+  std::vector<int> other_links;
+  /// a contact whose true link is the named one or one of other_links
+  bool link_in_candidates = false;
   /// collisions (evaluation only): the contact's torque on its own link's joint over its largest
   /// joint torque, at the middle of the pulse (near 0: the contact acts like one on the link before)
   double own_joint_share = std::numeric_limits<double>::quiet_NaN();

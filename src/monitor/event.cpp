@@ -47,6 +47,7 @@ std::string Event::to_json_line() const {
   j["class"] = std::string(to_string(fault));
   j["joint"] = joint;
   j["link"] = link;
+  j["other_links"] = other_links;
   j["magnitude"] = magnitude;
   j["units"] = units;
   j["confidence"] = confidence;

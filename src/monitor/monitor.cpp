@@ -523,6 +523,7 @@ void Monitor::run_diagnosis(double t) {
   e.fault = h.fault;
   if (h.joint >= 0) e.joint = h.joint;
   e.link = h.link;
+  e.other_links = h.other_links;
   e.magnitude = h.magnitude;
   e.units = h.units;
   e.confidence = h.explained;

@@ -25,6 +25,14 @@ TEST(Event, JsonLineCarriesClassJointMagnitudeAndDuration) {
   EXPECT_DOUBLE_EQ(j["duration_s"].get<double>(), 0.75);
   EXPECT_DOUBLE_EQ(j["magnitude"].get<double>(), -0.48);
   EXPECT_EQ(e.to_json_line().find('\n'), std::string::npos);
+  EXPECT_TRUE(j["other_links"].is_array());
+  EXPECT_TRUE(j["other_links"].empty());
+  e.fault = FaultClass::Collision;
+  e.link = 4;
+  e.other_links = {5};
+  const auto c = nlohmann::json::parse(e.to_json_line());
+  EXPECT_EQ(c["link"], 4);
+  EXPECT_EQ(c["other_links"], nlohmann::json::array({5}));
 }
 
 TEST(FaultClass, RoundTripsAndRejectsUnknownNames) {

@@ -42,6 +42,9 @@ struct Hypothesis {
   std::string units;
   double explained = 0.0;  ///< fraction of sum ||r||² explained, [0, 1]
   std::string detail;
+  /// Contacts: other links that explain the joint torques as well as `link` (best first), e.g. a
+  /// force through the contact link's own joint axis leaves that joint untouched; empty otherwise.
+  std::vector<int> other_links;
 };
 
 struct DiagnosisOptions {

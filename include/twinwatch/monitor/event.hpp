@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace twinwatch::monitor {
 
@@ -33,6 +34,9 @@ struct Event {
   FaultClass fault = FaultClass::Unknown;
   int joint = -1;           ///< 0-based joint most affected, -1 if none
   int link = -1;            ///< 0-based link for contacts, -1 if none
+  /// Contacts: other 0-based links that fit the joint torques as well as `link` (best first);
+  /// the joint torques cannot tell them apart (e.g. a force through the link's own joint axis)
+  std::vector<int> other_links;
   double magnitude = 0.0;   ///< size of the fault in `units`
   std::string units;        ///< e.g. "N·m", "kg", "N", "A", "samples"
   double confidence = 0.0;  ///< [0, 1]
