@@ -68,7 +68,8 @@ const VectorJ& rnea(const RobotModel& model, DynamicsData& data, const VectorJ& 
                     const VectorJ& qdd);
 
 /// Inverse dynamics at two accelerations of the same state: returns data.tau = rnea(q, qd, qdd)
-/// (workspace filled as rnea does) and writes tau2 = rnea(q, qd, qdd2), for about 1.5 RNEAs
+/// and writes tau2 = rnea(q, qd, qdd2), for about 1.5 RNEAs. Torques only: unlike rnea, it leaves
+/// the rest of the workspace (body motion and wrenches) as it was
 /// (tau2 = tau + M(q) (qdd2 - qdd) by a Newton-Euler pass over the first pass's rotations).
 const VectorJ& rnea_pair(const RobotModel& model, DynamicsData& data, const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
                          const VectorJ& qdd2, VectorJ& tau2);
