@@ -6,6 +6,7 @@
 #include <array>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <string_view>
 
 #include "twinwatch/core/error.hpp"
 
@@ -74,7 +75,7 @@ EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()
       "CREATE TABLE IF NOT EXISTS events ("
       " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
       " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
-      " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP);";
+      " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT);";
   char* err = nullptr;
   if (sqlite3_exec(impl_->db, schema, nullptr, nullptr, &err) != SQLITE_OK) {
     const std::string msg = err ? err : "unknown error";
@@ -83,9 +84,25 @@ EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()
     impl_->db = nullptr;
     throw std::runtime_error(fmt::format("{}: cannot create the events table: {}", path, msg));
   }
+  // a table from before other_links (session 10) gets the column; its old rows read as none
+  bool has_other_links = false;
+  sqlite3_stmt* info = nullptr;
+  if (sqlite3_prepare_v2(impl_->db, "PRAGMA table_info(events);", -1, &info, nullptr) == SQLITE_OK)
+    while (sqlite3_step(info) == SQLITE_ROW) {
+      const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(info, 1));
+      has_other_links |= name != nullptr && std::string_view(name) == "other_links";
+    }
+  sqlite3_finalize(info);
+  if (!has_other_links && sqlite3_exec(impl_->db, "ALTER TABLE events ADD COLUMN other_links TEXT;", nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    sqlite3_close(impl_->db);
+    impl_->db = nullptr;
+    throw std::runtime_error(fmt::format("{}: cannot add the other_links column to the events table: {}", path, msg));
+  }
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail) VALUES (?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) {
     const std::string msg = sqlite3_errmsg(impl_->db);
     sqlite3_close(impl_->db);
@@ -115,6 +132,8 @@ void EventStore::insert(const Event& e, const std::string& source) {
   sqlite3_bind_double(s, 10, e.confidence);
   sqlite3_bind_double(s, 11, e.peak_residual);
   sqlite3_bind_text(s, 12, e.detail.c_str(), -1, SQLITE_TRANSIENT);
+  const std::string others = nlohmann::json(e.other_links).dump();
+  sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   if (sqlite3_step(s) != SQLITE_DONE)
     throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
 }
@@ -126,6 +145,47 @@ long EventStore::count() const {
   if (sqlite3_step(s) == SQLITE_ROW) n = sqlite3_column_int64(s, 0);
   sqlite3_finalize(s);
   return n;
+}
+
+std::vector<std::pair<std::string, Event>> EventStore::read() const {
+  sqlite3_stmt* s = nullptr;
+  const char* sel =
+      "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
+      " other_links FROM events ORDER BY id;";
+  if (sqlite3_prepare_v2(impl_->db, sel, -1, &s, nullptr) != SQLITE_OK)
+    throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  const auto text = [&](int col) {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s, col));
+    return p ? std::string(p) : std::string();
+  };
+  std::vector<std::pair<std::string, Event>> out;
+  int rc = SQLITE_ROW;
+  while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+    const long id = sqlite3_column_int64(s, 0);
+    Event e;
+    e.open = false;
+    e.t_start = e.t_detected = sqlite3_column_double(s, 2);
+    e.t_end = sqlite3_column_double(s, 3);
+    e.joint = sqlite3_column_int(s, 5);
+    e.link = sqlite3_column_int(s, 6);
+    e.magnitude = sqlite3_column_double(s, 7);
+    e.units = text(8);
+    e.confidence = sqlite3_column_double(s, 9);
+    e.peak_residual = sqlite3_column_double(s, 10);
+    e.detail = text(11);
+    try {
+      e.fault = fault_class_from_string(text(4));
+      const std::string others = text(12);
+      if (!others.empty()) e.other_links = nlohmann::json::parse(others).get<std::vector<int>>();
+    } catch (const std::exception& x) {
+      sqlite3_finalize(s);
+      throw std::runtime_error(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
+    }
+    out.emplace_back(text(1), std::move(e));
+  }
+  sqlite3_finalize(s);
+  if (rc != SQLITE_DONE) throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errstr(rc)));
+  return out;
 }
 
 }  // namespace twinwatch::monitor

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sqlite3.h>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 
@@ -54,12 +56,85 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
     EventStore store(path.string());
     Event e;
     e.fault = FaultClass::Collision;
+    e.t_start = 7.25;
+    e.t_end = 7.31;
+    e.joint = e.link = 4;
+    e.other_links = {3};
+    e.magnitude = 61.5;
+    e.units = "N";
+    e.detail = "contact on link 5";
     store.insert(e, "rec.csv");
-    store.insert(e, "rec.csv");
+    e.fault = FaultClass::PayloadChange;
+    e.link = -1;
+    e.other_links.clear();
+    store.insert(e, "robot 10.0.0.2");
     EXPECT_EQ(store.count(), 2);
   }
   EventStore again(path.string());
   EXPECT_EQ(again.count(), 2);
+  const auto rows = again.read();
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].first, "rec.csv");
+  EXPECT_EQ(rows[0].second.fault, FaultClass::Collision);
+  EXPECT_DOUBLE_EQ(rows[0].second.t_start, 7.25);
+  EXPECT_DOUBLE_EQ(rows[0].second.t_end, 7.31);
+  EXPECT_EQ(rows[0].second.link, 4);
+  EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
+  EXPECT_DOUBLE_EQ(rows[0].second.magnitude, 61.5);
+  EXPECT_EQ(rows[0].second.units, "N");
+  EXPECT_EQ(rows[0].second.detail, "contact on link 5");
+  EXPECT_EQ(rows[1].first, "robot 10.0.0.2");
+  EXPECT_EQ(rows[1].second.fault, FaultClass::PayloadChange);
+  EXPECT_TRUE(rows[1].second.other_links.empty());
+  std::filesystem::remove(path);
+}
+
+// a store written before other_links existed (the session-9 schema) opens, keeps its rows, gains
+// the column, and takes new events with it; a row that cannot be read back names the file and row
+TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_old.db";
+  std::filesystem::remove(path);
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+    const char* old_schema =
+        "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
+        " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
+        " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP);"
+        "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
+        " peak_residual, detail) VALUES ('old.csv', 1.0, 1.05, 0.05, 'collision', 2, 2, 40.0, 'N', 0.9, 1.2, 'old');";
+    ASSERT_EQ(sqlite3_exec(db, old_schema, nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  {
+    EventStore store(path.string());
+    EXPECT_EQ(store.count(), 1);
+    Event e;
+    e.fault = FaultClass::Collision;
+    e.link = 5;
+    e.other_links = {4};
+    store.insert(e, "new.csv");
+    const auto rows = store.read();
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(rows[0].first, "old.csv");
+    EXPECT_EQ(rows[0].second.link, 2);
+    EXPECT_TRUE(rows[0].second.other_links.empty());
+    EXPECT_EQ(rows[1].second.other_links, std::vector<int>{4});
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "UPDATE events SET other_links = '[4,' WHERE source = 'new.csv';", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  EventStore store(path.string());
+  try {
+    store.read();
+    FAIL() << "a malformed other_links was read";
+  } catch (const std::runtime_error& x) {
+    EXPECT_THAT(x.what(), ::testing::HasSubstr(path.string()));
+    EXPECT_THAT(x.what(), ::testing::HasSubstr("row id 2"));
+  }
   std::filesystem::remove(path);
 }
 

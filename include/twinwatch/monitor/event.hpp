@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace twinwatch::monitor {
@@ -52,8 +53,9 @@ struct Event {
 /// the monitor hands events to it from the consumer side.
 class EventStore {
  public:
-  /// Opens or creates the database and its `events` table. Throws std::runtime_error naming the
-  /// file when SQLite cannot open it.
+  /// Opens or creates the database and its `events` table; a table written by an older version
+  /// gets the columns it lacks (other_links). Throws std::runtime_error naming the file when SQLite
+  /// cannot open it.
   explicit EventStore(const std::string& path);
   ~EventStore();
   EventStore(const EventStore&) = delete;
@@ -63,6 +65,10 @@ class EventStore {
   void insert(const Event& e, const std::string& source);
   /// Number of stored events.
   long count() const;
+  /// Every stored event with its source, oldest first (open is false; t_detected is not stored and
+  /// reads as t_start). Throws std::runtime_error naming the file and the row id when a row cannot
+  /// be read back (an unknown class, a malformed other_links).
+  std::vector<std::pair<std::string, Event>> read() const;
 
  private:
   struct Impl;

@@ -1,0 +1,79 @@
+// `twinwatch events`: the event history that `twinwatch monitor` keeps in its SQLite store.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/monitor/event.hpp"
+#include "verb_registry.hpp"
+
+namespace {
+
+using namespace twinwatch;
+
+struct EventsOptions {
+  std::string db = "events.db";
+  std::string fault;   // only this class ("" = all)
+  std::string source;  // only events whose source contains this text
+  int last = 0;        // only the newest N (0 = all)
+  bool json = false;
+};
+
+// "3" or "3 (or 4)": the contact link and the one the joint torques cannot rule out (1-based)
+std::string link_text(const monitor::Event& e) {
+  if (e.link < 0) return "-";
+  std::string s = std::to_string(e.link + 1);
+  for (int l : e.other_links) s += fmt::format(" (or {})", l + 1);
+  return s;
+}
+
+void run_events(const EventsOptions& o) {
+  if (!std::filesystem::exists(o.db))
+    throw InvalidArgument(fmt::format("{}: no such event store ('twinwatch monitor --db {}' writes one)", o.db, o.db));
+  if (!o.fault.empty()) monitor::fault_class_from_string(o.fault);  // names the valid classes when unknown
+  if (o.last < 0) throw InvalidArgument(fmt::format("--last is {}, must be >= 0", o.last));
+  const monitor::EventStore store(o.db);
+  auto rows = store.read();
+  std::erase_if(rows, [&](const auto& r) {
+    return (!o.fault.empty() && monitor::to_string(r.second.fault) != o.fault) ||
+           (!o.source.empty() && r.first.find(o.source) == std::string::npos);
+  });
+  if (o.last > 0 && rows.size() > static_cast<size_t>(o.last)) rows.erase(rows.begin(), rows.end() - o.last);
+  if (o.json) {
+    for (const auto& [source, e] : rows) {
+      nlohmann::json j = nlohmann::json::parse(e.to_json_line());
+      j["source"] = source;
+      fmt::print("{}\n", j.dump());
+    }
+    return;
+  }
+  fmt::print("{:<24} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "source", "t [s]", "dur ms", "class", "joint", "link",
+             "magnitude", "detail");
+  for (const auto& [source, e] : rows)
+    fmt::print("{:<24} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n",
+               source.size() > 24 ? "…" + source.substr(source.size() - 23) : source, e.t_start, 1000.0 * e.duration(),
+               monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
+               fmt::format("{:.3g} {}", e.magnitude, e.units), e.detail);
+  fmt::print("{} event(s) of {} stored in {}\n", rows.size(), store.count(), o.db);
+}
+
+twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
+  auto o = std::make_shared<EventsOptions>();
+  auto* sub = app.add_subcommand("events", "List the events 'twinwatch monitor' stored (SQLite): class, joint, contact link, magnitude, detail");
+  sub->add_option("--db", o->db, "Event store written by 'twinwatch monitor --db'")->capture_default_str();
+  sub->add_option("--class", o->fault,
+                  "Only this class: collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
+  sub->add_option("--source", o->source, "Only events whose source (recording file or robot address) contains this text");
+  sub->add_option("--last", o->last, "Only the newest N events (0: all)")->capture_default_str();
+  sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\")");
+  sub->footer(
+      "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"
+      "passes near the contact link's own joint axis); --json gives it as \"other_links\". Links and joints in --json\n"
+      "are 0-based, as in the monitor's --events file; the table shows them 1-based.");
+  sub->callback([o] { run_events(*o); });
+}};
+
+}  // namespace

@@ -1,0 +1,24 @@
+# monitor writes its events to SQLite; `events` lists them (table and --json), filters them, and
+# names a missing store and a bad class
+set(d ${PROJECT_BINARY_DIR}/cli-pipeline)
+set(s ${PROJECT_SOURCE_DIR}/tests/data/cli)
+add_test(NAME cli.events_setup COMMAND ${CMAKE_COMMAND} -E remove -f ${d}/events_collision.db)
+add_test(NAME cli.simulate_collision COMMAND twinwatch simulate ${s}/short_collision.yaml -o ${d}/collision.csv)
+add_test(NAME cli.monitor_collision COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5
+         --payload-com 0 0 0.04 --db ${d}/events_collision.db)
+set_tests_properties(cli.events_setup PROPERTIES FIXTURES_SETUP events_clean)
+set_tests_properties(cli.simulate_collision PROPERTIES FIXTURES_SETUP collision_recording PASS_REGULAR_EXPRESSION "samples")
+set_tests_properties(cli.monitor_collision PROPERTIES FIXTURES_REQUIRED "twin;collision_recording;events_clean" FIXTURES_SETUP collision_db
+                     PASS_REGULAR_EXPRESSION "collision")
+add_test(NAME cli.events_table COMMAND twinwatch events --db ${d}/events_collision.db)
+set_tests_properties(cli.events_table PROPERTIES FIXTURES_REQUIRED collision_db
+                     PASS_REGULAR_EXPRESSION "collision.csv +6\\.[0-9]+ +[0-9]+ collision +J[1-6] +[1-6]( \\(or [1-6]\\))? +[0-9.]+ N  contact on link [1-6]")
+add_test(NAME cli.events_json COMMAND twinwatch events --db ${d}/events_collision.db --class collision --json)
+set_tests_properties(cli.events_json PROPERTIES FIXTURES_REQUIRED collision_db
+                     PASS_REGULAR_EXPRESSION "\"class\":\"collision\".*\"link\":[0-5],.*\"other_links\":\\[[0-5]?\\].*\"source\":\"[^\"]*collision.csv\"")
+add_test(NAME cli.events_filter_none COMMAND twinwatch events --db ${d}/events_collision.db --class payload_change)
+set_tests_properties(cli.events_filter_none PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "^[^\n]*\n0 event\\(s\\) of [1-9]")
+add_test(NAME cli.events_missing_store COMMAND twinwatch events --db ${d}/no_such_events.db)
+set_tests_properties(cli.events_missing_store PROPERTIES PASS_REGULAR_EXPRESSION "no_such_events.db: no such event store")
+add_test(NAME cli.events_bad_class COMMAND twinwatch events --db ${d}/events_collision.db --class earthquake)
+set_tests_properties(cli.events_bad_class PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "'earthquake' is unknown")
