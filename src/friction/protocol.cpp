@@ -257,12 +257,7 @@ ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned
   };
   ProtocolRecords r;
   r.joint = joint.name;
-  constexpr int kRichHarmonics = 4;     // 0.25, 0.5, 0.75, 1.0 Hz
-  constexpr unsigned kRichSeedOffset = 50;  // coefficients unlike the validation trajectory's
-  r.train = make(training == TrainingExcitation::Sweep
-                     ? sine_profile(0.25, kVelocity, kDuration)
-                     : fourier_profile(kRichHarmonics, 0.25, kVelocity, kDuration, seed + kRichSeedOffset),
-                 seed * 3 + 1, nullptr);
+  r.train = make(training_profile(training, seed), seed * 3 + 1, nullptr);
   r.fourier = make(fourier_profile(kHarmonics, kFourierBase, kVelocity, kDuration, seed), seed * 3 + 2, nullptr);
   r.chirp = make(chirp_profile(0.1, 1.0, kVelocity, kDuration), seed * 3 + 3, &r.chirp_frequency);
   return r;

@@ -223,7 +223,28 @@ std::vector<SimulatedJoint> simulated_study_joints() {
           make("J3", 3.0, 3.8, 0.04, 2.0, 0.010, {1e-4, 4e-4, 1e-3, 3e-3}, 0.08)};
 }
 
-FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed) {
+VelocityProfile training_profile(TrainingExcitation training, unsigned seed) {
+  constexpr double kDuration = 20.0, kVelocity = 1.2, kSweep = 0.25;
+  switch (training) {
+    case TrainingExcitation::Sweep:
+      return sine_profile(kSweep, kVelocity, kDuration);
+    case TrainingExcitation::Fourier: {
+      constexpr int kRichHarmonics = 4;         // 0.25, 0.5, 0.75, 1.0 Hz
+      constexpr unsigned kRichSeedOffset = 50;  // coefficients unlike the validation trajectory's
+      return fourier_profile(kRichHarmonics, kSweep, kVelocity, kDuration, seed + kRichSeedOffset);
+    }
+    case TrainingExcitation::Crawls: {
+      // 12 s of the sweep (3 periods) and 8 plateaus of 1 s, both directions, 0.02-0.1 rad/s: the
+      // Stribeck band of the simulated joints (vs 0.04-0.08 rad/s), entered over 0.2 s
+      constexpr double kSweepTime = 12.0, kCrawlTime = 1.0, kBlend = 0.2;
+      return sweep_and_crawls_profile(kSweep, kVelocity, kSweepTime, {0.02, -0.02, 0.05, -0.05, 0.1, -0.1, 0.03, -0.03},
+                                      kCrawlTime, kBlend);
+    }
+  }
+  throw InvalidArgument("unknown training excitation");
+}
+
+FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
   // HESR Table I: training sweep 0.25 Hz at 1.2 rad/s; untrained Fourier; chirp 0.1-1.0 Hz
   constexpr double kDuration = 20.0;   // [s] 4000 samples at 200 Hz, as the paper's validation record
   constexpr double kVelocity = 1.2;    // [rad/s]
@@ -234,7 +255,7 @@ FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned see
   FrictionStudyData d;
   d.joint = joint.name;
   o.seed = seed * 3 + 1;
-  d.train = simulate_joint(joint.truth, sine_profile(0.25, kVelocity, kDuration), o).record;
+  d.train = simulate_joint(joint.truth, training_profile(training, seed), o).record;
   o.seed = seed * 3 + 2;
   d.fourier = simulate_joint(joint.truth, fourier_profile(kHarmonics, kFourierBase, kVelocity, kDuration, seed), o).record;
   o.seed = seed * 3 + 3;

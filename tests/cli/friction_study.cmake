@@ -36,3 +36,6 @@ set_tests_properties(cli.friction_study_bad_pd_scale PROPERTIES PASS_REGULAR_EXP
 add_test(NAME cli.friction_study_bad_truth_lag_scale COMMAND twinwatch friction-study --closed-loop --truth-lag-scale -1 -q)
 set_tests_properties(cli.friction_study_bad_truth_lag_scale PROPERTIES PASS_REGULAR_EXPRESSION
   "--truth-lag-scale is -1, must be >= 0")
+# the two non-HESR training excitations exclude each other, named
+add_test(NAME cli.friction_study_training_conflict COMMAND twinwatch friction-study --closed-loop --rich-training --crawl-training -q)
+set_tests_properties(cli.friction_study_training_conflict PROPERTIES PASS_REGULAR_EXPRESSION "--rich-training and --crawl-training exclude each other")

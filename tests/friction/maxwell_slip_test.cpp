@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/friction/synthetic_joint.hpp"
@@ -129,6 +130,30 @@ TEST(SyntheticJoint, FourierProfileReachesTheRequestedPeak) {
   double peak = 0.0;
   for (int i = 0; i < 20000; ++i) peak = std::max(peak, std::abs(p.qd(i * 1e-3)));
   EXPECT_NEAR(peak, 1.2, 1e-3);
+}
+
+// the crawl-training profile: the sweep, then plateaus held after a raised-cosine blend, continuous
+// everywhere; a sweep that is not a whole number of periods is refused with its numbers
+TEST(SyntheticJoint, SweepAndCrawlsHoldsEachPlateauAfterAContinuousBlend) {
+  const std::vector<double> crawls{0.02, -0.05, 0.1};
+  const VelocityProfile p = sweep_and_crawls_profile(0.25, 1.2, 8.0, crawls, 1.0, 0.2);
+  EXPECT_DOUBLE_EQ(p.duration, 11.0);
+  EXPECT_DOUBLE_EQ(p.qd(1.0), 1.2);                             // the sweep's crest
+  EXPECT_NEAR(p.qd(8.0 - 1e-9), 0.0, 1e-8);                      // ends at rest
+  for (std::size_t i = 0; i < crawls.size(); ++i) {
+    const double t0 = 8.0 + static_cast<double>(i);
+    EXPECT_DOUBLE_EQ(p.qd(t0 + 0.2), crawls[i]) << i;             // held after the blend
+    EXPECT_DOUBLE_EQ(p.qd(t0 + 0.99), crawls[i]) << i;
+    const double from = i == 0 ? 0.0 : crawls[i - 1];
+    EXPECT_NEAR(p.qd(t0 + 0.1), 0.5 * (from + crawls[i]), 1e-12) << i;  // half-way at mid-blend
+  }
+  for (double t = 0.0; t < p.duration; t += 1e-3) EXPECT_LT(std::abs(p.qd(t + 1e-3) - p.qd(t)), 2e-3) << t;
+  try {
+    sweep_and_crawls_profile(0.25, 1.2, 7.0, crawls, 1.0, 0.2);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("sweep_time 7 s is 1.75 periods"));
+  }
 }
 
 TEST(SyntheticJoint, InvalidOptionsAreNamed) {

@@ -35,6 +35,7 @@ struct StudyOptions {
   double input_guard = 0.1;
   int reversal_weight = 1;
   bool rich_training = false;
+  bool crawl_training = false;
   std::string memory = "displacement";
   int remove_viscous = -1;  // < 0: the study's (on); 0 off, 1 on
   std::string predictions;  // CSV of the validation record and every model's prediction
@@ -263,6 +264,12 @@ nlohmann::json to_json(const std::vector<ProtocolResult>& res) {
 }
 
 // HESR §V-G on the simulated joints: models fitted on each joint's residual-torque sweep, then the
+// the simulated joints' training excitation (--rich-training, --crawl-training; HESR's sweep by default)
+TrainingExcitation training_of(const StudyOptions& o) {
+  if (o.rich_training && o.crawl_training) throw InvalidArgument("--rich-training and --crawl-training exclude each other");
+  return o.rich_training ? TrainingExcitation::Fourier : o.crawl_training ? TrainingExcitation::Crawls : TrainingExcitation::Sweep;
+}
+
 // eq. 19-20 feed-forward with each of them on a 10 s untrained Fourier trajectory
 int run_closed_loop_study(const StudyOptions& o) {
   if (!o.recordings.empty())
@@ -288,10 +295,11 @@ int run_closed_loop_study(const StudyOptions& o) {
     if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
     // a diagnosis only: the same truth (records and plant) with its frictional lag scaled
     j.truth.lag_time *= o.truth_lag_scale;
-    say(fmt::format("{}: fitting the residual-torque models on the 20 s sweep", j.name));
+    say(fmt::format("{}: fitting the residual-torque models on the 20 s {}", j.name,
+                    o.crawl_training ? "sweep and crawls" : "sweep"));
     FrictionStudyOptions so;
     apply_parfam_options(so.parfam, o);
-    const JointStudy study = run_friction_study(simulated_study_data(j, o.seed), so);
+    const JointStudy study = run_friction_study(simulated_study_data(j, o.seed, training_of(o)), so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
     co.gains.kp_min *= o.pd_scale;
@@ -380,8 +388,7 @@ int run(const StudyOptions& o) {
   if (o.simulated) {
     for (const SimulatedJoint& j : simulated_study_joints()) {
       if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
-      joints.push_back(simulated_protocol_records(
-          j, o.seed, o.rich_training ? TrainingExcitation::Fourier : TrainingExcitation::Sweep));
+      joints.push_back(simulated_protocol_records(j, o.seed, training_of(o)));
     }
   } else {
     joints = recorded_joints(o);
@@ -497,7 +504,11 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                   "ParFam: samples within +-0.1 s of a training reversal count this many times (1: plain mse)")
       ->capture_default_str();
   sub->add_flag("--rich-training", o->rich_training,
-                "--simulated: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
+                "--simulated, --closed-loop: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
+  sub->add_flag("--crawl-training", o->crawl_training,
+                "--simulated, --closed-loop diagnosis (not HESR's protocol): train on 12 s of the sweep and 8 s of slow "
+                "constant-velocity crawls (+-0.02 ... 0.1 rad/s, 1 s each), which show the steady Stribeck curve the sweep "
+                "crosses in tens of ms");
   sub->add_option("--memory", o->memory,
                   "Clock of the hysteresis state h: 'time' (HESR eq. 10 as printed, h relaxes in time with 1/alpha) "
                   "or 'displacement' (eq. 10 in the travelled-distance clock, hd = alpha |qd| (tanh(beta qd) - h): "

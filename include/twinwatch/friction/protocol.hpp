@@ -86,12 +86,6 @@ std::vector<double> frequency_from_reversals(std::span<const double> qd, double 
 /// Runs the protocol. Throws InvalidArgument on bad records or options.
 ProtocolResult run_hesr_protocol(const ProtocolRecords& records, const ProtocolOptions& options = {});
 
-/// The training excitation of a simulated joint.
-enum class TrainingExcitation {
-  Sweep,    ///< HESR: 0.25 Hz sine at 1.2 rad/s for 20 s
-  Fourier,  ///< richer: four harmonics of 0.25 Hz (0.25-1.0 Hz, the chirp's range), peak 1.2 rad/s, 20 s
-};
-
 /// The simulated study joints with a rigid body added to the measured torque (what a current-based
 /// pipeline sees): tau = I qdd + g_s sin(q) + g_c cos(q) + c + tau_f + noise, with the records of
 /// simulated_study_data() (or the richer training excitation). The rigid-body values are in protocol.cpp.

@@ -19,6 +19,7 @@
 #include "twinwatch/friction/parfam.hpp"
 #include "twinwatch/friction/rbf_network.hpp"
 #include "twinwatch/friction/stribeck.hpp"
+#include "twinwatch/friction/synthetic_joint.hpp"
 
 namespace twinwatch::friction {
 
@@ -102,10 +103,23 @@ struct SimulatedJoint {
 };
 std::vector<SimulatedJoint> simulated_study_joints();
 
-/// The HESR protocol's records for a simulated joint: training 0.25 Hz / 1.2 rad/s sine for 20 s,
-/// a 20 s five-harmonic Fourier trajectory (base 0.1 Hz, peak 1.2 rad/s, coefficients from `seed`),
-/// a 20 s 0.1-1.0 Hz chirp at 1.2 rad/s; 200 Hz, 20-bit encoder, the joint's torque noise, each
-/// record with its own noise seed.
-FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed);
+/// The training excitation of a simulated joint.
+enum class TrainingExcitation {
+  Sweep,    ///< HESR: 0.25 Hz sine at 1.2 rad/s for 20 s
+  Fourier,  ///< richer: four harmonics of 0.25 Hz (0.25-1.0 Hz, the chirp's range), peak 1.2 rad/s, 20 s
+  /// not HESR's protocol (a diagnosis): 12 s of the sweep, then 8 s of slow constant-velocity crawls
+  /// (sweep_and_crawls_profile), as in classical Stribeck-curve identification
+  Crawls,
+};
+
+/// The training profile of `training` (20 s; `seed` only for Fourier).
+VelocityProfile training_profile(TrainingExcitation training, unsigned seed);
+
+/// The HESR protocol's records for a simulated joint: training 0.25 Hz / 1.2 rad/s sine for 20 s
+/// (or `training`), a 20 s five-harmonic Fourier trajectory (base 0.1 Hz, peak 1.2 rad/s,
+/// coefficients from `seed`), a 20 s 0.1-1.0 Hz chirp at 1.2 rad/s; 200 Hz, 20-bit encoder, the
+/// joint's torque noise, each record with its own noise seed.
+FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed,
+                                       TrainingExcitation training = TrainingExcitation::Sweep);
 
 }  // namespace twinwatch::friction

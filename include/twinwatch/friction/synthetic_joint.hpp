@@ -30,6 +30,13 @@ VelocityProfile sine_profile(double f, double v_amp, double duration);
 /// (the untrained validation trajectory, HESR Table VIII).
 VelocityProfile fourier_profile(int harmonics, double f_base, double v_amp, double duration, unsigned seed);
 
+/// The sweep qd = v sin(2 pi f t) for the first `sweep_time` (a whole number of periods, ending at
+/// rest), then one plateau per entry of `crawls` [rad/s], each held for `crawl_time` [s] and entered
+/// by a raised-cosine blend over its first `blend` [s] from the previous plateau (from 0 for the
+/// first): slow constant-velocity sliding in both directions, which the sweep crosses in tens of ms.
+VelocityProfile sweep_and_crawls_profile(double f, double v_amp, double sweep_time, const std::vector<double>& crawls,
+                                         double crawl_time, double blend);
+
 /// Linear chirp qd = v sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T))), T = duration (HESR §V-F).
 VelocityProfile chirp_profile(double f0, double f1, double v_amp, double duration);
 
