@@ -223,8 +223,16 @@ std::vector<SimulatedJoint> simulated_study_joints() {
           make("J3", 3.0, 3.8, 0.04, 2.0, 0.010, {1e-4, 4e-4, 1e-3, 3e-3}, 0.08)};
 }
 
+namespace {
+// HESR Table I: every simulated record lasts 20 s (4000 samples at 200 Hz, as the paper's validation
+// record) and peaks at 1.2 rad/s; the training sweep runs at 0.25 Hz
+constexpr double kRecordDuration = 20.0;  // [s]
+constexpr double kRecordVelocity = 1.2;   // [rad/s]
+constexpr double kSweepFrequency = 0.25;  // [Hz]
+}  // namespace
+
 VelocityProfile training_profile(TrainingExcitation training, unsigned seed) {
-  constexpr double kDuration = 20.0, kVelocity = 1.2, kSweep = 0.25;
+  constexpr double kDuration = kRecordDuration, kVelocity = kRecordVelocity, kSweep = kSweepFrequency;
   switch (training) {
     case TrainingExcitation::Sweep:
       return sine_profile(kSweep, kVelocity, kDuration);
@@ -245,9 +253,8 @@ VelocityProfile training_profile(TrainingExcitation training, unsigned seed) {
 }
 
 FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
-  // HESR Table I: training sweep 0.25 Hz at 1.2 rad/s; untrained Fourier; chirp 0.1-1.0 Hz
-  constexpr double kDuration = 20.0;   // [s] 4000 samples at 200 Hz, as the paper's validation record
-  constexpr double kVelocity = 1.2;    // [rad/s]
+  // HESR Table I: training (training_profile); untrained Fourier; chirp 0.1-1.0 Hz
+  constexpr double kDuration = kRecordDuration, kVelocity = kRecordVelocity;
   constexpr int kHarmonics = 5;
   constexpr double kFourierBase = 0.1;  // [Hz]
   SyntheticJointOptions o;

@@ -25,10 +25,10 @@ VelocityProfile sine_profile(double f, double v_amp, double duration) {
 
 VelocityProfile sweep_and_crawls_profile(double f, double v_amp, double sweep_time, const std::vector<double>& crawls,
                                          double crawl_time, double blend) {
-  if (!(f > 0.0) || !(sweep_time >= 0.0) || !(crawl_time > 0.0) || !(blend >= 0.0 && blend <= crawl_time))
-    throw InvalidArgument(fmt::format("sweep_and_crawls_profile: f {}, sweep_time {}, crawl_time {}, blend {}: expected f > 0, "
-                                      "sweep_time >= 0, crawl_time > 0, 0 <= blend <= crawl_time",
-                                      f, sweep_time, crawl_time, blend));
+  if (!(f > 0.0) || !(sweep_time >= 0.0) || !(crawl_time > 0.0) || !(blend >= 0.0 && blend <= crawl_time) || crawls.empty())
+    throw InvalidArgument(fmt::format("sweep_and_crawls_profile: f {}, sweep_time {}, crawl_time {}, blend {}, {} crawls: expected "
+                                      "f > 0, sweep_time >= 0, crawl_time > 0, 0 <= blend <= crawl_time, at least one crawl",
+                                      f, sweep_time, crawl_time, blend, crawls.size()));
   const double periods = sweep_time * f;
   if (std::abs(periods - std::round(periods)) > 1e-9)
     throw InvalidArgument(fmt::format("sweep_and_crawls_profile: sweep_time {} s is {} periods of {} Hz, expected a whole number",
@@ -42,7 +42,7 @@ VelocityProfile sweep_and_crawls_profile(double f, double v_amp, double sweep_ti
     const auto i = std::min(static_cast<std::size_t>(u / crawl_time), crawls.size() - 1);
     const double from = i == 0 ? 0.0 : crawls[i - 1], to = crawls[i];
     const double into = u - crawl_time * static_cast<double>(i);
-    if (blend <= 0.0 || into >= blend) return to;
+    if (into >= blend) return to;
     return from + (to - from) * 0.5 * (1.0 - std::cos(M_PI * into / blend));
   };
   return p;

@@ -349,11 +349,11 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   }
   // model selection: weighted least-squares misfit plus a penalty per link further out (a force on
   // link l moves joints 1..l only, so a more distal hypothesis always fits at least as well)
+  const auto penalised = [&](int l) { return out.cost[static_cast<size_t>(l)] + kLinkPenalty * l; };
   int best = 0;
   for (int l = 1; l < n; ++l)
-    if (out.cost[static_cast<size_t>(l)] + kLinkPenalty * l < out.cost[static_cast<size_t>(best)] + kLinkPenalty * best) best = l;
+    if (penalised(l) < penalised(best)) best = l;
   out.link = best;
-  const auto penalised = [&](int l) { return out.cost[static_cast<size_t>(l)] + kLinkPenalty * l; };
   int other = -1;
   for (int l = 0; l < n; ++l) {
     const bool close = l != best && penalised(l) - penalised(best) < kAmbiguousMisfit;

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <stdexcept>
 #include <string_view>
 
@@ -65,25 +66,27 @@ struct EventStore::Impl {
 
 EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
-  if (sqlite3_open(path.c_str(), &impl_->db) != SQLITE_OK) {
-    const std::string msg = impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory";
+  // every failure below: close what is open and name the file and the step
+  const auto fail = [&](const char* what, const std::string& msg) {
     sqlite3_close(impl_->db);
     impl_->db = nullptr;
-    throw std::runtime_error(fmt::format("{}: cannot open event store: {}", path, msg));
-  }
-  const char* schema =
-      "CREATE TABLE IF NOT EXISTS events ("
-      " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
-      " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
-      " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT);";
-  char* err = nullptr;
-  if (sqlite3_exec(impl_->db, schema, nullptr, nullptr, &err) != SQLITE_OK) {
+    throw std::runtime_error(fmt::format("{}: {}: {}", path, what, msg));
+  };
+  // a statement run once; SQLite's own message on failure
+  const auto exec = [&](const char* sql, const char* what) {
+    char* err = nullptr;
+    if (sqlite3_exec(impl_->db, sql, nullptr, nullptr, &err) == SQLITE_OK) return;
     const std::string msg = err ? err : "unknown error";
     sqlite3_free(err);
-    sqlite3_close(impl_->db);
-    impl_->db = nullptr;
-    throw std::runtime_error(fmt::format("{}: cannot create the events table: {}", path, msg));
-  }
+    fail(what, msg);
+  };
+  if (sqlite3_open(path.c_str(), &impl_->db) != SQLITE_OK)
+    fail("cannot open event store", impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory");
+  exec("CREATE TABLE IF NOT EXISTS events ("
+       " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
+       " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
+       " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT);",
+       "cannot create the events table");
   // a table from before other_links (session 10) gets the column; its old rows read as none
   bool has_other_links = false;
   sqlite3_stmt* info = nullptr;
@@ -93,22 +96,11 @@ EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()
       has_other_links |= name != nullptr && std::string_view(name) == "other_links";
     }
   sqlite3_finalize(info);
-  if (!has_other_links && sqlite3_exec(impl_->db, "ALTER TABLE events ADD COLUMN other_links TEXT;", nullptr, nullptr, &err) != SQLITE_OK) {
-    const std::string msg = err ? err : "unknown error";
-    sqlite3_free(err);
-    sqlite3_close(impl_->db);
-    impl_->db = nullptr;
-    throw std::runtime_error(fmt::format("{}: cannot add the other_links column to the events table: {}", path, msg));
-  }
+  if (!has_other_links) exec("ALTER TABLE events ADD COLUMN other_links TEXT;", "cannot add the other_links column to the events table");
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
       " peak_residual, detail, other_links) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?);";
-  if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) {
-    const std::string msg = sqlite3_errmsg(impl_->db);
-    sqlite3_close(impl_->db);
-    impl_->db = nullptr;
-    throw std::runtime_error(fmt::format("{}: cannot prepare insert: {}", path, msg));
-  }
+  if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
 EventStore::~EventStore() {
@@ -148,12 +140,14 @@ long EventStore::count() const {
 }
 
 std::vector<std::pair<std::string, Event>> EventStore::read() const {
-  sqlite3_stmt* s = nullptr;
+  sqlite3_stmt* raw = nullptr;
   const char* sel =
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
       " other_links FROM events ORDER BY id;";
-  if (sqlite3_prepare_v2(impl_->db, sel, -1, &s, nullptr) != SQLITE_OK)
+  if (sqlite3_prepare_v2(impl_->db, sel, -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
+  sqlite3_stmt* s = stmt.get();
   const auto text = [&](int col) {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s, col));
     return p ? std::string(p) : std::string();
@@ -178,12 +172,10 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
       const std::string others = text(12);
       if (!others.empty()) e.other_links = nlohmann::json::parse(others).get<std::vector<int>>();
     } catch (const std::exception& x) {
-      sqlite3_finalize(s);
       throw std::runtime_error(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
     }
     out.emplace_back(text(1), std::move(e));
   }
-  sqlite3_finalize(s);
   if (rc != SQLITE_DONE) throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errstr(rc)));
   return out;
 }

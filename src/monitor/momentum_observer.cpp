@@ -73,13 +73,9 @@ void TwinMomentumObserver::reset() {
   memory_ = ident::FrictionMemory{};
 }
 
-const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque,
-                                            const ident::FrictionMemory* memory) {
-  if (memory == nullptr) {
-    twin.advance(memory_, s.q);
-    memory = &memory_;
-  }
-  if (const VectorJ* qdd = acceleration(s, dt)) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, memory);
+const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
+  twin.advance(memory_, s.q);
+  if (const VectorJ* qdd = acceleration(s, dt)) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, &memory_);
   return update_with_torque(twin, s, dt, tau_twin_, extra_torque);
 }
 

@@ -263,14 +263,14 @@ nlohmann::json to_json(const std::vector<ProtocolResult>& res) {
   return out;
 }
 
-// HESR §V-G on the simulated joints: models fitted on each joint's residual-torque sweep, then the
 // the simulated joints' training excitation (--rich-training, --crawl-training; HESR's sweep by default)
 TrainingExcitation training_of(const StudyOptions& o) {
   if (o.rich_training && o.crawl_training) throw InvalidArgument("--rich-training and --crawl-training exclude each other");
   return o.rich_training ? TrainingExcitation::Fourier : o.crawl_training ? TrainingExcitation::Crawls : TrainingExcitation::Sweep;
 }
 
-// eq. 19-20 feed-forward with each of them on a 10 s untrained Fourier trajectory
+// HESR §V-G on the simulated joints: models fitted on each joint's residual-torque training record,
+// then the eq. 19-20 feed-forward with each of them on a 10 s untrained Fourier trajectory
 int run_closed_loop_study(const StudyOptions& o) {
   if (!o.recordings.empty())
     throw InvalidArgument("--closed-loop runs on the simulated joints; give no recordings");
@@ -282,7 +282,7 @@ int run_closed_loop_study(const StudyOptions& o) {
   struct JointRuns {
     std::string joint;
     std::vector<ClosedLoopRun> runs;
-    std::string parfam_equation;  // ParFam-H as fitted on the joint's sweep
+    std::string parfam_equation;  // ParFam-H as fitted on the joint's training record
   };
   std::vector<JointRuns> all;
   const auto t0 = std::chrono::steady_clock::now();
@@ -371,7 +371,7 @@ int run_closed_loop_study(const StudyOptions& o) {
   }
   fmt::print("(None: qd_cmd = qd_d; Baseline: tau_d = I qdd_d, the rigid body only; True friction: the simulator's "
              "Maxwell-slip truth as the model, an oracle reference; gains x{})\n", o.pd_scale);
-  fmt::print("\nParFam-H as fitted on the sweep\n");
+  fmt::print("\nParFam-H as fitted on the training record\n");
   for (const auto& jr : all) fmt::print("{} {}\n", jr.joint, jr.parfam_equation);
   return 0;
 }

@@ -71,11 +71,8 @@ class TwinMomentumObserver {
   /// current [A], temperature [°C] of n_dof joints; @param dt time since the previous sample [s]
   /// @param extra_torque optional drive torque the twin does not predict, added to its prediction
   /// (the monitor's temperature compensation of the viscous friction) [N·m]; null: none
-  /// @param memory the stream's twin friction memory, already advanced to this sample by its owner
-  /// (the monitor's, so that one memory is advanced per sample); null: the observer keeps its own
   /// @return r, the estimate of the external joint torque [N·m] (twin torque units)
-  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr,
-                        const ident::FrictionMemory* memory = nullptr);
+  const VectorJ& update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque = nullptr);
 
   /// The same sample in two steps, for an owner that evaluates the twin itself (the monitor, with
   /// its own prediction in one TwinModel::predict_pair). acceleration(): the acceleration the twin's
@@ -97,7 +94,7 @@ class TwinMomentumObserver {
   double gain_;
   bool started_ = false;
   VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_;
-  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream (when no owner passes one)
+  ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream (update() only)
   double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
 
