@@ -126,7 +126,8 @@ int run_monitor(const MonitorOptions& o) {
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
   mon.on_event = [&](const monitor::Event& e) {
     if (e.open) {
-      if (!o.quiet && !o.json) fmt::print("{:9.3f} s  ALERT  {}\n", e.t_start, e.detail);
+      // the raise time (what a detection delay counts to), and when the exceedance began
+      if (!o.quiet && !o.json) fmt::print("{:9.3f} s  ALERT  {} (above the threshold since {:.3f} s)\n", e.t_detected, e.detail, e.t_start);
       return;
     }
     if (!o.quiet && !o.json)
