@@ -225,8 +225,10 @@ struct ContactFit {
 // joint l's axis leaves that joint untouched, and then a point on the link before fits as well;
 // but only a small part of that link's box can produce the pattern, while most of link l's can,
 // and the evidence weighs exactly that. Monte Carlo on the contact distribution of
-// scripts/make_validation_collisions.py (/work/runs/s11/bayes/ceiling2.py, white noise at the
-// observer's per-sample level): 88 % of links named with this rule, 96 % at a third of that noise.
+// scripts/make_validation_collisions.py with white noise at the observer's per-sample level
+// (scripts/contact_link_ceiling.py 7 300): this rule names 91 % of links, 95 % at a third of that
+// noise; the observer's real error is not white (model error, drifts), and on the simulated
+// collision sets it names 80-92 % (docs/validation.md).
 struct LinkEvidence {
   int best = -1, second = -1;
   std::vector<double> cost;       // -2 log evidence per link, less the best's (0 for the best)

@@ -8,7 +8,10 @@
 /// - Payload change:         r_k = J_n(q_k)^T W(dm, dh; w, wd, a of link n)  (4 unknowns: dm, dm*c)
 ///   the wrench a point-like payload change exerts on the last link (inertia terms neglected);
 /// - Contact on link l:      r_k = J_l(q_k, p_l)^T F_k                        (3 unknowns per sample)
-///   with p_l the middle of link l; joints after l see nothing, which is what isolates the link;
+///   with p_l the middle of link l; joints after l see nothing, which is what isolates the link.
+///   With the momentum observer's estimate (the `reference` argument), the link is a Bayesian model
+///   choice on the pulse's joint impulse: the contact point integrated over the link's equivalent
+///   inertia box, the force under a scale-free Gaussian prior (diagnosis.cpp, link_evidence);
 /// - Sensor fault on joint j: one channel frozen (identical values) or offset while the others agree.
 /// The explained fraction of ||r||² decides; ties go to the simpler hypothesis.
 #include <string>
