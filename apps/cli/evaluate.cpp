@@ -483,7 +483,7 @@ void print_evaluation(const Evaluation& e) {
       ambiguous += !s.other_links.empty();
     }
   if (contacts > 0)
-    fmt::print("contact link: named {}/{}; named or reported as fitting almost as well {}/{} ({} events report a second link)\n",
+    fmt::print("contact link: named {}/{}; named or reported as also possible {}/{} ({} events report a second link)\n",
                named, contacts, among, contacts, ambiguous);
   fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
              e.false_alarms_per_hour(), e.wear_false_alarms);

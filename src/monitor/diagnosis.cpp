@@ -205,7 +205,9 @@ struct ContactFit {
   double force = 0.0;         // [N] peak force: impulse fit / pulse-equivalent duration
   double joint_torque = 0.0;  // [N·m] peak |tau_ext| over the joints in the pulse
   std::vector<double> cost;   // per candidate link: -2 log evidence, less the named link's
+  double share = 0.0;         // the named link's posterior probability
   std::vector<int> others;    // a link with at least kSecondLinkPosterior of the posterior, or none
+  std::vector<double> other_shares;  // their posterior probabilities
 };
 
 // Which link carries the contact: Bayesian model selection on the weighted impulse b = W tau_imp
@@ -411,7 +413,11 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   const LinkEvidence ev = link_evidence(m, d, wgt, b);
   out.cost = ev.cost;
   out.link = ev.best;
-  if (ev.second >= 0 && ev.posterior[static_cast<size_t>(ev.second)] >= kSecondLinkPosterior) out.others.push_back(ev.second);
+  out.share = ev.posterior[static_cast<size_t>(ev.best)];
+  if (ev.second >= 0 && ev.posterior[static_cast<size_t>(ev.second)] >= kSecondLinkPosterior) {
+    out.others.push_back(ev.second);
+    out.other_shares.push_back(ev.posterior[static_cast<size_t>(ev.second)]);
+  }
   // its size: force and lever arm trade off inside the link's box, so the size is read where a
   // contact is most likely, at the link's centre of mass or kContactOffset away along a body axis
   // (the best-fitting of these seven points; contacts are on the surface)
@@ -510,11 +516,11 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     if (fit.link >= 0) {
       contact.link = contact.joint = fit.link;
       contact.magnitude = fit.force;
-      contact.detail = fmt::format("contact on link {} (moved by J{}), ≈ {:.1f} N ({:.1f} N·m peak joint torque)", fit.link + 1,
-                                   fit.link + 1, fit.force, fit.joint_torque);
+      contact.detail = fmt::format("contact on link {} (moved by J{}, {:.0f} % likely), ≈ {:.1f} N ({:.1f} N·m peak joint torque)",
+                                   fit.link + 1, fit.link + 1, 100.0 * fit.share, fit.force, fit.joint_torque);
       contact.other_links = fit.others;
-      for (int l : fit.others)
-        contact.detail += fmt::format("; link {} fits the joint torques almost as well", l + 1);
+      for (size_t i = 0; i < fit.others.size(); ++i)
+        contact.detail += fmt::format("; link {} is also possible ({:.0f} %)", fit.others[i] + 1, 100.0 * fit.other_shares[i]);
     }
   }
   scored.emplace_back(contact.explained - (pulse ? 0.0 : 0.3), contact);
