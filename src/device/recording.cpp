@@ -57,6 +57,16 @@ std::vector<std::string> split_csv(const std::string& line) {
   return out;
 }
 
+// the joint a column name carries after its group prefix ("actual_q_12" -> 12): -1 unless the
+// rest is all digits; any index beyond the largest robot comes back as kMaxDof, however many digits
+// it has (an int conversion of "actual_q_4000641156" would overflow)
+int joint_index(const std::string& nm, std::size_t prefix_len) {
+  if (nm.size() <= prefix_len || !std::all_of(nm.begin() + static_cast<long>(prefix_len), nm.end(), ::isdigit)) return -1;
+  int j = 0;
+  for (std::size_t i = prefix_len; i < nm.size() && j < kMaxDof; ++i) j = 10 * j + (nm[i] - '0');
+  return std::min(j, kMaxDof);
+}
+
 // an RTDE name a recording column may carry
 bool known_name(const std::string& nm) {
   if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "stream_gap") return true;
@@ -162,10 +172,15 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   rec.path = path;
   int ts_col = -1, do_col = -1, mode_col = -1, gap_col = -1;
   int n = 0;
-  for (size_t c = 0; c < names.size(); ++c)
-    if (names[c].rfind("actual_q_", 0) == 0) n = std::max(n, std::atoi(names[c].c_str() + 9) + 1);
+  for (size_t c = 0; c < names.size(); ++c) {
+    if (names[c].rfind("actual_q_", 0) != 0) continue;
+    const int j = joint_index(names[c], 9);
+    if (j >= kMaxDof)
+      throw ParseError(path, 1, header[c],
+                       fmt::format("expected a joint 0 to {} (at most {} joints supported), got '{}'", kMaxDof - 1, kMaxDof, names[c]));
+    n = std::max(n, j + 1);
+  }
   if (n == 0) throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)");
-  if (n > kMaxDof) throw ParseError(path, 1, "actual_q_*", fmt::format("{} joints, at most {} supported", n, kMaxDof));
   rec.n_dof = n;
   struct Target {
     int group;
@@ -185,14 +200,13 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       size_t best_len = 0;
       for (size_t g = 0; g < std::size(kGroups); ++g) {
         const std::string p = kGroups[g].prefix;
-        if (nm.rfind(p, 0) == 0 && p.size() > best_len && nm.size() > p.size() &&
-            std::all_of(nm.begin() + static_cast<long>(p.size()), nm.end(), ::isdigit)) {
+        if (nm.rfind(p, 0) == 0 && p.size() > best_len && joint_index(nm, p.size()) >= 0) {
           best = static_cast<int>(g);
           best_len = p.size();
         }
       }
       if (best >= 0) {
-        const int j = std::atoi(nm.c_str() + best_len);
+        const int j = joint_index(nm, best_len);
         if (j < n) {
           target[c] = {best, j};
           seen[static_cast<size_t>(best)][static_cast<size_t>(j)] = true;
@@ -238,8 +252,20 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
         throw ParseError(path, ln, header[c], fmt::format("expected a number, got '{}'", cells[c]));
       v *= scale[c];
       if (static_cast<int>(c) == ts_col) s.timestamp = v;
-      else if (static_cast<int>(c) == do_col) s.digital_outputs = static_cast<std::uint64_t>(v);
-      else if (static_cast<int>(c) == mode_col) s.robot_mode = static_cast<std::int32_t>(v);
+      else if (static_cast<int>(c) == do_col) {
+        // a bit mask: a whole number 0 to 2^64-1, exact when written as an integer (as the writer
+        // does); a cast of anything else to uint64 would be undefined
+        std::uint64_t bits = 0;
+        const char* e = cells[c].data() + cells[c].size();
+        const auto r = std::from_chars(cells[c].data(), e, bits);
+        if (scale[c] == 1.0 && r.ec == std::errc() && r.ptr == e) s.digital_outputs = bits;
+        else if (v >= 0.0 && v < 0x1p64 && v == std::floor(v)) s.digital_outputs = static_cast<std::uint64_t>(v);
+        else throw ParseError(path, ln, header[c], fmt::format("expected a whole number 0 to 2^64-1 (a bit mask), got '{}'", cells[c]));
+      } else if (static_cast<int>(c) == mode_col) {
+        if (!(v >= std::numeric_limits<std::int32_t>::min() && v <= std::numeric_limits<std::int32_t>::max() && v == std::floor(v)))
+          throw ParseError(path, ln, header[c], fmt::format("expected a whole number (an RTDE robot mode), got '{}'", cells[c]));
+        s.robot_mode = static_cast<std::int32_t>(v);
+      }
       else if (static_cast<int>(c) == gap_col) {
         if (v != 0.0 && v != 1.0) throw ParseError(path, ln, header[c], fmt::format("expected 0 or 1, got '{}'", cells[c]));
         s.gap_before = v != 0.0;

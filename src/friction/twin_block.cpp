@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
@@ -27,6 +28,16 @@ double positive(const nlohmann::json& j, const char* key, const std::string& pre
   const double x = v.get<double>();
   if (!std::isfinite(x) || x <= 0.0) throw ParseError(origin, 0, prefix + key, fmt::format("must be > 0, got {}", x));
   return x;
+}
+
+// a whole number that fits an int (get<int>() of 1e20 would be undefined behaviour)
+int whole_number(const nlohmann::json& j, const char* key, const std::string& prefix, const std::string& origin) {
+  const nlohmann::json& v = need(j, key, prefix, origin);
+  if (!v.is_number()) throw ParseError(origin, 0, prefix + key, fmt::format("expected a whole number, got {}", v.dump()));
+  const double x = v.get<double>();
+  if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
+    throw ParseError(origin, 0, prefix + key, fmt::format("expected a whole number, got {}", v.dump()));
+  return static_cast<int>(x);
 }
 
 }  // namespace
@@ -71,6 +82,8 @@ std::vector<JointFrictionEquation> friction_block_from_json(const std::string& t
     js = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw ParseError(origin, 0, "friction_models", fmt::format("not JSON: {}", e.what()));
+  } catch (const nlohmann::json::out_of_range& e) {  // a number beyond a double ("1e400")
+    throw ParseError(origin, 0, "friction_models", fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
   if (!js.is_array()) throw ParseError(origin, 0, "friction_models", fmt::format("expected an array, got {}", js.type_name()));
   std::vector<JointFrictionEquation> out;
@@ -80,9 +93,9 @@ std::vector<JointFrictionEquation> friction_block_from_json(const std::string& t
     if (!j.is_object()) throw ParseError(origin, 0, p.substr(0, p.size() - 1), "expected an object");
     try {
       JointFrictionEquation e;
-      e.joint = need(j, "joint", p, origin).get<int>();
+      e.joint = whole_number(j, "joint", p, origin);
       if (e.joint < 1) throw ParseError(origin, 0, p + "joint", fmt::format("must be >= 1, got {}", e.joint));
-      e.expression.dim = need(j, "dim", p, origin).get<int>();
+      e.expression.dim = whole_number(j, "dim", p, origin);
       if (e.expression.dim != 1 && e.expression.dim != 3)
         throw ParseError(origin, 0, p + "dim", fmt::format("expected 1 or 3, got {}", e.expression.dim));
       const nlohmann::json& f = need(j, "functions", p, origin);

@@ -388,28 +388,57 @@ Mlp Mlp::from_json(const std::string& text, const std::string& origin, const std
     }
     return v;
   };
+  // a whole number that fits an int (get<int>() of 1e20 would be undefined behaviour)
+  auto whole = [&](const nlohmann::json& v, const std::string& field) {
+    const double x = v.is_number() ? v.get<double>() : 0.5;
+    if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
+      throw ParseError(origin, 0, field, fmt::format("expected a whole number, got {}", v.dump()));
+    return static_cast<int>(x);
+  };
   try {
     if (j.value("activation", "relu") != "relu")
       throw ParseError(origin, 0, prefix + "activation", fmt::format("expected \"relu\", got \"{}\"", j.value("activation", "")));
     MlpOptions o;
-    const int n_in = need(j, "inputs", prefix).get<int>();
-    const int n_out = need(j, "outputs", prefix).get<int>();
-    o.hidden = need(j, "hidden", prefix).get<std::vector<int>>();
+    const int n_in = whole(need(j, "inputs", prefix), prefix + "inputs");
+    const int n_out = whole(need(j, "outputs", prefix), prefix + "outputs");
+    const nlohmann::json& hidden = need(j, "hidden", prefix);
+    if (!hidden.is_array()) throw ParseError(origin, 0, prefix + "hidden", fmt::format("expected an array of layer widths, got {}", hidden.type_name()));
+    o.hidden.clear();
+    for (size_t l = 0; l < hidden.size(); ++l) o.hidden.push_back(whole(hidden[l], fmt::format("{}hidden[{}]", prefix, l)));
     try {
       o.validate();
       if (n_in < 1 || n_out < 1) throw InvalidArgument(fmt::format("inputs {} and outputs {} must be >= 1", n_in, n_out));
     } catch (const InvalidArgument& e) {
       throw ParseError(origin, 0, prefix + "hidden", e.what());
     }
+    const Eigen::VectorXd x_mean = vec(j, "x_mean", prefix, n_in), x_std = vec(j, "x_std", prefix, n_in);
+    const Eigen::VectorXd y_mean = vec(j, "y_mean", prefix, n_out), y_std = vec(j, "y_std", prefix, n_out);
+    for (Eigen::Index i = 0; i < n_in; ++i)
+      if (!(x_std(i) > 0)) throw ParseError(origin, 0, fmt::format("{}x_std[{}]", prefix, i), fmt::format("must be > 0, got {}", x_std(i)));
+    // the weights the widths call for must be in the file, checked before allocating them (a width
+    // of 2e9 would otherwise allocate terabytes): layer l is width_l+1 x width_l
+    std::vector<long> widths{n_in};
+    widths.insert(widths.end(), o.hidden.begin(), o.hidden.end());
+    widths.push_back(n_out);
+    const nlohmann::json& layers_in = need(j, "layers", prefix);
+    if (!layers_in.is_array() || layers_in.size() != widths.size() - 1)
+      throw ParseError(origin, 0, prefix + "layers", fmt::format("expected {} layers (hidden + output), got {}", widths.size() - 1,
+                                                                 layers_in.is_array() ? layers_in.size() : 0));
+    for (size_t l = 0; l + 1 < widths.size(); ++l) {
+      const nlohmann::json& w = layers_in[l].is_object() && layers_in[l].contains("W") ? layers_in[l].at("W") : nlohmann::json();
+      const long expected = widths[l + 1] * widths[l];
+      if (!w.is_array() || static_cast<long>(w.size()) != expected)
+        throw ParseError(origin, 0, fmt::format("{}layers[{}].W", prefix, l),
+                         fmt::format("expected an array of {} numbers ({} x {}), got {}", expected, widths[l + 1], widths[l],
+                                     w.is_array() ? std::to_string(w.size()) : w.type_name()));
+    }
     Mlp m(n_in, n_out, o);
     m.l2 = j.value("l2", 0.0);
     m.seed = j.value("seed", std::uint64_t{0});
-    m.x_mean = vec(j, "x_mean", prefix, n_in);
-    m.x_std = vec(j, "x_std", prefix, n_in);
-    m.y_mean = vec(j, "y_mean", prefix, n_out);
-    m.y_std = vec(j, "y_std", prefix, n_out);
-    for (Eigen::Index i = 0; i < n_in; ++i)
-      if (!(m.x_std(i) > 0)) throw ParseError(origin, 0, fmt::format("{}x_std[{}]", prefix, i), fmt::format("must be > 0, got {}", m.x_std(i)));
+    m.x_mean = x_mean;
+    m.x_std = x_std;
+    m.y_mean = y_mean;
+    m.y_std = y_std;
     const nlohmann::json& layers = need(j, "layers", prefix);
     if (!layers.is_array() || layers.size() != m.W_.size())
       throw ParseError(origin, 0, prefix + "layers", fmt::format("expected {} layers (hidden + output), got {}", m.W_.size(), layers.is_array() ? layers.size() : 0));

@@ -148,6 +148,8 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   } catch (const json::parse_error& e) {
     throw ParseError(origin, line_of(text, e.byte > 0 ? e.byte - 1 : 0), "",
                      fmt::format("not valid JSON: {}", e.what()));
+  } catch (const json::out_of_range& e) {  // a number beyond a double ("1e400")
+    throw ParseError(origin, 0, "", fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
   const Reader r(origin);
   r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment"});
@@ -262,7 +264,9 @@ RobotModel load_robot(const std::string& name_or_path) {
   if (p.extension() == ".json") return RobotModel(load_description_json(name_or_path));
   if (p.extension() == ".urdf") return RobotModel(load_description_urdf(name_or_path));
   const fs::path builtin = fs::path(robots_directory()) / (name_or_path + ".json");
-  if (fs::exists(builtin)) return RobotModel(load_description_json(builtin.string()));
+  // (a name the file system rejects, e.g. too long, is simply not a built-in robot)
+  std::error_code ec;
+  if (fs::exists(builtin, ec)) return RobotModel(load_description_json(builtin.string()));
   std::string list;
   for (const auto& n : builtin_robot_names()) list += (list.empty() ? "" : ", ") + n;
   throw InvalidArgument(fmt::format("robot '{}' is unknown: not a built-in robot ({}) and not a .json or .urdf file",

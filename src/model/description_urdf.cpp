@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
@@ -33,6 +35,24 @@ RigidBodyInertia link_inertia(const urdf::Link& link) {
   return local.expressed_in(to_iso(in.origin));
 }
 
+// 1-based line of the first byte that is not part of a valid UTF-8 sequence, 0 if all are.
+// TinyXML 2.6 (under urdfdom) skips a multi-byte sequence by its lead byte's length without looking
+// for the end of the text, so a file ending in a truncated sequence made it read past its buffer
+// (found by fuzzing: fuzz/regressions/description_urdf).
+int first_invalid_utf8_line(const std::string& text) {
+  int line = 1;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const std::size_t len = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    if (len == 0 || i + len > text.size()) return line;
+    for (std::size_t k = 1; k < len; ++k)
+      if ((static_cast<unsigned char>(text[i + k]) >> 6) != 0x2) return line;
+    if (c == '\n') ++line;
+    i += len;
+  }
+  return 0;
+}
+
 // rotation taking z onto the unit axis a
 Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
   return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), a).toRotationMatrix();
@@ -41,9 +61,16 @@ Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
 }  // namespace
 
 RobotDescription load_description_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw ParseError(path, 0, "", "cannot open the file (does it exist and is it readable?)");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  if (const int line = first_invalid_utf8_line(text))
+    throw ParseError(path, line, "", "not valid UTF-8 text (a URDF file is XML in UTF-8)");
   urdf::ModelInterfaceSharedPtr urdf_model;
   try {
-    urdf_model = urdf::parseURDFFile(path);
+    urdf_model = urdf::parseURDF(text);
   } catch (const std::exception& e) {
     throw ParseError(path, 0, "", fmt::format("not a valid URDF: {}", e.what()));
   }

@@ -83,10 +83,25 @@ nlohmann::json vec_json(const VectorJ& v) {
   for (int i = 0; i < v.size(); ++i) a.push_back(v[i]);
   return a;
 }
-VectorJ json_vec(const nlohmann::json& a) {
+// a per-joint vector: an array of at most kMaxDof numbers (VectorJ's capacity; more would write
+// past its inline storage). Throws InvalidArgument naming `field`.
+VectorJ json_vec(const nlohmann::json& a, const std::string& field) {
+  if (!a.is_array()) throw InvalidArgument(fmt::format("{}: expected an array of numbers (one per joint), got {}", field, a.type_name()));
+  if (a.size() > static_cast<size_t>(kMaxDof))
+    throw InvalidArgument(fmt::format("{}: expected at most {} values (one per joint), got {}", field, kMaxDof, a.size()));
   VectorJ v(static_cast<int>(a.size()));
   for (size_t i = 0; i < a.size(); ++i) v[static_cast<int>(i)] = a[i].get<double>();
   return v;
+}
+
+// the whole number at `key` (fallback if absent) that fits an int: get<int>() of 1e20 would be
+// undefined behaviour. Throws InvalidArgument naming `field`, a json type_error for a non-number.
+int json_int(const nlohmann::json& j, const char* key, int fallback, const std::string& field) {
+  if (!j.contains(key)) return fallback;
+  const double x = j.at(key).get<double>();
+  if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
+    throw InvalidArgument(fmt::format("{}: expected a whole number within +-{}, got {}", field, std::numeric_limits<int>::max(), j.at(key).dump()));
+  return static_cast<int>(x);
 }
 
 // MonitorConfig::residual_filter: 0, 1 or n entries, each "iir" or "fir"
@@ -174,14 +189,14 @@ TrendConfig trend_from_json(const nlohmann::json& j) {
   t.cycle_period = j.value("cycle_period", t.cycle_period);
   t.v_min = j.value("v_min", t.v_min);
   t.min_moving_fraction = j.value("min_moving_fraction", t.min_moving_fraction);
-  t.baseline_windows = j.value("baseline_windows", t.baseline_windows);
-  t.min_windows = j.value("min_windows", t.min_windows);
-  t.history = j.value("history", t.history);
+  t.baseline_windows = json_int(j, "baseline_windows", t.baseline_windows, "trend.baseline_windows");
+  t.min_windows = json_int(j, "min_windows", t.min_windows, "trend.min_windows");
+  t.history = json_int(j, "history", t.history, "trend.history");
   t.z_crit = j.value("z_crit", t.z_crit);
   t.min_rate_pct_per_h = j.value("min_rate_pct_per_h", t.min_rate_pct_per_h);
-  t.persist = j.value("persist", t.persist);
+  t.persist = json_int(j, "persist", t.persist, "trend.persist");
   t.temperature_ref = j.value("temperature_ref", t.temperature_ref);
-  if (j.contains("temperature_slope")) t.temperature_slope = json_vec(j["temperature_slope"]);
+  if (j.contains("temperature_slope")) t.temperature_slope = json_vec(j["temperature_slope"], "trend.temperature_slope");
   return t;
 }
 
@@ -293,35 +308,37 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
   MonitorConfig c;
   try {
     const auto j = nlohmann::json::parse(text);
-    c.static_level = json_vec(j.at("static_level_A"));
+    c.static_level = json_vec(j.at("static_level_A"), "static_level_A");
     if (j.contains("dynamic")) c.dynamic = json_dynamic(j["dynamic"]);
     c.use_dynamic = j.value("use_dynamic", !c.dynamic.empty());
     c.filter_cutoff_hz = j.value("filter_cutoff_hz", c.filter_cutoff_hz);
-    c.raise_after = j.value("raise_after", c.raise_after);
-    c.clear_after = j.value("clear_after", c.clear_after);
-    if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"]);
+    c.raise_after = json_int(j, "raise_after", c.raise_after, "raise_after");
+    c.clear_after = json_int(j, "clear_after", c.clear_after, "clear_after");
+    if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"], "sensitivity");
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
     if (j.contains("trend")) c.trend = trend_from_json(j["trend"]);
     if (j.contains("programs"))
       for (const auto& [name, p] : j["programs"].items()) {
         ThresholdSet set;
-        set.static_level = json_vec(p.at("static_level_A"));
+        set.static_level = json_vec(p.at("static_level_A"), fmt::format("programs.{}.static_level_A", name));
         if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
-        if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"]);
+        if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"], fmt::format("programs.{}.observer_level_Nm", name));
         if (p.contains("observer_dynamic")) set.observer_dynamic = json_dynamic(p["observer_dynamic"]);
-        set.runs = p.value("runs", 0);
+        set.runs = json_int(p, "runs", 0, fmt::format("programs.{}.runs", name));
         set.seconds = p.value("seconds", 0.0);
         c.programs[name] = std::move(set);
       }
     c.observer_gain = j.value("observer_gain", c.observer_gain);
     c.observer_alerts = j.value("observer_alerts", c.observer_alerts);
-    if (j.contains("observer_level_Nm")) c.observer_level = json_vec(j["observer_level_Nm"]);
+    if (j.contains("observer_level_Nm")) c.observer_level = json_vec(j["observer_level_Nm"], "observer_level_Nm");
     if (j.contains("observer_dynamic"))
       for (const auto& d : j["observer_dynamic"])
         c.observer_dynamic.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"),
                                       d.value("margin", 0.0), d.value("alpha", 0.0)});
   } catch (const nlohmann::json::exception& e) {
+    throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
+  } catch (const InvalidArgument& e) {
     throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
   }
   return c;

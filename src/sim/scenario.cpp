@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -28,6 +29,8 @@ class Y {
   void only_keys(const YAML::Node& n, const std::string& path, const std::set<std::string>& allowed) const {
     if (!n.IsMap()) fail(n, path, "expected a mapping of keys");
     for (auto it = n.begin(); it != n.end(); ++it) {
+      // (as<std::string>() of a list or mapping used as a key, "? [a]", throws a YAML exception)
+      if (!it->first.IsScalar()) fail(it->first, path, "expected text keys, got a list or mapping as a key");
       const std::string k = it->first.as<std::string>();
       if (!allowed.count(k)) {
         std::string list;
@@ -58,7 +61,9 @@ class Y {
     const YAML::Node n = parent[key];
     if (!n) return fallback;
     const double v = as_number(n, join(path, key));
-    if (v != std::floor(v)) fail(n, join(path, key), fmt::format("expected a whole number, got {}", v));
+    // (the range check first: casting 1e20 to int is undefined)
+    if (!(v == std::floor(v) && std::abs(v) <= std::numeric_limits<int>::max()))
+      fail(n, join(path, key), fmt::format("expected a whole number within +-{}, got {}", std::numeric_limits<int>::max(), v));
     return static_cast<int>(v);
   }
   std::string text(const YAML::Node& parent, const std::string& path, const std::string& key, const std::string& fallback) const {

@@ -182,5 +182,31 @@ TEST(Recording, ColumnMapLoadsTorqueSensorAndTimeInAnotherUnit) {
 
 TEST(Recording, MissingFileIsNamed) { EXPECT_THROW(read_recording("/nonexistent/rec.csv"), ParseError); }
 
+// found by fuzzing (fuzz/regressions/recording): an int conversion of the joint index overflowed
+// and the row indexed a negative joint
+TEST(Recording, JointIndexTooLargeForAnIntNamesTheColumn) {
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_4000641156\n0,0,0\n"),
+              HasSubstr("bad.csv:1: field 'actual_q_4000641156': expected a joint 0 to 6 (at most 7 joints supported), got 'actual_q_4000641156'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_7\n0,0,0\n"), HasSubstr("field 'actual_q_7': expected a joint 0 to 6"));
+  // other groups' joints beyond the robot's stay ignored, however large
+  EXPECT_EQ(error_of("timestamp,actual_q_0,actual_current_99999999999\n0,0,1\n0.002,0,1\n"), "no error");
+}
+
+// found by fuzzing (fuzz/regressions/recording): casting 1e20 or -1 to the integer fields was undefined
+TEST(Recording, RobotModeAndDigitalOutputsMustBeWholeNumbersInRange) {
+  EXPECT_THAT(error_of("timestamp,actual_q_0,robot_mode\n0,0,1e20\n"),
+              HasSubstr("bad.csv:2: field 'robot_mode': expected a whole number (an RTDE robot mode), got '1e20'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,robot_mode\n0,0,7.5\n"), HasSubstr("field 'robot_mode': expected a whole number"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_digital_output_bits\n0,0,-1\n"),
+              HasSubstr("bad.csv:2: field 'actual_digital_output_bits': expected a whole number 0 to 2^64-1 (a bit mask), got '-1'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_digital_output_bits\n0,0,nan\n"), HasSubstr("got 'nan'"));
+  // the full 64-bit range loads exactly
+  const std::string p = tmp("bits.csv");
+  std::ofstream(p) << "timestamp,actual_q_0,actual_digital_output_bits,robot_mode\n0,0,18446744073709551615,-1\n";
+  const Recording r = read_recording(p);
+  EXPECT_EQ(r.samples[0].digital_outputs, 18446744073709551615ull);
+  EXPECT_EQ(r.samples[0].robot_mode, -1);
+}
+
 }  // namespace
 }  // namespace twinwatch::device

@@ -76,5 +76,14 @@ TEST(FrictionBlock, MalformedBlocksNameTheField) {
               HasSubstr("friction_models[0].memory': expected 'time' or 'displacement', got 'distance'"));
 }
 
+// found by fuzzing (fuzz/regressions/friction_block): json's out_of_range escaped, and get<int>()
+// of 1e20 was undefined
+TEST(FrictionBlock, OverflowingNumbersAreParseErrors) {
+  EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 1, "functions": ["tanh"], "theta": [1e400]}])"),
+              HasSubstr("field 'friction_models': expected numbers within the range of a double"));
+  EXPECT_THAT(parse_error_of(R"([{"joint": 1e20, "dim": 1}])"), HasSubstr("field 'friction_models[0].joint': expected a whole number, got 1e+20"));
+  EXPECT_THAT(parse_error_of(R"([{"joint": 1, "dim": 2.5}])"), HasSubstr("field 'friction_models[0].dim': expected a whole number, got 2.5"));
+}
+
 }  // namespace
 }  // namespace twinwatch::friction

@@ -242,5 +242,15 @@ TEST(LearnedFile, NamesANetworkOfTheWrongOutputCount) {
               HasSubstr("expected 6 (one per joint), got 3"));
 }
 
+// found by fuzzing the twin file (fuzz/regressions/twin_model): get<int>() of 1e20 was undefined
+TEST(LearnedModel, FromJsonRejectsAWindowBeyondAnInt) {
+  try {
+    LearnedModel::from_json(R"({"role": "current", "inputs": "q+qd", "qd_smoothing": {"window": 1e20}})", "twin.json", 6);
+    ADD_FAILURE() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("twin.json: field 'learned.qd_smoothing.window': expected a whole number, got 1e+20"));
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -328,5 +328,24 @@ TEST(MlpFile, NamesANonPositiveScale) {
               HasSubstr("x_std[1]"));
 }
 
+// found by fuzzing the twin file (fuzz/regressions/twin_model): get<int>() of 1e20 was undefined,
+// and a hidden width of 2e9 tried to allocate 190 GB before the weights were checked
+TEST(Mlp, FromJsonRejectsHugeSizesBeforeAllocating) {
+  const auto error_of = [](const std::string& text) {
+    try {
+      Mlp::from_json(text, "net.json", "network.");
+    } catch (const ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string tail = R"(, "x_mean": [0], "x_std": [1], "y_mean": [0], "y_std": [1], "layers": [{"W": [1], "b": [0]}, {"W": [1], "b": [0]}]})";
+  EXPECT_EQ(error_of(R"({"inputs": 1, "outputs": 1, "hidden": [1])" + tail), "no error");
+  EXPECT_THAT(error_of(R"({"inputs": 1e20, "outputs": 1, "hidden": [1])" + tail),
+              HasSubstr("net.json: field 'network.inputs': expected a whole number, got 1e+20"));
+  EXPECT_THAT(error_of(R"({"inputs": 1, "outputs": 1, "hidden": [2000000000])" + tail),
+              HasSubstr("field 'network.layers[0].W': expected an array of 2000000000 numbers (2000000000 x 1), got 1"));
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/signal/metrics.hpp"
 
@@ -410,5 +411,29 @@ TEST_F(Fixture, LowSpeedFrictionPredictsTheTriangleStops) {
     EXPECT_LT(with_memory[j], table3[j]) << "joint " << j + 1;
   }
 }
+// found by fuzzing (fuzz/regressions/twin_model): json type_error / out_of_range escaped, and
+// get<int>() of 1e20 was undefined
+TEST(TwinFile, NonObjectsOverflowsAndHugeIndicesAreParseErrors) {
+  const auto error_of = [](const std::string& text) {
+    try {
+      TwinModel::from_json(text, "t.json");
+    } catch (const ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(error_of("[1, 2, 3]"), ::testing::HasSubstr("t.json: expected a JSON object (a twin file from twinwatch identify), got array"));
+  EXPECT_THAT(error_of(R"({"format": 7})"), ::testing::HasSubstr("field 'format': expected \"twinwatch-twin\""));
+  EXPECT_THAT(error_of(R"({"format": "twinwatch-twin", "robot": "ur3e", "temperature_ref": 1e400})"),
+              ::testing::HasSubstr("expected numbers within the range of a double"));
+  TwinModel twin("ur3e", model::load_robot("ur3e"));
+  twin.joints.resize(6);
+  std::string text = twin.to_json();
+  const std::string key = "\"base_columns\": [";  // empty for an unfitted twin
+  ASSERT_NE(text.find(key + "]"), std::string::npos);
+  text.insert(text.find(key) + key.size(), "1e20");
+  EXPECT_THAT(error_of(text), ::testing::HasSubstr("field 'base_columns[0]': expected a whole number, got 1e+20"));
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -222,5 +222,29 @@ TEST(Payload, ChangesGravityTorqueByJTransposeMg) {
   EXPECT_LT((gravity_torque(m, d, q) - g0).cwiseAbs().maxCoeff(), 1e-14);
 }
 
+// found by fuzzing (fuzz/regressions/description_json): json's out_of_range escaped
+TEST(DescriptionJson, NumberBeyondADoubleIsAParseError) {
+  EXPECT_THAT(error_of(one_joint(R"("mass": 1e400, "com": [0, 0, 0], "inertia": [0.01, 0, 0, 0.01, 0, 0.01])")),
+              HasSubstr("robot.json: expected numbers within the range of a double"));
+}
+
+// found by fuzzing a scenario's robot name: std::filesystem threw "File name too long"
+TEST(LoadRobot, OverlongNameIsAnUnknownRobot) {
+  EXPECT_THROW(load_robot(std::string(300, 'a')), InvalidArgument);
+}
+
+// found by fuzzing (fuzz/regressions/description_urdf): a file ending in a truncated UTF-8
+// sequence made TinyXML (under urdfdom) read past its buffer
+TEST(DescriptionUrdf, InvalidUtf8NamesTheLine) {
+  const std::string path = ::testing::TempDir() + "description_test_utf8.urdf";
+  std::ofstream(path, std::ios::binary) << "<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\xf4";
+  try {
+    load_description_urdf(path);
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("description_test_utf8.urdf:3: not valid UTF-8 text"));
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::model

@@ -110,5 +110,23 @@ TEST(MonitorConfig, ValidationNamesTheField) {
   }
 }
 
+// found by fuzzing (fuzz/regressions/monitor_config): 9 values overflowed a VectorJ (stack buffer
+// overflow), and get<int>() of 1e20 was undefined
+TEST(MonitorConfig, FromJsonRejectsMoreValuesThanJointsAndHugeCounts) {
+  const auto error_of = [](const std::string& text) {
+    try {
+      MonitorConfig::from_json(text, "twin.json");
+    } catch (const ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(error_of(R"({"static_level_A": [1, 2, 3, 4, 5, 6, 7, 8, 9]})"),
+              ::testing::HasSubstr("twin.json: field 'monitor': malformed monitor thresholds: static_level_A: expected at most 7 values (one per joint), got 9"));
+  EXPECT_THAT(error_of(R"({"static_level_A": [1], "raise_after": 1e20})"),
+              ::testing::HasSubstr("raise_after: expected a whole number within +-2147483647, got 1e+20"));
+  EXPECT_THAT(error_of(R"({"static_level_A": [1], "trend": {"history": 2.5}})"), ::testing::HasSubstr("trend.history: expected a whole number"));
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

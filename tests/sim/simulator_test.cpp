@@ -246,5 +246,22 @@ TEST(Scenario, LibraryScenariosAllLoad) {
   }
 }
 
+// found by fuzzing (fuzz/regressions/scenario): each of these escaped as a YAML or filesystem
+// exception, or cast 1e20 to int (undefined)
+TEST(Scenario, OutOfRangeIntegersKeysAndRobotNamesAreParseErrors) {
+  const std::string t = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
+  const auto error_of = [](const std::string& yaml) {
+    try {
+      parse_scenario(yaml, "test.yaml");
+    } catch (const ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(error_of("robot: ur3e\nseed: 1e20\n" + t), HasSubstr("test.yaml:2: field 'seed': expected a whole number within +-2147483647, got 1e+20"));
+  EXPECT_THAT(error_of("? [a]\n: 1\n"), HasSubstr("test.yaml:1: expected text keys, got a list or mapping as a key"));
+  EXPECT_THAT(error_of("robot: " + std::string(300, 'a') + "\n" + t), HasSubstr("field 'robot': robot 'aaaa"));
+}
+
 }  // namespace
 }  // namespace twinwatch::sim
