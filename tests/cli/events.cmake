@@ -22,3 +22,9 @@ add_test(NAME cli.events_missing_store COMMAND twinwatch events --db ${d}/no_suc
 set_tests_properties(cli.events_missing_store PROPERTIES PASS_REGULAR_EXPRESSION "no_such_events.db: no such event store")
 add_test(NAME cli.events_bad_class COMMAND twinwatch events --db ${d}/events_collision.db --class earthquake)
 set_tests_properties(cli.events_bad_class PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "'earthquake' is unknown")
+# the live lines: an ALERT carries the raise time (what a detection delay counts to) and when the
+# exceedance began; the diagnosed contact says how likely its link is
+add_test(NAME cli.monitor_alert_line COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5
+         --payload-com 0 0 0.04 --db "")
+set_tests_properties(cli.monitor_alert_line PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+                     PASS_REGULAR_EXPRESSION " +6\\.[0-9]+ s  ALERT  [^\n]*\\(above the threshold since 6\\.[0-9]+ s\\)\n.*collision +contact on link [1-6] \\(moved by J[1-6], [0-9]+ % likely\\)")
