@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/numbers.hpp"
 
 namespace twinwatch::device {
 
@@ -262,9 +263,9 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
         else if (v >= 0.0 && v < 0x1p64 && v == std::floor(v)) s.digital_outputs = static_cast<std::uint64_t>(v);
         else throw ParseError(path, ln, header[c], fmt::format("expected a whole number 0 to 2^64-1 (a bit mask), got '{}'", cells[c]));
       } else if (static_cast<int>(c) == mode_col) {
-        if (!(v >= std::numeric_limits<std::int32_t>::min() && v <= std::numeric_limits<std::int32_t>::max() && v == std::floor(v)))
-          throw ParseError(path, ln, header[c], fmt::format("expected a whole number (an RTDE robot mode), got '{}'", cells[c]));
-        s.robot_mode = static_cast<std::int32_t>(v);
+        const std::optional<int> mode = whole_int(v);
+        if (!mode) throw ParseError(path, ln, header[c], fmt::format("expected a whole number (an RTDE robot mode), got '{}'", cells[c]));
+        s.robot_mode = *mode;
       }
       else if (static_cast<int>(c) == gap_col) {
         if (v != 0.0 && v != 1.0) throw ParseError(path, ln, header[c], fmt::format("expected 0 or 1, got '{}'", cells[c]));

@@ -3,10 +3,10 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/numbers.hpp"
 
 namespace twinwatch::friction {
 
@@ -33,11 +33,9 @@ double positive(const nlohmann::json& j, const char* key, const std::string& pre
 // a whole number that fits an int (get<int>() of 1e20 would be undefined behaviour)
 int whole_number(const nlohmann::json& j, const char* key, const std::string& prefix, const std::string& origin) {
   const nlohmann::json& v = need(j, key, prefix, origin);
-  if (!v.is_number()) throw ParseError(origin, 0, prefix + key, fmt::format("expected a whole number, got {}", v.dump()));
-  const double x = v.get<double>();
-  if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
-    throw ParseError(origin, 0, prefix + key, fmt::format("expected a whole number, got {}", v.dump()));
-  return static_cast<int>(x);
+  const std::optional<int> x = v.is_number() ? whole_int(v.get<double>()) : std::nullopt;
+  if (!x) throw ParseError(origin, 0, prefix + key, fmt::format("expected a whole number, got {}", v.dump()));
+  return *x;
 }
 
 }  // namespace

@@ -3,12 +3,12 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <limits>
-#include <utility>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+
+#include "json_numbers.hpp"
 
 namespace twinwatch::ident {
 
@@ -121,16 +121,10 @@ LearnedModel LearnedModel::from_json(const std::string& text, const std::string&
     }
     m.temperature_ref = j.value("temperature_ref", 35.0);
     if (j.contains("qd_smoothing")) {
-      // whole numbers that fit an int (get<int>() of 1e20 would be undefined behaviour)
       const nlohmann::json& sg = j["qd_smoothing"];
       if (!sg.is_object()) throw ParseError(origin, 0, p + "qd_smoothing", fmt::format("expected an object, got {}", sg.type_name()));
-      for (auto [key, value] : {std::pair<const char*, int*>{"window", &m.sg_window}, {"order", &m.sg_order}}) {
-        if (!sg.contains(key)) continue;
-        const double x = sg.at(key).is_number() ? sg.at(key).get<double>() : 0.5;
-        if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
-          throw ParseError(origin, 0, p + "qd_smoothing." + key, fmt::format("expected a whole number, got {}", sg.at(key).dump()));
-        *value = static_cast<int>(x);
-      }
+      if (sg.contains("window")) m.sg_window = json_whole(sg.at("window"), origin, p + "qd_smoothing.window");
+      if (sg.contains("order")) m.sg_order = json_whole(sg.at("order"), origin, p + "qd_smoothing.order");
     }
     m.validation_rmse = j.value("validation_rmse", std::vector<double>{});
     if (!j.contains("network")) throw ParseError(origin, 0, p + "network", "missing required field");

@@ -11,6 +11,8 @@
 
 #include "twinwatch/core/error.hpp"
 
+#include "json_numbers.hpp"
+
 namespace twinwatch::ident {
 
 namespace {
@@ -388,23 +390,13 @@ Mlp Mlp::from_json(const std::string& text, const std::string& origin, const std
     }
     return v;
   };
-  // a whole number that fits an int (get<int>() of 1e20 would be undefined behaviour)
-  auto whole = [&](const nlohmann::json& v, const std::string& field) {
-    const double x = v.is_number() ? v.get<double>() : 0.5;
-    if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
-      throw ParseError(origin, 0, field, fmt::format("expected a whole number, got {}", v.dump()));
-    return static_cast<int>(x);
-  };
   try {
     if (j.value("activation", "relu") != "relu")
       throw ParseError(origin, 0, prefix + "activation", fmt::format("expected \"relu\", got \"{}\"", j.value("activation", "")));
     MlpOptions o;
-    const int n_in = whole(need(j, "inputs", prefix), prefix + "inputs");
-    const int n_out = whole(need(j, "outputs", prefix), prefix + "outputs");
-    const nlohmann::json& hidden = need(j, "hidden", prefix);
-    if (!hidden.is_array()) throw ParseError(origin, 0, prefix + "hidden", fmt::format("expected an array of layer widths, got {}", hidden.type_name()));
-    o.hidden.clear();
-    for (size_t l = 0; l < hidden.size(); ++l) o.hidden.push_back(whole(hidden[l], fmt::format("{}hidden[{}]", prefix, l)));
+    const int n_in = json_whole(need(j, "inputs", prefix), origin, prefix + "inputs");
+    const int n_out = json_whole(need(j, "outputs", prefix), origin, prefix + "outputs");
+    o.hidden = json_wholes(need(j, "hidden", prefix), origin, prefix + "hidden");
     try {
       o.validate();
       if (n_in < 1 || n_out < 1) throw InvalidArgument(fmt::format("inputs {} and outputs {} must be >= 1", n_in, n_out));
@@ -439,15 +431,12 @@ Mlp Mlp::from_json(const std::string& text, const std::string& origin, const std
     m.x_std = x_std;
     m.y_mean = y_mean;
     m.y_std = y_std;
-    const nlohmann::json& layers = need(j, "layers", prefix);
-    if (!layers.is_array() || layers.size() != m.W_.size())
-      throw ParseError(origin, 0, prefix + "layers", fmt::format("expected {} layers (hidden + output), got {}", m.W_.size(), layers.is_array() ? layers.size() : 0));
-    for (size_t l = 0; l < m.W_.size(); ++l) {
+    for (size_t l = 0; l < m.W_.size(); ++l) {  // (layers_in's count and W sizes are checked above)
       const std::string p = fmt::format("{}layers[{}].", prefix, l);
       const Eigen::Index rows = m.W_[l].rows(), cols = m.W_[l].cols();
-      const Eigen::VectorXd w = vec(layers[l], "W", p, rows * cols);
+      const Eigen::VectorXd w = vec(layers_in[l], "W", p, rows * cols);
       m.W_[l] = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(w.data(), rows, cols);
-      m.b_[l] = vec(layers[l], "b", p, rows);
+      m.b_[l] = vec(layers_in[l], "b", p, rows);
     }
     return m;
   } catch (const nlohmann::json::type_error& e) {

@@ -4,13 +4,14 @@
 
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
+
+#include "json_numbers.hpp"
 
 namespace twinwatch::ident {
 
@@ -29,21 +30,6 @@ Eigen::VectorXd numbers(const nlohmann::json& a, const std::string& origin, cons
     else if (a[i].is_number()) v(static_cast<Eigen::Index>(i)) = a[i].get<double>();
     else throw ParseError(origin, 0, fmt::format("{}[{}]", field, i), fmt::format("expected a number, got {}", a[i].type_name()));
   }
-  return v;
-}
-
-// a whole number that fits an int, and an array of them (get<int>() of 1e20 would be undefined
-// behaviour)
-int whole(const nlohmann::json& v, const std::string& origin, const std::string& field) {
-  const double x = v.is_number() ? v.get<double>() : 0.5;
-  if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
-    throw ParseError(origin, 0, field, fmt::format("expected a whole number, got {}", v.dump()));
-  return static_cast<int>(x);
-}
-std::vector<int> wholes(const nlohmann::json& a, const std::string& origin, const std::string& field) {
-  if (!a.is_array()) throw ParseError(origin, 0, field, fmt::format("expected an array of whole numbers, got {}", a.type_name()));
-  std::vector<int> v;
-  for (size_t i = 0; i < a.size(); ++i) v.push_back(whole(a[i], origin, fmt::format("{}[{}]", field, i)));
   return v;
 }
 
@@ -84,16 +70,16 @@ SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::
   };
   SequentialModel m;
   const auto& lib = need(s, "library", "sequential.");
-  if (lib.contains("motion_joints")) m.library.motion_joints = wholes(lib.at("motion_joints"), origin, "sequential.library.motion_joints");
-  m.library.config_joints = wholes(need(lib, "config_joints", "sequential.library."), origin, "sequential.library.config_joints");
-  m.library.harmonics = whole(need(lib, "harmonics", "sequential.library."), origin, "sequential.library.harmonics");
+  if (lib.contains("motion_joints")) m.library.motion_joints = json_wholes(lib.at("motion_joints"), origin, "sequential.library.motion_joints");
+  m.library.config_joints = json_wholes(need(lib, "config_joints", "sequential.library."), origin, "sequential.library.config_joints");
+  m.library.harmonics = json_whole(need(lib, "harmonics", "sequential.library."), origin, "sequential.library.harmonics");
   try {
     m.library.validate(n);
   } catch (const InvalidArgument& e) {
     throw ParseError(origin, 0, "sequential.library", e.what());
   }
   const int p = m.library.size(n);
-  m.gravity_columns = wholes(need(s, "gravity_columns", "sequential."), origin, "sequential.gravity_columns");
+  m.gravity_columns = json_wholes(need(s, "gravity_columns", "sequential."), origin, "sequential.gravity_columns");
   for (int c : m.gravity_columns)
     if (c < 0 || c >= 10 * n) throw ParseError(origin, 0, "sequential.gravity_columns", fmt::format("column {} out of range 0..{}", c, 10 * n - 1));
   if (s.contains("recordings")) {
@@ -113,7 +99,7 @@ SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::
     jm.coulomb = need(js[k], "coulomb", f).get<double>();
     jm.viscous = need(js[k], "viscous", f).get<double>();
     jm.intercept = need(js[k], "intercept", f).get<double>();
-    jm.lasso_index = wholes(need(js[k], "lasso_index", f), origin, f + "lasso_index");
+    jm.lasso_index = json_wholes(need(js[k], "lasso_index", f), origin, f + "lasso_index");
     jm.lasso_value = need(js[k], "lasso_value", f).get<std::vector<double>>();
     if (jm.lasso_index.size() != jm.lasso_value.size())
       throw ParseError(origin, 0, f + "lasso_value", fmt::format("expected {} values (one per lasso_index), got {}", jm.lasso_index.size(), jm.lasso_value.size()));
@@ -397,7 +383,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
     if (j.contains("learned")) t.learned = LearnedModel::from_json(j["learned"].dump(), origin, t.n_dof());
     if (j.contains("friction_models")) t.friction_json = j["friction_models"].dump();
-    t.base_columns = wholes(need(j, "base_columns", ""), origin, "base_columns");
+    t.base_columns = json_wholes(need(j, "base_columns", ""), origin, "base_columns");
     for (int c : t.base_columns)
       if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));
     t.beta = numbers(need(j, "beta", ""), origin, "beta");

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -204,7 +205,6 @@ struct ContactFit {
   int link = -1;
   double force = 0.0;         // [N] peak force: impulse fit / pulse-equivalent duration
   double joint_torque = 0.0;  // [N·m] peak |tau_ext| over the joints in the pulse
-  std::vector<double> cost;   // per candidate link: -2 log evidence, less the named link's
   double share = 0.0;         // the named link's posterior probability
   std::vector<int> others;    // a link with at least kSecondLinkPosterior of the posterior, or none
   std::vector<double> other_shares;  // their posterior probabilities
@@ -233,7 +233,6 @@ struct ContactFit {
 // collision sets it names 71-92 % per set, 83 % of all 240 (docs/validation.md).
 struct LinkEvidence {
   int best = -1, second = -1;
-  std::vector<double> cost;       // -2 log evidence per link, less the best's (0 for the best)
   std::vector<double> posterior;  // per link, uniform prior over the links
 };
 
@@ -252,6 +251,10 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
   LinkEvidence ev;
   std::vector<double> logz(static_cast<size_t>(n), -std::numeric_limits<double>::infinity());
   const double bb = b.squaredNorm();
+  // the prior's force-impulse variances s^2, log-spaced
+  std::array<double, kImpulseScales> s2;
+  for (int k = 0; k < kImpulseScales; ++k)
+    s2[static_cast<size_t>(k)] = sq(kImpulseScaleMin * std::pow(kImpulseScaleMax / kImpulseScaleMin, k / (kImpulseScales - 1.0)));
   Matrix6J J;
   for (int l = 0; l < n; ++l) {
     const model::RigidBodyInertia& body = m.joint(l).body;
@@ -272,12 +275,11 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> G(A.transpose() * A);
       const Eigen::Vector3d lambda = G.eigenvalues().cwiseMax(0.0);
       const Eigen::Vector3d proj = G.eigenvectors().transpose() * (A.transpose() * b);
-      for (int k = 0; k < kImpulseScales; ++k) {
-        const double s2 = sq(kImpulseScaleMin * std::pow(kImpulseScaleMax / kImpulseScaleMin, k / (kImpulseScales - 1.0)));
+      for (double v : s2) {
         double quad = bb, logdet = 0.0;
         for (int a = 0; a < 3; ++a) {
-          quad -= sq(proj[a]) * s2 / (1.0 + s2 * lambda[a]);
-          logdet += std::log1p(s2 * lambda[a]);
+          quad -= sq(proj[a]) * v / (1.0 + v * lambda[a]);
+          logdet += std::log1p(v * lambda[a]);
         }
         const double ll = -0.5 * (quad + logdet);
         lls.push_back(ll);
@@ -291,10 +293,8 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
   const double top = *std::max_element(logz.begin(), logz.end());
   double norm = 0.0;
   for (double z : logz) norm += std::exp(z - top);
-  ev.cost.resize(static_cast<size_t>(n));
   ev.posterior.resize(static_cast<size_t>(n));
   for (int l = 0; l < n; ++l) {
-    ev.cost[static_cast<size_t>(l)] = -2.0 * (logz[static_cast<size_t>(l)] - top);
     ev.posterior[static_cast<size_t>(l)] = std::exp(logz[static_cast<size_t>(l)] - top) / norm;
     if (ev.best < 0 || logz[static_cast<size_t>(l)] > logz[static_cast<size_t>(ev.best)]) ev.best = l;
   }
@@ -408,7 +408,6 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   model::DynamicsData d(m);
   model::forward_kinematics(m, d, w[k_peak].q);
   const LinkEvidence ev = link_evidence(m, d, wgt, b);
-  out.cost = ev.cost;
   out.link = ev.best;
   out.share = ev.posterior[static_cast<size_t>(ev.best)];
   if (ev.second >= 0 && ev.posterior[static_cast<size_t>(ev.second)] >= kSecondLinkPosterior) {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/numbers.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 
 namespace twinwatch::monitor {
@@ -98,10 +99,9 @@ VectorJ json_vec(const nlohmann::json& a, const std::string& field) {
 // undefined behaviour. Throws InvalidArgument naming `field`, a json type_error for a non-number.
 int json_int(const nlohmann::json& j, const char* key, int fallback, const std::string& field) {
   if (!j.contains(key)) return fallback;
-  const double x = j.at(key).get<double>();
-  if (!(x == std::floor(x) && std::abs(x) <= std::numeric_limits<int>::max()))
-    throw InvalidArgument(fmt::format("{}: expected a whole number within +-{}, got {}", field, std::numeric_limits<int>::max(), j.at(key).dump()));
-  return static_cast<int>(x);
+  const std::optional<int> x = whole_int(j.at(key).get<double>());
+  if (!x) throw InvalidArgument(fmt::format("{}: expected a whole number within +-{}, got {}", field, std::numeric_limits<int>::max(), j.at(key).dump()));
+  return *x;
 }
 
 // MonitorConfig::residual_filter: 0, 1 or n entries, each "iir" or "fir"

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/numbers.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 namespace twinwatch::sim {
@@ -61,10 +62,9 @@ class Y {
     const YAML::Node n = parent[key];
     if (!n) return fallback;
     const double v = as_number(n, join(path, key));
-    // (the range check first: casting 1e20 to int is undefined)
-    if (!(v == std::floor(v) && std::abs(v) <= std::numeric_limits<int>::max()))
-      fail(n, join(path, key), fmt::format("expected a whole number within +-{}, got {}", std::numeric_limits<int>::max(), v));
-    return static_cast<int>(v);
+    const std::optional<int> x = whole_int(v);
+    if (!x) fail(n, join(path, key), fmt::format("expected a whole number within +-{}, got {}", std::numeric_limits<int>::max(), v));
+    return *x;
   }
   std::string text(const YAML::Node& parent, const std::string& path, const std::string& key, const std::string& fallback) const {
     const YAML::Node n = parent[key];

@@ -411,6 +411,7 @@ TEST_F(Fixture, LowSpeedFrictionPredictsTheTriangleStops) {
     EXPECT_LT(with_memory[j], table3[j]) << "joint " << j + 1;
   }
 }
+
 // found by fuzzing (fuzz/regressions/twin_model): json type_error / out_of_range escaped, and
 // get<int>() of 1e20 was undefined
 TEST(TwinFile, NonObjectsOverflowsAndHugeIndicesAreParseErrors) {
