@@ -34,8 +34,9 @@ constexpr double kGainError = 0.1;
 constexpr double kSharedError = 0.01;
 // a joint whose mean speed over the pulse is below this [rad/s] is at rest (static friction holds
 // it; 0.01 rad/s is about three steps of the measured velocity, whose resolution is one encoder
-// count per 2 ms sample, 0.003 rad/s on the simulated UR3e); its row is weighed
-// by kRestWeight (left out). Chosen on the tuning sets (0.02 and 0.04 name fewer links right).
+// count per 2 ms sample, 0.003 rad/s on the simulated UR3e). Chosen on the tuning sets (0.02 and
+// 0.04 name fewer links right). Its row's noise is widened by the friction it can hold
+// (isolate_contact), or, when that level is unknown, its row is weighed by kRestWeight (left out).
 constexpr double kRestSpeed = 0.01;
 constexpr double kRestWeight = 1e-3;
 // the pulse window is widened by this many samples before (onset below the fraction) and after
@@ -304,7 +305,7 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
 }
 
 ContactFit isolate_contact(const model::RobotModel& m, const std::vector<DiagnosisSample>& w,
-                           const std::vector<DiagnosisSample>& ref) {
+                           const std::vector<DiagnosisSample>& ref, const VectorJ& static_friction) {
   const int n = m.n_dof();
   ContactFit out;
   if (w.size() < 3 || ref.size() < 10) return out;
@@ -396,12 +397,24 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   // joint's own impulse)
   // a joint at rest during the pulse is held by static friction: a contact torque below the
   // breakaway level does not move it and does not show in its current, and the twin's friction
-  // flips sign with the velocity's encoder-step toggling. Its row carries no information (it
-  // named the contact link wrongly on a resting wrist, docs/validation.md) and is left out.
+  // flips sign with the velocity's encoder-step toggling. Its row alone named the contact link
+  // wrongly on a resting wrist (docs/validation.md). But it is not empty: the contact did not move
+  // the joint, so its torque there stayed within what friction holds. The row keeps its estimate
+  // with that much more noise: friction anywhere in [-F, F] (uniform, sd F / sqrt 3) over the
+  // pulse's equivalent duration (a constant c over the pulse projects to c * area^2 / period).
+  // Without it a link-1 contact with every other joint at rest had six equal posteriors, and the
+  // named link was a tie's accident (docs/validation.md, session 12).
+  const double t_equiv = area * area / period;  // [s]
+  const bool friction_known = static_friction.size() == n;
   VectorJ wgt(n), b(n);
   for (int j = 0; j < n; ++j) {
     const double sigma = std::sqrt(var[j] + sq(kGainError * impulse[j]) + sq(kSharedError * impulse.norm()) + sq(kImpulseFloor));
-    wgt[j] = mean_speed[j] < kRestSpeed ? kRestWeight / sigma : 1.0 / sigma;
+    if (mean_speed[j] >= kRestSpeed)
+      wgt[j] = 1.0 / sigma;
+    else if (friction_known)
+      wgt[j] = 1.0 / std::hypot(sigma, std::abs(static_friction[j]) / std::sqrt(3.0) * t_equiv);
+    else
+      wgt[j] = kRestWeight / sigma;
     b[j] = impulse[j] * wgt[j];
   }
   // the contact link: the joint torques' evidence for each link (link_evidence)
@@ -508,7 +521,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
   Hypothesis contact = contact_hypothesis(model, window, total);
   if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {
-    const ContactFit fit = reference ? isolate_contact(model, window, *reference) : ContactFit{};
+    const ContactFit fit = reference ? isolate_contact(model, window, *reference, options.static_friction) : ContactFit{};
     if (fit.link >= 0) {
       contact.link = contact.joint = fit.link;
       contact.magnitude = fit.force;

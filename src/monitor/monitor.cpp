@@ -439,6 +439,12 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   for (int j = 0; j < n_; ++j) tau_gain_[j] = trusted_gain(j);
   obs_to_nm_ = VectorJ::Ones(n_);
   for (int j = 0; j < n_; ++j) obs_to_nm_[j] = torque_gain(j) / twin_.joints[static_cast<size_t>(j)].gain;
+  // breakaway friction: the Coulomb level plus the Stribeck rise, in N·m like the observer's estimate
+  static_friction_ = VectorJ::Zero(n_);
+  for (int j = 0; j < n_; ++j) {
+    const ident::JointDrive& d = twin_.joints[static_cast<size_t>(j)];
+    static_friction_[j] = (std::abs(d.friction[ident::kCoulomb]) + std::max(0.0, d.stribeck)) * obs_to_nm_[j];
+  }
   if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   fir_ = make_fir_filters(cfg_, n_);
@@ -531,6 +537,7 @@ void Monitor::run_diagnosis(double t) {
   // a payload change is most likely the declared payload (or one gripped at the flange)
   const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, 0.04);
   o.payload_com = twin_.robot().description().flange * com_flange;
+  o.static_friction = static_friction_;
   // the exceedance lasted until now, or ended if the joints are below again
   bool any_active = false;
   for (const auto& d : deb_) any_active |= d.active();

@@ -498,6 +498,50 @@ TEST(TwinMomentumObserver, RejectsBadGainAndJointCount) {
   EXPECT_THROW(TwinMomentumObserver(0, 100.0), InvalidArgument);
 }
 
+// A joint at rest during a contact is held by static friction: its estimate flips with the twin's
+// friction and a contact torque below the breakaway level never reaches its current. But it is not
+// blind: what the contact put on it beyond what friction holds does show. With the friction levels
+// known (DiagnosisOptions::static_friction, from the twin), a resting joint counts with that much
+// more noise. (Before session 12 a resting joint's row was dropped: with every joint but J1 at rest
+// all six links fitted a J1-only pattern equally, and the named link was a tie's accident; the
+// simulated collision sets had three such link-1 contacts, all named link 2.)
+TEST(ContactIsolation, JointsAtRestCountUpToTheFrictionTheyHold) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  VectorJ q(6), qd(6);
+  q << 0.3, -1.2, 1.4, -1.6, 0.9, 0.2;
+  qd << 0.3, 0.0, 0.0, 0.0, 0.0, 0.0;  // only the base turns
+  DiagnosisOptions o;
+  o.static_friction = VectorJ(6);
+  o.static_friction << 0.65, 0.77, 0.70, 0.50, 0.35, 0.39;  // the identified twin's Coulomb levels [N·m]
+  const auto toggling = [](int k, double, VectorJ& tau) {
+    // the resting joints' estimates flip with the encoder-step toggling of their velocity
+    for (int j = 1; j < 6; ++j) tau[j] += ((k + j) / 3) % 2 ? 0.3 : -0.3;
+  };
+  // (1) on the shoulder link (link 1): only J1 feels it, and nothing on the resting joints needs
+  // another link
+  const VectorJ shoulder = contact_torque(m, q, 0, Eigen::Vector3d(0.02, -0.03, 0.0), Eigen::Vector3d(1.0, 0.4, 0.2), 6.0);
+  ASSERT_NEAR(shoulder.tail<5>().norm(), 0.0, 1e-12);
+  // (2) on the upper arm (link 2), pushing J2 with 6 N·m while its drive holds it still: far more
+  // than the 0.77 N·m friction holds, so the resting J2 says the contact is past J1
+  model::DynamicsData d(m);
+  model::forward_kinematics(m, d, q);
+  Matrix6J J;
+  const Eigen::Vector3d point = m.joint(1).body.com;
+  model::point_jacobian(m, d, 1, point, J);
+  const VectorJ upper = contact_torque(m, q, 1, point, J.block<3, 1>(0, 1) + 0.5 * J.block<3, 1>(0, 0), 6.0);
+  ASSERT_GT(std::abs(upper[1]), 5.0);
+  for (unsigned seed : {31u, 32u, 33u}) {
+    const SyntheticWindow a = synthetic_contact(q, qd, shoulder, seed, toggling);
+    const Hypothesis ha = diagnose(m, a.win, 0.06, 0, o, &a.ref).front();
+    EXPECT_EQ(ha.fault, FaultClass::Collision) << ha.detail;
+    EXPECT_EQ(ha.link, 0) << ha.detail;
+    const SyntheticWindow b = synthetic_contact(q, qd, upper, seed, toggling);
+    const Hypothesis hb = diagnose(m, b.win, 0.06, 1, o, &b.ref).front();
+    EXPECT_EQ(hb.fault, FaultClass::Collision) << hb.detail;
+    EXPECT_EQ(hb.link, 1) << hb.detail;
+  }
+}
+
 // The link is chosen by its evidence over where on the link a contact can be: the contact point is
 // integrated over the link's equivalent inertia box (30-39 cm along the UR3e upper arm), not fixed
 // near the centre of mass. A push near either end of the upper arm, in three directions that load

@@ -57,6 +57,10 @@ struct DiagnosisOptions {
   /// centre of mass of a payload change, in the last link frame [m]: the declared payload's (a
   /// short window cannot resolve a free COM; the mass alone is fitted)
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
+  /// per joint, the friction torque a joint at rest can hold [N·m] (the twin's Coulomb, Stribeck
+  /// and pre-sliding levels): a contact torque below it does not move the joint and does not show
+  /// in its current. Empty: unknown, and a joint at rest tells the contact isolation nothing.
+  VectorJ static_friction;
   void validate() const;
 };
 

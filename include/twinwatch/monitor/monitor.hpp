@@ -177,6 +177,7 @@ class Monitor {
   bool obs_on_ = false;
   int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
   VectorJ obs_level_, obs_to_nm_;
+  VectorJ static_friction_;  ///< [N·m] per joint, what friction holds at rest (DiagnosisOptions::static_friction)
   VectorJ obs_warm_;  // the observer's temperature compensation of the sample [N·m] (scratch)
   VectorJ tau_obs_;   // the twin's torque at the observer's acceleration (scratch)
   RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
