@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <random>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/dynamics.hpp"
+#include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "twinwatch/sim/scenario.hpp"
@@ -204,8 +206,14 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   return twin;
 }
 
+namespace {
+// link ceiling: noise draws per contact, and its seed offset
+constexpr int kCeilingDraws = 20;
+}  // namespace
+
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
-                              double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv) {
+                              double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
+                              double link_ceiling) {
   Evaluation ev;
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
   if (static_threshold) cfg.use_dynamic = false;
@@ -230,6 +238,8 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // joint that link hangs on). A contact whose own joint takes almost none of it acts like one on
     // the link before, and no joint-torque signature can tell the two apart.
     std::vector<double> own_share(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
+    // and (link ceiling) its joint impulse over the half-sine pulse, 2 T / pi of the peak, and the pose
+    std::vector<VectorJ> true_impulse(s.faults.size()), true_q(s.faults.size());
     const model::RobotModel& kin = t.robot();  // the arm's kinematics (the twin's inertia is not used)
     model::DynamicsData dkin(kin);
     simulator->run([&](const RobotSample& x) {
@@ -240,6 +250,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                        model::forward_kinematics(kin, dkin, x.q);
                        const VectorJ tau = sim::collision_torque_per_newton(kin, dkin, f);
                        own_share[fi] = tau.cwiseAbs().maxCoeff() > 0.0 ? std::abs(tau[f.link]) / tau.cwiseAbs().maxCoeff() : 0.0;
+                       if (tau.cwiseAbs().maxCoeff() > 0.0) {
+                         true_impulse[fi] = tau * (f.magnitude / tau.cwiseAbs().maxCoeff() * 2.0 * f.duration / M_PI);
+                         true_q[fi] = x.q;
+                       }
                      }
                    },
                    [&](double f) {
@@ -286,6 +300,24 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
             ll >= 0 && (e.link == ll || std::find(e.other_links.begin(), e.other_links.end(), ll) != e.other_links.end());
         sc.magnitude = e.magnitude;
         sc.detail = e.detail;
+        if (link_ceiling >= 0.0 && ll >= 0 && fi < true_impulse.size() && true_impulse[fi].size() > 0 &&
+            e.contact.noise.size() == true_impulse[fi].size()) {
+          const VectorJ sd = e.contact.noise.cwiseMax(1e-9);
+          const auto named = [&](const VectorJ& b) {
+            const auto post = monitor::contact_link_posterior(kin, true_q[fi], b, sd, link_ceiling);
+            return static_cast<int>(std::max_element(post.begin(), post.end()) - post.begin()) == ll;
+          };
+          sc.link_ceiling_exact = named(true_impulse[fi]) ? 1 : 0;
+          std::mt19937 rng(static_cast<unsigned>(s.options.seed) * 7919u + static_cast<unsigned>(fi));
+          std::normal_distribution<double> unit;
+          int right = 0;
+          for (int k = 0; k < kCeilingDraws; ++k) {
+            VectorJ b = true_impulse[fi];
+            for (int j = 0; j < b.size(); ++j) b[j] += sd[j] * unit(rng);
+            right += named(b);
+          }
+          sc.link_ceiling = static_cast<double>(right) / kCeilingDraws;
+        }
       }
       scs.push_back(sc);
     }
@@ -485,6 +517,18 @@ void print_evaluation(const Evaluation& e) {
   if (contacts > 0)
     fmt::print("contact link: named {}/{}; named or reported as also possible {}/{} ({} events report a second link)\n",
                named, contacts, among, contacts, ambiguous);
+  int ceiling_n = 0, ceiling_exact = 0;
+  double ceiling_noisy = 0.0;
+  for (const auto& s : e.scores)
+    if (s.link_ceiling_exact >= 0) {
+      ++ceiling_n;
+      ceiling_exact += s.link_ceiling_exact;
+      ceiling_noisy += s.link_ceiling;
+    }
+  if (ceiling_n > 0)
+    fmt::print("link ceiling (evaluation only; the true joint impulse, every joint read): {:.1f}/{} named with white noise at the "
+               "observer's sd ({} draws each), {}/{} without noise\n",
+               ceiling_noisy, ceiling_n, kCeilingDraws, ceiling_exact, ceiling_n);
   fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
              e.false_alarms_per_hour(), e.wear_false_alarms);
 }
@@ -508,6 +552,8 @@ std::string evaluation_json(const Evaluation& e) {
                                }()},
                               {"link_in_candidates", s.link_in_candidates},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
+                              {"link_ceiling", std::isfinite(s.link_ceiling) ? nlohmann::json(s.link_ceiling) : nlohmann::json(nullptr)},
+                              {"link_ceiling_exact", s.link_ceiling_exact >= 0 ? nlohmann::json(s.link_ceiling_exact == 1) : nlohmann::json(nullptr)},
                               {"magnitude", s.magnitude},
                               {"false_alarms", s.false_alarms},
                               {"wear_false_alarms", s.wear_false_alarms},

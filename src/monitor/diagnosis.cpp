@@ -209,6 +209,7 @@ struct ContactFit {
   double share = 0.0;         // the named link's posterior probability
   std::vector<int> others;    // a link with at least kSecondLinkPosterior of the posterior, or none
   std::vector<double> other_shares;  // their posterior probabilities
+  ContactImpulse measured;           // what the choice read
 };
 
 // Which link carries the contact: Bayesian model selection on the weighted impulse b = W tau_imp
@@ -247,7 +248,10 @@ double radical_inverse(int i, int base) {
   return r;
 }
 
-LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData& d, const VectorJ& wgt, const VectorJ& b) {
+// cube_half > 0: the contact point uniform in that cube around the centre of mass (body axes)
+// instead of the equivalent inertia box (contact_link_posterior)
+LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData& d, const VectorJ& wgt, const VectorJ& b,
+                           double cube_half = 0.0) {
   const int n = m.n_dof();
   LinkEvidence ev;
   std::vector<double> logz(static_cast<size_t>(n), -std::numeric_limits<double>::infinity());
@@ -270,7 +274,8 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
     lls.reserve(static_cast<size_t>(kPriorPoints * kImpulseScales));
     for (int i = 0; i < kPriorPoints; ++i) {
       const Eigen::Vector3d u(radical_inverse(i + 1, 2), radical_inverse(i + 1, 3), radical_inverse(i + 1, 5));
-      const Eigen::Vector3d p = body.com + principal.eigenvectors() * ((2.0 * u - Eigen::Vector3d::Ones()).cwiseProduct(half));
+      const Eigen::Vector3d p = cube_half > 0.0 ? Eigen::Vector3d(body.com + cube_half * (2.0 * u - Eigen::Vector3d::Ones()))
+                                                : Eigen::Vector3d(body.com + principal.eigenvectors() * ((2.0 * u - Eigen::Vector3d::Ones()).cwiseProduct(half)));
       model::point_jacobian(m, d, l, p, J);
       const Eigen::Matrix<double, Eigen::Dynamic, 3> A = wgt.asDiagonal() * J.topRows<3>().transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> G(A.transpose() * A);
@@ -417,6 +422,7 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
       wgt[j] = kRestWeight / sigma;
     b[j] = impulse[j] * wgt[j];
   }
+  out.measured = ContactImpulse{w[k_peak].q, impulse, var.cwiseSqrt(), wgt.cwiseInverse()};
   // the contact link: the joint torques' evidence for each link (link_evidence)
   model::DynamicsData d(m);
   model::forward_kinematics(m, d, w[k_peak].q);
@@ -528,6 +534,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
       contact.detail = fmt::format("contact on link {} (moved by J{}, {:.0f} % likely), ≈ {:.1f} N ({:.1f} N·m peak joint torque)",
                                    fit.link + 1, fit.link + 1, 100.0 * fit.share, fit.force, fit.joint_torque);
       contact.other_links = fit.others;
+      contact.contact = fit.measured;
       for (size_t i = 0; i < fit.others.size(); ++i)
         contact.detail += fmt::format("; link {} is also possible ({:.0f} %)", fit.others[i] + 1, 100.0 * fit.other_shares[i]);
     }
@@ -565,6 +572,20 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     out.insert(out.begin(), u);
   }
   return out;
+}
+
+std::vector<double> contact_link_posterior(const model::RobotModel& model, const VectorJ& q, const VectorJ& impulse,
+                                           const VectorJ& sigma, double cube_half) {
+  const int n = model.n_dof();
+  check_size("q", q.size(), n, "model.n_dof");
+  check_size("impulse", impulse.size(), n, "model.n_dof");
+  check_size("sigma", sigma.size(), n, "model.n_dof");
+  if (!(sigma.array() > 0.0).all()) throw InvalidArgument("contact_link_posterior: every sigma must be > 0");
+  if (!(cube_half >= 0.0)) throw InvalidArgument(fmt::format("contact_link_posterior: cube_half is {}, must be >= 0", cube_half));
+  model::DynamicsData d(model);
+  model::forward_kinematics(model, d, q);
+  const VectorJ wgt = sigma.cwiseInverse();
+  return link_evidence(model, d, wgt, impulse.cwiseProduct(wgt), cube_half).posterior;
 }
 
 MatrixJ residual_velocity_correlation(const std::vector<VectorJ>& residual, const std::vector<VectorJ>& qd) {

@@ -548,6 +548,7 @@ void Monitor::run_diagnosis(double t) {
   if (h.joint >= 0) e.joint = h.joint;
   e.link = h.link;
   e.other_links = h.other_links;
+  e.contact = h.contact;
   e.magnitude = h.magnitude;
   e.units = h.units;
   e.confidence = h.explained;

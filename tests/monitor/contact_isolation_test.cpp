@@ -542,6 +542,40 @@ TEST(ContactIsolation, JointsAtRestCountUpToTheFrictionTheyHold) {
   }
 }
 
+// The link choice as a function (what `evaluate --link-ceiling` calls on the true impulse): a
+// posterior over the links that sums to 1; a noise-free forearm contact that loads J3 is named on
+// the forearm under either point prior; a link-1 pattern (J1 only) is named on link 1 when every
+// joint is read; bad input is refused with the field named.
+TEST(ContactIsolation, TheLinkPosteriorNamesANoiseFreeContactAndRefusesBadInput) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  VectorJ q(6);
+  q << 0.3, -1.2, 1.4, -1.6, 0.9, 0.2;
+  model::DynamicsData d(m);
+  model::forward_kinematics(m, d, q);
+  Matrix6J J;
+  const Eigen::Vector3d point(-0.1, 0.0, 0.03);
+  model::point_jacobian(m, d, 2, point, J);
+  const VectorJ forearm = 0.05 * contact_torque(m, q, 2, point, J.block<3, 1>(0, 2), 6.0);  // [N·m·s]
+  const VectorJ sd = VectorJ::Constant(6, 0.002);
+  for (double cube : {0.0, 0.04}) {
+    const std::vector<double> post = contact_link_posterior(m, q, forearm, sd, cube);
+    ASSERT_EQ(post.size(), 6u);
+    double sum = 0.0;
+    for (double p : post) sum += p;
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    EXPECT_EQ(std::max_element(post.begin(), post.end()) - post.begin(), 2) << "cube " << cube;
+  }
+  VectorJ base = VectorJ::Zero(6);
+  base[0] = 0.3;
+  const std::vector<double> pb = contact_link_posterior(m, q, base, sd);
+  EXPECT_EQ(std::max_element(pb.begin(), pb.end()) - pb.begin(), 0);
+  VectorJ bad = sd;
+  bad[3] = 0.0;
+  EXPECT_THROW(contact_link_posterior(m, q, forearm, bad), InvalidArgument);
+  EXPECT_THROW(contact_link_posterior(m, q, forearm, sd, -0.01), InvalidArgument);
+  EXPECT_THROW(contact_link_posterior(m, q.head(5), forearm, sd), InvalidArgument);
+}
+
 // The link is chosen by its evidence over where on the link a contact can be: the contact point is
 // integrated over the link's equivalent inertia box (30-39 cm along the UR3e upper arm), not fixed
 // near the centre of mass. A push near either end of the upper arm, in three directions that load

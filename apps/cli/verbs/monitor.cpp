@@ -288,6 +288,7 @@ struct EvaluateOptions {
   std::string twin, robot = "ur3e", save_twin, trend_csv, filter;
   bool json = false, static_threshold = false, sweep = false, all_programs = false;
   double max_duration = 0.0;
+  double link_ceiling = -1.0;
   cli::SweepOptions sweep_options;
 };
 
@@ -322,7 +323,7 @@ int run_evaluate(const EvaluateOptions& o) {
   const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
                                                : ident::TwinModel::load(o.twin);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
-  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv);
+  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);
   return 0;
@@ -368,6 +369,13 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--trend-csv", o->trend_csv,
                   "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
                   "temperature, I_total) to this CSV");
+  sub->add_option("--link-ceiling", o->link_ceiling,
+                  "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse plus "
+                  "white noise at the sd the observer's estimate had on it, every joint read (none held by friction), the "
+                  "contact point uniform in a cube of this half extent [m] around the link's centre of mass (0.04: the "
+                  "distribution of scripts/make_validation_collisions.py; 0: the monitor's inertia box). What any rule "
+                  "reading joint torques at that noise could reach; adds \"link_ceiling\" fields to --json")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--sweep-collisions", o->sweep,
                 "Instead of scenario files: collisions of decreasing magnitude on --links, each monitored with the static "
                 "and the dynamic threshold; prints the smallest contact detected on every link (Cao: 10 vs 5 N·m)");

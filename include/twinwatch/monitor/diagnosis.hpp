@@ -48,6 +48,7 @@ struct Hypothesis {
   /// Contacts: other links that explain the joint torques as well as `link` (best first), e.g. a
   /// force through the contact link's own joint axis leaves that joint untouched; empty otherwise.
   std::vector<int> other_links;
+  ContactImpulse contact;  ///< contacts isolated on the observer's estimate: what the link choice read
 };
 
 struct DiagnosisOptions {
@@ -71,6 +72,15 @@ struct DiagnosisOptions {
 std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vector<DiagnosisSample>& window,
                                  double alert_duration, int alert_joint, const DiagnosisOptions& options = {},
                                  const std::vector<DiagnosisSample>* reference = nullptr);
+
+/// Posterior probability of each link (uniform prior over the links) for a contact of joint
+/// impulse `impulse` [N·m·s] whose rows have sd `sigma` [N·m·s], at configuration q: the Bayesian
+/// model choice the diagnosis names the contact link with (diagnosis.cpp, link_evidence). The
+/// contact point is uniform in the link's equivalent inertia box, or, with `cube_half` > 0 [m], in
+/// a cube of that half extent around the link's centre of mass along its body axes (evaluation: a
+/// test generator's own distribution). Allocates.
+std::vector<double> contact_link_posterior(const model::RobotModel& model, const VectorJ& q, const VectorJ& impulse,
+                                           const VectorJ& sigma, double cube_half = 0.0);
 
 /// Cross-correlation matrix between residuals (rows) and joint velocities (columns) over a
 /// window, as printed in [UR3e] Table 5 (Pearson coefficients at lag 0).

@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "twinwatch/core/types.hpp"
+
 namespace twinwatch::monitor {
 
 /// Class of a diagnosed anomaly (UR3e §2.3, §4 sign/shape interpretation).
@@ -26,6 +28,15 @@ std::string_view to_string(FaultClass c);
 /// Inverse of to_string; throws InvalidArgument for an unknown name.
 FaultClass fault_class_from_string(std::string_view s);
 
+/// A contact pulse's joint impulse as the momentum observer measured it (isolate_contact in
+/// diagnosis.cpp), with its noise; all empty when no contact was isolated.
+struct ContactImpulse {
+  VectorJ q;        ///< [rad] the configuration at the pulse's peak
+  VectorJ impulse;  ///< [N·m·s] per joint, over the pulse
+  VectorJ noise;    ///< [N·m·s] sd of the same estimate on the healthy reference just before
+  VectorJ sigma;    ///< [N·m·s] the sd the link choice gave each joint (noise, model error, rest)
+};
+
 /// One alert with its diagnosis.
 struct Event {
   double t_start = 0.0;     ///< [s] controller time the alert was raised
@@ -43,6 +54,9 @@ struct Event {
   double confidence = 0.0;  ///< [0, 1]
   double peak_residual = 0.0;  ///< largest |residual| seen during the alert (residual units)
   std::string detail;       ///< human-readable one-liner, e.g. "extra friction on J5 ≈ 0.8 N·m"
+  /// contacts: the joint impulse the link was chosen on (in memory only: not in the JSON line or
+  /// the event store; `evaluate --link-ceiling` reads its noise)
+  ContactImpulse contact;
 
   double duration() const { return t_end - t_start; }
   /// One JSON object on one line (no trailing newline).
