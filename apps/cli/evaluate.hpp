@@ -34,10 +34,12 @@ struct ScenarioScore {
   /// collisions (evaluation only): the contact's torque on its own link's joint over its largest
   /// joint torque, at the middle of the pulse (near 0: the contact acts like one on the link before)
   double own_joint_share = std::numeric_limits<double>::quiet_NaN();
-  /// collisions with a link ceiling (evaluation only, EvaluateSettings::link_ceiling): the share of
-  /// noise draws whose link choice on the true joint impulse is right, and that choice without noise
-  double link_ceiling = std::numeric_limits<double>::quiet_NaN();
-  int link_ceiling_exact = -1;  ///< 1 right, 0 wrong, -1 not computed
+  /// collisions, with evaluate_scenarios' `link_ceiling` (evaluation only): the share of noise draws
+  /// whose link is named right from the true joint impulse by the monitor's choice and by that choice
+  /// told the generator's point cube, and each without noise (1 right, 0 wrong, -1 not run)
+  double ceiling_monitor = std::numeric_limits<double>::quiet_NaN();
+  double ceiling_bayes = std::numeric_limits<double>::quiet_NaN();
+  int ceiling_monitor_exact = -1, ceiling_bayes_exact = -1;
 };
 
 struct Evaluation {
@@ -51,11 +53,13 @@ struct Evaluation {
 /// `max_duration` skips longer scenarios (0: none skipped). `report_dir` (may be empty) gets one
 /// HTML report per scenario. `trend_csv` (may be empty) gets the per-window wear-trend history
 /// of every scenario appended.
-/// `link_ceiling` >= 0 (evaluation only): for every detected contact, also choose the link from the
-/// simulator's true joint impulse (J^T F over the pulse) plus white noise at the sd the observer's
-/// estimate had on that contact (ContactImpulse::noise), every joint read as if moving, with the
-/// contact point uniform in a cube of this half extent [m] around the link's centre of mass (0:
-/// the monitor's inertia box): what any rule reading joint torques at that noise could reach.
+/// `link_ceiling` > 0 (evaluation only): for every detected contact the diagnosis isolated, also
+/// name the link from the simulator's true joint impulse (J^T F over the pulse), exact and plus white
+/// noise at the sd the observer's estimate had on that contact, every joint read as if moving: by
+/// the monitor's own choice (monitor::contact_link_posterior), and by that choice told the contact
+/// generator's point distribution (uniform in a cube of half extent `link_ceiling` [m] around the
+/// link's centre of mass). A reference for what the joint torques carry at that noise, not a proof
+/// of a bound (the force prior is still the monitor's, not the generator's).
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir = "", const std::string& trend_csv = "",
                               double link_ceiling = -1.0);

@@ -232,8 +232,8 @@ struct ContactFit {
 // scripts/make_validation_collisions.py with white noise at the observer's per-sample level
 // (scripts/contact_link_ceiling.py 7 300): this rule names 91 % of links, 95 % at a third of that
 // noise. On the 288 contacts of the simulated collision sets it names 85 %; the same choice on the
-// simulator's true joint impulse with white noise at the observer's measured sd, knowing the sets'
-// contact distribution, names 89 % (`evaluate --link-ceiling 0.04`, docs/validation.md, session 12).
+// simulator's true joint impulse with white noise at the observer's measured sd, told the sets'
+// contact-point distribution, names 89 % (`evaluate --link-ceiling 0.04`, docs/validation.md, session 12).
 struct LinkEvidence {
   int best = -1, second = -1;
   std::vector<double> posterior;  // per link, uniform prior over the links
@@ -249,8 +249,8 @@ double radical_inverse(int i, int base) {
   return r;
 }
 
-// cube_half > 0: the contact point uniform in that cube around the centre of mass (body axes)
-// instead of the equivalent inertia box (contact_link_posterior)
+// cube_half > 0 (evaluation, contact_link_posterior): the contact point uniform in that cube around
+// the centre of mass (body axes) instead of the equivalent inertia box
 LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData& d, const VectorJ& wgt, const VectorJ& b,
                            double cube_half = 0.0) {
   const int n = m.n_dof();
@@ -275,8 +275,8 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
     lls.reserve(static_cast<size_t>(kPriorPoints * kImpulseScales));
     for (int i = 0; i < kPriorPoints; ++i) {
       const Eigen::Vector3d u(radical_inverse(i + 1, 2), radical_inverse(i + 1, 3), radical_inverse(i + 1, 5));
-      const Eigen::Vector3d p = cube_half > 0.0 ? Eigen::Vector3d(body.com + cube_half * (2.0 * u - Eigen::Vector3d::Ones()))
-                                                : Eigen::Vector3d(body.com + principal.eigenvectors() * ((2.0 * u - Eigen::Vector3d::Ones()).cwiseProduct(half)));
+      const Eigen::Vector3d box = principal.eigenvectors() * ((2.0 * u - Eigen::Vector3d::Ones()).cwiseProduct(half));
+      const Eigen::Vector3d p = body.com + (cube_half > 0.0 ? Eigen::Vector3d(cube_half * (2.0 * u - Eigen::Vector3d::Ones())) : box);
       model::point_jacobian(m, d, l, p, J);
       const Eigen::Matrix<double, Eigen::Dynamic, 3> A = wgt.asDiagonal() * J.topRows<3>().transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> G(A.transpose() * A);
@@ -410,15 +410,16 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   // pulse's equivalent duration (a constant c over the pulse projects to c * area^2 / period).
   // Without it a link-1 contact with every other joint at rest had six equal posteriors, and the
   // named link was a tie's accident (docs/validation.md, session 12).
-  const double t_equiv = area * area / period;  // [s]
+  // (a joint whose level is unknown or zero, e.g. a sequential twin's, is left out as before)
+  const double t_equiv = sq(prof.sum()) * period;  // [s] = area^2 / period
   const bool friction_known = static_friction.size() == n;
   VectorJ wgt(n), b(n);
   for (int j = 0; j < n; ++j) {
     const double sigma = std::sqrt(var[j] + sq(kGainError * impulse[j]) + sq(kSharedError * impulse.norm()) + sq(kImpulseFloor));
     if (mean_speed[j] >= kRestSpeed)
       wgt[j] = 1.0 / sigma;
-    else if (friction_known)
-      wgt[j] = 1.0 / std::hypot(sigma, std::abs(static_friction[j]) / std::sqrt(3.0) * t_equiv);
+    else if (friction_known && static_friction[j] > 0.0)
+      wgt[j] = 1.0 / std::hypot(sigma, static_friction[j] / std::sqrt(3.0) * t_equiv);
     else
       wgt[j] = kRestWeight / sigma;
     b[j] = impulse[j] * wgt[j];
@@ -468,6 +469,9 @@ void DiagnosisOptions::validate() const {
   if (frozen_samples < 2) throw InvalidArgument(fmt::format("frozen_samples is {}, must be >= 2", frozen_samples));
   if (!(min_explained >= 0.0 && min_explained <= 1.0))
     throw InvalidArgument(fmt::format("min_explained is {}, must be in [0, 1]", min_explained));
+  for (Eigen::Index j = 0; j < static_friction.size(); ++j)
+    if (!(static_friction[j] >= 0.0 && std::isfinite(static_friction[j])))
+      throw InvalidArgument(fmt::format("static_friction of J{} is {} N·m, must be finite and >= 0", j + 1, static_friction[j]));
 }
 
 std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vector<DiagnosisSample>& window,
@@ -476,18 +480,19 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   options.validate();
   std::vector<Hypothesis> out;
   if (window.empty()) {
-    out.push_back({FaultClass::Unknown, alert_joint, -1, 0.0, "", 0.0, "empty diagnosis window", {}});
+    out.push_back({FaultClass::Unknown, alert_joint, -1, 0.0, "", 0.0, "empty diagnosis window", {}, {}});
     return out;
   }
   const int n = model.n_dof();
   for (const auto& s : window) check_size("diagnosis sample r_tau", s.r_tau.size(), n, "model.n_dof");
+  if (options.static_friction.size() != 0) check_size("static_friction", options.static_friction.size(), n, "model.n_dof");
 
   // stream fault: a gap inside the window explains itself
   int gaps = 0;
   for (const auto& s : window) gaps += s.gap_before ? 1 : 0;
   if (gaps > 0) {
     out.push_back({FaultClass::StreamFault, -1, -1, static_cast<double>(gaps), "gaps", 1.0,
-                   fmt::format("{} gap(s) in the sample stream", gaps), {}});
+                   fmt::format("{} gap(s) in the sample stream", gaps), {}, {}});
   }
   // frozen channel: identical consecutive current values while the joint moves
   for (int j = 0; j < n; ++j) {
@@ -499,14 +504,14 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     }
     if (best >= options.frozen_samples)
       out.push_back({FaultClass::SensorFault, j, -1, static_cast<double>(best), "samples", 1.0,
-                     fmt::format("current channel of J{} frozen for {} samples while the joint moves", j + 1, best), {}});
+                     fmt::format("current channel of J{} frozen for {} samples while the joint moves", j + 1, best), {}, {}});
   }
   if (!out.empty()) return out;
 
   double total = 0.0;
   for (const auto& s : window) total += s.r_tau.squaredNorm();
   if (total <= 0.0) {
-    out.push_back({FaultClass::Unknown, alert_joint, -1, 0.0, "", 0.0, "no residual energy in the window", {}});
+    out.push_back({FaultClass::Unknown, alert_joint, -1, 0.0, "", 0.0, "no residual energy in the window", {}, {}});
     return out;
   }
   bool io_change = false;

@@ -443,7 +443,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   static_friction_ = VectorJ::Zero(n_);
   for (int j = 0; j < n_; ++j) {
     const ident::JointDrive& d = twin_.joints[static_cast<size_t>(j)];
-    static_friction_[j] = (std::abs(d.friction[ident::kCoulomb]) + std::max(0.0, d.stribeck)) * obs_to_nm_[j];
+    const double f = (std::abs(d.friction[ident::kCoulomb]) + std::max(0.0, d.stribeck)) * obs_to_nm_[j];
+    static_friction_[j] = std::isfinite(f) ? f : 0.0;  // 0: unknown (a sequential twin has no Coulomb column here)
   }
   if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);

@@ -370,12 +370,12 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                   "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
                   "temperature, I_total) to this CSV");
   sub->add_option("--link-ceiling", o->link_ceiling,
-                  "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse plus "
-                  "white noise at the sd the observer's estimate had on it, every joint read (none held by friction), the "
-                  "contact point uniform in a cube of this half extent [m] around the link's centre of mass (0.04: the "
-                  "distribution of scripts/make_validation_collisions.py; 0: the monitor's inertia box). What any rule "
-                  "reading joint torques at that noise could reach; adds \"link_ceiling\" fields to --json")
-      ->check(CLI::Range(0.0, 1.0));
+                  "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse, exact "
+                  "and with white noise at the sd the observer's estimate had on it, every joint read: by the monitor's own "
+                  "choice, and by that choice told a contact generator's point distribution, uniform in a cube of this half "
+                  "extent [m] around the link's centre of mass (0.04: scripts/make_validation_collisions.py). A reference "
+                  "for what the joint torques carry; adds \"ceiling_*\" fields to --json")
+      ->check(CLI::Range(1e-3, 1.0));
   sub->add_flag("--sweep-collisions", o->sweep,
                 "Instead of scenario files: collisions of decreasing magnitude on --links, each monitored with the static "
                 "and the dynamic threshold; prints the smallest contact detected on every link (Cao: 10 vs 5 N·m)");

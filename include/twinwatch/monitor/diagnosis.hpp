@@ -58,9 +58,10 @@ struct DiagnosisOptions {
   /// centre of mass of a payload change, in the last link frame [m]: the declared payload's (a
   /// short window cannot resolve a free COM; the mass alone is fitted)
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
-  /// per joint, the friction torque a joint at rest can hold [N·m] (the twin's Coulomb, Stribeck
-  /// and pre-sliding levels): a contact torque below it does not move the joint and does not show
-  /// in its current. Empty: unknown, and a joint at rest tells the contact isolation nothing.
+  /// per joint, the friction torque a joint at rest can hold [N·m] (the twin's Coulomb level plus
+  /// its Stribeck rise): a contact torque below it does not move the joint and does not show in its
+  /// current. Empty (or 0 for a joint): unknown, and a joint at rest tells the contact isolation
+  /// nothing.
   VectorJ static_friction;
   void validate() const;
 };
@@ -75,10 +76,11 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
 
 /// Posterior probability of each link (uniform prior over the links) for a contact of joint
 /// impulse `impulse` [N·m·s] whose rows have sd `sigma` [N·m·s], at configuration q: the Bayesian
-/// model choice the diagnosis names the contact link with (diagnosis.cpp, link_evidence). The
-/// contact point is uniform in the link's equivalent inertia box, or, with `cube_half` > 0 [m], in
-/// a cube of that half extent around the link's centre of mass along its body axes (evaluation: a
-/// test generator's own distribution). Allocates.
+/// model choice the diagnosis names the contact link with (diagnosis.cpp, link_evidence; the
+/// contact point uniform in the link's equivalent inertia box, or, with `cube_half` > 0 [m], in a
+/// cube of that half extent around the link's centre of mass along its body axes: a test
+/// generator's own distribution). Allocates. `evaluate --link-ceiling` runs it on the simulator's
+/// true impulse.
 std::vector<double> contact_link_posterior(const model::RobotModel& model, const VectorJ& q, const VectorJ& impulse,
                                            const VectorJ& sigma, double cube_half = 0.0);
 
