@@ -374,6 +374,19 @@ TEST(ContactIsolation, ADriftOnAReversingWristAndAStuckJointDoNotMoveTheContactL
   ASSERT_FALSE(hyps.empty());
   EXPECT_EQ(hyps.front().fault, FaultClass::Collision) << hyps.front().detail;
   EXPECT_EQ(hyps.front().link, 2) << hyps.front().detail;
+  // a twin that knows no friction level (a sequential twin: zeros) leaves the stuck J6 out as well,
+  // instead of trusting its toggling estimate
+  DiagnosisOptions zero;
+  zero.static_friction = VectorJ::Zero(6);
+  const Hypothesis hz = diagnose(m, w.win, 0.06, 2, zero, &w.ref).front();
+  EXPECT_EQ(hz.link, 2) << hz.detail;
+  EXPECT_GT(hz.contact.sigma[5], 100.0 * hz.contact.sigma[2]) << "J6 at rest is left out";
+  // a friction vector of the wrong size or a negative level is refused
+  DiagnosisOptions bad;
+  bad.static_friction = VectorJ::Zero(5);
+  EXPECT_THROW(diagnose(m, w.win, 0.06, 2, bad, &w.ref), InvalidArgument);
+  bad.static_friction = VectorJ::Constant(6, -0.1);
+  EXPECT_THROW(diagnose(m, w.win, 0.06, 2, bad, &w.ref), InvalidArgument);
 }
 
 // A contact on the forearm (link 3) whose force line passes near J3's axis puts little torque on J3
