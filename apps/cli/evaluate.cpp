@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -212,6 +214,99 @@ namespace {
 constexpr int kCeilingDraws = 20;
 constexpr unsigned kCeilingSeedStride = 7919;  // draws of scenario seed s, fault f: seed s * stride + f
 constexpr double kLeverFloor = 1e-9;  // [m] below it the simulator applies no contact (collision_torque_per_newton)
+constexpr int kBayesPoints = 1024;      // contact points per link of the generator's Bayes choice
+constexpr double kMagnitudeMargin = 1.1;  // its magnitude range: the scenarios' range widened by this factor
+
+double halton(int i, int base) {
+  double f = 1.0, r = 0.0;
+  for (int k = i; k > 0; k /= base) {
+    f /= base;
+    r += f * (k % base);
+  }
+  return r;
+}
+
+// The Bayes choice for a contact generator's own distribution: the point uniform in a cube of half
+// extent `half` around the link's centre of mass, the direction isotropic, the peak joint torque m
+// log-uniform in [m_min, m_max], a half-sine of duration T (impulse c J^T F, c = 2 T / pi), white
+// noise of sd `sd` on each joint's impulse, every joint read. The force F = s d has the density
+// p(F) = |F|^-3 / (4 pi ln(m_max / m_min)) where m = max |J^T F| is in range. For each point the
+// likelihood is a sharp Gaussian in F on A = c W J^T's row space (SNR 20-70), so the integral over
+// F is taken by Laplace's method there, with the density integrated exactly over A's null space
+// (rank 2: 2 / |F_0|^2, rank 1: 2 pi / |F_0|, F_0 the row-space part) and the magnitude range as a
+// Gaussian probability; the points are averaged (kBayesPoints Halton points).
+class GeneratorBayes {
+ public:
+  GeneratorBayes(const model::RobotModel& m, const VectorJ& q, double half, double m_min, double m_max, double duration)
+      : m_min_(m_min), m_max_(m_max), c_(2.0 * duration / M_PI) {
+    model::DynamicsData d(m);
+    model::forward_kinematics(m, d, q);
+    Matrix6J J;
+    jt_.resize(static_cast<size_t>(m.n_dof()));
+    for (int l = 0; l < m.n_dof(); ++l)
+      for (int i = 1; i <= kBayesPoints; ++i) {
+        const Eigen::Vector3d u(halton(i, 2), halton(i, 3), halton(i, 5));
+        model::point_jacobian(m, d, l, m.joint(l).body.com + half * (2.0 * u - Eigen::Vector3d::Ones()), J);
+        jt_[static_cast<size_t>(l)].push_back(J.topRows<3>().transpose());
+      }
+  }
+
+  int named(const VectorJ& b, const VectorJ& sd) const {
+    const VectorJ w = sd.cwiseInverse();
+    const VectorJ bw = b.cwiseProduct(w);
+    const double bb = bw.squaredNorm();
+    int best = -1;
+    double best_z = -std::numeric_limits<double>::infinity();
+    std::vector<double> lz;
+    for (size_t l = 0; l < jt_.size(); ++l) {
+      lz.clear();
+      for (const auto& A : jt_[l]) {
+        const Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxDof, 3> G = c_ * (w.asDiagonal() * A);
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+        es.computeDirect(G.transpose() * G);
+        const Eigen::Vector3d proj = es.eigenvectors().transpose() * (G.transpose() * bw);
+        const double top = es.eigenvalues().maxCoeff();
+        if (!(top > 0.0)) continue;
+        int k = 0;
+        double res = bb, logdet = 0.0;
+        Eigen::Vector3d F = Eigen::Vector3d::Zero();
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (int i = 0; i < 3; ++i) {
+          const double lam = es.eigenvalues()[i];
+          if (lam <= 1e-7 * top) continue;
+          ++k;
+          res -= proj[i] * proj[i] / lam;
+          logdet += std::log(lam);
+          F += es.eigenvectors().col(i) * (proj[i] / lam);
+          cov += es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose() / lam;
+        }
+        const double f = F.norm();
+        if (!(f > 0.0)) continue;
+        const double log_prior = k == 3 ? -3.0 * std::log(f) : (k == 2 ? std::log(2.0) - 2.0 * std::log(f) : std::log(2.0 * M_PI) - std::log(f));
+        // the peak joint torque m = max |J^T F| must lie in range: its Gaussian probability
+        const VectorJ tau = A * F;
+        Eigen::Index jm = 0;
+        const double m = tau.cwiseAbs().maxCoeff(&jm);
+        const Eigen::Vector3d g = (tau[jm] > 0.0 ? 1.0 : -1.0) * A.row(jm).transpose();
+        const double sm = std::sqrt(std::max(g.dot(cov * g), 1e-300));
+        const double in_range = 0.5 * (std::erf((m - m_min_) / (sm * M_SQRT2)) - std::erf((m - m_max_) / (sm * M_SQRT2)));
+        if (!(in_range > 1e-300)) continue;
+        lz.push_back(log_prior + std::log(in_range) - 0.5 * res + 0.5 * k * std::log(2.0 * M_PI) - 0.5 * logdet);
+      }
+      if (lz.empty()) continue;
+      const double top = *std::max_element(lz.begin(), lz.end());
+      double sum = 0.0;
+      for (double v : lz) sum += std::exp(v - top);
+      const double z = top + std::log(sum / static_cast<double>(jt_[l].size()));
+      if (z > best_z) best_z = z, best = static_cast<int>(l);
+    }
+    return best;
+  }
+
+ private:
+  std::vector<std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxDof, 3>>> jt_;  // per link, per point: J^T (n x 3)
+  double m_min_, m_max_, c_;
+};
 
 }  // namespace
 
@@ -221,6 +316,17 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
   Evaluation ev;
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
   if (static_threshold) cfg.use_dynamic = false;
+  // link ceiling: the range of the contacts' peak joint torques over every scenario given (the
+  // generator's magnitude prior)
+  double mag_min = std::numeric_limits<double>::infinity(), mag_max = 0.0;
+  if (link_ceiling > 0.0)
+    for (const auto& f : files)
+      for (const sim::FaultSpec& fs : sim::load_scenario(f).faults)
+        if (fs.type == sim::FaultType::Collision) mag_min = std::min(mag_min, fs.magnitude), mag_max = std::max(mag_max, fs.magnitude);
+  // (the generator draws from a list of magnitudes; the prior's range is widened by kMagnitudeMargin
+  // on each side, which also keeps a single magnitude from being an empty range)
+  mag_min /= kMagnitudeMargin;
+  mag_max *= kMagnitudeMargin;
   for (const auto& f : files) {
     sim::Scenario s = sim::load_scenario(f);
     if (max_duration > 0 && s.options.duration > max_duration) {
@@ -306,26 +412,33 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         sc.detail = e.detail;
         if (link_ceiling > 0.0 && ll >= 0 && fi < true_impulse.size() && true_impulse[fi].size() > 0 &&
             e.contact.noise.size() == true_impulse[fi].size()) {
-          // the same impulse, exact and with kCeilingDraws draws of the observer's noise, through the
-          // monitor's own choice (every joint read) and that choice told the generator's point cube
+          // the same impulse, exact and with kCeilingDraws draws of the observer's noise, through
+          // (0) the monitor's own choice, (1) that choice told the generator's point cube, (2) the
+          // Bayes choice for the generator, every joint read, (3) the same with each resting joint's
+          // row as uncertain as the friction it holds (the rule's widening: ContactImpulse::rest_sd)
           const VectorJ sd = e.contact.noise.cwiseMax(kLeverFloor);
-          const auto named = [&](const VectorJ& b, double cube) {
-            const auto post = monitor::contact_link_posterior(kin, true_q[fi], b, sd, cube);
+          const VectorJ sd_rest = e.contact.rest_sd.size() == sd.size()
+                                      ? VectorJ((sd.cwiseAbs2() + e.contact.rest_sd.cwiseAbs2()).cwiseSqrt())
+                                      : sd;
+          const GeneratorBayes gen(kin, true_q[fi], link_ceiling, mag_min, mag_max, s.faults[fi].duration);
+          const auto named_by = [&](int c, const VectorJ& b) {
+            if (c >= 2) return gen.named(b, c == 2 ? sd : sd_rest) == ll;
+            const auto post = monitor::contact_link_posterior(kin, true_q[fi], b, sd, c == 1 ? link_ceiling : 0.0);
             return static_cast<int>(std::max_element(post.begin(), post.end()) - post.begin()) == ll;
           };
-          sc.ceiling_monitor_exact = named(true_impulse[fi], 0.0) ? 1 : 0;
-          sc.ceiling_bayes_exact = named(true_impulse[fi], link_ceiling) ? 1 : 0;
+          std::array<int, 4> right{};
+          for (size_t c = 0; c < right.size(); ++c) sc.link_reference[c].exact = named_by(static_cast<int>(c), true_impulse[fi]) ? 1 : 0;
           std::mt19937 rng(static_cast<unsigned>(s.options.seed) * kCeilingSeedStride + static_cast<unsigned>(fi));
           std::normal_distribution<double> unit;
-          int right_monitor = 0, right_bayes = 0;
           for (int draw = 0; draw < kCeilingDraws; ++draw) {
-            VectorJ b = true_impulse[fi];
-            for (int j = 0; j < b.size(); ++j) b[j] += sd[j] * unit(rng);
-            right_monitor += named(b, 0.0);
-            right_bayes += named(b, link_ceiling);
+            // each joint's noise is that of its observation: the observer's sd, and a resting
+            // joint's friction on top for the choice that hides it (the same unit draws)
+            VectorJ z(sd.size());
+            for (int j = 0; j < z.size(); ++j) z[j] = unit(rng);
+            for (size_t c = 0; c < right.size(); ++c)
+              right[c] += named_by(static_cast<int>(c), true_impulse[fi] + (c == 3 ? sd_rest : sd).cwiseProduct(z));
           }
-          sc.ceiling_monitor = static_cast<double>(right_monitor) / kCeilingDraws;
-          sc.ceiling_bayes = static_cast<double>(right_bayes) / kCeilingDraws;
+          for (size_t c = 0; c < right.size(); ++c) sc.link_reference[c].noisy = static_cast<double>(right[c]) / kCeilingDraws;
         }
       }
       scs.push_back(sc);
@@ -526,21 +639,21 @@ void print_evaluation(const Evaluation& e) {
   if (contacts > 0)
     fmt::print("contact link: named {}/{}; named or reported as also possible {}/{} ({} events report a second link)\n",
                named, contacts, among, contacts, ambiguous);
-  int ceiling_n = 0, monitor_exact = 0, bayes_exact = 0;
-  double monitor_noisy = 0.0, bayes_noisy = 0.0;
+  int ceiling_n = 0;
+  std::array<double, 4> ref_noisy{};
+  std::array<int, 4> ref_exact{};
   for (const auto& s : e.scores)
-    if (s.ceiling_bayes_exact >= 0) {
+    if (s.link_reference[0].exact >= 0) {
       ++ceiling_n;
-      monitor_exact += s.ceiling_monitor_exact;
-      bayes_exact += s.ceiling_bayes_exact;
-      monitor_noisy += s.ceiling_monitor;
-      bayes_noisy += s.ceiling_bayes;
+      for (size_t c = 0; c < ref_noisy.size(); ++c) ref_noisy[c] += s.link_reference[c].noisy, ref_exact[c] += s.link_reference[c].exact;
     }
-  if (ceiling_n > 0)
+  if (ceiling_n > 0) {
     fmt::print("link from the TRUE joint impulse (evaluation only; {} of the {} contacts above; white noise at the observer's sd, {} "
-               "draws each; every joint read): the monitor's choice {:.1f} ({} noise-free), the same choice told the "
-               "generator's point cube {:.1f} ({} noise-free)\n",
-               ceiling_n, contacts, kCeilingDraws, monitor_noisy, monitor_exact, bayes_noisy, bayes_exact);
+               "draws each; noise-free in brackets):\n",
+               ceiling_n, contacts, kCeilingDraws);
+    for (size_t c = 0; c < ref_noisy.size(); ++c)
+      fmt::print("  {:<68} {:6.1f} ({})\n", kLinkReferenceNames[c], ref_noisy[c], ref_exact[c]);
+  }
   fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
              e.false_alarms_per_hour(), e.wear_false_alarms);
 }
@@ -564,10 +677,14 @@ std::string evaluation_json(const Evaluation& e) {
                                }()},
                               {"link_in_candidates", s.link_in_candidates},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
-                              {"ceiling_monitor", std::isfinite(s.ceiling_monitor) ? nlohmann::json(s.ceiling_monitor) : nlohmann::json(nullptr)},
-                              {"ceiling_monitor_exact", s.ceiling_monitor_exact >= 0 ? nlohmann::json(s.ceiling_monitor_exact == 1) : nlohmann::json(nullptr)},
-                              {"ceiling_bayes", std::isfinite(s.ceiling_bayes) ? nlohmann::json(s.ceiling_bayes) : nlohmann::json(nullptr)},
-                              {"ceiling_bayes_exact", s.ceiling_bayes_exact >= 0 ? nlohmann::json(s.ceiling_bayes_exact == 1) : nlohmann::json(nullptr)},
+                              {"link_reference", [&] {
+                                 nlohmann::json r = nullptr;
+                                 if (s.link_reference[0].exact < 0) return r;
+                                 r = nlohmann::json::object();
+                                 for (size_t c = 0; c < s.link_reference.size(); ++c)
+                                   r[kLinkReferenceKeys[c]] = {{"noisy", s.link_reference[c].noisy}, {"exact", s.link_reference[c].exact == 1}};
+                                 return r;
+                               }()},
                               {"magnitude", s.magnitude},
                               {"false_alarms", s.false_alarms},
                               {"wear_false_alarms", s.wear_false_alarms},

@@ -2,6 +2,7 @@
 // Shared by `twinwatch evaluate` and `twinwatch demo`: train a reference twin on simulated healthy
 // runs, then monitor scenarios and score the events against their labels (evaluation code: the
 // only place that reads labels, DESIGN.md rule 1).
+#include <array>
 #include <limits>
 #include <string>
 #include <vector>
@@ -15,6 +16,18 @@ namespace twinwatch::cli {
 /// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).
 ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter = {},
                                  bool all_programs = false);
+
+/// One link choice on a contact's true joint impulse (evaluate --link-ceiling): the share of noise
+/// draws it names right, and whether it does without noise (1 right, 0 wrong, -1 not run).
+struct LinkReference {
+  double noisy = std::numeric_limits<double>::quiet_NaN();
+  int exact = -1;
+};
+/// The link choices of ScenarioScore::link_reference: their JSON keys and their descriptions.
+inline constexpr std::array<const char*, 4> kLinkReferenceKeys{"monitor", "monitor_cube", "bayes", "bayes_rest"};
+inline constexpr std::array<const char*, 4> kLinkReferenceNames{
+    "the monitor's choice, every joint read", "the same, told the generator's point cube",
+    "Bayes choice for the generator, every joint read", "Bayes choice for the generator, resting joints hidden by friction"};
 
 struct ScenarioScore {
   std::string name, fault, predicted_class, detail;
@@ -34,12 +47,9 @@ struct ScenarioScore {
   /// collisions (evaluation only): the contact's torque on its own link's joint over its largest
   /// joint torque, at the middle of the pulse (near 0: the contact acts like one on the link before)
   double own_joint_share = std::numeric_limits<double>::quiet_NaN();
-  /// collisions, with evaluate_scenarios' `link_ceiling` (evaluation only): the share of noise draws
-  /// whose link is named right from the true joint impulse by the monitor's choice and by that choice
-  /// told the generator's point cube, and each without noise (1 right, 0 wrong, -1 not run)
-  double ceiling_monitor = std::numeric_limits<double>::quiet_NaN();
-  double ceiling_bayes = std::numeric_limits<double>::quiet_NaN();
-  int ceiling_monitor_exact = -1, ceiling_bayes_exact = -1;
+  /// collisions, with evaluate_scenarios' `link_ceiling` (evaluation only): link choices on the true
+  /// joint impulse (LinkReference), in the order of kLinkReferences
+  std::array<LinkReference, 4> link_reference;
 };
 
 struct Evaluation {

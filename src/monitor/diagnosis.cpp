@@ -413,7 +413,7 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   // (a joint whose level is unknown or zero, e.g. a sequential twin's, is left out as before)
   const double t_equiv = sq(prof.sum()) * period;  // [s] = area^2 / period
   const bool friction_known = static_friction.size() == n;
-  VectorJ wgt(n), b(n);
+  VectorJ wgt(n), b(n), rest_sd(n);
   for (int j = 0; j < n; ++j) {
     const double sigma = std::sqrt(var[j] + sq(kGainError * impulse[j]) + sq(kSharedError * impulse.norm()) + sq(kImpulseFloor));
     if (mean_speed[j] >= kRestSpeed)
@@ -423,8 +423,9 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
     else
       wgt[j] = kRestWeight / sigma;
     b[j] = impulse[j] * wgt[j];
+    rest_sd[j] = std::sqrt(std::max(0.0, sq(1.0 / wgt[j]) - sq(sigma)));
   }
-  out.measured = ContactImpulse{w[k_peak].q, impulse, var.cwiseSqrt(), wgt.cwiseInverse()};
+  out.measured = ContactImpulse{w[k_peak].q, impulse, var.cwiseSqrt(), wgt.cwiseInverse(), rest_sd};
   // the contact link: the joint torques' evidence for each link (link_evidence)
   model::DynamicsData d(m);
   model::forward_kinematics(m, d, w[k_peak].q);

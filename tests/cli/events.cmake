@@ -29,10 +29,11 @@ add_test(NAME cli.monitor_alert_line COMMAND twinwatch monitor --twin ${d}/twin.
 set_tests_properties(cli.monitor_alert_line PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
                      PASS_REGULAR_EXPRESSION " +6\\.[0-9]+ s  ALERT  [^\n]*\\(above the threshold since 6\\.[0-9]+ s\\)\n.*collision +contact on link [1-6] \\(moved by J[1-6], [0-9]+ % likely\\)")
 # evaluate --link-ceiling (evaluation only): the same contact's link named from the simulator's true
-# joint impulse plus white noise at the observer's sd, by the monitor's choice and by that choice told
-# the generator's point cube; a half extent out of range is refused
+# joint impulse plus white noise at the observer's sd by four choices (the monitor's, told the generator's
+# point cube, the Bayes choice for the generator with every joint read and with resting joints hidden
+# by friction); a half extent out of range is refused
 add_test(NAME cli.evaluate_link_ceiling COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --link-ceiling 0.04)
 set_tests_properties(cli.evaluate_link_ceiling PROPERTIES FIXTURES_REQUIRED twin
-                     PASS_REGULAR_EXPRESSION "link from the TRUE joint impulse \\(evaluation only; 1 of the 1 contacts above[^\n]*\\): the monitor's choice [01]\\.[0-9] \\([01] noise-free\\), the same choice told the generator's point cube [01]\\.[0-9] \\([01] noise-free\\)")
+                     PASS_REGULAR_EXPRESSION "link from the TRUE joint impulse \\(evaluation only; 1 of the 1 contacts above[^\n]*\n  the monitor's choice, every joint read +[01]\\.[0-9] \\([01]\\)\n  the same, told the generator's point cube +[01]\\.[0-9] \\([01]\\)\n  Bayes choice for the generator, every joint read +[01]\\.[0-9] \\([01]\\)\n  Bayes choice for the generator, resting joints hidden by friction +[01]\\.[0-9] \\([01]\\)")
 add_test(NAME cli.evaluate_link_ceiling_negative COMMAND twinwatch evaluate ${s}/short_collision.yaml --link-ceiling -0.1)
 set_tests_properties(cli.evaluate_link_ceiling_negative PROPERTIES PASS_REGULAR_EXPRESSION "--link-ceiling: Value -0.1 not in range 0")

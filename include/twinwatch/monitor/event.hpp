@@ -35,6 +35,7 @@ struct ContactImpulse {
   VectorJ impulse;  ///< [N·m·s] per joint, over the pulse
   VectorJ noise;    ///< [N·m·s] sd of the same estimate on the healthy reference just before
   VectorJ sigma;    ///< [N·m·s] the sd the link choice gave each joint (noise, model error, rest)
+  VectorJ rest_sd;  ///< [N·m·s] the part of sigma for a joint at rest (friction it holds; 0 when moving)
 };
 
 /// One alert with its diagnosis.
