@@ -65,11 +65,12 @@ struct Evaluation {
 /// of every scenario appended.
 /// `link_ceiling` > 0 (evaluation only): for every detected contact the diagnosis isolated, also
 /// name the link from the simulator's true joint impulse (J^T F over the pulse), exact and plus white
-/// noise at the sd the observer's estimate had on that contact, every joint read as if moving: by
-/// the monitor's own choice (monitor::contact_link_posterior), and by that choice told the contact
-/// generator's point distribution (uniform in a cube of half extent `link_ceiling` [m] around the
-/// link's centre of mass). A reference for what the joint torques carry at that noise, not a proof
-/// of a bound (the force prior is still the monitor's, not the generator's).
+/// noise at the sd the observer's estimate had on that contact, by the choices of kLinkReferenceNames:
+/// the monitor's (every joint read as if moving), the monitor's told the contact generator's point
+/// cube (half extent `link_ceiling` [m] around the link's centre of mass), and the Bayes choice for
+/// the generator's distribution (that cube, isotropic direction, peak torque log-uniform over the
+/// scenarios' range) with every joint read and with resting joints as uncertain as the friction
+/// they hold. The last is what the joint torques carry at that noise (docs/validation.md).
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir = "", const std::string& trend_csv = "",
                               double link_ceiling = -1.0);

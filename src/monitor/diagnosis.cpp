@@ -231,9 +231,10 @@ struct ContactFit {
 // and the evidence weighs exactly that. Monte Carlo on the contact distribution of
 // scripts/make_validation_collisions.py with white noise at the observer's per-sample level
 // (scripts/contact_link_ceiling.py 7 300): this rule names 91 % of links, 95 % at a third of that
-// noise. On the 288 contacts of the simulated collision sets it names 85 %; the same choice on the
-// simulator's true joint impulse with white noise at the observer's measured sd, told the sets'
-// contact-point distribution, names 89 % (`evaluate --link-ceiling 0.04`, docs/validation.md, session 12).
+// noise. On the 288 contacts of the simulated collision sets it names 85 %; the Bayes choice for the
+// sets' own contact distribution, on the simulator's true joint impulse with white noise at the
+// observer's measured sd and resting joints hidden by friction, names 86 % (`evaluate --link-ceiling
+// 0.04`, docs/validation.md, session 12).
 struct LinkEvidence {
   int best = -1, second = -1;
   std::vector<double> posterior;  // per link, uniform prior over the links

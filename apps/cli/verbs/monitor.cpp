@@ -371,10 +371,11 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                   "temperature, I_total) to this CSV");
   sub->add_option("--link-ceiling", o->link_ceiling,
                   "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse, exact "
-                  "and with white noise at the sd the observer's estimate had on it, every joint read: by the monitor's own "
-                  "choice, and by that choice told a contact generator's point distribution, uniform in a cube of this half "
-                  "extent [m] around the link's centre of mass (0.04: scripts/make_validation_collisions.py). A reference "
-                  "for what the joint torques carry; adds \"ceiling_*\" fields to --json")
+                  "and with white noise at the sd the observer's estimate had on it: by the monitor's choice, by it told a "
+                  "contact generator's point cube of this half extent [m] around the link's centre of mass (0.04: "
+                  "scripts/make_validation_collisions.py), and by the Bayes choice for that generator's distribution "
+                  "(every joint read / resting joints hidden by friction): what the joint torques carry. Adds "
+                  "\"link_reference\" to --json")
       ->check(CLI::Range(1e-3, 1.0));
   sub->add_flag("--sweep-collisions", o->sweep,
                 "Instead of scenario files: collisions of decreasing magnitude on --links, each monitored with the static "
