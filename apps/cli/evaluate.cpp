@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -217,15 +218,6 @@ constexpr double kLeverFloor = 1e-9;  // [m] below it the simulator applies no c
 constexpr int kBayesPoints = 1024;      // contact points per link of the generator's Bayes choice
 constexpr double kMagnitudeMargin = 1.1;  // its magnitude range: the scenarios' range widened by this factor
 
-double halton(int i, int base) {
-  double f = 1.0, r = 0.0;
-  for (int k = i; k > 0; k /= base) {
-    f /= base;
-    r += f * (k % base);
-  }
-  return r;
-}
-
 // The Bayes choice for a contact generator's own distribution: the point uniform in a cube of half
 // extent `half` around the link's centre of mass, the direction isotropic, the peak joint torque m
 // log-uniform in [m_min, m_max], a half-sine of duration T (impulse c J^T F, c = 2 T / pi), white
@@ -245,7 +237,7 @@ class GeneratorBayes {
     jt_.resize(static_cast<size_t>(m.n_dof()));
     for (int l = 0; l < m.n_dof(); ++l)
       for (int i = 1; i <= kBayesPoints; ++i) {
-        const Eigen::Vector3d u(halton(i, 2), halton(i, 3), halton(i, 5));
+        const Eigen::Vector3d u(radical_inverse(i, 2), radical_inverse(i, 3), radical_inverse(i, 5));
         model::point_jacobian(m, d, l, m.joint(l).body.com + half * (2.0 * u - Eigen::Vector3d::Ones()), J);
         jt_[static_cast<size_t>(l)].push_back(J.topRows<3>().transpose());
       }

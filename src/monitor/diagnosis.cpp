@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/quasi_random.hpp"
 
 namespace twinwatch::monitor {
 
@@ -239,16 +240,6 @@ struct LinkEvidence {
   int best = -1, second = -1;
   std::vector<double> posterior;  // per link, uniform prior over the links
 };
-
-// Halton radical inverse of i in base (quasi-random points that fill the box evenly, deterministic)
-double radical_inverse(int i, int base) {
-  double f = 1.0, r = 0.0;
-  for (int k = i; k > 0; k /= base) {
-    f /= base;
-    r += f * (k % base);
-  }
-  return r;
-}
 
 // cube_half > 0 (evaluation, contact_link_posterior): the contact point uniform in that cube around
 // the centre of mass (body axes) instead of the equivalent inertia box
