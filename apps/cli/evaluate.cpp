@@ -308,19 +308,21 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
   Evaluation ev;
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
   if (static_threshold) cfg.use_dynamic = false;
-  // link ceiling: the range of the contacts' peak joint torques over every scenario given (the
-  // generator's magnitude prior)
+  // every scenario is read first: a malformed one stops the run before any simulation, and the
+  // link ceiling needs the range of the contacts' peak joint torques over all of them (the
+  // generator's magnitude prior; the generator draws from a list, so the range is widened by
+  // kMagnitudeMargin on each side, which also keeps a single magnitude from being an empty range)
+  std::vector<sim::Scenario> scenarios;
+  scenarios.reserve(files.size());
   double mag_min = std::numeric_limits<double>::infinity(), mag_max = 0.0;
-  if (link_ceiling > 0.0)
-    for (const auto& f : files)
-      for (const sim::FaultSpec& fs : sim::load_scenario(f).faults)
-        if (fs.type == sim::FaultType::Collision) mag_min = std::min(mag_min, fs.magnitude), mag_max = std::max(mag_max, fs.magnitude);
-  // (the generator draws from a list of magnitudes; the prior's range is widened by kMagnitudeMargin
-  // on each side, which also keeps a single magnitude from being an empty range)
+  for (const auto& f : files) {
+    scenarios.push_back(sim::load_scenario(f));
+    for (const sim::FaultSpec& fs : scenarios.back().faults)
+      if (fs.type == sim::FaultType::Collision) mag_min = std::min(mag_min, fs.magnitude), mag_max = std::max(mag_max, fs.magnitude);
+  }
   mag_min /= kMagnitudeMargin;
   mag_max *= kMagnitudeMargin;
-  for (const auto& f : files) {
-    sim::Scenario s = sim::load_scenario(f);
+  for (const sim::Scenario& s : scenarios) {
     if (max_duration > 0 && s.options.duration > max_duration) {
       if (!quiet) fmt::print("   skip {} ({:.0f} s > --max-duration {:.0f} s)\n", s.name, s.options.duration, max_duration);
       continue;
@@ -351,9 +353,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                        if (f.type != sim::FaultType::Collision || std::isfinite(own_share[fi]) || x.timestamp < f.onset + 0.5 * f.duration) continue;
                        model::forward_kinematics(kin, dkin, x.q);
                        const VectorJ tau = sim::collision_torque_per_newton(kin, dkin, f);
-                       own_share[fi] = tau.cwiseAbs().maxCoeff() > 0.0 ? std::abs(tau[f.link]) / tau.cwiseAbs().maxCoeff() : 0.0;
-                       if (tau.cwiseAbs().maxCoeff() > kLeverFloor) {
-                         true_impulse[fi] = tau * (f.magnitude / tau.cwiseAbs().maxCoeff() * 2.0 * f.duration / M_PI);
+                       const double peak = tau.cwiseAbs().maxCoeff();
+                       own_share[fi] = peak > 0.0 ? std::abs(tau[f.link]) / peak : 0.0;
+                       if (peak > kLeverFloor) {
+                         true_impulse[fi] = tau * (f.magnitude / peak * 2.0 * f.duration / M_PI);
                          true_q[fi] = x.q;
                        }
                      }

@@ -236,17 +236,12 @@ struct ContactFit {
 // sets' own contact distribution, on the simulator's true joint impulse with white noise at the
 // observer's measured sd and resting joints hidden by friction, names 86 % (`evaluate --link-ceiling
 // 0.04`, docs/validation.md, session 12).
-struct LinkEvidence {
-  int best = -1, second = -1;
-  std::vector<double> posterior;  // per link, uniform prior over the links
-};
-
-// cube_half > 0 (evaluation, contact_link_posterior): the contact point uniform in that cube around
-// the centre of mass (body axes) instead of the equivalent inertia box
-LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData& d, const VectorJ& wgt, const VectorJ& b,
-                           double cube_half = 0.0) {
+// Returns the posterior per link (uniform prior over the links). cube_half > 0 (evaluation,
+// contact_link_posterior): the contact point uniform in that cube around the centre of mass (body
+// axes) instead of the equivalent inertia box.
+std::vector<double> link_evidence(const model::RobotModel& m, const model::DynamicsData& d, const VectorJ& wgt, const VectorJ& b,
+                                  double cube_half = 0.0) {
   const int n = m.n_dof();
-  LinkEvidence ev;
   std::vector<double> logz(static_cast<size_t>(n), -std::numeric_limits<double>::infinity());
   const double bb = b.squaredNorm();
   // the prior's force-impulse variances s^2, log-spaced
@@ -267,8 +262,9 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
     lls.reserve(static_cast<size_t>(kPriorPoints * kImpulseScales));
     for (int i = 0; i < kPriorPoints; ++i) {
       const Eigen::Vector3d u(radical_inverse(i + 1, 2), radical_inverse(i + 1, 3), radical_inverse(i + 1, 5));
-      const Eigen::Vector3d box = principal.eigenvectors() * ((2.0 * u - Eigen::Vector3d::Ones()).cwiseProduct(half));
-      const Eigen::Vector3d p = body.com + (cube_half > 0.0 ? Eigen::Vector3d(cube_half * (2.0 * u - Eigen::Vector3d::Ones())) : box);
+      const Eigen::Vector3d unit = 2.0 * u - Eigen::Vector3d::Ones();  // in [-1, 1]^3
+      const Eigen::Vector3d p =
+          body.com + (cube_half > 0.0 ? Eigen::Vector3d(cube_half * unit) : Eigen::Vector3d(principal.eigenvectors() * unit.cwiseProduct(half)));
       model::point_jacobian(m, d, l, p, J);
       const Eigen::Matrix<double, Eigen::Dynamic, 3> A = wgt.asDiagonal() * J.topRows<3>().transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> G(A.transpose() * A);
@@ -292,14 +288,9 @@ LinkEvidence link_evidence(const model::RobotModel& m, const model::DynamicsData
   const double top = *std::max_element(logz.begin(), logz.end());
   double norm = 0.0;
   for (double z : logz) norm += std::exp(z - top);
-  ev.posterior.resize(static_cast<size_t>(n));
-  for (int l = 0; l < n; ++l) {
-    ev.posterior[static_cast<size_t>(l)] = std::exp(logz[static_cast<size_t>(l)] - top) / norm;
-    if (ev.best < 0 || logz[static_cast<size_t>(l)] > logz[static_cast<size_t>(ev.best)]) ev.best = l;
-  }
-  for (int l = 0; l < n; ++l)
-    if (l != ev.best && (ev.second < 0 || logz[static_cast<size_t>(l)] > logz[static_cast<size_t>(ev.second)])) ev.second = l;
-  return ev;
+  std::vector<double> posterior(static_cast<size_t>(n));
+  for (size_t l = 0; l < posterior.size(); ++l) posterior[l] = std::exp(logz[l] - top) / norm;
+  return posterior;
 }
 
 ContactFit isolate_contact(const model::RobotModel& m, const std::vector<DiagnosisSample>& w,
@@ -421,12 +412,15 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   // the contact link: the joint torques' evidence for each link (link_evidence)
   model::DynamicsData d(m);
   model::forward_kinematics(m, d, w[k_peak].q);
-  const LinkEvidence ev = link_evidence(m, d, wgt, b);
-  out.link = ev.best;
-  out.share = ev.posterior[static_cast<size_t>(ev.best)];
-  if (ev.second >= 0 && ev.posterior[static_cast<size_t>(ev.second)] >= kSecondLinkPosterior) {
-    out.others.push_back(ev.second);
-    out.other_shares.push_back(ev.posterior[static_cast<size_t>(ev.second)]);
+  std::vector<double> post = link_evidence(m, d, wgt, b);
+  const auto best = std::max_element(post.begin(), post.end());
+  out.link = static_cast<int>(best - post.begin());
+  out.share = *best;
+  *best = -1.0;  // the runner-up next
+  const auto second = std::max_element(post.begin(), post.end());
+  if (*second >= kSecondLinkPosterior) {
+    out.others.push_back(static_cast<int>(second - post.begin()));
+    out.other_shares.push_back(*second);
   }
   // its size: force and lever arm trade off inside the link's box, so the size is read where a
   // contact is most likely, at the link's centre of mass or kContactOffset away along a body axis
@@ -584,7 +578,7 @@ std::vector<double> contact_link_posterior(const model::RobotModel& model, const
   model::DynamicsData d(model);
   model::forward_kinematics(model, d, q);
   const VectorJ wgt = sigma.cwiseInverse();
-  return link_evidence(model, d, wgt, impulse.cwiseProduct(wgt), cube_half).posterior;
+  return link_evidence(model, d, wgt, impulse.cwiseProduct(wgt), cube_half);
 }
 
 MatrixJ residual_velocity_correlation(const std::vector<VectorJ>& residual, const std::vector<VectorJ>& qd) {

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::device {
 namespace {
@@ -22,12 +23,7 @@ std::string tmp(const std::string& name) {
 std::string error_of(const std::string& content) {
   const std::string p = tmp("bad.csv");
   std::ofstream(p) << content;
-  try {
-    read_recording(p);
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<ParseError>([&] { read_recording(p); });
 }
 
 TEST(Recording, RoundTripsEveryFieldBitExactly) {
@@ -117,12 +113,7 @@ TEST(Recording, ColumnMapRenamesAndScalesForeignLogs) {
 std::string map_error(const std::string& content) {
   const std::string mp = tmp("bad.map");
   std::ofstream(mp) << content;
-  try {
-    ColumnMap::load(mp);
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<ParseError>([&] { ColumnMap::load(mp); });
 }
 
 TEST(Recording, ColumnMapUnknownRtdeNameNamesTheLine) {

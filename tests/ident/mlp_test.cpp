@@ -10,6 +10,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::ident {
 namespace {
@@ -332,12 +333,7 @@ TEST(MlpFile, NamesANonPositiveScale) {
 // and a hidden width of 2e9 tried to allocate 190 GB before the weights were checked
 TEST(Mlp, FromJsonRejectsHugeSizesBeforeAllocating) {
   const auto error_of = [](const std::string& text) {
-    try {
-      Mlp::from_json(text, "net.json", "network.");
-    } catch (const ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return twinwatch::test::error_text<ParseError>([&] { Mlp::from_json(text, "net.json", "network."); });
   };
   const std::string tail = R"(, "x_mean": [0], "x_std": [1], "y_mean": [0], "y_std": [1], "layers": [{"W": [1], "b": [0]}, {"W": [1], "b": [0]}]})";
   EXPECT_EQ(error_of(R"({"inputs": 1, "outputs": 1, "hidden": [1])" + tail), "no error");

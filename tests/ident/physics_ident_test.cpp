@@ -11,6 +11,7 @@
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/signal/metrics.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::ident {
 namespace {
@@ -416,12 +417,7 @@ TEST_F(Fixture, LowSpeedFrictionPredictsTheTriangleStops) {
 // get<int>() of 1e20 was undefined
 TEST(TwinFile, NonObjectsOverflowsAndHugeIndicesAreParseErrors) {
   const auto error_of = [](const std::string& text) {
-    try {
-      TwinModel::from_json(text, "t.json");
-    } catch (const ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return twinwatch::test::error_text<ParseError>([&] { TwinModel::from_json(text, "t.json"); });
   };
   EXPECT_THAT(error_of("[1, 2, 3]"), ::testing::HasSubstr("t.json: expected a JSON object (a twin file from twinwatch identify), got array"));
   EXPECT_THAT(error_of(R"({"format": 7})"), ::testing::HasSubstr("field 'format': expected \"twinwatch-twin\""));

@@ -8,6 +8,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::model {
 namespace {
@@ -21,12 +22,7 @@ std::string one_joint(const std::string& joint_fields) {
 const std::string kGood = R"("mass": 1.0, "com": [0, 0, 0], "inertia": [0.01, 0, 0, 0.01, 0, 0.01])";
 
 std::string error_of(const std::string& text) {
-  try {
-    parse_description_json(text, "robot.json");
-  } catch (const ParseError& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<ParseError>([&] { parse_description_json(text, "robot.json"); });
 }
 
 TEST(DescriptionJson, ValidMinimalFileLoads) {

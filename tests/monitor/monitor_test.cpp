@@ -9,6 +9,7 @@
 #include "twinwatch/ident/physics_ident.hpp"
 #include "monitor/simulated_run.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::monitor {
 namespace {
@@ -114,12 +115,7 @@ TEST(MonitorConfig, ValidationNamesTheField) {
 // overflow), and get<int>() of 1e20 was undefined
 TEST(MonitorConfig, FromJsonRejectsMoreValuesThanJointsAndHugeCounts) {
   const auto error_of = [](const std::string& text) {
-    try {
-      MonitorConfig::from_json(text, "twin.json");
-    } catch (const ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); });
   };
   EXPECT_THAT(error_of(R"({"static_level_A": [1, 2, 3, 4, 5, 6, 7, 8, 9]})"),
               ::testing::HasSubstr("twin.json: field 'monitor': malformed monitor thresholds: static_level_A: expected at most 7 values (one per joint), got 9"));

@@ -15,6 +15,7 @@
 #include "twinwatch/monitor/monitor.hpp"
 #include "monitor/simulated_run.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::monitor {
 namespace {
@@ -231,12 +232,7 @@ TEST(TrendConfigValidation, NamesTheFieldAndValue) {
   auto msg = [](auto mutate) {
     TrendConfig c;
     mutate(c);
-    try {
-      c.validate(6);
-    } catch (const InvalidArgument& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); });
   };
   EXPECT_THAT(msg([](TrendConfig& c) { c.window_s = 0; }), HasSubstr("trend window_s is 0, must be > 0"));
   EXPECT_THAT(msg([](TrendConfig& c) { c.cycle_period = -1; }), HasSubstr("trend cycle_period is -1"));

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::signal {
 namespace {
@@ -149,12 +150,7 @@ TEST(Align, ShiftedInterpolatesLinearly) {
 }
 
 std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<InvalidArgument>([&] { f(); });
 }
 
 TEST(Align, ValidationNamesTheProblem) {

@@ -9,6 +9,7 @@
 
 #include "signal/fixture_csv.hpp"
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::signal {
 namespace {
@@ -110,12 +111,7 @@ TEST(Butterworth, CausalSosfiltStartsInSteadyStateWithScaledZi) {
 }
 
 std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<InvalidArgument>([&] { f(); });
 }
 
 TEST(Butterworth, ValidationNamesTheValueAndTheLimit) {

@@ -11,6 +11,7 @@
 #include "twinwatch/core/error.hpp"
 
 #include "malloc_counter.hpp"  // counts heap allocations (one TU per test binary)
+#include "error_text.hpp"
 
 namespace twinwatch::signal {
 namespace {
@@ -137,12 +138,7 @@ TEST(FirFilter, PushAllocatesNothing) {
 }
 
 std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<InvalidArgument>([&] { fn(); });
 }
 
 TEST(FirDesign, ValidationNamesTheValueAndTheLimit) {

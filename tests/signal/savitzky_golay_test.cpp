@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::signal {
 namespace {
@@ -53,12 +54,7 @@ TEST(SavitzkyGolay, DifferentiatesAPolynomialExactly) {
 }
 
 std::string error_of(const SavitzkyGolay& sg, const std::vector<double>& x) {
-  try {
-    sg.apply(x);
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "no error";
+  return twinwatch::test::error_text<InvalidArgument>([&] { sg.apply(x); });
 }
 
 TEST(SavitzkyGolay, ValidationNamesTheParameter) {

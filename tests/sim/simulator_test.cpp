@@ -7,6 +7,7 @@
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::sim {
 namespace {
@@ -251,12 +252,7 @@ TEST(Scenario, LibraryScenariosAllLoad) {
 TEST(Scenario, OutOfRangeIntegersKeysAndRobotNamesAreParseErrors) {
   const std::string t = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
   const auto error_of = [](const std::string& yaml) {
-    try {
-      parse_scenario(yaml, "test.yaml");
-    } catch (const ParseError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return twinwatch::test::error_text<ParseError>([&] { parse_scenario(yaml, "test.yaml"); });
   };
   EXPECT_THAT(error_of("robot: ur3e\nseed: 1e20\n" + t), HasSubstr("test.yaml:2: field 'seed': expected a whole number within +-2147483647, got 1e+20"));
   EXPECT_THAT(error_of("? [a]\n: 1\n"), HasSubstr("test.yaml:1: expected text keys, got a list or mapping as a key"));
