@@ -259,6 +259,8 @@ void MonitorConfig::validate(int n) const {
   if (!(filter_cutoff_hz > 0.0)) throw InvalidArgument(fmt::format("filter_cutoff_hz is {}, must be > 0", filter_cutoff_hz));
   if (raise_after < 1) throw InvalidArgument(fmt::format("raise_after is {}, must be >= 1", raise_after));
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
+  if (observer_raise_after < 0)
+    throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
   if (sensitivity.size() != 0 && sensitivity.size() != n)
     throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
   for (int j = 0; j < sensitivity.size(); ++j)
@@ -283,6 +285,7 @@ std::string MonitorConfig::to_json() const {
   j["filter_cutoff_hz"] = filter_cutoff_hz;
   j["raise_after"] = raise_after;
   j["clear_after"] = clear_after;
+  if (observer_raise_after > 0) j["observer_raise_after"] = observer_raise_after;
   if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
@@ -314,6 +317,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.filter_cutoff_hz = j.value("filter_cutoff_hz", c.filter_cutoff_hz);
     c.raise_after = json_int(j, "raise_after", c.raise_after, "raise_after");
     c.clear_after = json_int(j, "clear_after", c.clear_after, "clear_after");
+    c.observer_raise_after = json_int(j, "observer_raise_after", c.observer_raise_after, "observer_raise_after");
     if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"], "sensitivity");
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
@@ -450,6 +454,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
+  deb_obs_.assign(static_cast<size_t>(n_), Debouncer(cfg_.observer_raise_after > 0 ? cfg_.observer_raise_after : cfg_.raise_after, cfg_.clear_after));
+  joint_active_.assign(static_cast<size_t>(n_), 0);
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
   const size_t cap = static_cast<size_t>(std::ceil((kContactReference + cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
@@ -541,7 +547,7 @@ void Monitor::run_diagnosis(double t) {
   o.static_friction = static_friction_;
   // the exceedance lasted until now, or ended if the joints are below again
   bool any_active = false;
-  for (const auto& d : deb_) any_active |= d.active();
+  for (const char a : joint_active_) any_active |= a != 0;
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
   const Hypothesis& h = hyps.front();
@@ -671,11 +677,19 @@ void Monitor::push(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     // the thresholds were learned without each run's first kObserverSettle samples (filter and
     // observer start-up), so they do not apply there
-    const bool over = n_samples_ > kObserverSettle &&
-                      (std::abs(rf_dec_[j]) > level_[j] || (obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
-                                                         std::abs(obs_dec_[j]) > obs_level_[j]));
-    const auto ch = deb_[static_cast<size_t>(j)].update(over, t);
-    if (ch == Debouncer::Change::Raised && open_ < 0) {
+    const bool settled = n_samples_ > kObserverSettle;
+    const bool over_current = settled && std::abs(rf_dec_[j]) > level_[j];
+    const bool over_observer = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
+                               std::abs(obs_dec_[j]) > obs_level_[j];
+    Debouncer& dc = deb_[static_cast<size_t>(j)];
+    Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
+    dc.update(over_current, t);
+    dob.update(over_observer, t);
+    // the joint's alert is active while either channel's is; it is raised when the first one raises
+    const bool active = dc.active() || dob.active();
+    const bool raised = active && !joint_active_[static_cast<size_t>(j)];
+    joint_active_[static_cast<size_t>(j)] = active;
+    if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
       // the last alert closed continues that alert instead of opening a new one
       if (last_closed_ >= 0 && t - events_[static_cast<size_t>(last_closed_)].t_end < kMergeGap &&
@@ -683,10 +697,11 @@ void Monitor::push(const RobotSample& s) {
         open_ = last_closed_;
         events_[static_cast<size_t>(open_)].open = true;
       } else {
-        open_event(j, deb_[static_cast<size_t>(j)].start(), t);
+        const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
+        open_event(j, start, t);
       }
     }
-    any_active |= deb_[static_cast<size_t>(j)].active();
+    any_active |= active;
   }
   if (open_ >= 0) {
     Event& e = events_[static_cast<size_t>(open_)];

@@ -225,6 +225,47 @@ TEST_F(Collisions, ThreeNewtonMetreContactIsDetectedWithinTwentyMilliseconds) {
   }
 }
 
+// The observer channel has its own debounce (MonitorConfig::observer_raise_after). The same 3 N·m
+// contacts raised by one observer exceedance instead of two: the alert starts at the same first
+// exceedance and is raised no later, at most one sample earlier (the observer channel raised it) and
+// never more (the current channel keeps raise_after); at least one of the two is raised earlier.
+TEST_F(Collisions, ASingleSampleObserverDebounceRaisesTheSameContactOneSampleEarlier) {
+  struct Case {
+    int link;
+    double onset;
+    const char* point;
+  };
+  const Case cases[] = {{2, 5.71, "[-0.12, 0.0, 0.1]"}, {3, 6.53, "[-0.1, 0.0, 0.03]"}};
+  unsigned seed = 720;
+  int earlier = 0;
+  for (const Case& c : cases) {
+    const auto rec = run(scenario(seed++, 8, 0.5,
+                                  "  - {type: collision, link: " + std::to_string(c.link) + ", onset: " + std::to_string(c.onset) +
+                                      ", magnitude: 3, duration: 0.05, point: " + c.point + ", direction: [0.3, 1.0, -0.2]}\n"));
+    ident::TwinModel t = *twin;
+    t.set_payload(payload);
+    auto first_event = [&](int observer_raise_after) {
+      MonitorConfig cfg = *config;
+      cfg.observer_raise_after = observer_raise_after;
+      Monitor mon(t, cfg);
+      for (const auto& s : rec.samples) mon.push(s);
+      mon.finish();
+      EXPECT_EQ(mon.events().size(), 1u) << "link " << c.link << ", observer_raise_after " << observer_raise_after;
+      return mon.events().empty() ? Event{} : mon.events().front();
+    };
+    const Event two = first_event(0), one = first_event(1);
+    ASSERT_EQ(two.fault, FaultClass::Collision) << two.detail;
+    ASSERT_EQ(one.fault, FaultClass::Collision) << one.detail;
+    EXPECT_DOUBLE_EQ(one.t_start, two.t_start) << "link " << c.link;
+    const double gain = two.t_detected - one.t_detected;
+    EXPECT_GE(gain, -1e-9) << "link " << c.link;
+    EXPECT_LE(gain, config->nominal_period + 1e-9) << "link " << c.link;
+    earlier += gain > 0.5 * config->nominal_period;
+    EXPECT_EQ(one.link, two.link) << "the diagnosis window moves by one sample at most";
+  }
+  EXPECT_GE(earlier, 1);
+}
+
 // A contact that pushes a resting joint leaves it held off target by static friction (the PD holds a
 // current against it for the rest of the run). That is one collision, not a stream of new alerts:
 // the held residual is the resting joint's new baseline (RestBaseline). Held-out case of

@@ -111,6 +111,20 @@ TEST(MonitorConfig, ValidationNamesTheField) {
   }
 }
 
+TEST(MonitorConfig, ObserverRaiseAfterIsValidatedAndStored) {
+  MonitorConfig c;
+  c.static_level = VectorJ::Ones(6);
+  c.use_dynamic = false;
+  c.observer_raise_after = -1;
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }), ::testing::HasSubstr("observer_raise_after is -1, must be >= 1"));
+  c.observer_raise_after = 0;  // the default: the current channel's raise_after, not written
+  EXPECT_EQ(c.to_json().find("observer_raise_after"), std::string::npos);
+  c.observer_raise_after = 1;
+  const MonitorConfig back = MonitorConfig::from_json(c.to_json(), "twin.json");
+  EXPECT_EQ(back.observer_raise_after, 1);
+  EXPECT_EQ(back.raise_after, c.raise_after);
+}
+
 // found by fuzzing (fuzz/regressions/monitor_config): 9 values overflowed a VectorJ (stack buffer
 // overflow), and get<int>() of 1e20 was undefined
 TEST(MonitorConfig, FromJsonRejectsMoreValuesThanJointsAndHugeCounts) {

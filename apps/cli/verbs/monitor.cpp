@@ -32,6 +32,7 @@ struct MonitorOptions {
   double payload_mass = 0.0, cycle_period = 0.0;
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
+  int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   std::string program;  // threshold set of this program ("" = the default set)
   bool static_threshold = false, quiet = false, json = false;
@@ -57,6 +58,28 @@ monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string
     throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", path, path));
   return monitor::MonitorConfig::from_json(twin.monitor_json, path);
 }
+
+// --sensitivity, --raise-after, --observer-raise-after: user settings over the twin's monitor block
+// (0 / empty: keep the twin's); validated with the rest of the configuration
+void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vector<double>& sensitivity, int raise_after,
+                          int observer_raise_after) {
+  if (!sensitivity.empty()) {
+    if (sensitivity.size() == 1) cfg.sensitivity = VectorJ::Constant(n_dof, sensitivity[0]);
+    else {
+      cfg.sensitivity.resize(static_cast<int>(sensitivity.size()));
+      for (size_t k = 0; k < sensitivity.size(); ++k) cfg.sensitivity[static_cast<int>(k)] = sensitivity[k];
+    }
+  }
+  if (raise_after > 0) cfg.raise_after = raise_after;
+  if (observer_raise_after > 0) cfg.observer_raise_after = observer_raise_after;
+  cfg.validate(n_dof);
+}
+constexpr const char* kRaiseAfterHelp =
+    "Consecutive samples over the current-residual threshold that raise an alert (default: the twin's, 2)";
+constexpr const char* kObserverRaiseAfterHelp =
+    "Consecutive samples over the momentum observer's threshold that raise an alert (default: the twin's, else "
+    "--raise-after). 1 raises contacts one sample earlier but leaves less margin against false alarms "
+    "(docs/validation.md, 'Observer debounce')";
 
 int run_monitor(const MonitorOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);
@@ -84,13 +107,7 @@ int run_monitor(const MonitorOptions& o) {
                  o.twin, learned.empty() ? "iir" : fmt::format("{}", fmt::join(learned, ",")), o.filter);
   }
   if (o.cycle_period > 0) cfg.trend.cycle_period = o.cycle_period;
-  if (!o.sensitivity.empty()) {
-    if (static_cast<int>(o.sensitivity.size()) == 1) cfg.sensitivity = VectorJ::Constant(twin.n_dof(), o.sensitivity[0]);
-    else {
-      cfg.sensitivity.resize(static_cast<int>(o.sensitivity.size()));
-      for (size_t k = 0; k < o.sensitivity.size(); ++k) cfg.sensitivity[static_cast<int>(k)] = o.sensitivity[k];
-    }
-  }
+  apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   if (o.recording.empty() == o.rtde.empty())
     throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
   device::Recording rec;
@@ -254,6 +271,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m]")->expected(3);
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::PositiveNumber);
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::PositiveNumber);
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
@@ -289,6 +308,8 @@ struct EvaluateOptions {
   bool json = false, static_threshold = false, sweep = false, all_programs = false;
   double max_duration = 0.0;
   double link_ceiling = -1.0;
+  std::vector<double> sensitivity;
+  int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   cli::SweepOptions sweep_options;
 };
 
@@ -320,8 +341,13 @@ int run_evaluate(const EvaluateOptions& o) {
   if (!o.filter.empty() && !o.twin.empty())
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
-  const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
-                                               : ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
+                                         : ident::TwinModel::load(o.twin);
+  if (!o.sensitivity.empty() || o.raise_after > 0 || o.observer_raise_after > 0) {
+    monitor::MonitorConfig cfg = config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
+    apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+    twin.monitor_json = cfg.to_json();
+  }
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
@@ -364,6 +390,11 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                 "Learn ONE threshold set over every program of scenarios/ur3e/long (figure-eight, triangle at 3 speeds, "
                 "pick-and-place) instead of one set per program; wider thresholds (misses payload loss on the figure-eight); "
                 "for comparison");
+  sub->add_option("--sensitivity", o->sensitivity,
+                  "Threshold factor, one value or one per joint (< 1: more sensitive), over the twin's; e.g. to measure the "
+                  "false-alarm margin of the long runs");
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::PositiveNumber);
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::PositiveNumber);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->add_option("--trend-csv", o->trend_csv,

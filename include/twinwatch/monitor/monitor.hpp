@@ -48,6 +48,9 @@ struct MonitorConfig {
   /// collision; 2 raised no new false alarm in 8 h of long runs and wear ramps: docs/validation.md)
   int raise_after = 2;
   int clear_after = 50;                       ///< consecutive samples below that clear it
+  /// consecutive exceedances of the momentum observer's threshold that raise an alert (the current
+  /// residual keeps raise_after); 0: raise_after
+  int observer_raise_after = 0;
   VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
   double nominal_period = 0.002;              ///< [s]
   double gap_factor = 1.5;                    ///< dt > gap_factor * period is a stream gap
@@ -172,7 +175,8 @@ class Monitor {
   MonitorConfig cfg_;
   int n_;
   double alpha_ = 1.0;  // IIR coefficient
-  std::vector<Debouncer> deb_;
+  std::vector<Debouncer> deb_, deb_obs_;  // per joint: current residual, observer
+  std::vector<char> joint_active_;        // either channel of the joint active (last sample)
   TwinMomentumObserver obs_;
   bool obs_on_ = false;
   int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
