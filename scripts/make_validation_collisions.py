@@ -39,6 +39,12 @@ python3 scripts/make_validation_collisions.py --held-out-5
 3, 5, 7, 10 N·m), seeds 12000+, another random stream. Generated on 2026-11-24 (session 12) after a
 joint at rest began to count up to the friction it holds (commit 832b045), chosen with sets 0-5 read;
 measured once: python3 scripts/make_validation_collisions.py --held-out-6
+
+`--held-out-7` writes scenarios/ur3e/heldout7_collisions/: 48 contacts (two per link and magnitude,
+3, 4, 5, 8 N·m: half of them at or near the 3 N·m detection goal), seeds 13000+, another random
+stream. Generated on 2026-11-24 (session 13) after the observer channel got its own debounce
+(commit d7d630b), chosen with sets 0-6 read; measured once with the default debounce and with
+--observer-raise-after 1: python3 scripts/make_validation_collisions.py --held-out-7
 """
 import json
 import math
@@ -47,14 +53,23 @@ import random
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-HELD_OUT_6 = "--held-out-6" in sys.argv[1:]
-HELD_OUT_5 = "--held-out-5" in sys.argv[1:]
-HELD_OUT_4 = "--held-out-4" in sys.argv[1:]
-HELD_OUT_3 = "--held-out-3" in sys.argv[1:]
-HELD_OUT_2 = "--held-out-2" in sys.argv[1:]
-HELD_OUT = "--held-out" in sys.argv[1:] or HELD_OUT_2 or HELD_OUT_3 or HELD_OUT_4 or HELD_OUT_5 or HELD_OUT_6
-SET = ("heldout6_collisions" if HELD_OUT_6 else "heldout5_collisions" if HELD_OUT_5 else "heldout4_collisions" if HELD_OUT_4 else "heldout3_collisions" if HELD_OUT_3 else "heldout2_collisions" if HELD_OUT_2 else
-       ("heldout_collisions" if HELD_OUT else "validation_collisions"))
+# flag -> (directory, magnitudes [N·m], repeats per link and magnitude, random seed, first noise seed)
+SETS = {
+    None: ("validation_collisions", [3, 5, 8, 15], 1, 20261123, 5000),
+    "--held-out": ("heldout_collisions", [3, 4, 6, 10], 1, 7331, 6000),
+    "--held-out-2": ("heldout2_collisions", [3, 5, 7, 12], 2, 4242, 8000),
+    "--held-out-3": ("heldout3_collisions", [4, 6, 9, 14], 2, 9091, 9000),
+    "--held-out-4": ("heldout4_collisions", [3, 5, 8, 11], 2, 5151, 10000),
+    "--held-out-5": ("heldout5_collisions", [3, 4, 6, 9], 2, 60606, 11000),
+    "--held-out-6": ("heldout6_collisions", [3, 5, 7, 10], 2, 80808, 12000),
+    "--held-out-7": ("heldout7_collisions", [3, 4, 5, 8], 2, 31337, 13000),
+}
+FLAG = next((a for a in sys.argv[1:] if a in SETS), None)
+unknown = [a for a in sys.argv[1:] if a not in SETS]
+if unknown:
+    sys.exit(f"make_validation_collisions.py: unknown argument {unknown[0]!r}; expected one of {', '.join(k for k in SETS if k)}")
+HELD_OUT = FLAG is not None
+SET, MAGNITUDES, REPEATS, RANDOM_SEED, FIRST_SEED = SETS[FLAG]
 OUT = os.path.join(ROOT, "scenarios", "ur3e", SET)
 ROBOT = json.load(open(os.path.join(ROOT, "data", "robots", "ur3e.json")))
 
@@ -63,12 +78,10 @@ TRAJECTORIES = [
     ("figure_eight_fast", "{type: figure_eight, size: [0.12, 0.08], period: 6, tilt: [0.3, 0.4, 0.5]}"),
     ("triangle", "{type: triangle, side: 0.15, speed: 0.2}"),
 ]
-MAGNITUDES = [3, 5, 7, 10] if HELD_OUT_6 else [3, 4, 6, 9] if HELD_OUT_5 else [3, 5, 8, 11] if HELD_OUT_4 else [4, 6, 9, 14] if HELD_OUT_3 else [3, 5, 7, 12] if HELD_OUT_2 else ([3, 4, 6, 10] if HELD_OUT else [3, 5, 8, 15])
-REPEATS = 2 if HELD_OUT_2 or HELD_OUT_3 or HELD_OUT_4 or HELD_OUT_5 or HELD_OUT_6 else 1
 
 
 def main():
-    rng = random.Random(80808 if HELD_OUT_6 else 60606 if HELD_OUT_5 else 5151 if HELD_OUT_4 else 9091 if HELD_OUT_3 else 4242 if HELD_OUT_2 else (7331 if HELD_OUT else 20261123))
+    rng = random.Random(RANDOM_SEED)
     os.makedirs(OUT, exist_ok=True)
     count = 0
     for link in range(1, 7):
@@ -83,7 +96,7 @@ def main():
             norm = math.sqrt(sum(d * d for d in direction))
             direction = [round(d / norm, 3) for d in direction]
             onset = round(rng.uniform(6.0, 14.0), 3)
-            seed = (12000 if HELD_OUT_6 else 11000 if HELD_OUT_5 else 10000 if HELD_OUT_4 else 9000 if HELD_OUT_3 else 8000 if HELD_OUT_2 else (6000 if HELD_OUT else 5000)) + 10 * link + m_idx
+            seed = FIRST_SEED + 10 * link + m_idx
             payload = "payload: {mass: 0.5, com: [0, 0, 0.04]}\n" if (link + m_idx) % 2 == 0 else ""
             name = f"{'hcollision' if HELD_OUT else 'vcollision'}_{mag}Nm_link{link}" + (f"_{'ab'[rep]}" if REPEATS > 1 else "")
             text = (
