@@ -37,3 +37,11 @@ set_tests_properties(cli.evaluate_link_ceiling PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "link from the TRUE joint impulse \\(evaluation only; 1 of the 1 contacts above[^\n]*\n  the monitor's choice, every joint read +[01]\\.[0-9] \\([01]\\)\n  the same, told the generator's point cube +[01]\\.[0-9] \\([01]\\)\n  Bayes choice for the generator, every joint read +[01]\\.[0-9] \\([01]\\)\n  Bayes choice for the generator, resting joints hidden by friction +[01]\\.[0-9] \\([01]\\)")
 add_test(NAME cli.evaluate_link_ceiling_negative COMMAND twinwatch evaluate ${s}/short_collision.yaml --link-ceiling -0.1)
 set_tests_properties(cli.evaluate_link_ceiling_negative PROPERTIES PASS_REGULAR_EXPRESSION "--link-ceiling: Value -0.1 not in range 0")
+# the debounce settings: a count out of range is refused with the option's name; evaluate's
+# --sensitivity (the false-alarm margin check) names a wrong number of joints
+add_test(NAME cli.monitor_observer_raise_after_zero COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --observer-raise-after 0)
+set_tests_properties(cli.monitor_observer_raise_after_zero PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+                     PASS_REGULAR_EXPRESSION "--observer-raise-after: Value 0 not in range 1 to 1000")
+add_test(NAME cli.evaluate_sensitivity_count COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --sensitivity 1 1 1)
+set_tests_properties(cli.evaluate_sensitivity_count PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "sensitivity has size 3, expected 6 \\(one per joint\\)")

@@ -271,8 +271,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m]")->expected(3);
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::PositiveNumber);
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::PositiveNumber);
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
@@ -393,8 +393,8 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--sensitivity", o->sensitivity,
                   "Threshold factor, one value or one per joint (< 1: more sensitive), over the twin's; e.g. to measure the "
                   "false-alarm margin of the long runs");
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::PositiveNumber);
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::PositiveNumber);
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   sub->add_option("--trend-csv", o->trend_csv,
