@@ -313,10 +313,19 @@ struct EvaluateOptions {
   cli::SweepOptions sweep_options;
 };
 
+// evaluate's --sensitivity / --raise-after / --observer-raise-after written into the twin's monitor block
+void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
+  if (o.sensitivity.empty() && o.raise_after == 0 && o.observer_raise_after == 0) return;
+  monitor::MonitorConfig cfg = config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
+  apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+  twin.monitor_json = cfg.to_json();
+}
+
 int run_evaluate(const EvaluateOptions& o) {
   if (o.sweep) {
     o.sweep_options.validate();
-    const ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
+    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
+    apply_alert_settings(twin, o);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
     const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
     if (o.json) fmt::print("{}\n", cli::sweep_json(sw, o.sweep_options));
@@ -343,11 +352,7 @@ int run_evaluate(const EvaluateOptions& o) {
                           "with (re-learn them with 'twinwatch thresholds --filter')");
   ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
                                          : ident::TwinModel::load(o.twin);
-  if (!o.sensitivity.empty() || o.raise_after > 0 || o.observer_raise_after > 0) {
-    monitor::MonitorConfig cfg = config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
-    apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
-    twin.monitor_json = cfg.to_json();
-  }
+  apply_alert_settings(twin, o);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
