@@ -335,6 +335,8 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // the thresholds learned for the program that runs (its trajectory type), else the default set
     if (scfg.programs.count(s.trajectory_type)) scfg.select_program(s.trajectory_type);
     monitor::Monitor mon(t, scfg);
+    const bool healthy = s.faults.empty();
+    if (healthy) mon.track_margin();
     auto simulator = sim::make_simulator(s);
     const bool long_run = s.options.duration > 300;
     double shown = 0.0;
@@ -463,6 +465,17 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     }
     ev.wear_false_alarms += wfa;
     ev.false_alarms += fa;
+    if (healthy) {
+      const VectorJ mc = mon.margin_current(), mo = mon.margin_observer();
+      ev.margin_current.resize(static_cast<size_t>(mc.size()), 0.0);
+      ev.margin_observer.resize(static_cast<size_t>(mo.size()), 0.0);
+      for (int j = 0; j < mc.size(); ++j) {
+        ev.margin_current[static_cast<size_t>(j)] = std::max(ev.margin_current[static_cast<size_t>(j)], mc[j]);
+        ev.margin_observer[static_cast<size_t>(j)] = std::max(ev.margin_observer[static_cast<size_t>(j)], mo[j]);
+      }
+      ++ev.healthy_runs;
+      ev.healthy_hours += s.options.duration / 3600.0;
+    }
     // monitored time outside fault windows counts towards the false-alarm rate
     ev.monitored_hours += s.options.duration / 3600.0;
     for (const auto& sc : scs) {
@@ -651,6 +664,22 @@ void print_evaluation(const Evaluation& e) {
   }
   fmt::print("false alarms: {} in {:.2f} h monitored ({:.2f} per hour; {} of them wear warnings)\n", e.false_alarms, e.monitored_hours,
              e.false_alarms_per_hour(), e.wear_false_alarms);
+  if (e.healthy_runs > 0) {
+    const auto fmt_row = [](const std::vector<double>& v) {
+      std::string out;
+      for (size_t j = 0; j < v.size(); ++j) out += fmt::format("{}J{} {:.4f}", j ? "  " : "", j + 1, v[j]);
+      return out;
+    };
+    const double worst = std::max(*std::max_element(e.margin_current.begin(), e.margin_current.end()),
+                                  *std::max_element(e.margin_observer.begin(), e.margin_observer.end()));
+    fmt::print("false-alarm margin on the {} healthy run(s) ({:.2f} h): the largest |residual| / threshold a whole debounce run "
+               "exceeded (>= 1: an alarm)\n  current   {}\n  observer  {}\n  largest "
+               "{:.4f}: {}\n",
+               e.healthy_runs, e.healthy_hours, fmt_row(e.margin_current), fmt_row(e.margin_observer), worst,
+               worst < 1.0 ? fmt::format("thresholds tightened by more than {:.1f} % (--sensitivity below {:.4f}) raise the first alarm",
+                                         100.0 * (1.0 - worst), worst)
+                           : std::string("an alarm at the thresholds in use"));
+  }
 }
 
 std::string evaluation_json(const Evaluation& e) {
@@ -691,6 +720,8 @@ std::string evaluation_json(const Evaluation& e) {
   j["monitored_hours"] = e.monitored_hours;
   j["false_alarms"] = e.false_alarms;
   j["wear_false_alarms"] = e.wear_false_alarms;
+  if (e.healthy_runs > 0)
+    j["healthy_margin"] = {{"runs", e.healthy_runs}, {"hours", e.healthy_hours}, {"current", e.margin_current}, {"observer", e.margin_observer}};
   return j.dump();
 }
 

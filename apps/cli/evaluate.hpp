@@ -56,6 +56,13 @@ struct Evaluation {
   std::vector<ScenarioScore> scores;
   int false_alarms = 0, wear_false_alarms = 0;
   double monitored_hours = 0.0;
+  /// False-alarm margin over the scenarios without faults (Monitor::track_margin): per joint, the
+  /// largest ratio |residual| / threshold that a whole debounce run exceeded, for the current residual
+  /// and the momentum observer. Every threshold scaled by a sensitivity below the largest of them
+  /// raises an alert on those runs; 1 or more is an alarm at the twin's own sensitivity.
+  int healthy_runs = 0;
+  double healthy_hours = 0.0;
+  std::vector<double> margin_current, margin_observer;
   double false_alarms_per_hour() const { return monitored_hours > 0 ? false_alarms / monitored_hours : 0.0; }
 };
 

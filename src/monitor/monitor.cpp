@@ -564,6 +564,27 @@ void Monitor::run_diagnosis(double t) {
   if (on_event) on_event(e);
 }
 
+void Monitor::track_margin(bool on) {
+  if (n_samples_ > 0) throw InvalidArgument("Monitor::track_margin must be called before the first sample");
+  margin_cur_.clear();
+  margin_obs_.clear();
+  if (!on) return;
+  margin_cur_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.raise_after));
+  margin_obs_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.observer_raise_after > 0 ? cfg_.observer_raise_after : cfg_.raise_after));
+}
+
+VectorJ Monitor::margin_current() const {
+  VectorJ v = VectorJ::Zero(n_);
+  for (size_t j = 0; j < margin_cur_.size(); ++j) v[static_cast<int>(j)] = margin_cur_[j].peak();
+  return v;
+}
+
+VectorJ Monitor::margin_observer() const {
+  VectorJ v = VectorJ::Zero(n_);
+  for (size_t j = 0; j < margin_obs_.size(); ++j) v[static_cast<int>(j)] = margin_obs_[j].peak();
+  return v;
+}
+
 void Monitor::push(const RobotSample& s) {
   const double t = s.timestamp;
   ++n_samples_;
@@ -685,6 +706,11 @@ void Monitor::push(const RobotSample& s) {
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);
     dob.update(over_observer, t);
+    if (!margin_cur_.empty()) {
+      const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
+      margin_cur_[static_cast<size_t>(j)].update(settled && level_[j] > 0.0 ? std::abs(rf_dec_[j]) / level_[j] : 0.0);
+      margin_obs_[static_cast<size_t>(j)].update(observer_decides && obs_level_[j] > 0.0 ? std::abs(obs_dec_[j]) / obs_level_[j] : 0.0);
+    }
     // the joint's alert is active while either channel's is; it is raised when the first one raises
     const bool active = dc.active() || dob.active();
     const bool raised = active && !joint_active_[static_cast<size_t>(j)];

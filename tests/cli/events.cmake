@@ -45,3 +45,8 @@ set_tests_properties(cli.monitor_observer_raise_after_zero PROPERTIES FIXTURES_R
 add_test(NAME cli.evaluate_sensitivity_count COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --sensitivity 1 1 1)
 set_tests_properties(cli.evaluate_sensitivity_count PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "sensitivity has size 3, expected 6 \\(one per joint\\)")
+# evaluate reports the false-alarm margin of its healthy scenarios: per joint and channel the largest
+# |residual| / threshold a whole debounce run exceeded, and the sensitivity of the first alarm
+add_test(NAME cli.evaluate_healthy_margin COMMAND twinwatch evaluate ${s}/short_fig8.yaml --twin ${d}/twin.json)
+set_tests_properties(cli.evaluate_healthy_margin PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "false-alarm margin on the 1 healthy run\\(s\\) \\(0\\.00 h\\)[^\n]*\n  current   J1 0\\.[0-9]+  J2 [^\n]*J6 0\\.[0-9]+\n  observer  J1 0\\.[0-9]+[^\n]*\n  largest 0\\.[0-9]+: thresholds tightened by more than [0-9.]+ % \\(--sensitivity below 0\\.[0-9]+\\) raise the first alarm")

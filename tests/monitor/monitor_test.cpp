@@ -98,6 +98,33 @@ TEST_F(MonitorLoop, StreamGapsAndFrozenChannelsAreTheirOwnEvents) {
   EXPECT_TRUE(stuck);
 }
 
+// The false-alarm margin a healthy run reports (Monitor::track_margin) is exactly the sensitivity of
+// its first alarm: every threshold scaled by a factor just above it raises nothing, just below it raises.
+TEST_F(MonitorLoop, TheMarginOfAHealthyRunIsTheSensitivityOfItsFirstAlarm) {
+  const auto rec = run(scenario(607, 16, 0.5));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  const auto alerts = [&](double sensitivity, double* margin) {
+    MonitorConfig c = *config;
+    c.sensitivity = VectorJ::Constant(t.n_dof(), sensitivity);
+    Monitor m(t, c);
+    m.track_margin();
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    if (margin) *margin = std::max(m.margin_current().maxCoeff(), m.margin_observer().maxCoeff());
+    return m.events().size();
+  };
+  double margin = 0.0;
+  EXPECT_EQ(alerts(1.0, &margin), 0u);
+  EXPECT_GT(margin, 0.3) << "a healthy run uses a fair part of its thresholds";
+  ASSERT_LT(margin, 1.0);
+  EXPECT_EQ(alerts(margin * 1.001, nullptr), 0u);
+  EXPECT_GE(alerts(margin * 0.999, nullptr), 1u);
+  Monitor late(t, *config);
+  late.push(rec.samples.front());
+  EXPECT_THROW(late.track_margin(), InvalidArgument);
+}
+
 TEST(MonitorConfig, ValidationNamesTheField) {
   MonitorConfig c;
   c.static_level = VectorJ::Ones(6);

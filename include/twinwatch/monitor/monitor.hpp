@@ -160,6 +160,14 @@ class Monitor {
   const VectorJ& observer_residual() const { return obs_.residual(); }
   const VectorJ& observer_threshold() const { return obs_level_; }
   double total_current() const { return i_total_; }
+  /// Turns on the false-alarm margin (off by default: it costs a little per sample). From then on each
+  /// joint and channel keeps the largest ratio |residual| / threshold that its debounce's raise_after
+  /// consecutive decisions all exceeded (DebouncedPeak): on a healthy run, the sensitivity below which
+  /// that channel would first raise. Call before the first sample.
+  void track_margin(bool on = true);
+  /// Those peaks per joint for the current residual and the momentum observer (zero when off).
+  VectorJ margin_current() const;
+  VectorJ margin_observer() const;
   /// All events so far (closed and open).
   const std::vector<Event>& events() const { return events_; }
   long samples() const { return n_samples_; }
@@ -181,6 +189,7 @@ class Monitor {
   double alpha_ = 1.0;  // IIR coefficient
   std::vector<Debouncer> deb_, deb_obs_;  // per joint: current residual, observer
   std::vector<char> joint_active_;        // either channel of the joint active (last sample)
+  std::vector<DebouncedPeak> margin_cur_, margin_obs_;  // per joint, when track_margin (else empty)
   TwinMomentumObserver obs_;
   bool obs_on_ = false;
   int obs_samples_ = 0;  // observer updates so far (alerts wait for its start-up)
