@@ -52,7 +52,7 @@ struct MonitorConfig {
   /// consecutive exceedances of the momentum observer's threshold that raise an alert; 0: raise_after.
   /// Each channel counts its own run; a joint's alert is active while either channel's is. 1 raises
   /// contacts one sample earlier (all 288 of the collision sets 0-6 within 20 ms) but leaves healthy
-  /// observer peaks within 1-2.5 % of the threshold instead of 7.5-10 % (docs/validation.md,
+  /// observer peaks within 1.0 % of the threshold instead of 9.1 % (evaluate reports it; docs/validation.md,
   /// "Observer debounce"), so it is not the default
   int observer_raise_after = 0;
   VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
