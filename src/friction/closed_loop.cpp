@@ -103,6 +103,12 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0, tau_d_filtered = 0.0, x_integral = 0.0;
   double u_mean = 0.0, tau_d_prev = 0.0;
   bool first = true;
+  // record_measurements: encoder position at each period start and the period's noisy mean torque
+  // (its own noise stream, so that the run is the same with and without the record)
+  std::vector<double> q_enc, tau_rec;
+  std::mt19937_64 rec_rng(o.seed + 7919u);
+  std::normal_distribution<double> rec_noise(0.0, o.torque_noise);  // own object: a distribution caches draws
+  constexpr double kEncoderStep = 2.0 * M_PI / 1048576.0;  // 20-bit encoder [rad]
   for (std::size_t kk = 0; kk < ramp + n; ++kk) {
     const bool scored = kk >= ramp;
     const std::size_t k = scored ? kk - ramp : 0;
@@ -159,6 +165,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
       }
       qd_cmd += o.gains.kp(v_mid) * e + o.gains.kd(v_mid) * de_filtered;
     }
+    if (o.record_measurements) q_enc.push_back(std::round(q / kEncoderStep) * kEncoderStep);
     // plant and inner PI velocity loop over one command period (semi-implicit Euler)
     u_mean = 0.0;
     for (int s = 0; s < o.substeps; ++s) {
@@ -172,6 +179,25 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
       // the desired position by the trapezoidal rule on the substeps
       const double ts = t + s * h;
       qdes += 0.5 * h * (vel(ts) + vel(ts + h));
+    }
+    if (o.record_measurements) tau_rec.push_back(u_mean + rec_noise(rec_rng));
+  }
+  if (o.record_measurements) {
+    q_enc.push_back(std::round(q / kEncoderStep) * kEncoderStep);
+    const std::size_t m = tau_rec.size();  // periods; q_enc has m + 1 boundaries
+    run.measured.dt = o.dt;
+    run.measured.qd.resize(m);
+    run.measured.tau.resize(m);
+    // boundary velocity by encoder central differences (one-sided at the ends)
+    const auto v_at = [&](std::size_t b) {
+      if (b == 0) return (q_enc[1] - q_enc[0]) / o.dt;
+      if (b == m) return (q_enc[m] - q_enc[m - 1]) / o.dt;
+      return (q_enc[b + 1] - q_enc[b - 1]) / (2.0 * o.dt);
+    };
+    for (std::size_t k = 0; k < m; ++k) {
+      run.measured.qd[k] = (q_enc[k + 1] - q_enc[k]) / o.dt;
+      // I qdd = u - tau_f over the period: mean tau_f = mean u - I (qd(end) - qd(start)) / dt
+      run.measured.tau[k] = tau_rec[k] - o.inertia * (v_at(k + 1) - v_at(k)) / o.dt;
     }
   }
   // Table X: tracking RMSE; Table XI: per-segment RMSE mean, +-window at desired reversals

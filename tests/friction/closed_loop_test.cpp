@@ -156,6 +156,37 @@ TEST(ClosedLoop, WithoutFrictionTheRigidBodyIsTheExactModel) {
   EXPECT_GT(lagged.rmse, 2.0 * ff_only.rmse);
 }
 
+// What the loop's own sensors record (record_measurements: identification data gathered under
+// feedback): on a purely viscous joint without noise the recorded residual torque is sigma2 times the
+// recorded velocity, whatever the loop does; and recording does not change the run.
+TEST(ClosedLoop, TheMeasuredRecordIsTheFrictionAlongTheMotion) {
+  SimulatedJoint joint = simulated_study_joints()[1];
+  MaxwellSlipParams viscous = joint.truth;
+  viscous.Fc = viscous.Fs = 1e-9;
+  viscous.sigma2 = 3.0;
+  ClosedLoopOptions o = closed_loop_options_for(joint);
+  o.torque_noise = 0.0;
+  const VelocityProfile desired = closed_loop_profile(kSeed);
+  const ClosedLoopRun plain = run_closed_loop(viscous, desired, nullptr, o, false);
+  EXPECT_EQ(plain.measured.size(), 0);
+  o.record_measurements = true;
+  const ClosedLoopRun rec = run_closed_loop(viscous, desired, nullptr, o, false);
+  EXPECT_DOUBLE_EQ(rec.rmse, plain.rmse) << "recording changed the run";
+  // the 1 s ramp-in from rest and the scored 10 s, one sample per command period
+  EXPECT_EQ(rec.measured.size(), static_cast<long>(std::lround(1.0 / o.dt) + plain.q.size()));
+  double sse = 0.0, peak = 0.0;
+  for (long k = 2; k + 2 < rec.measured.size(); ++k) {
+    const double e = rec.measured.tau[static_cast<std::size_t>(k)] - viscous.sigma2 * rec.measured.qd[static_cast<std::size_t>(k)];
+    sse += e * e;
+    peak = std::max(peak, std::abs(viscous.sigma2 * rec.measured.qd[static_cast<std::size_t>(k)]));
+  }
+  EXPECT_GT(peak, 2.0);  // the joint moved at up to ~1 rad/s
+  // what is left is the 20-bit encoder differentiated twice: quantization sd 1.7e-6 rad gives an
+  // acceleration sd of 2 x 1.7e-6 / (2 dt^2) = 0.068 rad/s^2 at 200 Hz, x I = 0.6 kg m^2: 0.041 N·m
+  // (measured 0.042), against an inertia term of up to about I x 3 rad/s^2 = 2 N·m that it removes.
+  EXPECT_LT(std::sqrt(sse / static_cast<double>(rec.measured.size() - 4)), 0.06) << "N·m";
+}
+
 TEST(ClosedLoop, InvalidOptionsAreNamed) {
   ClosedLoopOptions o;
   o.kv = 0.0;

@@ -36,6 +36,7 @@ struct StudyOptions {
   int reversal_weight = 1;
   bool rich_training = false;
   bool crawl_training = false;
+  int loop_training = 0;  // closed-loop identification rounds (--loop-training)
   std::string memory = "displacement";
   int remove_viscous = -1;  // < 0: the study's (on); 0 off, 1 on
   std::string predictions;  // CSV of the validation record and every model's prediction
@@ -299,7 +300,8 @@ int run_closed_loop_study(const StudyOptions& o) {
                     o.crawl_training ? "sweep and crawls" : "sweep"));
     FrictionStudyOptions so;
     apply_parfam_options(so.parfam, o);
-    const JointStudy study = run_friction_study(simulated_study_data(j, o.seed, training_of(o)), so);
+    const FrictionStudyData data = simulated_study_data(j, o.seed, training_of(o));
+    const JointStudy study = run_friction_study(data, so);
     ClosedLoopOptions co = closed_loop_options_for(j);
     co.seed = o.seed;
     co.gains.kp_min *= o.pd_scale;
@@ -313,9 +315,26 @@ int run_closed_loop_study(const StudyOptions& o) {
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, false));
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, true));
     for (const char* name : {"LuGre", "RBFNN-H", "ParFam-H"}) {
-      const ModelStudy& m = study.model(name);
-      if (!m.model) throw InvalidArgument(fmt::format("{}: the {} fit failed: {}", j.name, name, m.fit.brief_report()));
-      jr.runs.push_back(run_closed_loop(j.truth, desired, m.model.get(), co, true));
+      std::shared_ptr<FrictionModel> model = study.model(name).model;
+      if (!model) throw InvalidArgument(fmt::format("{}: the {} fit failed: {}", j.name, name, study.model(name).fit.brief_report()));
+      // identification in the loop (--loop-training N): run the model's own feed-forward on a
+      // training trajectory of the loop (another seed than the scored one), append what the joint's
+      // sensors recorded to the training record, refit; N rounds, the same for every model
+      for (int round = 0; round < o.loop_training; ++round) {
+        ClosedLoopOptions lo = co;
+        lo.record_measurements = true;
+        lo.seed = co.seed + 500u + static_cast<unsigned>(round);
+        const ClosedLoopRun trial = run_closed_loop(j.truth, closed_loop_profile(o.seed + 1000u + static_cast<unsigned>(round)), model.get(), lo, true);
+        FrictionStudyData d2 = data;
+        d2.train.qd.insert(d2.train.qd.end(), trial.measured.qd.begin(), trial.measured.qd.end());
+        d2.train.tau.insert(d2.train.tau.end(), trial.measured.tau.begin(), trial.measured.tau.end());
+        const JointStudy again = run_friction_study(d2, so);
+        say(fmt::format("{}: {} in-loop round {}: training tracking {:.2f} mrad, refitted on {} + {} samples", j.name, name, round + 1,
+                        1e3 * trial.rmse, data.train.size(), trial.measured.size()));
+        model = again.model(name).model;
+        if (!model) throw InvalidArgument(fmt::format("{}: the in-loop refit of {} failed: {}", j.name, name, again.model(name).fit.brief_report()));
+      }
+      jr.runs.push_back(run_closed_loop(j.truth, desired, model.get(), co, true));
     }
     MaxwellSlipOracle oracle(j.truth);
     jr.runs.push_back(run_closed_loop(j.truth, desired, &oracle, co, true));
@@ -509,6 +528,11 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "--simulated, --closed-loop diagnosis (not HESR's protocol): train on 12 s of the sweep and 8 s of slow "
                 "constant-velocity crawls (+-0.02 ... 0.1 rad/s, 1 s each), which show the steady Stribeck curve the sweep "
                 "crosses in tens of ms");
+  sub->add_option("--loop-training", o->loop_training,
+                  "--closed-loop: identification in the loop, N rounds: each model's own feed-forward runs a 10 s training "
+                  "trajectory of the loop (another seed than the scored one), what the joint's sensors recorded (encoder, "
+                  "noisy motor torque) is appended to the training record and the model refitted; the same for every model")
+      ->check(CLI::Range(0, 10));
   sub->add_option("--memory", o->memory,
                   "Clock of the hysteresis state h: 'time' (HESR eq. 10 as printed, h relaxes in time with 1/alpha) "
                   "or 'displacement' (eq. 10 in the travelled-distance clock, hd = alpha |qd| (tanh(beta qd) - h): "

@@ -65,6 +65,9 @@ struct ClosedLoopOptions {
   double segment = 1.0;         ///< segment length of the segment-wise RMSE [s], > 0
   AdaptivePdGains gains;
   unsigned seed = 1;            ///< seeds the torque noise
+  /// Also return what the joint's own sensors recorded (ClosedLoopRun::measured): identification
+  /// data gathered under this feedback. Off by default; the run itself is the same either way.
+  bool record_measurements = false;
   /// Throws InvalidArgument naming the first field out of range.
   void validate() const;
 };
@@ -82,6 +85,11 @@ struct ClosedLoopRun {
   double feedforward_rmse = 0.0;
   /// The same within |qd_d| < 0.1 rad/s, where eq. 20's gains are highest [N·m]; NaN without a model.
   double feedforward_rmse_slow = 0.0;
+  /// With record_measurements: the residual-torque record of the whole run, ramp-in included, as the
+  /// joint's sensors give it (20-bit encoder, the torque noise of the options): per command period
+  /// the mean velocity from encoder increments and the mean motor torque less I times the period's
+  /// velocity change (encoder central differences). Empty otherwise.
+  FrictionRecord measured;
 };
 
 /// Runs the joint along the desired velocity profile (q_d(0) = q(0) = 0 after a 1 s ramp-in from
