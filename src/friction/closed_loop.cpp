@@ -8,6 +8,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/friction/study.hpp"
+#include "twinwatch/signal/savitzky_golay.hpp"
 
 namespace twinwatch::friction {
 
@@ -189,15 +190,11 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
     run.measured.qd.resize(m);
     run.measured.tau.resize(m);
     // boundary velocity by encoder central differences (one-sided at the ends)
-    const auto v_at = [&](std::size_t b) {
-      if (b == 0) return (q_enc[1] - q_enc[0]) / o.dt;
-      if (b == m) return (q_enc[m] - q_enc[m - 1]) / o.dt;
-      return (q_enc[b + 1] - q_enc[b - 1]) / (2.0 * o.dt);
-    };
+    const std::vector<double> v = signal::central_difference(q_enc, o.dt);
     for (std::size_t k = 0; k < m; ++k) {
       run.measured.qd[k] = (q_enc[k + 1] - q_enc[k]) / o.dt;
       // I qdd = u - tau_f over the period: mean tau_f = mean u - I (qd(end) - qd(start)) / dt
-      run.measured.tau[k] = tau_rec[k] - o.inertia * (v_at(k + 1) - v_at(k)) / o.dt;
+      run.measured.tau[k] = tau_rec[k] - o.inertia * (v[k + 1] - v[k]) / o.dt;
     }
   }
   // Table X: tracking RMSE; Table XI: per-segment RMSE mean, +-window at desired reversals

@@ -454,7 +454,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
-  deb_obs_.assign(static_cast<size_t>(n_), Debouncer(cfg_.observer_raise_after > 0 ? cfg_.observer_raise_after : cfg_.raise_after, cfg_.clear_after));
+  deb_obs_.assign(static_cast<size_t>(n_), Debouncer(cfg_.observer_debounce(), cfg_.clear_after));
   joint_active_.assign(static_cast<size_t>(n_), 0);
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
@@ -545,9 +545,6 @@ void Monitor::run_diagnosis(double t) {
   const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, 0.04);
   o.payload_com = twin_.robot().description().flange * com_flange;
   o.static_friction = static_friction_;
-  // the exceedance lasted until now, or ended if the joints are below again
-  bool any_active = false;
-  for (const char a : joint_active_) any_active |= a != 0;
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
   const Hypothesis& h = hyps.front();
@@ -570,20 +567,18 @@ void Monitor::track_margin(bool on) {
   margin_obs_.clear();
   if (!on) return;
   margin_cur_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.raise_after));
-  margin_obs_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.observer_raise_after > 0 ? cfg_.observer_raise_after : cfg_.raise_after));
+  margin_obs_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.observer_debounce()));
 }
 
-VectorJ Monitor::margin_current() const {
+VectorJ Monitor::peaks(const std::vector<DebouncedPeak>& channel) const {
   VectorJ v = VectorJ::Zero(n_);
-  for (size_t j = 0; j < margin_cur_.size(); ++j) v[static_cast<int>(j)] = margin_cur_[j].peak();
+  for (size_t j = 0; j < channel.size(); ++j) v[static_cast<int>(j)] = channel[j].peak();
   return v;
 }
 
-VectorJ Monitor::margin_observer() const {
-  VectorJ v = VectorJ::Zero(n_);
-  for (size_t j = 0; j < margin_obs_.size(); ++j) v[static_cast<int>(j)] = margin_obs_[j].peak();
-  return v;
-}
+VectorJ Monitor::margin_current() const { return peaks(margin_cur_); }
+
+VectorJ Monitor::margin_observer() const { return peaks(margin_obs_); }
 
 void Monitor::push(const RobotSample& s) {
   const double t = s.timestamp;
@@ -695,19 +690,18 @@ void Monitor::push(const RobotSample& s) {
   obs_dec_ = obs_.residual();
   rest_obs_.apply(s, obs_dec_);
   bool any_active = false;
+  // the thresholds were learned without each run's first kObserverSettle samples (filter and
+  // observer start-up), so they do not apply there
+  const bool settled = n_samples_ > kObserverSettle;
+  const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
   for (int j = 0; j < n_; ++j) {
-    // the thresholds were learned without each run's first kObserverSettle samples (filter and
-    // observer start-up), so they do not apply there
-    const bool settled = n_samples_ > kObserverSettle;
     const bool over_current = settled && std::abs(rf_dec_[j]) > level_[j];
-    const bool over_observer = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle &&
-                               std::abs(obs_dec_[j]) > obs_level_[j];
+    const bool over_observer = observer_decides && std::abs(obs_dec_[j]) > obs_level_[j];
     Debouncer& dc = deb_[static_cast<size_t>(j)];
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);
     dob.update(over_observer, t);
     if (!margin_cur_.empty()) {
-      const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
       margin_cur_[static_cast<size_t>(j)].update(settled && level_[j] > 0.0 ? std::abs(rf_dec_[j]) / level_[j] : 0.0);
       margin_obs_[static_cast<size_t>(j)].update(observer_decides && obs_level_[j] > 0.0 ? std::abs(obs_dec_[j]) / obs_level_[j] : 0.0);
     }

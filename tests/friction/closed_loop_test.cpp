@@ -133,14 +133,24 @@ TEST_P(ClosedLoopJoint, Eq19AloneCannotFeedTheModelForward) {
 INSTANTIATE_TEST_SUITE_P(Joints, ClosedLoopJoint, ::testing::Values(0, 1, 2),
                          [](const ::testing::TestParamInfo<int>& i) { return "J" + std::to_string(i.param + 1); });
 
+// A study joint whose truth keeps only viscous friction sigma2 (Coulomb and Stribeck levels ~0), with
+// the joint's loop options and no torque noise: the cases whose exact answer is known.
+struct ViscousJoint {
+  MaxwellSlipParams truth;
+  ClosedLoopOptions options;
+};
+ViscousJoint viscous_joint(std::size_t index, double sigma2) {
+  const SimulatedJoint joint = simulated_study_joints()[index];
+  ViscousJoint v{joint.truth, closed_loop_options_for(joint)};
+  v.truth.Fc = v.truth.Fs = 1e-9;
+  v.truth.sigma2 = sigma2;
+  v.options.torque_noise = 0.0;
+  return v;
+}
+
 TEST(ClosedLoop, WithoutFrictionTheRigidBodyIsTheExactModel) {
   // a plant without friction: Baseline's tau_d = I qdd_d is exact, so it tracks far better than None
-  SimulatedJoint joint = simulated_study_joints()[2];
-  MaxwellSlipParams smooth = joint.truth;
-  smooth.Fc = smooth.Fs = 1e-9;
-  smooth.sigma2 = 0.0;
-  ClosedLoopOptions o = closed_loop_options_for(joint);
-  o.torque_noise = 0.0;
+  const auto [smooth, o] = viscous_joint(2, 0.0);
   const VelocityProfile desired = closed_loop_profile(kSeed);
   const ClosedLoopRun none = run_closed_loop(smooth, desired, nullptr, o, false);
   const ClosedLoopRun baseline = run_closed_loop(smooth, desired, nullptr, o, true);
@@ -160,12 +170,7 @@ TEST(ClosedLoop, WithoutFrictionTheRigidBodyIsTheExactModel) {
 // feedback): on a purely viscous joint without noise the recorded residual torque is sigma2 times the
 // recorded velocity, whatever the loop does; and recording does not change the run.
 TEST(ClosedLoop, TheMeasuredRecordIsTheFrictionAlongTheMotion) {
-  SimulatedJoint joint = simulated_study_joints()[1];
-  MaxwellSlipParams viscous = joint.truth;
-  viscous.Fc = viscous.Fs = 1e-9;
-  viscous.sigma2 = 3.0;
-  ClosedLoopOptions o = closed_loop_options_for(joint);
-  o.torque_noise = 0.0;
+  auto [viscous, o] = viscous_joint(1, 3.0);
   const VelocityProfile desired = closed_loop_profile(kSeed);
   const ClosedLoopRun plain = run_closed_loop(viscous, desired, nullptr, o, false);
   EXPECT_EQ(plain.measured.size(), 0);

@@ -55,6 +55,8 @@ struct MonitorConfig {
   /// observer peaks within 1.0 % of the threshold instead of 9.1 % (evaluate reports it; docs/validation.md,
   /// "Observer debounce"), so it is not the default
   int observer_raise_after = 0;
+  /// The observer channel's debounce count in effect: observer_raise_after, else raise_after.
+  int observer_debounce() const { return observer_raise_after > 0 ? observer_raise_after : raise_after; }
   VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
   double nominal_period = 0.002;              ///< [s]
   double gap_factor = 1.5;                    ///< dt > gap_factor * period is a stream gap
@@ -180,6 +182,7 @@ class Monitor {
  private:
   void open_event(int joint, double start, double t);
   void run_diagnosis(double t);
+  VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
   double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
 
