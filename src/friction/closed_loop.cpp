@@ -57,13 +57,16 @@ void ClosedLoopOptions::validate() const {
 }
 
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
-                              const ClosedLoopOptions& o, bool feedforward) {
+                              const ClosedLoopOptions& o, bool feedforward, const MaxwellSlipFriction* plant_start) {
   o.validate();
   if (!desired.qd) throw InvalidArgument(fmt::format("desired profile '{}' has no qd(t)", desired.name));
   if (!std::isfinite(desired.duration) || desired.duration <= o.dt)
     throw InvalidArgument(fmt::format("desired profile '{}' duration is {}, must be > dt ({})", desired.name,
                                       desired.duration, o.dt));
-  MaxwellSlipFriction plant_friction(truth);
+  if (plant_start && plant_start->element_forces().size() != truth.elements.size())
+    throw InvalidArgument(fmt::format("closed-loop plant_start has {} elements, the truth {}",
+                                      plant_start->element_forces().size(), truth.elements.size()));
+  MaxwellSlipFriction plant_friction = plant_start ? *plant_start : MaxwellSlipFriction(truth);
   MaxwellSlipFriction desired_friction(truth);  // the truth along qd_d: scores f_hat (evaluation only)
   double ff_sse = 0.0, slow_sse = 0.0;
   long slow_n = 0;
@@ -101,6 +104,9 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   };
   const auto ramp = static_cast<std::size_t>(std::lround(kRampIn / o.dt));
   double q = 0.0, qd = 0.0, integral = 0.0, u = 0.0, qdes = 0.0;
+  // a joint that another motion left at rest with stressed elements is held there by its velocity
+  // loop: the integrator starts at the torque the elements hold (from relaxed elements: zero)
+  if (o.ki > 0.0) integral = plant_friction.torque(0.0) / o.ki;
   double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0, tau_d_filtered = 0.0, x_integral = 0.0;
   double u_mean = 0.0, tau_d_prev = 0.0;
   bool first = true;

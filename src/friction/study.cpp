@@ -262,7 +262,7 @@ FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned see
   FrictionStudyData d;
   d.joint = joint.name;
   o.seed = seed * 3 + 1;
-  d.train = simulate_joint(joint.truth, training_profile(training, seed), o).record;
+  d.train = simulate_joint(joint.truth, training_profile(training, seed), o).record;  // training_end_state: the same run
   o.seed = seed * 3 + 2;
   d.fourier = simulate_joint(joint.truth, fourier_profile(kHarmonics, kFourierBase, kVelocity, kDuration, seed), o).record;
   o.seed = seed * 3 + 3;
@@ -270,6 +270,14 @@ FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned see
   d.chirp = std::move(chirp.record);
   d.chirp_frequency = std::move(chirp.frequency);
   return d;
+}
+
+MaxwellSlipFriction training_end_state(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
+  // the truth's state does not depend on the noise or the encoder: the training run of
+  // simulated_study_data with the default sampling (dt, substeps) gives the same state
+  MaxwellSlipFriction state(joint.truth);
+  simulate_joint(state, training_profile(training, seed), SyntheticJointOptions{});
+  return state;
 }
 
 }  // namespace twinwatch::friction

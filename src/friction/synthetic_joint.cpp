@@ -98,12 +98,17 @@ void SyntheticJointOptions::validate() const {
 
 SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityProfile& profile,
                                const SyntheticJointOptions& options) {
+  MaxwellSlipFriction relaxed(truth);
+  return simulate_joint(relaxed, profile, options);
+}
+
+SyntheticRecord simulate_joint(MaxwellSlipFriction& gms, const VelocityProfile& profile,
+                               const SyntheticJointOptions& options) {
   options.validate();
   if (!profile.qd) throw InvalidArgument(fmt::format("velocity profile '{}' has no qd(t)", profile.name));
   if (!std::isfinite(profile.duration) || profile.duration <= options.dt)
     throw InvalidArgument(fmt::format("velocity profile '{}' duration is {}, must be > dt ({})", profile.name,
                                       profile.duration, options.dt));
-  MaxwellSlipFriction gms(truth);
   const auto n = static_cast<std::size_t>(std::floor(profile.duration / options.dt)) + 1;
   SyntheticRecord out;
   out.record.dt = options.dt;
@@ -115,7 +120,7 @@ SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityPro
   std::vector<double> q(n);
   out.true_qdd.resize(n);
   const double h = options.dt / options.substeps;
-  // sample 0: relaxed elements, the velocity of t = 0
+  // sample 0: the given state (relaxed elements for a fresh joint), the velocity of t = 0
   double pos = 0.0;
   out.true_qd[0] = profile.qd(0.0);
   out.true_tau[0] = gms.torque(out.true_qd[0]);

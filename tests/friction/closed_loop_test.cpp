@@ -192,6 +192,37 @@ TEST(ClosedLoop, TheMeasuredRecordIsTheFrictionAlongTheMotion) {
   EXPECT_LT(std::sqrt(sse / static_cast<double>(rec.measured.size() - 4)), 0.06) << "N·m";
 }
 
+// A trial that follows the training motion on the same joint (--loop-training) starts in the state
+// the sweep left: at rest its first recorded torque is what the stressed elements hold, not the zero
+// of relaxed ones; a relaxed plant_start is the default run bit for bit; a state of another joint
+// is refused.
+TEST(ClosedLoop, ATrialThatFollowsTheTrainingMotionStartsFromItsState) {
+  const SimulatedJoint joint = simulated_study_joints()[1];
+  ClosedLoopOptions o = closed_loop_options_for(joint);
+  o.torque_noise = 0.0;
+  o.record_measurements = true;
+  const VelocityProfile desired = closed_loop_profile(kSeed);
+  const MaxwellSlipFriction after = training_end_state(joint, kSeed);
+  const double held = after.torque(0.0);
+  EXPECT_GT(std::abs(held), 0.5 * joint.truth.Fc) << "the sweep ends at rest with its elements stressed";
+  const ClosedLoopRun fresh = run_closed_loop(joint.truth, desired, nullptr, o, false);
+  const MaxwellSlipFriction relaxed(joint.truth);
+  const ClosedLoopRun same = run_closed_loop(joint.truth, desired, nullptr, o, false, &relaxed);
+  EXPECT_EQ(same.q, fresh.q);
+  EXPECT_EQ(same.measured.tau, fresh.measured.tau);
+  const ClosedLoopRun continued = run_closed_loop(joint.truth, desired, nullptr, o, false, &after);
+  // first period: the joint at rest, held by the inner loop's integrator; the recorded torque is
+  // the elements' holding torque, the relaxed joint's is zero
+  EXPECT_NEAR(continued.measured.tau[1], held, 0.01 * std::abs(held));
+  EXPECT_NEAR(fresh.measured.tau[1], 0.0, 0.05);
+  MaxwellSlipParams other = joint.truth;
+  other.elements.pop_back();
+  other.elements.back().weight += joint.truth.elements.back().weight;
+  const MaxwellSlipFriction wrong(other);
+  EXPECT_THAT([&] { run_closed_loop(joint.truth, desired, nullptr, o, false, &wrong); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("plant_start has 3 elements, the truth 4")));
+}
+
 TEST(ClosedLoop, InvalidOptionsAreNamed) {
   ClosedLoopOptions o;
   o.kv = 0.0;

@@ -156,6 +156,38 @@ TEST(SyntheticJoint, SweepAndCrawlsHoldsEachPlateauAfterAContinuousBlend) {
   }
 }
 
+// One joint, two motions in a row: simulating the second from the state the first left gives the
+// truth of one run over both (the memory carries across: pre-sliding from stressed elements), and
+// differs from the same motion started relaxed by up to the Coulomb level.
+TEST(SyntheticJoint, ASecondMotionContinuesTheStateTheFirstLeft) {
+  const MaxwellSlipParams p = flat_params();
+  const VelocityProfile first = sine_profile(0.25, 1.2, 4.0);  // one period, ends at rest moving down to 0 from below
+  VelocityProfile second;
+  second.name = "second";
+  second.duration = 2.0;
+  second.qd = [](double t) { return 0.3 * std::sin(M_PI * t); };  // starts at rest, moves up
+  VelocityProfile both;
+  both.name = "both";
+  both.duration = 6.0;
+  both.qd = [&](double t) { return t < 4.0 ? first.qd(t) : second.qd(t - 4.0); };
+  SyntheticJointOptions o;
+  o.torque_noise = 0.0;
+  MaxwellSlipFriction state(p);
+  simulate_joint(state, first, o);
+  EXPECT_LT(state.torque(0.0), -0.5 * p.Fc) << "the sweep's last motion (down) leaves the elements stressed";
+  const SyntheticRecord continued = simulate_joint(state, second, o);
+  const SyntheticRecord whole = simulate_joint(p, both, o);
+  const SyntheticRecord fresh = simulate_joint(p, second, o);
+  ASSERT_EQ(continued.true_tau.size(), 401u);
+  double worst = 0.0, apart = 0.0;
+  for (std::size_t k = 0; k < continued.true_tau.size(); ++k) {
+    worst = std::max(worst, std::abs(continued.true_tau[k] - whole.true_tau[800 + k]));
+    apart = std::max(apart, std::abs(continued.true_tau[k] - fresh.true_tau[k]));
+  }
+  EXPECT_LT(worst, 1e-9) << "N·m";
+  EXPECT_GT(apart, 0.9 * p.Fc) << "a relaxed start forgets the first motion";
+}
+
 TEST(SyntheticJoint, InvalidOptionsAreNamed) {
   SyntheticJointOptions o;
   o.substeps = 0;

@@ -320,11 +320,18 @@ int run_closed_loop_study(const StudyOptions& o) {
       // identification in the loop (--loop-training N): run the model's own feed-forward on a
       // training trajectory of the loop (another seed than the scored one), append what the joint's
       // sensors recorded to the training record, refit; N rounds, the same for every model
+      // The trial continues the training motion on the same joint: its plant starts in the state the
+      // sweep left (at rest, elements stressed), so that the appended record is one continuous
+      // experiment for the refit's stateful models. From relaxed elements instead, the record's
+      // first ~0.1 s (a break-away from zero) contradicts the state the models carry over from the
+      // sweep by up to the Coulomb level, and those samples dominated the least-squares refit.
+      const MaxwellSlipFriction after_training = training_end_state(j, o.seed, training_of(o));
       for (int round = 0; round < o.loop_training; ++round) {
         ClosedLoopOptions lo = co;
         lo.record_measurements = true;
         lo.seed = co.seed + 500u + static_cast<unsigned>(round);
-        const ClosedLoopRun trial = run_closed_loop(j.truth, closed_loop_profile(o.seed + 1000u + static_cast<unsigned>(round)), model.get(), lo, true);
+        const ClosedLoopRun trial = run_closed_loop(j.truth, closed_loop_profile(o.seed + 1000u + static_cast<unsigned>(round)),
+                                                    model.get(), lo, true, &after_training);
         FrictionStudyData d2 = data;
         d2.train.qd.insert(d2.train.qd.end(), trial.measured.qd.begin(), trial.measured.qd.end());
         d2.train.tau.insert(d2.train.tau.end(), trial.measured.tau.begin(), trial.measured.tau.end());

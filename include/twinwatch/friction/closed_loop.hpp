@@ -96,9 +96,13 @@ struct ClosedLoopRun {
 /// rest that is not scored; the held command of each period is its mean desired velocity, tau_d is
 /// taken at its midpoint and compared with the mean motor torque it produced). `model` predicts the
 /// residual torque along qd_d for tau_d; null means "Baseline" (tau_d = I qdd_d). With
-/// `feedforward` false the command is qd_d alone ("None"). Throws InvalidArgument on bad options.
+/// `feedforward` false the command is qd_d alone ("None"). `plant_start` is the plant friction's
+/// state when the ramp-in begins (null: relaxed elements, a fresh joint; else a copy of the state
+/// another motion of the same joint left, e.g. training_end_state(): the trial continues it, at
+/// rest, the inner loop's integrator holding the torque the elements hold). Throws InvalidArgument on bad options or a plant_start with another element count.
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
-                              const ClosedLoopOptions& options = {}, bool feedforward = true);
+                              const ClosedLoopOptions& options = {}, bool feedforward = true,
+                              const MaxwellSlipFriction* plant_start = nullptr);
 
 /// Closed-loop options for a simulated study joint: its inertia (the rigid body of
 /// simulated_protocol_records), an inner velocity loop of 55 rad/s bandwidth (kv = 55 I,

@@ -66,4 +66,9 @@ struct SyntheticRecord {
 SyntheticRecord simulate_joint(const MaxwellSlipParams& truth, const VelocityProfile& profile,
                                const SyntheticJointOptions& options = {});
 
+/// The same from the truth's current state, advanced in place: a second call continues where the
+/// first left off (one joint, two motions in a row). Evaluation only, like the truth itself.
+SyntheticRecord simulate_joint(MaxwellSlipFriction& truth_state, const VelocityProfile& profile,
+                               const SyntheticJointOptions& options = {});
+
 }  // namespace twinwatch::friction
