@@ -537,8 +537,9 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "crosses in tens of ms");
   sub->add_option("--loop-training", o->loop_training,
                   "--closed-loop: identification in the loop, N rounds: each model's own feed-forward runs a 10 s training "
-                  "trajectory of the loop (another seed than the scored one), what the joint's sensors recorded (encoder, "
-                  "noisy motor torque) is appended to the training record and the model refitted; the same for every model")
+                  "trajectory of the loop (another seed than the scored one), starting at rest in the state the training motion "
+                  "left; what the joint's sensors recorded (encoder, noisy motor torque) is appended to the training record "
+                  "and the model refitted; the same for every model (a diagnosis, not HESR's protocol)")
       ->check(CLI::Range(0, 10));
   sub->add_option("--memory", o->memory,
                   "Clock of the hysteresis state h: 'time' (HESR eq. 10 as printed, h relaxes in time with 1/alpha) "
