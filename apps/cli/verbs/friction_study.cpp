@@ -37,6 +37,8 @@ struct StudyOptions {
   bool rich_training = false;
   bool crawl_training = false;
   int loop_training = 0;  // closed-loop identification rounds (--loop-training)
+  int loop_tuning = 0;    // closed-loop trials to tune LuGre's and ParFam-H's parameters (--loop-tuning)
+  int tuning_trajectories = 1;  // training trajectories per tuning trial (--tuning-trajectories)
   std::string memory = "displacement";
   int remove_viscous = -1;  // < 0: the study's (on); 0 off, 1 on
   std::string predictions;  // CSV of the validation record and every model's prediction
@@ -341,6 +343,17 @@ int run_closed_loop_study(const StudyOptions& o) {
         model = again.model(name).model;
         if (!model) throw InvalidArgument(fmt::format("{}: the in-loop refit of {} failed: {}", j.name, name, again.model(name).fit.brief_report()));
       }
+      // parameters tuned on the loop's tracking error of the training trajectory (--loop-tuning N)
+      if (o.loop_tuning > 0 && std::string_view(name) != "RBFNN-H") {
+        ClosedLoopOptions lo = co;
+        lo.seed = co.seed + 500u;
+        std::vector<VelocityProfile> tuning;
+        for (int k = 0; k < o.tuning_trajectories; ++k) tuning.push_back(closed_loop_profile(o.seed + 1000u + 100u * static_cast<unsigned>(k)));
+        const LoopTuning t = tune_in_loop(*model, j.truth, tuning, lo, nullptr, o.loop_tuning);
+        say(fmt::format("{}: {} tuned in the loop: {} parameters, {} trials, training tracking {:.2f} -> {:.2f} mrad", j.name, name,
+                        t.parameters, t.evaluations, 1e3 * t.rmse_before, 1e3 * t.rmse_after));
+        model = t.model;
+      }
       jr.runs.push_back(run_closed_loop(j.truth, desired, model.get(), co, true));
     }
     MaxwellSlipOracle oracle(j.truth);
@@ -535,6 +548,16 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "--simulated, --closed-loop diagnosis (not HESR's protocol): train on 12 s of the sweep and 8 s of slow "
                 "constant-velocity crawls (+-0.02 ... 0.1 rad/s, 1 s each), which show the steady Stribeck curve the sweep "
                 "crosses in tens of ms");
+  sub->add_option("--loop-tuning", o->loop_tuning,
+                  "--closed-loop: tune LuGre's and ParFam-H's parameters on the loop's tracking error of a 10 s training "
+                  "trajectory (not the scored one), N closed-loop trials each (BOBYQA from the fitted values; RBFNN-H is not "
+                  "tuned); after --loop-training when both are given (a diagnosis, not HESR's protocol)")
+      ->check(CLI::Range(0, 100000));
+  sub->add_option("--tuning-trajectories", o->tuning_trajectories,
+                  "--loop-tuning: 10 s training trajectories per trial (each another seed than the scored one); the tuning "
+                  "minimises the RMS of their tracking RMSEs")
+      ->check(CLI::Range(1, 20))
+      ->capture_default_str();
   sub->add_option("--loop-training", o->loop_training,
                   "--closed-loop: identification in the loop, N rounds: each model's own feed-forward runs a 10 s training "
                   "trajectory of the loop (another seed than the scored one), starting at rest in the state the training motion "

@@ -22,6 +22,7 @@
 /// The plant: I qdd = u - tau_f, tau_f from a generalized Maxwell-slip truth (maxwell_slip.hpp),
 /// u = kv (qd_cmd - qd) + ki int (qd_cmd - qd) dt, integrated on substeps. Evaluation code:
 /// it reads the truth by construction (it *is* the simulated robot).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -110,6 +111,26 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
 /// of 2 on the sampled unfiltered loop qd_comp = K_p e_tau, unstable at kv K_p = 1; K_p^min =
 /// K_p^max/10, K_d 0 .. K_p^max/130 s, lambda 4 s/rad), the joint's torque noise.
 ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint);
+
+/// Result of tune_in_loop().
+struct LoopTuning {
+  std::shared_ptr<FrictionModel> model;  ///< the tuned copy (the input model is not changed)
+  double rmse_before = 0.0;              ///< tracking RMSE of the training trials with the fitted parameters [rad]
+  double rmse_after = 0.0;               ///< the same with the tuned parameters [rad]
+  int parameters = 0;                    ///< parameters tuned
+  long evaluations = 0;                  ///< closed-loop trials run
+};
+
+/// Tunes a fitted model's parameters on the loop's own tracking error (a diagnosis, not HESR's
+/// protocol): derivative-free local search (NLopt BOBYQA) from the fitted parameters, each
+/// evaluation one closed-loop trial of every `training` trajectory (the joint's encoder against the
+/// desired path, what a robot's trial run gives; the noise of `options.seed`, the same for every
+/// trial); the objective is the RMS over the trajectories of their tracking RMSE. LuGre:
+/// sigma0, Fs, vs, Fc (x e^[-1,1]), sigma1, sigma2 (x e^[-1,1] when nonzero), offset (+-0.5 N·m);
+/// ParFam-H / ParFam-V: every active coefficient (x [0.5, 1.5]) and alpha, beta (x e^[-1,1]).
+/// Throws InvalidArgument for another model type, an unfitted model, no trajectory or evaluations < 1.
+LoopTuning tune_in_loop(const FrictionModel& model, const MaxwellSlipParams& truth, std::span<const VelocityProfile> training,
+                        const ClosedLoopOptions& options, const MaxwellSlipFriction* plant_start, int evaluations);
 
 /// The closed-loop desired trajectory: 10 s, five harmonics of 0.1 Hz, peak 1.0 rad/s,
 /// coefficients from seed + 100 (not the study's validation trajectory).
