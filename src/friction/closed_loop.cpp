@@ -107,7 +107,9 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   // a joint that another motion left at rest with stressed elements is held there by its velocity
   // loop: the integrator starts at the torque the elements hold (from relaxed elements: zero)
   if (o.ki > 0.0) integral = plant_friction.torque(0.0) / o.ki;
-  double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0, tau_d_filtered = 0.0, x_integral = 0.0;
+  // the inverse feed-forward knows the loop it drives: its integrator share starts at what the
+  // integrator holds (else it would feed tau_d on top of the held torque)
+  double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0, tau_d_filtered = 0.0, x_integral = integral;
   double u_mean = 0.0, tau_d_prev = 0.0;
   bool first = true;
   // record_measurements: encoder position at each period start and the period's noisy mean torque
