@@ -39,3 +39,11 @@ set_tests_properties(cli.friction_study_bad_truth_lag_scale PROPERTIES PASS_REGU
 # the two non-HESR training excitations exclude each other, named
 add_test(NAME cli.friction_study_training_conflict COMMAND twinwatch friction-study --closed-loop --rich-training --crawl-training -q)
 set_tests_properties(cli.friction_study_training_conflict PROPERTIES PASS_REGULAR_EXPRESSION "--rich-training and --crawl-training exclude each other")
+# in-loop tuning (a diagnosis): LuGre and ParFam-H tuned by closed-loop trials, RBFNN-H not
+add_test(NAME cli.friction_study_loop_tuning COMMAND twinwatch friction-study --closed-loop --joint 3 --hops 2 --loop-tuning 20)
+set_tests_properties(cli.friction_study_loop_tuning PROPERTIES PASS_REGULAR_EXPRESSION
+  "J3: LuGre tuned in the loop: 7 parameters, 2[01] trials, training tracking [0-9.]+ -> [0-9.]+ mrad.*J3: ParFam-H tuned in the loop: [0-9]+ parameters, 2[01] trials")
+# the closed loop's own options are refused, named, on the offline study
+add_test(NAME cli.friction_study_loop_option_offline COMMAND twinwatch friction-study --simulated --loop-tuning 5 -q)
+set_tests_properties(cli.friction_study_loop_option_offline PROPERTIES PASS_REGULAR_EXPRESSION
+  "--loop-tuning applies to --closed-loop only")

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <utility>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
@@ -417,6 +418,13 @@ int run_closed_loop_study(const StudyOptions& o) {
 
 int run(const StudyOptions& o) {
   if (o.closed_loop) return run_closed_loop_study(o);
+  // the closed loop's own options mean nothing to the offline study: refuse rather than ignore them
+  const std::vector<std::pair<bool, const char*>> loop_only = {
+      {o.loop_training != 0, "--loop-training"}, {o.loop_tuning != 0, "--loop-tuning"},
+      {o.tuning_trajectories != 1, "--tuning-trajectories"}, {o.pd_scale != 1.0, "--pd-scale"},
+      {o.literal_eq19, "--literal-eq19"}, {o.truth_lag_scale != 1.0, "--truth-lag-scale"}};
+  for (const auto& [given, flag] : loop_only)
+    if (given) throw InvalidArgument(fmt::format("{} applies to --closed-loop only", flag));
   if (o.simulated == !o.recordings.empty())
     throw InvalidArgument("give either recordings (TRAIN [VALIDATION [CHIRP]]) or --simulated, not both and not neither");
   if (o.torque != "current" && o.torque != "moment")
