@@ -56,6 +56,19 @@ void ClosedLoopOptions::validate() const {
   gains.validate();
 }
 
+namespace {
+
+// the same Maxwell-slip joint: every parameter equal
+bool same_joint(const MaxwellSlipParams& a, const MaxwellSlipParams& b) {
+  if (a.elements.size() != b.elements.size()) return false;
+  for (std::size_t i = 0; i < a.elements.size(); ++i)
+    if (a.elements[i].stiffness != b.elements[i].stiffness || a.elements[i].weight != b.elements[i].weight) return false;
+  return a.Fc == b.Fc && a.Fs == b.Fs && a.vs == b.vs && a.delta == b.delta && a.sigma2 == b.sigma2 &&
+         a.lag_time == b.lag_time;
+}
+
+}  // namespace
+
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
                               const ClosedLoopOptions& o, bool feedforward, const MaxwellSlipFriction* plant_start) {
   o.validate();
@@ -63,11 +76,11 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   if (!std::isfinite(desired.duration) || desired.duration <= o.dt)
     throw InvalidArgument(fmt::format("desired profile '{}' duration is {}, must be > dt ({})", desired.name,
                                       desired.duration, o.dt));
-  if (plant_start && plant_start->element_forces().size() != truth.elements.size())
-    throw InvalidArgument(fmt::format("closed-loop plant_start has {} elements, the truth {}",
-                                      plant_start->element_forces().size(), truth.elements.size()));
+  if (plant_start && !same_joint(plant_start->params(), truth))
+    throw InvalidArgument("closed-loop plant_start is the state of another joint (its Maxwell-slip parameters differ from the truth's)");
   MaxwellSlipFriction plant_friction = plant_start ? *plant_start : MaxwellSlipFriction(truth);
-  MaxwellSlipFriction desired_friction(truth);  // the truth along qd_d: scores f_hat (evaluation only)
+  // the truth along qd_d, from the same state: scores f_hat (evaluation only)
+  MaxwellSlipFriction desired_friction = plant_friction;
   double ff_sse = 0.0, slow_sse = 0.0;
   long slow_n = 0;
   if (model) model->start(o.dt);
@@ -110,7 +123,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   // the inverse feed-forward knows the loop it drives: its integrator share starts at what the
   // integrator holds (else it would feed tau_d on top of the held torque)
   double e_prev = 0.0, de_filtered = 0.0, tau_filtered = 0.0, tau_d_filtered = 0.0, x_integral = integral;
-  double u_mean = 0.0, tau_d_prev = 0.0;
+  double u_mean = o.ki * integral, tau_d_prev = 0.0;  // the torque of the "last period": what the loop held
   bool first = true;
   // record_measurements: encoder position at each period start and the period's noisy mean torque
   // (its own noise stream, so that the run is the same with and without the record)

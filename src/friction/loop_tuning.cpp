@@ -6,9 +6,12 @@
 #include <fmt/format.h>
 #include <nlopt.h>
 
+#include <algorithm>
 #include <cmath>
+#include <exception>
 #include <functional>
-#include <limits>
+#include <memory>
+#include <new>
 #include <span>
 
 #include "twinwatch/core/error.hpp"
@@ -95,10 +98,15 @@ Problem parfam_problem(const ParFamModel& m) {
 struct Context {
   const Problem* problem;
   std::function<double(FrictionModel&)> trial;
+  double penalty = 0.0;            // objective of parameters the model refuses (finite: BOBYQA's model stays finite)
+  nlopt_opt opt = nullptr;
+  std::exception_ptr error;        // an unexpected exception, rethrown after the search
   long evaluations = 0;
   std::vector<double> p;
 };
 
+// NLopt's C callback must not throw: parameters the model refuses (InvalidArgument from its
+// constructor or start()) score the penalty; anything else stops the search and is rethrown
 double objective(unsigned n, const double* x, double* /*grad*/, void* data) {
   auto* c = static_cast<Context*>(data);
   ++c->evaluations;
@@ -106,9 +114,13 @@ double objective(unsigned n, const double* x, double* /*grad*/, void* data) {
   try {
     const std::shared_ptr<FrictionModel> m = c->problem->build(c->p);
     const double r = c->trial(*m);
-    return std::isfinite(r) ? r : std::numeric_limits<double>::max();
+    return std::isfinite(r) ? r : c->penalty;
   } catch (const InvalidArgument&) {
-    return std::numeric_limits<double>::max();  // parameters the model refuses (e.g. a bound)
+    return c->penalty;
+  } catch (...) {
+    c->error = std::current_exception();
+    nlopt_force_stop(c->opt);
+    return c->penalty;
   }
 }
 
@@ -136,26 +148,32 @@ LoopTuning tune_in_loop(const FrictionModel& model, const MaxwellSlipParams& tru
     }
     return std::sqrt(ss / static_cast<double>(training.size()));
   };
-  Context ctx{&problem, trials, 0, std::vector<double>(problem.coords.size())};
   const auto n = static_cast<unsigned>(problem.coords.size());
-  std::vector<double> x(n, 0.0), lo(n), hi(n);
+  std::vector<double> x(n, 0.0), lo(n), hi(n), p0(n);
   for (unsigned i = 0; i < n; ++i) {
     lo[i] = problem.coords[i].lo;
     hi[i] = problem.coords[i].hi;
+    p0[i] = problem.coords[i].apply(0.0);
   }
   LoopTuning out;
   out.parameters = static_cast<int>(n);
-  out.rmse_before = objective(n, x.data(), nullptr, &ctx);
-  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
-  nlopt_set_lower_bounds(opt, lo.data());
-  nlopt_set_upper_bounds(opt, hi.data());
-  nlopt_set_min_objective(opt, objective, &ctx);
-  nlopt_set_maxeval(opt, evaluations);
+  // the fitted parameters, outside the search: a bad option, profile or plant_start throws here
+  out.rmse_before = trials(*problem.build(p0));
+  constexpr double kPenaltyFactor = 1e3;
+  Context ctx{&problem, trials, kPenaltyFactor * std::max(out.rmse_before, 1e-9), nullptr, nullptr, 1, std::vector<double>(n)};
+  const std::unique_ptr<nlopt_opt_s, decltype(&nlopt_destroy)> opt(nlopt_create(NLOPT_LN_BOBYQA, n), &nlopt_destroy);
+  if (!opt) throw std::bad_alloc();
+  ctx.opt = opt.get();
+  nlopt_set_lower_bounds(opt.get(), lo.data());
+  nlopt_set_upper_bounds(opt.get(), hi.data());
+  nlopt_set_min_objective(opt.get(), objective, &ctx);
+  nlopt_set_maxeval(opt.get(), evaluations);
   constexpr double kInitialStep = 0.05;  // 5 % of each parameter (0.05 N·m for the offset)
-  nlopt_set_initial_step1(opt, kInitialStep);
+  nlopt_set_initial_step1(opt.get(), kInitialStep);
   double f = out.rmse_before;
-  nlopt_optimize(opt, x.data(), &f);  // any stop (budget, tolerance) leaves the best point in x
-  nlopt_destroy(opt);
+  // any stop (budget, tolerance, a forced stop) leaves the best point found in x and its value in f
+  nlopt_optimize(opt.get(), x.data(), &f);
+  if (ctx.error) std::rethrow_exception(ctx.error);
   out.rmse_after = f;
   if (!(f < out.rmse_before)) {  // no improvement: the fitted parameters
     std::fill(x.begin(), x.end(), 0.0);

@@ -196,7 +196,7 @@ TEST(ClosedLoop, TheMeasuredRecordIsTheFrictionAlongTheMotion) {
 // A trial that follows the training motion on the same joint (--loop-training) starts in the state
 // the sweep left: at rest its first recorded torque is what the stressed elements hold, not the zero
 // of relaxed ones; a relaxed plant_start is the default run bit for bit; a state of another joint
-// is refused.
+// (another element count, or the same count with other parameters) is refused.
 TEST(ClosedLoop, ATrialThatFollowsTheTrainingMotionStartsFromItsState) {
   const SimulatedJoint joint = simulated_study_joints()[1];
   ClosedLoopOptions o = closed_loop_options_for(joint);
@@ -216,12 +216,15 @@ TEST(ClosedLoop, ATrialThatFollowsTheTrainingMotionStartsFromItsState) {
   // the elements' holding torque, the relaxed joint's is zero
   EXPECT_NEAR(continued.measured.tau[1], held, 0.01 * std::abs(held));
   EXPECT_NEAR(fresh.measured.tau[1], 0.0, 0.05);
-  // and with the exact friction fed forward the trial tracks within a few mrad of a fresh joint: the
-  // inverse feed-forward counts the torque the integrator already holds (fed on top of it, the held
-  // -11 N·m stays in the command until the velocity error integrates it away: 45 mrad, which a
-  // velocity loop never takes back). What is left (1.6 against 0.26 mrad) is the oracle starting from
-  // relaxed elements while the plant's are stressed, until the first break-away.
+  // and with the exact friction fed forward (the inverse feed-forward alone, no eq. 19 PD) the trial
+  // tracks within a few mrad of a fresh joint: the inverse feed-forward counts the torque the
+  // integrator already holds (fed on top of it, the held -11 N·m stays in the command until the
+  // velocity error integrates it away: tens of mrad, which a velocity loop never takes back). What is
+  // left is the oracle starting from relaxed elements while the plant's are stressed, until the first
+  // break-away. (With the PD on, eq. 19 also sees that mismatch as a torque error of ~11 N·m at the
+  // start, since the first torque it measures is the held one.)
   o.record_measurements = false;
+  o.gains.kp_min = o.gains.kp_max = o.gains.kd_min = o.gains.kd_max = 0.0;
   MaxwellSlipOracle oracle(joint.truth);
   const ClosedLoopRun fresh_ff = run_closed_loop(joint.truth, desired, &oracle, o, true);
   const ClosedLoopRun held_ff = run_closed_loop(joint.truth, desired, &oracle, o, true, &after);
@@ -232,13 +235,18 @@ TEST(ClosedLoop, ATrialThatFollowsTheTrainingMotionStartsFromItsState) {
   other.elements.back().weight += joint.truth.elements.back().weight;
   const MaxwellSlipFriction wrong(other);
   EXPECT_THAT([&] { run_closed_loop(joint.truth, desired, nullptr, o, false, &wrong); },
-              ThrowsMessage<InvalidArgument>(HasSubstr("plant_start has 3 elements, the truth 4")));
+              ThrowsMessage<InvalidArgument>(HasSubstr("plant_start is the state of another joint")));
+  // the same element count is not enough: J1's state on J2's truth is refused too
+  const MaxwellSlipFriction j1_state = training_end_state(simulated_study_joints()[0], kSeed);
+  ASSERT_EQ(j1_state.element_forces().size(), joint.truth.elements.size());
+  EXPECT_THAT([&] { run_closed_loop(joint.truth, desired, nullptr, o, false, &j1_state); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("plant_start is the state of another joint")));
 }
 
 // In-loop tuning (--loop-tuning) moves a model's parameters toward what tracks: a LuGre whose viscous
 // coefficient is a third short of a viscous joint's recovers it within 10 % from the tracking error
-// of trials alone, and the trial tracks at least 3x better; other model types and bad budgets are
-// refused by name.
+// of trials alone, and the trial tracks at least 3x better; other model types, bad budgets and bad
+// profiles are refused by name.
 TEST(ClosedLoop, InLoopTuningRecoversAViscousCoefficientFromTheTrackingError) {
   const auto [viscous, o] = viscous_joint(1, 3.0);
   LugreParams p;
@@ -253,7 +261,7 @@ TEST(ClosedLoop, InLoopTuningRecoversAViscousCoefficientFromTheTrackingError) {
   ASSERT_NE(tuned, nullptr);
   EXPECT_NEAR(tuned->params().sigma2, 3.0, 0.3);
   EXPECT_LT(t.rmse_after, t.rmse_before / 3.0);
-  EXPECT_LE(t.evaluations, 151);
+  EXPECT_LE(t.evaluations, 151);  // the fitted parameters' evaluation and at most 150 of the search
   EXPECT_EQ(t.parameters, 6);  // sigma0, Fc, Fs, vs, sigma2, offset (sigma1 is zero: not tuned)
   EXPECT_EQ(model.params().sigma2, 2.0) << "the input model is not changed";
   MaxwellSlipOracle oracle(viscous);
@@ -263,6 +271,11 @@ TEST(ClosedLoop, InLoopTuningRecoversAViscousCoefficientFromTheTrackingError) {
               ThrowsMessage<InvalidArgument>(HasSubstr("evaluations is 0, must be >= 1")));
   EXPECT_THAT([&] { tune_in_loop(model, viscous, {}, o, nullptr, 10); },
               ThrowsMessage<InvalidArgument>(HasSubstr("at least one training trajectory")));
+  // a caller's error is reported, not scored as bad parameters
+  std::vector<VelocityProfile> no_qd{closed_loop_profile(kSeed)};
+  no_qd[0].qd = nullptr;
+  EXPECT_THAT([&] { tune_in_loop(model, viscous, no_qd, o, nullptr, 10); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("has no qd(t)")));
 }
 
 TEST(ClosedLoop, InvalidOptionsAreNamed) {

@@ -328,13 +328,14 @@ int run_closed_loop_study(const StudyOptions& o) {
       // experiment for the refit's stateful models. From relaxed elements instead, the record's
       // first ~0.1 s (a break-away from zero) contradicts the state the models carry over from the
       // sweep by up to the Coulomb level, and those samples dominated the least-squares refit.
-      const MaxwellSlipFriction after_training = training_end_state(j, o.seed, training_of(o));
+      const std::optional<MaxwellSlipFriction> after_training =
+          o.loop_training > 0 ? std::optional(training_end_state(j, o.seed, training_of(o))) : std::nullopt;
       for (int round = 0; round < o.loop_training; ++round) {
         ClosedLoopOptions lo = co;
         lo.record_measurements = true;
         lo.seed = co.seed + 500u + static_cast<unsigned>(round);
         const ClosedLoopRun trial = run_closed_loop(j.truth, closed_loop_profile(o.seed + 1000u + static_cast<unsigned>(round)),
-                                                    model.get(), lo, true, &after_training);
+                                                    model.get(), lo, true, &*after_training);
         FrictionStudyData d2 = data;
         d2.train.qd.insert(d2.train.qd.end(), trial.measured.qd.begin(), trial.measured.qd.end());
         d2.train.tau.insert(d2.train.tau.end(), trial.measured.tau.begin(), trial.measured.tau.end());
@@ -351,8 +352,8 @@ int run_closed_loop_study(const StudyOptions& o) {
         std::vector<VelocityProfile> tuning;
         for (int k = 0; k < o.tuning_trajectories; ++k) tuning.push_back(closed_loop_profile(o.seed + 1000u + 100u * static_cast<unsigned>(k)));
         const LoopTuning t = tune_in_loop(*model, j.truth, tuning, lo, nullptr, o.loop_tuning);
-        say(fmt::format("{}: {} tuned in the loop: {} parameters, {} trials, training tracking {:.2f} -> {:.2f} mrad", j.name, name,
-                        t.parameters, t.evaluations, 1e3 * t.rmse_before, 1e3 * t.rmse_after));
+        say(fmt::format("{}: {} tuned in the loop: {} parameters, {} evaluations of {} trial(s), training tracking {:.2f} -> {:.2f} mrad",
+                        j.name, name, t.parameters, t.evaluations, tuning.size(), 1e3 * t.rmse_before, 1e3 * t.rmse_after));
         model = t.model;
       }
       jr.runs.push_back(run_closed_loop(j.truth, desired, model.get(), co, true));
@@ -557,9 +558,10 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "constant-velocity crawls (+-0.02 ... 0.1 rad/s, 1 s each), which show the steady Stribeck curve the sweep "
                 "crosses in tens of ms");
   sub->add_option("--loop-tuning", o->loop_tuning,
-                  "--closed-loop: tune LuGre's and ParFam-H's parameters on the loop's tracking error of a 10 s training "
-                  "trajectory (not the scored one), N closed-loop trials each (BOBYQA from the fitted values; RBFNN-H is not "
-                  "tuned); after --loop-training when both are given (a diagnosis, not HESR's protocol)")
+                  "--closed-loop: tune LuGre's and ParFam-H's parameters on the loop's tracking error of 10 s training "
+                  "trajectories (not the scored one; --tuning-trajectories), at most N objective evaluations each (BOBYQA from "
+                  "the fitted values; RBFNN-H is not tuned); after --loop-training when both are given (a diagnosis, not HESR's "
+                  "protocol)")
       ->check(CLI::Range(0, 100000));
   sub->add_option("--tuning-trajectories", o->tuning_trajectories,
                   "--loop-tuning: 10 s training trajectories per trial (each another seed than the scored one); the tuning "

@@ -23,6 +23,7 @@
 /// u = kv (qd_cmd - qd) + ki int (qd_cmd - qd) dt, integrated on substeps. Evaluation code:
 /// it reads the truth by construction (it *is* the simulated robot).
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -100,7 +101,9 @@ struct ClosedLoopRun {
 /// `feedforward` false the command is qd_d alone ("None"). `plant_start` is the plant friction's
 /// state when the ramp-in begins (null: relaxed elements, a fresh joint; else a copy of the state
 /// another motion of the same joint left, e.g. training_end_state(): the trial continues it, at
-/// rest, the inner loop's integrator holding the torque the elements hold). Throws InvalidArgument on bad options or a plant_start with another element count.
+/// rest, the inner loop's integrator holding the torque the elements hold; with ki = 0 nothing holds
+/// it and the elements spring back). Throws InvalidArgument on bad options or a plant_start of
+/// another joint (other Maxwell-slip parameters).
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
                               const ClosedLoopOptions& options = {}, bool feedforward = true,
                               const MaxwellSlipFriction* plant_start = nullptr);
@@ -118,7 +121,7 @@ struct LoopTuning {
   double rmse_before = 0.0;              ///< tracking RMSE of the training trials with the fitted parameters [rad]
   double rmse_after = 0.0;               ///< the same with the tuned parameters [rad]
   int parameters = 0;                    ///< parameters tuned
-  long evaluations = 0;                  ///< closed-loop trials run
+  long evaluations = 0;                  ///< objective evaluations, the fitted parameters' included (each one trial per trajectory)
 };
 
 /// Tunes a fitted model's parameters on the loop's own tracking error (a diagnosis, not HESR's

@@ -123,9 +123,10 @@ FrictionStudyData simulated_study_data(const SimulatedJoint& joint, unsigned see
                                        TrainingExcitation training = TrainingExcitation::Sweep);
 
 /// The joint's truth friction as the training record of simulated_study_data left it (the sweep
-/// ends at rest with its elements stressed in the last direction of motion). Evaluation only: a
-/// closed-loop trial that follows the training motion on the same joint starts from this state, so
-/// that the two records appended form one continuous experiment.
+/// ends at rest with its elements stressed in the last direction of motion; the crawls and the
+/// Fourier excitation end moving, so a trial that starts from this state at rest follows an instant
+/// stop). Evaluation only: a closed-loop trial that follows the training motion on the same joint
+/// starts from this state, so that the two records appended form one continuous experiment.
 MaxwellSlipFriction training_end_state(const SimulatedJoint& joint, unsigned seed,
                                        TrainingExcitation training = TrainingExcitation::Sweep);
 
