@@ -56,19 +56,6 @@ void ClosedLoopOptions::validate() const {
   gains.validate();
 }
 
-namespace {
-
-// the same Maxwell-slip joint: every parameter equal
-bool same_joint(const MaxwellSlipParams& a, const MaxwellSlipParams& b) {
-  if (a.elements.size() != b.elements.size()) return false;
-  for (std::size_t i = 0; i < a.elements.size(); ++i)
-    if (a.elements[i].stiffness != b.elements[i].stiffness || a.elements[i].weight != b.elements[i].weight) return false;
-  return a.Fc == b.Fc && a.Fs == b.Fs && a.vs == b.vs && a.delta == b.delta && a.sigma2 == b.sigma2 &&
-         a.lag_time == b.lag_time;
-}
-
-}  // namespace
-
 ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProfile& desired, FrictionModel* model,
                               const ClosedLoopOptions& o, bool feedforward, const MaxwellSlipFriction* plant_start) {
   o.validate();
@@ -76,7 +63,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   if (!std::isfinite(desired.duration) || desired.duration <= o.dt)
     throw InvalidArgument(fmt::format("desired profile '{}' duration is {}, must be > dt ({})", desired.name,
                                       desired.duration, o.dt));
-  if (plant_start && !same_joint(plant_start->params(), truth))
+  if (plant_start && plant_start->params() != truth)
     throw InvalidArgument("closed-loop plant_start is the state of another joint (its Maxwell-slip parameters differ from the truth's)");
   MaxwellSlipFriction plant_friction = plant_start ? *plant_start : MaxwellSlipFriction(truth);
   // the truth along qd_d, from the same state: scores f_hat (evaluation only)

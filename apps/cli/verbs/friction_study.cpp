@@ -317,19 +317,23 @@ int run_closed_loop_study(const StudyOptions& o) {
     say(fmt::format("{}: closed loop, {} compensations", j.name, comps.size()));
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, false));
     jr.runs.push_back(run_closed_loop(j.truth, desired, nullptr, co, true));
+    // --loop-training: the trial continues the training motion on the same joint: its plant starts in
+    // the state the sweep left (at rest, elements stressed), so that the appended record is one
+    // continuous experiment for the refit's stateful models. From relaxed elements instead, the
+    // record's first ~0.1 s (a break-away from zero) contradicts the state the models carry over from
+    // the sweep by up to the Coulomb level, and those samples dominated the least-squares refit.
+    const std::optional<MaxwellSlipFriction> after_training =
+        o.loop_training > 0 ? std::optional(training_end_state(j, o.seed, training_of(o))) : std::nullopt;
+    // --loop-tuning: the training trajectories of the tuning trials (never the scored one)
+    std::vector<VelocityProfile> tuning;
+    for (int k = 0; o.loop_tuning > 0 && k < o.tuning_trajectories; ++k)
+      tuning.push_back(closed_loop_profile(o.seed + 1000u + 100u * static_cast<unsigned>(k)));
     for (const char* name : {"LuGre", "RBFNN-H", "ParFam-H"}) {
       std::shared_ptr<FrictionModel> model = study.model(name).model;
       if (!model) throw InvalidArgument(fmt::format("{}: the {} fit failed: {}", j.name, name, study.model(name).fit.brief_report()));
       // identification in the loop (--loop-training N): run the model's own feed-forward on a
       // training trajectory of the loop (another seed than the scored one), append what the joint's
       // sensors recorded to the training record, refit; N rounds, the same for every model
-      // The trial continues the training motion on the same joint: its plant starts in the state the
-      // sweep left (at rest, elements stressed), so that the appended record is one continuous
-      // experiment for the refit's stateful models. From relaxed elements instead, the record's
-      // first ~0.1 s (a break-away from zero) contradicts the state the models carry over from the
-      // sweep by up to the Coulomb level, and those samples dominated the least-squares refit.
-      const std::optional<MaxwellSlipFriction> after_training =
-          o.loop_training > 0 ? std::optional(training_end_state(j, o.seed, training_of(o))) : std::nullopt;
       for (int round = 0; round < o.loop_training; ++round) {
         ClosedLoopOptions lo = co;
         lo.record_measurements = true;
@@ -349,8 +353,6 @@ int run_closed_loop_study(const StudyOptions& o) {
       if (o.loop_tuning > 0 && std::string_view(name) != "RBFNN-H") {
         ClosedLoopOptions lo = co;
         lo.seed = co.seed + 500u;
-        std::vector<VelocityProfile> tuning;
-        for (int k = 0; k < o.tuning_trajectories; ++k) tuning.push_back(closed_loop_profile(o.seed + 1000u + 100u * static_cast<unsigned>(k)));
         const LoopTuning t = tune_in_loop(*model, j.truth, tuning, lo, nullptr, o.loop_tuning);
         say(fmt::format("{}: {} tuned in the loop: {} parameters, {} evaluations of {} trial(s), training tracking {:.2f} -> {:.2f} mrad",
                         j.name, name, t.parameters, t.evaluations, tuning.size(), 1e3 * t.rmse_before, 1e3 * t.rmse_after));

@@ -23,6 +23,7 @@ namespace twinwatch::friction {
 struct MaxwellSlipElement {
   double stiffness = 1e4;  ///< k_i [N·m/rad], > 0
   double weight = 1.0;     ///< w_i, share of the Stribeck curve, > 0 (weights sum to 1)
+  bool operator==(const MaxwellSlipElement&) const = default;
 };
 
 struct MaxwellSlipParams {
@@ -33,6 +34,8 @@ struct MaxwellSlipParams {
   double delta = 2.0;     ///< Stribeck shape exponent, > 0
   double sigma2 = 0.0;    ///< viscous coefficient [N·m·s/rad], >= 0
   double lag_time = 0.0;  ///< frictional-lag time constant T_lag of slipping elements [s], >= 0
+  /// The same joint: every parameter equal.
+  bool operator==(const MaxwellSlipParams&) const = default;
 
   /// Throws InvalidArgument naming the field (elements[i].stiffness etc.) and its value; the
   /// weights must sum to 1 within 1e-9.
