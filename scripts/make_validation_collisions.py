@@ -45,6 +45,12 @@ measured once: python3 scripts/make_validation_collisions.py --held-out-6
 stream. Generated on 2026-11-24 (session 13) after the observer channel got its own debounce
 (commit d7d630b), chosen with sets 0-6 read; measured once with the default debounce and with
 --observer-raise-after 1: python3 scripts/make_validation_collisions.py --held-out-7
+
+`--held-out-8` writes scenarios/ur3e/heldout8_collisions/: 54 contacts (three per link and magnitude,
+3, 4, 6 N·m: a third of them at the 3 N·m detection goal), seeds 14000+, another random stream.
+Generated on 2026-11-24 (session 15) after the observer's debounce became a per-joint choice on the
+twin's healthy validation runs (choose_observer_debounce), chosen with sets 0-7 and the long runs
+read; measured once: python3 scripts/make_validation_collisions.py --held-out-8
 """
 import json
 import math
@@ -63,6 +69,7 @@ SETS = {
     "--held-out-5": ("heldout5_collisions", [3, 4, 6, 9], 2, 60606, 11000),
     "--held-out-6": ("heldout6_collisions", [3, 5, 7, 10], 2, 80808, 12000),
     "--held-out-7": ("heldout7_collisions", [3, 4, 5, 8], 2, 31337, 13000),
+    "--held-out-8": ("heldout8_collisions", [3, 4, 6], 3, 271828, 14000),
 }
 FLAG = next((a for a in sys.argv[1:] if a in SETS), None)
 unknown = [a for a in sys.argv[1:] if a not in SETS]
@@ -98,7 +105,7 @@ def main():
             onset = round(rng.uniform(6.0, 14.0), 3)
             seed = FIRST_SEED + 10 * link + m_idx
             payload = "payload: {mass: 0.5, com: [0, 0, 0.04]}\n" if (link + m_idx) % 2 == 0 else ""
-            name = f"{'hcollision' if HELD_OUT else 'vcollision'}_{mag}Nm_link{link}" + (f"_{'ab'[rep]}" if REPEATS > 1 else "")
+            name = f"{'hcollision' if HELD_OUT else 'vcollision'}_{mag}Nm_link{link}" + (f"_{'abc'[rep]}" if REPEATS > 1 else "")
             text = (
                 (f"# Held-out collision (measured only, never tuned on): a 50 ms pulse on link {link},\n" if HELD_OUT else
                  f"# Validation collision (tuning set; the library's collision_*.yaml is the test set): a 50 ms pulse on link {link},\n") +

@@ -197,6 +197,16 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
     say("   learning thresholds: default set (figure-eight at 3 speeds with/without payload, triangle), and per program: "
         "triangle (3 speeds), pick-and-place (2 speeds, one from cold), chirp");
     cfg = monitor::learn_thresholds(twin, {f8, f8_fast, f8_slow, tri}, settings);
+    // the observer's debounce per joint, on the 20 min of healthy figure-eight that taught the
+    // temperature slope and that the thresholds were not learned on (the default set's program);
+    // the program sets keep the shared count (no long healthy run of theirs here)
+    const auto choice = monitor::choose_observer_debounce(twin, cfg, {{&hc, p}, {&hw, p}});
+    cfg.observer_raise_after_joint = choice.raise_after;
+    cfg.observer_validation_ratio = choice.ratio;
+    say(fmt::format("   observer debounce per joint (default set, chosen on the {:.0f} s warm-up and cool-down runs): {}; "
+                    "their healthy ratio at 1 sample {:.3f}, at {} {:.3f}",
+                    choice.seconds, fmt::join(choice.raise_after, " "), fmt::join(choice.ratio.front(), " "), choice.ratio.size(),
+                    fmt::join(choice.ratio.back(), " ")));
     monitor::learn_program_thresholds(cfg, "triangle", twin,
                                       {tri, run("{type: triangle, side: 0.15, speed: 0.3}", 1009, 12, 0.5),
                                        run("{type: triangle, side: 0.15, speed: 0.12}", 1010, 20, 0.0)});
@@ -469,6 +479,8 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       const VectorJ mc = mon.margin_current(), mo = mon.margin_observer();
       ev.margin_current.resize(static_cast<size_t>(mc.size()), 0.0);
       ev.margin_observer.resize(static_cast<size_t>(mo.size()), 0.0);
+      scs.front().margin_current.assign(mc.data(), mc.data() + mc.size());
+      scs.front().margin_observer.assign(mo.data(), mo.data() + mo.size());
       for (int j = 0; j < mc.size(); ++j) {
         ev.margin_current[static_cast<size_t>(j)] = std::max(ev.margin_current[static_cast<size_t>(j)], mc[j]);
         ev.margin_observer[static_cast<size_t>(j)] = std::max(ev.margin_observer[static_cast<size_t>(j)], mo[j]);
@@ -715,7 +727,9 @@ std::string evaluation_json(const Evaluation& e) {
                               {"duration_s", s.duration_s},
                               {"first_wear_warning_s", std::isfinite(s.t_first_wear) ? nlohmann::json(s.t_first_wear) : nlohmann::json(nullptr)},
                               {"first_threshold_alert_s", std::isfinite(s.t_first_alert) ? nlohmann::json(s.t_first_alert) : nlohmann::json(nullptr)},
-                              {"wear_warning", s.wear_detail}});
+                              {"wear_warning", s.wear_detail},
+                              {"margin", s.margin_current.empty() ? nlohmann::json(nullptr)
+                                                                  : nlohmann::json{{"current", s.margin_current}, {"observer", s.margin_observer}}}});
   j["false_alarms_per_hour"] = e.false_alarms_per_hour();
   j["monitored_hours"] = e.monitored_hours;
   j["false_alarms"] = e.false_alarms;

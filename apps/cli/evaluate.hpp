@@ -37,6 +37,8 @@ struct ScenarioScore {
   int wear_false_alarms = 0;   ///< false alarms that were wear warnings
   double duration_s = 0.0;
   double t_first_wear = std::numeric_limits<double>::quiet_NaN();   ///< [s] first wear warning
+  /// healthy scenario: its own false-alarm margin per joint (Monitor::track_margin); empty otherwise
+  std::vector<double> margin_current, margin_observer;
   double t_first_alert = std::numeric_limits<double>::quiet_NaN();  ///< [s] first threshold alert (no stream gaps)
   std::string wear_detail;
   int predicted_link = -1;  ///< contact link of the detecting event (0-based; -1: none)

@@ -224,6 +224,37 @@ void check_levels(const VectorJ& static_level, const std::vector<DynamicThreshol
     throw InvalidArgument(fmt::format("{} dynamic thresholds: {} joints, expected {}", what, dynamic.size(), n));
 }
 
+void check_joint_debounce(const std::vector<int>& d, int n, const std::string& where) {
+  if (d.empty()) return;
+  if (static_cast<int>(d.size()) != n)
+    throw InvalidArgument(fmt::format("{} observer_raise_after_joint has {} entries, expected {} (one per joint)", where, d.size(), n));
+  for (size_t j = 0; j < d.size(); ++j)
+    if (d[j] < 1) throw InvalidArgument(fmt::format("{} observer_raise_after_joint of joint {} is {}, must be >= 1", where, j + 1, d[j]));
+}
+
+nlohmann::json rows_json(const std::vector<VectorJ>& rows) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& r : rows) a.push_back(vec_json(r));
+  return a;
+}
+
+std::vector<VectorJ> json_rows(const nlohmann::json& a, const std::string& field) {
+  if (!a.is_array()) throw InvalidArgument(fmt::format("{} must be an array of per-joint arrays", field));
+  std::vector<VectorJ> rows;
+  for (size_t i = 0; i < a.size(); ++i) rows.push_back(json_vec(a.at(i), fmt::format("{}[{}]", field, i)));
+  return rows;
+}
+
+std::vector<int> json_ints(const nlohmann::json& a, const std::string& field) {
+  if (!a.is_array()) throw InvalidArgument(fmt::format("{} must be an array of integers", field));
+  std::vector<int> v;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!a[i].is_number_integer()) throw InvalidArgument(fmt::format("{}[{}] must be an integer, got {}", field, i, a[i].dump()));
+    v.push_back(a[i].get<int>());
+  }
+  return v;
+}
+
 void check_program_name(const std::string& name) {
   if (name.empty()) throw InvalidArgument("threshold set: the program name is empty");
   for (char ch : name)
@@ -249,6 +280,9 @@ void MonitorConfig::select_program(const std::string& name) {
   if (it->second.observer_level.size() != 0) {
     observer_level = it->second.observer_level;
     observer_dynamic = it->second.observer_dynamic;
+    // the debounce learned with these thresholds (none learned: the shared count)
+    observer_raise_after_joint = it->second.observer_raise_after_joint;
+    observer_validation_ratio = it->second.observer_validation_ratio;
   }
   program = name;
 }
@@ -261,6 +295,8 @@ void MonitorConfig::validate(int n) const {
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
   if (observer_raise_after < 0)
     throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
+  check_joint_debounce(observer_raise_after_joint, n, "monitor");
+  for (const auto& [name, set] : programs) check_joint_debounce(set.observer_raise_after_joint, n, fmt::format("program '{}'", name));
   if (sensitivity.size() != 0 && sensitivity.size() != n)
     throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
   for (int j = 0; j < sensitivity.size(); ++j)
@@ -286,6 +322,8 @@ std::string MonitorConfig::to_json() const {
   j["raise_after"] = raise_after;
   j["clear_after"] = clear_after;
   if (observer_raise_after > 0) j["observer_raise_after"] = observer_raise_after;
+  if (!observer_raise_after_joint.empty()) j["observer_raise_after_joint"] = observer_raise_after_joint;
+  if (!observer_validation_ratio.empty()) j["observer_validation_ratio"] = rows_json(observer_validation_ratio);
   if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
@@ -297,6 +335,8 @@ std::string MonitorConfig::to_json() const {
     if (set.observer_level.size() != 0) {
       j["programs"][name]["observer_level_Nm"] = vec_json(set.observer_level);
       j["programs"][name]["observer_dynamic"] = dynamic_json(set.observer_dynamic);
+      if (!set.observer_raise_after_joint.empty()) j["programs"][name]["observer_raise_after_joint"] = set.observer_raise_after_joint;
+      if (!set.observer_validation_ratio.empty()) j["programs"][name]["observer_validation_ratio"] = rows_json(set.observer_validation_ratio);
     }
   j["observer_gain"] = observer_gain;
   j["observer_alerts"] = observer_alerts;
@@ -318,6 +358,8 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.raise_after = json_int(j, "raise_after", c.raise_after, "raise_after");
     c.clear_after = json_int(j, "clear_after", c.clear_after, "clear_after");
     c.observer_raise_after = json_int(j, "observer_raise_after", c.observer_raise_after, "observer_raise_after");
+    if (j.contains("observer_raise_after_joint")) c.observer_raise_after_joint = json_ints(j["observer_raise_after_joint"], "observer_raise_after_joint");
+    if (j.contains("observer_validation_ratio")) c.observer_validation_ratio = json_rows(j["observer_validation_ratio"], "observer_validation_ratio");
     if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"], "sensitivity");
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
@@ -329,6 +371,9 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
         if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"], fmt::format("programs.{}.observer_level_Nm", name));
         if (p.contains("observer_dynamic")) set.observer_dynamic = json_dynamic(p["observer_dynamic"]);
+        if (p.contains("observer_raise_after_joint"))
+          set.observer_raise_after_joint = json_ints(p["observer_raise_after_joint"], fmt::format("programs.{}.observer_raise_after_joint", name));
+        if (p.contains("observer_validation_ratio")) set.observer_validation_ratio = json_rows(p["observer_validation_ratio"], fmt::format("programs.{}.observer_validation_ratio", name));
         set.runs = json_int(p, "runs", 0, fmt::format("programs.{}.runs", name));
         set.seconds = p.value("seconds", 0.0);
         c.programs[name] = std::move(set);
@@ -412,7 +457,54 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       c.observer_dynamic.push_back(fit.params);
     }
   }
+  // a per-joint debounce belongs to the thresholds it was chosen for
+  c.observer_raise_after_joint.clear();
+  c.observer_validation_ratio.clear();
   return c;
+}
+
+ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, const MonitorConfig& config,
+                                                const std::vector<HealthyRun>& validation) {
+  if (validation.empty()) throw InvalidArgument("observer debounce: no healthy validation runs given");
+  const int n = twin.n_dof();
+  if (config.observer_level.size() != n || !(config.observer_gain > 0.0))
+    throw InvalidArgument("observer debounce: the momentum observer has no thresholds (learn them first)");
+  if (!config.observer_alerts) throw InvalidArgument("observer debounce: the observer raises no alerts (observer_alerts is off)");
+  if (config.observer_raise_after > 0)
+    throw InvalidArgument(fmt::format("observer debounce: observer_raise_after is set ({}) and would override a per-joint choice",
+                                      config.observer_raise_after));
+  const int shared = config.observer_debounce();
+  ObserverDebounceChoice out;
+  out.ratio.assign(static_cast<size_t>(shared), VectorJ::Zero(n));
+  for (const HealthyRun& h : validation) {
+    if (h.recording == nullptr) throw InvalidArgument("observer debounce: a validation run has no recording");
+    const auto& smp = h.recording->samples;
+    if (smp.size() > 1) out.seconds += smp.back().timestamp - smp.front().timestamp;
+    ident::TwinModel t = twin;
+    t.set_payload(h.payload);
+    for (int d = 1; d <= shared; ++d) {
+      MonitorConfig c = config;
+      c.observer_raise_after_joint.clear();
+      c.observer_raise_after = d;
+      Monitor m(t, c);
+      m.track_margin();
+      for (const auto& x : smp) m.push(x);
+      m.finish();
+      VectorJ& row = out.ratio[static_cast<size_t>(d - 1)];
+      row = row.cwiseMax(m.margin_observer());
+    }
+  }
+  const double worst = out.ratio.back().maxCoeff();
+  out.raise_after.assign(static_cast<size_t>(n), shared);
+  for (int j = 0; j < n; ++j)
+    for (int d = 1; d < shared; ++d) {
+      const double r = out.ratio[static_cast<size_t>(d - 1)][j];
+      if (r < 1.0 && r <= worst) {
+        out.raise_after[static_cast<size_t>(j)] = d;
+        break;
+      }
+    }
+  return out;
 }
 
 void learn_program_thresholds(MonitorConfig& config, const std::string& name, const ident::TwinModel& twin,
@@ -424,6 +516,8 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.dynamic = learned.dynamic;
   set.observer_level = learned.observer_level;
   set.observer_dynamic = learned.observer_dynamic;
+  set.observer_raise_after_joint = learned.observer_raise_after_joint;
+  set.observer_validation_ratio = learned.observer_validation_ratio;
   set.runs = static_cast<int>(runs.size());
   for (const auto& r : runs)
     if (r.recording->samples.size() > 1) set.seconds += r.recording->samples.back().timestamp - r.recording->samples.front().timestamp;
@@ -454,7 +548,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
-  deb_obs_.assign(static_cast<size_t>(n_), Debouncer(cfg_.observer_debounce(), cfg_.clear_after));
+  deb_obs_.clear();
+  for (int j = 0; j < n_; ++j) deb_obs_.emplace_back(cfg_.observer_debounce(j), cfg_.clear_after);
   joint_active_.assign(static_cast<size_t>(n_), 0);
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
@@ -567,7 +662,7 @@ void Monitor::track_margin(bool on) {
   margin_obs_.clear();
   if (!on) return;
   margin_cur_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.raise_after));
-  margin_obs_.assign(static_cast<size_t>(n_), DebouncedPeak(cfg_.observer_debounce()));
+  for (int j = 0; j < n_; ++j) margin_obs_.emplace_back(cfg_.observer_debounce(j));
 }
 
 VectorJ Monitor::peaks(const std::vector<DebouncedPeak>& channel) const {

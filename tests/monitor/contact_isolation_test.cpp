@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -259,6 +260,41 @@ TEST_F(Collisions, ASingleSampleObserverDebounceRaisesTheSameContactOneSampleEar
     EXPECT_EQ(one.link, two.link) << "the diagnosis window moves by one sample at most";
   }
   EXPECT_GE(earlier, 1);
+}
+
+// Per-joint observer debounce (MonitorConfig::observer_raise_after_joint): one sample on joint k and
+// the shared two elsewhere. Each such alert starts at the same first exceedance and is raised between
+// the shared two-sample and one-sample raises; the earliest of the six is the one-sample raise (the
+// joint whose observer crossed first raised it), and with every joint at one it is the one-sample
+// alert exactly.
+TEST_F(Collisions, APerJointObserverDebounceRaisesOnTheJointThatCrossedFirst) {
+  for (const ThreeNmContact& c : kThreeNmContacts) {
+    const auto rec = record(c);
+    auto first_event = [&](int shared, std::vector<int> per_joint) {
+      MonitorConfig cfg = *config;
+      cfg.observer_raise_after = shared;
+      cfg.observer_raise_after_joint = std::move(per_joint);
+      const std::vector<Event> ev = monitor(rec, cfg);
+      EXPECT_EQ(ev.size(), 1u) << "link " << c.link;
+      return ev.empty() ? Event{} : ev.front();
+    };
+    const int n = twin->n_dof();
+    const Event two = first_event(2, {}), one = first_event(1, {});
+    const Event all_one = first_event(0, std::vector<int>(static_cast<size_t>(n), 1));
+    EXPECT_DOUBLE_EQ(all_one.t_detected, one.t_detected) << "link " << c.link;
+    EXPECT_EQ(all_one.link, one.link);
+    double earliest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < n; ++k) {
+      std::vector<int> d(static_cast<size_t>(n), 2);
+      d[static_cast<size_t>(k)] = 1;
+      const Event e = first_event(0, d);
+      EXPECT_DOUBLE_EQ(e.t_start, two.t_start) << "link " << c.link << ", J" << k + 1 << " at one sample";
+      EXPECT_GE(e.t_detected, one.t_detected - 1e-9) << "link " << c.link << ", J" << k + 1;
+      EXPECT_LE(e.t_detected, two.t_detected + 1e-9) << "link " << c.link << ", J" << k + 1;
+      earliest = std::min(earliest, e.t_detected);
+    }
+    EXPECT_DOUBLE_EQ(earliest, one.t_detected) << "link " << c.link;
+  }
 }
 
 // A contact that pushes a resting joint leaves it held off target by static friction (the PD holds a

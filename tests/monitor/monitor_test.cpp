@@ -125,6 +125,64 @@ TEST_F(MonitorLoop, TheMarginOfAHealthyRunIsTheSensitivityOfItsFirstAlarm) {
   EXPECT_THROW(late.track_margin(), InvalidArgument);
 }
 
+// The observer's debounce per joint, chosen on a healthy validation run the thresholds were not
+// learned on. Checked: one exceedance's peak is never below two's (the run-minimum of two samples);
+// the chosen count of every joint is the smallest whose validation ratio is below 1 and below the
+// worst joint's at the shared count; a monitor with the choice shows each joint the margin of its own
+// count, so the run's largest observer ratio is no larger than with the shared count (the margin is
+// kept) while at least one joint is debounced less. A twin without an observer, a user's explicit
+// count and no validation run are refused; learning the thresholds again drops the choice.
+TEST_F(MonitorLoop, TheObserverDebouncePerJointKeepsTheSharedCountsMargin) {
+  const auto val = run(scenario(608, 40, 0.5));
+  const ObserverDebounceChoice choice = choose_observer_debounce(*twin, *config, {{&val, payload}});
+  const int n = twin->n_dof();
+  ASSERT_EQ(choice.ratio.size(), 2u) << "one row per count up to the shared 2";
+  ASSERT_EQ(choice.raise_after.size(), static_cast<size_t>(n));
+  EXPECT_NEAR(choice.seconds, 40.0, 0.01);
+  const double worst = choice.ratio[1].maxCoeff();
+  EXPECT_GT(worst, 0.3) << "a healthy run uses a fair part of its observer thresholds";
+  EXPECT_LT(worst, 1.0);
+  int fewer = 0;
+  for (int j = 0; j < n; ++j) {
+    EXPECT_GE(choice.ratio[0][j], choice.ratio[1][j]) << "J" << j + 1;
+    const bool one_fits = choice.ratio[0][j] < 1.0 && choice.ratio[0][j] <= worst;
+    EXPECT_EQ(choice.raise_after[static_cast<size_t>(j)], one_fits ? 1 : 2) << "J" << j + 1;
+    fewer += one_fits;
+  }
+  EXPECT_GE(fewer, 1) << "no joint keeps the worst joint's margin with one sample: nothing to check";
+  EXPECT_LT(fewer, n) << "the worst joint itself needs the shared count";
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  MonitorConfig chosen = *config;
+  chosen.observer_raise_after_joint = choice.raise_after;
+  Monitor m(t, chosen);
+  m.track_margin();
+  for (const auto& s : val.samples) m.push(s);
+  m.finish();
+  const VectorJ seen = m.margin_observer();
+  for (int j = 0; j < n; ++j)
+    EXPECT_DOUBLE_EQ(seen[j], choice.ratio[static_cast<size_t>(choice.raise_after[static_cast<size_t>(j)] - 1)][j]) << "J" << j + 1;
+  EXPECT_LE(seen.maxCoeff(), worst);
+  EXPECT_TRUE(m.events().empty());
+  // the explicit count overrides the per-joint one, and a choice under it is refused
+  chosen.observer_raise_after = 2;
+  EXPECT_EQ(chosen.observer_debounce(0), 2);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { choose_observer_debounce(*twin, chosen, {{&val, payload}}); }),
+              ::testing::HasSubstr("observer_raise_after is set (2)"));
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { choose_observer_debounce(*twin, *config, {}); }),
+              ::testing::HasSubstr("no healthy validation runs"));
+  MonitorConfig no_observer = *config;
+  no_observer.observer_level.resize(0);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { choose_observer_debounce(*twin, no_observer, {{&val, payload}}); }),
+              ::testing::HasSubstr("no thresholds"));
+  MonitorConfig relearned = *config;
+  relearned.observer_raise_after_joint = choice.raise_after;
+  relearned.observer_validation_ratio = choice.ratio;
+  relearned = learn_thresholds(*twin, {{&val, payload}}, relearned);
+  EXPECT_TRUE(relearned.observer_raise_after_joint.empty()) << "a choice belongs to the thresholds it was made for";
+  EXPECT_TRUE(relearned.observer_validation_ratio.empty());
+}
+
 TEST(MonitorConfig, ValidationNamesTheField) {
   MonitorConfig c;
   c.static_level = VectorJ::Ones(6);
@@ -150,6 +208,53 @@ TEST(MonitorConfig, ObserverRaiseAfterIsValidatedAndStored) {
   const MonitorConfig back = MonitorConfig::from_json(c.to_json(), "twin.json");
   EXPECT_EQ(back.observer_raise_after, 1);
   EXPECT_EQ(back.raise_after, c.raise_after);
+}
+
+// The per-joint observer debounce: validated (one entry per joint, each >= 1), stored with its
+// validation ratios in the default set and in a program's set, and taken with the program's thresholds
+// (a program without a choice of its own uses the shared count, not the default set's choice).
+TEST(MonitorConfig, ObserverDebouncePerJointIsValidatedStoredAndFollowsTheProgram) {
+  MonitorConfig c;
+  c.static_level = VectorJ::Ones(6);
+  c.use_dynamic = false;
+  c.observer_level = VectorJ::Constant(6, 2.0);
+  c.observer_raise_after_joint = {1, 1, 2};
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
+              ::testing::HasSubstr("monitor observer_raise_after_joint has 3 entries, expected 6 (one per joint)"));
+  c.observer_raise_after_joint = {1, 1, 0, 2, 1, 1};
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
+              ::testing::HasSubstr("observer_raise_after_joint of joint 3 is 0, must be >= 1"));
+  c.observer_raise_after_joint = {1, 1, 1, 2, 1, 1};
+  c.observer_validation_ratio = {VectorJ::Constant(6, 0.8), VectorJ::Constant(6, 0.7)};
+  ThresholdSet tri;
+  tri.static_level = VectorJ::Ones(6);
+  tri.observer_level = VectorJ::Constant(6, 3.0);
+  c.programs["triangle"] = tri;
+  ThresholdSet p2p = tri;
+  p2p.observer_raise_after_joint = {2, 2, 2, 2, 2, 1};
+  c.programs["point_to_point"] = p2p;
+  c.validate(6);
+  EXPECT_EQ(c.observer_debounce(0), 1);
+  EXPECT_EQ(c.observer_debounce(3), 2);
+  const MonitorConfig back = MonitorConfig::from_json(c.to_json(), "twin.json");
+  EXPECT_EQ(back.observer_raise_after_joint, c.observer_raise_after_joint);
+  ASSERT_EQ(back.observer_validation_ratio.size(), 2u);
+  EXPECT_DOUBLE_EQ(back.observer_validation_ratio[1][5], 0.7);
+  EXPECT_EQ(back.programs.at("point_to_point").observer_raise_after_joint, p2p.observer_raise_after_joint);
+  MonitorConfig on_p2p = back;
+  on_p2p.select_program("point_to_point");
+  EXPECT_EQ(on_p2p.observer_debounce(5), 1);
+  EXPECT_EQ(on_p2p.observer_debounce(0), 2);
+  MonitorConfig on_tri = back;
+  on_tri.select_program("triangle");
+  EXPECT_EQ(on_tri.observer_debounce(0), on_tri.raise_after) << "the default set's choice is not the triangle's";
+  c.programs["point_to_point"].observer_raise_after_joint = {2, 2};
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
+              ::testing::HasSubstr("program 'point_to_point' observer_raise_after_joint has 2 entries"));
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] {
+                MonitorConfig::from_json(R"({"static_level_A": [1], "observer_raise_after_joint": [1, 1.5]})", "twin.json");
+              }),
+              ::testing::HasSubstr("observer_raise_after_joint[1] must be an integer, got 1.5"));
 }
 
 // found by fuzzing (fuzz/regressions/monitor_config): 9 values overflowed a VectorJ (stack buffer

@@ -70,16 +70,22 @@ void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vec
       for (size_t k = 0; k < sensitivity.size(); ++k) cfg.sensitivity[static_cast<int>(k)] = sensitivity[k];
     }
   }
-  if (raise_after > 0) cfg.raise_after = raise_after;
+  if (raise_after > 0) {
+    cfg.raise_after = raise_after;
+    // the observer follows the current channel's count, as it did before the twin learned one per
+    // joint: a count the user gives overrides the learned one (MonitorConfig::observer_debounce)
+    if (cfg.observer_raise_after == 0) cfg.observer_raise_after = raise_after;
+  }
   if (observer_raise_after > 0) cfg.observer_raise_after = observer_raise_after;
   cfg.validate(n_dof);
 }
 constexpr const char* kRaiseAfterHelp =
-    "Consecutive samples over the current-residual threshold that raise an alert (default: the twin's, 2)";
+    "Consecutive samples over the current-residual threshold that raise an alert (default: the twin's, 2); the momentum "
+    "observer's channel then uses it too, instead of the twin's learned per-joint count, unless --observer-raise-after is given";
 constexpr const char* kObserverRaiseAfterHelp =
-    "Consecutive samples over the momentum observer's threshold that raise an alert (default: the twin's, else "
-    "--raise-after). 1 raises contacts one sample earlier but leaves less margin against false alarms "
-    "(docs/validation.md, 'Observer debounce')";
+    "Consecutive samples over the momentum observer's threshold that raise an alert, on every joint (default: the twin's "
+    "count per joint, learned by cross-validation on its healthy runs; else --raise-after). 1 raises contacts one sample "
+    "earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 
 int run_monitor(const MonitorOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);

@@ -36,6 +36,10 @@ struct ThresholdSet {
   std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] momentum observer, Cao eq. 24
   int runs = 0;                               ///< healthy runs it was learned on
   double seconds = 0.0;                       ///< their total duration [s]
+  /// Per-joint observer debounce chosen for these thresholds (choose_observer_debounce; empty: the shared one)
+  std::vector<int> observer_raise_after_joint;
+  /// The healthy validation ratios it was chosen from: row d-1 for a debounce of d samples (empty: not chosen)
+  std::vector<VectorJ> observer_validation_ratio;
 };
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
@@ -55,7 +59,22 @@ struct MonitorConfig {
   /// observer peaks within 1.0 % of the threshold instead of 9.1 % (evaluate reports it; docs/validation.md,
   /// "Observer debounce"), so it is not the default
   int observer_raise_after = 0;
-  /// The observer channel's debounce count in effect: observer_raise_after, else raise_after.
+  /// The observer channel's debounce per joint, chosen on healthy validation runs that the thresholds
+  /// were not learned on (choose_observer_debounce): a joint whose healthy observer peaks stay as far
+  /// below its threshold with fewer samples as the worst joint's do with the shared count gets fewer.
+  /// Empty: the shared count. observer_raise_after, when set, overrides it. Learning the thresholds
+  /// again clears it (it belongs to the thresholds it was chosen for).
+  std::vector<int> observer_raise_after_joint;
+  /// The healthy validation ratios it was chosen from: row d-1 for a debounce of d samples.
+  std::vector<VectorJ> observer_validation_ratio;
+  /// The observer channel's debounce count in effect for joint j: observer_raise_after, else the
+  /// learned per-joint count, else raise_after.
+  int observer_debounce(int j) const {
+    if (observer_raise_after > 0) return observer_raise_after;
+    if (j >= 0 && static_cast<size_t>(j) < observer_raise_after_joint.size()) return observer_raise_after_joint[static_cast<size_t>(j)];
+    return raise_after;
+  }
+  /// The shared count (no per-joint choice): observer_raise_after, else raise_after.
   int observer_debounce() const { return observer_raise_after > 0 ? observer_raise_after : raise_after; }
   VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
   double nominal_period = 0.002;              ///< [s]
@@ -134,6 +153,25 @@ struct HealthyRun {
 /// training data itself never trips it.
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs,
                                const MonitorConfig& settings = {}, const LearnOptions& options = {});
+
+/// The observer's debounce per joint, chosen on healthy validation runs that the thresholds in
+/// `config` (its selected program's, or the default set) were not learned on. The monitor runs each
+/// validation run for every debounce d = 1..D (D: the shared count, MonitorConfig::observer_debounce())
+/// and keeps each joint's healthy margin: the largest ratio |observer| / threshold that a whole run
+/// of d decisions exceeded (Monitor::track_margin). Joint j gets the smallest d whose ratio is below 1
+/// and no larger than the worst joint's ratio at D: a joint debounced less never comes closer to its
+/// threshold than the shared count already lets the worst joint come. Why validation runs and not a
+/// cross-validation of the (short) threshold runs: the largest healthy peak grows with the time
+/// watched, and blocks of a minute did not rank the joints the way hours of operation do (measured:
+/// docs/validation.md, "Observer debounce per joint"). Throws InvalidArgument without validation runs,
+/// with the observer off or not raising alerts, or with observer_raise_after set (it overrides any choice).
+struct ObserverDebounceChoice {
+  std::vector<int> raise_after;  ///< per joint
+  std::vector<VectorJ> ratio;    ///< row d-1: validation ratio per joint at debounce d
+  double seconds = 0.0;          ///< validation time [s]
+};
+ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, const MonitorConfig& config,
+                                                const std::vector<HealthyRun>& validation);
 
 /// Learns the thresholds of one program on its healthy runs and stores them in config.programs
 /// under `name` (replacing an earlier set of that name); config's other settings are used as is.
