@@ -40,6 +40,14 @@ $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_fir.json ${PROJECT_BINARY_DIR
 set_tests_properties(cli.thresholds_fir PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "with residual filter 'fir' and stored in.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)"
   FAIL_REGULAR_EXPRESSION "note: the thresholds")
+# the observer's debounce per joint, chosen on a healthy recording the thresholds were not learned on
+# (another seed of the same program and payload), stored, and used by the monitor without an alarm
+add_test(NAME cli.thresholds_debounce_validation
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_deb.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_deb.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --debounce-validation ${da}/full.csv && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_deb.json ${da}/full.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
+set_tests_properties(cli.thresholds_debounce_validation PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
+  PASS_REGULAR_EXPRESSION "observer debounce per joint [12] [12] [12] [12] [12] [12] \\(samples\\), chosen on 1 validation recording\\(s\\), 10 s.*observer debounce per joint: [12] [12] [12] [12] [12] [12] sample\\(s\\) \\(chosen on healthy validation runs.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
 # thresholds per program: learned into a named set, selected with --program; the default set stays
 add_test(NAME cli.thresholds_program
   COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_prog.json && \

@@ -84,8 +84,8 @@ constexpr const char* kRaiseAfterHelp =
     "observer's channel then uses it too, instead of the twin's learned per-joint count, unless --observer-raise-after is given";
 constexpr const char* kObserverRaiseAfterHelp =
     "Consecutive samples over the momentum observer's threshold that raise an alert, on every joint (default: the twin's "
-    "count per joint, learned by cross-validation on its healthy runs; else --raise-after). 1 raises contacts one sample "
-    "earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
+    "count per joint, chosen on healthy validation runs ('thresholds --debounce-validation'); else --raise-after). 1 "
+    "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 
 int run_monitor(const MonitorOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);
@@ -114,6 +114,10 @@ int run_monitor(const MonitorOptions& o) {
   }
   if (o.cycle_period > 0) cfg.trend.cycle_period = o.cycle_period;
   apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+  if (!o.quiet && !o.json && cfg.observer_alerts && cfg.observer_raise_after == 0 && !cfg.observer_raise_after_joint.empty())
+    fmt::print(stderr, "observer debounce per joint: {} sample(s) (chosen on healthy validation runs; --observer-raise-after N "
+                       "sets one count for all)\n",
+               fmt::join(cfg.observer_raise_after_joint, " "));
   if (o.recording.empty() == o.rtde.empty())
     throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
   device::Recording rec;
@@ -215,7 +219,7 @@ int run_monitor(const MonitorOptions& o) {
 
 struct ThresholdOptions {
   std::string twin, filter, program;
-  std::vector<std::string> recordings;
+  std::vector<std::string> recordings, debounce_validation;
   double payload_mass = 0.0;
 };
 
@@ -243,12 +247,37 @@ int run_thresholds(const ThresholdOptions& o) {
     }
     cfg.select_program(o.program);  // for the table below
   }
+  // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
+  std::vector<device::Recording> vrecs;
+  for (const auto& f : o.debounce_validation) vrecs.push_back(device::read_recording(f));
+  if (!vrecs.empty()) {
+    std::vector<monitor::HealthyRun> val;
+    for (const auto& r : vrecs) val.push_back({&r, p});
+    const auto choice = monitor::choose_observer_debounce(twin, cfg, val);
+    cfg.observer_raise_after_joint = choice.raise_after;
+    cfg.observer_validation_ratio = choice.ratio;
+    if (!o.program.empty()) {
+      cfg.programs.at(o.program).observer_raise_after_joint = choice.raise_after;
+      cfg.programs.at(o.program).observer_validation_ratio = choice.ratio;
+    }
+    fmt::print("observer debounce per joint {} (samples), chosen on {} validation recording(s), {:.0f} s; their healthy observer "
+               "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
+               fmt::join(choice.raise_after, " "), vrecs.size(), choice.seconds, fmt::join(choice.ratio.front(), " "),
+               choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
+  } else if (!twin.monitor_json.empty() && o.program.empty() && !settings.observer_raise_after_joint.empty()) {
+    fmt::print("note: the twin's per-joint observer debounce belonged to the old thresholds and is dropped; choose one "
+               "for the new ones with --debounce-validation HEALTHY.csv...\n");
+  }
   ident::TwinModel out = twin;
   monitor::MonitorConfig stored = cfg;
-  if (!o.program.empty() && !twin.monitor_json.empty()) {  // keep the default set as it was
+  if (!o.program.empty() && !twin.monitor_json.empty()) {  // keep the default set as it was (observer included)
     const auto before = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
     stored.static_level = before.static_level;
     stored.dynamic = before.dynamic;
+    stored.observer_level = before.observer_level;
+    stored.observer_dynamic = before.observer_dynamic;
+    stored.observer_raise_after_joint = before.observer_raise_after_joint;
+    stored.observer_validation_ratio = before.observer_validation_ratio;
   }
   stored.program.clear();
   out.monitor_json = stored.to_json();
@@ -302,6 +331,12 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]");
   sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--debounce-validation", o->debounce_validation,
+                  "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
+                  "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
+                  "a joint gets one sample where its healthy peaks stay as far below its threshold as the worst joint's do "
+                  "with the shared count (docs/validation.md, 'Observer debounce per joint'). Without it the shared count is used")
+      ->check(CLI::ExistingFile);
   sub->add_option("--program", o->program,
                   "Store the thresholds as the set of this program (letters, digits, _ - .), selected with 'monitor --program'; "
                   "the default set and the other programs' sets are kept. Without it: re-learn the default set");
