@@ -48,6 +48,17 @@ $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_deb.json ${PROJECT_BINARY_
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_deb.json ${da}/full.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_debounce_validation PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
   PASS_REGULAR_EXPRESSION "observer debounce per joint [12] [12] [12] [12] [12] [12] \\(samples\\), chosen on 1 validation recording\\(s\\), 10 s.*observer debounce per joint: [12] [12] [12] [12] [12] [12] sample\\(s\\) \\(chosen on healthy validation runs.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
+# a program's set leaves the default set as it was, the observer's thresholds included: the default
+# set's trace (residuals, thresholds, observer thresholds per sample) is the same before and after
+add_test(NAME cli.thresholds_program_keeps_the_default_set
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_keep.json && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_keep.json ${da}/full.csv --payload-mass 0.5 --db '' -q --trace ${da}/keep_before.csv && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_keep.json ${da}/full.csv --payload-mass 0.5 --program other && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_keep.json ${da}/full.csv --payload-mass 0.5 --db '' -q --trace ${da}/keep_after.csv && \
+$<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_keep.json ${da}/full.csv --payload-mass 0.5 --db '' -q --program other --trace ${da}/keep_other.csv && \
+cmp ${da}/keep_before.csv ${da}/keep_after.csv && echo DEFAULT-KEPT && (cmp -s ${da}/keep_before.csv ${da}/keep_other.csv || echo PROGRAM-DIFFERS)")
+set_tests_properties(cli.thresholds_program_keeps_the_default_set PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
+  PASS_REGULAR_EXPRESSION "DEFAULT-KEPT.*PROGRAM-DIFFERS")
 # thresholds per program: learned into a named set, selected with --program; the default set stays
 add_test(NAME cli.thresholds_program
   COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_prog.json && \

@@ -235,7 +235,10 @@ int run_thresholds(const ThresholdOptions& o) {
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
+  // cfg is what is stored: the default set re-learned, or a program's set added with the default
+  // set (observer thresholds and debounce included) left as it was
   monitor::MonitorConfig cfg = settings;
+  bool program_is_default = false;
   if (o.program.empty()) {
     cfg = monitor::learn_thresholds(twin, runs, settings);
   } else {
@@ -244,18 +247,24 @@ int run_thresholds(const ThresholdOptions& o) {
       const auto& set = cfg.programs.at(o.program);
       cfg.static_level = set.static_level;
       cfg.dynamic = set.dynamic;
+      cfg.observer_level = set.observer_level;
+      cfg.observer_dynamic = set.observer_dynamic;
+      program_is_default = true;
     }
-    cfg.select_program(o.program);  // for the table below
   }
+  monitor::MonitorConfig shown = cfg;  // the set just learned, for the choice and the table below
+  shown.select_program(o.program);
   // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
   std::vector<device::Recording> vrecs;
   for (const auto& f : o.debounce_validation) vrecs.push_back(device::read_recording(f));
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});
-    const auto choice = monitor::choose_observer_debounce(twin, cfg, val);
-    cfg.observer_raise_after_joint = choice.raise_after;
-    cfg.observer_validation_ratio = choice.ratio;
+    const auto choice = monitor::choose_observer_debounce(twin, shown, val);
+    if (o.program.empty() || program_is_default) {
+      cfg.observer_raise_after_joint = choice.raise_after;
+      cfg.observer_validation_ratio = choice.ratio;
+    }
     if (!o.program.empty()) {
       cfg.programs.at(o.program).observer_raise_after_joint = choice.raise_after;
       cfg.programs.at(o.program).observer_validation_ratio = choice.ratio;
@@ -264,31 +273,23 @@ int run_thresholds(const ThresholdOptions& o) {
                "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
                fmt::join(choice.raise_after, " "), vrecs.size(), choice.seconds, fmt::join(choice.ratio.front(), " "),
                choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
-  } else if (!twin.monitor_json.empty() && o.program.empty() && !settings.observer_raise_after_joint.empty()) {
+  } else if (o.program.empty() && !settings.observer_raise_after_joint.empty()) {
     fmt::print("note: the twin's per-joint observer debounce belonged to the old thresholds and is dropped; choose one "
                "for the new ones with --debounce-validation HEALTHY.csv...\n");
   }
   ident::TwinModel out = twin;
   monitor::MonitorConfig stored = cfg;
-  if (!o.program.empty() && !twin.monitor_json.empty()) {  // keep the default set as it was (observer included)
-    const auto before = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
-    stored.static_level = before.static_level;
-    stored.dynamic = before.dynamic;
-    stored.observer_level = before.observer_level;
-    stored.observer_dynamic = before.observer_dynamic;
-    stored.observer_raise_after_joint = before.observer_raise_after_joint;
-    stored.observer_validation_ratio = before.observer_validation_ratio;
-  }
   stored.program.clear();
   out.monitor_json = stored.to_json();
   out.save(o.twin);
   fmt::print("thresholds {} learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n",
              o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program), recs.size(),
              o.filter.empty() ? "iir" : o.filter, o.twin);
-  for (int j = 0; j < twin.n_dof(); ++j)
+  for (int j = 0; j < twin.n_dof(); ++j) {
+    const auto& d = shown.dynamic[static_cast<size_t>(j)];
     fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
-               cfg.static_level[j], cfg.dynamic[static_cast<size_t>(j)].psi_qdd, cfg.dynamic[static_cast<size_t>(j)].psi_qd,
-               cfg.dynamic[static_cast<size_t>(j)].psi_rev, cfg.dynamic[static_cast<size_t>(j)].rho, cfg.dynamic[static_cast<size_t>(j)].upsilon);
+               shown.static_level[j], d.psi_qdd, d.psi_qd, d.psi_rev, d.rho, d.upsilon);
+  }
   return 0;
 }
 
