@@ -49,7 +49,7 @@ struct MonitorConfig {
   bool use_dynamic = true;
   double filter_cutoff_hz = 40.0;             ///< first-order IIR on the current residual
   /// consecutive exceedances of the current residual's threshold that raise an alert [AGV §5] (and of
-  /// the observer's, unless observer_raise_after is set); 2 since 2026-11-23 (3 cost 2 ms on every
+  /// the observer's, unless observer_raise_after or a per-joint choice, observer_raise_after_joint, is set); 2 since 2026-11-23 (3 cost 2 ms on every
   /// collision; 2 raised no new false alarm in 8 h of long runs and wear ramps: docs/validation.md)
   int raise_after = 2;
   int clear_after = 50;                       ///< consecutive samples below that clear it
