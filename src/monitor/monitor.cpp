@@ -224,12 +224,24 @@ void check_levels(const VectorJ& static_level, const std::vector<DynamicThreshol
     throw InvalidArgument(fmt::format("{} dynamic thresholds: {} joints, expected {}", what, dynamic.size(), n));
 }
 
-void check_joint_debounce(const std::vector<int>& d, int n, const std::string& where) {
-  if (d.empty()) return;
+// the largest debounce count accepted in a file (the CLI's --raise-after range): each count is a ring of
+// that many ratios when the margin is tracked
+constexpr int kMaxDebounce = 1000;
+
+// a per-joint observer debounce choice with its validation ratios; only where the set has observer thresholds
+void check_joint_debounce(const std::vector<int>& d, const std::vector<VectorJ>& ratio, bool has_observer, int n,
+                          const std::string& where) {
+  if (d.empty() && ratio.empty()) return;
+  if (!has_observer)
+    throw InvalidArgument(fmt::format("{} has an observer debounce choice (observer_raise_after_joint) but no observer thresholds", where));
   if (static_cast<int>(d.size()) != n)
     throw InvalidArgument(fmt::format("{} observer_raise_after_joint has {} entries, expected {} (one per joint)", where, d.size(), n));
   for (size_t j = 0; j < d.size(); ++j)
-    if (d[j] < 1) throw InvalidArgument(fmt::format("{} observer_raise_after_joint of joint {} is {}, must be >= 1", where, j + 1, d[j]));
+    if (d[j] < 1 || d[j] > kMaxDebounce)
+      throw InvalidArgument(fmt::format("{} observer_raise_after_joint of joint {} is {}, must be 1 to {}", where, j + 1, d[j], kMaxDebounce));
+  for (size_t r = 0; r < ratio.size(); ++r)
+    if (ratio[r].size() != n)
+      throw InvalidArgument(fmt::format("{} observer_validation_ratio row {} has {} entries, expected {}", where, r + 1, ratio[r].size(), n));
 }
 
 nlohmann::json rows_json(const std::vector<VectorJ>& rows) {
@@ -249,8 +261,10 @@ std::vector<int> json_ints(const nlohmann::json& a, const std::string& field) {
   if (!a.is_array()) throw InvalidArgument(fmt::format("{} must be an array of integers", field));
   std::vector<int> v;
   for (size_t i = 0; i < a.size(); ++i) {
-    if (!a[i].is_number_integer()) throw InvalidArgument(fmt::format("{}[{}] must be an integer, got {}", field, i, a[i].dump()));
-    v.push_back(a[i].get<int>());
+    // whole_int: get<int>() would wrap 4294967297 to 1
+    const std::optional<int> x = a[i].is_number_integer() ? whole_int(a[i].get<double>()) : std::nullopt;
+    if (!x) throw InvalidArgument(fmt::format("{}[{}] must be a whole number within +-{}, got {}", field, i, std::numeric_limits<int>::max(), a[i].dump()));
+    v.push_back(*x);
   }
   return v;
 }
@@ -295,8 +309,10 @@ void MonitorConfig::validate(int n) const {
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
   if (observer_raise_after < 0)
     throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
-  check_joint_debounce(observer_raise_after_joint, n, "monitor");
-  for (const auto& [name, set] : programs) check_joint_debounce(set.observer_raise_after_joint, n, fmt::format("program '{}'", name));
+  check_joint_debounce(observer_raise_after_joint, observer_validation_ratio, observer_level.size() != 0, n, "monitor");
+  for (const auto& [name, set] : programs)
+    check_joint_debounce(set.observer_raise_after_joint, set.observer_validation_ratio, set.observer_level.size() != 0, n,
+                         fmt::format("program '{}'", name));
   if (sensitivity.size() != 0 && sensitivity.size() != n)
     throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
   for (int j = 0; j < sensitivity.size(); ++j)
@@ -486,6 +502,8 @@ ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, co
       MonitorConfig c = config;
       c.observer_raise_after_joint.clear();
       c.observer_raise_after = d;
+      // the recording's own period, as the monitor command uses it (a 125 Hz log is no stream of gaps)
+      if (h.recording->median_period > 0.0) c.nominal_period = h.recording->median_period;
       Monitor m(t, c);
       m.track_margin();
       for (const auto& x : smp) m.push(x);
@@ -516,8 +534,7 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.dynamic = learned.dynamic;
   set.observer_level = learned.observer_level;
   set.observer_dynamic = learned.observer_dynamic;
-  set.observer_raise_after_joint = learned.observer_raise_after_joint;
-  set.observer_validation_ratio = learned.observer_validation_ratio;
+  // no per-joint observer debounce: a choice belongs to the thresholds it was made for (choose_observer_debounce)
   set.runs = static_cast<int>(runs.size());
   for (const auto& r : runs)
     if (r.recording->samples.size() > 1) set.seconds += r.recording->samples.back().timestamp - r.recording->samples.front().timestamp;

@@ -47,7 +47,13 @@ add_test(NAME cli.thresholds_debounce_validation
 $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_deb.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --debounce-validation ${da}/full.csv && \
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_deb.json ${da}/full.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_debounce_validation PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
-  PASS_REGULAR_EXPRESSION "observer debounce per joint [12] [12] [12] [12] [12] [12] \\(samples\\), chosen on 1 validation recording\\(s\\), 10 s.*observer debounce per joint: [12] [12] [12] [12] [12] [12] sample\\(s\\) \\(chosen on healthy validation runs.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
+  PASS_REGULAR_EXPRESSION "observer debounce per joint ([12] )*1( [12])* \\(samples\\), chosen on 1 validation recording\\(s\\), 10 s.*observer debounce per joint: [12] [12] [12] [12] [12] [12] sample\\(s\\) \\(chosen on healthy validation runs.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
+# per-joint observer debounce chosen for the default set and for a program's set, each kept and used
+add_test(NAME cli.thresholds_debounce_program
+  COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/thresholds_debounce_program.sh $<TARGET_FILE:twinwatch>
+          ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/full.csv ${da})
+set_tests_properties(cli.thresholds_debounce_program PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
+  PASS_REGULAR_EXPRESSION "EACH-SET-KEEPS-ITS-OWN-COUNTS")
 # a program's set leaves the default set as it was, the observer's thresholds included: the default
 # set's trace (residuals, thresholds, observer thresholds per sample) is the same before and after
 add_test(NAME cli.thresholds_program_keeps_the_default_set

@@ -72,16 +72,23 @@ void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vec
   }
   if (raise_after > 0) {
     cfg.raise_after = raise_after;
-    // the observer follows the current channel's count, as it did before the twin learned one per
-    // joint: a count the user gives overrides the learned one (MonitorConfig::observer_debounce)
-    if (cfg.observer_raise_after == 0) cfg.observer_raise_after = raise_after;
+    // the observer follows the current channel's count (unless observer_raise_after is set), as it did
+    // before the twin chose one per joint: the choice was made for the old count and is dropped, in
+    // the default set and in every program's
+    cfg.observer_raise_after_joint.clear();
+    cfg.observer_validation_ratio.clear();
+    for (auto& [name, set] : cfg.programs) {
+      set.observer_raise_after_joint.clear();
+      set.observer_validation_ratio.clear();
+    }
   }
   if (observer_raise_after > 0) cfg.observer_raise_after = observer_raise_after;
   cfg.validate(n_dof);
 }
 constexpr const char* kRaiseAfterHelp =
     "Consecutive samples over the current-residual threshold that raise an alert (default: the twin's, 2); the momentum "
-    "observer's channel then uses it too, instead of the twin's learned per-joint count, unless --observer-raise-after is given";
+    "observer's channel then uses it too, instead of the twin's per-joint count, unless --observer-raise-after is given or the "
+    "twin sets observer_raise_after";
 constexpr const char* kObserverRaiseAfterHelp =
     "Consecutive samples over the momentum observer's threshold that raise an alert, on every joint (default: the twin's "
     "count per joint, chosen on healthy validation runs ('thresholds --debounce-validation'); else --raise-after). 1 "
@@ -273,9 +280,12 @@ int run_thresholds(const ThresholdOptions& o) {
                "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
                fmt::join(choice.raise_after, " "), vrecs.size(), choice.seconds, fmt::join(choice.ratio.front(), " "),
                choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
-  } else if (o.program.empty() && !settings.observer_raise_after_joint.empty()) {
-    fmt::print("note: the twin's per-joint observer debounce belonged to the old thresholds and is dropped; choose one "
-               "for the new ones with --debounce-validation HEALTHY.csv...\n");
+  } else if (o.program.empty() ? !settings.observer_raise_after_joint.empty()
+                                 : settings.programs.count(o.program) > 0 &&
+                                       !settings.programs.at(o.program).observer_raise_after_joint.empty()) {
+    fmt::print("note: the per-joint observer debounce of {} belonged to the old thresholds and is dropped; choose one "
+               "for the new ones with --debounce-validation HEALTHY.csv...\n",
+               o.program.empty() ? std::string("the default set") : fmt::format("program '{}'", o.program));
   }
   ident::TwinModel out = twin;
   monitor::MonitorConfig stored = cfg;
@@ -335,8 +345,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
                   "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
-                  "a joint gets one sample where its healthy peaks stay as far below its threshold as the worst joint's do "
-                  "with the shared count (docs/validation.md, 'Observer debounce per joint'). Without it the shared count is used")
+                  "each joint gets the smallest count (1 up to the shared one) at which its healthy peaks stay as far below its "
+                  "threshold as the worst joint's do with the shared count (docs/validation.md, 'Observer debounce per joint'). Without it the shared count is used")
       ->check(CLI::ExistingFile);
   sub->add_option("--program", o->program,
                   "Store the thresholds as the set of this program (letters, digits, _ - .), selected with 'monitor --program'; "
