@@ -48,6 +48,13 @@ $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_deb.json ${PROJECT_BINARY_
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_deb.json ${da}/full.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_debounce_validation PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
   PASS_REGULAR_EXPRESSION "observer debounce per joint ([12] )*1( [12])* \\(samples\\), chosen on 1 validation recording\\(s\\), 10 s.*observer debounce per joint: [12] [12] [12] [12] [12] [12] sample\\(s\\) \\(chosen on healthy validation runs.*5000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
+# a validation recording that is also a training recording is refused (the choice would be in-sample)
+add_test(NAME cli.thresholds_debounce_validation_in_sample
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_ins.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_ins.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 \
+--debounce-validation ${PROJECT_BINARY_DIR}/cli-pipeline/../cli-pipeline/fig.csv 2>&1; echo exit \$?")
+set_tests_properties(cli.thresholds_debounce_validation_in_sample PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "fig.csv is also one of the recordings the thresholds are learned on; the choice needs healthy runs they were not learned on.*exit [1-9]")
 # per-joint observer debounce chosen for the default set and for a program's set, each kept and used
 add_test(NAME cli.thresholds_debounce_program
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/thresholds_debounce_program.sh $<TARGET_FILE:twinwatch>

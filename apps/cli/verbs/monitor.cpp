@@ -263,7 +263,14 @@ int run_thresholds(const ThresholdOptions& o) {
   shown.select_program(o.program);
   // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
   std::vector<device::Recording> vrecs;
-  for (const auto& f : o.debounce_validation) vrecs.push_back(device::read_recording(f));
+  for (const auto& f : o.debounce_validation) {
+    for (const auto& r : o.recordings)
+      if (std::filesystem::equivalent(f, r))
+        throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
+                                          "the choice needs healthy runs they were not learned on",
+                                          f));
+    vrecs.push_back(device::read_recording(f));
+  }
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});
