@@ -201,8 +201,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
     // temperature slope and that the thresholds were not learned on (the default set's program);
     // the program sets keep the shared count (no long healthy run of theirs here)
     const auto choice = monitor::choose_observer_debounce(twin, cfg, {{&hc, p}, {&hw, p}});
-    cfg.observer_raise_after_joint = choice.raise_after;
-    cfg.observer_validation_ratio = choice.ratio;
+    cfg.observer_choice = choice;
     say(fmt::format("   observer debounce per joint (default set, chosen on the {:.0f} s warm-up and cool-down runs): {}; "
                     "their healthy ratio at 1 sample {:.3f}, at {} {:.3f}",
                     choice.seconds, fmt::join(choice.raise_after, " "), fmt::join(choice.ratio.front(), " "), choice.ratio.size(),

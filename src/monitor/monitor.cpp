@@ -229,8 +229,9 @@ void check_levels(const VectorJ& static_level, const std::vector<DynamicThreshol
 constexpr int kMaxDebounce = 1000;
 
 // a per-joint observer debounce choice with its validation ratios; only where the set has observer thresholds
-void check_joint_debounce(const std::vector<int>& d, const std::vector<VectorJ>& ratio, bool has_observer, int n,
-                          const std::string& where) {
+void check_choice(const ObserverDebounceChoice& choice, bool has_observer, int n, const std::string& where) {
+  const auto& d = choice.raise_after;
+  const auto& ratio = choice.ratio;
   if (d.empty() && ratio.empty()) return;
   if (!has_observer)
     throw InvalidArgument(fmt::format("{} has an observer debounce choice (observer_raise_after_joint) but no observer thresholds", where));
@@ -242,12 +243,6 @@ void check_joint_debounce(const std::vector<int>& d, const std::vector<VectorJ>&
   for (size_t r = 0; r < ratio.size(); ++r)
     if (ratio[r].size() != n)
       throw InvalidArgument(fmt::format("{} observer_validation_ratio row {} has {} entries, expected {}", where, r + 1, ratio[r].size(), n));
-}
-
-nlohmann::json rows_json(const std::vector<VectorJ>& rows) {
-  nlohmann::json a = nlohmann::json::array();
-  for (const auto& r : rows) a.push_back(vec_json(r));
-  return a;
 }
 
 std::vector<VectorJ> json_rows(const nlohmann::json& a, const std::string& field) {
@@ -267,6 +262,23 @@ std::vector<int> json_ints(const nlohmann::json& a, const std::string& field) {
     v.push_back(*x);
   }
   return v;
+}
+
+// a choice into the JSON object of its threshold set (nothing when none was chosen)
+void put_choice(nlohmann::json& j, const ObserverDebounceChoice& choice) {
+  if (!choice.raise_after.empty()) j["observer_raise_after_joint"] = choice.raise_after;
+  if (choice.ratio.empty()) return;
+  nlohmann::json& rows = j["observer_validation_ratio"] = nlohmann::json::array();
+  for (const auto& r : choice.ratio) rows.push_back(vec_json(r));
+}
+
+// the choice of the threshold set `j`; `prefix` names it in errors ("" or "programs.NAME.")
+ObserverDebounceChoice get_choice(const nlohmann::json& j, const std::string& prefix) {
+  ObserverDebounceChoice c;
+  if (j.contains("observer_raise_after_joint"))
+    c.raise_after = json_ints(j["observer_raise_after_joint"], prefix + "observer_raise_after_joint");
+  if (j.contains("observer_validation_ratio")) c.ratio = json_rows(j["observer_validation_ratio"], prefix + "observer_validation_ratio");
+  return c;
 }
 
 void check_program_name(const std::string& name) {
@@ -294,9 +306,8 @@ void MonitorConfig::select_program(const std::string& name) {
   if (it->second.observer_level.size() != 0) {
     observer_level = it->second.observer_level;
     observer_dynamic = it->second.observer_dynamic;
-    // the debounce learned with these thresholds (none learned: the shared count)
-    observer_raise_after_joint = it->second.observer_raise_after_joint;
-    observer_validation_ratio = it->second.observer_validation_ratio;
+    // the debounce chosen for these thresholds (none chosen: the shared count)
+    observer_choice = it->second.observer_choice;
   }
   program = name;
 }
@@ -309,10 +320,8 @@ void MonitorConfig::validate(int n) const {
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
   if (observer_raise_after < 0)
     throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
-  check_joint_debounce(observer_raise_after_joint, observer_validation_ratio, observer_level.size() != 0, n, "monitor");
-  for (const auto& [name, set] : programs)
-    check_joint_debounce(set.observer_raise_after_joint, set.observer_validation_ratio, set.observer_level.size() != 0, n,
-                         fmt::format("program '{}'", name));
+  check_choice(observer_choice, observer_level.size() != 0, n, "monitor");
+  for (const auto& [name, set] : programs) check_choice(set.observer_choice, set.observer_level.size() != 0, n, fmt::format("program '{}'", name));
   if (sensitivity.size() != 0 && sensitivity.size() != n)
     throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
   for (int j = 0; j < sensitivity.size(); ++j)
@@ -338,8 +347,7 @@ std::string MonitorConfig::to_json() const {
   j["raise_after"] = raise_after;
   j["clear_after"] = clear_after;
   if (observer_raise_after > 0) j["observer_raise_after"] = observer_raise_after;
-  if (!observer_raise_after_joint.empty()) j["observer_raise_after_joint"] = observer_raise_after_joint;
-  if (!observer_validation_ratio.empty()) j["observer_validation_ratio"] = rows_json(observer_validation_ratio);
+  put_choice(j, observer_choice);
   if (sensitivity.size()) j["sensitivity"] = vec_json(sensitivity);
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
@@ -351,8 +359,7 @@ std::string MonitorConfig::to_json() const {
     if (set.observer_level.size() != 0) {
       j["programs"][name]["observer_level_Nm"] = vec_json(set.observer_level);
       j["programs"][name]["observer_dynamic"] = dynamic_json(set.observer_dynamic);
-      if (!set.observer_raise_after_joint.empty()) j["programs"][name]["observer_raise_after_joint"] = set.observer_raise_after_joint;
-      if (!set.observer_validation_ratio.empty()) j["programs"][name]["observer_validation_ratio"] = rows_json(set.observer_validation_ratio);
+      put_choice(j["programs"][name], set.observer_choice);
     }
   j["observer_gain"] = observer_gain;
   j["observer_alerts"] = observer_alerts;
@@ -374,8 +381,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.raise_after = json_int(j, "raise_after", c.raise_after, "raise_after");
     c.clear_after = json_int(j, "clear_after", c.clear_after, "clear_after");
     c.observer_raise_after = json_int(j, "observer_raise_after", c.observer_raise_after, "observer_raise_after");
-    if (j.contains("observer_raise_after_joint")) c.observer_raise_after_joint = json_ints(j["observer_raise_after_joint"], "observer_raise_after_joint");
-    if (j.contains("observer_validation_ratio")) c.observer_validation_ratio = json_rows(j["observer_validation_ratio"], "observer_validation_ratio");
+    c.observer_choice = get_choice(j, "");
     if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"], "sensitivity");
     c.nominal_period = j.value("nominal_period", c.nominal_period);
     if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
@@ -387,9 +393,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
         if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"], fmt::format("programs.{}.observer_level_Nm", name));
         if (p.contains("observer_dynamic")) set.observer_dynamic = json_dynamic(p["observer_dynamic"]);
-        if (p.contains("observer_raise_after_joint"))
-          set.observer_raise_after_joint = json_ints(p["observer_raise_after_joint"], fmt::format("programs.{}.observer_raise_after_joint", name));
-        if (p.contains("observer_validation_ratio")) set.observer_validation_ratio = json_rows(p["observer_validation_ratio"], fmt::format("programs.{}.observer_validation_ratio", name));
+        set.observer_choice = get_choice(p, fmt::format("programs.{}.", name));
         set.runs = json_int(p, "runs", 0, fmt::format("programs.{}.runs", name));
         set.seconds = p.value("seconds", 0.0);
         c.programs[name] = std::move(set);
@@ -473,9 +477,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       c.observer_dynamic.push_back(fit.params);
     }
   }
-  // a per-joint debounce belongs to the thresholds it was chosen for
-  c.observer_raise_after_joint.clear();
-  c.observer_validation_ratio.clear();
+  c.observer_choice = {};  // a per-joint debounce belongs to the thresholds it was chosen for
   return c;
 }
 
@@ -500,7 +502,7 @@ ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, co
     t.set_payload(h.payload);
     for (int d = 1; d <= shared; ++d) {
       MonitorConfig c = config;
-      c.observer_raise_after_joint.clear();
+      c.observer_choice = {};
       c.observer_raise_after = d;
       // the recording's own period, as the monitor command uses it (a 125 Hz log is no stream of gaps)
       if (h.recording->median_period > 0.0) c.nominal_period = h.recording->median_period;

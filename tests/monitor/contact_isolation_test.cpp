@@ -262,7 +262,7 @@ TEST_F(Collisions, ASingleSampleObserverDebounceRaisesTheSameContactOneSampleEar
   EXPECT_GE(earlier, 1);
 }
 
-// Per-joint observer debounce (MonitorConfig::observer_raise_after_joint): one sample on joint k and
+// Per-joint observer debounce (MonitorConfig::observer_choice): one sample on joint k and
 // the shared two elsewhere. Each such alert starts at the same first exceedance and is raised between
 // the shared two-sample and one-sample raises; the earliest of the six is the one-sample raise (the
 // joint whose observer crossed first raised it), and with every joint at one it is the one-sample
@@ -273,7 +273,7 @@ TEST_F(Collisions, APerJointObserverDebounceRaisesOnTheJointThatCrossedFirst) {
     auto first_event = [&](int shared, std::vector<int> per_joint) {
       MonitorConfig cfg = *config;
       cfg.observer_raise_after = shared;
-      cfg.observer_raise_after_joint = std::move(per_joint);
+      cfg.observer_choice.raise_after = std::move(per_joint);
       const std::vector<Event> ev = monitor(rec, cfg);
       EXPECT_EQ(ev.size(), 1u) << "link " << c.link;
       return ev.empty() ? Event{} : ev.front();

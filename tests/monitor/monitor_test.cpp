@@ -153,7 +153,7 @@ TEST_F(MonitorLoop, TheObserverDebouncePerJointKeepsTheSharedCountsMargin) {
   ident::TwinModel t = *twin;
   t.set_payload(payload);
   MonitorConfig chosen = *config;
-  chosen.observer_raise_after_joint = choice.raise_after;
+  chosen.observer_choice.raise_after = choice.raise_after;
   Monitor m(t, chosen);
   m.track_margin();
   for (const auto& s : val.samples) m.push(s);
@@ -175,11 +175,10 @@ TEST_F(MonitorLoop, TheObserverDebouncePerJointKeepsTheSharedCountsMargin) {
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { choose_observer_debounce(*twin, no_observer, {{&val, payload}}); }),
               ::testing::HasSubstr("no thresholds"));
   MonitorConfig relearned = *config;
-  relearned.observer_raise_after_joint = choice.raise_after;
-  relearned.observer_validation_ratio = choice.ratio;
+  relearned.observer_choice = choice;
   relearned = learn_thresholds(*twin, {{&val, payload}}, relearned);
-  EXPECT_TRUE(relearned.observer_raise_after_joint.empty()) << "a choice belongs to the thresholds it was made for";
-  EXPECT_TRUE(relearned.observer_validation_ratio.empty());
+  EXPECT_TRUE(relearned.observer_choice.raise_after.empty()) << "a choice belongs to the thresholds it was made for";
+  EXPECT_TRUE(relearned.observer_choice.ratio.empty());
 }
 
 TEST(MonitorConfig, ValidationNamesTheField) {
@@ -217,17 +216,17 @@ TEST(MonitorConfig, ObserverDebouncePerJointIsValidatedStoredAndFollowsTheProgra
   c.static_level = VectorJ::Ones(6);
   c.use_dynamic = false;
   c.observer_level = VectorJ::Constant(6, 2.0);
-  c.observer_raise_after_joint = {1, 1, 2};
+  c.observer_choice.raise_after = {1, 1, 2};
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
               ::testing::HasSubstr("monitor observer_raise_after_joint has 3 entries, expected 6 (one per joint)"));
-  c.observer_raise_after_joint = {1, 1, 0, 2, 1, 1};
+  c.observer_choice.raise_after = {1, 1, 0, 2, 1, 1};
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
               ::testing::HasSubstr("observer_raise_after_joint of joint 3 is 0, must be 1 to 1000"));
-  c.observer_raise_after_joint = {1, 1, 1, 2, 1, 1};
-  c.observer_validation_ratio = {VectorJ::Constant(6, 0.8), VectorJ::Constant(5, 0.7)};
+  c.observer_choice.raise_after = {1, 1, 1, 2, 1, 1};
+  c.observer_choice.ratio = {VectorJ::Constant(6, 0.8), VectorJ::Constant(5, 0.7)};
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
               ::testing::HasSubstr("monitor observer_validation_ratio row 2 has 5 entries, expected 6"));
-  c.observer_validation_ratio = {VectorJ::Constant(6, 0.8), VectorJ::Constant(6, 0.7)};
+  c.observer_choice.ratio = {VectorJ::Constant(6, 0.8), VectorJ::Constant(6, 0.7)};
   MonitorConfig no_observer = c;
   no_observer.observer_level.resize(0);
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { no_observer.validate(6); }),
@@ -237,16 +236,16 @@ TEST(MonitorConfig, ObserverDebouncePerJointIsValidatedStoredAndFollowsTheProgra
   tri.observer_level = VectorJ::Constant(6, 3.0);
   c.programs["triangle"] = tri;
   ThresholdSet p2p = tri;
-  p2p.observer_raise_after_joint = {2, 2, 2, 2, 2, 1};
+  p2p.observer_choice.raise_after = {2, 2, 2, 2, 2, 1};
   c.programs["point_to_point"] = p2p;
   c.validate(6);
   EXPECT_EQ(c.observer_debounce(0), 1);
   EXPECT_EQ(c.observer_debounce(3), 2);
   const MonitorConfig back = MonitorConfig::from_json(c.to_json(), "twin.json");
-  EXPECT_EQ(back.observer_raise_after_joint, c.observer_raise_after_joint);
-  ASSERT_EQ(back.observer_validation_ratio.size(), 2u);
-  EXPECT_DOUBLE_EQ(back.observer_validation_ratio[1][5], 0.7);
-  EXPECT_EQ(back.programs.at("point_to_point").observer_raise_after_joint, p2p.observer_raise_after_joint);
+  EXPECT_EQ(back.observer_choice.raise_after, c.observer_choice.raise_after);
+  ASSERT_EQ(back.observer_choice.ratio.size(), 2u);
+  EXPECT_DOUBLE_EQ(back.observer_choice.ratio[1][5], 0.7);
+  EXPECT_EQ(back.programs.at("point_to_point").observer_choice.raise_after, p2p.observer_choice.raise_after);
   MonitorConfig on_p2p = back;
   on_p2p.select_program("point_to_point");
   EXPECT_EQ(on_p2p.observer_debounce(5), 1);
@@ -254,7 +253,7 @@ TEST(MonitorConfig, ObserverDebouncePerJointIsValidatedStoredAndFollowsTheProgra
   MonitorConfig on_tri = back;
   on_tri.select_program("triangle");
   EXPECT_EQ(on_tri.observer_debounce(0), on_tri.raise_after) << "the default set's choice is not the triangle's";
-  c.programs["point_to_point"].observer_raise_after_joint = {2, 2};
+  c.programs["point_to_point"].observer_choice.raise_after = {2, 2};
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
               ::testing::HasSubstr("program 'point_to_point' observer_raise_after_joint has 2 entries"));
   EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] {

@@ -75,12 +75,8 @@ void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vec
     // the observer follows the current channel's count (unless observer_raise_after is set), as it did
     // before the twin chose one per joint: the choice was made for the old count and is dropped, in
     // the default set and in every program's
-    cfg.observer_raise_after_joint.clear();
-    cfg.observer_validation_ratio.clear();
-    for (auto& [name, set] : cfg.programs) {
-      set.observer_raise_after_joint.clear();
-      set.observer_validation_ratio.clear();
-    }
+    cfg.observer_choice = {};
+    for (auto& [name, set] : cfg.programs) set.observer_choice = {};
   }
   if (observer_raise_after > 0) cfg.observer_raise_after = observer_raise_after;
   cfg.validate(n_dof);
@@ -121,10 +117,10 @@ int run_monitor(const MonitorOptions& o) {
   }
   if (o.cycle_period > 0) cfg.trend.cycle_period = o.cycle_period;
   apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
-  if (!o.quiet && !o.json && cfg.observer_alerts && cfg.observer_raise_after == 0 && !cfg.observer_raise_after_joint.empty())
+  if (!o.quiet && !o.json && cfg.observer_alerts && cfg.observer_raise_after == 0 && !cfg.observer_choice.raise_after.empty())
     fmt::print(stderr, "observer debounce per joint: {} sample(s) (chosen on healthy validation runs; --observer-raise-after N "
                        "sets one count for all)\n",
-               fmt::join(cfg.observer_raise_after_joint, " "));
+               fmt::join(cfg.observer_choice.raise_after, " "));
   if (o.recording.empty() == o.rtde.empty())
     throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
   device::Recording rec;
@@ -251,11 +247,8 @@ int run_thresholds(const ThresholdOptions& o) {
   } else {
     monitor::learn_program_thresholds(cfg, o.program, twin, runs);
     if (cfg.static_level.size() == 0) {  // a twin without thresholds: the first program's set is also the default
-      const auto& set = cfg.programs.at(o.program);
-      cfg.static_level = set.static_level;
-      cfg.dynamic = set.dynamic;
-      cfg.observer_level = set.observer_level;
-      cfg.observer_dynamic = set.observer_dynamic;
+      cfg.select_program(o.program);
+      cfg.program.clear();
       program_is_default = true;
     }
   }
@@ -275,21 +268,15 @@ int run_thresholds(const ThresholdOptions& o) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);
-    if (o.program.empty() || program_is_default) {
-      cfg.observer_raise_after_joint = choice.raise_after;
-      cfg.observer_validation_ratio = choice.ratio;
-    }
-    if (!o.program.empty()) {
-      cfg.programs.at(o.program).observer_raise_after_joint = choice.raise_after;
-      cfg.programs.at(o.program).observer_validation_ratio = choice.ratio;
-    }
+    if (o.program.empty() || program_is_default) cfg.observer_choice = choice;
+    if (!o.program.empty()) cfg.programs.at(o.program).observer_choice = choice;
     fmt::print("observer debounce per joint {} (samples), chosen on {} validation recording(s), {:.0f} s; their healthy observer "
                "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
                fmt::join(choice.raise_after, " "), vrecs.size(), choice.seconds, fmt::join(choice.ratio.front(), " "),
                choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
-  } else if (o.program.empty() ? !settings.observer_raise_after_joint.empty()
+  } else if (o.program.empty() ? !settings.observer_choice.raise_after.empty()
                                  : settings.programs.count(o.program) > 0 &&
-                                       !settings.programs.at(o.program).observer_raise_after_joint.empty()) {
+                                       !settings.programs.at(o.program).observer_choice.raise_after.empty()) {
     fmt::print("note: the per-joint observer debounce of {} belonged to the old thresholds and is dropped; choose one "
                "for the new ones with --debounce-validation HEALTHY.csv...\n",
                o.program.empty() ? std::string("the default set") : fmt::format("program '{}'", o.program));

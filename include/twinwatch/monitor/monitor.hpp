@@ -26,6 +26,16 @@
 
 namespace twinwatch::monitor {
 
+/// The momentum observer's debounce count per joint chosen for one threshold set on healthy
+/// validation runs (choose_observer_debounce), with the ratios it was chosen from. Empty: none chosen,
+/// the shared count applies. It belongs to the thresholds it was chosen for: learning them again drops it.
+/// Stored in the twin file as observer_raise_after_joint and observer_validation_ratio.
+struct ObserverDebounceChoice {
+  std::vector<int> raise_after;  ///< per joint
+  std::vector<VectorJ> ratio;    ///< row d-1: validation ratio per joint at debounce d
+  double seconds = 0.0;          ///< validation time [s] (not stored)
+};
+
 /// The thresholds learned for one program (the motion the robot repeats): healthy residuals differ
 /// between programs (speeds, reversals, payload, warm-up), and one set learned over all of them is
 /// as wide as the widest program needs, which costs sensitivity on the quiet ones.
@@ -36,10 +46,7 @@ struct ThresholdSet {
   std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] momentum observer, Cao eq. 24
   int runs = 0;                               ///< healthy runs it was learned on
   double seconds = 0.0;                       ///< their total duration [s]
-  /// Per-joint observer debounce chosen for these thresholds (choose_observer_debounce; empty: the shared one)
-  std::vector<int> observer_raise_after_joint;
-  /// The healthy validation ratios it was chosen from: row d-1 for a debounce of d samples (empty: not chosen)
-  std::vector<VectorJ> observer_validation_ratio;
+  ObserverDebounceChoice observer_choice;     ///< the observer's debounce per joint for these thresholds (empty: the shared count)
 };
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
@@ -49,7 +56,7 @@ struct MonitorConfig {
   bool use_dynamic = true;
   double filter_cutoff_hz = 40.0;             ///< first-order IIR on the current residual
   /// consecutive exceedances of the current residual's threshold that raise an alert [AGV §5] (and of
-  /// the observer's, unless observer_raise_after or a per-joint choice, observer_raise_after_joint, is set); 2 since 2026-11-23 (3 cost 2 ms on every
+  /// the observer's, unless observer_raise_after or a per-joint choice, observer_choice, is set); 2 since 2026-11-23 (3 cost 2 ms on every
   /// collision; 2 raised no new false alarm in 8 h of long runs and wear ramps: docs/validation.md)
   int raise_after = 2;
   int clear_after = 50;                       ///< consecutive samples below that clear it
@@ -62,16 +69,14 @@ struct MonitorConfig {
   /// The observer channel's debounce per joint, chosen on healthy validation runs that the thresholds
   /// were not learned on (choose_observer_debounce): a joint whose healthy observer peaks stay as far
   /// below its threshold with fewer samples as the worst joint's do with the shared count gets fewer.
-  /// Empty: the shared count. observer_raise_after, when set, overrides it. Learning the thresholds
-  /// again clears it (it belongs to the thresholds it was chosen for).
-  std::vector<int> observer_raise_after_joint;
-  /// The healthy validation ratios it was chosen from: row d-1 for a debounce of d samples.
-  std::vector<VectorJ> observer_validation_ratio;
+  /// Empty: the shared count. observer_raise_after, when set, overrides it.
+  ObserverDebounceChoice observer_choice;
   /// The observer channel's debounce count in effect for joint j: observer_raise_after, else the
-  /// learned per-joint count, else raise_after.
+  /// chosen per-joint count, else raise_after.
   int observer_debounce(int j) const {
+    const auto& d = observer_choice.raise_after;
     if (observer_raise_after > 0) return observer_raise_after;
-    if (j >= 0 && static_cast<size_t>(j) < observer_raise_after_joint.size()) return observer_raise_after_joint[static_cast<size_t>(j)];
+    if (j >= 0 && static_cast<size_t>(j) < d.size()) return d[static_cast<size_t>(j)];
     return raise_after;
   }
   /// The shared count (no per-joint choice): observer_raise_after, else raise_after.
@@ -165,11 +170,6 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
 /// watched, and blocks of a minute did not rank the joints the way hours of operation do (measured:
 /// docs/validation.md, "Observer debounce per joint"). Throws InvalidArgument without validation runs,
 /// with the observer off or not raising alerts, or with observer_raise_after set (it overrides any choice).
-struct ObserverDebounceChoice {
-  std::vector<int> raise_after;  ///< per joint
-  std::vector<VectorJ> ratio;    ///< row d-1: validation ratio per joint at debounce d
-  double seconds = 0.0;          ///< validation time [s]
-};
 ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, const MonitorConfig& config,
                                                 const std::vector<HealthyRun>& validation);
 
