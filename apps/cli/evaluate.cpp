@@ -746,6 +746,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   if (payload_com.size() == 3) p.com = Eigen::Vector3d(payload_com[0], payload_com[1], payload_com[2]);
   twin.set_payload(p);
   const device::Recording rec = device::read_recording(recording);
+  device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   monitor::Monitor mon(twin, cfg);

@@ -88,10 +88,6 @@ std::string group_prefixes() {
 
 bool parse_double(const std::string& s, double& v) {
   if (s.empty()) return false;
-  if (s == "nan" || s == "NaN") {
-    v = std::numeric_limits<double>::quiet_NaN();
-    return true;
-  }
   const char* b = s.data();
   const char* e = b + s.size();
   if (*b == '+') ++b;
@@ -147,6 +143,8 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   if (!f) throw ParseError(path, 0, "", "cannot open the recording (does it exist and is it readable?)");
   std::string line;
   if (!std::getline(f, line)) throw ParseError(path, 1, "", "empty file, expected a header of RTDE names");
+  // a UTF-8 byte-order mark (spreadsheet programs write one) is not part of the first name
+  if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
   std::vector<std::string> header = split_csv(line);
   std::vector<double> scale(header.size(), 1.0);
   std::vector<std::string> names = header;
@@ -215,6 +213,15 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       }
     }
   }
+  // the same signal twice: one copy would win silently and the other's data would be lost
+  for (size_t c = 0; c < names.size(); ++c) {
+    if (names[c].empty() || !known_name(names[c])) continue;
+    for (size_t d = c + 1; d < names.size(); ++d)
+      if (names[d] == names[c])
+        throw ParseError(path, 1, header[d],
+                         fmt::format("column {} is '{}' again (column {} is '{}'): expected each signal once",
+                                     d + 1, names[d], c + 1, header[c]));
+  }
   if (ts_col < 0) throw ParseError(path, 1, "timestamp", "missing required column");
   for (int j = 0; j < n; ++j)
     if (!seen[0][static_cast<size_t>(j)]) throw ParseError(path, 1, fmt::format("actual_q_{}", j), "missing required column");
@@ -251,7 +258,12 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       double v;
       if (!parse_double(cells[c], v))
         throw ParseError(path, ln, header[c], fmt::format("expected a number, got '{}'", cells[c]));
+      // nan or inf in one cell would run through every filter and observer state after it and
+      // blind the monitor for the rest of the recording: refuse it here, where file and line are known
       v *= scale[c];
+      if (!std::isfinite(v))
+        throw ParseError(path, ln, header[c],
+                         fmt::format("expected a finite number, got '{}'{}", cells[c], scale[c] == 1.0 ? "" : " (after the column map's scale)"));
       if (static_cast<int>(c) == ts_col) s.timestamp = v;
       else if (static_cast<int>(c) == do_col) {
         // a bit mask: a whole number 0 to 2^64-1, exact when written as an integer (as the writer
@@ -293,6 +305,14 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
   for (const RobotSample& s : rec.samples) rec.gaps += s.gap_before ? 1 : 0;
   return rec;
+}
+
+void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user) {
+  for (const Group& g : kGroups)
+    if (g.flag != 0 && (fields & g.flag) && !(rec.present & g.flag))
+      throw ParseError(rec.path, 1, fmt::format("{}0", g.prefix),
+                       fmt::format("missing required column: {} needs {}0..{}{}, the header has none of them", user, g.prefix,
+                                   g.prefix, rec.n_dof - 1));
 }
 
 RecordingWriter::RecordingWriter(const std::string& path, int n_dof, std::uint32_t fields)

@@ -2,6 +2,7 @@
 
 #include <ClpSimplex.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -37,10 +38,16 @@ StaticThreshold StaticThreshold::learn(const std::vector<std::vector<VectorJ>>& 
   long n = -1;
   for (size_t r = 0; r < runs.size(); ++r) {
     if (runs[r].empty()) throw InvalidArgument(fmt::format("static threshold: healthy run {} is empty", r));
-    for (const VectorJ& v : runs[r]) {
+    for (size_t k = 0; k < runs[r].size(); ++k) {
+      const VectorJ& v = runs[r][k];
       if (n < 0) n = v.size();
       if (v.size() != n)
         throw InvalidArgument(fmt::format("static threshold: a residual of run {} has size {}, expected {}", r, v.size(), n));
+      // one nan would make every level nan, and a nan threshold never trips
+      if (!v.allFinite())
+        throw InvalidArgument(fmt::format("static threshold: residual {} of healthy run {} is not finite ({}); expected finite "
+                                          "residuals from finite signals",
+                                          k, r, fmt::join(v, " ")));
     }
   }
   // max over runs of the per-run MAE, plus k sigma of all healthy residuals pooled
@@ -170,6 +177,12 @@ DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<c
                                       qd.size(), qdd.size()));
   if (r.size() < 10)
     throw InvalidArgument(fmt::format("dynamic threshold: {} healthy samples, expected at least 10", r.size()));
+  // the LP solvers assert on non-finite coefficients (CLP aborts the process): refuse them here
+  for (size_t k = 0; k < r.size(); ++k)
+    if (!std::isfinite(r[k]) || !std::isfinite(qd[k]) || !std::isfinite(qdd[k]))
+      throw InvalidArgument(fmt::format("dynamic threshold: healthy sample {} is not finite (r {}, qd {}, qdd {}); expected finite "
+                                        "residuals, velocities and accelerations",
+                                        k, r[k], qd[k], qdd[k]));
 
   // decimate uniformly, but always keep the largest residuals: they bind the constraints
   const size_t N = r.size();

@@ -199,5 +199,58 @@ TEST(Recording, RobotModeAndDigitalOutputsMustBeWholeNumbersInRange) {
   EXPECT_EQ(r.samples[0].robot_mode, -1);
 }
 
+// audit of session 16: one nan or inf cell used to load and then blind the monitor for the rest
+// of the recording (the filter and observer states stayed nan); now the reader names it
+TEST(Recording, NonFiniteCellsAreRefusedWithFileLineAndColumn) {
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_current_0\n0,0,1\n0.002,nan,1\n"),
+              HasSubstr("bad.csv:3: field 'actual_q_0': expected a finite number, got 'nan'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_current_0\n0,0,1\n0.002,0,-inf\n"),
+              HasSubstr("bad.csv:3: field 'actual_current_0': expected a finite number, got '-inf'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0\ninf,0\n"), HasSubstr("bad.csv:2: field 'timestamp': expected a finite number, got 'inf'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0\n0,infinity\n"), HasSubstr("got 'infinity'"));
+  // a finite cell that a column map's scale takes beyond a double
+  const std::string m = tmp("huge.map");
+  std::ofstream(m) << "Position1,actual_q_0,1e300\n";
+  const ColumnMap map = ColumnMap::load(m);
+  const std::string p = tmp("huge.csv");
+  std::ofstream(p) << "timestamp,Position1\n0,1e10\n";
+  try {
+    read_recording(p, &map);
+    ADD_FAILURE() << "a scaled cell beyond a double loaded";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("huge.csv:2: field 'Position1': expected a finite number, got '1e10' (after the column map's scale)"));
+  }
+}
+
+TEST(Recording, ASignalInTwoColumnsIsRefusedNamingBoth) {
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_current_0,actual_current_0\n0,0,1,0\n"),
+              HasSubstr("bad.csv:1: field 'actual_current_0': column 4 is 'actual_current_0' again (column 3 is 'actual_current_0')"));
+  EXPECT_THAT(error_of("timestamp,timestamp,actual_q_0\n0,0,0\n"), HasSubstr("column 2 is 'timestamp' again"));
+  // unknown columns are ignored, so two of them are no conflict
+  EXPECT_EQ(error_of("timestamp,actual_q_0,note,note\n0,0,1,2\n0.002,0,1,2\n"), "no error");
+}
+
+TEST(Recording, AByteOrderMarkBeforeTheHeaderIsSkipped) {
+  const std::string p = tmp("bom.csv");
+  std::ofstream(p) << "\xEF\xBB\xBFtimestamp,actual_q_0\r\n0,0.5\r\n0.002,0.25\r\n";
+  const Recording r = read_recording(p);
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.samples[1].q[0], 0.25);
+}
+
+TEST(Recording, RequireFieldsNamesTheFirstMissingGroupAndWhoNeedsIt) {
+  const std::string p = tmp("noqd.csv");
+  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1,actual_current_0,actual_current_1\n0,0,0,1,1\n";
+  const Recording r = read_recording(p);
+  EXPECT_NO_THROW(require_fields(r, kFieldActualCurrent, "the monitor"));
+  try {
+    require_fields(r, kFieldActualQd | kFieldActualCurrent, "the monitor");
+    ADD_FAILURE() << "a recording without actual_qd passed";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("noqd.csv:1: field 'actual_qd_0': missing required column: the monitor needs "
+                                    "actual_qd_0..actual_qd_1, the header has none of them"));
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::device

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "twinwatch/core/error.hpp"
@@ -112,6 +113,30 @@ TEST(DynamicThreshold, TooFewSamples) {
         }
       },
       InvalidArgument);
+}
+
+// audit of session 16: a recording without actual_qd gave nan velocities, and CLP aborted the
+// process on an assertion about the objective; a nan residual made every static level nan
+TEST(DynamicThreshold, NonFiniteSamplesAreRefusedBeforeTheSolver) {
+  std::vector<double> r(40, 0.01), qd(40, 0.5), qdd(40, 0.0);
+  qd[17] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    fit_dynamic_threshold(r, qd, qdd);
+    FAIL() << "a nan velocity reached the solver";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("healthy sample 17 is not finite (r 0.01, qd nan, qdd 0)"));
+  }
+}
+
+TEST(StaticThreshold, ANonFiniteResidualIsRefused) {
+  std::vector<std::vector<VectorJ>> runs(1, std::vector<VectorJ>(5, VectorJ::Constant(2, 0.1)));
+  runs[0][3][1] = std::numeric_limits<double>::infinity();
+  try {
+    StaticThreshold::learn(runs);
+    FAIL() << "an infinite residual gave a threshold";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("residual 3 of healthy run 0 is not finite (0.1 inf)"));
+  }
 }
 
 TEST(DynamicThresholdOptions, RejectsNonPositiveRho) {

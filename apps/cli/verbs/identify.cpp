@@ -111,7 +111,10 @@ int run_identify(const IdentifyOptions& o) {
   std::optional<device::ColumnMap> map;
   if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
   std::vector<device::Recording> recs;
-  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+  for (const auto& f : o.recordings) {
+    recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+    device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, fmt::format("identify --method {}", o.method));
+  }
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
@@ -258,7 +261,7 @@ int run_validate(const ValidateOptions& o) {
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
   if (rec.n_dof != twin.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
-  if (!(rec.present & kFieldActualCurrent)) throw InvalidArgument(fmt::format("{}: no actual_current_* columns", o.recording));
+  device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "validate");
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
   if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);

@@ -128,6 +128,7 @@ int run_monitor(const MonitorOptions& o) {
   const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
   if (o.rtde.empty()) {
     rec = device::read_recording(o.recording);
+    device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
     if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   } else {
@@ -229,7 +230,10 @@ struct ThresholdOptions {
 int run_thresholds(const ThresholdOptions& o) {
   ident::TwinModel twin = ident::TwinModel::load(o.twin);
   std::vector<device::Recording> recs;
-  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f));
+  for (const auto& f : o.recordings) {
+    recs.push_back(device::read_recording(f));
+    device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
+  }
   std::vector<monitor::HealthyRun> runs;
   model::RigidBodyInertia p;
   p.mass = o.payload_mass;
@@ -263,6 +267,7 @@ int run_thresholds(const ThresholdOptions& o) {
                                           "the choice needs healthy runs they were not learned on",
                                           f));
     vrecs.push_back(device::read_recording(f));
+    device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
   }
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;

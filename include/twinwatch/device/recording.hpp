@@ -46,9 +46,16 @@ struct Recording {
 };
 
 /// Reads a recording. Throws twinwatch::ParseError naming the file, line and column for a
-/// non-numeric cell, a wrong number of cells, a missing required column, a timestamp that
-/// goes backwards, or a column map entry whose file column is not in the header. Timestamp gaps are not errors: they are marked (gap_before) and counted.
+/// non-numeric or non-finite cell (nan, inf), a wrong number of cells, a missing required column,
+/// a column that names a signal another column already carries, a timestamp that goes backwards,
+/// or a column map entry whose file column is not in the header. A UTF-8 byte-order mark before
+/// the header is skipped. Timestamp gaps are not errors: they are marked (gap_before) and counted.
 Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
+
+/// Throws twinwatch::ParseError (line 1, the first missing group's column) unless every group in
+/// `fields` (SampleField flags) is present in the recording; `user` says who needs them, e.g.
+/// "the monitor", so that a recording without currents is refused instead of watched blind.
+void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user);
 
 /// Streaming writer. Each write() appends one row with full double precision (round-trips).
 class RecordingWriter {
