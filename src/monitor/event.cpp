@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <array>
 #include <nlohmann/json.hpp>
 #include <memory>
@@ -62,9 +63,10 @@ struct EventStore::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string path;
+  bool has_other_links = false, has_t_detected = false;
 };
 
-EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()) {
+EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   // every failure below: close what is open and name the file and the step
   const auto fail = [&](const char* what, const std::string& msg) {
@@ -80,26 +82,42 @@ EventStore::EventStore(const std::string& path) : impl_(std::make_unique<Impl>()
     sqlite3_free(err);
     fail(what, msg);
   };
-  if (sqlite3_open(path.c_str(), &impl_->db) != SQLITE_OK)
+  const int flags = mode == Mode::Read ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+  if (sqlite3_open_v2(path.c_str(), &impl_->db, flags, nullptr) != SQLITE_OK)
     fail("cannot open event store", impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory");
-  exec("CREATE TABLE IF NOT EXISTS events ("
-       " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
-       " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
-       " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT);",
-       "cannot create the events table");
-  // a table from before other_links (session 10) gets the column; its old rows read as none
-  bool has_other_links = false;
+  if (mode == Mode::Write)
+    exec("CREATE TABLE IF NOT EXISTS events ("
+         " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
+         " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
+         " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL);",
+         "cannot create the events table");
+  // the table's columns: a table from an older version lacks the later ones
+  std::vector<std::string> columns;
   sqlite3_stmt* info = nullptr;
   if (sqlite3_prepare_v2(impl_->db, "PRAGMA table_info(events);", -1, &info, nullptr) == SQLITE_OK)
     while (sqlite3_step(info) == SQLITE_ROW) {
       const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(info, 1));
-      has_other_links |= name != nullptr && std::string_view(name) == "other_links";
+      if (name) columns.emplace_back(name);
     }
   sqlite3_finalize(info);
-  if (!has_other_links) exec("ALTER TABLE events ADD COLUMN other_links TEXT;", "cannot add the other_links column to the events table");
+  const auto has = [&](const char* c) { return std::find(columns.begin(), columns.end(), c) != columns.end(); };
+  if (mode == Mode::Read) {
+    if (columns.empty()) fail("not an event store", "it has no events table (is it a database 'twinwatch monitor --db' wrote?)");
+    for (const char* c : {"id", "source", "t_start", "t_end", "class", "joint", "link", "magnitude", "units", "confidence",
+                          "peak_residual", "detail"})
+      if (!has(c)) fail("not an event store", fmt::format("its events table has no column '{}'", c));
+  } else {
+    // a table from before other_links (session 10) or t_detected (session 16) gets the column;
+    // its old rows read as none, and as t_start
+    if (!has("other_links")) exec("ALTER TABLE events ADD COLUMN other_links TEXT;", "cannot add the other_links column to the events table");
+    if (!has("t_detected")) exec("ALTER TABLE events ADD COLUMN t_detected REAL;", "cannot add the t_detected column to the events table");
+  }
+  impl_->has_other_links = mode == Mode::Write || has("other_links");
+  impl_->has_t_detected = mode == Mode::Write || has("t_detected");
+  if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail, other_links) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links, t_detected) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
@@ -109,6 +127,7 @@ EventStore::~EventStore() {
 }
 
 void EventStore::insert(const Event& e, const std::string& source) {
+  if (!impl_->insert) throw std::logic_error(fmt::format("{}: the event store was opened for reading", impl_->path));
   sqlite3_stmt* s = impl_->insert;
   sqlite3_reset(s);
   sqlite3_bind_text(s, 1, source.c_str(), -1, SQLITE_TRANSIENT);
@@ -126,6 +145,7 @@ void EventStore::insert(const Event& e, const std::string& source) {
   sqlite3_bind_text(s, 12, e.detail.c_str(), -1, SQLITE_TRANSIENT);
   const std::string others = nlohmann::json(e.other_links).dump();
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_double(s, 14, e.t_detected);
   if (sqlite3_step(s) != SQLITE_DONE)
     throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
 }
@@ -141,10 +161,11 @@ long EventStore::count() const {
 
 std::vector<std::pair<std::string, Event>> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
-  const char* sel =
+  const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " other_links FROM events ORDER BY id;";
-  if (sqlite3_prepare_v2(impl_->db, sel, -1, &raw, nullptr) != SQLITE_OK)
+      " {}, {} FROM events ORDER BY id;",
+      impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL");
+  if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
   sqlite3_stmt* s = stmt.get();
@@ -156,16 +177,33 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
   int rc = SQLITE_ROW;
   while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
     const long id = sqlite3_column_int64(s, 0);
+    // SQLite keeps whatever a row was given: a number column holding text would read as 0
+    const auto bad = [&](int col, const char* expected) {
+      return std::runtime_error(fmt::format("{}: events row id {}: column '{}': expected {}, got '{}'", impl_->path, id,
+                                            sqlite3_column_name(s, col), expected, text(col)));
+    };
+    const auto number = [&](int col) {
+      const int t = sqlite3_column_type(s, col);
+      if (t != SQLITE_FLOAT && t != SQLITE_INTEGER) throw bad(col, "a number");
+      return sqlite3_column_double(s, col);
+    };
+    const auto whole = [&](int col) {
+      if (sqlite3_column_type(s, col) != SQLITE_INTEGER) throw bad(col, "a whole number");
+      const long v = sqlite3_column_int64(s, col);
+      if (v < -1 || v > 63) throw bad(col, "-1 or a joint/link index 0 to 63");
+      return static_cast<int>(v);
+    };
     Event e;
     e.open = false;
-    e.t_start = e.t_detected = sqlite3_column_double(s, 2);
-    e.t_end = sqlite3_column_double(s, 3);
-    e.joint = sqlite3_column_int(s, 5);
-    e.link = sqlite3_column_int(s, 6);
-    e.magnitude = sqlite3_column_double(s, 7);
+    e.t_start = number(2);
+    e.t_end = number(3);
+    e.t_detected = sqlite3_column_type(s, 13) == SQLITE_NULL ? e.t_start : number(13);
+    e.joint = whole(5);
+    e.link = whole(6);
+    e.magnitude = number(7);
     e.units = text(8);
-    e.confidence = sqlite3_column_double(s, 9);
-    e.peak_residual = sqlite3_column_double(s, 10);
+    e.confidence = number(9);
+    e.peak_residual = number(10);
     e.detail = text(11);
     try {
       e.fault = fault_class_from_string(text(4));

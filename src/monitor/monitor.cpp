@@ -826,11 +826,12 @@ void Monitor::push(const RobotSample& s) {
     if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
       // the last alert closed continues that alert instead of opening a new one
-      if (last_closed_ >= 0 && t - events_[static_cast<size_t>(last_closed_)].t_end < kMergeGap &&
-          events_[static_cast<size_t>(last_closed_)].fault != FaultClass::Collision) {
-        open_ = last_closed_;
+      if (pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end < kMergeGap) {
+        open_ = pending_close_;
+        pending_close_ = -1;
         events_[static_cast<size_t>(open_)].open = true;
       } else {
+        report_pending_close();
         const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
         open_event(j, start, t);
       }
@@ -852,11 +853,15 @@ void Monitor::push(const RobotSample& s) {
       if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
-      last_closed_ = open_;
+      if (done.fault == FaultClass::Collision) {
+        if (on_event) on_event(done);
+      } else {
+        pending_close_ = open_;
+      }
       open_ = -1;
-      if (on_event) on_event(done);
     }
   }
+  if (pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end >= kMergeGap) report_pending_close();
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0)) {
     events_.push_back(trend_.warning());
@@ -867,7 +872,15 @@ void Monitor::push(const RobotSample& s) {
   have_prev_ = true;
 }
 
+void Monitor::report_pending_close() {
+  if (pending_close_ < 0) return;
+  const Event& e = events_[static_cast<size_t>(pending_close_)];
+  pending_close_ = -1;
+  if (on_event) on_event(e);
+}
+
 void Monitor::finish() {
+  report_pending_close();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);
   Event& e = events_[static_cast<size_t>(open_)];

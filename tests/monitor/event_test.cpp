@@ -138,6 +138,72 @@ TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
   std::filesystem::remove(path);
 }
 
+// audit of session 16: `twinwatch events --db other.db` created an events table in the user's
+// database, a text in a number column read as 0, and t_detected read back as t_start
+TEST(EventStore, ReadingChangesNothingAndRefusesWhatIsNotAnEventStore) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto other = dir / "twinwatch_not_an_event_store.db";
+  std::filesystem::remove(other);
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(other.string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE parts (id INTEGER);", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  try {
+    EventStore store(other.string(), EventStore::Mode::Read);
+    FAIL() << "a database without an events table opened";
+  } catch (const std::runtime_error& x) {
+    EXPECT_THAT(x.what(), ::testing::HasSubstr(other.string() + ": not an event store: it has no events table"));
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(other.string().c_str(), &db), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM sqlite_master WHERE name = 'events';", -1, &st, nullptr), SQLITE_OK);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+    EXPECT_EQ(sqlite3_column_int(st, 0), 0) << "reading created a table";
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+  }
+  EXPECT_THROW(EventStore((dir / "twinwatch_no_such_store.db").string(), EventStore::Mode::Read), std::runtime_error);
+  EXPECT_FALSE(std::filesystem::exists(dir / "twinwatch_no_such_store.db"));
+  std::filesystem::remove(other);
+
+  const auto path = dir / "twinwatch_event_store_typed.db";
+  std::filesystem::remove(path);
+  {
+    EventStore store(path.string());
+    Event e;
+    e.t_start = 12.102;
+    e.t_detected = 12.104;
+    e.t_end = 40.0;
+    e.fault = FaultClass::Resistance;
+    e.joint = 4;
+    store.insert(e, "j5.csv");
+  }
+  {
+    const EventStore store(path.string(), EventStore::Mode::Read);
+    const auto rows = store.read();
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_DOUBLE_EQ(rows[0].second.t_detected, 12.104);
+    EXPECT_DOUBLE_EQ(rows[0].second.t_start, 12.102);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "UPDATE events SET t_start = 'abc';", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  try {
+    EventStore(path.string(), EventStore::Mode::Read).read();
+    FAIL() << "a text t_start was read";
+  } catch (const std::runtime_error& x) {
+    EXPECT_THAT(x.what(), ::testing::HasSubstr("events row id 1: column 't_start': expected a number, got 'abc'"));
+  }
+  std::filesystem::remove(path);
+}
+
 TEST(EventStore, UnopenablePathNamesTheFile) {
   try {
     EventStore store("/nonexistent-dir/events.db");

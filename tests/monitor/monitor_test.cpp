@@ -5,6 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <regex>
+
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "monitor/simulated_run.hpp"
@@ -62,6 +64,42 @@ TEST_F(MonitorLoop, J5ResistanceIsDetectedAndAttributedToJ5) {
   EXPECT_EQ(ev.front().fault, FaultClass::Resistance) << ev.front().detail;
   EXPECT_EQ(ev.front().joint, 4) << ev.front().detail;
   EXPECT_NEAR(ev.front().magnitude, 0.8, 0.3) << ev.front().detail;
+}
+
+// audit of session 16: a persistent fault dips below its threshold at reversals; each raise within
+// the merge gap continues the same event, and that event used to be reported closed at every dip
+// (five records of one J5 resistance in the events file and the store). Its first, short-window
+// diagnosis also split the extra friction into Coulomb +4.8 N·m and viscous -16 N·m·s/rad.
+TEST_F(MonitorLoop, AContinuedAlertIsReportedClosedOnceWithFrictionThatOpposesMotion) {
+  const auto rec = run(scenario(603, 30, 0.5, "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, *config);
+  std::vector<Event> closed;
+  int resistance_updates = 0;
+  const std::regex split(R"(Coulomb (-?[0-9.]+) N·m, viscous (-?[0-9.]+) N·m·s/rad)");
+  m.on_event = [&](const Event& e) {
+    if (!e.open) closed.push_back(e);
+    std::smatch g;
+    if (e.fault == FaultClass::Resistance && std::regex_search(e.detail, g, split)) {
+      ++resistance_updates;
+      EXPECT_GE(std::stod(g[1]), 0.0) << e.detail;
+      EXPECT_GE(std::stod(g[2]), 0.0) << e.detail;
+    }
+  };
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const auto& ev = m.events();
+  ASSERT_FALSE(ev.empty());
+  EXPECT_GE(resistance_updates, 2);
+  // one closed record per event, the event's final state
+  ASSERT_EQ(closed.size(), ev.size());
+  for (size_t k = 0; k < ev.size(); ++k) {
+    EXPECT_EQ(closed[k].t_start, ev[k].t_start);
+    EXPECT_EQ(closed[k].t_end, ev[k].t_end);
+  }
+  EXPECT_EQ(ev.front().fault, FaultClass::Resistance) << ev.front().detail;
+  EXPECT_GT(ev.front().duration(), 10.0) << "the J5 alert should span the dips, not end at the first";
 }
 
 // UR3e §4.3: 0.5 kg payload loss detected within 100 ms, classified, mass within +-20 %

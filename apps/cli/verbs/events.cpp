@@ -35,7 +35,7 @@ void run_events(const EventsOptions& o) {
     throw InvalidArgument(fmt::format("{}: no such event store ('twinwatch monitor --db {}' writes one)", o.db, o.db));
   if (!o.fault.empty()) monitor::fault_class_from_string(o.fault);  // names the valid classes when unknown
   if (o.last < 0) throw InvalidArgument(fmt::format("--last is {}, must be >= 0", o.last));
-  const monitor::EventStore store(o.db);
+  const monitor::EventStore store(o.db, monitor::EventStore::Mode::Read);
   auto rows = store.read();
   std::erase_if(rows, [&](const auto& r) {
     return (!o.fault.empty() && monitor::to_string(r.second.fault) != o.fault) ||

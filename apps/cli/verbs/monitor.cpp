@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
@@ -155,10 +156,17 @@ int run_monitor(const MonitorOptions& o) {
   }
   std::unique_ptr<monitor::EventStore> store;
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
+  double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   mon.on_event = [&](const monitor::Event& e) {
     if (e.open) {
-      // the raise time (what a detection delay counts to), and when the exceedance began
-      if (!o.quiet && !o.json) fmt::print("{:9.3f} s  ALERT  {} (above the threshold since {:.3f} s)\n", e.t_detected, e.detail, e.t_start);
+      if (o.quiet || o.json) return;
+      // the raise time (what a detection delay counts to), and when the exceedance began; a later
+      // diagnosis of the same alert is printed at the time it was made
+      if (e.t_detected != raise_shown)
+        fmt::print("{:9.3f} s  ALERT  {} (above the threshold since {:.3f} s)\n", e.t_detected, e.detail, e.t_start);
+      else
+        fmt::print("{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", e.t_end, e.detail, e.t_detected);
+      raise_shown = e.t_detected;
       return;
     }
     if (!o.quiet && !o.json)

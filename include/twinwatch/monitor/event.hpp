@@ -68,10 +68,15 @@ struct Event {
 /// the monitor hands events to it from the consumer side.
 class EventStore {
  public:
-  /// Opens or creates the database and its `events` table; a table written by an older version
-  /// gets the columns it lacks (other_links). Throws std::runtime_error naming the file when SQLite
-  /// cannot open it.
-  explicit EventStore(const std::string& path);
+  enum class Mode {
+    Write,  ///< open or create the database and its `events` table (the monitor)
+    Read,   ///< open an existing store read-only; nothing is created or changed (`twinwatch events`)
+  };
+  /// Write: opens or creates the database and its `events` table; a table written by an older
+  /// version gets the columns it lacks (other_links, t_detected). Read: the file must exist and hold
+  /// an `events` table with the columns every version wrote; columns added later read as absent.
+  /// Throws std::runtime_error naming the file when SQLite cannot open it or the table is missing.
+  explicit EventStore(const std::string& path, Mode mode = Mode::Write);
   ~EventStore();
   EventStore(const EventStore&) = delete;
   EventStore& operator=(const EventStore&) = delete;
@@ -80,9 +85,10 @@ class EventStore {
   void insert(const Event& e, const std::string& source);
   /// Number of stored events.
   long count() const;
-  /// Every stored event with its source, oldest first (open is false; t_detected is not stored and
-  /// reads as t_start). Throws std::runtime_error naming the file and the row id when a row cannot
-  /// be read back (an unknown class, a malformed other_links).
+  /// Every stored event with its source, oldest first (open is false; rows from before t_detected
+  /// was stored read it as t_start). Throws std::runtime_error naming the file, the row id and the
+  /// column when a row cannot be read back (a number column holding text, an unknown class, a
+  /// malformed other_links).
   std::vector<std::pair<std::string, Event>> read() const;
 
  private:

@@ -183,7 +183,10 @@ class Monitor {
  public:
   Monitor(const ident::TwinModel& twin, MonitorConfig config);
 
-  /// Processes one sample. Calls on_event for every raise, diagnosis and clear.
+  /// Processes one sample. Calls on_event for every raise and diagnosis (open events) and once
+  /// for each event's end (closed). An alert that falls back is closed only after a merge gap
+  /// (1 s) without a new raise, since a raise within it continues the same event; collisions,
+  /// which are never continued, and stream faults close at once.
   void push(const RobotSample& s);
   /// Closes an open alert at the end of a run.
   void finish();
@@ -251,7 +254,10 @@ class Monitor {
   size_t ring_head_ = 0, ring_count_ = 0;
   std::vector<Event> events_;
   int open_ = -1;             // index of the open event
-  int last_closed_ = -1;      // index of the last closed alert (for merging re-raises)
+  // a closed alert (not a collision) whose closing is reported only once no raise within
+  // kMergeGap continues it: a persistent fault that dips at reversals is one event, reported once
+  int pending_close_ = -1;
+  void report_pending_close();
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
