@@ -14,6 +14,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
@@ -116,6 +117,7 @@ void append_trend_csv(const std::string& path, const std::string& name, const mo
       f << fmt::format("{},{:.3f},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.2f},{},{:.5f}\n", name, h[k].t, j + 1, h[k].friction, h[k].coulomb,
                        h[k].viscous, h[k].energy, h[k].temperature, h[k].valid ? 1 : 0, it[off + k]);
   }
+  close_written(f, path);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "evaluate.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -69,7 +70,7 @@ int run(const Options& o) {
   const auto files = scenario_files(o.scenarios);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, false, o.max_duration, false);
   cli::print_evaluation(ev);
-  std::ofstream(std::filesystem::path(o.out) / "evaluation.json") << cli::evaluation_json(ev) << '\n';
+  write_text_file((std::filesystem::path(o.out) / "evaluation.json").string(), cli::evaluation_json(ev) + '\n');
 
   fmt::print("== step 4: report of the J5-resistance run (UR3e §4.2)\n");
   sim::Scenario s = sim::load_scenario((std::filesystem::path(o.scenarios) / "j5_resistance.yaml").string());

@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <cerrno>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
@@ -172,7 +174,11 @@ int run_monitor(const MonitorOptions& o) {
     if (!o.quiet && !o.json)
       fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
                  e.duration(), 100 * e.confidence);
-    if (jl) jl << e.to_json_line() << '\n';
+    if (jl.is_open()) {
+      errno = 0;
+      jl << e.to_json_line() << '\n';
+      check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
+    }
     if (o.json) fmt::print("{}\n", e.to_json_line());
     if (store) store->insert(e, source);
   };
@@ -223,6 +229,8 @@ int run_monitor(const MonitorOptions& o) {
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
+  close_written(jl, o.events_path);
+  close_written(trace, o.trace);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}\n", mon.samples(), mon.gaps(), mon.events().size(),
                o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));

@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/rigid_body_ls.hpp"
@@ -137,10 +138,7 @@ int run_identify(const IdentOpts& o) {
   const ident::RigidBodyModel r = ident::identify_rigid_body(m, o.robot, segs, io, [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
   });
-  std::ofstream out(o.output);
-  if (!out) throw InvalidArgument(fmt::format("{}: cannot open for writing", o.output));
-  out << r.to_json() << '\n';
-  out.close();
+  write_text_file(o.output, r.to_json() + '\n');
   if (o.json) {
     fmt::print("{}\n", r.to_json());
     return 0;
