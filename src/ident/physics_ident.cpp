@@ -332,6 +332,18 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     total += static_cast<long>(r.recording->samples.size());
   }
   if (total < 200) throw InvalidArgument(fmt::format("identify: {} samples in all, expected at least 200", total));
+  // the same floor after decimation and the reversal screen, per joint (each has its own friction
+  // columns): a fit on 1 sample would show RMSE 0 and be written as a twin
+  for (int j = 0; j < n; ++j) {
+    long used = 0;
+    for (const TrainingRun& r : runs)
+      for (size_t k = 0; k < r.recording->samples.size(); k += static_cast<size_t>(o.decimate))
+        used += o.reversal_screen > 0.0 && std::abs(r.recording->samples[k].qd[j]) < o.reversal_screen ? 0 : 1;
+    if (used < 200)
+      throw InvalidArgument(fmt::format("identify: J{} keeps {} of {} samples after decimation by {} and the reversal screen at "
+                                        "{} rad/s, expected at least 200",
+                                        j + 1, used, total, o.decimate, o.reversal_screen));
+  }
 
   TwinModel twin(robot, rm);
   twin.temperature_ref = o.temperature_ref;

@@ -227,6 +227,23 @@ TEST(TwinFile, MalformedFilesNameTheField) {
   }(), ::testing::HasSubstr("expected 6 joints"));
 }
 
+// audit of session 16: the 200-sample floor was checked before decimation and the reversal
+// screen, so a fit on 0 or 1 sample was written as a twin with RMSE 0
+TEST_F(Fixture, TooFewSamplesLeftAfterDecimationOrScreeningAreRefused) {
+  IdentReport rep;
+  IdentOptions o;
+  o.decimate = 100000;
+  try {
+    identify_physics("ur3e", {{excitation, {}}}, o, rep);
+    FAIL() << "a fit on one sample per joint passed";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("identify: J1 keeps 1 of 30000 samples after decimation by 100000"));
+  }
+  o.decimate = 1;
+  o.reversal_screen = 100.0;
+  EXPECT_THROW(identify_physics("ur3e", {{excitation, {}}}, o, rep), InvalidArgument);
+}
+
 TEST(Identify, RejectsRecordingsWithoutCurrent) {
   device::Recording r;
   r.path = "nocurrent.csv";
