@@ -49,7 +49,7 @@ set_tests_properties(cli.evaluate_sensitivity_count PROPERTIES FIXTURES_REQUIRED
 # |residual| / threshold a whole debounce run exceeded, and the sensitivity of the first alarm
 add_test(NAME cli.evaluate_healthy_margin COMMAND twinwatch evaluate ${s}/short_fig8.yaml --twin ${d}/twin.json)
 set_tests_properties(cli.evaluate_healthy_margin PROPERTIES FIXTURES_REQUIRED twin
-                     PASS_REGULAR_EXPRESSION "false-alarm margin on the 1 healthy run\\(s\\) \\(0\\.00 h\\)[^\n]*\n  current   J1 0\\.[0-9]+  J2 [^\n]*J6 0\\.[0-9]+\n  observer  J1 0\\.[0-9]+[^\n]*\n  largest 0\\.[0-9]+: thresholds tightened by more than [0-9.]+ % \\(--sensitivity below 0\\.[0-9]+\\) raise the first alarm")
+                     PASS_REGULAR_EXPRESSION "false-alarm margin on the 1 healthy run\\(s\\) \\(0\\.00 h\\)[^\n]*\n  current   J1 0\\.[0-9]+  J2 [^\n]*J6 0\\.[0-9]+\n  observer  J1 0\\.[0-9]+[^\n]*\n  largest 0\\.[0-9]+: thresholds tightened by more than [0-9.]+ % from those in use \\(--sensitivity below 0\\.[0-9]+\\) raise the first alarm")
 # a full disk is an error naming the file, not a shorter events file behind exit 0 (audit, session 16)
 if(EXISTS /dev/full)
   add_test(NAME cli.monitor_events_disk_full COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5
@@ -63,3 +63,7 @@ endif()
 # events reads a store without changing it: a database that is not one is refused, not given a table
 add_test(NAME cli.events_not_a_store COMMAND twinwatch events --db ${s}/bad_field.yaml)
 set_tests_properties(cli.events_not_a_store PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml: (cannot open event store|not an event store)")
+# a payload COM without a mass would be dropped silently: refused (audit, session 16)
+add_test(NAME cli.monitor_payload_com_without_mass COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-com 0 0 0.04 --db "")
+set_tests_properties(cli.monitor_payload_com_without_mass PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+                     PASS_REGULAR_EXPRESSION "--payload-com is given without --payload-mass")

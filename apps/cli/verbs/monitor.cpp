@@ -41,6 +41,17 @@ struct MonitorOptions {
   bool static_threshold = false, quiet = false, json = false;
 };
 
+// --payload-mass/--payload-com: a COM without a mass would be dropped silently, so it is refused
+model::RigidBodyInertia payload_of(double mass, const std::vector<double>& com) {
+  model::RigidBodyInertia p;
+  p.mass = mass;
+  if (com.size() == 3) {
+    if (!(mass > 0.0)) throw InvalidArgument("--payload-com is given without --payload-mass (a centre of mass needs a mass)");
+    p.com = Eigen::Vector3d(com[0], com[1], com[2]);
+  }
+  return p;
+}
+
 // --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
 std::vector<std::string> split_filter(const std::string& s) {
   std::vector<std::string> out;
@@ -146,10 +157,7 @@ int run_monitor(const MonitorOptions& o) {
       fmt::print(stderr, "monitoring {} ({}){}; Ctrl-C stops\n", o.rtde, cli::describe(*client),
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
   }
-  model::RigidBodyInertia p;
-  p.mass = o.payload_mass;
-  if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);
-  twin.set_payload(p);
+  twin.set_payload(payload_of(o.payload_mass, o.payload_com));
   monitor::Monitor mon(twin, cfg);
   std::ofstream jl;
   if (!o.events_path.empty()) {
@@ -241,6 +249,7 @@ struct ThresholdOptions {
   std::string twin, filter, program;
   std::vector<std::string> recordings, debounce_validation;
   double payload_mass = 0.0;
+  std::vector<double> payload_com;
 };
 
 int run_thresholds(const ThresholdOptions& o) {
@@ -251,8 +260,7 @@ int run_thresholds(const ThresholdOptions& o) {
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
   }
   std::vector<monitor::HealthyRun> runs;
-  model::RigidBodyInertia p;
-  p.mass = o.payload_mass;
+  const model::RigidBodyInertia p = payload_of(o.payload_mass, o.payload_com);
   for (const auto& r : recs) runs.push_back({&r, p});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
@@ -329,8 +337,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
-  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m]")->expected(3);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
   sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
@@ -355,7 +363,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   auto* sub = app.add_subcommand("thresholds", "Re-learn the monitor's thresholds from healthy recordings (per payload/program)");
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
-  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]");
+  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
@@ -441,6 +450,7 @@ int run_report(const ReportOptions& o) {
     if (!f) throw std::runtime_error(o.labels + ": cannot open");
     labels.assign(std::istreambuf_iterator<char>(f), {});
   }
+  payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused before the work
   cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels);
   fmt::print("report written to {}\n", o.output);
   return 0;
@@ -500,8 +510,8 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]");
-  sub->add_option("--payload-com", o->payload_com, "Payload COM [m]")->expected(3);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};
 
