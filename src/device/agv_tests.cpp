@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -10,17 +11,34 @@
 
 namespace twinwatch::device {
 
+namespace {
+constexpr const char* kHeader = "motor,test,voltage_V,current_A,speed_rad_s,time_s";
+constexpr const char* kUtf8Bom = "\xEF\xBB\xBF";
+// largest magnitude a cell may hold [V, A, rad/s, s]: far above any bench test (AGV §4.1 stays within
+// 6 V, 1 A, 16 rad/s and 1.5 s), and small enough that the least-squares sums of squares stay finite
+// (a -1e300 cell turned the fitted gain into NaN)
+constexpr double kMaxMagnitude = 1e6;
+
+// a line without the '\r' of a CRLF file (as the recording reader accepts them)
+void strip_cr(std::string& line) {
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+}
+}  // namespace
+
 std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the test file");
   std::string line;
-  if (!std::getline(f, line) || line.rfind("motor,test,voltage_V,current_A,speed_rad_s,time_s", 0) != 0)
-    throw ParseError(path, 1, "", "expected the header 'motor,test,voltage_V,current_A,speed_rad_s,time_s'");
+  if (!std::getline(f, line)) throw ParseError(path, 1, "", fmt::format("expected the header '{}', got an empty file", kHeader));
+  strip_cr(line);
+  if (line.rfind(kUtf8Bom, 0) == 0) line.erase(0, std::string(kUtf8Bom).size());  // as a spreadsheet may write it
+  if (line != kHeader) throw ParseError(path, 1, "", fmt::format("expected the header '{}', got '{}'", kHeader, line));
   const char* cols[] = {"motor", "test", "voltage_V", "current_A", "speed_rad_s", "time_s"};
   std::vector<AgvTestRow> rows;
   int ln = 1;
   while (std::getline(f, line)) {
     ++ln;
+    strip_cr(line);
     if (line.empty()) continue;
     std::vector<std::string> c;
     std::stringstream ss(line);
@@ -34,24 +52,35 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
     if (r.test != "steady" && r.test != "step") throw ParseError(path, ln, "test", fmt::format("expected steady or step, got '{}'", r.test));
     double* dst[] = {&r.voltage, &r.current, &r.speed, &r.time};
     for (int k = 0; k < 4; ++k) {
+      const std::string& text = c[static_cast<size_t>(k + 2)];
+      const char* col = cols[k + 2];
       try {
         size_t used = 0;
-        *dst[k] = std::stod(c[static_cast<size_t>(k + 2)], &used);
-        if (used != c[static_cast<size_t>(k + 2)].size()) throw std::invalid_argument("trailing");
+        *dst[k] = std::stod(text, &used);
+        if (used != text.size()) throw std::invalid_argument("trailing");
       } catch (const std::exception&) {
-        throw ParseError(path, ln, cols[k + 2], fmt::format("expected a number, got '{}'", c[static_cast<size_t>(k + 2)]));
+        throw ParseError(path, ln, col, fmt::format("expected a number, got '{}'", text));
       }
+      // (std::stod reads "nan" and "inf" as numbers)
+      if (!std::isfinite(*dst[k])) throw ParseError(path, ln, col, fmt::format("expected a finite number, got '{}'", text));
+      if (std::abs(*dst[k]) > kMaxMagnitude)
+        throw ParseError(path, ln, col, fmt::format("expected a number within +-{:g}, got '{}'", kMaxMagnitude, text));
     }
+    if (r.time < 0.0) throw ParseError(path, ln, "time_s", fmt::format("expected a time >= 0 s, got '{}'", c[5]));
     rows.push_back(r);
   }
+  if (rows.empty()) throw ParseError(path, 2, "", "no data rows after the header");
   return rows;
 }
 
 void write_agv_tests(const std::string& path, const std::vector<AgvTestRow>& rows) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  f << "motor,test,voltage_V,current_A,speed_rad_s,time_s\n";
+  f << kHeader << '\n';
   for (const auto& r : rows) f << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.motor, r.test, r.voltage, r.current, r.speed, r.time);
+  // a full disk shows only when the buffer goes out
+  f.close();
+  if (!f) throw std::runtime_error(path + ": write error (disk full?)");
 }
 
 }  // namespace twinwatch::device

@@ -69,6 +69,13 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
   if (!(fit.tau > 0.0)) throw InvalidArgument(fmt::format("{} motor: the step response never reaches 63 % of its final value", motor));
   fit.step_points = static_cast<int>(step.size());
   fit.params.J = fit.tau * (fit.params.B * fit.params.Ra + fit.params.k * fit.params.k) / fit.params.Ra;
+  // a physical motor, or the tuning (IMC PI) and the twin built on it are meaningless
+  try {
+    fit.params.validate(motor.c_str());
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(fmt::format("{} (fitted from {} steady-state and {} step rows: they do not describe a DC motor, eq. 3-6)",
+                                      e.what(), fit.steady_points, fit.step_points));
+  }
   return fit;
 }
 

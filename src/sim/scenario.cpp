@@ -6,17 +6,40 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "twinwatch/core/numbers.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 namespace twinwatch::sim {
 
 namespace {
+
+// rated payloads of the built-in robots [kg], from the manufacturers' data sheets
+struct RatedPayload {
+  const char* robot;
+  double kg;
+};
+constexpr RatedPayload kRatedPayloads[] = {{"ur3e", 3.0}, {"ur5e", 5.0}, {"panda", 3.0}};
+
+std::optional<double> rated_payload(const model::RobotModel& m) {
+  for (const RatedPayload& r : kRatedPayloads)
+    if (m.name() == r.robot) return r.kg;
+  return std::nullopt;
+}
+
+// mass of the links the joints move [kg] (the limit of a description without a rated payload)
+double moving_mass(const model::RobotModel& m) {
+  double sum = 0.0;
+  for (int i = 0; i < m.n_dof(); ++i) sum += m.joint(i).body.mass;
+  return sum;
+}
 
 class Y {
  public:
@@ -27,8 +50,23 @@ class Y {
     throw ParseError(origin_, line, field, what);
   }
 
+  // yaml-cpp keeps every entry of a repeated key and n[key] answers the first: a second `duration:`
+  // would be dropped without a word
+  void unique_keys(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsMap()) return;
+    std::map<std::string, int> first_line;
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      if (!it->first.IsScalar()) continue;
+      const std::string k = it->first.Scalar();
+      const int line = it->first.Mark().line + 1;
+      const auto [first, fresh] = first_line.emplace(k, line);
+      if (!fresh) fail(it->first, join(path, k), fmt::format("key given twice, on lines {} and {}; expected it once", first->second, line));
+    }
+  }
+
   void only_keys(const YAML::Node& n, const std::string& path, const std::set<std::string>& allowed) const {
     if (!n.IsMap()) fail(n, path, "expected a mapping of keys");
+    unique_keys(n, path);
     for (auto it = n.begin(); it != n.end(); ++it) {
       // (as<std::string>() of a list or mapping used as a key, "? [a]", throws a YAML exception)
       if (!it->first.IsScalar()) fail(it->first, path, "expected text keys, got a list or mapping as a key");
@@ -96,17 +134,34 @@ class Y {
     for (int i = 0; i < size; ++i) v[i] = as_number(n[static_cast<size_t>(i)], fmt::format("{}[{}]", f, i));
     return v;
   }
+  // the key node of `key` in mapping `n` (its line is where the user wrote the key, also when the
+  // value is a block mapping that starts on the next line); undefined if absent
+  static YAML::Node key_of(const YAML::Node& n, const std::string& key) {
+    if (n.IsMap())
+      for (auto it = n.begin(); it != n.end(); ++it)
+        if (it->first.IsScalar() && it->first.Scalar() == key) return it->first;
+    return YAML::Node();  // no mark: reported without a line
+  }
   static std::string join(const std::string& p, const std::string& k) { return p.empty() ? k : p + "." + k; }
 
  private:
   std::string origin_;
 };
 
-model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std::string& path) {
+// the payload check's "expected" text, e.g. "expected at most 3 kg (the rated payload of ur3e), got 500 kg"
+std::string payload_above_limit(const model::RobotModel& m, double mass) {
+  return fmt::format("expected at most {:g} kg ({}), got {} kg", payload_limit(m),
+                     rated_payload(m) ? fmt::format("the rated payload of {}", m.name())
+                                      : fmt::format("the moving mass of {}: its description gives no rated payload", m.name()),
+                     mass);
+}
+
+model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std::string& path, const model::RobotModel& m) {
   y.only_keys(n, path, {"mass", "com", "inertia"});
   model::RigidBodyInertia p;
   p.mass = y.number(n, path, "mass");
   if (!(p.mass >= 0.0)) y.fail(n["mass"], path + ".mass", fmt::format("must be >= 0, got {}", p.mass));
+  if (p.mass > payload_limit(m)) y.fail(n["mass"], path + ".mass", payload_above_limit(m, p.mass));
   if (n["com"]) p.com = y.vec(n, path, "com", 3);
   if (n["inertia"]) {
     const VectorJ I = y.vec(n, path, "inertia", 6);
@@ -120,11 +175,16 @@ model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std:
   return p;
 }
 
+// a frequency the controller, reading the target `rate` times a second, can command: at or above
+// rate / 2 the samples alias (a 1000 Hz sine read at 500 Hz looks still while its velocity is huge)
+bool below_nyquist(double f, double rate) { return f < 0.5 * rate; }
+
 std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& t, const model::RobotModel& m,
-                                                  std::string& type) {
+                                                  std::string& type, double rate) {
   const std::string p = "trajectory";
   if (!t) y.fail(t, p, "missing required field");
   if (!t.IsMap()) y.fail(t, p, "expected a mapping with a 'type'");
+  y.unique_keys(t, p);
   type = y.text(t, p, "type", "");
   const int n = m.n_dof();
   VectorJ home = VectorJ::Zero(n);
@@ -182,13 +242,22 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
       y.only_keys(t, p, {"type", "start", "amplitude", "frequency", "phase"});
       const VectorJ A = y.vec(t, p, "amplitude", n, true);
       const VectorJ f = y.vec(t, p, "frequency", n, true);
+      for (int j = 0; j < n; ++j)
+        if (!(f[j] >= 0.0 && below_nyquist(f[j], rate)))
+          y.fail(t["frequency"], p + ".frequency",
+                 fmt::format("expected frequencies from 0 to below half the control rate ({:g} Hz at {:g} Hz), got {} Hz on joint {}",
+                             0.5 * rate, rate, f[j], j + 1));
       const VectorJ ph = t["phase"] ? y.vec(t, p, "phase", n, true) : VectorJ(VectorJ::Zero(n));
       return make_sine(start, A, f, ph);
     }
     if (type == "chirp") {
       y.only_keys(t, p, {"type", "start", "amplitude", "f0", "f1", "sweep"});
-      return make_chirp(start, y.vec(t, p, "amplitude", n, true), y.number_or(t, p, "f0", 0.1), y.number_or(t, p, "f1", 1.0),
-                        y.number_or(t, p, "sweep", 30.0));
+      const double f0 = y.number_or(t, p, "f0", 0.1), f1 = y.number_or(t, p, "f1", 1.0);
+      for (const auto& [key, f] : {std::pair{"f0", f0}, std::pair{"f1", f1}})
+        if (!below_nyquist(f, rate))
+          y.fail(t[key], p + "." + key,
+                 fmt::format("expected a frequency below half the control rate ({:g} Hz at {:g} Hz), got {} Hz", 0.5 * rate, rate, f));
+      return make_chirp(start, y.vec(t, p, "amplitude", n, true), f0, f1, y.number_or(t, p, "sweep", 30.0));
     }
     if (type == "point_to_point") {
       y.only_keys(t, p, {"type", "start", "waypoints", "durations"});
@@ -230,6 +299,8 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
 
 }  // namespace
 
+double payload_limit(const model::RobotModel& m) { return rated_payload(m).value_or(moving_mass(m)); }
+
 Scenario parse_scenario(const std::string& text, const std::string& origin) {
   YAML::Node root;
   try {
@@ -252,17 +323,45 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     }
   }();
   const int n = m.n_dof();
-  s.options.seed = static_cast<unsigned>(y.integer(root, "", "seed", 1));
-  s.serial = static_cast<unsigned>(y.integer(root, "", "robot_serial", 1));
-  s.options.rate = y.number_or(root, "", "rate", 500.0);
-  s.options.substeps = y.integer(root, "", "substeps", std::max(1, static_cast<int>(std::ceil(2000.0 / s.options.rate))));
+  // (a negative seed or serial would wrap around to a large unsigned number)
+  const int seed = y.integer(root, "", "seed", 1), serial = y.integer(root, "", "robot_serial", 1);
+  if (seed < 0) y.fail(root["seed"], "seed", fmt::format("expected a whole number >= 0, got {}", seed));
+  if (serial < 0) y.fail(root["robot_serial"], "robot_serial", fmt::format("expected a whole number >= 0, got {}", serial));
+  s.options.seed = static_cast<unsigned>(seed);
+  s.serial = static_cast<unsigned>(serial);
+  // control rate and physics substeps: the default substeps meet rate x substeps >= kMinPhysicsRate
+  const double rate = s.options.rate = y.number_or(root, "", "rate", 500.0);
+  if (!(rate >= kMinRate && rate <= kMaxRate))
+    y.fail(root["rate"], "rate", fmt::format("expected a control rate from {:g} to {:g} Hz, got {}", kMinRate, kMaxRate, rate));
+  const int min_substeps = static_cast<int>(std::ceil(kMinPhysicsRate / rate));
+  const int substeps = s.options.substeps = y.integer(root, "", "substeps", std::max(1, min_substeps));
+  if (substeps < 1) y.fail(root["substeps"], "substeps", fmt::format("expected >= 1, got {}", substeps));
+  if (rate * substeps < kMinPhysicsRate)
+    y.fail(root["substeps"], "substeps",
+           fmt::format("physics rate is {} Hz (rate {} x substeps {}), must be >= {:g} Hz: expected substeps >= {}", rate * substeps,
+                       rate, substeps, kMinPhysicsRate, min_substeps));
   s.options.cold_start = y.boolean(root, "", "cold_start", false);
   s.options.payload_declared = y.boolean(root, "", "payload_declared", true);
-  if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload");
-  s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type);
+  if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload", m);
+  s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type, rate);
+  // duration, given or as cycles of the trajectory (default one cycle), each checked at its own line
+  const double period = s.trajectory->period();
   if (root["duration"] && root["cycles"]) y.fail(root["cycles"], "cycles", "give either duration or cycles, not both");
-  if (root["cycles"]) s.options.duration = y.number(root, "", "cycles") * s.trajectory->period();
-  else s.options.duration = y.number_or(root, "", "duration", s.trajectory->period());
+  if (const YAML::Node c = root["cycles"]) {
+    const double cycles = y.as_number(c, "cycles");
+    if (!(cycles > 0.0 && std::isfinite(cycles)))
+      y.fail(c, "cycles", fmt::format("expected a number of trajectory periods > 0, got {}", cycles));
+    s.options.duration = cycles * period;
+    if (const std::string why = duration_problem(s.options.duration, rate); !why.empty())
+      y.fail(c, "cycles", fmt::format("{:g} cycles of the {:g} s period last {:g} s: {}", cycles, period, s.options.duration, why));
+  } else if (const YAML::Node d = root["duration"]) {
+    s.options.duration = y.as_number(d, "duration");
+    if (const std::string why = duration_problem(s.options.duration, rate); !why.empty()) y.fail(d, "duration", why);
+  } else {
+    s.options.duration = period;
+    if (const std::string why = duration_problem(s.options.duration, rate); !why.empty())
+      y.fail(Y::key_of(root, "trajectory"), "duration", fmt::format("the default, one trajectory period of {:g} s: {}", period, why));
+  }
   if (root["noise"]) {
     const YAML::Node nz = root["noise"];
     y.only_keys(nz, "noise", {"current_sigma"});
@@ -273,10 +372,15 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     }
   }
   try {
-    s.options.validate(n);
+    s.options.validate(n);  // each field is checked above at its line; this catches what they miss
   } catch (const InvalidArgument& e) {
     y.fail(root, "", e.what());
   }
+  // the commanded trajectory stays inside the joint limits over the run (the controller would
+  // otherwise drive the arm through its end stops or faster than its drives turn)
+  if (const std::string v = joint_limit_violation(*s.trajectory, m, s.options.duration, rate); !v.empty())
+    y.fail(Y::key_of(root, "trajectory"), "trajectory", v);
+  s.trajectory_line = Y::key_of(root, "trajectory").Mark().line + 1;
   if (const YAML::Node fl = root["faults"]) {
     if (!fl.IsSequence()) y.fail(fl, "faults", "expected a list of faults");
     for (size_t k = 0; k < fl.size(); ++k) {
@@ -296,6 +400,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
                                fs.type == FaultType::CurrentOffset || fs.type == FaultType::StuckCurrent;
       if (joint_fault) {
         // users count joints from 1 (J1..J6), as the papers do
+        if (!f["joint"]) y.fail(f, p + ".joint", "missing required field");
         const int j = y.integer(f, p, "joint", 0);
         if (j < 1 || j > n) y.fail(f["joint"] ? f["joint"] : f, p + ".joint", fmt::format("expected 1 to {}, got {}", n, j));
         fs.joint = j - 1;
@@ -304,6 +409,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
                                    fs.type != FaultType::StuckCurrent;
       if (needs_magnitude) fs.magnitude = y.number(f, p, "magnitude");
       if (fs.type == FaultType::Collision) {
+        if (!f["link"]) y.fail(f, p + ".link", "missing required field");
         const int l = y.integer(f, p, "link", 0);
         if (l < 1 || l > n) y.fail(f["link"] ? f["link"] : f, p + ".link", fmt::format("expected 1 to {}, got {}", n, l));
         fs.link = l - 1;
@@ -318,15 +424,31 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       if (fs.type == FaultType::PayloadPick) {
         fs.payload.mass = y.number(f, p, "mass");
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
+        if (fs.payload.mass > payload_limit(m)) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
         if (f["com"]) fs.payload.com = y.vec(f, p, "com", 3);
         fs.magnitude = fs.payload.mass;
       }
       if (fs.type == FaultType::PayloadLoss) fs.magnitude = -s.options.payload.mass;
       fs.io_bit = y.integer(f, p, "io_bit", 0);
+      if (fs.io_bit < 0 || fs.io_bit > kMaxDigitalOutputBit)
+        y.fail(f["io_bit"], p + ".io_bit",
+               fmt::format("expected a digital output bit from 0 to {} (standard 0-7, configurable 8-15, tool 16-17), got {}",
+                           kMaxDigitalOutputBit, fs.io_bit));
+      if (fs.type == FaultType::TimestampJitter) {
+        const double max_jitter = kMaxJitterFraction / rate;
+        if (!(fs.magnitude >= 0.0 && fs.magnitude <= max_jitter))
+          y.fail(f["magnitude"], p + ".magnitude",
+                 fmt::format("expected a jitter sigma from 0 to {:g} s (an eighth of the {:g} s sample period), got {} s", max_jitter,
+                             1.0 / rate, fs.magnitude));
+      }
       if (fs.type == FaultType::DroppedSamples) {
         fs.period = y.number_or(f, p, "period", 0.0);
         if (!(fs.magnitude >= 1)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("must be >= 1 sample, got {}", fs.magnitude));
       }
+      // the fault's own fields first, then whether it happens at all in this run
+      if (!(fs.onset < s.options.duration))
+        y.fail(f["onset"], p + ".onset", fmt::format("expected a time before the end of the run ({} s), got {} s: the {} would never fire",
+                                                     s.options.duration, fs.onset, to_string(fs.type)));
       s.faults.push_back(fs);
     }
   }
@@ -339,6 +461,20 @@ Scenario load_scenario(const std::string& path) {
   std::stringstream ss;
   ss << f.rdbuf();
   return parse_scenario(ss.str(), path);
+}
+
+void override_duration(Scenario& s, double duration, const std::string& option) {
+  if (const std::string why = duration_problem(duration, s.options.rate); !why.empty())
+    throw InvalidArgument(fmt::format("{}: {}", option, why));
+  // a longer run may reach a part of the trajectory the file's own duration did not
+  const model::RobotModel m = model::load_robot(s.robot);
+  if (const std::string v = joint_limit_violation(*s.trajectory, m, duration, s.options.rate); !v.empty())
+    throw InvalidArgument(fmt::format("{} {} s: {} ({}:{}, trajectory)", option, duration, v, s.path, s.trajectory_line));
+  s.options.duration = duration;
+  for (size_t k = 0; k < s.faults.size(); ++k)
+    if (!(s.faults[k].onset < duration))
+      log::warn(fmt::format("{} {} s ends the run before faults[{}] ({}, onset {} s) of {} starts: it does not fire", option, duration, k,
+                            to_string(s.faults[k].type), s.faults[k].onset, s.path));
 }
 
 std::unique_ptr<Simulator> make_simulator(const Scenario& s) {

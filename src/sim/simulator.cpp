@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "twinwatch/core/error.hpp"
 
@@ -79,13 +81,25 @@ PlantTruth default_truth(const model::RobotModel& m, unsigned serial) {
   return p;
 }
 
+std::string duration_problem(double duration, double rate) {
+  if (!(duration > 0.0)) return fmt::format("expected a duration > 0 s, got {}", duration);
+  if (!(duration <= kMaxDuration))
+    return fmt::format("expected at most {:g} s (the longest run the simulator accepts), got {}", kMaxDuration, duration);
+  // at least one sample: run() records llround(duration * rate) of them (the tolerance lets a
+  // duration of exactly 1 / rate through whatever its rounding)
+  if (duration * rate < 1.0 - 1e-9)
+    return fmt::format("expected at least one sample period ({:g} s at {:g} Hz), got {} s", 1.0 / rate, rate, duration);
+  return "";
+}
+
 void SimOptions::validate(int n) const {
-  if (!(rate > 0.0)) throw InvalidArgument(fmt::format("rate is {} Hz, must be > 0", rate));
+  if (!(rate >= kMinRate && rate <= kMaxRate))
+    throw InvalidArgument(fmt::format("rate is {} Hz, must be in [{:g}, {:g}]", rate, kMinRate, kMaxRate));
   if (substeps < 1) throw InvalidArgument(fmt::format("substeps is {}, must be >= 1", substeps));
-  if (rate * substeps < 2000.0)
-    throw InvalidArgument(fmt::format("physics rate is {} Hz (rate {} x substeps {}), must be >= 2000 Hz", rate * substeps,
-                                      rate, substeps));
-  if (!(duration > 0.0)) throw InvalidArgument(fmt::format("duration is {} s, must be > 0", duration));
+  if (rate * substeps < kMinPhysicsRate)
+    throw InvalidArgument(fmt::format("physics rate is {} Hz (rate {} x substeps {}), must be >= {:g} Hz", rate * substeps,
+                                      rate, substeps, kMinPhysicsRate));
+  if (const std::string p = duration_problem(duration, rate); !p.empty()) throw InvalidArgument("duration: " + p);
   if (kp.size() != 0 && kp.size() != n) throw InvalidArgument(fmt::format("kp has size {}, expected {} (n_dof)", kp.size(), n));
   if (kd.size() != 0 && kd.size() != n) throw InvalidArgument(fmt::format("kd has size {}, expected {} (n_dof)", kd.size(), n));
   payload.validate("payload");
@@ -153,6 +167,14 @@ Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Tra
       throw InvalidArgument(fmt::format("fault {} (collision): link is {}, expected 1 to {}", k, f.link + 1, n_));
     if (f.type == FaultType::Collision && !(f.duration > 0.0))
       throw InvalidArgument(fmt::format("fault {} (collision): duration is {} s, must be > 0", k, f.duration));
+    // the bit is shifted into a 64-bit word: outside 0..63 the shift is undefined
+    if (f.io_bit < 0 || f.io_bit > kMaxDigitalOutputBit)
+      throw InvalidArgument(fmt::format("fault {} ({}): io_bit is {}, expected 0 to {}", k, to_string(f.type), f.io_bit,
+                                        kMaxDigitalOutputBit));
+    const double max_jitter = kMaxJitterFraction / opt_.rate;
+    if (f.type == FaultType::TimestampJitter && !(f.magnitude >= 0.0 && f.magnitude <= max_jitter))
+      throw InvalidArgument(fmt::format("fault {} (timestamp_jitter): magnitude is {} s, expected 0 to {:g} s", k, f.magnitude,
+                                        max_jitter));
   }
   fault_applied_.assign(faults_.size(), false);
   if (opt_.payload.mass > 0.0) {
@@ -303,7 +325,8 @@ bool Simulator::step(RobotSample& s) {
   s.robot_mode = 7;
   s.timestamp = t_ + dt;
   for (const FaultSpec& f : faults_)
-    if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0) s.timestamp += f.magnitude * normal_(rng_);
+    if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0)
+      s.timestamp += f.magnitude * std::clamp(normal_(rng_), -kJitterClipSigmas, kJitterClipSigmas);
 
   q_meas_prev_ = q_meas;
   ++tick_;

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
+#include <string>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -294,6 +296,31 @@ std::unique_ptr<Trajectory> make_quasi_static(const std::vector<VectorJ>& poses,
   }
   segs.push_back({prev, poses.front() - VectorJ::Constant(prev.size(), delta), move_T, false});
   return std::make_unique<Segments>(std::move(segs));
+}
+
+std::string joint_limit_violation(const Trajectory& traj, const model::RobotModel& m, double duration, double rate) {
+  check_size("trajectory joints", traj.n_dof(), m.n_dof(), "model.n_dof");
+  // the controller reads the target at t = k dt (Simulator::step); one period holds every value a
+  // cyclic trajectory takes, so a long run needs no more than that
+  const double dt = 1.0 / rate;
+  const long run_steps = std::llround(duration * rate);
+  const double period = traj.period();
+  const long steps = std::isfinite(period) ? std::min(run_steps, static_cast<long>(std::ceil(period * rate)) + 1) : run_steps;
+  VectorJ q, qd, qdd;
+  for (long k = 0; k < steps; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    traj.evaluate(t, q, qd, qdd);
+    for (int j = 0; j < m.n_dof(); ++j) {
+      const model::JointLimits& l = m.joint(j).limits;
+      if (!(q[j] >= l.q_min && q[j] <= l.q_max))
+        return fmt::format("joint {} target position reaches {:.6g} rad at t = {:.6g} s, outside its range [{:.6g}, {:.6g}] rad ({})",
+                           j + 1, q[j], t, l.q_min, l.q_max, m.name());
+      if (!(std::abs(qd[j]) <= l.qd_max))
+        return fmt::format("joint {} target velocity reaches {:.6g} rad/s at t = {:.6g} s, beyond its limit of {:.6g} rad/s ({})",
+                           j + 1, qd[j], t, l.qd_max, m.name());
+    }
+  }
+  return "";
 }
 
 bool inverse_kinematics(const model::RobotModel& m, const Eigen::Isometry3d& target, const VectorJ& seed, VectorJ& q) {

@@ -7,3 +7,23 @@ add_test(NAME cli.agv_make_tests COMMAND twinwatch agv make-tests -o ${agvd}/tes
 set_tests_properties(cli.agv_make_tests PROPERTIES FIXTURES_SETUP agvtests)
 add_test(NAME cli.agv_identify COMMAND twinwatch agv identify ${agvd}/tests.csv --json)
 set_tests_properties(cli.agv_identify PROPERTIES FIXTURES_REQUIRED agvtests PASS_REGULAR_EXPRESSION "\"left\":\\{\"B\"")
+# --speed must be a positive factor (0 and -1 used to run the demo)
+foreach(speed 0 -1)
+  add_test(NAME cli.agv_demo_speed_${speed} COMMAND sh -c "$<TARGET_FILE:twinwatch> agv demo --speed ${speed} 2>&1; echo exit \$?")
+  set_tests_properties(cli.agv_demo_speed_${speed} PROPERTIES PASS_REGULAR_EXPRESSION "error: --speed must be a finite factor > 0, got ${speed}\nexit [1-9]")
+endforeach()
+# a failed write is an error naming the path (it used to print "wrote /dev/full" and exit 0)
+if(EXISTS /dev/full)
+  add_test(NAME cli.agv_make_tests_disk_full COMMAND sh -c "$<TARGET_FILE:twinwatch> agv make-tests -o /dev/full 2>&1; echo exit \$?")
+  set_tests_properties(cli.agv_make_tests_disk_full PROPERTIES PASS_REGULAR_EXPRESSION "error: /dev/full: write error \\(disk full\\?\\)\nexit [1-9]"
+                       FAIL_REGULAR_EXPRESSION "wrote")
+endif()
+# CRLF line ends give the same parameters as LF; a nan cell is named with its line and column
+add_test(NAME cli.agv_identify_crlf
+         COMMAND sh -c "sed 's/$/\\r/' ${agvd}/tests.csv > ${agvd}/crlf.csv && $<TARGET_FILE:twinwatch> agv identify ${agvd}/tests.csv --json > ${agvd}/lf.json && \
+$<TARGET_FILE:twinwatch> agv identify ${agvd}/crlf.csv --json > ${agvd}/crlf.json && cmp ${agvd}/lf.json ${agvd}/crlf.json && echo SAME")
+set_tests_properties(cli.agv_identify_crlf PROPERTIES FIXTURES_REQUIRED agvtests PASS_REGULAR_EXPRESSION "SAME")
+add_test(NAME cli.agv_identify_nan
+         COMMAND sh -c "sed '7s/^\\([a-z]*,[a-z]*,[^,]*\\),[^,]*/\\1,nan/' ${agvd}/tests.csv > ${agvd}/nan.csv && $<TARGET_FILE:twinwatch> agv identify ${agvd}/nan.csv 2>&1; echo exit \$?")
+set_tests_properties(cli.agv_identify_nan PROPERTIES FIXTURES_REQUIRED agvtests
+                     PASS_REGULAR_EXPRESSION "nan\\.csv:7: field 'current_A': expected a finite number, got 'nan'\nexit [1-9]")

@@ -33,3 +33,7 @@ set_tests_properties(cli.validate_torque_bad_table PROPERTIES FIXTURES_REQUIRED 
 add_test(NAME cli.validate_torque_bad_segment COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --segment 0.7:0.2)
 set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRED excite_model
                      PASS_REGULAR_EXPRESSION "--segment '0.7:0.2': expected 0 <= FROM < TO <= 1")
+# a negative or zero --duration is refused (it used to write one period, `cycles: 1`)
+add_test(NAME cli.excite_duration_negative COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/neg.yaml -q --duration -10 2>&1; echo exit \$?")
+set_tests_properties(cli.excite_duration_negative PROPERTIES PASS_REGULAR_EXPRESSION
+  "error: --duration: expected a time > 0 s and at most 1e\\+06 s \\(the longest run the simulator accepts\\), got -10\nexit [1-9]")

@@ -3,10 +3,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/sim/agv.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::ident {
 namespace {
@@ -47,6 +50,63 @@ TEST(AgvIdent, TestFileRoundTripsAndBadCellsAreNamed) {
   }
   std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\nmiddle,steady,1.0,0.1,2,0\n";
   EXPECT_THROW(device::read_agv_tests(bad), ParseError);
+}
+
+// a CRLF file (and one with a byte-order mark) reads as the LF file does
+TEST(AgvIdent, CrlfTestFileReadsLikeTheLfOne) {
+  const std::string lf = ::testing::TempDir() + "agv_lf.csv", crlf = ::testing::TempDir() + "agv_crlf.csv";
+  device::write_agv_tests(lf, sim::simulate_agv_tests(sim::AgvParams{}, 5));
+  {
+    std::ifstream in(lf);
+    std::ofstream out(crlf, std::ios::binary);
+    out << "\xEF\xBB\xBF";
+    for (std::string line; std::getline(in, line);) out << line << "\r\n";
+  }
+  const auto a = device::read_agv_tests(lf), b = device::read_agv_tests(crlf);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].test, b[k].test) << k;
+    EXPECT_EQ(a[k].time, b[k].time) << k;
+    EXPECT_EQ(a[k].voltage, b[k].voltage) << k;
+  }
+  EXPECT_EQ(fit_agv_motor(a, "left").params.J, fit_agv_motor(b, "left").params.J);
+}
+
+// nan, inf and absurd magnitudes stop at the reader with the file, line and column (they used to
+// reach the fit and come out as "plant gain g_p is -nan")
+TEST(AgvIdent, NonFiniteAndAbsurdCellsAreNamed) {
+  const std::string bad = ::testing::TempDir() + "agv_nonfinite.csv";
+  const auto error_of = [&](const std::string& row) {
+    std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\r\nright,steady,1.0,0.1,2,0\r\n" << row << "\r\n";
+    return twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(bad); });
+  };
+  EXPECT_THAT(error_of("right,steady,2.4,nan,5.2,0"), ::testing::HasSubstr("agv_nonfinite.csv:3: field 'current_A': expected a finite number, got 'nan'"));
+  EXPECT_THAT(error_of("right,steady,2.4,0.1,inf,0"), ::testing::HasSubstr("agv_nonfinite.csv:3: field 'speed_rad_s': expected a finite number, got 'inf'"));
+  EXPECT_THAT(error_of("right,steady,-1e300,0.1,5.2,0"),
+              ::testing::HasSubstr("agv_nonfinite.csv:3: field 'voltage_V': expected a number within +-1e+06, got '-1e300'"));
+  EXPECT_THAT(error_of("right,step,6,0.1,5.2,-0.005"), ::testing::HasSubstr("agv_nonfinite.csv:3: field 'time_s': expected a time >= 0 s, got '-0.005'"));
+  std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\n";
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(bad); }),
+              ::testing::HasSubstr("agv_nonfinite.csv:2: no data rows after the header"));
+}
+
+// a write that fails (here a full device) is an error naming the path, not "wrote /dev/full"
+TEST(AgvIdent, WriteErrorNamesThePath) {
+  if (!std::ifstream("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>(
+                  [] { device::write_agv_tests("/dev/full", sim::simulate_agv_tests(sim::AgvParams{}, 1)); }),
+              ::testing::HasSubstr("/dev/full: write error"));
+}
+
+// rows that give a non-physical motor are refused by the fit, not handed to the controller tuning
+TEST(AgvIdent, NonPhysicalFitIsRefused) {
+  // the voltage falls as the wheel speeds up: the fitted k (intercept of U/w over i/w) is negative
+  std::vector<device::AgvTestRow> rows;
+  for (int k = 1; k <= 5; ++k) rows.push_back({"right", "steady", 6.0 - k, 0.1 * k, 2.0 * k, 0.0});
+  for (int k = 1; k <= 20; ++k) rows.push_back({"right", "step", 6.0, 0.1, 10.0 * (1 - std::exp(-k * 0.01 / 0.2)), k * 0.01});
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { fit_agv_motor(rows, "right"); }),
+              ::testing::AllOf(::testing::HasSubstr("right motor: "), ::testing::HasSubstr("must be > 0"),
+                               ::testing::HasSubstr("(fitted from 5 steady-state and 20 step rows: they do not describe a DC motor")));
 }
 
 TEST(AgvIdent, TooFewSteadyPoints) {

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/device/agv_link.hpp"
 #include "twinwatch/device/agv_tests.hpp"
 #include "twinwatch/ident/agv_ident.hpp"
@@ -77,6 +78,7 @@ struct DemoOptions {
 };
 
 int run_demo(const DemoOptions& o) {
+  if (!(o.speed > 0.0 && std::isfinite(o.speed))) throw InvalidArgument(fmt::format("--speed must be a finite factor > 0, got {}", o.speed));
   // the "real" robot is AGV Table 1; the twin is what identification of that robot's tests gives
   sim::AgvParams real;
   const auto tests = sim::simulate_agv_tests(real, o.seed);
@@ -196,7 +198,15 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
   ident_cmd->add_flag("--json", idf->second, "Print the parameters as JSON");
   ident_cmd->callback([idf] {
     const auto rows = device::read_agv_tests(idf->first);
-    const auto r = ident::fit_agv_motor(rows, "right"), l = ident::fit_agv_motor(rows, "left");
+    // the fit's complaints (too few points, a non-physical result) concern this file
+    const auto fit = [&](const char* motor) {
+      try {
+        return ident::fit_agv_motor(rows, motor);
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument(fmt::format("{}: {}", idf->first, e.what()));
+      }
+    };
+    const auto r = fit("right"), l = fit("left");
     if (idf->second) {
       fmt::print("{}\n", nlohmann::json{{"right", fit_json(r)}, {"left", fit_json(l)}}.dump());
       return;

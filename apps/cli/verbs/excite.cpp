@@ -12,6 +12,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ident/excitation.hpp"
 #include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/simulator.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -27,6 +28,7 @@ struct Options {
   double base_frequency = 0.1, duration = 0.0, amplitude = 1.0, qdd_default = 5.0, fraction = 0.9;
   unsigned seed = 1;
   std::vector<double> q0;
+  bool duration_given = false;  // (else one period)
   bool json = false, quiet = false, progress = false;
 };
 
@@ -53,7 +55,11 @@ int run(const Options& o) {
   // the run must end at rest: a whole number of periods
   const double period = 1.0 / o.base_frequency;
   int cycles = 1;
-  if (o.duration > 0.0) {
+  if (o.duration_given) {
+    // the scenario written must load: a run of at most sim::kMaxDuration
+    if (!(o.duration > 0.0 && o.duration <= sim::kMaxDuration))
+      throw InvalidArgument(fmt::format("--duration: expected a time > 0 s and at most {:g} s (the longest run the simulator accepts), got {}",
+                                        sim::kMaxDuration, o.duration));
     const double c = o.duration / period;
     cycles = static_cast<int>(std::lround(c));
     if (cycles < 1 || std::abs(c - cycles) > kWholeCycleTolerance * std::max(1.0, c))
@@ -133,7 +139,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
   sub->add_option("--harmonics", o->harmonics, "Harmonics L per joint (>= 3)")->capture_default_str();
   sub->add_option("--base-frequency", o->base_frequency, "Base frequency [Hz]; the period is its inverse")->capture_default_str();
-  sub->add_option("--duration", o->duration, "Total run time [s], a whole number of periods (default: one period)");
+  auto* duration = sub->add_option("--duration", o->duration, "Total run time [s], a whole number of periods (default: one period)");
   sub->add_option("--seed", o->seed, "Seed of the random start and of the global search")->capture_default_str();
   sub->add_option("--q0", o->q0, "Centre (start and end) position per joint [rad] (default: middle of each range)");
   sub->add_option("--amplitude", o->amplitude, "Largest excursion from q0 [rad] besides the joint limits")->capture_default_str();
@@ -147,7 +153,10 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+  sub->callback([o, duration] {
+    o->duration_given = duration->count() > 0;
+    twinwatch::cli::set_exit_code(run(*o));
+  });
 }};
 
 }  // namespace

@@ -6,8 +6,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -52,7 +54,11 @@ struct RecordOptions {
 };
 
 int run_record(const RecordOptions& o) {
-  if (!(o.duration > 0.0)) throw InvalidArgument(fmt::format("--duration must be > 0 s, got {}", o.duration));
+  // (an infinite time would overflow the clock arithmetic below)
+  if (!(o.duration > 0.0 && std::isfinite(o.duration)))
+    throw InvalidArgument(fmt::format("--duration must be a finite time > 0 s, got {}", o.duration));
+  if (!(o.wait >= 0.0 && std::isfinite(o.wait)))
+    throw InvalidArgument(fmt::format("--wait must be a finite time >= 0 s, got {}", o.wait));
   cli::RtdeSourceOptions so;
   so.endpoint = o.endpoint;
   so.frequency = o.frequency;
@@ -150,6 +156,7 @@ struct ServeOptions {
   int port = rtde::kDefaultPort;
   double speed = 1.0, duration = -1.0, wait_client = 0.0;
   long seed = -1;
+  bool seed_given = false, duration_given = false;  // (the values above are then the user's)
   bool json = false, quiet = false;
 };
 
@@ -167,11 +174,15 @@ rtde::ControllerVersion parse_version(const std::string& s) {
 }
 
 int run_serve(const ServeOptions& o) {
-  if (!(o.speed > 0.0)) throw InvalidArgument(fmt::format("--speed must be > 0, got {}", o.speed));
+  if (!(o.speed > 0.0 && std::isfinite(o.speed))) throw InvalidArgument(fmt::format("--speed must be a finite factor > 0, got {}", o.speed));
   if (o.port < 0 || o.port > 65535) throw InvalidArgument(fmt::format("--port must be in 0..65535, got {}", o.port));
+  if (!(o.wait_client >= 0.0 && std::isfinite(o.wait_client)))
+    throw InvalidArgument(fmt::format("--wait-client must be a finite time >= 0 s, got {}", o.wait_client));
+  if (o.seed_given && (o.seed < 0 || o.seed > static_cast<long>(std::numeric_limits<unsigned>::max())))
+    throw InvalidArgument(fmt::format("--seed: expected 0 to {}, got {}", std::numeric_limits<unsigned>::max(), o.seed));
   sim::Scenario sc = sim::load_scenario(o.scenario);
-  if (o.seed >= 0) sc.options.seed = static_cast<unsigned>(o.seed);
-  if (o.duration > 0) sc.options.duration = o.duration;
+  if (o.seed_given) sc.options.seed = static_cast<unsigned>(o.seed);
+  if (o.duration_given) sim::override_duration(sc, o.duration, "--duration");
   auto simulator = sim::make_simulator(sc);
   model::RobotModel nominal = model::load_robot(sc.robot);  // the controller's own model
   if (sc.options.payload_declared) nominal.set_payload(sc.options.payload);
@@ -275,13 +286,17 @@ twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
   sub->add_option("--port", o->port, "TCP port (0: any free port, printed at start)")->capture_default_str();
   sub->add_option("--bind", o->bind, "Address to listen on (0.0.0.0 for other machines)")->capture_default_str();
   sub->add_option("--speed", o->speed, "Real-time factor (2 = twice as fast; timestamps stay in robot time)")->capture_default_str();
-  sub->add_option("--duration", o->duration, "Override the scenario's duration [s of robot time]");
-  sub->add_option("--seed", o->seed, "Override the scenario's seed");
+  auto* duration = sub->add_option("--duration", o->duration, "Override the scenario's duration [s of robot time]");
+  auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
   sub->add_option("--controller-version", o->version, "Version to report to clients")->capture_default_str();
   sub->add_option("--wait-client", o->wait_client, "Hold the robot until a client connects, for at most this long [s]");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_serve(*o)); });
+  sub->callback([o, duration, seed] {
+    o->duration_given = duration->count() > 0;
+    o->seed_given = seed->count() > 0;
+    twinwatch::cli::set_exit_code(run_serve(*o));
+  });
 }};
 
 }  // namespace

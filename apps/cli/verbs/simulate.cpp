@@ -7,7 +7,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <stdexcept>
 
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "verb_registry.hpp"
@@ -18,6 +21,7 @@ struct Options {
   std::string scenario, output;
   long seed = -1;
   double duration = -1;
+  bool seed_given = false, duration_given = false;  // (the values above are then the user's)
   bool quiet = false, progress = false;
 };
 
@@ -30,8 +34,12 @@ std::string labels_path(const std::string& output) {
 int run(const Options& o) {
   using namespace twinwatch;
   sim::Scenario s = sim::load_scenario(o.scenario);
-  if (o.seed >= 0) s.options.seed = static_cast<unsigned>(o.seed);
-  if (o.duration > 0) s.options.duration = o.duration;
+  if (o.seed_given) {
+    if (o.seed < 0 || o.seed > static_cast<long>(std::numeric_limits<unsigned>::max()))
+      throw InvalidArgument(fmt::format("--seed: expected 0 to {}, got {}", std::numeric_limits<unsigned>::max(), o.seed));
+    s.options.seed = static_cast<unsigned>(o.seed);
+  }
+  if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
   auto simulator = sim::make_simulator(s);
   const int n = simulator->truth_model().n_dof();
   device::RecordingWriter writer(o.output, n, sim::Simulator::fields());
@@ -46,7 +54,10 @@ int run(const Options& o) {
                    if (f >= 1.0) std::fprintf(stderr, "\n");
                  });
   writer.close();
-  std::ofstream(labels_path(o.output)) << sim::labels_json(s) << '\n';
+  std::ofstream labels(labels_path(o.output));
+  labels << sim::labels_json(s) << '\n';
+  labels.close();
+  if (!labels) throw std::runtime_error(labels_path(o.output) + ": cannot write the labels");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.quiet)
     fmt::print("{}: {} samples, {:.1f} s of robot time at {:g} Hz in {:.2f} s ({:.0f}x real time), {} fault(s) -> {}\n",
@@ -62,11 +73,15 @@ twinwatch::cli::VerbRegistrar reg{"simulate", 20, [](CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "Recording CSV to write; labels go to <name>.labels.json")->required();
-  sub->add_option("--seed", o->seed, "Override the scenario's seed");
-  sub->add_option("--duration", o->duration, "Override the duration [s]");
+  auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
+  auto* duration = sub->add_option("--duration", o->duration, "Override the duration [s] (one sample period to 1e6 s)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+  sub->callback([o, seed, duration] {
+    o->seed_given = seed->count() > 0;
+    o->duration_given = duration->count() > 0;
+    twinwatch::cli::set_exit_code(run(*o));
+  });
 }};
 
 }  // namespace

@@ -14,8 +14,11 @@ struct AgvTestRow {
   double voltage = 0.0, current = 0.0, speed = 0.0, time = 0.0;
 };
 
-/// Reads the test CSV; errors (ParseError) name the file, line and column.
+/// Reads the test CSV (LF or CRLF line ends, an optional UTF-8 byte-order mark); errors (ParseError)
+/// name the file, line and column. Every number must be finite and within +-1e6; time_s >= 0.
 std::vector<AgvTestRow> read_agv_tests(const std::string& path);
+/// Writes the test CSV. Throws std::runtime_error naming the path when it cannot be opened or written
+/// (a full disk included).
 void write_agv_tests(const std::string& path, const std::vector<AgvTestRow>& rows);
 
 }  // namespace twinwatch::device

@@ -26,7 +26,8 @@ struct AgvMotorFit {
 };
 
 /// Fits one motor ("right" or "left") from the rows. Throws InvalidArgument when there are fewer
-/// than 3 steady-state points with w > 0 or no usable step response.
+/// than 3 steady-state points with w > 0, no usable step response, or the fitted parameters are not
+/// a physical motor (DcMotorParams::validate: Ra, k, J > 0; B, Tq >= 0).
 AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string& motor);
 
 }  // namespace twinwatch::ident

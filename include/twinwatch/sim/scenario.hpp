@@ -2,7 +2,9 @@
 /// @file scenario.hpp
 /// Scenario files (YAML): robot, payload, trajectory, duration, rate, noise, seed, faults — the
 /// rehearsal a user wants to run on the virtual robot. See docs/scenarios.md for every field.
-/// Every malformed field is reported as ParseError(file, line, field, "expected X, got Y").
+/// Every malformed field is reported as ParseError(file, line, field, "expected X, got Y"), and so is
+/// a scenario the robot cannot run: a trajectory beyond its joint position or velocity limits, a
+/// payload above payload_limit(), a fault that would start after the end, a repeated key.
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,6 +22,7 @@ struct Scenario {
   std::vector<FaultSpec> faults;
   std::vector<double> current_sigma;  ///< per-joint override of the truth's noise (empty: defaults)
   std::string trajectory_type;
+  int trajectory_line = 0;  ///< line of `trajectory:` in the file (0: unknown), for later errors
   unsigned serial = 1;  ///< which physical robot (hidden parameters); the seed only changes noise
 };
 
@@ -27,6 +30,17 @@ struct Scenario {
 Scenario load_scenario(const std::string& path);
 /// Same from YAML text; `origin` names it in errors.
 Scenario parse_scenario(const std::string& text, const std::string& origin);
+
+/// Replaces the scenario's duration [s] by a command-line override and checks it as the file's own:
+/// duration_problem() and the trajectory's joint limits over the new run. A fault that starts at or
+/// after the new end stays in the scenario (and its labels) but does not fire: a warning is logged.
+/// @param option the override's name in errors, e.g. "--duration". Throws InvalidArgument.
+void override_duration(Scenario& s, double duration, const std::string& option);
+
+/// Heaviest payload [kg] a scenario may give the robot (at start or picked): the manufacturer's rated
+/// payload of the built-in robots (UR3e 3 kg, UR5e 5 kg, Panda 3 kg), else, for a description file,
+/// the mass of the robot's own moving links (no arm carries more than itself).
+double payload_limit(const model::RobotModel& model);
 
 /// Builds the simulator for a scenario (nominal robot loaded by name/path).
 std::unique_ptr<Simulator> make_simulator(const Scenario& s);

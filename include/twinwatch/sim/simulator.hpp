@@ -90,7 +90,7 @@ enum class FaultType {
   CurrentOffset,   ///< sensor: constant offset on one current channel [A]
   StuckCurrent,    ///< sensor: one current channel frozen at its last value
   DroppedSamples,  ///< stream: `magnitude` consecutive samples are not delivered (every `period` s)
-  TimestampJitter, ///< stream: controller timestamp jitter of sigma = magnitude [s]
+  TimestampJitter, ///< stream: controller timestamp jitter of sigma = magnitude [s] (clipped, see kJitterClipSigmas)
 };
 
 /// Lower-case YAML name ("resistance", "friction_growth", ...).
@@ -109,7 +109,7 @@ struct FaultSpec {
   double duration = 0.05;  ///< collision pulse length [s]
   double period = 0.0;     ///< dropped samples: repeat every period [s] (0: once)
   model::RigidBodyInertia payload;  ///< payload pick
-  int io_bit = 0;          ///< digital output bit of the gripper
+  int io_bit = 0;          ///< digital output bit of the gripper, 0 to kMaxDigitalOutputBit
 
   /// 0 before onset, ramps to 1, 0 after end.
   double level(double t) const;
@@ -120,10 +120,35 @@ struct FaultSpec {
 /// entry is the fault's magnitude; evaluation reads it to score the contact isolation.
 VectorJ collision_torque_per_newton(const model::RobotModel& m, const model::DynamicsData& d, const FaultSpec& f);
 
+/// Control and recording rates the simulator accepts [Hz]. The lowest is the slowest real UR
+/// controller's (CB3 RTDE, 125 Hz): below it the default joint PD (10 Hz closed-loop bandwidth) no
+/// longer tracks (worst error on the library figure-eight: 3 mrad at 500 Hz, 12 mrad at 125 Hz,
+/// 38 mrad at 100 Hz, 0.25 rad at 50 Hz). The highest, 20x an e-Series controller's 500 Hz, keeps
+/// duration * rate (the sample count) far inside a long.
+inline constexpr double kMinRate = 125.0;
+inline constexpr double kMaxRate = 10000.0;
+/// Physics steps per second the integration needs, rate * substeps [Hz].
+inline constexpr double kMinPhysicsRate = 2000.0;
+/// Longest run the simulator accepts [s], about 11.6 days (5e8 samples at 500 Hz): anything longer is
+/// a typo or an overflow (1e300, .inf), not a rehearsal.
+inline constexpr double kMaxDuration = 1e6;
+/// Highest digital output bit a fault may drive: a UR controller's actual_digital_output_bits holds
+/// the standard outputs in bits 0-7, the configurable ones in 8-15 and the tool's in 16-17.
+inline constexpr int kMaxDigitalOutputBit = 17;
+/// Timestamp jitter: each draw is clipped to kJitterClipSigmas sigmas and sigma may be at most
+/// kMaxJitterFraction of the sample period, so that consecutive timestamps stay at least
+/// 1 - 2 * 3 / 8 = a quarter period apart (the recording reader requires increasing timestamps).
+inline constexpr double kJitterClipSigmas = 3.0;
+inline constexpr double kMaxJitterFraction = 0.125;
+
+/// Why a run of `duration` [s] cannot be recorded at `rate` [Hz] ("expected ..., got ..."), or "" when
+/// it can: it must be > 0, at least one sample period (1 / rate) and at most kMaxDuration.
+std::string duration_problem(double duration, double rate);
+
 struct SimOptions {
-  double rate = 500.0;          ///< controller and recording rate [Hz]
-  int substeps = 4;             ///< physics steps per control step (rate * substeps >= 2000 Hz)
-  double duration = 10.0;       ///< [s]
+  double rate = 500.0;          ///< controller and recording rate [Hz], kMinRate to kMaxRate
+  int substeps = 4;             ///< physics steps per control step (rate * substeps >= kMinPhysicsRate)
+  double duration = 10.0;       ///< [s], see duration_problem()
   unsigned seed = 1;
   bool cold_start = false;      ///< joints start at ambient temperature (else warmed up, ~T_ref)
   model::RigidBodyInertia payload;  ///< carried at start (truth), also declared to the controller
@@ -136,7 +161,8 @@ struct SimOptions {
 class Simulator {
  public:
   /// @param nominal the robot file's model (the controller's model); the plant's truth is derived
-  /// from it with `truth` perturbations. Throws InvalidArgument on invalid options or faults.
+  /// from it with `truth` perturbations. Throws InvalidArgument on invalid options or faults (a joint
+  /// or link out of range, an io_bit beyond kMaxDigitalOutputBit, a jitter above kMaxJitterFraction).
   Simulator(const model::RobotModel& nominal, std::shared_ptr<const Trajectory> trajectory, PlantTruth truth,
             SimOptions options, std::vector<FaultSpec> faults);
 

@@ -4,6 +4,7 @@
 /// All are smooth (C2) so target_qdd exists; cyclic ones repeat with period().
 #include <Eigen/Geometry>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "twinwatch/core/types.hpp"
@@ -60,6 +61,15 @@ std::unique_ptr<Trajectory> make_figure_eight(const model::RobotModel& model, co
 /// each edge a quintic whose peak speed is `speed` [m/s].
 std::unique_ptr<Trajectory> make_triangle(const model::RobotModel& model, const VectorJ& start, double side, double speed,
                                           double ik_step = 0.002);
+
+/// The first place where the target leaves the robot's joint position range or exceeds its velocity
+/// limit, as the controller would command it: sampled at t = k / rate [s, Hz] over the run of
+/// `duration` [s], or over one period when the run is longer (the trajectory repeats). Returns the
+/// violation as text, e.g. "joint 2 target velocity reaches 4.1 rad/s at t = 1.25 s, beyond its limit
+/// of 3.14159 rad/s (ur3e)", or "" when the target stays inside. Limits the description does not
+/// publish (infinite) are not checked; a NaN target always is a violation. Throws InvalidArgument if
+/// the trajectory and the model have different numbers of joints.
+std::string joint_limit_violation(const Trajectory& trajectory, const model::RobotModel& model, double duration, double rate);
 
 /// Damped-least-squares IK for a flange pose, from `seed`. Returns false if not converged.
 bool inverse_kinematics(const model::RobotModel& model, const Eigen::Isometry3d& target, const VectorJ& seed, VectorJ& q);

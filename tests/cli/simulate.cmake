@@ -1,0 +1,43 @@
+# bad options and impossible scenarios of simulate, serve-robot and record: each is refused with the
+# option or the file's line and field, the expected and the actual value, and a non-zero exit (they
+# used to run the scenario's own duration, or write a header-only recording, and exit 0)
+set(ds ${PROJECT_BINARY_DIR}/cli-simulate)
+file(MAKE_DIRECTORY ${ds})
+set(fig ${PROJECT_SOURCE_DIR}/tests/data/cli/short_fig8.yaml)
+foreach(case "neg;-1;expected a duration > 0 s, got -1" "zero;0;expected a duration > 0 s, got 0"
+        "nan;nan;expected a duration > 0 s, got nan" "inf;inf;expected at most 1e\\+06 s \\(the longest run the simulator accepts\\), got inf"
+        "tiny;1e-9;expected at least one sample period \\(0\\.002 s at 500 Hz\\), got 1e-09 s")
+  list(GET case 0 name)
+  list(GET case 1 value)
+  list(GET case 2 message)
+  add_test(NAME cli.simulate_duration_${name}
+           COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${fig} --duration ${value} -o ${ds}/d_${name}.csv -q 2>&1; echo exit \$?")
+  set_tests_properties(cli.simulate_duration_${name} PROPERTIES PASS_REGULAR_EXPRESSION "error: --duration: ${message}\nexit [1-9]")
+endforeach()
+add_test(NAME cli.simulate_seed_negative COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${fig} --seed -5 -o ${ds}/seed.csv -q 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_seed_negative PROPERTIES PASS_REGULAR_EXPRESSION "error: --seed: expected 0 to 4294967295, got -5\nexit [1-9]")
+add_test(NAME cli.simulate_beyond_joint_limits
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/tests/data/cli/too_fast.yaml -o ${ds}/fast.csv 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_beyond_joint_limits PROPERTIES PASS_REGULAR_EXPRESSION
+  "too_fast\\.yaml:5: field 'trajectory': joint 1 target velocity reaches 6\\.28319 rad/s at t = 0 s, beyond its limit of 3\\.14159 rad/s \\(ur3e\\)\nexit [1-9]")
+# labels that cannot be written (their path is a directory) are an error, not a recording without labels
+add_test(NAME cli.simulate_labels_unwritable
+         COMMAND sh -c "mkdir -p ${ds}/lbl.labels.json && $<TARGET_FILE:twinwatch> simulate ${fig} --duration 0.1 -o ${ds}/lbl.csv -q 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_labels_unwritable PROPERTIES PASS_REGULAR_EXPRESSION "lbl\\.labels\\.json: cannot write the labels\nexit [1-9]")
+# a shorter run keeps the faults it cuts off in the labels, and says they do not fire
+add_test(NAME cli.simulate_shortened_fault_warns
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/j5_resistance.yaml --duration 2 -o ${ds}/short.csv -q 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_shortened_fault_warns PROPERTIES PASS_REGULAR_EXPRESSION
+  "\\[warning\\] --duration 2 s ends the run before faults\\[0\\] \\(resistance, onset 12 s\\) of .*j5_resistance\\.yaml starts: it does not fire\nexit 0")
+
+add_test(NAME cli.serve_robot_duration_negative
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${fig} --port 0 --duration -1 --speed 100 2>&1; echo exit \$?")
+set_tests_properties(cli.serve_robot_duration_negative PROPERTIES PASS_REGULAR_EXPRESSION "error: --duration: expected a duration > 0 s, got -1\nexit [1-9]"
+                     FAIL_REGULAR_EXPRESSION "serving")
+add_test(NAME cli.serve_robot_wait_client_negative
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${fig} --port 0 --duration 0.2 --wait-client -1 2>&1; echo exit \$?")
+set_tests_properties(cli.serve_robot_wait_client_negative PROPERTIES
+                     PASS_REGULAR_EXPRESSION "error: --wait-client must be a finite time >= 0 s, got -1\nexit [1-9]" FAIL_REGULAR_EXPRESSION "serving")
+add_test(NAME cli.record_wait_negative
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --wait -1 --duration 1 -o ${ds}/never.csv 2>&1; echo exit \$?")
+set_tests_properties(cli.record_wait_negative PROPERTIES PASS_REGULAR_EXPRESSION "error: --wait must be a finite time >= 0 s, got -1\nexit [1-9]")

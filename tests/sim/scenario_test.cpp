@@ -1,0 +1,246 @@
+#include "twinwatch/sim/scenario.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "error_text.hpp"
+
+namespace twinwatch::sim {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+// the message of parsing `yaml` as test.yaml ("no error" if it loads)
+std::string error_of(const std::string& yaml) {
+  return twinwatch::test::error_text<ParseError>([&] { parse_scenario(yaml, "test.yaml"); });
+}
+
+const std::string kSine = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
+const std::string kFig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n";
+
+// a duration that cannot be run is reported at its own line, with the value
+TEST(Scenario, DurationOutOfRangeIsNamedAtItsLine) {
+  EXPECT_THAT(error_of("robot: ur3e\nseed: 3\nduration: -5\n" + kSine),
+              HasSubstr("test.yaml:3: field 'duration': expected a duration > 0 s, got -5"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 0\n" + kSine), HasSubstr("test.yaml:2: field 'duration': expected a duration > 0 s, got 0"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: .nan\n" + kSine), HasSubstr("test.yaml:2: field 'duration': expected a duration > 0 s, got nan"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: .inf\n" + kSine),
+              HasSubstr("test.yaml:2: field 'duration': expected at most 1e+06 s (the longest run the simulator accepts), got inf"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1e300\n" + kSine),
+              HasSubstr("test.yaml:2: field 'duration': expected at most 1e+06 s (the longest run the simulator accepts), got 1e+300"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1e-9\n" + kSine),
+              HasSubstr("test.yaml:2: field 'duration': expected at least one sample period (0.002 s at 500 Hz), got 1e-09 s"));
+  EXPECT_THAT(error_of("robot: ur3e\nrate: 250\nduration: 0.003\n" + kSine),
+              HasSubstr("test.yaml:3: field 'duration': expected at least one sample period (0.004 s at 250 Hz), got 0.003 s"));
+  // one sample period is enough
+  EXPECT_EQ(error_of("robot: ur3e\nduration: 0.002\n" + kSine), "no error");
+}
+
+TEST(Scenario, CyclesOutOfRangeAreNamedAtTheirLine) {
+  EXPECT_THAT(error_of("robot: ur3e\nseed: 3\ncycles: -2\n" + kSine),
+              HasSubstr("test.yaml:3: field 'cycles': expected a number of trajectory periods > 0, got -2"));
+  EXPECT_THAT(error_of("robot: ur3e\ncycles: .inf\n" + kSine),
+              HasSubstr("test.yaml:2: field 'cycles': expected a number of trajectory periods > 0, got inf"));
+  // the sine's period is 2 s: 1e6 cycles last 2e6 s
+  EXPECT_THAT(error_of("robot: ur3e\ncycles: 1e6\n" + kSine),
+              HasSubstr("test.yaml:2: field 'cycles': 1e+06 cycles of the 2 s period last 2e+06 s: expected at most 1e+06 s (the "
+                        "longest run the simulator accepts)"));
+}
+
+// the command-line override goes through the same checks and names the option
+TEST(Scenario, DurationOverrideIsCheckedAndNamed) {
+  const auto error_of_override = [](double d) {
+    Scenario s = parse_scenario("robot: ur3e\nduration: 2\n" + kSine, "test.yaml");
+    return twinwatch::test::error_text<InvalidArgument>([&] { override_duration(s, d, "--duration"); });
+  };
+  EXPECT_THAT(error_of_override(-1), HasSubstr("--duration: expected a duration > 0 s, got -1"));
+  EXPECT_THAT(error_of_override(0), HasSubstr("--duration: expected a duration > 0 s, got 0"));
+  EXPECT_THAT(error_of_override(std::nan("")), HasSubstr("--duration: expected a duration > 0 s, got nan"));
+  EXPECT_THAT(error_of_override(INFINITY), HasSubstr("--duration: expected at most 1e+06 s"));
+  EXPECT_THAT(error_of_override(1e-9), HasSubstr("--duration: expected at least one sample period (0.002 s at 500 Hz), got 1e-09 s"));
+  Scenario s = parse_scenario("robot: ur3e\nduration: 2\n" + kSine, "test.yaml");
+  override_duration(s, 0.5, "--duration");
+  EXPECT_EQ(s.options.duration, 0.5);
+  // the limits are checked over the new duration: a slow sine that passes its joint limit at 3.55 s
+  const std::string slow = "robot: ur3e\nduration: 1\ntrajectory: {type: sine, start: [0, 0, 0, 0, 0, 0], amplitude: [7, 0, 0, 0, 0, 0], frequency: 0.05}\n";
+  Scenario t = parse_scenario(slow, "slow.yaml");
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { override_duration(t, 5, "--duration"); }),
+              AllOf(HasSubstr("--duration 5 s: joint 1 target position reaches"), HasSubstr("outside its range [-6.28319, 6.28319] rad (ur3e)"),
+                    HasSubstr("slow.yaml:3, trajectory")));
+}
+
+// a commanded trajectory beyond the robot's joint limits is refused before simulating: the message
+// names the trajectory's line, the joint, the value reached, when, and the limit
+TEST(Scenario, TrajectoryBeyondTheJointLimitsIsRefused) {
+  // 0.5 rad at 2 Hz: 6.28 rad/s on every joint, above the UR3e's 3.14 rad/s of J1-J3
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n"
+                       "trajectory: {type: sine, amplitude: 0.5, frequency: 2, phase: 0}\n"),
+              HasSubstr("test.yaml:3: field 'trajectory': joint 1 target velocity reaches 6.28319 rad/s at t = 0 s, beyond its "
+                        "limit of 3.14159 rad/s (ur3e)"));
+  // the audit's 1000 Hz sine: above what a 500 Hz controller can command at all
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\ntrajectory: {type: sine, amplitude: 0.5, frequency: 1000, phase: 0}\n"),
+              HasSubstr("test.yaml:3: field 'trajectory.frequency': expected frequencies from 0 to below half the control rate "
+                        "(250 Hz at 500 Hz), got 1000 Hz on joint 1"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\ntrajectory: {type: sine, amplitude: 0.1, frequency: -1}\n"),
+              HasSubstr("field 'trajectory.frequency': expected frequencies from 0 to below half the control rate (250 Hz at 500 Hz), "
+                        "got -1 Hz on joint 1"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\ntrajectory: {type: chirp, amplitude: 0.01, f0: 1, f1: 300, sweep: 1}\n"),
+              HasSubstr("field 'trajectory.f1': expected a frequency below half the control rate (250 Hz at 500 Hz), got 300 Hz"));
+  // +-90 rad of Fourier excitation leaves the +-2 pi range
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n"
+                       "trajectory:\n  type: fourier\n  amplitude: 90\n  period: 10\n  harmonics: 5\n  seed: 3\n"),
+              AllOf(HasSubstr("test.yaml:3: field 'trajectory': joint "), HasSubstr(" target "), HasSubstr(" at t = "),
+                    HasSubstr("(ur3e)")));
+  // a triangle at 100 m/s needs joint speeds no UR3e has
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\ntrajectory: {type: triangle, side: 0.1, speed: 100}\n"),
+              AllOf(HasSubstr("test.yaml:3: field 'trajectory': joint "), HasSubstr(" target velocity reaches "),
+                    HasSubstr("rad/s (ur3e)")));
+  // only the part of the trajectory that runs is checked: the slow sine reaches 6.28 rad at 3.55 s
+  const std::string slow = "trajectory: {type: sine, start: [0, 0, 0, 0, 0, 0], amplitude: [7, 0, 0, 0, 0, 0], frequency: 0.05}\n";
+  EXPECT_EQ(error_of("robot: ur3e\nduration: 2\n" + slow), "no error");
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + slow),
+              HasSubstr("test.yaml:3: field 'trajectory': joint 1 target position reaches 6.28"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + slow), HasSubstr(" rad at t = 3.548 s"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + slow), HasSubstr("outside its range [-6.28319, 6.28319] rad (ur3e)"));
+}
+
+// payloads above the robot's rated payload (UR3e: 3 kg) are refused, at start and when picked
+TEST(Scenario, PayloadAboveTheRatedPayloadIsRefused) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "payload: {mass: 500, com: [0, 0, 0.04]}\n"),
+              HasSubstr("test.yaml:4: field 'payload.mass': expected at most 3 kg (the rated payload of ur3e), got 500 kg"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + kSine + "faults:\n  - {type: payload_pick, onset: 1, mass: 3.5}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].mass': expected at most 3 kg (the rated payload of ur3e), got 3.5 kg"));
+  EXPECT_EQ(error_of("robot: ur3e\nduration: 1\n" + kSine + "payload: {mass: 3, com: [0, 0, 0.04]}\n"), "no error");
+  EXPECT_THAT(error_of("robot: ur5e\nduration: 1\n" + kSine + "payload: {mass: 5.5}\n"),
+              HasSubstr("field 'payload.mass': expected at most 5 kg (the rated payload of ur5e), got 5.5 kg"));
+}
+
+// jittered timestamps must stay increasing, or the simulator's own reader rejects the recording
+TEST(Scenario, TimestampJitterIsBoundedBelowTheSamplePeriod) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: timestamp_jitter, onset: 0.2, magnitude: 10}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].magnitude': expected a jitter sigma from 0 to 0.00025 s (an eighth of the "
+                        "0.002 s sample period), got 10 s"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: timestamp_jitter, onset: 0.2, magnitude: -1e-4}\n"),
+              HasSubstr("field 'faults[0].magnitude': expected a jitter sigma from 0 to 0.00025 s"));
+  // the largest jitter allowed: the recording reads back (every timestamp increases)
+  const Scenario s = parse_scenario("robot: ur3e\nseed: 4\nduration: 20\n" + kSine +
+                                        "faults:\n  - {type: timestamp_jitter, onset: 0, magnitude: 0.00025}\n",
+                                    "test.yaml");
+  const std::string path = ::testing::TempDir() + "sim_jitter.csv";
+  double smallest_step = 1.0;
+  {
+    device::RecordingWriter w(path, 6, Simulator::fields());
+    double last = -1.0;
+    make_simulator(s)->run([&](const RobotSample& x) {
+      if (last >= 0.0) smallest_step = std::min(smallest_step, x.timestamp - last);
+      last = x.timestamp;
+      w.write(x);
+    });
+    w.close();
+  }
+  EXPECT_GE(smallest_step, 0.25 * 0.002) << "clipped at 3 sigma, the steps stay above a quarter period";
+  EXPECT_LT(smallest_step, 0.002 - 3 * 0.00025) << "the jitter must be there";
+  EXPECT_NO_THROW(device::read_recording(path));
+}
+
+// io_bit is a bit of actual_digital_output_bits that a UR controller drives (0 to 17)
+TEST(Scenario, IoBitOutsideTheDigitalOutputsIsRefused) {
+  for (const char* bit : {"99", "-1", "18"})
+    EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: payload_pick, mass: 1, io_bit: " + bit +
+                         ", onset: 0.3}\n"),
+                HasSubstr(std::string("test.yaml:5: field 'faults[0].io_bit': expected a digital output bit from 0 to 17 "
+                                      "(standard 0-7, configurable 8-15, tool 16-17), got ") + bit))
+        << bit;
+  const Scenario s = parse_scenario("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: payload_pick, mass: 1, io_bit: 17, onset: 0.3}\n",
+                                    "test.yaml");
+  std::uint64_t last = 0;
+  make_simulator(s)->run([&](const RobotSample& x) { last = x.digital_outputs; });
+  EXPECT_EQ(last, std::uint64_t{1} << 17);
+}
+
+// a negative seed or serial used to wrap around to a large unsigned number without a word
+TEST(Scenario, NegativeSeedOrSerialIsRefused) {
+  EXPECT_THAT(error_of("robot: ur3e\nseed: -3\nduration: 1\n" + kSine), HasSubstr("test.yaml:2: field 'seed': expected a whole number >= 0, got -3"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nrobot_serial: -1\n" + kSine),
+              HasSubstr("test.yaml:3: field 'robot_serial': expected a whole number >= 0, got -1"));
+}
+
+// a fault that starts at or after the end of the run would never fire: the scenario says otherwise
+TEST(Scenario, FaultOnsetAfterTheEndIsRefused) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine +
+                       "faults:\n  - {type: resistance, joint: 2, onset: 0.5, magnitude: 1}\n"
+                       "  - {type: collision, link: 2, onset: 50, magnitude: 10}\n"),
+              HasSubstr("test.yaml:6: field 'faults[1].onset': expected a time before the end of the run (1 s), got 50 s: "
+                        "the collision would never fire"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: current_offset, joint: 2, onset: 1, magnitude: 1}\n"),
+              HasSubstr("field 'faults[0].onset': expected a time before the end of the run (1 s), got 1 s"));
+}
+
+// a shorter run on the command line keeps the faults it cuts off in the scenario (they just do not fire)
+TEST(Scenario, DurationOverrideMayCutFaultsOff) {
+  Scenario s = parse_scenario("robot: ur3e\nduration: 10\n" + kSine + "faults:\n  - {type: resistance, joint: 2, onset: 5, magnitude: 1}\n",
+                              "test.yaml");
+  EXPECT_NO_THROW(override_duration(s, 2.0, "--duration"));
+  EXPECT_EQ(s.faults.size(), 1u);
+}
+
+// rate x substeps >= 2000 Hz: the default substeps meet it at any rate, explicit ones are checked
+TEST(Scenario, PhysicsRateRuleIsEnforcedAtTheSubstepsLine) {
+  const Scenario s = parse_scenario("robot: ur3e\nduration: 1\nrate: 125\n" + kSine, "test.yaml");
+  EXPECT_EQ(s.options.substeps, 16);
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nrate: 125\nsubsteps: 4\n" + kSine),
+              HasSubstr("test.yaml:4: field 'substeps': physics rate is 500 Hz (rate 125 x substeps 4), must be >= 2000 Hz: "
+                        "expected substeps >= 16"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nsubsteps: 0\n" + kSine), HasSubstr("test.yaml:3: field 'substeps': expected >= 1, got 0"));
+}
+
+// below 125 Hz (the slowest UR controller) the default joint PD no longer tracks: the rate is refused,
+// with the audit's `rate: 100` among the values
+TEST(Scenario, ControlRateOutsideItsRangeIsRefused) {
+  for (const char* rate : {"100", "0", "-1", ".nan", ".inf", "1e6"})
+    EXPECT_THAT(error_of(std::string("robot: ur3e\nduration: 1\nrate: ") + rate + "\n" + kSine),
+                HasSubstr(std::string("test.yaml:3: field 'rate': expected a control rate from 125 to 10000 Hz, got ")))
+        << rate;
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nrate: 100\n" + kSine), HasSubstr("got 100"));
+}
+
+// yaml-cpp keeps both entries of a repeated key (and answers the first): every mapping read refuses them
+TEST(Scenario, DuplicateKeysAreNamedWithBothLines) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kFig8 + "duration: 3\n"),
+              HasSubstr("test.yaml:4: field 'duration': key given twice, on lines 2 and 4; expected it once"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\ntrajectory: {type: sine, amplitude: 0.1, frequency: 0.5, amplitude: 0.2}\n"),
+              HasSubstr("test.yaml:3: field 'trajectory.amplitude': key given twice, on lines 3 and 3; expected it once"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "payload:\n  mass: 1\n  mass: 2\n"),
+              HasSubstr("test.yaml:6: field 'payload.mass': key given twice, on lines 5 and 6; expected it once"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + kSine + "faults:\n  - type: resistance\n    joint: 2\n    onset: 1\n"
+                       "    magnitude: 1\n    joint: 3\n"),
+              HasSubstr("test.yaml:9: field 'faults[0].joint': key given twice, on lines 6 and 9; expected it once"));
+}
+
+// a joint fault without its joint says so (it used to say "expected 1 to 6, got 0")
+TEST(Scenario, FaultWithoutItsJointOrLinkSaysTheFieldIsMissing) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: resistance, onset: 0.2, magnitude: 0.8}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].joint': missing required field"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: collision, onset: 0.2, magnitude: 5}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].link': missing required field"));
+}
+
+// every scenario of the library (the collision sets, the long and wear runs, the fault scenarios)
+// loads: the checks above refuse none of them
+TEST(Scenario, EveryScenarioUnderScenariosLoads) {
+  int loaded = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(std::string(TWINWATCH_SOURCE_DIR) + "/scenarios")) {
+    if (e.path().extension() != ".yaml") continue;
+    EXPECT_NO_THROW(load_scenario(e.path().string())) << e.path();
+    ++loaded;
+  }
+  EXPECT_GT(loaded, 400);
+}
+
+}  // namespace
+}  // namespace twinwatch::sim
