@@ -637,11 +637,13 @@ std::string sweep_json(const Sweep& s, const SweepOptions& o) {
 }
 
 void print_evaluation(const Evaluation& e) {
-  fmt::print("\n{:<28} {:<16} {:>8} {:>10} {:>8} {:>8} {:>7}\n", "scenario", "fault", "detected", "delay ms", "class", "joint", "false");
+  // "where": the contact link for a collision (the link is what the label names), else the joint
+  fmt::print("\n{:<28} {:<16} {:>8} {:>10} {:>8} {:>8} {:>7}\n", "scenario", "fault", "detected", "delay ms", "class", "where", "false");
   for (const auto& s : e.scores)
     fmt::print("{:<28} {:<16} {:>8} {:>10} {:>8} {:>8} {:>7}\n", s.name, s.has_fault ? s.fault : "-",
                s.has_fault ? (s.detected ? "yes" : "NO") : "-", s.detected ? fmt::format("{:.0f}", s.delay_ms) : "-",
                s.detected ? (s.class_ok ? "ok" : "wrong") : "-", s.detected ? (s.joint_ok ? "ok" : "wrong") : "-", s.false_alarms);
+  fmt::print("(where: the contact link for a collision, the joint otherwise; false: false alarms)\n");
   bool any_wear = false;
   for (const auto& s : e.scores) any_wear |= std::isfinite(s.t_first_wear) || s.fault == "friction_growth";
   if (any_wear) {

@@ -47,3 +47,9 @@ set_tests_properties(cli.friction_study_loop_tuning PROPERTIES PASS_REGULAR_EXPR
 add_test(NAME cli.friction_study_loop_option_offline COMMAND twinwatch friction-study --simulated --loop-tuning 5 -q)
 set_tests_properties(cli.friction_study_loop_option_offline PROPERTIES PASS_REGULAR_EXPRESSION
   "--loop-tuning applies to --closed-loop only")
+# --save-twin stores N·m equations: a current-domain study without --gain (the default 1 leaves it in A)
+# is refused before the work (audit, session 16)
+add_test(NAME cli.friction_study_save_twin_needs_gain COMMAND twinwatch friction-study ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv
+         --save-twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json)
+set_tests_properties(cli.friction_study_save_twin_needs_gain PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "no --gain was given \\(the default 1 leaves it in A\\)")

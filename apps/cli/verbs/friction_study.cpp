@@ -29,6 +29,7 @@ struct StudyOptions {
   std::vector<int> joints;  // 1-based
   std::string column_map, torque = "current", save_twin;
   double gain = 1.0;
+  bool gain_given = false;  // --gain on the command line (its default 1 leaves currents in A)
   double split = 0.5;
   int decimate = 1;
   int trials = 200;
@@ -421,6 +422,12 @@ int run_closed_loop_study(const StudyOptions& o) {
 
 int run(const StudyOptions& o) {
   if (o.closed_loop) return run_closed_loop_study(o);
+  // the twin's friction block is in N·m: equations fitted to currents times the default gain 1
+  // would be stored in A, ten times off on a UR3e joint, without a word
+  if (!o.save_twin.empty() && o.torque == "current" && !o.gain_given && !o.recordings.empty())
+    throw InvalidArgument(fmt::format("--save-twin {}: the study's torque is actual_current x --gain, and no --gain was given (the "
+                                      "default 1 leaves it in A); give the joint's N·m/A (the twin's gains) or --torque moment",
+                                      o.save_twin));
   // the closed loop's own options mean nothing to the offline study: refuse rather than ignore them
   const std::vector<std::pair<bool, const char*>> loop_only = {
       {o.loop_training != 0, "--loop-training"}, {o.loop_tuning != 0, "--loop-tuning"},
@@ -541,7 +548,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs")
       ->check(CLI::ExistingFile);
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
-  sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str();
+  CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(CLI::PositiveNumber);
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (e.g. 5: 1 kHz -> 200 Hz)")->capture_default_str();
   sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str();
@@ -601,7 +608,10 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   sub->add_flag("--json", o->json, "Print the tables as one JSON object {\"joints\": [...]}");
   sub->add_flag("-q,--quiet", o->quiet, "No progress messages on stderr");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+  sub->callback([o, gain] {
+    o->gain_given = gain->count() > 0;
+    twinwatch::cli::set_exit_code(run(*o));
+  });
 }};
 
 }  // namespace

@@ -167,8 +167,11 @@ int run_identify(const IdentifyOptions& o) {
       const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
                  fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
-                 twin.gains_known() ? fmt::format("{:.3f}", m.gain) : fmt::format("({:.3f})", m.gain));
+                 !twin.gains_known() ? fmt::format("({:.3f})", m.gain) : fmt::format("{:.3f}{}", m.gain, m.gain_identified ? "" : "*"));
     }
+    // the notes say why; the mark keeps a reader of the table alone from taking the number as measured
+    if (std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
+      fmt::print("* gain: not identified (no recording loads the joint enough; the monitor uses the median of the identified ones)\n");
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
       const auto& mo = twin.learned->net;

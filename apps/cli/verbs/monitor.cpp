@@ -141,6 +141,8 @@ int run_monitor(const MonitorOptions& o) {
   std::unique_ptr<device::rtde::Client> client;
   const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
   if (o.rtde.empty()) {
+    if (o.duration > 0 || o.wait > 0 || !o.record_to.empty())
+      throw InvalidArgument("--duration, --wait and --record apply to --rtde; a recording is watched whole");
     rec = device::read_recording(o.recording);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
@@ -332,8 +334,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
-  sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)");
-  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]");
+  sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(CLI::NonNegativeNumber);
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
@@ -349,7 +352,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                   "default set");
   sub->add_option("--cycle-period", o->cycle_period,
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
-                  "trend.window_s)");
+                  "trend.window_s)")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only");
   sub->add_option("--trace", o->trace,
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
@@ -399,6 +403,8 @@ void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
 
 int run_evaluate(const EvaluateOptions& o) {
   if (o.sweep) {
+    if (!o.dirs.empty())
+      throw InvalidArgument(fmt::format("--sweep-collisions simulates its own contacts; it takes no scenarios (got {})", o.dirs.front()));
     o.sweep_options.validate();
     ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
     apply_alert_settings(twin, o);
@@ -460,13 +466,13 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   auto o = std::make_shared<EvaluateOptions>();
   auto* sub = app.add_subcommand("evaluate", "Simulate scenarios, monitor them and score detection against the labels");
   sub->add_option("SCENARIOS", o->dirs,
-                  "Scenario directory (e.g. scenarios/ur3e; scenarios/ur3e/long holds >= 1 h of nominal operation and the "
-                  "2-hour wear ramps) or scenario files; several may be given")
+                  "Scenario directory (its .yaml files, not its subfolders: e.g. scenarios/ur3e; scenarios/ur3e/long holds >= 1 h "
+                  "of nominal operation, scenarios/ur3e/wear the 2-hour wear ramps) or scenario files; several may be given")
       ->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
-  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all)");
+  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")->check(CLI::NonNegativeNumber);
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
   sub->add_flag("--all-programs", o->all_programs,
                 "Learn ONE threshold set over every program of scenarios/ur3e/long (figure-eight, triangle at 3 speeds, "
