@@ -1,6 +1,7 @@
 #include "evaluate.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <Eigen/Dense>
 
@@ -120,12 +121,17 @@ void append_trend_csv(const std::string& path, const std::string& name, const mo
   close_written(f, path);
 }
 
+// a progress line: on stdout, or with --json (quiet) on a terminal's stderr, so that a script
+// reading the JSON gets only the JSON and a person at the terminal still sees the work go on
+void progress_line(bool quiet, const std::string& m) {
+  if (!quiet) fmt::print("{}\n", m);
+  else if (isatty(STDERR_FILENO)) fmt::print(stderr, "{}\n", m);
+}
+
 }  // namespace
 
 ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter, bool all_programs) {
-  auto say = [&](const std::string& m) {
-    if (!quiet) fmt::print("{}\n", m);
-  };
+  auto say = [&](const std::string& m) { progress_line(quiet, m); };
   say("   simulating healthy training runs (excitation 60 s, figure-eight with a known 0.5 kg payload 40 s)");
   const auto exc = simulate_to_memory(
       sim::parse_scenario(fmt::format("robot: {}\nseed: 1001\nduration: 60\ntrajectory: {{type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}}\n", robot),
@@ -377,9 +383,9 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                      }
                    },
                    [&](double f) {
-                     if (quiet || !long_run || f < shown + 0.25) return;
+                     if (!long_run || f < shown + 0.25) return;
                      shown = f;
-                     fmt::print("   {} {:.0f} %\n", s.name, 100 * f);
+                     progress_line(quiet, fmt::format("   {} {:.0f} %", s.name, 100 * f));
                    });
     mon.finish();
     if (!trend_csv.empty()) append_trend_csv(trend_csv, s.name, mon.trend());
@@ -494,11 +500,11 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // monitored time outside fault windows counts towards the false-alarm rate
     ev.monitored_hours += s.options.duration / 3600.0;
     for (const auto& sc : scs) {
-      if (!quiet)
-        fmt::print("   {:<28} {:<16} {}\n", s.name, sc.has_fault ? sc.fault : "(healthy)",
-                   sc.has_fault ? (sc.detected ? fmt::format("detected after {:.0f} ms as {} — {}", sc.delay_ms, sc.predicted_class, sc.detail)
-                                               : std::string("NOT detected"))
-                                : fmt::format("{} false alarm(s)", sc.false_alarms));
+      progress_line(quiet, fmt::format("   {:<28} {:<16} {}", s.name, sc.has_fault ? sc.fault : "(healthy)",
+                                       sc.has_fault ? (sc.detected ? fmt::format("detected after {:.0f} ms as {} — {}", sc.delay_ms,
+                                                                                 sc.predicted_class, sc.detail)
+                                                                   : std::string("NOT detected"))
+                                                    : fmt::format("{} false alarm(s)", sc.false_alarms)));
       ev.scores.push_back(sc);
     }
     (void)report_dir;
@@ -571,10 +577,9 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
       }
       sw.runs.push_back(run);
       ++done;
-      if (!quiet)
-        fmt::print("   [{}/{}] link {} {:>5.2f} N·m: static {} dynamic {}\n", done, total, link, m,
-                   run.detected[0] ? fmt::format("{:.0f} ms", run.delay_ms[0]) : "missed",
-                   run.detected[1] ? fmt::format("{:.0f} ms", run.delay_ms[1]) : "missed");
+      progress_line(quiet, fmt::format("   [{}/{}] link {} {:>5.2f} N·m: static {} dynamic {}", done, total, link, m,
+                                       run.detected[0] ? fmt::format("{:.0f} ms", run.delay_ms[0]) : "missed",
+                                       run.detected[1] ? fmt::format("{:.0f} ms", run.delay_ms[1]) : "missed"));
     }
   // detection limits: walk down the magnitudes until the first miss
   sw.limit.assign(2, std::vector<double>(o.links.size(), std::numeric_limits<double>::quiet_NaN()));

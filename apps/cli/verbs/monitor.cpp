@@ -298,6 +298,8 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});
+    fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} validation recording(s) once per "
+                       "count ...\n", vrecs.size());
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);
     if (o.program.empty() || program_is_default) cfg.observer_choice = choice;
     if (!o.program.empty()) cfg.programs.at(o.program).observer_choice = choice;
