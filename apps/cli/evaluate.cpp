@@ -311,11 +311,17 @@ class GeneratorBayes {
 
 }  // namespace
 
+ident::TwinModel load_twin(const std::string& path) {
+  ident::TwinModel twin = ident::TwinModel::load(path);
+  if (!twin.monitor_json.empty()) monitor::MonitorConfig::from_twin(twin);
+  return twin;
+}
+
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
                               double link_ceiling) {
   Evaluation ev;
-  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (static_threshold) cfg.use_dynamic = false;
   // every scenario is read first: a malformed one stops the run before any simulation, and the
   // link ceiling needs the range of the contacts' peak joint torques over all of them (the
@@ -523,7 +529,7 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
   constexpr double kOnset = 10.0, kDuration = 16.0, kWindowAfter = 1.0;
   std::vector<double> mags = o.magnitudes;
   std::sort(mags.begin(), mags.end(), std::greater<>());
-  monitor::MonitorConfig base = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig base = monitor::MonitorConfig::from_twin(twin);
   if (base.programs.count("figure_eight")) base.select_program("figure_eight");  // the sweep's program
   Sweep sw;
   unsigned seed = o.seed;
@@ -746,7 +752,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   if (payload_com.size() == 3) p.com = Eigen::Vector3d(payload_com[0], payload_com[1], payload_com[2]);
   twin.set_payload(p);
   const device::Recording rec = device::read_recording(recording);
-  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   monitor::Monitor mon(twin, cfg);
   const int n = rec.n_dof;

@@ -11,6 +11,11 @@
 
 namespace twinwatch::cli {
 
+/// The twin file at `path` (ident::TwinModel::load) with its monitor block checked too
+/// (monitor::MonitorConfig::from_twin), so that every verb refuses a malformed block, not only the
+/// ones that monitor. Throws ParseError naming the file and the field.
+ident::TwinModel load_twin(const std::string& path);
+
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
 /// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).

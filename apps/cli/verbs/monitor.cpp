@@ -56,7 +56,7 @@ constexpr const char* kFilterHelp =
 monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path) {
   if (twin.monitor_json.empty())
     throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", path, path));
-  return monitor::MonitorConfig::from_json(twin.monitor_json, path);
+  return monitor::MonitorConfig::from_twin(twin);
 }
 
 // --sensitivity, --raise-after, --observer-raise-after: user settings over the twin's monitor block
@@ -91,7 +91,7 @@ constexpr const char* kObserverRaiseAfterHelp =
     "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 
 int run_monitor(const MonitorOptions& o) {
-  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = cli::load_twin(o.twin);
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
   cfg.select_program(o.program);
@@ -227,7 +227,7 @@ struct ThresholdOptions {
 };
 
 int run_thresholds(const ThresholdOptions& o) {
-  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = cli::load_twin(o.twin);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) recs.push_back(device::read_recording(f));
   std::vector<monitor::HealthyRun> runs;
@@ -236,7 +236,7 @@ int run_thresholds(const ThresholdOptions& o) {
   for (const auto& r : recs) runs.push_back({&r, p});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
-  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
+  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
   // cfg is what is stored: the default set re-learned, or a program's set added with the default
   // set (observer thresholds and debounce included) left as it was
@@ -370,7 +370,7 @@ void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
 int run_evaluate(const EvaluateOptions& o) {
   if (o.sweep) {
     o.sweep_options.validate();
-    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
+    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : cli::load_twin(o.twin);
     apply_alert_settings(twin, o);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
     const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
@@ -397,7 +397,7 @@ int run_evaluate(const EvaluateOptions& o) {
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
   ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
-                                         : ident::TwinModel::load(o.twin);
+                                         : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
@@ -413,7 +413,7 @@ struct ReportOptions {
 };
 
 int run_report(const ReportOptions& o) {
-  const ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  const ident::TwinModel twin = cli::load_twin(o.twin);
   std::string labels;
   if (!o.labels.empty()) {
     std::ifstream f(o.labels);
