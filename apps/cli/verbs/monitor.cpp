@@ -414,11 +414,11 @@ struct ReportOptions {
 
 int run_report(const ReportOptions& o) {
   const ident::TwinModel twin = cli::load_twin(o.twin);
-  std::string labels;
+  std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
     std::ifstream f(o.labels);
     if (!f) throw std::runtime_error(o.labels + ": cannot open");
-    labels.assign(std::istreambuf_iterator<char>(f), {});
+    labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
   cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels);
   fmt::print("report written to {}\n", o.output);
