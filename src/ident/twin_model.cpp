@@ -1,7 +1,6 @@
 #include "twinwatch/ident/twin_model.hpp"
 
 #include <fmt/format.h>
-
 #include <fmt/ranges.h>
 #include <unistd.h>
 
@@ -571,6 +570,12 @@ void write_text(const std::string& file, const std::string& text, const std::str
 void TwinModel::save(const std::string& path) const {
   namespace fs = std::filesystem;
   const std::string text = to_json() + '\n';
+  // what is written must load back: a value the reader refuses is named now, not when the twin is used
+  try {
+    from_json(text, path);
+  } catch (const ParseError& e) {
+    throw std::runtime_error(fmt::format("{}: not written, the twin would not load back: {}", path, e.what()));
+  }
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);  // (through a symbolic link)
   // a device or a pipe (/dev/stdout) is written in place

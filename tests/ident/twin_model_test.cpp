@@ -248,5 +248,16 @@ TEST(TwinFile, SaveReportsAFailedWriteAndLeavesNoTemporaryFile) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(TwinFile, SaveRefusesATwinThatWouldNotLoadBack) {
+  TwinModel t = TwinModel::from_json(valid_twin().dump(), "twin.json");
+  t.joints[1].c_gen = 0.0;
+  const std::string path = (std::filesystem::temp_directory_path() / "twinwatch_twin_model_test_refused.json").string();
+  std::filesystem::remove(path);
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] { t.save(path); }),
+              HasSubstr("twinwatch_twin_model_test_refused.json: not written, the twin would not load back: "));
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] { t.save(path); }), HasSubstr("field 'joints[1].c_gen'"));
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -166,7 +166,8 @@ class TwinModel {
   static TwinModel from_json(const std::string& text, const std::string& origin);
   /// Writes to_json() to `path`. A regular file is replaced only once the new text is completely
   /// on disk (written beside it, then renamed over it), so a failed write leaves the old file as
-  /// it was. Throws std::runtime_error naming the path and the system's reason.
+  /// it was. Throws std::runtime_error naming the path and the system's reason, or the field when
+  /// the text would not load back (from_json), before writing anything.
   void save(const std::string& path) const;
   /// from_json of the file at `path`; ParseError when it cannot be read.
   static TwinModel load(const std::string& path);
