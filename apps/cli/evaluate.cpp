@@ -319,11 +319,17 @@ class GeneratorBayes {
 
 }  // namespace
 
+ident::TwinModel load_twin(const std::string& path) {
+  ident::TwinModel twin = ident::TwinModel::load(path);
+  if (!twin.monitor_json.empty()) monitor::MonitorConfig::from_twin(twin);
+  return twin;
+}
+
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
                               double link_ceiling) {
   Evaluation ev;
-  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (static_threshold) cfg.use_dynamic = false;
   if (cfg.sensitivity.size() == 0) ev.sensitivity.assign(static_cast<size_t>(twin.n_dof()), 1.0);
   else ev.sensitivity.assign(cfg.sensitivity.data(), cfg.sensitivity.data() + cfg.sensitivity.size());
@@ -346,7 +352,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       if (!quiet) fmt::print("   skip {} ({:.0f} s > --max-duration {:.0f} s)\n", s.name, s.options.duration, max_duration);
       continue;
     }
-    const auto labels = nlohmann::json::parse(sim::labels_json(s));
+    const sim::Labels labels = sim::parse_labels(sim::labels_json(s), s.path + " (its labels)");
     ident::TwinModel t = twin;
     t.set_payload(s.options.payload);  // what the program declares
     monitor::MonitorConfig scfg = cfg;
@@ -393,18 +399,18 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // events matching no fault window are false alarms
     std::vector<bool> used(mon.events().size(), false);
     std::vector<ScenarioScore> scs;
-    for (size_t fi = 0; fi < labels["faults"].size(); ++fi) {
-      const auto& lf = labels["faults"][fi];
+    for (size_t fi = 0; fi < labels.faults.size(); ++fi) {
+      const sim::FaultLabel& lf = labels.faults[fi];
       ScenarioScore sc;
       if (fi < own_share.size()) sc.own_joint_share = own_share[fi];
       sc.name = s.name;
       sc.duration_s = s.options.duration;
       sc.has_fault = true;
-      sc.fault = lf["type"].get<std::string>();
-      const double onset = lf["onset"].get<double>();
-      const double end = lf["end"].is_null() ? s.options.duration : lf["end"].get<double>();
-      const double window_end = std::max(end, onset + lf["ramp"].get<double>()) + 1.0;
-      sc.true_magnitude = lf["magnitude"].get<double>();
+      sc.fault = sim::to_string(lf.type);
+      const double onset = lf.onset;
+      const double end = std::isfinite(lf.end) ? lf.end : s.options.duration;
+      const double window_end = std::max(end, onset + lf.ramp) + 1.0;
+      sc.true_magnitude = lf.magnitude;
       const std::string want = expected_class(sc.fault);
       for (size_t k = 0; k < mon.events().size(); ++k) {
         const auto& e = mon.events()[k];
@@ -417,8 +423,8 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         sc.delay_ms = 1000.0 * std::max(0.0, e.t_detected - onset);
         sc.predicted_class = std::string(monitor::to_string(e.fault));
         sc.class_ok = sc.predicted_class == want || (want == "wear" && sc.predicted_class == "resistance");
-        const int lj = lf["joint"].is_null() ? -1 : lf["joint"].get<int>() - 1;
-        const int ll = lf["link"].is_null() ? -1 : lf["link"].get<int>() - 1;
+        const int lj = lf.joint;
+        const int ll = lf.link;
         sc.joint_ok = ll >= 0 ? e.link == ll : (lj >= 0 ? e.joint == lj : true);
         sc.predicted_link = e.link;
         sc.other_links = e.other_links;
@@ -533,7 +539,7 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
   constexpr double kOnset = 10.0, kDuration = 16.0, kWindowAfter = 1.0;
   std::vector<double> mags = o.magnitudes;
   std::sort(mags.begin(), mags.end(), std::greater<>());
-  monitor::MonitorConfig base = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig base = monitor::MonitorConfig::from_twin(twin);
   if (base.programs.count("figure_eight")) base.select_program("figure_eight");  // the sweep's program
   Sweep sw;
   unsigned seed = o.seed;
@@ -763,7 +769,7 @@ std::string evaluation_json(const Evaluation& e) {
 }
 
 void write_report(const ident::TwinModel& twin_in, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::string& labels_text) {
+                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels) {
   ident::TwinModel twin = twin_in;
   model::RigidBodyInertia p;
   p.mass = payload_mass;
@@ -771,7 +777,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   twin.set_payload(p);
   const device::Recording rec = device::read_recording(recording);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
-  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_json(twin.monitor_json, "twin");
+  monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   monitor::Monitor mon(twin, cfg);
   const int n = rec.n_dof;
@@ -801,12 +807,11 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                               t.empty() ? 0.0 : t.back() - t.front(), twin.robot_name(), fmt::join(twin.recordings, ", ")));
   std::vector<ui::PlotSpan> spans;
   for (const auto& e : mon.events()) spans.push_back({e.t_start, std::max(e.t_end, e.t_start + 0.02), e.detail});
-  if (!labels_text.empty()) {
-    const auto lj = nlohmann::json::parse(labels_text);
-    for (const auto& f : lj["faults"]) {
-      const double on = f["onset"].get<double>();
-      const double en = f["end"].is_null() ? (t.empty() ? on : t.back()) : f["end"].get<double>();
-      spans.push_back({on, std::max(en, on + 0.05), "truth: " + f["type"].get<std::string>(), "rgba(38,139,210,0.12)"});
+  if (labels) {
+    for (const sim::FaultLabel& f : labels->faults) {
+      const double on = f.onset;
+      const double en = std::isfinite(f.end) ? f.end : (t.empty() ? on : t.back());
+      spans.push_back({on, std::max(en, on + 0.05), std::string("truth: ") + sim::to_string(f.type), "rgba(38,139,210,0.12)"});
     }
   }
   // tables: events, Table 3 metrics, Table 5 correlation

@@ -4,12 +4,19 @@
 // only place that reads labels, DESIGN.md rule 1).
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "twinwatch/ident/twin_model.hpp"
+#include "twinwatch/sim/scenario.hpp"
 
 namespace twinwatch::cli {
+
+/// The twin file at `path` (ident::TwinModel::load) with its monitor block checked too
+/// (monitor::MonitorConfig::from_twin), so that every verb refuses a malformed block, not only the
+/// ones that monitor. Throws ParseError naming the file and the field.
+ident::TwinModel load_twin(const std::string& path);
 
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
@@ -119,8 +126,8 @@ void print_evaluation(const Evaluation& e);
 std::string evaluation_json(const Evaluation& e);
 
 /// Writes a self-contained HTML report for one recording monitored by the twin (UR3e Fig. 8-13
-/// style plots and Tables 3/5).
+/// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
 void write_report(const ident::TwinModel& twin, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::string& labels_json = "");
+                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt);
 
 }  // namespace twinwatch::cli

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/json_fields.hpp"
 
 #include "json_numbers.hpp"
 
@@ -98,45 +99,47 @@ std::string LearnedModel::to_json() const {
 }
 
 LearnedModel LearnedModel::from_json(const std::string& text, const std::string& origin, int n_dof) {
-  const std::string p = "learned.";
-  nlohmann::json j;
+  const nlohmann::json j = parse_json(text, origin, "learned");
   try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ParseError(origin, 0, "learned", fmt::format("not valid JSON: {}", e.what()));
-  }
-  try {
+    const JsonFields b(j, origin, "learned");
+    b.only({"role", "inputs", "v_scale", "temperature_ref", "qd_smoothing", "validation_rmse", "network"});
     LearnedModel m;
-    const std::string role = j.value("role", "");
+    const std::string role = b.text("role");
     if (role == "current") m.role = LearnedRole::Current;
     else if (role == "residual") m.role = LearnedRole::Residual;
-    else throw ParseError(origin, 0, p + "role", fmt::format("expected \"current\" or \"residual\", got \"{}\"", role));
-    if (!j.contains("inputs")) throw ParseError(origin, 0, p + "inputs", "missing required field");
+    else b.fail("role", fmt::format("expected \"current\" or \"residual\", got \"{}\"", role));
+    const std::string inputs = b.text("inputs");
     try {
-      m.inputs = LearnedInputs::parse(j["inputs"].get<std::string>());
-      m.inputs.v_scale = j.value("v_scale", m.inputs.v_scale);
-      m.inputs.validate();
+      m.inputs = LearnedInputs::parse(inputs);
     } catch (const InvalidArgument& e) {
-      throw ParseError(origin, 0, p + "inputs", e.what());
+      b.fail("inputs", e.what());
     }
-    m.temperature_ref = j.value("temperature_ref", 35.0);
-    if (j.contains("qd_smoothing")) {
-      const nlohmann::json& sg = j["qd_smoothing"];
-      if (!sg.is_object()) throw ParseError(origin, 0, p + "qd_smoothing", fmt::format("expected an object, got {}", sg.type_name()));
-      if (sg.contains("window")) m.sg_window = json_whole(sg.at("window"), origin, p + "qd_smoothing.window");
-      if (sg.contains("order")) m.sg_order = json_whole(sg.at("order"), origin, p + "qd_smoothing.order");
-    }
-    m.validation_rmse = j.value("validation_rmse", std::vector<double>{});
-    if (!j.contains("network")) throw ParseError(origin, 0, p + "network", "missing required field");
-    m.net = Mlp::from_json(j["network"].dump(), origin, p + "network.");
+    m.inputs.v_scale = b.positive("v_scale");
+    m.temperature_ref = b.number("temperature_ref");
+    const JsonFields sg = b.object("qd_smoothing");
+    sg.only({"filter", "window", "order"});
+    if (const std::string f = sg.text("filter"); f != "savitzky_golay") sg.fail("filter", fmt::format("expected \"savitzky_golay\", got \"{}\"", f));
+    m.sg_window = json_whole(sg.need("window"), origin, sg.field("window"));
+    m.sg_order = json_whole(sg.need("order"), origin, sg.field("order"));
+    // the rules of LearnedIdentOptions (0: off)
+    if (m.sg_window != 0 && (m.sg_window < 3 || m.sg_window % 2 == 0))
+      sg.fail("window", fmt::format("expected 0 (off) or an odd number >= 3, got {}", m.sg_window));
+    if (m.sg_window != 0 && (m.sg_order < 0 || m.sg_order >= m.sg_window))
+      sg.fail("order", fmt::format("expected a whole number in [0, window = {}), got {}", m.sg_window, m.sg_order));
+    // per joint (none: not validated); null: no held-out samples on the joint
+    const nlohmann::json& v = b.need("validation_rmse");
+    if (!v.is_array()) b.fail("validation_rmse", fmt::format("expected an array of numbers, got {}", json_brief(v)));
+    if (!v.empty() && static_cast<int>(v.size()) != n_dof)
+      b.fail("validation_rmse", fmt::format("expected {} values (one per joint) or none, got {}", n_dof, v.size()));
+    for (size_t i = 0; i < v.size(); ++i)
+      m.validation_rmse.push_back(v[i].is_null() ? std::nan("") : json_number(v[i], origin, json_element(b.field("validation_rmse"), i)));
+    m.net = Mlp::from_json(b.need("network").dump(), origin, "learned.network.");
     if (m.net.n_inputs() != m.inputs.count(n_dof))
-      throw ParseError(origin, 0, p + "network.inputs",
-                       fmt::format("expected {} (inputs '{}' for {} joints), got {}", m.inputs.count(n_dof), m.inputs.to_string(), n_dof,
-                                   m.net.n_inputs()));
-    if (m.net.n_outputs() != n_dof)
-      throw ParseError(origin, 0, p + "network.outputs", fmt::format("expected {} (one per joint), got {}", n_dof, m.net.n_outputs()));
+      b.fail("network.inputs", fmt::format("expected {} (inputs '{}' for {} joints), got {}", m.inputs.count(n_dof), m.inputs.to_string(), n_dof,
+                                           m.net.n_inputs()));
+    if (m.net.n_outputs() != n_dof) b.fail("network.outputs", fmt::format("expected {} (one per joint), got {}", n_dof, m.net.n_outputs()));
     return m;
-  } catch (const nlohmann::json::type_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // (every field is type-checked above: a safety net for the fuzzer's contract)
     throw ParseError(origin, 0, "learned", fmt::format("wrong type: {}", e.what()));
   }
 }

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/json_fields.hpp"
 
 #include "json_numbers.hpp"
 
@@ -367,44 +368,37 @@ std::string Mlp::to_json() const {
 }
 
 Mlp Mlp::from_json(const std::string& text, const std::string& origin, const std::string& prefix) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ParseError(origin, 0, prefix, fmt::format("not valid JSON: {}", e.what()));
-  }
-  auto need = [&](const nlohmann::json& o, const char* key, const std::string& path) -> const nlohmann::json& {
-    if (!o.contains(key)) throw ParseError(origin, 0, path + key, "missing required field");
-    return o.at(key);
-  };
-  auto vec = [&](const nlohmann::json& o, const char* key, const std::string& path, long n) {
-    const nlohmann::json& a = need(o, key, path);
+  // `prefix` ends with '.' (or is empty): the JSON path of this object is prefix without it
+  const std::string path = prefix.empty() ? prefix : prefix.substr(0, prefix.size() - 1);
+  const nlohmann::json j = parse_json(text, origin, path);
+  auto vec = [&](const JsonFields& o, const char* key, long n) {
+    const nlohmann::json& a = o.need(key);
     if (!a.is_array() || static_cast<long>(a.size()) != n)
-      throw ParseError(origin, 0, path + key, fmt::format("expected an array of {} numbers, got {}", n, a.is_array() ? std::to_string(a.size()) : a.type_name()));
+      o.fail(key, fmt::format("expected an array of {} numbers, got {}", n, a.is_array() ? std::to_string(a.size()) : a.type_name()));
     Eigen::VectorXd v(n);
-    for (long i = 0; i < n; ++i) {
-      if (!a[static_cast<size_t>(i)].is_number())
-        throw ParseError(origin, 0, fmt::format("{}{}[{}]", path, key, i), "expected a number");
-      v(i) = a[static_cast<size_t>(i)].get<double>();
-      if (!std::isfinite(v(i))) throw ParseError(origin, 0, fmt::format("{}{}[{}]", path, key, i), "expected a finite number");
-    }
+    for (long i = 0; i < n; ++i) v(i) = json_number(a[static_cast<size_t>(i)], origin, json_element(o.field(key), static_cast<size_t>(i)));
     return v;
   };
   try {
-    if (j.value("activation", "relu") != "relu")
-      throw ParseError(origin, 0, prefix + "activation", fmt::format("expected \"relu\", got \"{}\"", j.value("activation", "")));
+    const JsonFields net(j, origin, path);
+    net.only({"inputs", "outputs", "hidden", "activation", "l2", "seed", "x_mean", "x_std", "y_mean", "y_std", "layers"});
+    if (const std::string a = net.text("activation"); a != "relu") net.fail("activation", fmt::format("expected \"relu\", got \"{}\"", a));
     MlpOptions o;
-    const int n_in = json_whole(need(j, "inputs", prefix), origin, prefix + "inputs");
-    const int n_out = json_whole(need(j, "outputs", prefix), origin, prefix + "outputs");
-    o.hidden = json_wholes(need(j, "hidden", prefix), origin, prefix + "hidden");
+    const int n_in = json_whole(net.need("inputs"), origin, prefix + "inputs");
+    const int n_out = json_whole(net.need("outputs"), origin, prefix + "outputs");
+    o.hidden = json_wholes(net.need("hidden"), origin, prefix + "hidden");
     try {
       o.validate();
       if (n_in < 1 || n_out < 1) throw InvalidArgument(fmt::format("inputs {} and outputs {} must be >= 1", n_in, n_out));
     } catch (const InvalidArgument& e) {
       throw ParseError(origin, 0, prefix + "hidden", e.what());
     }
-    const Eigen::VectorXd x_mean = vec(j, "x_mean", prefix, n_in), x_std = vec(j, "x_std", prefix, n_in);
-    const Eigen::VectorXd y_mean = vec(j, "y_mean", prefix, n_out), y_std = vec(j, "y_std", prefix, n_out);
+    const double l2 = net.nonnegative("l2");
+    const nlohmann::json& seed = net.need("seed");
+    if (!seed.is_number_unsigned() && !(seed.is_number_integer() && seed.get<std::int64_t>() >= 0))
+      net.fail("seed", fmt::format("expected a whole number >= 0, got {}", json_brief(seed)));
+    const Eigen::VectorXd x_mean = vec(net, "x_mean", n_in), x_std = vec(net, "x_std", n_in);
+    const Eigen::VectorXd y_mean = vec(net, "y_mean", n_out), y_std = vec(net, "y_std", n_out);
     for (Eigen::Index i = 0; i < n_in; ++i)
       if (!(x_std(i) > 0)) throw ParseError(origin, 0, fmt::format("{}x_std[{}]", prefix, i), fmt::format("must be > 0, got {}", x_std(i)));
     // the weights the widths call for must be in the file, checked before allocating them (a width
@@ -412,35 +406,40 @@ Mlp Mlp::from_json(const std::string& text, const std::string& origin, const std
     std::vector<long> widths{n_in};
     widths.insert(widths.end(), o.hidden.begin(), o.hidden.end());
     widths.push_back(n_out);
-    const nlohmann::json& layers_in = need(j, "layers", prefix);
+    const nlohmann::json& layers_in = net.need("layers");
     if (!layers_in.is_array() || layers_in.size() != widths.size() - 1)
-      throw ParseError(origin, 0, prefix + "layers", fmt::format("expected {} layers (hidden + output), got {}", widths.size() - 1,
-                                                                 layers_in.is_array() ? layers_in.size() : 0));
+      net.fail("layers", fmt::format("expected {} layers (hidden + output), got {}", widths.size() - 1, layers_in.is_array() ? layers_in.size() : 0));
+    std::vector<JsonFields> layer;
     for (size_t l = 0; l + 1 < widths.size(); ++l) {
-      const nlohmann::json& w = layers_in[l].is_object() && layers_in[l].contains("W") ? layers_in[l].at("W") : nlohmann::json();
+      layer.emplace_back(layers_in[l], origin, json_element(net.field("layers"), l));
+      const JsonFields& L = layer.back();
+      L.only({"rows", "cols", "W", "b"});
+      const nlohmann::json& w = L.need("W");
       const long expected = widths[l + 1] * widths[l];
       if (!w.is_array() || static_cast<long>(w.size()) != expected)
-        throw ParseError(origin, 0, fmt::format("{}layers[{}].W", prefix, l),
-                         fmt::format("expected an array of {} numbers ({} x {}), got {}", expected, widths[l + 1], widths[l],
-                                     w.is_array() ? std::to_string(w.size()) : w.type_name()));
+        L.fail("W", fmt::format("expected an array of {} numbers ({} x {}), got {}", expected, widths[l + 1], widths[l],
+                                w.is_array() ? std::to_string(w.size()) : w.type_name()));
+      if (const int r = json_whole(L.need("rows"), origin, L.field("rows")); r != widths[l + 1])
+        L.fail("rows", fmt::format("expected {} (the width of layer {}), got {}", widths[l + 1], l + 1, r));
+      if (const int c = json_whole(L.need("cols"), origin, L.field("cols")); c != widths[l])
+        L.fail("cols", fmt::format("expected {} (the width of its input), got {}", widths[l], c));
     }
     Mlp m(n_in, n_out, o);
-    m.l2 = j.value("l2", 0.0);
-    m.seed = j.value("seed", std::uint64_t{0});
+    m.l2 = l2;
+    m.seed = seed.get<std::uint64_t>();
     m.x_mean = x_mean;
     m.x_std = x_std;
     m.y_mean = y_mean;
     m.y_std = y_std;
     for (size_t l = 0; l < m.W_.size(); ++l) {  // (layers_in's count and W sizes are checked above)
-      const std::string p = fmt::format("{}layers[{}].", prefix, l);
       const Eigen::Index rows = m.W_[l].rows(), cols = m.W_[l].cols();
-      const Eigen::VectorXd w = vec(layers_in[l], "W", p, rows * cols);
+      const Eigen::VectorXd w = vec(layer[l], "W", rows * cols);
       m.W_[l] = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(w.data(), rows, cols);
-      m.b_[l] = vec(layers_in[l], "b", p, rows);
+      m.b_[l] = vec(layer[l], "b", rows);
     }
     return m;
-  } catch (const nlohmann::json::type_error& e) {
-    throw ParseError(origin, 0, prefix, fmt::format("wrong type: {}", e.what()));
+  } catch (const nlohmann::json::exception& e) {  // (every field is type-checked above: a safety net for the fuzzer's contract)
+    throw ParseError(origin, 0, path, fmt::format("wrong type: {}", e.what()));
   }
 }
 

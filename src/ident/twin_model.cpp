@@ -1,14 +1,23 @@
 #include "twinwatch/ident/twin_model.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/json_fields.hpp"
+#include "twinwatch/core/log.hpp"
+#include "twinwatch/core/numbers.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 #include "json_numbers.hpp"
@@ -16,21 +25,22 @@
 namespace twinwatch::ident {
 
 namespace {
-// JSON has no NaN: write it as null and read null back as NaN
+// the names of the friction columns, in their order (FrictionColumn)
+const std::vector<std::string> kFrictionColumnNames{"coulomb", "viscous", "offset", "armature", "viscous_temperature"};
+// the methods identify writes (IdentOptions, identify --method)
+const std::array<std::string, 4> kMethods{"physics", "mlp", "hybrid", "sequential"};
+// the back-driven current factor a file may hold: c_gen = eta_motoring * eta_back-driven <= 1 for
+// a drive (physics_ident.cpp pins the joint fit to [0.25, 1]); the alternating efficiency fit is
+// unbounded and wrote up to 6.8 on the simulated UR3e (a joint hardly ever back-driven), so the
+// file takes up to 10. Zero or less would zero or flip the back-driven current, and the learned
+// block divides by it.
+constexpr double kCGenFileMax = 10.0;
+
+// JSON has no NaN: write it as null (the reader takes finite numbers only)
 nlohmann::json numbers(const Eigen::VectorXd& v) {
   nlohmann::json a = nlohmann::json::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(std::isfinite(v(i)) ? nlohmann::json(v(i)) : nlohmann::json(nullptr));
   return a;
-}
-Eigen::VectorXd numbers(const nlohmann::json& a, const std::string& origin, const std::string& field) {
-  if (!a.is_array()) throw ParseError(origin, 0, field, "expected an array of numbers");
-  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
-  for (size_t i = 0; i < a.size(); ++i) {
-    if (a[i].is_null()) v(static_cast<Eigen::Index>(i)) = std::numeric_limits<double>::quiet_NaN();
-    else if (a[i].is_number()) v(static_cast<Eigen::Index>(i)) = a[i].get<double>();
-    else throw ParseError(origin, 0, fmt::format("{}[{}]", field, i), fmt::format("expected a number, got {}", a[i].type_name()));
-  }
-  return v;
 }
 
 // the optional "sequential" block (Cao's sequential model, sequential_model.hpp)
@@ -63,57 +73,62 @@ nlohmann::json sequential_to_json(const SequentialModel& m, int n) {
   return s;
 }
 
-SequentialModel sequential_from_json(const nlohmann::json& s, int n, const std::string& origin) {
-  auto need = [&](const nlohmann::json& o, const char* key, const std::string& path) -> const nlohmann::json& {
-    if (!o.contains(key)) throw ParseError(origin, 0, path + key, "missing required field");
-    return o.at(key);
-  };
+SequentialModel sequential_from_json(const nlohmann::json& block, int n, const std::string& origin) {
+  const JsonFields s(block, origin, "sequential");
+  s.only({"library", "gravity_columns", "recordings", "joints"});
   SequentialModel m;
-  const auto& lib = need(s, "library", "sequential.");
-  if (lib.contains("motion_joints")) m.library.motion_joints = json_wholes(lib.at("motion_joints"), origin, "sequential.library.motion_joints");
-  m.library.config_joints = json_wholes(need(lib, "config_joints", "sequential.library."), origin, "sequential.library.config_joints");
-  m.library.harmonics = json_whole(need(lib, "harmonics", "sequential.library."), origin, "sequential.library.harmonics");
+  const JsonFields lib = s.object("library");
+  lib.only({"motion_joints", "config_joints", "harmonics", "candidates"});
+  m.library.motion_joints = json_wholes(lib.need("motion_joints"), origin, lib.field("motion_joints"));
+  m.library.config_joints = json_wholes(lib.need("config_joints"), origin, lib.field("config_joints"));
+  m.library.harmonics = lib.whole("harmonics");
   try {
     m.library.validate(n);
   } catch (const InvalidArgument& e) {
     throw ParseError(origin, 0, "sequential.library", e.what());
   }
   const int p = m.library.size(n);
-  m.gravity_columns = json_wholes(need(s, "gravity_columns", "sequential."), origin, "sequential.gravity_columns");
+  if (const int c = lib.whole("candidates"); c != p)
+    lib.fail("candidates", fmt::format("expected {} (the size of this library for {} joints), got {}", p, n, c));
+  m.gravity_columns = json_wholes(s.need("gravity_columns"), origin, "sequential.gravity_columns");
   for (int c : m.gravity_columns)
     if (c < 0 || c >= 10 * n) throw ParseError(origin, 0, "sequential.gravity_columns", fmt::format("column {} out of range 0..{}", c, 10 * n - 1));
-  if (s.contains("recordings")) {
-    m.quasi_static = s["recordings"].value("quasi_static", std::vector<std::string>{});
-    m.sine = s["recordings"].value("sine", std::vector<std::string>{});
-    m.general = s["recordings"].value("general", std::vector<std::string>{});
-  }
-  const auto& js = need(s, "joints", "sequential.");
+  const JsonFields rec = s.object("recordings");
+  rec.only({"quasi_static", "sine", "general"});
+  m.quasi_static = rec.texts("quasi_static");
+  m.sine = rec.texts("sine");
+  m.general = rec.texts("general");
+  const nlohmann::json& js = s.need("joints");
   if (!js.is_array() || static_cast<int>(js.size()) != n)
-    throw ParseError(origin, 0, "sequential.joints", fmt::format("expected {} joints, got {}", n, js.size()));
+    throw ParseError(origin, 0, "sequential.joints", fmt::format("expected {} joints, got {}", n, json_brief(js)));
   for (size_t k = 0; k < js.size(); ++k) {
-    const std::string f = fmt::format("sequential.joints[{}].", k);
+    const JsonFields e(js[k], origin, json_element("sequential.joints", k));
+    e.only({"gravity", "coulomb", "viscous", "intercept", "lasso_index", "lasso_value", "lasso_terms", "payload", "lambda", "cv_rmse",
+            "train_rmse", "train_r2"});
     SequentialJoint jm;
-    jm.gravity = numbers(need(js[k], "gravity", f), origin, f + "gravity");
-    if (jm.gravity.size() != static_cast<Eigen::Index>(m.gravity_columns.size()))
-      throw ParseError(origin, 0, f + "gravity", fmt::format("expected {} values (one per gravity column), got {}", m.gravity_columns.size(), jm.gravity.size()));
-    jm.coulomb = need(js[k], "coulomb", f).get<double>();
-    jm.viscous = need(js[k], "viscous", f).get<double>();
-    jm.intercept = need(js[k], "intercept", f).get<double>();
-    jm.lasso_index = json_wholes(need(js[k], "lasso_index", f), origin, f + "lasso_index");
-    jm.lasso_value = need(js[k], "lasso_value", f).get<std::vector<double>>();
+    const std::vector<double> g = e.numbers("gravity");
+    if (g.size() != m.gravity_columns.size())
+      e.fail("gravity", fmt::format("expected {} values (one per gravity column), got {}", m.gravity_columns.size(), g.size()));
+    jm.gravity = Eigen::Map<const Eigen::VectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
+    jm.coulomb = e.number("coulomb");
+    jm.viscous = e.number("viscous");
+    jm.intercept = e.number("intercept");
+    jm.lasso_index = json_wholes(e.need("lasso_index"), origin, e.field("lasso_index"));
+    jm.lasso_value = e.numbers("lasso_value");
     if (jm.lasso_index.size() != jm.lasso_value.size())
-      throw ParseError(origin, 0, f + "lasso_value", fmt::format("expected {} values (one per lasso_index), got {}", jm.lasso_index.size(), jm.lasso_value.size()));
+      e.fail("lasso_value", fmt::format("expected {} values (one per lasso_index), got {}", jm.lasso_index.size(), jm.lasso_value.size()));
     for (int i : jm.lasso_index)
-      if (i < 0 || i >= p) throw ParseError(origin, 0, f + "lasso_index", fmt::format("candidate {} out of range 0..{}", i, p - 1));
-    if (js[k].contains("payload")) {
-      jm.payload = numbers(js[k]["payload"], origin, f + "payload");
-      if (jm.payload.size() != n) throw ParseError(origin, 0, f + "payload", fmt::format("expected {} values, got {}", n, jm.payload.size()));
+      if (i < 0 || i >= p) e.fail("lasso_index", fmt::format("candidate {} out of range 0..{}", i, p - 1));
+    if (const auto terms = e.texts("lasso_terms"); terms.size() != jm.lasso_index.size())
+      e.fail("lasso_terms", fmt::format("expected {} names (one per lasso_index), got {}", jm.lasso_index.size(), terms.size()));
+    if (e.has("payload")) {  // only when a recording had a known payload
+      const std::vector<double> h = e.numbers("payload", static_cast<size_t>(n));
+      jm.payload = Eigen::Map<const Eigen::VectorXd>(h.data(), n);
     }
-    if (!jm.gravity.allFinite() || !jm.payload.allFinite()) throw ParseError(origin, 0, f + "gravity", "values must be finite numbers");
-    jm.lambda = js[k].value("lambda", 0.0);
-    jm.cv_rmse = js[k].value("cv_rmse", 0.0);
-    jm.rmse = js[k].value("train_rmse", 0.0);
-    jm.r2 = js[k].value("train_r2", 0.0);
+    jm.lambda = e.nonnegative("lambda");
+    jm.cv_rmse = e.nonnegative("cv_rmse");
+    jm.rmse = e.nonnegative("train_rmse");
+    jm.r2 = e.number("train_r2");
     m.joints.push_back(std::move(jm));
   }
   for (size_t k = 1; k < m.joints.size(); ++k)
@@ -315,7 +330,7 @@ void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
 std::string TwinModel::to_json() const {
   nlohmann::json j;
   j["format"] = "twinwatch-twin";
-  j["version"] = 1;
+  j["version"] = kTwinFormatVersion;
   j["robot"] = robot_name_;
   j["method"] = method;
   j["created"] = created;
@@ -335,12 +350,12 @@ std::string TwinModel::to_json() const {
     e["c_gen"] = m.c_gen;
     e["gain_identified"] = m.gain_identified;
     e["friction"] = numbers(Eigen::VectorXd(m.friction));
-    e["friction_columns"] = {"coulomb", "viscous", "offset", "armature", "viscous_temperature"};
-    if (m.presliding_alpha > 0.0 || m.stribeck_velocity > 0.0)
-      e["low_speed_friction"] = {{"presliding_alpha", m.presliding_alpha},
-                                 {"presliding", m.presliding},
-                                 {"stribeck_velocity", m.stribeck_velocity},
-                                 {"stribeck", m.stribeck}};
+    e["friction_columns"] = kFrictionColumnNames;
+    // always written (all zero: none), so that a block lost from a file is not read as "none"
+    e["low_speed_friction"] = {{"presliding_alpha", m.presliding_alpha},
+                               {"presliding", m.presliding},
+                               {"stribeck_velocity", m.stribeck_velocity},
+                               {"stribeck", m.stribeck}};
     e["train_rmse"] = m.rmse;
     e["train_r2"] = m.r2;
     j["joints"].push_back(e);
@@ -349,103 +364,246 @@ std::string TwinModel::to_json() const {
   return j.dump(1);
 }
 
-TwinModel TwinModel::from_json(const std::string& text, const std::string& origin) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ParseError(origin, 0, "", fmt::format("not valid JSON: {}", e.what()));
-  } catch (const nlohmann::json::out_of_range& e) {  // a number beyond a double ("1e400")
-    throw ParseError(origin, 0, "", fmt::format("expected numbers within the range of a double: {}", e.what()));
-  }
-  auto need = [&](const nlohmann::json& o, const char* key, const std::string& path) -> const nlohmann::json& {
-    if (!o.contains(key)) throw ParseError(origin, 0, path + key, "missing required field");
-    return o.at(key);
+namespace {
+
+// The format version of a twin file: a whole number from 1 to kTwinFormatVersion.
+int format_version(const nlohmann::json& j, const std::string& origin) {
+  if (!j.contains("version"))
+    throw ParseError(origin, 0, "version", fmt::format("missing required field (the twin file format version, 1 to {})", kTwinFormatVersion));
+  const nlohmann::json& v = j.at("version");
+  const std::optional<int> x = v.is_number() ? whole_int(v.get<double>()) : std::nullopt;
+  if (!x) throw ParseError(origin, 0, "version", fmt::format("expected a whole number from 1 to {}, got {}", kTwinFormatVersion, json_brief(v)));
+  if (*x < 1 || *x > kTwinFormatVersion)
+    throw ParseError(origin, 0, "version",
+                     fmt::format("expected 1 to {}, got {} (a file from a newer twinwatch? this one reads versions 1 to {})",
+                                 kTwinFormatVersion, *x, kTwinFormatVersion));
+  return *x;
+}
+
+// The monitor's trend settings a version-1 file without a "trend" block is read with: those of
+// monitor::TrendConfig when version 2 came (tests/monitor/monitor_test.cpp checks that they still are)
+const nlohmann::json& version_1_trend() {
+  static const nlohmann::json t = {{"enabled", true},         {"window_s", 30.0},   {"cycle_period", 0.0},
+                                   {"v_min", 0.05},           {"min_moving_fraction", 0.2}, {"baseline_windows", 4},
+                                   {"min_windows", 12},       {"history", 240},     {"z_crit", 4.0},
+                                   {"min_rate_pct_per_h", 4.0}, {"persist", 3},     {"temperature_ref", 35.0}};
+  return t;
+}
+
+// Version 1 -> 2: every version-1 writer wrote the fields version 2 requires except these, added
+// over time; a file without one is given the value the program has always read it with (the
+// defaults of the time, "files before it"). Returns "field = value" for each one filled.
+std::vector<std::string> upgrade_version_1(nlohmann::json& j) {
+  std::vector<std::string> filled;
+  const auto fill = [&](nlohmann::json& o, const char* key, const nlohmann::json& value, const std::string& field, const char* meaning) {
+    if (o.contains(key)) return;
+    o[key] = value;
+    filled.push_back(fmt::format("{} = {}", field, meaning));
   };
-  // (value() would throw a json type_error for a file that is not an object or a format that is not text)
+  fill(j, "direction_blend", 0.0, "direction_blend", "0 (the hard motoring/back-driven switch)");
+  if (j.contains("joints") && j["joints"].is_array())
+    for (size_t k = 0; k < j["joints"].size(); ++k) {
+      nlohmann::json& e = j["joints"][k];
+      if (!e.is_object()) continue;  // (named by the reader)
+      const std::string p = json_element("joints", k);
+      fill(e, "gain_identified", true, p + ".gain_identified", "true");
+      fill(e, "low_speed_friction", {{"presliding_alpha", 0.0}, {"presliding", 0.0}, {"stribeck_velocity", 0.0}, {"stribeck", 0.0}},
+           p + ".low_speed_friction", "none (plain Coulomb friction)");
+    }
+  if (j.contains("monitor") && j["monitor"].is_object()) {
+    nlohmann::json& m = j["monitor"];
+    fill(m, "trend", version_1_trend(), "monitor.trend", "the defaults (30 s windows)");
+    fill(m, "observer_gain", 150.0, "monitor.observer_gain", "150 1/s");
+    fill(m, "observer_alerts", true, "monitor.observer_alerts", "true");
+  }
+  return filled;
+}
+
+// one joint's drive, friction and fit (an element of "joints")
+JointDrive joint_from_json(const nlohmann::json& v, const std::string& origin, const std::string& path) {
+  const JsonFields e(v, origin, path);
+  e.only({"gain", "c_gen", "gain_identified", "friction", "friction_columns", "low_speed_friction", "train_rmse", "train_r2"});
+  JointDrive m;
+  m.gain = e.positive("gain");
+  m.c_gen = e.number("c_gen");
+  if (!(m.c_gen > 0.0 && m.c_gen <= kCGenFileMax))
+    e.fail("c_gen", fmt::format("expected a number in (0, {}] (the current factor when back-driven; 1: as when motoring), got {}", kCGenFileMax,
+                                m.c_gen));
+  m.gain_identified = e.boolean("gain_identified");
+  // the column names first: they say what the values are
+  if (e.texts("friction_columns") != kFrictionColumnNames)
+    e.fail("friction_columns", fmt::format("expected [\"{}\"] (the order of the friction values), got {}", fmt::join(kFrictionColumnNames, "\", \""),
+                                           json_brief(e.need("friction_columns"))));
+  const std::vector<double> f = e.numbers("friction", kFrictionColumns);
+  // friction opposes the motion: a negative Coulomb or viscous coefficient would push it along
+  for (const int c : {int(kCoulomb), int(kViscous)})
+    if (f[static_cast<size_t>(c)] < 0.0)
+      throw ParseError(origin, 0, json_element(e.field("friction"), static_cast<size_t>(c)),
+                       fmt::format("expected {} friction >= 0 (friction opposes the motion), got {}", kFrictionColumnNames[static_cast<size_t>(c)],
+                                   f[static_cast<size_t>(c)]));
+  m.friction = Eigen::Map<const Eigen::Matrix<double, kFrictionColumns, 1>>(f.data());
+  const JsonFields l = e.object("low_speed_friction");
+  l.only({"presliding_alpha", "presliding", "stribeck_velocity", "stribeck"});
+  m.presliding_alpha = l.nonnegative("presliding_alpha");
+  m.presliding = l.number("presliding");
+  m.stribeck_velocity = l.nonnegative("stribeck_velocity");
+  m.stribeck = l.number("stribeck");
+  // a level without its shape would be dropped by the prediction (all zero: none)
+  if (m.presliding_alpha == 0.0 && m.presliding != 0.0)
+    l.fail("presliding_alpha", fmt::format("expected a number > 0 [1/rad] when presliding is nonzero ({}), got 0", m.presliding));
+  if (m.stribeck_velocity == 0.0 && m.stribeck != 0.0)
+    l.fail("stribeck_velocity", fmt::format("expected a number > 0 [rad/s] when stribeck is nonzero ({}), got 0", m.stribeck));
+  m.rmse = e.nonnegative("train_rmse");
+  m.r2 = e.number("train_r2");
+  return m;
+}
+
+}  // namespace
+
+TwinModel TwinModel::from_json(const std::string& text, const std::string& origin) {
+  nlohmann::json j = parse_json(text, origin);
+  // (a file that is not an object, or whose format is no string, gets these messages rather than a missing field)
   if (!j.is_object())
     throw ParseError(origin, 0, "", fmt::format("expected a JSON object (a twin file from twinwatch identify), got {}", j.type_name()));
   if (!j.contains("format") || j.at("format") != "twinwatch-twin")
     throw ParseError(origin, 0, "format", fmt::format("expected \"twinwatch-twin\" (is this a twin file from twinwatch identify?), got {}",
-                                                      j.contains("format") ? j.at("format").dump() : "nothing"));
+                                                      j.contains("format") ? json_brief(j.at("format")) : "nothing"));
+  const int version = format_version(j, origin);
+  const std::vector<std::string> filled = version == 1 ? upgrade_version_1(j) : std::vector<std::string>{};
   try {
-    const std::string robot = need(j, "robot", "").get<std::string>();
-    TwinModel t(robot, model::load_robot(robot));
-    t.method = j.value("method", "physics");
-    t.created = j.value("created", "");
-    t.recordings = j.value("recordings", std::vector<std::string>{});
-    t.temperature_ref = j.value("temperature_ref", 35.0);
-    t.direction_blend = j.value("direction_blend", 0.0);  // files before it: the hard switch
-    const auto& js = need(j, "joints", "");
-    if (!js.is_array() || static_cast<int>(js.size()) != t.n_dof())
-      throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", t.n_dof(), robot, js.size()));
-    t.gains_absolute = j.value("gains_absolute", false);
-    if (j.contains("monitor")) t.monitor_json = j["monitor"].dump();
-    if (j.contains("learned")) t.learned = LearnedModel::from_json(j["learned"].dump(), origin, t.n_dof());
-    if (j.contains("friction_models")) t.friction_json = j["friction_models"].dump();
-    t.base_columns = json_wholes(need(j, "base_columns", ""), origin, "base_columns");
-    for (int c : t.base_columns)
-      if (c < 0 || c >= 10 * t.n_dof()) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * t.n_dof() - 1));
-    t.beta = numbers(need(j, "beta", ""), origin, "beta");
-    if (static_cast<size_t>(t.beta.size()) != t.base_columns.size())
-      throw ParseError(origin, 0, "beta", fmt::format("expected {} values (one per base column), got {}", t.base_columns.size(), t.beta.size()));
-    if (!t.beta.allFinite()) throw ParseError(origin, 0, "beta", "values must be finite numbers");
-    for (size_t k = 0; k < js.size(); ++k) {
-      const std::string p = fmt::format("joints[{}].", k);
-      JointDrive m;
-      m.gain = need(js[k], "gain", p).get<double>();
-      if (!(m.gain > 0.0)) throw ParseError(origin, 0, p + "gain", fmt::format("must be > 0, got {}", m.gain));
-      m.c_gen = js[k].value("c_gen", 1.0);
-      m.gain_identified = js[k].value("gain_identified", true);
-      const Eigen::VectorXd f = numbers(need(js[k], "friction", p), origin, p + "friction");
-      if (f.size() != kFrictionColumns)
-        throw ParseError(origin, 0, p + "friction", fmt::format("expected {} values, got {}", int(kFrictionColumns), f.size()));
-      m.friction = f;
-      if (js[k].contains("low_speed_friction")) {
-        // files before it: none (plain Coulomb)
-        const auto& l = js[k]["low_speed_friction"];
-        const std::string lp = p + "low_speed_friction.";
-        auto nonneg = [&](const char* key) {
-          const double v = need(l, key, lp).get<double>();
-          if (!std::isfinite(v) || v < 0.0) throw ParseError(origin, 0, lp + key, fmt::format("must be a finite number >= 0, got {}", v));
-          return v;
-        };
-        m.presliding_alpha = nonneg("presliding_alpha");
-        m.stribeck_velocity = nonneg("stribeck_velocity");
-        m.presliding = need(l, "presliding", lp).get<double>();
-        m.stribeck = need(l, "stribeck", lp).get<double>();
-        if (!std::isfinite(m.presliding) || !std::isfinite(m.stribeck))
-          throw ParseError(origin, 0, lp + "presliding", "presliding and stribeck must be finite numbers");
-      }
-      m.rmse = js[k].value("train_rmse", 0.0);
-      m.r2 = js[k].value("train_r2", 0.0);
-      t.joints.push_back(m);
+    const JsonFields top(j, origin, "");
+    top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "payload",
+              "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential"});
+    const std::string robot = top.text("robot");
+    TwinModel t;
+    try {
+      t = TwinModel(robot, model::load_robot(robot));
+    } catch (const InvalidArgument& e) {
+      throw ParseError(origin, 0, "robot", e.what());
     }
-    if (j.contains("sequential")) t.sequential = sequential_from_json(j["sequential"], t.n_dof(), origin);
-    if (j.contains("payload")) {
-      model::RigidBodyInertia p;
-      p.mass = j["payload"].value("mass", 0.0);
-      const auto c = j["payload"].value("com", std::vector<double>{0, 0, 0});
-      if (c.size() == 3) p.com = Eigen::Vector3d(c[0], c[1], c[2]);
-      t.set_payload(p);
+    const int n = t.n_dof();
+    t.origin = origin;
+    t.method = top.text("method");
+    if (std::find(kMethods.begin(), kMethods.end(), t.method) == kMethods.end())
+      top.fail("method", fmt::format("expected one of \"{}\", got {}", fmt::join(kMethods, "\", \""), json_brief(top.need("method"))));
+    t.created = top.text("created");
+    t.recordings = top.texts("recordings");
+    t.temperature_ref = top.number("temperature_ref");
+    t.direction_blend = top.nonnegative("direction_blend");
+    t.gains_absolute = top.boolean("gains_absolute");
+    const JsonFields pl = top.object("payload");
+    pl.only({"mass", "com"});
+    model::RigidBodyInertia payload;
+    payload.mass = pl.nonnegative("mass");
+    const std::vector<double> com = pl.numbers("com", 3);
+    payload.com = Eigen::Vector3d(com[0], com[1], com[2]);
+    t.set_payload(payload);
+    // base parameters: each standard column once, one value per column
+    t.base_columns = json_wholes(top.need("base_columns"), origin, "base_columns");
+    std::vector<int> first(static_cast<size_t>(10 * n), -1);
+    for (size_t i = 0; i < t.base_columns.size(); ++i) {
+      const int c = t.base_columns[i];
+      if (c < 0 || c >= 10 * n) throw ParseError(origin, 0, "base_columns", fmt::format("column {} out of range 0..{}", c, 10 * n - 1));
+      if (first[static_cast<size_t>(c)] >= 0)
+        throw ParseError(origin, 0, json_element("base_columns", i),
+                         fmt::format("expected each standard column once, got column {} again (also at base_columns[{}])", c, first[static_cast<size_t>(c)]));
+      first[static_cast<size_t>(c)] = static_cast<int>(i);
     }
+    const nlohmann::json& bj = top.need("beta");
+    if (!bj.is_array()) top.fail("beta", fmt::format("expected an array of numbers, got {}", json_brief(bj)));
+    if (bj.size() != t.base_columns.size())
+      top.fail("beta", fmt::format("expected {} values (one per base column), got {}", t.base_columns.size(), bj.size()));
+    const std::vector<double> beta = top.numbers("beta");
+    t.beta = Eigen::Map<const Eigen::VectorXd>(beta.data(), static_cast<Eigen::Index>(beta.size()));
+    const nlohmann::json& js = top.need("joints");
+    if (!js.is_array() || static_cast<int>(js.size()) != n)
+      throw ParseError(origin, 0, "joints", fmt::format("expected {} joints for robot '{}', got {}", n, robot, js.is_array() ? std::to_string(js.size()) : json_brief(js)));
+    for (size_t k = 0; k < js.size(); ++k) t.joints.push_back(joint_from_json(js[k], origin, json_element("joints", k)));
+    // the optional blocks (the monitor's and the friction study's are read by their modules)
+    if (top.has("monitor")) t.monitor_json = top.object("monitor").json().dump();
+    if (top.has("learned")) t.learned = LearnedModel::from_json(j["learned"].dump(), origin, n);
+    if (top.has("friction_models")) {
+      if (!j["friction_models"].is_array()) top.fail("friction_models", fmt::format("expected an array, got {}", json_brief(j["friction_models"])));
+      t.friction_json = j["friction_models"].dump();
+    }
+    if (top.has("sequential")) t.sequential = sequential_from_json(j["sequential"], n, origin);
+    // the method names the model that predicts: its block must be there, and no other
+    const bool mlp = t.learned && t.learned->role == LearnedRole::Current, hybrid = t.learned && t.learned->role == LearnedRole::Residual;
+    const char* wants = t.method == "mlp" ? (mlp ? nullptr : "a \"learned\" block with role \"current\"")
+                        : t.method == "hybrid" ? (hybrid ? nullptr : "a \"learned\" block with role \"residual\"")
+                        : t.method == "sequential" ? (t.sequential && !t.learned ? nullptr : "a \"sequential\" block and no \"learned\" block")
+                                                   : (t.learned || t.sequential ? "no \"learned\" or \"sequential\" block" : nullptr);
+    if (wants != nullptr)
+      top.fail("method", fmt::format("method \"{}\" expects {}, got {}", t.method, wants,
+                                     t.learned ? (mlp ? "a \"learned\" block with role \"current\"" : "a \"learned\" block with role \"residual\"")
+                                               : (t.sequential ? "a \"sequential\" block" : "neither block")));
+    if (version == 1)
+      log::warn(fmt::format("{}: a version-1 twin file, read as version {} with {}; re-identify (twinwatch identify) to write a version-{} "
+                            "file, in which every field is required",
+                            origin, kTwinFormatVersion,
+                            filled.empty() ? std::string("every field present") : fmt::format("defaults for the fields it lacks: {}", fmt::join(filled, ", ")),
+                            kTwinFormatVersion));
     return t;
-  } catch (const nlohmann::json::type_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // (every field is type-checked above: a safety net for the fuzzer's contract)
     throw ParseError(origin, 0, "", fmt::format("wrong type: {}", e.what()));
-  } catch (const InvalidArgument& e) {
-    throw ParseError(origin, 0, "robot", e.what());
   }
 }
 
+namespace {
+
+// Writes `text` to `file` and checks that every byte reached it (a full disk shows at the flush or
+// the close, not at the write). `shown`: the path named in errors.
+void write_text(const std::string& file, const std::string& text, const std::string& shown) {
+  errno = 0;
+  std::ofstream f(file, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot open for writing: {}", shown, std::strerror(errno != 0 ? errno : EIO)));
+  f.write(text.data(), static_cast<std::streamsize>(text.size()));
+  f.flush();
+  int err = errno;
+  f.close();
+  if (err == 0) err = errno;
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot write the twin file: {}", shown, std::strerror(err != 0 ? err : EIO)));
+}
+
+}  // namespace
+
 void TwinModel::save(const std::string& path) const {
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  f << to_json() << '\n';
+  namespace fs = std::filesystem;
+  const std::string text = to_json() + '\n';
+  // what is written must load back: a value the reader refuses is named now, not when the twin is used
+  try {
+    from_json(text, path);
+  } catch (const ParseError& e) {
+    throw std::runtime_error(fmt::format("{}: not written, the twin would not load back: {}", path, e.what()));
+  }
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);  // (through a symbolic link)
+  // a device or a pipe (/dev/stdout) is written in place
+  if (fs::exists(st) && !fs::is_regular_file(st)) return write_text(path, text, path);
+  // a regular file is replaced only once the new text is completely on disk: a full disk or a
+  // failed write leaves the twin it held (thresholds and friction-study rewrite the twin they read)
+  const fs::path target = fs::exists(st) ? fs::canonical(path, ec) : fs::path(path);
+  fs::path tmp = target;
+  tmp += fmt::format(".tmp{}", static_cast<long>(::getpid()));
+  {
+    std::ofstream probe(tmp, std::ios::binary | std::ios::trunc);
+    if (!probe) return write_text(path, text, path);  // no file can be made beside it: in place, as before
+  }
+  try {
+    write_text(tmp.string(), text, path);
+    if (fs::exists(st)) fs::permissions(tmp, st.permissions(), ec);
+    fs::rename(tmp, target, ec);
+    if (ec) throw std::runtime_error(fmt::format("{}: cannot write the twin file: {}", path, ec.message()));
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
 }
 
 TwinModel TwinModel::load(const std::string& path) {
+  errno = 0;
   std::ifstream f(path);
-  if (!f) throw ParseError(path, 0, "", "cannot open the twin file");
+  if (!f) throw ParseError(path, 0, "", fmt::format("cannot open the twin file: {}", std::strerror(errno != 0 ? errno : ENOENT)));
   std::stringstream ss;
   ss << f.rdbuf();
   return from_json(ss.str(), path);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/numbers.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 
@@ -40,6 +41,12 @@ constexpr double kMovingVelocity = 0.01;
 // N 50-160, eta 0.7-0.95); outside, the identified gain is not
 // trusted for converting residuals to torque and the median of the plausible ones is used
 constexpr double kGainMin = 2.0, kGainMax = 40.0;
+
+// the largest residual filter cut-off a twin file may hold [Hz]: the Nyquist frequency of the
+// fastest stream the monitor reads (1 kHz, e.g. Franka's FCI; RTDE streams at 500 Hz). Above it the
+// first-order filter passes everything on any recording (a = 1 - exp(-2 pi fc T) > 0.96), so such
+// a value is a slip, not a setting
+constexpr double kMaxFilterCutoffHz = 500.0;
 
 double iir_alpha(double cutoff_hz, double period) {
   // y += a (x - y), a = 1 - exp(-2 pi fc T)
@@ -84,24 +91,23 @@ nlohmann::json vec_json(const VectorJ& v) {
   for (int i = 0; i < v.size(); ++i) a.push_back(v[i]);
   return a;
 }
-// a per-joint vector: an array of at most kMaxDof numbers (VectorJ's capacity; more would write
-// past its inline storage). Throws InvalidArgument naming `field`.
-VectorJ json_vec(const nlohmann::json& a, const std::string& field) {
-  if (!a.is_array()) throw InvalidArgument(fmt::format("{}: expected an array of numbers (one per joint), got {}", field, a.type_name()));
+// a per-joint vector of the block at path `field`: `n` finite numbers (at most kMaxDof, VectorJ's
+// capacity: more would write past its inline storage), each > 0 when `positive`
+VectorJ joint_array(const nlohmann::json& a, const std::string& origin, const std::string& field, int n, bool positive) {
+  if (!a.is_array()) throw ParseError(origin, 0, field, fmt::format("expected an array of numbers (one per joint), got {}", json_brief(a)));
   if (a.size() > static_cast<size_t>(kMaxDof))
-    throw InvalidArgument(fmt::format("{}: expected at most {} values (one per joint), got {}", field, kMaxDof, a.size()));
-  VectorJ v(static_cast<int>(a.size()));
-  for (size_t i = 0; i < a.size(); ++i) v[static_cast<int>(i)] = a[i].get<double>();
+    throw ParseError(origin, 0, field, fmt::format("expected at most {} values (one per joint), got {}", kMaxDof, a.size()));
+  if (static_cast<int>(a.size()) != n) throw ParseError(origin, 0, field, fmt::format("expected {} values (one per joint), got {}", n, a.size()));
+  VectorJ v(n);
+  for (int i = 0; i < n; ++i) {
+    const std::string f = json_element(field, static_cast<size_t>(i));
+    v[i] = json_number(a[static_cast<size_t>(i)], origin, f);
+    if (positive && !(v[i] > 0.0)) throw ParseError(origin, 0, f, fmt::format("expected a number > 0, got {}", v[i]));
+  }
   return v;
 }
-
-// the whole number at `key` (fallback if absent) that fits an int: get<int>() of 1e20 would be
-// undefined behaviour. Throws InvalidArgument naming `field`, a json type_error for a non-number.
-int json_int(const nlohmann::json& j, const char* key, int fallback, const std::string& field) {
-  if (!j.contains(key)) return fallback;
-  const std::optional<int> x = whole_int(j.at(key).get<double>());
-  if (!x) throw InvalidArgument(fmt::format("{}: expected a whole number within +-{}, got {}", field, std::numeric_limits<int>::max(), j.at(key).dump()));
-  return *x;
+VectorJ joint_values(const JsonFields& o, const char* key, int n, bool positive) {
+  return joint_array(o.need(key), o.origin(), o.field(key), n, positive);
 }
 
 // MonitorConfig::residual_filter: 0, 1 or n entries, each "iir" or "fir"
@@ -182,21 +188,31 @@ nlohmann::json trend_json(const TrendConfig& t) {
   if (t.temperature_slope.size()) j["temperature_slope"] = vec_json(t.temperature_slope);
   return j;
 }
-TrendConfig trend_from_json(const nlohmann::json& j) {
+// the trend block (every field the writer writes; temperature_slope only once learned)
+TrendConfig trend_from_json(const JsonFields& j, int n) {
+  j.only({"enabled", "window_s", "cycle_period", "v_min", "min_moving_fraction", "baseline_windows", "min_windows", "history", "z_crit",
+          "min_rate_pct_per_h", "persist", "temperature_ref", "temperature_slope"});
   TrendConfig t;
-  t.enabled = j.value("enabled", t.enabled);
-  t.window_s = j.value("window_s", t.window_s);
-  t.cycle_period = j.value("cycle_period", t.cycle_period);
-  t.v_min = j.value("v_min", t.v_min);
-  t.min_moving_fraction = j.value("min_moving_fraction", t.min_moving_fraction);
-  t.baseline_windows = json_int(j, "baseline_windows", t.baseline_windows, "trend.baseline_windows");
-  t.min_windows = json_int(j, "min_windows", t.min_windows, "trend.min_windows");
-  t.history = json_int(j, "history", t.history, "trend.history");
-  t.z_crit = j.value("z_crit", t.z_crit);
-  t.min_rate_pct_per_h = j.value("min_rate_pct_per_h", t.min_rate_pct_per_h);
-  t.persist = json_int(j, "persist", t.persist, "trend.persist");
-  t.temperature_ref = j.value("temperature_ref", t.temperature_ref);
-  if (j.contains("temperature_slope")) t.temperature_slope = json_vec(j["temperature_slope"], "trend.temperature_slope");
+  t.enabled = j.boolean("enabled");
+  t.window_s = j.positive("window_s");
+  t.cycle_period = j.nonnegative("cycle_period");
+  t.v_min = j.positive("v_min");
+  t.min_moving_fraction = j.number("min_moving_fraction");
+  if (!(t.min_moving_fraction > 0.0 && t.min_moving_fraction <= 1.0))
+    j.fail("min_moving_fraction", fmt::format("expected a number in (0, 1], got {}", t.min_moving_fraction));
+  t.baseline_windows = j.whole("baseline_windows");
+  if (t.baseline_windows < 1) j.fail("baseline_windows", fmt::format("expected a whole number >= 1, got {}", t.baseline_windows));
+  t.min_windows = j.whole("min_windows");
+  if (t.min_windows < 3 || t.min_windows < t.baseline_windows)
+    j.fail("min_windows", fmt::format("expected a whole number >= 3 and >= baseline_windows ({}), got {}", t.baseline_windows, t.min_windows));
+  t.history = j.whole("history");
+  if (t.history < t.min_windows) j.fail("history", fmt::format("expected a whole number >= min_windows ({}), got {}", t.min_windows, t.history));
+  t.z_crit = j.positive("z_crit");
+  t.min_rate_pct_per_h = j.nonnegative("min_rate_pct_per_h");
+  t.persist = j.whole("persist");
+  if (t.persist < 1) j.fail("persist", fmt::format("expected a whole number >= 1, got {}", t.persist));
+  t.temperature_ref = j.number("temperature_ref");
+  if (j.has("temperature_slope")) t.temperature_slope = joint_values(j, "temperature_slope", n, false);
   return t;
 }
 
@@ -207,11 +223,21 @@ nlohmann::json dynamic_json(const std::vector<DynamicThresholdJoint>& dynamic) {
                  {"rho", d.rho}, {"margin", d.margin}, {"alpha", d.alpha}});
   return a;
 }
-std::vector<DynamicThresholdJoint> json_dynamic(const nlohmann::json& a) {
+// a dynamic threshold per joint [Cao eq. 24]: the LP of eq. 26 bounds psi and upsilon below by 0
+// (threshold.cpp), and its max gap alpha and the margin xi are >= 0 too; rho > 0 (the grid's).
+// `allow_empty`: none learned is an empty array (a set the monitor does not need them for)
+std::vector<DynamicThresholdJoint> dynamic_from_json(const JsonFields& o, const char* key, int n, bool allow_empty) {
+  const nlohmann::json& a = o.need(key);
+  if (!a.is_array() || (static_cast<int>(a.size()) != n && !(allow_empty && a.empty())))
+    o.fail(key, fmt::format("expected {} thresholds (one per joint){}, got {}", n, allow_empty ? " or none" : "",
+                            a.is_array() ? std::to_string(a.size()) : json_brief(a)));
   std::vector<DynamicThresholdJoint> out;
-  for (const auto& d : a)
-    out.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"), d.value("margin", 0.0),
-                   d.value("alpha", 0.0)});
+  for (size_t i = 0; i < a.size(); ++i) {
+    const JsonFields d(a[i], o.origin(), json_element(o.field(key), i));
+    d.only({"psi_qdd", "psi_qd", "psi_rev", "upsilon", "rho", "margin", "alpha"});
+    out.push_back({d.nonnegative("psi_qdd"), d.nonnegative("psi_qd"), d.nonnegative("psi_rev"), d.nonnegative("upsilon"), d.positive("rho"),
+                   d.nonnegative("margin"), d.nonnegative("alpha")});
+  }
   return out;
 }
 
@@ -245,25 +271,6 @@ void check_choice(const ObserverDebounceChoice& choice, bool has_observer, int n
       throw InvalidArgument(fmt::format("{} observer_validation_ratio row {} has {} entries, expected {}", where, r + 1, ratio[r].size(), n));
 }
 
-std::vector<VectorJ> json_rows(const nlohmann::json& a, const std::string& field) {
-  if (!a.is_array()) throw InvalidArgument(fmt::format("{} must be an array of per-joint arrays", field));
-  std::vector<VectorJ> rows;
-  for (size_t i = 0; i < a.size(); ++i) rows.push_back(json_vec(a.at(i), fmt::format("{}[{}]", field, i)));
-  return rows;
-}
-
-std::vector<int> json_ints(const nlohmann::json& a, const std::string& field) {
-  if (!a.is_array()) throw InvalidArgument(fmt::format("{} must be an array of integers", field));
-  std::vector<int> v;
-  for (size_t i = 0; i < a.size(); ++i) {
-    // whole_int: get<int>() would wrap 4294967297 to 1
-    const std::optional<int> x = a[i].is_number_integer() ? whole_int(a[i].get<double>()) : std::nullopt;
-    if (!x) throw InvalidArgument(fmt::format("{}[{}] must be a whole number within +-{}, got {}", field, i, std::numeric_limits<int>::max(), a[i].dump()));
-    v.push_back(*x);
-  }
-  return v;
-}
-
 // a choice into the JSON object of its threshold set (nothing when none was chosen)
 void put_choice(nlohmann::json& j, const ObserverDebounceChoice& choice) {
   if (!choice.raise_after.empty()) j["observer_raise_after_joint"] = choice.raise_after;
@@ -272,12 +279,35 @@ void put_choice(nlohmann::json& j, const ObserverDebounceChoice& choice) {
   for (const auto& r : choice.ratio) rows.push_back(vec_json(r));
 }
 
-// the choice of the threshold set `j`; `prefix` names it in errors ("" or "programs.NAME.")
-ObserverDebounceChoice get_choice(const nlohmann::json& j, const std::string& prefix) {
+// a debounce count of the block: a whole number from `lo` to kMaxDebounce
+int debounce_count(const JsonFields& o, const char* key, int lo) {
+  const int x = o.whole(key);
+  if (x < lo || x > kMaxDebounce) o.fail(key, fmt::format("expected a whole number from {} to {}, got {}", lo, kMaxDebounce, x));
+  return x;
+}
+
+// the per-joint observer debounce choice of the threshold set `j`, when it has one
+ObserverDebounceChoice get_choice(const JsonFields& j, int n) {
   ObserverDebounceChoice c;
-  if (j.contains("observer_raise_after_joint"))
-    c.raise_after = json_ints(j["observer_raise_after_joint"], prefix + "observer_raise_after_joint");
-  if (j.contains("observer_validation_ratio")) c.ratio = json_rows(j["observer_validation_ratio"], prefix + "observer_validation_ratio");
+  if (j.has("observer_raise_after_joint")) {
+    const nlohmann::json& a = j.need("observer_raise_after_joint");
+    if (!a.is_array() || static_cast<int>(a.size()) != n)
+      j.fail("observer_raise_after_joint", fmt::format("expected {} counts (one per joint), got {}", n, a.is_array() ? std::to_string(a.size()) : json_brief(a)));
+    for (size_t i = 0; i < a.size(); ++i) {
+      const std::string f = json_element(j.field("observer_raise_after_joint"), i);
+      // whole_int: get<int>() would wrap 4294967297 to 1
+      const std::optional<int> x = a[i].is_number_integer() ? whole_int(a[i].get<double>()) : std::nullopt;
+      if (!x) throw ParseError(j.origin(), 0, f, fmt::format("expected a whole number within +-{}, got {}", std::numeric_limits<int>::max(), json_brief(a[i])));
+      if (*x < 1 || *x > kMaxDebounce) throw ParseError(j.origin(), 0, f, fmt::format("expected a whole number from 1 to {}, got {}", kMaxDebounce, *x));
+      c.raise_after.push_back(*x);
+    }
+  }
+  if (j.has("observer_validation_ratio")) {
+    const nlohmann::json& a = j.need("observer_validation_ratio");
+    if (!a.is_array()) j.fail("observer_validation_ratio", fmt::format("expected an array of per-joint arrays, got {}", json_brief(a)));
+    for (size_t r = 0; r < a.size(); ++r)
+      c.ratio.push_back(joint_array(a[r], j.origin(), json_element(j.field("observer_validation_ratio"), r), n, false));
+  }
   return c;
 }
 
@@ -370,47 +400,94 @@ std::string MonitorConfig::to_json() const {
   return j.dump();
 }
 
-MonitorConfig MonitorConfig::from_json(const std::string& text, const std::string& origin) {
-  MonitorConfig c;
+MonitorConfig MonitorConfig::from_json(const std::string& text, const std::string& origin, int n_dof) {
+  const nlohmann::json j = parse_json(text, origin, "monitor");
   try {
-    const auto j = nlohmann::json::parse(text);
-    c.static_level = json_vec(j.at("static_level_A"), "static_level_A");
-    if (j.contains("dynamic")) c.dynamic = json_dynamic(j["dynamic"]);
-    c.use_dynamic = j.value("use_dynamic", !c.dynamic.empty());
-    c.filter_cutoff_hz = j.value("filter_cutoff_hz", c.filter_cutoff_hz);
-    c.raise_after = json_int(j, "raise_after", c.raise_after, "raise_after");
-    c.clear_after = json_int(j, "clear_after", c.clear_after, "clear_after");
-    c.observer_raise_after = json_int(j, "observer_raise_after", c.observer_raise_after, "observer_raise_after");
-    c.observer_choice = get_choice(j, "");
-    if (j.contains("sensitivity")) c.sensitivity = json_vec(j["sensitivity"], "sensitivity");
-    c.nominal_period = j.value("nominal_period", c.nominal_period);
-    if (j.contains("residual_filter")) c.residual_filter = j["residual_filter"].get<std::vector<std::string>>();
-    if (j.contains("trend")) c.trend = trend_from_json(j["trend"]);
-    if (j.contains("programs"))
-      for (const auto& [name, p] : j["programs"].items()) {
+    const JsonFields m(j, origin, "monitor");
+    m.only({"static_level_A", "dynamic", "use_dynamic", "filter_cutoff_hz", "raise_after", "clear_after", "observer_raise_after",
+            "observer_raise_after_joint", "observer_validation_ratio", "sensitivity", "nominal_period", "residual_filter", "trend", "programs",
+            "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic"});
+    // the joint count: the twin's, or (a block read on its own) that of the static levels
+    const nlohmann::json& levels = m.need("static_level_A");
+    const int n = n_dof > 0 ? n_dof : levels.is_array() ? static_cast<int>(std::min<size_t>(levels.size(), kMaxDof + 1)) : 0;
+    if (n < 1) m.fail("static_level_A", "expected at least 1 value (one per joint), got 0");
+    MonitorConfig c;
+    // the default threshold set; the dynamic thresholds are written when learned
+    c.static_level = joint_values(m, "static_level_A", n, true);
+    c.use_dynamic = m.boolean("use_dynamic");
+    if (m.has("dynamic")) c.dynamic = dynamic_from_json(m, "dynamic", n, false);
+    else if (c.use_dynamic) m.fail("dynamic", "missing required field (use_dynamic is true)");
+    c.filter_cutoff_hz = m.positive("filter_cutoff_hz");
+    if (c.filter_cutoff_hz > kMaxFilterCutoffHz)
+      m.fail("filter_cutoff_hz", fmt::format("expected a number in (0, {}] Hz, got {}", kMaxFilterCutoffHz, c.filter_cutoff_hz));
+    c.raise_after = debounce_count(m, "raise_after", 1);
+    c.clear_after = debounce_count(m, "clear_after", 1);
+    // written when set; 0 means raise_after, as in validate() (the session-13 sweep twins hold a 0)
+    if (m.has("observer_raise_after")) c.observer_raise_after = debounce_count(m, "observer_raise_after", 0);
+    c.observer_choice = get_choice(m, n);
+    if (m.has("sensitivity")) c.sensitivity = joint_values(m, "sensitivity", n, true);
+    c.nominal_period = m.positive("nominal_period");
+    if (m.has("residual_filter")) {
+      c.residual_filter = m.texts("residual_filter");
+      if (c.residual_filter.size() != 1 && static_cast<int>(c.residual_filter.size()) != n)
+        m.fail("residual_filter", fmt::format("expected 1 or {} entries (one per joint), got {}", n, c.residual_filter.size()));
+      for (size_t k = 0; k < c.residual_filter.size(); ++k)
+        if (c.residual_filter[k] != "iir" && c.residual_filter[k] != "fir")
+          throw ParseError(origin, 0, json_element(m.field("residual_filter"), k), fmt::format("expected \"iir\" or \"fir\", got \"{}\"", c.residual_filter[k]));
+    }
+    c.trend = trend_from_json(m.object("trend"), n);
+    // the sets learned per program
+    if (m.has("programs")) {
+      const JsonFields programs = m.object("programs");
+      for (const auto& [name, value] : programs.json().items()) {
+        try {
+          check_program_name(name);
+        } catch (const InvalidArgument& e) {
+          programs.fail(name, e.what());
+        }
+        const JsonFields p(value, origin, programs.field(name));
+        p.only({"static_level_A", "dynamic", "runs", "seconds", "observer_level_Nm", "observer_dynamic", "observer_raise_after_joint",
+                "observer_validation_ratio"});
         ThresholdSet set;
-        set.static_level = json_vec(p.at("static_level_A"), fmt::format("programs.{}.static_level_A", name));
-        if (p.contains("dynamic")) set.dynamic = json_dynamic(p["dynamic"]);
-        if (p.contains("observer_level_Nm")) set.observer_level = json_vec(p["observer_level_Nm"], fmt::format("programs.{}.observer_level_Nm", name));
-        if (p.contains("observer_dynamic")) set.observer_dynamic = json_dynamic(p["observer_dynamic"]);
-        set.observer_choice = get_choice(p, fmt::format("programs.{}.", name));
-        set.runs = json_int(p, "runs", 0, fmt::format("programs.{}.runs", name));
-        set.seconds = p.value("seconds", 0.0);
+        set.static_level = joint_values(p, "static_level_A", n, true);
+        set.dynamic = dynamic_from_json(p, "dynamic", n, !c.use_dynamic);
+        set.runs = p.whole("runs");
+        if (set.runs < 0) p.fail("runs", fmt::format("expected a whole number >= 0, got {}", set.runs));
+        set.seconds = p.nonnegative("seconds");
+        // the observer's set comes whole (written together)
+        if (p.has("observer_level_Nm") || p.has("observer_dynamic")) {
+          set.observer_level = joint_values(p, "observer_level_Nm", n, true);
+          set.observer_dynamic = dynamic_from_json(p, "observer_dynamic", n, true);
+        }
+        set.observer_choice = get_choice(p, n);
         c.programs[name] = std::move(set);
       }
-    c.observer_gain = j.value("observer_gain", c.observer_gain);
-    c.observer_alerts = j.value("observer_alerts", c.observer_alerts);
-    if (j.contains("observer_level_Nm")) c.observer_level = json_vec(j["observer_level_Nm"], "observer_level_Nm");
-    if (j.contains("observer_dynamic"))
-      for (const auto& d : j["observer_dynamic"])
-        c.observer_dynamic.push_back({d.at("psi_qdd"), d.at("psi_qd"), d.at("psi_rev"), d.at("upsilon"), d.at("rho"),
-                                      d.value("margin", 0.0), d.value("alpha", 0.0)});
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
-  } catch (const InvalidArgument& e) {
-    throw ParseError(origin, 0, "monitor", fmt::format("malformed monitor thresholds: {}", e.what()));
+    }
+    // the momentum observer: on when its thresholds were learned
+    c.observer_gain = m.positive("observer_gain");
+    c.observer_alerts = m.boolean("observer_alerts");
+    if (m.has("observer_level_Nm")) c.observer_level = joint_values(m, "observer_level_Nm", n, true);
+    if (m.has("observer_dynamic")) {
+      if (!m.has("observer_level_Nm")) m.fail("observer_level_Nm", "missing required field (observer_dynamic is there)");
+      c.observer_dynamic = dynamic_from_json(m, "observer_dynamic", n, true);
+    }
+    // what validate() checks across fields (the per-field checks above already name the field)
+    try {
+      c.validate(n);
+    } catch (const InvalidArgument& e) {
+      throw ParseError(origin, 0, "monitor", e.what());
+    }
+    return c;
+  } catch (const nlohmann::json::exception& e) {  // (every field is type-checked above: a safety net for the fuzzer's contract)
+    throw ParseError(origin, 0, "monitor", fmt::format("wrong type: {}", e.what()));
   }
-  return c;
+}
+
+MonitorConfig MonitorConfig::from_twin(const ident::TwinModel& twin) {
+  const std::string origin = twin.origin.empty() ? std::string("the twin") : twin.origin;
+  if (twin.monitor_json.empty())
+    throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", origin, origin));
+  return from_json(twin.monitor_json, origin, twin.n_dof());
 }
 
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs, const MonitorConfig& settings,

@@ -155,12 +155,14 @@ bool solve_lp(const std::vector<double>& ar, const std::vector<double>& aqd, con
   lp.setOptimizationDirection(1.0);
   lp.dual();
   if (lp.status() != 0) return false;
+  // every column is bounded below by 0, which Clp holds to its primal tolerance (1e-7): a basic
+  // variable at the bound can come out a rounding error below it, and the twin file takes >= 0
   const double* x = lp.primalColumnSolution();
-  out.psi_qdd = x[0];
-  out.psi_qd = x[1];
-  out.psi_rev = x[2];
-  out.upsilon = x[3];
-  out.alpha = x[4];
+  out.psi_qdd = std::max(0.0, x[0]);
+  out.psi_qd = std::max(0.0, x[1]);
+  out.psi_rev = std::max(0.0, x[2]);
+  out.upsilon = std::max(0.0, x[3]);
+  out.alpha = std::max(0.0, x[4]);
   out.rho = rho;
   out.margin = xi;
   objective = lp.objectiveValue();

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -14,6 +15,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/log.hpp"
+#include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/numbers.hpp"
 #include "twinwatch/model/description_io.hpp"
 
@@ -484,6 +486,36 @@ std::unique_ptr<Simulator> make_simulator(const Scenario& s) {
   return std::make_unique<Simulator>(m, s.trajectory, truth, s.options, s.faults);
 }
 
+namespace {
+
+constexpr FaultType kFaultTypes[] = {FaultType::Resistance,    FaultType::FrictionGrowth, FaultType::PayloadPick,
+                                     FaultType::PayloadLoss,   FaultType::Collision,      FaultType::CurrentOffset,
+                                     FaultType::StuckCurrent,  FaultType::DroppedSamples, FaultType::TimestampJitter};
+
+// the units of a fault type's magnitude in the labels
+const char* units_of(FaultType t) {
+  switch (t) {
+    case FaultType::Resistance: case FaultType::Collision: return "N·m";
+    case FaultType::FrictionGrowth: return "relative";
+    case FaultType::PayloadPick: case FaultType::PayloadLoss: return "kg";
+    case FaultType::CurrentOffset: return "A";
+    case FaultType::StuckCurrent: return "";
+    case FaultType::DroppedSamples: return "samples";
+    case FaultType::TimestampJitter: return "s";
+  }
+  return "";
+}
+
+// a joint or link number of the labels (from 1), or null: none (-1 returned, 0-based otherwise)
+int label_index(const JsonFields& f, const char* key) {
+  if (f.need(key).is_null()) return -1;
+  const int i = f.whole(key);
+  if (i < 1 || i > kMaxDof) f.fail(key, fmt::format("expected null or a whole number from 1 to {}, got {}", kMaxDof, i));
+  return i - 1;
+}
+
+}  // namespace
+
 std::string labels_json(const Scenario& s) {
   nlohmann::json j;
   j["scenario"] = s.name;
@@ -500,20 +532,53 @@ std::string labels_json(const Scenario& s) {
     e["magnitude"] = f.magnitude;
     e["joint"] = f.joint >= 0 ? nlohmann::json(f.joint + 1) : nlohmann::json(nullptr);
     e["link"] = f.link >= 0 ? nlohmann::json(f.link + 1) : nlohmann::json(nullptr);
-    const char* units = "";
-    switch (f.type) {
-      case FaultType::Resistance: case FaultType::Collision: units = "N·m"; break;
-      case FaultType::FrictionGrowth: units = "relative"; break;
-      case FaultType::PayloadPick: case FaultType::PayloadLoss: units = "kg"; break;
-      case FaultType::CurrentOffset: units = "A"; break;
-      case FaultType::StuckCurrent: units = ""; break;
-      case FaultType::DroppedSamples: units = "samples"; break;
-      case FaultType::TimestampJitter: units = "s"; break;
-    }
-    e["units"] = units;
+    e["units"] = units_of(f.type);
     j["faults"].push_back(e);
   }
   return j.dump(2);
+}
+
+Labels parse_labels(const std::string& text, const std::string& origin) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw ParseError(origin, 0, "", "the file is empty, expected the labels JSON that twinwatch simulate writes beside a recording");
+  const nlohmann::json j = parse_json(text, origin);
+  if (!j.is_object())
+    throw ParseError(origin, 0, "", fmt::format("expected a JSON object (the labels twinwatch simulate writes), got {}", json_brief(j)));
+  const JsonFields top(j, origin, "");
+  top.only({"scenario", "seed", "duration", "rate", "faults"});
+  Labels l;
+  l.scenario = top.text("scenario");
+  const int seed = top.whole("seed");
+  if (seed < 0) top.fail("seed", fmt::format("expected a whole number >= 0, got {}", seed));
+  l.seed = static_cast<unsigned>(seed);
+  l.duration = top.positive("duration");
+  l.rate = top.positive("rate");
+  const nlohmann::json& fl = top.need("faults");
+  if (!fl.is_array()) top.fail("faults", fmt::format("expected an array of faults, got {}", json_brief(fl)));
+  for (size_t k = 0; k < fl.size(); ++k) {
+    const JsonFields f(fl[k], origin, json_element("faults", k));
+    f.only({"type", "onset", "ramp", "end", "magnitude", "joint", "link", "units"});
+    FaultLabel e;
+    const std::string type = f.text("type");
+    const auto* t = std::find_if(std::begin(kFaultTypes), std::end(kFaultTypes), [&](FaultType x) { return type == to_string(x); });
+    if (t == std::end(kFaultTypes))
+      f.fail("type", fmt::format("expected one of resistance, friction_growth, payload_pick, payload_loss, collision, current_offset, "
+                                 "stuck_current, dropped_samples, timestamp_jitter; got \"{}\"", type));
+    e.type = *t;
+    e.onset = f.nonnegative("onset");
+    e.ramp = f.nonnegative("ramp");
+    if (!f.need("end").is_null()) {  // null: to the end of the run
+      e.end = f.number("end");
+      if (!(e.end > e.onset)) f.fail("end", fmt::format("expected null or a time after onset ({} s), got {}", e.onset, e.end));
+    }
+    e.magnitude = f.number("magnitude");
+    e.joint = label_index(f, "joint");
+    e.link = label_index(f, "link");
+    e.units = f.text("units");
+    if (e.units != units_of(e.type)) f.fail("units", fmt::format("expected \"{}\" (the units of {}), got \"{}\"", units_of(e.type), type, e.units));
+    l.faults.push_back(e);
+  }
+  return l;
 }
 
 }  // namespace twinwatch::sim

@@ -5,6 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/signal/metrics.hpp"
@@ -244,8 +246,13 @@ TEST(LearnedFile, NamesANetworkOfTheWrongOutputCount) {
 
 // found by fuzzing the twin file (fuzz/regressions/twin_model): get<int>() of 1e20 was undefined
 TEST(LearnedModel, FromJsonRejectsAWindowBeyondAnInt) {
+  LearnedModel lm;
+  lm.net = Mlp(lm.inputs.count(6), 6, MlpOptions{});
+  lm.validation_rmse.assign(6, 0.01);
+  nlohmann::json j = nlohmann::json::parse(lm.to_json());
+  j["qd_smoothing"]["window"] = 1e20;
   try {
-    LearnedModel::from_json(R"({"role": "current", "inputs": "q+qd", "qd_smoothing": {"window": 1e20}})", "twin.json", 6);
+    LearnedModel::from_json(j.dump(), "twin.json", 6);
     ADD_FAILURE() << "expected ParseError";
   } catch (const ParseError& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("twin.json: field 'learned.qd_smoothing.window': expected a whole number, got 1e+20"));

@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <random>
 
@@ -303,27 +305,45 @@ TEST(Mlp, RejectsAParameterVectorOfTheWrongSize) {
 }
 TEST(MlpFile, NamesAMissingField) {
   Mlp net(3, 2, MlpOptions{});
+  nlohmann::json j = nlohmann::json::parse(net.to_json());
+  j.erase("x_std");
+  EXPECT_THAT(message_of([&] { Mlp::from_json(j.dump(), "t.json", "learned.network."); }),
+              HasSubstr("t.json: field 'learned.network.x_std': missing required field"));
+}
+TEST(MlpFile, NamesAnUnknownKey) {
+  Mlp net(3, 2, MlpOptions{});
   std::string text = net.to_json();
   text.replace(text.find("\"x_std\""), 7, "\"x_sdd\"");
-  EXPECT_THAT(message_of([&] { Mlp::from_json(text, "t.json", "learned.network."); }), HasSubstr("learned.network.x_std"));
+  EXPECT_THAT(message_of([&] { Mlp::from_json(text, "t.json", "learned.network."); }),
+              HasSubstr("t.json: field 'learned.network.x_sdd': unknown key, expected one of: inputs, outputs, hidden, activation, l2, seed, x_mean, x_std"));
+}
+TEST(MlpFile, NamesALayerOfTheWrongShape) {
+  Mlp net(3, 2, MlpOptions{});
+  nlohmann::json j = nlohmann::json::parse(net.to_json());
+  j["layers"][0]["rows"] = 7;
+  EXPECT_THAT(message_of([&] { Mlp::from_json(j.dump(), "t.json", "network."); }), HasSubstr("t.json: field 'network.layers[0].rows': expected"));
+  j = nlohmann::json::parse(net.to_json());
+  j["activation"] = "tanh";
+  EXPECT_THAT(message_of([&] { Mlp::from_json(j.dump(), "t.json", "network."); }),
+              HasSubstr("t.json: field 'network.activation': expected \"relu\", got \"tanh\""));
 }
 TEST(MlpFile, NamesAVectorOfTheWrongLength) {
   EXPECT_THAT(message_of([] {
-                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "x_mean": [0], "x_std": [1, 1], "y_mean": [0],
+                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "activation": "relu", "l2": 0, "seed": 0, "x_mean": [0], "x_std": [1, 1], "y_mean": [0],
                                   "y_std": [1], "layers": []})", "t.json", "");
               }),
               HasSubstr("expected an array of 2 numbers, got 1"));
 }
 TEST(MlpFile, NamesAWrongLayerCount) {
   EXPECT_THAT(message_of([] {
-                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "x_mean": [0, 0], "x_std": [1, 1], "y_mean": [0],
+                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "activation": "relu", "l2": 0, "seed": 0, "x_mean": [0, 0], "x_std": [1, 1], "y_mean": [0],
                                   "y_std": [1], "layers": []})", "t.json", "");
               }),
               HasSubstr("expected 2 layers (hidden + output), got 0"));
 }
 TEST(MlpFile, NamesANonPositiveScale) {
   EXPECT_THAT(message_of([] {
-                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "x_mean": [0, 0], "x_std": [1, 0], "y_mean": [0],
+                Mlp::from_json(R"({"inputs": 2, "outputs": 1, "hidden": [3], "activation": "relu", "l2": 0, "seed": 0, "x_mean": [0, 0], "x_std": [1, 0], "y_mean": [0],
                                   "y_std": [1], "layers": []})", "t.json", "");
               }),
               HasSubstr("x_std[1]"));
@@ -335,7 +355,8 @@ TEST(Mlp, FromJsonRejectsHugeSizesBeforeAllocating) {
   const auto error_of = [](const std::string& text) {
     return twinwatch::test::error_text<ParseError>([&] { Mlp::from_json(text, "net.json", "network."); });
   };
-  const std::string tail = R"(, "x_mean": [0], "x_std": [1], "y_mean": [0], "y_std": [1], "layers": [{"W": [1], "b": [0]}, {"W": [1], "b": [0]}]})";
+  const std::string tail = R"(, "activation": "relu", "l2": 0, "seed": 0, "x_mean": [0], "x_std": [1], "y_mean": [0], "y_std": [1],
+                                "layers": [{"rows": 1, "cols": 1, "W": [1], "b": [0]}, {"rows": 1, "cols": 1, "W": [1], "b": [0]}]})";
   EXPECT_EQ(error_of(R"({"inputs": 1, "outputs": 1, "hidden": [1])" + tail), "no error");
   EXPECT_THAT(error_of(R"({"inputs": 1e20, "outputs": 1, "hidden": [1])" + tail),
               HasSubstr("net.json: field 'network.inputs': expected a whole number, got 1e+20"));

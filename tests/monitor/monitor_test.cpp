@@ -5,10 +5,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
 #include <regex>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "monitor/simulated_run.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "error_text.hpp"
@@ -18,6 +21,23 @@ namespace {
 
 using test::run;
 using test::scenario;
+
+// a complete monitor block as the writer writes it: default set with dynamic thresholds, the
+// observer's, and a program's set
+nlohmann::json valid_block() {
+  MonitorConfig c;
+  c.static_level = VectorJ::Constant(6, 0.1);
+  c.dynamic.assign(6, DynamicThresholdJoint{0.01, 0.02, 0.03, 0.04, 5.0, 0.02, 0.1});
+  c.observer_level = VectorJ::Constant(6, 1.0);
+  c.observer_dynamic = c.dynamic;
+  ThresholdSet s;
+  s.static_level = VectorJ::Constant(6, 0.3);
+  s.dynamic = c.dynamic;
+  s.runs = 2;
+  s.seconds = 40.0;
+  c.programs["chirp"] = s;
+  return nlohmann::json::parse(c.to_json());
+}
 
 struct MonitorLoop : ::testing::Test {
   static void SetUpTestSuite() {
@@ -294,27 +314,137 @@ TEST(MonitorConfig, ObserverDebouncePerJointIsValidatedStoredAndFollowsTheProgra
   c.programs["point_to_point"].observer_choice.raise_after = {2, 2};
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }),
               ::testing::HasSubstr("program 'point_to_point' observer_raise_after_joint has 2 entries"));
-  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] {
-                MonitorConfig::from_json(R"({"static_level_A": [1], "observer_raise_after_joint": [1, 1.5]})", "twin.json");
-              }),
-              ::testing::HasSubstr("observer_raise_after_joint[1] must be a whole number within +-2147483647, got 1.5"));
-  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] {
-                MonitorConfig::from_json(R"({"static_level_A": [1], "observer_raise_after_joint": [4294967297]})", "twin.json");
-              }),
-              ::testing::HasSubstr("observer_raise_after_joint[0] must be a whole number within +-2147483647, got 4294967297"));
+  nlohmann::json bad = nlohmann::json::parse(back.to_json());
+  bad["observer_raise_after_joint"] = {1, 1.5, 1, 1, 1, 1};
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(bad.dump(), "twin.json"); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.observer_raise_after_joint[1]': expected a whole number within +-2147483647, got 1.5"));
+  bad["observer_raise_after_joint"] = {4294967297, 1, 1, 1, 1, 1};
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(bad.dump(), "twin.json"); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.observer_raise_after_joint[0]': expected a whole number within +-2147483647, got 4294967297"));
 }
 
 // found by fuzzing (fuzz/regressions/monitor_config): 9 values overflowed a VectorJ (stack buffer
 // overflow), and get<int>() of 1e20 was undefined
 TEST(MonitorConfig, FromJsonRejectsMoreValuesThanJointsAndHugeCounts) {
-  const auto error_of = [](const std::string& text) {
-    return twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); });
+  const auto error_of = [](const nlohmann::json& j) {
+    return twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(j.dump(), "twin.json"); });
   };
-  EXPECT_THAT(error_of(R"({"static_level_A": [1, 2, 3, 4, 5, 6, 7, 8, 9]})"),
-              ::testing::HasSubstr("twin.json: field 'monitor': malformed monitor thresholds: static_level_A: expected at most 7 values (one per joint), got 9"));
-  EXPECT_THAT(error_of(R"({"static_level_A": [1], "raise_after": 1e20})"),
-              ::testing::HasSubstr("raise_after: expected a whole number within +-2147483647, got 1e+20"));
-  EXPECT_THAT(error_of(R"({"static_level_A": [1], "trend": {"history": 2.5}})"), ::testing::HasSubstr("trend.history: expected a whole number"));
+  nlohmann::json j = valid_block();
+  j["static_level_A"] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  EXPECT_THAT(error_of(j), ::testing::HasSubstr("twin.json: field 'monitor.static_level_A': expected at most 7 values (one per joint), got 9"));
+  j = valid_block();
+  j["raise_after"] = 1e20;
+  EXPECT_THAT(error_of(j), ::testing::HasSubstr("twin.json: field 'monitor.raise_after': expected a whole number within +-2147483647, got 1e+20"));
+  j = valid_block();
+  j["trend"]["history"] = 2.5;
+  EXPECT_THAT(error_of(j), ::testing::HasSubstr("field 'monitor.trend.history': expected a whole number"));
+}
+
+// every error of the twin's monitor block names the twin file and the field's path, the expected
+// and the actual value (they named neither: "clear_after is -1, must be >= 1")
+TEST(MonitorConfig, ErrorsOfTheTwinsBlockNameTheFileAndThePath) {
+  ident::TwinModel twin("ur3e", model::load_robot("ur3e"));
+  twin.origin = "twin.json";
+  const auto error_of = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json j = valid_block();
+    edit(j);
+    twin.monitor_json = j.dump();
+    return twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_twin(twin); });
+  };
+  EXPECT_EQ(error_of([](nlohmann::json&) {}), "no error");
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["dynamic"][1].erase("rho"); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.dynamic[1].rho': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["clear_after"] = -1; }),
+              ::testing::HasSubstr("twin.json: field 'monitor.clear_after': expected a whole number from 1 to 1000, got -1"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["static_level_A"].erase(5); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.static_level_A': expected 6 values (one per joint), got 5"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["static_level_A"][2] = 0.0; }),
+              ::testing::HasSubstr("twin.json: field 'monitor.static_level_A[2]': expected a number > 0, got 0"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["dynamic"][3]["alpha"] = -1.0; }),
+              ::testing::HasSubstr("twin.json: field 'monitor.dynamic[3].alpha': expected a number >= 0, got -1"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["dynamic"][0]["psi_qd"] = -0.01; }),
+              ::testing::HasSubstr("field 'monitor.dynamic[0].psi_qd': expected a number >= 0, got -0.01"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["dynamic"][0]["rho"] = 0.0; }), ::testing::HasSubstr("field 'monitor.dynamic[0].rho': expected a number > 0, got 0"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["dynamic"].erase(5); }),
+              ::testing::HasSubstr("field 'monitor.dynamic': expected 6 thresholds (one per joint), got 5"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["filter_cutoff_hz"] = 1e9; }),
+              ::testing::HasSubstr("twin.json: field 'monitor.filter_cutoff_hz': expected a number in (0, 500] Hz, got 1000000000"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["filter_cutoff_hz"] = 0; }), ::testing::HasSubstr("field 'monitor.filter_cutoff_hz': expected a number > 0, got 0"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["raise_aftr"] = 5; }),
+              ::testing::HasSubstr("twin.json: field 'monitor.raise_aftr': unknown key, expected one of: static_level_A, dynamic, use_dynamic, "
+                                   "filter_cutoff_hz, raise_after"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j.erase("raise_after"); }), ::testing::HasSubstr("twin.json: field 'monitor.raise_after': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j.erase("observer_gain"); }), ::testing::HasSubstr("field 'monitor.observer_gain': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["trend"].erase("window_s"); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.trend.window_s': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j.erase("trend"); }), ::testing::HasSubstr("field 'monitor.trend': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["trend"]["window_s"] = 0; }),
+              ::testing::HasSubstr("field 'monitor.trend.window_s': expected a number > 0, got 0"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j.erase("dynamic"); }),
+              ::testing::HasSubstr("field 'monitor.dynamic': missing required field (use_dynamic is true)"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["observer_level_Nm"] = {1, 1, 1, 1}; }),
+              ::testing::HasSubstr("field 'monitor.observer_level_Nm': expected 6 values (one per joint), got 4"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["programs"]["chirp"].erase("dynamic"); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.programs.chirp.dynamic': missing required field"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["programs"]["chirp"]["static_level_A"][0] = -0.1; }),
+              ::testing::HasSubstr("field 'monitor.programs.chirp.static_level_A[0]': expected a number > 0, got -0.1"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["residual_filter"] = {"iir", "butter"}; }),
+              ::testing::HasSubstr("field 'monitor.residual_filter': expected 1 or 6 entries (one per joint), got 2"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["gain"] = nullptr; }), ::testing::HasSubstr("field 'monitor.gain': unknown key"));
+  EXPECT_THAT(error_of([](nlohmann::json& j) { j["use_dynamic"] = nullptr; }),
+              ::testing::HasSubstr("field 'monitor.use_dynamic': expected true or false, got null"));
+  EXPECT_EQ(error_of([](nlohmann::json& j) { j["observer_raise_after"] = 0; }), "no error") << "0: raise_after";
+  twin.monitor_json.clear();
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { MonitorConfig::from_twin(twin); }),
+              ::testing::HasSubstr("twin.json has no monitor thresholds"));
+}
+
+// a version-1 twin written before the trend and the observer existed reads their defaults: those
+// of the day version 2 came (twin_model.cpp, upgrade_version_1), still the ones of TrendConfig and
+// MonitorConfig (if they change, old twins keep the values they were read with until then)
+TEST(MonitorConfig, AVersion1TwinWithoutTrendOrObserverReadsTheDefaults) {
+  ident::TwinModel t("ur3e", model::load_robot("ur3e"));
+  t.joints.resize(6);
+  nlohmann::json block = valid_block();
+  block.erase("trend");
+  block.erase("observer_gain");
+  block.erase("observer_alerts");
+  t.monitor_json = block.dump();
+  nlohmann::json file = nlohmann::json::parse(t.to_json());
+  file["version"] = 1;
+  std::vector<std::string> warnings;
+  log::set_sink([&](log::Level level, std::string_view m) {
+    if (level == log::Level::Warn) warnings.emplace_back(m);
+  });
+  const ident::TwinModel old = ident::TwinModel::from_json(file.dump(), "old.json");
+  log::set_sink(nullptr);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], ::testing::HasSubstr("monitor.trend = the defaults"));
+  EXPECT_THAT(warnings[0], ::testing::HasSubstr("monitor.observer_gain = 150 1/s"));
+  EXPECT_THAT(warnings[0], ::testing::HasSubstr("monitor.observer_alerts = true"));
+  const MonitorConfig c = MonitorConfig::from_twin(old);
+  const MonitorConfig d;
+  const TrendConfig& a = c.trend;
+  const TrendConfig& b = d.trend;
+  EXPECT_EQ(a.enabled, b.enabled);
+  EXPECT_EQ(a.window_s, b.window_s);
+  EXPECT_EQ(a.cycle_period, b.cycle_period);
+  EXPECT_EQ(a.v_min, b.v_min);
+  EXPECT_EQ(a.min_moving_fraction, b.min_moving_fraction);
+  EXPECT_EQ(a.baseline_windows, b.baseline_windows);
+  EXPECT_EQ(a.min_windows, b.min_windows);
+  EXPECT_EQ(a.history, b.history);
+  EXPECT_EQ(a.z_crit, b.z_crit);
+  EXPECT_EQ(a.min_rate_pct_per_h, b.min_rate_pct_per_h);
+  EXPECT_EQ(a.persist, b.persist);
+  EXPECT_EQ(a.temperature_ref, b.temperature_ref);
+  EXPECT_EQ(a.temperature_slope.size(), 0);
+  EXPECT_EQ(c.observer_gain, d.observer_gain);
+  EXPECT_EQ(c.observer_alerts, d.observer_alerts);
+  // and the same block in a version-2 file is refused
+  file["version"] = 2;
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_twin(ident::TwinModel::from_json(file.dump(), "new.json")); }),
+              ::testing::HasSubstr("new.json: field 'monitor.trend': missing required field"));
 }
 
 }  // namespace

@@ -82,7 +82,7 @@ int run(const Options& o) {
   }
   const std::string html = (std::filesystem::path(o.out) / "report.html").string();
   cli::write_report(twin, rec, s.options.payload.mass, {s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z()},
-                    html, sim::labels_json(s));
+                    html, sim::parse_labels(sim::labels_json(s), s.path + " (its labels)"));
   fmt::print("   {} (open it in a browser)\n", html);
   fmt::print("done in {:.1f} s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;

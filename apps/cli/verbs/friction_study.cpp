@@ -16,6 +16,7 @@
 #include "twinwatch/friction/synthetic_joint.hpp"
 #include "twinwatch/friction/twin_block.hpp"
 #include "twinwatch/ident/twin_model.hpp"
+#include "evaluate.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -462,7 +463,7 @@ int run(const StudyOptions& o) {
       fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
     };
   std::optional<ident::TwinModel> twin;
-  if (!o.save_twin.empty()) twin = ident::TwinModel::load(o.save_twin);  // fail early on a bad twin file
+  if (!o.save_twin.empty()) twin = cli::load_twin(o.save_twin);  // fail early on a bad twin file
   std::vector<ProtocolResult> res;
   for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
   if (!o.predictions.empty()) {

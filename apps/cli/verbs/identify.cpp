@@ -14,6 +14,7 @@
 #include "twinwatch/ident/sequential_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
+#include "evaluate.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -258,7 +259,7 @@ struct ValidateOptions {
 };
 
 int run_validate(const ValidateOptions& o) {
-  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = cli::load_twin(o.twin);
   std::optional<device::ColumnMap> map;
   if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);

@@ -70,7 +70,7 @@ constexpr const char* kFilterHelp =
 monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path) {
   if (twin.monitor_json.empty())
     throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", path, path));
-  return monitor::MonitorConfig::from_json(twin.monitor_json, path);
+  return monitor::MonitorConfig::from_twin(twin);
 }
 
 // --sensitivity, --raise-after, --observer-raise-after: user settings over the twin's monitor block
@@ -105,7 +105,7 @@ constexpr const char* kObserverRaiseAfterHelp =
     "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 
 int run_monitor(const MonitorOptions& o) {
-  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = cli::load_twin(o.twin);
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
   cfg.select_program(o.program);
@@ -255,7 +255,7 @@ struct ThresholdOptions {
 };
 
 int run_thresholds(const ThresholdOptions& o) {
-  ident::TwinModel twin = ident::TwinModel::load(o.twin);
+  ident::TwinModel twin = cli::load_twin(o.twin);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f));
@@ -266,7 +266,7 @@ int run_thresholds(const ThresholdOptions& o) {
   for (const auto& r : recs) runs.push_back({&r, p});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
-  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_json(twin.monitor_json, o.twin);
+  if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
   // cfg is what is stored: the default set re-learned, or a program's set added with the default
   // set (observer thresholds and debounce included) left as it was
@@ -408,7 +408,7 @@ int run_evaluate(const EvaluateOptions& o) {
     if (!o.dirs.empty())
       throw InvalidArgument(fmt::format("--sweep-collisions simulates its own contacts; it takes no scenarios (got {})", o.dirs.front()));
     o.sweep_options.validate();
-    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : ident::TwinModel::load(o.twin);
+    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : cli::load_twin(o.twin);
     apply_alert_settings(twin, o);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
     const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
@@ -435,7 +435,7 @@ int run_evaluate(const EvaluateOptions& o) {
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
   ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
-                                         : ident::TwinModel::load(o.twin);
+                                         : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
@@ -451,12 +451,12 @@ struct ReportOptions {
 };
 
 int run_report(const ReportOptions& o) {
-  const ident::TwinModel twin = ident::TwinModel::load(o.twin);
-  std::string labels;
+  const ident::TwinModel twin = cli::load_twin(o.twin);
+  std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
     std::ifstream f(o.labels);
     if (!f) throw std::runtime_error(o.labels + ": cannot open");
-    labels.assign(std::istreambuf_iterator<char>(f), {});
+    labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
   payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused before the work
   cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels);

@@ -29,6 +29,12 @@ namespace twinwatch::ident {
 /// Friction columns of a joint, in this order.
 enum FrictionColumn : int { kCoulomb = 0, kViscous, kOffset, kArmature, kViscousTemperature, kFrictionColumns };
 
+/// Format version of the twin file that TwinModel::to_json writes (docs/twin-file.md). In version 2
+/// every field the writer always writes is required; version-1 files (written before 2026-11-24)
+/// are read with the values the program assumed for the fields the earliest of them lack, and one
+/// warning names them.
+inline constexpr int kTwinFormatVersion = 2;
+
 struct JointDrive {
   double gain = 1.0;             ///< g_j [N·m/A] (arbitrary common scale when !gains_known)
   double c_gen = 1.0;            ///< current factor when back-driven
@@ -107,6 +113,9 @@ class TwinModel {
   /// Optional friction block "friction_models": per-joint symbolic residual-torque equations
   /// (HESR Table VII; JSON array of friction/twin_block.hpp, opaque here, "" if none).
   std::string friction_json;
+  /// The file the twin was read from (from_json's `origin`; "" for a twin built in memory): the
+  /// readers of its opaque blocks (the monitor's thresholds) name it in their errors.
+  std::string origin;
 
   /// Payload the robot carries now (flange frame); enters through the identified gains.
   void set_payload(const model::RigidBodyInertia& p) { payload_ = p; }
@@ -146,10 +155,21 @@ class TwinModel {
   /// Regressor and payload torque for a state (workspace internal).
   void regress(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, model::RegressorMatrix& Y, VectorJ& tau_payload) const;
 
-  /// JSON text of the whole model / load it back. Load errors are ParseErrors naming the field.
+  /// JSON text of the whole model (format version kTwinFormatVersion).
   std::string to_json() const;
+  /// Reads a twin file's text; `origin` names the file in errors. Every field the writer always
+  /// writes is required (version 2), each value is checked for its type and range, and a key the
+  /// format does not have, or the same key twice in an object, is an error. A version-1 file gets
+  /// the defaults of the fields its writer may have lacked, and one log warning names them. The
+  /// opaque monitor block is checked by monitor::MonitorConfig::from_twin.
+  /// Throws ParseError(origin, 0, JSON path, "expected X, got Y").
   static TwinModel from_json(const std::string& text, const std::string& origin);
+  /// Writes to_json() to `path`. A regular file is replaced only once the new text is completely
+  /// on disk (written beside it, then renamed over it), so a failed write leaves the old file as
+  /// it was. Throws std::runtime_error naming the path and the system's reason, or the field when
+  /// the text would not load back (from_json), before writing anything.
   void save(const std::string& path) const;
+  /// from_json of the file at `path`; ParseError when it cannot be read.
   static TwinModel load(const std::string& path);
 
  private:

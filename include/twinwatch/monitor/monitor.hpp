@@ -112,8 +112,17 @@ struct MonitorConfig {
   /// default. Throws InvalidArgument naming the known programs when there is no such set.
   void select_program(const std::string& name);
   void validate(int n_dof) const;
+  /// The twin file's monitor block (JSON text).
   std::string to_json() const;
-  static MonitorConfig from_json(const std::string& text, const std::string& origin);
+  /// Reads a monitor block written by to_json(). Every field to_json() always writes is required,
+  /// each value is checked for its type and range (thresholds > 0, Cao eq. 26 coefficients >= 0,
+  /// debounce counts 1 to 1000, filter_cutoff_hz up to 500 Hz), and a key the block does not have is
+  /// an error. `origin` names the file, `n_dof` the joints (0: as many as static_level_A has).
+  /// Throws ParseError(origin, 0, "monitor.<path>", "expected X, got Y").
+  static MonitorConfig from_json(const std::string& text, const std::string& origin, int n_dof = 0);
+  /// from_json of a twin's monitor block (TwinModel::monitor_json) for its joints, naming the file
+  /// the twin was read from. Throws InvalidArgument when the twin has no monitor block.
+  static MonitorConfig from_twin(const ident::TwinModel& twin);
 };
 
 /// A joint held at rest by its controller (target velocity ~0) keeps whatever current the static

@@ -5,6 +5,7 @@
 /// Every malformed field is reported as ParseError(file, line, field, "expected X, got Y"), and so is
 /// a scenario the robot cannot run: a trajectory beyond its joint position or velocity limits, a
 /// payload above payload_limit(), a fault that would start after the end, a repeated key.
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,5 +49,33 @@ std::unique_ptr<Simulator> make_simulator(const Scenario& s);
 /// Ground-truth labels of a scenario as JSON text (fault intervals, magnitudes, units).
 /// Only evaluation code may read them (DESIGN.md rule 1).
 std::string labels_json(const Scenario& s);
+
+/// One fault of a labels file, as labels_json writes it.
+struct FaultLabel {
+  FaultType type = FaultType::Resistance;
+  double onset = 0.0;  ///< [s]
+  double ramp = 0.0;   ///< [s]
+  double end = std::numeric_limits<double>::infinity();  ///< [s] (infinity: to the end of the run)
+  double magnitude = 0.0;  ///< in `units`
+  int joint = -1;      ///< 0-based (-1: none)
+  int link = -1;       ///< 0-based (-1: none)
+  std::string units;
+};
+
+/// A labels file (labels_json).
+struct Labels {
+  std::string scenario;
+  unsigned seed = 0;
+  double duration = 0.0;  ///< [s]
+  double rate = 0.0;      ///< [Hz]
+  std::vector<FaultLabel> faults;
+};
+
+/// Reads the text of a labels file (labels_json); `origin` names it in errors. Every field
+/// labels_json writes is required, a key it does not write is an error, and each value is checked
+/// (a known fault type, onset >= 0, end after onset or null, joint and link from 1 or null, the
+/// type's units). Only evaluation code may read labels (DESIGN.md rule 1).
+/// Throws ParseError(origin, 0, JSON path, "expected X, got Y").
+Labels parse_labels(const std::string& text, const std::string& origin);
 
 }  // namespace twinwatch::sim
