@@ -60,7 +60,7 @@ struct IdentifyOptions {
   int decimate = 1;
   std::string efficiency_fit = "joint";
   int efficiency_passes = 2;
-  bool quiet = false;
+  bool quiet = false, progress = false;
   // --method sequential (Cao): the recordings of the gravity and friction steps, the library
   std::vector<std::string> quasi_static, sine;
   std::vector<int> lasso_joints{2, 3};
@@ -138,7 +138,7 @@ int run_identify(const IdentifyOptions& o) {
   io.low_speed_friction = !o.no_low_speed_friction;
   io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
-  const bool bar = !o.quiet && isatty(STDERR_FILENO);
+  const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   auto show = [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
   };
@@ -226,7 +226,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   so.use_1se = o.lasso_1se;
   so.decimate = std::max(o.decimate, 2);
   ident::SequentialReport report;
-  const bool bar = !o.quiet && isatty(STDERR_FILENO);
+  const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   ident::TwinModel twin = ident::identify_sequential(o.robot, qsp, snp, runs, so, report, [&](double f) {
     if (bar) std::fprintf(stderr, "\r  identifying (sequential) %3.0f %%%s", 100 * f, f >= 1.0 ? "\n" : "");
   });
@@ -386,6 +386,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
 }};
 

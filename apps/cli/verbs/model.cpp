@@ -45,15 +45,18 @@ nlohmann::json to_json(const RobotModel& m) {
 void print_summary(const RobotModel& m) {
   fmt::print("robot {} ({} joints) from {}\n", m.name(), m.n_dof(), m.description().source);
   fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9}  {}\n", "#", "joint", "mass kg", "COM (body frame) m",
-             "q range rad", "qd max", "tau max", "drive N / kt");
+             "q range rad", "qd rad/s", "tau N·m", "drive N / kt");
   double total = 0.0;
   for (int i = 0; i < m.n_dof(); ++i) {
     const auto& j = m.joint(i);
     total += j.body.mass;
-    fmt::print("{:<3} {:<14} {:>8.4f} {:>26} {:>18} {:>9.3f} {:>9.1f}  {} / {}\n", i + 1, j.name, j.body.mass,
+    // a drive the description leaves out is identified from recordings (the twin's gain N·kt·eta)
+    const bool no_drive = std::isnan(j.drive.gear_ratio) && std::isnan(j.drive.torque_constant);
+    fmt::print("{:<3} {:<14} {:>8.4f} {:>26} {:>18} {:>9.3f} {:>9.1f}  {}\n", i + 1, j.name, j.body.mass,
                fmt::format("[{:.4f} {:.4f} {:.4f}]", j.body.com.x(), j.body.com.y(), j.body.com.z()),
                fmt::format("[{:.2f}, {:.2f}]", j.limits.q_min, j.limits.q_max), j.limits.qd_max, j.limits.torque_max,
-               fmt_gain(j.drive.gear_ratio, ""), fmt_gain(j.drive.torque_constant, "N·m/A"));
+               no_drive ? std::string("not given: identified from recordings")
+                        : fmt::format("{} / {}", fmt_gain(j.drive.gear_ratio, ""), fmt_gain(j.drive.torque_constant, "N·m/A")));
   }
   fmt::print("moving mass {:.4f} kg; gravity [{:g} {:g} {:g}] m/s²\n", total, m.gravity().x(), m.gravity().y(),
              m.gravity().z());
