@@ -48,9 +48,12 @@ std::string Event::to_json_line() const {
   j["duration_s"] = duration();
   j["open"] = open;
   j["class"] = std::string(to_string(fault));
-  j["joint"] = joint;
-  j["link"] = link;
-  j["other_links"] = other_links;
+  // numbered from 1, as the labels and every table; null: none
+  const auto number = [](int index) { return index >= 0 ? nlohmann::json(index + 1) : nlohmann::json(nullptr); };
+  j["joint"] = number(joint);
+  j["link"] = number(link);
+  j["other_links"] = nlohmann::json::array();
+  for (int l : other_links) j["other_links"].push_back(l + 1);
   j["magnitude"] = magnitude;
   j["units"] = units;
   j["confidence"] = confidence;
@@ -64,7 +67,23 @@ struct EventStore::Impl {
   sqlite3_stmt* insert = nullptr;
   std::string path;
   bool has_other_links = false, has_t_detected = false;
+  bool from_one = true;  // joint/link/other_links numbered from 1 (user_version 1); false: a 0-based store from before
 };
+
+namespace {
+// the store's numbering version (PRAGMA user_version): 0 before session 17 (0-based, -1 none),
+// 1 since (from 1, NULL none)
+constexpr int kNumberedFromOne = 1;
+
+int user_version(sqlite3* db) {
+  sqlite3_stmt* s = nullptr;
+  int v = 0;
+  if (sqlite3_prepare_v2(db, "PRAGMA user_version;", -1, &s, nullptr) == SQLITE_OK && sqlite3_step(s) == SQLITE_ROW)
+    v = sqlite3_column_int(s, 0);
+  sqlite3_finalize(s);
+  return v;
+}
+}  // namespace
 
 EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
@@ -85,6 +104,20 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   const int flags = mode == Mode::Read ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
   if (sqlite3_open_v2(path.c_str(), &impl_->db, flags, nullptr) != SQLITE_OK)
     fail("cannot open event store", impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory");
+  const int version = user_version(impl_->db);
+  if (version > kNumberedFromOne)
+    fail("cannot use event store", fmt::format("it was written by a newer twinwatch (user_version {}, this one knows 0 and {})",
+                                               version, kNumberedFromOne));
+  const auto table_exists = [&] {
+    sqlite3_stmt* q = nullptr;
+    bool found = false;
+    if (sqlite3_prepare_v2(impl_->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'events';", -1, &q,
+                           nullptr) == SQLITE_OK)
+      found = sqlite3_step(q) == SQLITE_ROW;
+    sqlite3_finalize(q);
+    return found;
+  };
+  const bool existed = table_exists();
   if (mode == Mode::Write)
     exec("CREATE TABLE IF NOT EXISTS events ("
          " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
@@ -101,6 +134,64 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     }
   sqlite3_finalize(info);
   const auto has = [&](const char* c) { return std::find(columns.begin(), columns.end(), c) != columns.end(); };
+  // a 0-based store from before session 17: joint/link +1 (-1 -> NULL) and other_links +1, in one
+  // transaction; a cell that is not a whole number is left as it is (reading it names the row)
+  const auto renumber_from_one = [&] {
+    exec("BEGIN IMMEDIATE;", "cannot renumber the events from 1");
+    const auto rollback_fail = [&](const std::string& msg) {
+      sqlite3_exec(impl_->db, "ROLLBACK;", nullptr, nullptr, nullptr);
+      fail("cannot renumber the events from 1", msg);
+    };
+    char* err = nullptr;
+    const char* shift =
+        "UPDATE events SET"
+        " joint = CASE WHEN typeof(joint) != 'integer' THEN joint WHEN joint >= 0 THEN joint + 1 ELSE NULL END,"
+        " link = CASE WHEN typeof(link) != 'integer' THEN link WHEN link >= 0 THEN link + 1 ELSE NULL END;";
+    if (sqlite3_exec(impl_->db, shift, nullptr, nullptr, &err) != SQLITE_OK) {
+      const std::string msg = err ? err : "unknown error";
+      sqlite3_free(err);
+      rollback_fail(msg);
+    }
+    if (has("other_links")) {
+      std::vector<std::pair<long, std::string>> lists;
+      sqlite3_stmt* q = nullptr;
+      if (sqlite3_prepare_v2(impl_->db, "SELECT id, other_links FROM events WHERE other_links IS NOT NULL;", -1, &q,
+                             nullptr) != SQLITE_OK)
+        rollback_fail(sqlite3_errmsg(impl_->db));
+      while (sqlite3_step(q) == SQLITE_ROW) {
+        const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(q, 1));
+        lists.emplace_back(sqlite3_column_int64(q, 0), t ? t : "");
+      }
+      sqlite3_finalize(q);
+      sqlite3_stmt* u = nullptr;
+      if (sqlite3_prepare_v2(impl_->db, "UPDATE events SET other_links = ? WHERE id = ?;", -1, &u, nullptr) != SQLITE_OK)
+        rollback_fail(sqlite3_errmsg(impl_->db));
+      for (const auto& [id, text] : lists) {
+        std::vector<int> links;
+        try {
+          links = nlohmann::json::parse(text).get<std::vector<int>>();
+        } catch (const std::exception&) {
+          continue;  // malformed: left as it is; read() names the row
+        }
+        for (int& l : links) l += 1;
+        const std::string shifted = nlohmann::json(links).dump();
+        sqlite3_reset(u);
+        sqlite3_bind_text(u, 1, shifted.c_str(), -1, SQLITE_TRANSIENT);
+        sqlite3_bind_int64(u, 2, id);
+        if (sqlite3_step(u) != SQLITE_DONE) {
+          const std::string msg = sqlite3_errmsg(impl_->db);
+          sqlite3_finalize(u);
+          rollback_fail(msg);
+        }
+      }
+      sqlite3_finalize(u);
+    }
+    if (sqlite3_exec(impl_->db, "PRAGMA user_version = 1; COMMIT;", nullptr, nullptr, &err) != SQLITE_OK) {
+      const std::string msg = err ? err : "unknown error";
+      sqlite3_free(err);
+      rollback_fail(msg);
+    }
+  };
   if (mode == Mode::Read) {
     if (columns.empty()) fail("not an event store", "it has no events table (is it a database 'twinwatch monitor --db' wrote?)");
     for (const char* c : {"id", "source", "t_start", "t_end", "class", "joint", "link", "magnitude", "units", "confidence",
@@ -111,7 +202,13 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     // its old rows read as none, and as t_start
     if (!has("other_links")) exec("ALTER TABLE events ADD COLUMN other_links TEXT;", "cannot add the other_links column to the events table");
     if (!has("t_detected")) exec("ALTER TABLE events ADD COLUMN t_detected REAL;", "cannot add the t_detected column to the events table");
+    if (!existed) {
+      exec("PRAGMA user_version = 1;", "cannot mark the event store's numbering");
+    } else if (version == 0) {
+      renumber_from_one();
+    }
   }
+  impl_->from_one = mode == Mode::Write || version == kNumberedFromOne;
   impl_->has_other_links = mode == Mode::Write || has("other_links");
   impl_->has_t_detected = mode == Mode::Write || has("t_detected");
   if (mode == Mode::Read) return;
@@ -136,14 +233,17 @@ void EventStore::insert(const Event& e, const std::string& source) {
   sqlite3_bind_double(s, 4, e.duration());
   const std::string cls(to_string(e.fault));
   sqlite3_bind_text(s, 5, cls.c_str(), -1, SQLITE_TRANSIENT);
-  sqlite3_bind_int(s, 6, e.joint);
-  sqlite3_bind_int(s, 7, e.link);
+  // numbered from 1, NULL: none (the store's user_version 1)
+  if (e.joint >= 0) sqlite3_bind_int(s, 6, e.joint + 1); else sqlite3_bind_null(s, 6);
+  if (e.link >= 0) sqlite3_bind_int(s, 7, e.link + 1); else sqlite3_bind_null(s, 7);
   sqlite3_bind_double(s, 8, e.magnitude);
   sqlite3_bind_text(s, 9, e.units.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 10, e.confidence);
   sqlite3_bind_double(s, 11, e.peak_residual);
   sqlite3_bind_text(s, 12, e.detail.c_str(), -1, SQLITE_TRANSIENT);
-  const std::string others = nlohmann::json(e.other_links).dump();
+  std::vector<int> numbered(e.other_links);
+  for (int& l : numbered) l += 1;
+  const std::string others = nlohmann::json(numbered).dump();
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 14, e.t_detected);
   if (sqlite3_step(s) != SQLITE_DONE)
@@ -187,19 +287,25 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
       if (t != SQLITE_FLOAT && t != SQLITE_INTEGER) throw bad(col, "a number");
       return sqlite3_column_double(s, col);
     };
-    const auto whole = [&](int col) {
-      if (sqlite3_column_type(s, col) != SQLITE_INTEGER) throw bad(col, "a whole number");
+    // a joint or link as the 0-based index in memory: from 1 with NULL for none (user_version 1),
+    // or 0-based with -1 for none (a store from before session 17)
+    const bool from_one = impl_->from_one;
+    const auto index = [&](int col) {
+      if (from_one && sqlite3_column_type(s, col) == SQLITE_NULL) return -1;
+      if (sqlite3_column_type(s, col) != SQLITE_INTEGER)
+        throw bad(col, from_one ? "a whole number or NULL" : "a whole number");
       const long v = sqlite3_column_int64(s, col);
-      if (v < -1 || v > 63) throw bad(col, "-1 or a joint/link index 0 to 63");
-      return static_cast<int>(v);
+      if (from_one ? v < 1 || v > 64 : v < -1 || v > 63)
+        throw bad(col, from_one ? "a joint/link number 1 to 64, or NULL for none" : "-1 or a joint/link index 0 to 63");
+      return static_cast<int>(from_one ? v - 1 : v);
     };
     Event e;
     e.open = false;
     e.t_start = number(2);
     e.t_end = number(3);
     e.t_detected = sqlite3_column_type(s, 13) == SQLITE_NULL ? e.t_start : number(13);
-    e.joint = whole(5);
-    e.link = whole(6);
+    e.joint = index(5);
+    e.link = index(6);
     e.magnitude = number(7);
     e.units = text(8);
     e.confidence = number(9);
@@ -209,6 +315,12 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
       e.fault = fault_class_from_string(text(4));
       const std::string others = text(12);
       if (!others.empty()) e.other_links = nlohmann::json::parse(others).get<std::vector<int>>();
+      for (int& l : e.other_links) {
+        if (from_one ? l < 1 || l > 64 : l < 0 || l > 63)
+          throw std::runtime_error(fmt::format("column 'other_links': expected link numbers {}, got '{}'",
+                                               from_one ? "1 to 64" : "0 to 63", others));
+        if (from_one) l -= 1;
+      }
     } catch (const std::exception& x) {
       throw std::runtime_error(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
     }

@@ -15,7 +15,7 @@ set_tests_properties(cli.events_table PROPERTIES FIXTURES_REQUIRED collision_db
                      PASS_REGULAR_EXPRESSION "collision.csv +6\\.[0-9]+ +[0-9]+ collision +J[1-6] +[1-6]( \\(or [1-6]\\))? +[0-9.]+ N  contact on link [1-6]")
 add_test(NAME cli.events_json COMMAND twinwatch events --db ${d}/events_collision.db --class collision --json)
 set_tests_properties(cli.events_json PROPERTIES FIXTURES_REQUIRED collision_db
-                     PASS_REGULAR_EXPRESSION "\"class\":\"collision\".*\"link\":[0-5],.*\"other_links\":\\[[0-5]?\\].*\"source\":\"[^\"]*collision.csv\"")
+                     PASS_REGULAR_EXPRESSION "\"class\":\"collision\".*\"link\":[1-6],.*\"other_links\":\\[[1-6]?\\].*\"source\":\"[^\"]*collision.csv\"")
 add_test(NAME cli.events_filter_none COMMAND twinwatch events --db ${d}/events_collision.db --class payload_change)
 set_tests_properties(cli.events_filter_none PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "^[^\n]*\n0 event\\(s\\) of [1-9]")
 add_test(NAME cli.events_missing_store COMMAND twinwatch events --db ${d}/no_such_events.db)
@@ -69,3 +69,8 @@ set_tests_properties(cli.events_not_a_store PROPERTIES PASS_REGULAR_EXPRESSION "
 add_test(NAME cli.monitor_payload_com_without_mass COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-com 0 0 0.04 --db "")
 set_tests_properties(cli.monitor_payload_com_without_mass PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
                      PASS_REGULAR_EXPRESSION "--payload-com is given without --payload-mass")
+# the JSON lines number joints and links from 1, as the labels do (short_collision.yaml: link 3)
+add_test(NAME cli.monitor_json_numbered_as_labels COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv
+         --payload-mass 0.5 --payload-com 0 0 0.04 --db "" --json)
+set_tests_properties(cli.monitor_json_numbered_as_labels PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+                     PASS_REGULAR_EXPRESSION "\"detail\":\"contact on link 3 \\(moved by J3[^\"]*\".*\"joint\":3,\"link\":3,")

@@ -29,12 +29,18 @@ TEST(Event, JsonLineCarriesClassJointMagnitudeAndDuration) {
   EXPECT_EQ(e.to_json_line().find('\n'), std::string::npos);
   EXPECT_TRUE(j["other_links"].is_array());
   EXPECT_TRUE(j["other_links"].empty());
+  // none is null, not -1
+  EXPECT_TRUE(j["joint"].is_null());
+  EXPECT_TRUE(j["link"].is_null());
+  // numbered from 1 as the labels: index 4 is J5 / link 5
   e.fault = FaultClass::Collision;
+  e.joint = 3;
   e.link = 4;
-  e.other_links = {5};
+  e.other_links = {5, 0};
   const auto c = nlohmann::json::parse(e.to_json_line());
-  EXPECT_EQ(c["link"], 4);
-  EXPECT_EQ(c["other_links"], nlohmann::json::array({5}));
+  EXPECT_EQ(c["joint"], 4);
+  EXPECT_EQ(c["link"], 5);
+  EXPECT_EQ(c["other_links"], nlohmann::json::array({6, 1}));
 }
 
 TEST(FaultClass, RoundTripsAndRejectsUnknownNames) {
@@ -211,6 +217,128 @@ TEST(EventStore, UnopenablePathNamesTheFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("/nonexistent-dir/events.db"));
   }
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
+
+namespace twinwatch::monitor {
+namespace {
+
+// a raw value of the store, as another SQLite client sees it
+std::string raw_cell(const std::filesystem::path& path, const char* sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql, -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  std::string out = "<no row>";
+  if (sqlite3_step(s) == SQLITE_ROW) {
+    const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+    out = t ? t : "NULL";
+  }
+  sqlite3_finalize(s);
+  sqlite3_close(db);
+  return out;
+}
+
+// the store keeps what the JSON lines say: joints and links from 1, NULL for none, user_version 1
+TEST(EventStore, NumbersJointsAndLinksFromOneAsTheJsonLines) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_numbering.db";
+  std::filesystem::remove(path);
+  {
+    EventStore store(path.string());
+    Event e;
+    e.fault = FaultClass::Collision;
+    e.joint = 2;
+    e.link = 4;
+    e.other_links = {3};
+    store.insert(e, "a.csv");
+    e.fault = FaultClass::PayloadChange;
+    e.joint = e.link = -1;
+    e.other_links.clear();
+    store.insert(e, "b.csv");
+  }
+  EXPECT_EQ(raw_cell(path, "PRAGMA user_version;"), "1");
+  EXPECT_EQ(raw_cell(path, "SELECT joint || ',' || link || ',' || other_links FROM events WHERE id = 1;"), "3,5,[4]");
+  EXPECT_EQ(raw_cell(path, "SELECT typeof(joint) || ',' || typeof(link) FROM events WHERE id = 2;"), "null,null");
+  const auto rows = EventStore(path.string(), EventStore::Mode::Read).read();
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].second.joint, 2);
+  EXPECT_EQ(rows[0].second.link, 4);
+  EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
+  EXPECT_EQ(rows[1].second.joint, -1);
+  EXPECT_EQ(rows[1].second.link, -1);
+  std::filesystem::remove(path);
+}
+
+// a store from before session 17 (0-based, -1 for none, user_version 0): read as it is, changed
+// by nothing that only reads it, renumbered in place when the monitor writes to it again; a store
+// from a newer numbering is refused by name
+TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_zero_based.db";
+  std::filesystem::remove(path);
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+    const char* old =
+        "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
+        " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
+        " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL);"
+        "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
+        " peak_residual, detail, other_links, t_detected) VALUES"
+        " ('old.csv', 1.0, 1.05, 0.05, 'collision', 2, 4, 40.0, 'N', 0.9, 1.2, 'contact on link 5', '[3]', 1.01),"
+        " ('old.csv', 2.0, 2.5, 0.5, 'payload_change', -1, -1, -0.5, 'kg', 0.9, 1.2, 'payload', '[]', 2.05),"
+        " ('old.csv', 3.0, 3.5, 0.5, 'resistance', 0, -1, 0.8, 'N·m', 0.9, 1.2, 'extra friction on J1', '[]', 3.1);";
+    ASSERT_EQ(sqlite3_exec(db, old, nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  const auto check = [](const std::vector<std::pair<std::string, Event>>& rows) {
+    ASSERT_GE(rows.size(), 3u);
+    EXPECT_EQ(rows[0].second.joint, 2);
+    EXPECT_EQ(rows[0].second.link, 4);
+    EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
+    EXPECT_EQ(rows[1].second.joint, -1);
+    EXPECT_EQ(rows[1].second.link, -1);
+    EXPECT_EQ(rows[2].second.joint, 0);
+    EXPECT_EQ(rows[2].second.link, -1);
+  };
+  check(EventStore(path.string(), EventStore::Mode::Read).read());
+  EXPECT_EQ(raw_cell(path, "PRAGMA user_version;"), "0");  // reading changed nothing
+  EXPECT_EQ(raw_cell(path, "SELECT joint FROM events WHERE id = 1;"), "2");
+  {
+    EventStore store(path.string());
+    Event e;
+    e.fault = FaultClass::Collision;
+    e.joint = e.link = 1;
+    store.insert(e, "new.csv");
+    const auto rows = store.read();
+    ASSERT_EQ(rows.size(), 4u);
+    check(rows);
+    EXPECT_EQ(rows[3].second.link, 1);
+  }
+  EXPECT_EQ(raw_cell(path, "PRAGMA user_version;"), "1");
+  EXPECT_EQ(raw_cell(path, "SELECT joint || ',' || link || ',' || other_links FROM events WHERE id = 1;"), "3,5,[4]");
+  EXPECT_EQ(raw_cell(path, "SELECT typeof(joint) || ',' || typeof(link) FROM events WHERE id = 2;"), "null,null");
+  EXPECT_EQ(raw_cell(path, "SELECT joint || ',' || typeof(link) FROM events WHERE id = 3;"), "1,null");
+  EXPECT_EQ(raw_cell(path, "SELECT link FROM events WHERE id = 4;"), "2");
+  check(EventStore(path.string(), EventStore::Mode::Read).read());  // opened again: not shifted twice
+  check(EventStore(path.string()).read());
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "PRAGMA user_version = 7;", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  }
+  for (const auto mode : {EventStore::Mode::Read, EventStore::Mode::Write}) {
+    try {
+      EventStore store(path.string(), mode);
+      ADD_FAILURE() << "a store from a newer numbering was opened";
+    } catch (const std::runtime_error& x) {
+      EXPECT_THAT(x.what(), ::testing::HasSubstr(path.string()));
+      EXPECT_THAT(x.what(), ::testing::HasSubstr("user_version 7"));
+    }
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace

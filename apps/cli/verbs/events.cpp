@@ -71,8 +71,9 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\")");
   sub->footer(
       "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"
-      "passes near the contact link's own joint axis); --json gives it as \"other_links\". Links and joints in --json\n"
-      "are 0-based, as in the monitor's --events file; the table shows them 1-based.");
+      "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"
+      "numbered from 1 everywhere (J5 is \"joint\": 5; none is null), as in the scenario labels. A store written\n"
+      "before this numbering (0-based) is read as such and renumbered the next time 'twinwatch monitor' writes to it.");
   sub->callback([o] { run_events(*o); });
 }};
 

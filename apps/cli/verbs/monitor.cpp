@@ -340,7 +340,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(CLI::NonNegativeNumber);
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joint and link are 0-based indices: joint 4 is J5, -1 none)");
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none)");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);

@@ -60,7 +60,9 @@ struct Event {
   ContactImpulse contact;
 
   double duration() const { return t_end - t_start; }
-  /// One JSON object on one line (no trailing newline).
+  /// One JSON object on one line (no trailing newline). Joints and links are numbered from 1 there,
+  /// as in the scenario labels and every table (J5 is "joint": 5), and none is null; in memory
+  /// they are 0-based indices.
   std::string to_json_line() const;
 };
 
@@ -73,8 +75,14 @@ class EventStore {
     Read,   ///< open an existing store read-only; nothing is created or changed (`twinwatch events`)
   };
   /// Write: opens or creates the database and its `events` table; a table written by an older
-  /// version gets the columns it lacks (other_links, t_detected). Read: the file must exist and hold
-  /// an `events` table with the columns every version wrote; columns added later read as absent.
+  /// version gets the columns it lacks (other_links, t_detected) and its joint/link numbers are
+  /// renumbered from 1 (see below). Read: the file must exist and hold an `events` table with the
+  /// columns every version wrote; columns added later read as absent; nothing is changed.
+  ///
+  /// Numbering: the store keeps joint, link and other_links numbered from 1 with NULL for none,
+  /// as the JSON lines do, and marks it with `PRAGMA user_version = 1`. A store with user_version 0
+  /// was written before session 17 with 0-based indices and -1 for none; it is read as such and,
+  /// opened for writing, renumbered in one transaction. A user_version above 1 is refused.
   /// Throws std::runtime_error naming the file when SQLite cannot open it or the table is missing.
   explicit EventStore(const std::string& path, Mode mode = Mode::Write);
   ~EventStore();
