@@ -769,13 +769,14 @@ std::string evaluation_json(const Evaluation& e) {
 }
 
 void write_report(const ident::TwinModel& twin_in, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels) {
+                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels,
+                  const device::ColumnMap* map) {
   ident::TwinModel twin = twin_in;
   model::RigidBodyInertia p;
   p.mass = payload_mass;
   if (payload_com.size() == 3) p.com = Eigen::Vector3d(payload_com[0], payload_com[1], payload_com[2]);
   twin.set_payload(p);
-  const device::Recording rec = device::read_recording(recording);
+  const device::Recording rec = device::read_recording(recording, map);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;

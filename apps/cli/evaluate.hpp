@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/sim/scenario.hpp"
 
@@ -127,7 +128,9 @@ std::string evaluation_json(const Evaluation& e);
 
 /// Writes a self-contained HTML report for one recording monitored by the twin (UR3e Fig. 8-13
 /// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
+/// `map`: a foreign log's column map (none: RTDE column names).
 void write_report(const ident::TwinModel& twin, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt);
+                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt,
+                  const device::ColumnMap* map = nullptr);
 
 }  // namespace twinwatch::cli

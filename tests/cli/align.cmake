@@ -94,3 +94,10 @@ echo rows $(wc -l < ${da}/trace.csv) && \
 awk -F, 'NR > 1 && ($3 <= 0 || $5 <= 0) { bad++ } END { print \"non-positive thresholds:\", bad + 0 }' ${da}/trace.csv")
 set_tests_properties(cli.monitor_trace PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "^timestamp,residual_1_A,threshold_1_A,observer_1_Nm,observer_threshold_1_Nm,residual_2_A,[^\n]*observer_threshold_6_Nm\nrows 5001\nnon-positive thresholds: 0\n$")
+# a foreign log through --column-map: thresholds, monitor and report see exactly what the RTDE columns give
+add_test(NAME cli.column_map_pipeline
+  COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/column_map_pipeline.sh $<TARGET_FILE:twinwatch>
+          ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/full.csv
+          ${PROJECT_BINARY_DIR}/cli-pipeline/collision.csv ${da})
+set_tests_properties(cli.column_map_pipeline PROPERTIES FIXTURES_REQUIRED "twin;recordings;align_pair;collision_recording"
+                     PASS_REGULAR_EXPRESSION "SAME-THROUGH-THE-COLUMN-MAP: [1-9]")

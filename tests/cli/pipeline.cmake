@@ -32,3 +32,8 @@ set_tests_properties(cli.identify_bad_efficiency_passes PROPERTIES FIXTURES_REQU
 # --progress shows the bar on a pipe too (ctest's is not a terminal)
 add_test(NAME cli.identify_progress COMMAND twinwatch identify ${d}/exc.csv --progress -o ${d}/twin_progress.json)
 set_tests_properties(cli.identify_progress PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "identifying +[0-9]+ %")
+# --column-map is for recordings: a live RTDE stream carries the controller's own names
+add_test(NAME cli.monitor_rtde_column_map COMMAND twinwatch monitor --twin ${d}/twin.json --rtde 127.0.0.1:1
+         --column-map ${PROJECT_SOURCE_DIR}/data/column_maps/kinova_gen3_chiha.csv --db "")
+set_tests_properties(cli.monitor_rtde_column_map PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "--column-map applies to a RECORDING")

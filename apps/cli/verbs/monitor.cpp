@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/file_io.hpp"
@@ -29,6 +30,7 @@ using namespace twinwatch;
 
 struct MonitorOptions {
   std::string twin, recording, events_path, db_path = "events.db";
+  std::string column_map;  // foreign logs: CSV column -> RTDE name, scale
   std::string trace;  // per-sample residuals and thresholds as CSV
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
   double duration = 0.0, wait = 0.0;
@@ -40,6 +42,15 @@ struct MonitorOptions {
   std::string program;  // threshold set of this program ("" = the default set)
   bool static_threshold = false, quiet = false, json = false;
 };
+
+constexpr const char* kColumnMapHelp =
+    "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
+
+// --column-map FILE: the map of a foreign log's columns to RTDE names (none when empty)
+std::optional<device::ColumnMap> load_column_map(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  return device::ColumnMap::load(path);
+}
 
 // --payload-mass/--payload-com: a COM without a mass would be dropped silently, so it is refused
 model::RigidBodyInertia payload_of(double mass, const std::vector<double>& com) {
@@ -143,11 +154,14 @@ int run_monitor(const MonitorOptions& o) {
   if (o.rtde.empty()) {
     if (o.duration > 0 || o.wait > 0 || !o.record_to.empty())
       throw InvalidArgument("--duration, --wait and --record apply to --rtde; a recording is watched whole");
-    rec = device::read_recording(o.recording);
+    const auto map = load_column_map(o.column_map);
+    rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
     if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   } else {
+    if (!o.column_map.empty())
+      throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
     if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
     cli::RtdeSourceOptions so;
     so.endpoint = o.rtde;
@@ -248,7 +262,7 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
-  std::string twin, filter, program;
+  std::string twin, filter, program, column_map;
   std::vector<std::string> recordings, debounce_validation;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
@@ -256,9 +270,10 @@ struct ThresholdOptions {
 
 int run_thresholds(const ThresholdOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
+  const auto map = load_column_map(o.column_map);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
-    recs.push_back(device::read_recording(f));
+    recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
   }
   std::vector<monitor::HealthyRun> runs;
@@ -292,7 +307,7 @@ int run_thresholds(const ThresholdOptions& o) {
         throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
                                           "the choice needs healthy runs they were not learned on",
                                           f));
-    vrecs.push_back(device::read_recording(f));
+    vrecs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
   }
   if (!vrecs.empty()) {
@@ -340,6 +355,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(CLI::NonNegativeNumber);
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none)");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
@@ -372,6 +388,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
   sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"))
+      ->check(CLI::ExistingFile);
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
                   "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
@@ -445,7 +463,8 @@ int run_evaluate(const EvaluateOptions& o) {
 }
 
 struct ReportOptions {
-  std::string twin, recording, output = "report.html", labels;
+  std::string twin, recording, output = "report.html", labels, column_map;
+  bool quiet = false;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
 };
@@ -459,8 +478,9 @@ int run_report(const ReportOptions& o) {
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
   payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused before the work
-  cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels);
-  fmt::print("report written to {}\n", o.output);
+  const auto map = load_column_map(o.column_map);
+  cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels, map ? &*map : nullptr);
+  if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }
 
@@ -520,6 +540,8 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};
 
