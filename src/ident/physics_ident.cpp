@@ -63,8 +63,13 @@ struct Stats {
 // on the groups' statistics; group 2j is joint j motoring, 2j + 1 back-driven (fitted only when
 // free_gen[j]; a folded group is empty). Without a known payload the scale of theta and h is
 // not identifiable and is fixed by prod_j h_2j = 1.
-void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload, Eigen::VectorXd& theta,
-                  std::vector<double>& h) {
+//
+// The coefficients `nonneg` (friction levels: friction opposes the motion) are held >= 0 by a
+// projected Levenberg-Marquardt with an active set: a coefficient at 0 whose gradient points below
+// 0 is fixed for that step, and every step is projected back onto the bounds. Returns the
+// coefficients the bound holds at 0 (the SSE would still fall below it).
+std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload,
+                                      Eigen::VectorXd& theta, std::vector<double>& h, const std::vector<int>& nonneg) {
   const int p = static_cast<int>(theta.size());
   const int n = static_cast<int>(free_gen.size());
   std::vector<int> active;  // fitted groups
@@ -81,6 +86,25 @@ void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_ge
       sum += x.e - 2.0 * hg * num + hg * hg * den;
     }
     return sum;
+  };
+  for (int i : nonneg) theta(i) = std::max(theta(i), 0.0);  // start inside the bounds
+  // half gradient of the SSE in theta (for the bounds held at the end)
+  auto theta_gradient = [&](const Eigen::VectorXd& th, const std::vector<double>& hh) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
+    for (int grp : active) {
+      const Stats& x = st[static_cast<size_t>(grp)];
+      const double hg = hh[static_cast<size_t>(grp)];
+      g += hg * hg * (x.A * th + x.cp) - hg * x.b;
+    }
+    return g;
+  };
+  auto held_at_zero = [&] {
+    std::vector<int> held;
+    if (nonneg.empty()) return held;
+    const Eigen::VectorXd g = theta_gradient(theta, h);
+    for (int i : nonneg)
+      if (theta(i) <= 0.0 && g(i) > 0.0) held.push_back(i);
+    return held;
   };
   double mu = 1e-3, obj = sse_of(theta, h);
   for (int it = 0; it < kLmIterations; ++it) {
@@ -101,6 +125,14 @@ void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_ge
       grad.head(p) += -hg * x.b + hg * hg * At;
       grad(col) = -num + hg * den;
     }
+    // the active set: a bounded coefficient at 0 that the SSE would push below 0 stays at 0 this step
+    for (int i : nonneg)
+      if (theta(i) <= 0.0 && grad(i) > 0.0) {
+        H.row(i).setZero();
+        H.col(i).setZero();
+        H(i, i) = 1.0;
+        grad(i) = 0.0;
+      }
     // damped, column-scaled step; a step that makes a drive gain or factor <= 0 counts as worse
     const Eigen::VectorXd D = H.diagonal().cwiseMax(1e-300).cwiseSqrt();
     bool accepted = false;
@@ -109,6 +141,7 @@ void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_ge
       Hs.diagonal().array() += mu + kRidge;
       const Eigen::VectorXd step = -(D.asDiagonal().inverse() * Hs.ldlt().solve(D.asDiagonal().inverse() * grad));
       Eigen::VectorXd th2 = theta + step.head(p);
+      for (int i : nonneg) th2(i) = std::max(th2(i), 0.0);  // projected onto the bounds
       std::vector<double> h2 = h;
       for (size_t a = 0; a < active.size(); ++a) h2[static_cast<size_t>(active[a])] += step(p + static_cast<int>(a));
       bool positive = true;
@@ -129,13 +162,30 @@ void fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_ge
         obj = obj2;
         mu = std::max(mu / 3.0, 1e-9);
         accepted = true;
-        if (gain < kLmTolerance * std::max(obj, 1e-30)) return;  // converged
+        if (gain < kLmTolerance * std::max(obj, 1e-30)) return held_at_zero();  // converged
       } else {
         mu *= 5.0;
       }
     }
-    if (!accepted) return;
+    if (!accepted) return held_at_zero();
   }
+  return held_at_zero();
+}
+
+// The bilinear fit, unconstrained first: on data that determine the friction levels that is the
+// result, bit for bit as before the bounds existed. Only when a level in `nonneg` comes out
+// negative (data that do not determine it, e.g. a joint moving one way only, where Coulomb, offset
+// and gravity share one column: friction pushing the motion along would be written) is the fit
+// repeated from the same start with the bounds. Returns the coefficients held at 0.
+std::vector<int> fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload,
+                              Eigen::VectorXd& theta, std::vector<double>& h, const std::vector<int>& nonneg) {
+  const Eigen::VectorXd theta0 = theta;
+  const std::vector<double> h0 = h;
+  fit_bilinear_bounded(st, free_gen, any_payload, theta, h, {});
+  if (std::all_of(nonneg.begin(), nonneg.end(), [&](int i) { return theta(i) >= 0.0; })) return {};
+  theta = theta0;
+  h = h0;
+  return fit_bilinear_bounded(st, free_gen, any_payload, theta, h, nonneg);
 }
 
 // Grids of the low-speed friction's two shape parameters. 1/alpha: pre-sliding distance 0.02-5 mrad
@@ -358,6 +408,11 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   const int p = nb + nfx * n;  // unknowns of the torque-domain linear step
   twin.beta = Eigen::VectorXd::Zero(nb);
   twin.joints.assign(static_cast<size_t>(n), JointDrive{});
+  // Coulomb and viscous friction and the two low-speed levels (pre-sliding, Stribeck: Fs - Fc) of
+  // every joint are held >= 0 (fit_bilinear); `held`: the ones the last fit held at 0
+  std::vector<int> nonneg, held;
+  for (int j = 0; j < n; ++j)
+    for (const int c : {int(kCoulomb), int(kViscous), nf, nf + 1}) nonneg.push_back(nb + nfx * j + c);
   bool any_payload = false;
   for (const auto& r : runs) any_payload |= r.payload.mass > 0.0;
 
@@ -442,6 +497,12 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     }
     Eigen::VectorXd theta = Eigen::VectorXd::Zero(p);
     const int passes = 1 + o.efficiency_passes;
+    // the bounds act on the last fit only: the passes before it only set the drive directions and
+    // factors it starts from, and on data that determine the friction they are then never reached
+    const std::vector<int> no_bounds;
+    auto bounds_of = [&](int pass) -> const std::vector<int>& {
+      return stage == stages - 1 && pass == passes - 1 ? nonneg : no_bounds;
+    };
     report = IdentReport{};
     report.samples_used.assign(static_cast<size_t>(n), 0);
     report.rmse.assign(static_cast<size_t>(n), 0.0);
@@ -538,7 +599,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           st[2 * J + 1] = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
           hg[2 * J] = h[J];
         }
-        fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), any_payload, theta, hg);
+        held = fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), any_payload, theta, hg, bounds_of(pass));
         for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = hg[static_cast<size_t>(2 * j)];
         std::vector<double> g(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
@@ -680,7 +741,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
         // the joint fitted again with it
         for (int attempt = 0; attempt < 2; ++attempt) {
-          fit_bilinear(st, free_gen, any_payload, theta, h);
+          held = fit_bilinear(st, free_gen, any_payload, theta, h, bounds_of(pass));
           bool refit = false;
           for (int j = 0; j < n; ++j) {
             const size_t J = static_cast<size_t>(j);
@@ -719,6 +780,19 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
                                          100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
+  for (int i : held) {
+    const int j = (i - nb) / nfx, c = (i - nb) % nfx;
+    // a low-speed level held at 0 is no term: its shape goes too (the note below says why)
+    JointDrive& jd = twin.joints[static_cast<size_t>(j)];
+    if (c == nf) jd.presliding_alpha = 0.0;
+    if (c == nf + 1) jd.stribeck_velocity = 0.0;
+    const char* what = c == kCoulomb ? "Coulomb friction" : c == kViscous ? "viscous friction" : c == nf ? "pre-sliding friction level" : "Stribeck level";
+    report.notes.push_back(fmt::format(
+        "J{}: {} held at 0: the fit would make it negative (friction pushing the motion along), so the recordings do not "
+        "determine it (e.g. the joint moves one way only, or too little); record motion in both directions ('twinwatch excite') "
+        "and check the joint with 'twinwatch validate'",
+        j + 1, what));
+  }
   twin.gains_absolute = any_payload;
   check_gains();
   for (int j = 0; j < n && o.low_speed_friction; ++j) {
