@@ -399,7 +399,10 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   twin.temperature_ref = o.temperature_ref;
   twin.direction_blend = o.direction_blend;
   twin.created = now_iso();
-  for (const TrainingRun& r : runs) twin.recordings.push_back(r.recording->path);
+  for (const TrainingRun& r : runs) {
+    twin.recordings.push_back(r.recording->path);
+    for (const RobotSample& s : r.recording->samples) twin.envelope.include(s.q, s.qd);
+  }
   const model::BaseParameters base = model::compute_base_parameters(rm);
   twin.base_columns = base.independent;
   const int nb = base.rank;

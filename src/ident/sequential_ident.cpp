@@ -180,6 +180,9 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
   for (const auto* r : quasi_static) seq.quasi_static.push_back(r->path), twin.recordings.push_back(r->path);
   for (const auto* r : sine) seq.sine.push_back(r->path), twin.recordings.push_back(r->path);
   for (const auto& r : general) seq.general.push_back(r.recording->path), twin.recordings.push_back(r.recording->path);
+  for (const auto* r : quasi_static) for (const RobotSample& s : r->samples) twin.envelope.include(s.q, s.qd);
+  for (const auto* r : sine) for (const RobotSample& s : r->samples) twin.envelope.include(s.q, s.qd);
+  for (const auto& r : general) for (const RobotSample& s : r.recording->samples) twin.envelope.include(s.q, s.qd);
   seq.joints.assign(static_cast<size_t>(n), SequentialJoint{});
   twin.joints.assign(static_cast<size_t>(n), JointDrive{});
   const VectorJ zero = VectorJ::Zero(n);

@@ -327,6 +327,17 @@ void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
   }
 }
 
+void MotionEnvelope::include(const VectorJ& q, const VectorJ& qd) {
+  if (empty()) {
+    q_min = q_max = q;
+    qd_max = qd.cwiseAbs();
+    return;
+  }
+  q_min = q_min.cwiseMin(q);
+  q_max = q_max.cwiseMax(q);
+  qd_max = qd_max.cwiseMax(qd.cwiseAbs());
+}
+
 std::string TwinModel::to_json() const {
   nlohmann::json j;
   j["format"] = "twinwatch-twin";
@@ -335,6 +346,10 @@ std::string TwinModel::to_json() const {
   j["method"] = method;
   j["created"] = created;
   j["recordings"] = recordings;
+  if (!envelope.empty())
+    j["motion_envelope"] = {{"q_min", numbers(Eigen::VectorXd(envelope.q_min))},
+                            {"q_max", numbers(Eigen::VectorXd(envelope.q_max))},
+                            {"qd_max", numbers(Eigen::VectorXd(envelope.qd_max))}};
   j["temperature_ref"] = temperature_ref;
   j["direction_blend"] = direction_blend;
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
@@ -473,7 +488,8 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
   try {
     const JsonFields top(j, origin, "");
     top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "payload",
-              "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential"});
+              "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
+              "motion_envelope"});
     const std::string robot = top.text("robot");
     TwinModel t;
     try {
@@ -527,6 +543,26 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       t.friction_json = j["friction_models"].dump();
     }
     if (top.has("sequential")) t.sequential = sequential_from_json(j["sequential"], n, origin);
+    // optional: twins written before session 17 do not have it (then nothing is said about extrapolation)
+    if (top.has("motion_envelope")) {
+      const JsonFields env = top.object("motion_envelope");
+      env.only({"q_min", "q_max", "qd_max"});
+      const auto vec = [&](const char* key) {
+        const std::vector<double> v = env.numbers(key, static_cast<size_t>(n));
+        return VectorJ(Eigen::Map<const Eigen::VectorXd>(v.data(), n));
+      };
+      t.envelope.q_min = vec("q_min");
+      t.envelope.q_max = vec("q_max");
+      t.envelope.qd_max = vec("qd_max");
+      for (int k = 0; k < n; ++k) {
+        if (t.envelope.q_min[k] > t.envelope.q_max[k])
+          throw ParseError(origin, 0, json_element(env.field("q_min"), static_cast<size_t>(k)),
+                           fmt::format("expected at most q_max[{}] = {}, got {}", k, t.envelope.q_max[k], t.envelope.q_min[k]));
+        if (t.envelope.qd_max[k] < 0.0)
+          throw ParseError(origin, 0, json_element(env.field("qd_max"), static_cast<size_t>(k)),
+                           fmt::format("expected a speed >= 0 [rad/s], got {}", t.envelope.qd_max[k]));
+      }
+    }
     // the method names the model that predicts: its block must be there, and no other
     const bool mlp = t.learned && t.learned->role == LearnedRole::Current, hybrid = t.learned && t.learned->role == LearnedRole::Residual;
     const char* wants = t.method == "mlp" ? (mlp ? nullptr : "a \"learned\" block with role \"current\"")

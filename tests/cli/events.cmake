@@ -74,3 +74,12 @@ add_test(NAME cli.monitor_json_numbered_as_labels COMMAND twinwatch monitor --tw
          --payload-mass 0.5 --payload-com 0 0 0.04 --db "" --json)
 set_tests_properties(cli.monitor_json_numbered_as_labels PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
                      PASS_REGULAR_EXPRESSION "\"detail\":\"contact on link 3 \\(moved by J3[^\"]*\".*\"joint\":3,\"link\":3,")
+# extrapolation: the same contact on a figure-eight twice as fast as the twin's training motion is
+# marked as raised beyond it (the run at the trained speed above is not: FAIL_REGULAR_EXPRESSION)
+add_test(NAME cli.simulate_fast_collision COMMAND twinwatch simulate ${s}/fast_collision.yaml -o ${d}/fast_collision.csv -q)
+set_tests_properties(cli.simulate_fast_collision PROPERTIES FIXTURES_SETUP fast_collision_recording)
+add_test(NAME cli.monitor_beyond_training_motion COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fast_collision.csv
+         --payload-mass 0.5 --payload-com 0 0 0.04 --db "")
+set_tests_properties(cli.monitor_beyond_training_motion PROPERTIES FIXTURES_REQUIRED "twin;fast_collision_recording"
+  PASS_REGULAR_EXPRESSION "s  note: J[1-6] at [0-9.]+ rad/s, identified up to [0-9.]+ rad/s: beyond the motion the twin was identified on.*collision +contact on link 3 [^\n]*; raised where the robot moves beyond what the twin was identified on \\(J[1-6] at [0-9.]+ rad/s, identified up to [0-9.]+ rad/s\\): it may be model error, not a fault.*[0-9]+ of 5000 samples \\([0-9.]+ %\\) beyond the motion the twin was identified on")
+set_tests_properties(cli.monitor_alert_line PROPERTIES FAIL_REGULAR_EXPRESSION "beyond the motion|does not record the motion")

@@ -261,3 +261,45 @@ TEST(TwinFile, SaveRefusesATwinThatWouldNotLoadBack) {
 
 }  // namespace
 }  // namespace twinwatch::ident
+
+namespace twinwatch::ident {
+namespace {
+
+// the motion the twin was identified on: written when known, read back, checked; a file without it
+// (written before session 17) still loads, with an empty envelope
+TEST(TwinFile, TheMotionEnvelopeRoundTripsIsCheckedAndMayBeAbsent) {
+  TwinModel t("ur3e", model::load_robot("ur3e"));
+  t.joints.resize(6);
+  t.base_columns = {10};
+  t.beta = Eigen::VectorXd::Constant(1, 0.1);
+  EXPECT_FALSE(json::parse(t.to_json()).contains("motion_envelope")) << "an unknown envelope is not written as one";
+  VectorJ q(6), qd(6);
+  q << 0.1, -1.0, 1.2, -1.5, -1.6, 0.0;
+  qd << 0.5, -0.2, 0.0, 0.3, -0.9, 0.1;
+  t.envelope.include(q, qd);
+  t.envelope.include(-q, 0.5 * qd);
+  json j = json::parse(t.to_json());
+  ASSERT_TRUE(j.contains("motion_envelope"));
+  const TwinModel back = TwinModel::from_json(j.dump(), "twin.json");
+  ASSERT_FALSE(back.envelope.empty());
+  EXPECT_DOUBLE_EQ(back.envelope.q_min[1], -1.0);
+  EXPECT_DOUBLE_EQ(back.envelope.q_max[1], 1.0);
+  EXPECT_DOUBLE_EQ(back.envelope.qd_max[4], 0.9);  // the largest |qd|, whichever its sign
+  j["motion_envelope"]["q_min"][2] = 3.0;
+  EXPECT_THAT(error_of(j), HasSubstr("twin.json: field 'motion_envelope.q_min[2]': expected at most q_max[2] = 1.2, got 3"));
+  j = json::parse(t.to_json());
+  j["motion_envelope"]["qd_max"][0] = -0.1;
+  EXPECT_THAT(error_of(j), HasSubstr("field 'motion_envelope.qd_max[0]': expected a speed >= 0 [rad/s], got -0.1"));
+  j = json::parse(t.to_json());
+  j["motion_envelope"]["qd_max"].erase(5);
+  EXPECT_THAT(error_of(j), HasSubstr("motion_envelope.qd_max"));
+  j = json::parse(t.to_json());
+  j["motion_envelope"]["q_mid"] = 0;
+  EXPECT_THAT(error_of(j), HasSubstr("q_mid"));
+  j = json::parse(t.to_json());
+  j.erase("motion_envelope");
+  EXPECT_TRUE(TwinModel::from_json(j.dump(), "twin.json").envelope.empty());
+}
+
+}  // namespace
+}  // namespace twinwatch::ident

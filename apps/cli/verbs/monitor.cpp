@@ -16,6 +16,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/monitor/envelope.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/device/rtde_client.hpp"
 #include "rtde_source.hpp"
@@ -183,7 +184,25 @@ int run_monitor(const MonitorOptions& o) {
   std::unique_ptr<monitor::EventStore> store;
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
-  mon.on_event = [&](const monitor::Event& e) {
+  // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
+  // twin's model error; the alert says so when it was raised there (from kEnvelopeLead s before the
+  // exceedance began to kEnvelopeLag s after the raise; a long alert is not marked for a later excursion)
+  monitor::EnvelopeWatch watch(twin.envelope);
+  constexpr double kEnvelopeLead = 0.5;  // [s] a filtered residual lags the motion that caused it
+  constexpr double kEnvelopeLag = 0.1;   // [s]
+  const bool chatty = !o.quiet && !o.json;
+  if (!watch.known() && chatty)
+    fmt::print(stderr, "note: {} does not record the motion it was identified on (written before session 17): alerts raised where "
+                       "the robot moves beyond it are not marked; identify again to have them marked\n",
+               o.twin);
+  std::vector<char> warned(static_cast<size_t>(2 * twin.n_dof()), 0);  // per joint: speed, position
+  mon.on_event = [&](const monitor::Event& raw) {
+    monitor::Event e = raw;
+    const monitor::Excursion x = watch.outside_during(e.t_start - kEnvelopeLead, e.t_detected + kEnvelopeLag);
+    if (!x.inside())
+      e.detail += fmt::format("; raised where the robot moves beyond what the twin was identified on ({}): it may be model error, "
+                              "not a fault",
+                              x.describe(watch.envelope()));
     if (e.open) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
@@ -217,6 +236,11 @@ int run_monitor(const MonitorOptions& o) {
     trace << '\n';
   }
   const auto push = [&](const RobotSample& s) {
+    const monitor::Excursion x = watch.check(s);
+    char& seen = warned[static_cast<size_t>(2 * std::max(x.joint, 0) + (x.speed ? 0 : 1))];
+    if (!x.inside() && chatty && !seen && (seen = 1))
+      fmt::print("{:9.3f} s  note: {}: beyond the motion the twin was identified on; residuals there may be model error\n",
+                 s.timestamp, x.describe(watch.envelope()));
     mon.push(s);
     if (!trace.is_open()) return;
     trace << fmt::format("{:.6f}", s.timestamp);
@@ -255,6 +279,10 @@ int run_monitor(const MonitorOptions& o) {
   mon.finish();
   close_written(jl, o.events_path);
   close_written(trace, o.trace);
+  if (chatty && watch.samples_outside() > 0)
+    fmt::print("{} of {} samples ({:.1f} %) beyond the motion the twin was identified on; the farthest: {} at {:.3f} s\n",
+               watch.samples_outside(), watch.samples(), 100.0 * static_cast<double>(watch.samples_outside()) / static_cast<double>(watch.samples()),
+               watch.worst().describe(watch.envelope()), watch.worst_time());
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}\n", mon.samples(), mon.gaps(), mon.events().size(),
                o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));

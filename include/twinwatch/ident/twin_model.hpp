@@ -26,6 +26,18 @@
 
 namespace twinwatch::ident {
 
+/// The motion a twin was identified on: per joint the range of actual_q and the largest |actual_qd|
+/// over its training recordings. Beyond it the twin extrapolates, and a residual there can be model
+/// error rather than a fault (monitor::EnvelopeWatch). Empty for a twin written before it was
+/// recorded (session 17).
+struct MotionEnvelope {
+  VectorJ q_min, q_max;  ///< [rad]
+  VectorJ qd_max;        ///< [rad/s] largest |qd|
+  bool empty() const { return qd_max.size() == 0; }
+  /// Widens the envelope to take in one sample (the first sets its size).
+  void include(const VectorJ& q, const VectorJ& qd);
+};
+
 /// Friction columns of a joint, in this order.
 enum FrictionColumn : int { kCoulomb = 0, kViscous, kOffset, kArmature, kViscousTemperature, kFrictionColumns };
 
@@ -100,6 +112,7 @@ class TwinModel {
   double direction_blend = 0.0;
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
+  MotionEnvelope envelope;              ///< the motion of those files (empty: not recorded, an older twin)
   std::string created;                  ///< ISO time
   std::string monitor_json;             ///< the monitor's learned thresholds (opaque JSON, "" if none)
   /// Cao's sequential model (method "sequential"): when set, predict() uses it for the current

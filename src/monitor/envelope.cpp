@@ -1,0 +1,77 @@
+#include "twinwatch/monitor/envelope.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace twinwatch::monitor {
+
+std::string Excursion::describe(const ident::MotionEnvelope& e) const {
+  if (inside()) return "inside the motion the twin was identified on";
+  const auto j = static_cast<Eigen::Index>(joint);
+  if (speed) return fmt::format("J{} at {:.2f} rad/s, identified up to {:.2f} rad/s", joint + 1, value, e.qd_max[j]);
+  return fmt::format("J{} at {:.2f} rad, identified on {:.2f} to {:.2f} rad", joint + 1, value, e.q_min[j], e.q_max[j]);
+}
+
+EnvelopeWatch::EnvelopeWatch(const ident::MotionEnvelope& envelope, EnvelopeMargins margins)
+    : envelope_(envelope), margins_(margins) {}
+
+Excursion EnvelopeWatch::check(const RobotSample& s) {
+  ++samples_;
+  Excursion out;
+  if (!known()) return out;
+  // score: how far past the margin, in units of the margin's own size (speed: of the allowed
+  // speed; position: of the position margin), so that speed and position compare
+  double best = 0.0;
+  const int n = static_cast<int>(std::min<Eigen::Index>(envelope_.qd_max.size(), s.qd.size()));
+  for (int j = 0; j < n; ++j) {
+    const double allowed = envelope_.qd_max[j] * (1.0 + margins_.speed_fraction) + margins_.speed_abs;
+    const double v = std::abs(s.qd[j]);
+    if (v > allowed && (v - allowed) / allowed > best) {
+      best = (v - allowed) / allowed;
+      out = Excursion{j, true, v, envelope_.qd_max[j]};
+    }
+    const double q = s.q[j];
+    const double below = envelope_.q_min[j] - margins_.position - q, above = q - envelope_.q_max[j] - margins_.position;
+    const double over = std::max(below, above);
+    if (over > 0.0 && over / margins_.position > best) {
+      best = over / margins_.position;
+      out = Excursion{j, false, q, below > above ? envelope_.q_min[j] : envelope_.q_max[j]};
+    }
+  }
+  if (out.inside()) return out;
+  ++outside_;
+  if (episodes_.empty() || !(s.timestamp - episodes_.back().t_end <= kEpisodeGap)) {
+    if (episodes_.size() == kEpisodes) episodes_.pop_front();
+    episodes_.push_back(Episode{s.timestamp, s.timestamp, best, out});
+  } else {
+    Episode& e = episodes_.back();
+    e.t_end = s.timestamp;
+    if (best > e.score) {
+      e.score = best;
+      e.worst = out;
+    }
+  }
+  last_ = out;
+  last_t_ = s.timestamp;
+  if (best > worst_score_) {
+    worst_score_ = best;
+    worst_ = out;
+    worst_t_ = s.timestamp;
+  }
+  return out;
+}
+
+Excursion EnvelopeWatch::outside_during(double t0, double t1) const {
+  Excursion out;
+  double best = 0.0;
+  for (const Episode& e : episodes_)
+    if (e.t_end >= t0 && e.t_begin <= t1 && e.score > best) {
+      best = e.score;
+      out = e.worst;
+    }
+  return out;
+}
+
+}  // namespace twinwatch::monitor
