@@ -289,7 +289,7 @@ twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
   auto* duration = sub->add_option("--duration", o->duration, "Override the scenario's duration [s of robot time]");
   auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
   sub->add_option("--controller-version", o->version, "Version to report to clients")->capture_default_str();
-  sub->add_option("--wait-client", o->wait_client, "Hold the robot until a client connects, for at most this long [s]");
+  sub->add_option("--wait-client", o->wait_client, "Hold the robot until a client starts streaming (a client that only connects does not release it), for at most this long [s]");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o, duration, seed] {

@@ -72,7 +72,7 @@ twinwatch::cli::VerbRegistrar reg{"simulate", 20, [](CLI::App& app) {
   sub->add_option("SCENARIO", o->scenario, "Scenario YAML (see scenarios/ur3e/ and docs/scenarios.md)")
       ->required()
       ->check(CLI::ExistingFile);
-  sub->add_option("-o,--output", o->output, "Recording CSV to write; labels go to <name>.labels.json")->required();
+  sub->add_option("-o,--output", o->output, "Recording CSV to write; the labels go beside it (rec.csv -> rec.labels.json)")->required();
   auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
   auto* duration = sub->add_option("--duration", o->duration, "Override the duration [s] (one sample period to 1e6 s)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
