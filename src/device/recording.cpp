@@ -206,10 +206,14 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       }
       if (best >= 0) {
         const int j = joint_index(nm, best_len);
-        if (j < n) {
-          target[c] = {best, j};
-          seen[static_cast<size_t>(best)][static_cast<size_t>(j)] = true;
-        }
+        // a joint the positions do not have: its data would be dropped without a word
+        if (j >= n)
+          throw ParseError(path, 1, header[c],
+                           fmt::format("column {} is '{}', joint index {}, but the recording's positions are actual_q_0..actual_q_{} "
+                                       "({} joints): expected an index below {}",
+                                       c + 1, nm, j, n - 1, n, n));
+        target[c] = {best, j};
+        seen[static_cast<size_t>(best)][static_cast<size_t>(j)] = true;
       }
     }
   }

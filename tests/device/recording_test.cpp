@@ -179,8 +179,13 @@ TEST(Recording, JointIndexTooLargeForAnIntNamesTheColumn) {
   EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_4000641156\n0,0,0\n"),
               HasSubstr("bad.csv:1: field 'actual_q_4000641156': expected a joint 0 to 6 (at most 7 joints supported), got 'actual_q_4000641156'"));
   EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_7\n0,0,0\n"), HasSubstr("field 'actual_q_7': expected a joint 0 to 6"));
-  // other groups' joints beyond the robot's stay ignored, however large
-  EXPECT_EQ(error_of("timestamp,actual_q_0,actual_current_99999999999\n0,0,1\n0.002,0,1\n"), "no error");
+  // other groups' joints beyond the positions' are refused too (they were dropped without a word),
+  // however large
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_current_99999999999\n0,0,1\n0.002,0,1\n"),
+              HasSubstr("field 'actual_current_99999999999': column 3 is 'actual_current_99999999999'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_1,actual_current_0,actual_current_1,actual_current_2\n0,0,0,0,0,0\n0.002,0,0,0,0,0\n"),
+              HasSubstr("bad.csv:1: field 'actual_current_2': column 6 is 'actual_current_2', joint index 2, but the recording's "
+                        "positions are actual_q_0..actual_q_1 (2 joints): expected an index below 2"));
 }
 
 // found by fuzzing (fuzz/regressions/recording): casting 1e20 or -1 to the integer fields was undefined
@@ -254,3 +259,4 @@ TEST(Recording, RequireFieldsNamesTheFirstMissingGroupAndWhoNeedsIt) {
 
 }  // namespace
 }  // namespace twinwatch::device
+
