@@ -47,10 +47,15 @@ void AgvMonitor::push(const device::AgvStateDatagram& d) {
   }
   have_[static_cast<size_t>(r)] = true;
   last_seq_[static_cast<size_t>(r)] = d.seq;
-  last_[static_cast<size_t>(r)] = d;
-  const auto& other = last_[static_cast<size_t>(1 - r)];
-  if (have_[static_cast<size_t>(1 - r)] && other.seq == d.seq && (!paired_any_ || d.seq != last_paired_))
-    r == 0 ? pair(d, other) : pair(other, d);
+  Slot& mine = ring_[static_cast<size_t>(r)][d.seq % kHistory];
+  if (mine.used && !mine.paired) ++c_.unpaired;  // kHistory states later its partner has not come
+  mine = Slot{d, true, false};
+  // the partner of the same sequence number, if it came already; pairs stay in sequence order
+  Slot& other = ring_[static_cast<size_t>(1 - r)][d.seq % kHistory];
+  if (other.used && !other.paired && other.d.seq == d.seq && (!paired_any_ || d.seq > last_paired_)) {
+    mine.paired = other.paired = true;
+    r == 0 ? pair(d, other.d) : pair(other.d, d);
+  }
 }
 
 void AgvMonitor::pair(const device::AgvStateDatagram& real, const device::AgvStateDatagram& twin) {
@@ -79,6 +84,12 @@ void AgvMonitor::pair(const device::AgvStateDatagram& real, const device::AgvSta
 }
 
 void AgvMonitor::finish(double t) {
+  for (auto& side : ring_)
+    for (Slot& slot : side)
+      if (slot.used && !slot.paired) {
+        ++c_.unpaired;
+        slot.paired = true;  // counted once
+      }
   for (int* open : {&open_v_, &open_w_})
     if (*open >= 0) {
       alerts_[static_cast<size_t>(*open)].end = t;

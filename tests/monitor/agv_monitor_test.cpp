@@ -71,6 +71,31 @@ TEST(AgvMonitor, CountsLostDuplicatedAndReordered) {
   EXPECT_EQ(m.counters().paired, 2);
 }
 
+// the two processes answer independently: a twin one period behind still pairs (its state for k
+// arrives after the robot's k + 1), and a state whose partner never comes is counted as unpaired
+TEST(AgvMonitor, APartnerThatComesAPeriodLateStillPairsAndAMissingOneIsCounted) {
+  AgvMonitor m;
+  m.push(state(AgvRole::Real, 0, 0.0));
+  for (std::uint32_t k = 1; k < 50; ++k) {
+    m.push(state(AgvRole::Real, k, 0.0));
+    m.push(state(AgvRole::Twin, k - 1, 0.0));
+  }
+  EXPECT_EQ(m.counters().paired, 49);
+  EXPECT_EQ(m.counters().unpaired, 0);
+  m.finish(2.0);
+  EXPECT_EQ(m.counters().unpaired, 1);  // the robot's state 49: the twin's never came
+  // more than kHistory states behind: too late to pair, each counted once
+  AgvMonitor far;
+  const std::uint32_t lag = AgvMonitor::kHistory + 2;
+  for (std::uint32_t k = 0; k < 40; ++k) {
+    far.push(state(AgvRole::Real, k + lag, 0.0));
+    far.push(state(AgvRole::Twin, k, 0.0));
+  }
+  far.finish(2.0);
+  EXPECT_EQ(far.counters().paired, 0);
+  EXPECT_EQ(far.counters().unpaired, 80);  // every state of both sides, each once
+}
+
 // AGV §5: one alert while the twins diverge, with its duration; transients do not alert
 TEST(AgvMonitor, DebouncedAlertHasStartAndDuration) {
   AgvMonitor m;

@@ -172,10 +172,10 @@ int run_demo(const DemoOptions& o) {
   waitpid(pt, &st, 0);
   const auto& c = monitor.counters();
   out["datagrams"] = {{"received", c.received}, {"paired", c.paired}, {"lost", c.lost}, {"duplicated", c.duplicated},
-                      {"reordered", c.reordered}, {"malformed", c.malformed}};
+                      {"reordered", c.reordered}, {"malformed", c.malformed}, {"unpaired", c.unpaired}};
   if (o.json) fmt::print("{}\n", out.dump());
-  else fmt::print("datagrams: {} received, {} paired, {} lost, {} duplicated, {} reordered, {} malformed\n", c.received, c.paired,
-                  c.lost, c.duplicated, c.reordered, c.malformed);
+  else fmt::print("datagrams: {} received, {} paired, {} lost, {} duplicated, {} reordered, {} malformed, {} unpaired (partner never came)\n",
+                  c.received, c.paired, c.lost, c.duplicated, c.reordered, c.malformed, c.unpaired);
   return 0;
 }
 

@@ -4,7 +4,10 @@
 /// sequence number, forms the residual linear and angular speeds, filters them with a first-order
 /// IIR, compares with thresholds and debounces (N consecutive exceedances raise; a sample below
 /// resets the counter), and reports alerts with start time and duration. Lost, duplicated,
-/// reordered and malformed datagrams are counted, never fatal.
+/// reordered and malformed datagrams are counted, never fatal. The last kHistory states of each
+/// side are kept, so a partner that arrives after the other side's next state still pairs (the
+/// two processes answer independently: on a loaded machine one runs a period behind); a state
+/// whose partner never comes is counted as unpaired.
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -32,6 +35,7 @@ struct AgvAlert {
 
 struct AgvCounters {
   long received = 0, paired = 0, lost = 0, duplicated = 0, reordered = 0, malformed = 0;
+  long unpaired = 0;  ///< states received in order whose partner never came (counted when they can no longer pair)
 };
 
 class AgvMonitor {
@@ -40,8 +44,9 @@ class AgvMonitor {
   /// Feeds raw bytes of one datagram (decoded here; malformed ones are counted).
   void push_bytes(const std::uint8_t* data, std::size_t n);
   void push(const device::AgvStateDatagram& d);
-  /// Closes an open alert.
+  /// Closes an open alert; the states still waiting for a partner count as unpaired.
   void finish(double t);
+  static constexpr std::uint32_t kHistory = 16;  ///< states kept per side (640 ms at 40 ms)
 
   const std::vector<AgvAlert>& alerts() const { return alerts_; }
   const AgvCounters& counters() const { return c_; }
@@ -53,7 +58,11 @@ class AgvMonitor {
 
   AgvMonitorOptions o_;
   AgvCounters c_;
-  std::array<device::AgvStateDatagram, 2> last_{};
+  struct Slot {
+    device::AgvStateDatagram d;
+    bool used = false, paired = false;
+  };
+  std::array<std::array<Slot, kHistory>, 2> ring_{};  // per side, at seq % kHistory
   std::array<bool, 2> have_{false, false};
   std::array<std::uint32_t, 2> last_seq_{0, 0};
   std::uint32_t last_paired_ = 0;
