@@ -423,8 +423,11 @@ TEST_F(Fixture, FrictionThatWouldPushTheMotionAlongIsHeldAtZeroAndReported) {
   EXPECT_GE(j4.presliding, 0.0);
   EXPECT_GE(j4.stribeck, 0.0);
   EXPECT_THAT(report.notes, ::testing::Contains(::testing::HasSubstr("J4: viscous friction held at 0")));
-  for (const std::string& note : report.notes)
-    if (note.find("held at 0") != std::string::npos) EXPECT_EQ(note.rfind("J4:", 0), 0u) << note;
+  for (const std::string& note : report.notes) {
+    if (note.find("held at 0") != std::string::npos) {
+      EXPECT_EQ(note.rfind("J4:", 0), 0u) << note;
+    }
+  }
   // the twin loads back (the file check refuses negative friction) and predicts as it did
   const TwinModel back = TwinModel::from_json(t.to_json(), "bounded.json");
   VectorJ a, b;
