@@ -325,6 +325,11 @@ ident::TwinModel load_twin(const std::string& path) {
   return twin;
 }
 
+std::optional<device::ColumnMap> load_column_map(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  return device::ColumnMap::load(path);
+}
+
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
                               double link_ceiling) {
@@ -768,14 +773,10 @@ std::string evaluation_json(const Evaluation& e) {
   return j.dump();
 }
 
-void write_report(const ident::TwinModel& twin_in, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels,
-                  const device::ColumnMap* map) {
+void write_report(const ident::TwinModel& twin_in, const std::string& recording, const model::RigidBodyInertia& payload,
+                  const std::string& out, const std::optional<sim::Labels>& labels, const device::ColumnMap* map) {
   ident::TwinModel twin = twin_in;
-  model::RigidBodyInertia p;
-  p.mass = payload_mass;
-  if (payload_com.size() == 3) p.com = Eigen::Vector3d(payload_com[0], payload_com[1], payload_com[2]);
-  twin.set_payload(p);
+  twin.set_payload(payload);
   const device::Recording rec = device::read_recording(recording, map);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);

@@ -19,6 +19,10 @@ namespace twinwatch::cli {
 /// ones that monitor. Throws ParseError naming the file and the field.
 ident::TwinModel load_twin(const std::string& path);
 
+/// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
+/// RTDE names (device::ColumnMap::load), none when `path` is empty.
+std::optional<device::ColumnMap> load_column_map(const std::string& path);
+
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
 /// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).
@@ -129,8 +133,7 @@ std::string evaluation_json(const Evaluation& e);
 /// Writes a self-contained HTML report for one recording monitored by the twin (UR3e Fig. 8-13
 /// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
 /// `map`: a foreign log's column map (none: RTDE column names).
-void write_report(const ident::TwinModel& twin, const std::string& recording, double payload_mass,
-                  const std::vector<double>& payload_com, const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt,
-                  const device::ColumnMap* map = nullptr);
+void write_report(const ident::TwinModel& twin, const std::string& recording, const model::RigidBodyInertia& payload,
+                  const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt, const device::ColumnMap* map = nullptr);
 
 }  // namespace twinwatch::cli

@@ -53,7 +53,6 @@ Excursion EnvelopeWatch::check(const RobotSample& s) {
       e.worst = out;
     }
   }
-  last_ = out;
   last_t_ = s.timestamp;
   if (best > worst_score_) {
     worst_score_ = best;

@@ -40,6 +40,14 @@ FaultClass fault_class_from_string(std::string_view s) {
                                     s));
 }
 
+namespace {
+// joint/link indices numbered from 1 (`by` = 1) or back to 0-based indices (`by` = -1)
+std::vector<int> shifted(std::vector<int> v, int by) {
+  for (int& x : v) x += by;
+  return v;
+}
+}  // namespace
+
 std::string Event::to_json_line() const {
   nlohmann::json j;
   j["t_start"] = t_start;
@@ -52,8 +60,7 @@ std::string Event::to_json_line() const {
   const auto number = [](int index) { return index >= 0 ? nlohmann::json(index + 1) : nlohmann::json(nullptr); };
   j["joint"] = number(joint);
   j["link"] = number(link);
-  j["other_links"] = nlohmann::json::array();
-  for (int l : other_links) j["other_links"].push_back(l + 1);
+  j["other_links"] = shifted(other_links, 1);
   j["magnitude"] = magnitude;
   j["units"] = units;
   j["confidence"] = confidence;
@@ -135,29 +142,21 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   sqlite3_finalize(info);
   const auto has = [&](const char* c) { return std::find(columns.begin(), columns.end(), c) != columns.end(); };
   // a 0-based store from before session 17: joint/link +1 (-1 -> NULL) and other_links +1, in one
-  // transaction; a cell that is not a whole number is left as it is (reading it names the row)
+  // transaction; a cell that is not a whole number is left as it is (reading it names the row).
+  // On any failure fail() closes the database, which rolls the open transaction back.
   const auto renumber_from_one = [&] {
-    exec("BEGIN IMMEDIATE;", "cannot renumber the events from 1");
-    const auto rollback_fail = [&](const std::string& msg) {
-      sqlite3_exec(impl_->db, "ROLLBACK;", nullptr, nullptr, nullptr);
-      fail("cannot renumber the events from 1", msg);
-    };
-    char* err = nullptr;
-    const char* shift =
-        "UPDATE events SET"
-        " joint = CASE WHEN typeof(joint) != 'integer' THEN joint WHEN joint >= 0 THEN joint + 1 ELSE NULL END,"
-        " link = CASE WHEN typeof(link) != 'integer' THEN link WHEN link >= 0 THEN link + 1 ELSE NULL END;";
-    if (sqlite3_exec(impl_->db, shift, nullptr, nullptr, &err) != SQLITE_OK) {
-      const std::string msg = err ? err : "unknown error";
-      sqlite3_free(err);
-      rollback_fail(msg);
-    }
+    constexpr const char* what = "cannot renumber the events from 1";
+    exec("BEGIN IMMEDIATE;", what);
+    exec("UPDATE events SET"
+         " joint = CASE WHEN typeof(joint) != 'integer' THEN joint WHEN joint >= 0 THEN joint + 1 ELSE NULL END,"
+         " link = CASE WHEN typeof(link) != 'integer' THEN link WHEN link >= 0 THEN link + 1 ELSE NULL END;",
+         what);
     if (has("other_links")) {
       std::vector<std::pair<long, std::string>> lists;
       sqlite3_stmt* q = nullptr;
       if (sqlite3_prepare_v2(impl_->db, "SELECT id, other_links FROM events WHERE other_links IS NOT NULL;", -1, &q,
                              nullptr) != SQLITE_OK)
-        rollback_fail(sqlite3_errmsg(impl_->db));
+        fail(what, sqlite3_errmsg(impl_->db));
       while (sqlite3_step(q) == SQLITE_ROW) {
         const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(q, 1));
         lists.emplace_back(sqlite3_column_int64(q, 0), t ? t : "");
@@ -165,7 +164,7 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
       sqlite3_finalize(q);
       sqlite3_stmt* u = nullptr;
       if (sqlite3_prepare_v2(impl_->db, "UPDATE events SET other_links = ? WHERE id = ?;", -1, &u, nullptr) != SQLITE_OK)
-        rollback_fail(sqlite3_errmsg(impl_->db));
+        fail(what, sqlite3_errmsg(impl_->db));
       for (const auto& [id, text] : lists) {
         std::vector<int> links;
         try {
@@ -173,24 +172,19 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
         } catch (const std::exception&) {
           continue;  // malformed: left as it is; read() names the row
         }
-        for (int& l : links) l += 1;
-        const std::string shifted = nlohmann::json(links).dump();
+        const std::string numbered = nlohmann::json(shifted(links, 1)).dump();
         sqlite3_reset(u);
-        sqlite3_bind_text(u, 1, shifted.c_str(), -1, SQLITE_TRANSIENT);
+        sqlite3_bind_text(u, 1, numbered.c_str(), -1, SQLITE_TRANSIENT);
         sqlite3_bind_int64(u, 2, id);
         if (sqlite3_step(u) != SQLITE_DONE) {
           const std::string msg = sqlite3_errmsg(impl_->db);
           sqlite3_finalize(u);
-          rollback_fail(msg);
+          fail(what, msg);
         }
       }
       sqlite3_finalize(u);
     }
-    if (sqlite3_exec(impl_->db, "PRAGMA user_version = 1; COMMIT;", nullptr, nullptr, &err) != SQLITE_OK) {
-      const std::string msg = err ? err : "unknown error";
-      sqlite3_free(err);
-      rollback_fail(msg);
-    }
+    exec("PRAGMA user_version = 1; COMMIT;", what);
   };
   if (mode == Mode::Read) {
     if (columns.empty()) fail("not an event store", "it has no events table (is it a database 'twinwatch monitor --db' wrote?)");
@@ -241,9 +235,7 @@ void EventStore::insert(const Event& e, const std::string& source) {
   sqlite3_bind_double(s, 10, e.confidence);
   sqlite3_bind_double(s, 11, e.peak_residual);
   sqlite3_bind_text(s, 12, e.detail.c_str(), -1, SQLITE_TRANSIENT);
-  std::vector<int> numbered(e.other_links);
-  for (int& l : numbered) l += 1;
-  const std::string others = nlohmann::json(numbered).dump();
+  const std::string others = nlohmann::json(shifted(e.other_links, 1)).dump();
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 14, e.t_detected);
   if (sqlite3_step(s) != SQLITE_DONE)

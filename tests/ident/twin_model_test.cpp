@@ -259,11 +259,6 @@ TEST(TwinFile, SaveRefusesATwinThatWouldNotLoadBack) {
   EXPECT_FALSE(std::filesystem::exists(path));
 }
 
-}  // namespace
-}  // namespace twinwatch::ident
-
-namespace twinwatch::ident {
-namespace {
 
 // the motion the twin was identified on: written when known, read back, checked; a file without it
 // (written before session 17) still loads, with an empty envelope

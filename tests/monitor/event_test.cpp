@@ -13,6 +13,31 @@
 namespace twinwatch::monitor {
 namespace {
 
+// runs `sql` on the database at `path` as another SQLite client would (a store an older version or
+// another program wrote, or a row edited by hand)
+void run_sql(const std::filesystem::path& path, const char* sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  sqlite3_close(db);
+}
+
+// a raw value of the store, as another SQLite client sees it
+std::string raw_cell(const std::filesystem::path& path, const char* sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql, -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  std::string out = "<no row>";
+  if (sqlite3_step(s) == SQLITE_ROW) {
+    const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+    out = t ? t : "NULL";
+  }
+  sqlite3_finalize(s);
+  sqlite3_close(db);
+  return out;
+}
+
 TEST(Event, JsonLineCarriesClassJointMagnitudeAndDuration) {
   Event e;
   e.t_start = 8.5;
@@ -101,16 +126,13 @@ TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
   const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_old.db";
   std::filesystem::remove(path);
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
     const char* old_schema =
         "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
         " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
         " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP);"
         "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
         " peak_residual, detail) VALUES ('old.csv', 1.0, 1.05, 0.05, 'collision', 2, 2, 40.0, 'N', 0.9, 1.2, 'old');";
-    ASSERT_EQ(sqlite3_exec(db, old_schema, nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(path, old_schema);
   }
   {
     EventStore store(path.string());
@@ -128,10 +150,7 @@ TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
     EXPECT_EQ(rows[1].second.other_links, std::vector<int>{4});
   }
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "UPDATE events SET other_links = '[4,' WHERE source = 'new.csv';", nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(path, "UPDATE events SET other_links = '[4,' WHERE source = 'new.csv';");
   }
   EventStore store(path.string());
   try {
@@ -151,10 +170,7 @@ TEST(EventStore, ReadingChangesNothingAndRefusesWhatIsNotAnEventStore) {
   const auto other = dir / "twinwatch_not_an_event_store.db";
   std::filesystem::remove(other);
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(other.string().c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE parts (id INTEGER);", nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(other, "CREATE TABLE parts (id INTEGER);");
   }
   try {
     EventStore store(other.string(), EventStore::Mode::Read);
@@ -162,16 +178,7 @@ TEST(EventStore, ReadingChangesNothingAndRefusesWhatIsNotAnEventStore) {
   } catch (const std::runtime_error& x) {
     EXPECT_THAT(x.what(), ::testing::HasSubstr(other.string() + ": not an event store: it has no events table"));
   }
-  {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(other.string().c_str(), &db), SQLITE_OK);
-    sqlite3_stmt* st = nullptr;
-    ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM sqlite_master WHERE name = 'events';", -1, &st, nullptr), SQLITE_OK);
-    ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
-    EXPECT_EQ(sqlite3_column_int(st, 0), 0) << "reading created a table";
-    sqlite3_finalize(st);
-    sqlite3_close(db);
-  }
+  EXPECT_EQ(raw_cell(other, "SELECT COUNT(*) FROM sqlite_master WHERE name = 'events';"), "0") << "reading created a table";
   EXPECT_THROW(EventStore((dir / "twinwatch_no_such_store.db").string(), EventStore::Mode::Read), std::runtime_error);
   EXPECT_FALSE(std::filesystem::exists(dir / "twinwatch_no_such_store.db"));
   std::filesystem::remove(other);
@@ -196,10 +203,7 @@ TEST(EventStore, ReadingChangesNothingAndRefusesWhatIsNotAnEventStore) {
     EXPECT_DOUBLE_EQ(rows[0].second.t_start, 12.102);
   }
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "UPDATE events SET t_start = 'abc';", nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(path, "UPDATE events SET t_start = 'abc';");
   }
   try {
     EventStore(path.string(), EventStore::Mode::Read).read();
@@ -219,27 +223,6 @@ TEST(EventStore, UnopenablePathNamesTheFile) {
   }
 }
 
-}  // namespace
-}  // namespace twinwatch::monitor
-
-namespace twinwatch::monitor {
-namespace {
-
-// a raw value of the store, as another SQLite client sees it
-std::string raw_cell(const std::filesystem::path& path, const char* sql) {
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(db, sql, -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
-  std::string out = "<no row>";
-  if (sqlite3_step(s) == SQLITE_ROW) {
-    const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-    out = t ? t : "NULL";
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return out;
-}
 
 // the store keeps what the JSON lines say: joints and links from 1, NULL for none, user_version 1
 TEST(EventStore, NumbersJointsAndLinksFromOneAsTheJsonLines) {
@@ -278,8 +261,6 @@ TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
   const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_zero_based.db";
   std::filesystem::remove(path);
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
     const char* old =
         "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
         " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
@@ -289,8 +270,7 @@ TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
         " ('old.csv', 1.0, 1.05, 0.05, 'collision', 2, 4, 40.0, 'N', 0.9, 1.2, 'contact on link 5', '[3]', 1.01),"
         " ('old.csv', 2.0, 2.5, 0.5, 'payload_change', -1, -1, -0.5, 'kg', 0.9, 1.2, 'payload', '[]', 2.05),"
         " ('old.csv', 3.0, 3.5, 0.5, 'resistance', 0, -1, 0.8, 'N·m', 0.9, 1.2, 'extra friction on J1', '[]', 3.1);";
-    ASSERT_EQ(sqlite3_exec(db, old, nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(path, old);
   }
   const auto check = [](const std::vector<std::pair<std::string, Event>>& rows) {
     ASSERT_GE(rows.size(), 3u);
@@ -324,10 +304,7 @@ TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
   check(EventStore(path.string(), EventStore::Mode::Read).read());  // opened again: not shifted twice
   check(EventStore(path.string()).read());
   {
-    sqlite3* db = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "PRAGMA user_version = 7;", nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_close(db);
+    run_sql(path, "PRAGMA user_version = 7;");
   }
   for (const auto mode : {EventStore::Mode::Read, EventStore::Mode::Write}) {
     try {

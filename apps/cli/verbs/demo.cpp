@@ -81,8 +81,10 @@ int run(const Options& o) {
     w.close();
   }
   const std::string html = (std::filesystem::path(o.out) / "report.html").string();
-  cli::write_report(twin, rec, s.options.payload.mass, {s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z()},
-                    html, sim::parse_labels(sim::labels_json(s), s.path + " (its labels)"));
+  model::RigidBodyInertia declared;  // what the program declares: mass and centre of mass (the report's twin takes no inertia)
+  declared.mass = s.options.payload.mass;
+  declared.com = s.options.payload.com;
+  cli::write_report(twin, rec, declared, html, sim::parse_labels(sim::labels_json(s), s.path + " (its labels)"));
   fmt::print("   {} (open it in a browser)\n", html);
   fmt::print("done in {:.1f} s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;

@@ -93,8 +93,7 @@ JointRecord slice(const JointRecord& r, long a, long b) {
 std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
   if (o.recordings.size() > 3)
     throw InvalidArgument(fmt::format("{} recordings given, expected 1 to 3 (TRAIN [VALIDATION [CHIRP]])", o.recordings.size()));
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
   for (const auto& r : recs)

@@ -109,8 +109,7 @@ int run_identify(const IdentifyOptions& o) {
   if (!learned && (!o.hidden.empty() || o.l2 || o.seed || o.max_evaluations || !o.inputs.empty()))
     throw InvalidArgument(fmt::format("--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp|hybrid, not {}", o.method));
   const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
@@ -194,8 +193,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   if (o.sine.empty())
     throw InvalidArgument("--method sequential needs --sine FILE: a recording of a sine with common turning points on every joint "
                           "(e.g. scenarios/ur3e/validation/sine_train.yaml)");
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   auto read_all = [&](const std::vector<std::string>& files) {
     std::vector<device::Recording> v;
     for (const auto& f : files) v.push_back(device::read_recording(f, map ? &*map : nullptr));
@@ -260,8 +258,7 @@ struct ValidateOptions {
 
 int run_validate(const ValidateOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
   if (rec.n_dof != twin.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));

@@ -47,12 +47,6 @@ struct MonitorOptions {
 constexpr const char* kColumnMapHelp =
     "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
 
-// --column-map FILE: the map of a foreign log's columns to RTDE names (none when empty)
-std::optional<device::ColumnMap> load_column_map(const std::string& path) {
-  if (path.empty()) return std::nullopt;
-  return device::ColumnMap::load(path);
-}
-
 // --payload-mass/--payload-com: a COM without a mass would be dropped silently, so it is refused
 model::RigidBodyInertia payload_of(double mass, const std::vector<double>& com) {
   model::RigidBodyInertia p;
@@ -155,7 +149,7 @@ int run_monitor(const MonitorOptions& o) {
   if (o.rtde.empty()) {
     if (o.duration > 0 || o.wait > 0 || !o.record_to.empty())
       throw InvalidArgument("--duration, --wait and --record apply to --rtde; a recording is watched whole");
-    const auto map = load_column_map(o.column_map);
+    const auto map = cli::load_column_map(o.column_map);
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
@@ -195,7 +189,7 @@ int run_monitor(const MonitorOptions& o) {
     fmt::print(stderr, "note: {} does not record the motion it was identified on (written before session 17): alerts raised where "
                        "the robot moves beyond it are not marked; identify again to have them marked\n",
                o.twin);
-  std::vector<char> warned(static_cast<size_t>(2 * twin.n_dof()), 0);  // per joint: speed, position
+  std::vector<bool> noted(static_cast<size_t>(2 * twin.n_dof()), false);  // per joint: speed, position
   mon.on_event = [&](const monitor::Event& raw) {
     monitor::Event e = raw;
     const monitor::Excursion x = watch.outside_during(e.t_start - kEnvelopeLead, e.t_detected + kEnvelopeLag);
@@ -237,10 +231,14 @@ int run_monitor(const MonitorOptions& o) {
   }
   const auto push = [&](const RobotSample& s) {
     const monitor::Excursion x = watch.check(s);
-    char& seen = warned[static_cast<size_t>(2 * std::max(x.joint, 0) + (x.speed ? 0 : 1))];
-    if (!x.inside() && chatty && !seen && (seen = 1))
-      fmt::print("{:9.3f} s  note: {}: beyond the motion the twin was identified on; residuals there may be model error\n",
-                 s.timestamp, x.describe(watch.envelope()));
+    if (!x.inside() && chatty) {
+      auto seen = noted[static_cast<size_t>(2 * x.joint + (x.speed ? 0 : 1))];  // (a vector<bool> reference)
+      if (!seen) {
+        seen = true;
+        fmt::print("{:9.3f} s  note: {}: beyond the motion the twin was identified on; residuals there may be model error\n",
+                   s.timestamp, x.describe(watch.envelope()));
+      }
+    }
     mon.push(s);
     if (!trace.is_open()) return;
     trace << fmt::format("{:.6f}", s.timestamp);
@@ -298,7 +296,7 @@ struct ThresholdOptions {
 
 int run_thresholds(const ThresholdOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
-  const auto map = load_column_map(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
@@ -505,9 +503,9 @@ int run_report(const ReportOptions& o) {
     if (!f) throw std::runtime_error(o.labels + ": cannot open");
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
-  payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused before the work
-  const auto map = load_column_map(o.column_map);
-  cli::write_report(twin, o.recording, o.payload_mass, o.payload_com, o.output, labels, map ? &*map : nullptr);
+  const model::RigidBodyInertia payload = payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused here
+  const auto map = cli::load_column_map(o.column_map);
+  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }

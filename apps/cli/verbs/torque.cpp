@@ -17,6 +17,7 @@
 #include "twinwatch/ident/rigid_body_ls.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
+#include "evaluate.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -104,8 +105,7 @@ struct IdentOpts {
 
 int run_identify(const IdentOpts& o) {
   const model::RobotModel m = model::load_robot(o.robot);
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs, revs;
   recs.reserve(o.recordings.size());
   for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
@@ -176,8 +176,7 @@ int run_validate(const ValidateOpts& o) {
   ss << f.rdbuf();
   const ident::RigidBodyModel rb = ident::RigidBodyModel::from_json(ss.str(), o.model);
   const model::RobotModel m = model::load_robot(rb.robot);
-  std::optional<device::ColumnMap> map;
-  if (!o.column_map.empty()) map = device::ColumnMap::load(o.column_map);
+  const auto map = cli::load_column_map(o.column_map);
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
   if (rec.n_dof != m.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the model's robot {}", o.recording, rec.n_dof, m.n_dof()));

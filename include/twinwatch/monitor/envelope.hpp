@@ -46,9 +46,8 @@ class EnvelopeWatch {
   /// The largest excursion seen so far (inside when none), and when.
   const Excursion& worst() const { return worst_; }
   double worst_time() const { return worst_t_; }
-  /// Timestamp of the last sample outside (NaN when none) and its excursion.
+  /// Timestamp of the last sample outside (NaN when none).
   double last_outside_time() const { return last_t_; }
-  const Excursion& last() const { return last_; }
   const ident::MotionEnvelope& envelope() const { return envelope_; }
   /// The largest excursion of the stretches outside that overlap [t0, t1] (inside when none). The
   /// last kEpisodes stretches are kept (a stretch ends after kEpisodeGap s back inside).
@@ -65,7 +64,7 @@ class EnvelopeWatch {
   ident::MotionEnvelope envelope_;
   EnvelopeMargins margins_;
   long samples_ = 0, outside_ = 0;
-  Excursion worst_, last_;
+  Excursion worst_;
   double worst_score_ = 0.0, worst_t_ = std::numeric_limits<double>::quiet_NaN();
   double last_t_ = std::numeric_limits<double>::quiet_NaN();
 };
