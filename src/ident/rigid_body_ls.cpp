@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/nonnegative_ls.hpp"
 #include "twinwatch/model/dynamics.hpp"
 
 namespace twinwatch::ident {
@@ -188,7 +189,8 @@ std::string RigidBodyModel::to_json() const {
   for (Eigen::Index r = 0; r < friction.rows(); ++r) {
     j["friction"].push_back({{"coulomb", friction(r, 0)}, {"viscous", friction(r, 1)}, {"offset", friction(r, 2)},
                              {"coulomb_std", friction_std(r, 0)}, {"viscous_std", friction_std(r, 1)},
-                             {"offset_std", friction_std(r, 2)}});
+                             {"offset_std", friction_std(r, 2)}, {"coulomb_held", bool(friction_held(r, 0))},
+                             {"viscous_held", bool(friction_held(r, 1))}});
   }
   j["sigma"] = sigma;
   j["rows_rigid"] = rows_rigid;
@@ -230,6 +232,7 @@ RigidBodyModel RigidBodyModel::from_json(const std::string& text, const std::str
     const auto& f = j.at("friction");
     m.friction.resize(static_cast<Eigen::Index>(f.size()), kFric);
     m.friction_std.setZero(static_cast<Eigen::Index>(f.size()), kFric);
+    m.friction_held.setConstant(static_cast<Eigen::Index>(f.size()), 2, false);
     for (size_t r = 0; r < f.size(); ++r) {
       field = fmt::format("friction[{}]", r);
       const auto R = static_cast<Eigen::Index>(r);
@@ -239,6 +242,8 @@ RigidBodyModel RigidBodyModel::from_json(const std::string& text, const std::str
       m.friction_std(R, 0) = f[r].value("coulomb_std", 0.0);
       m.friction_std(R, 1) = f[r].value("viscous_std", 0.0);
       m.friction_std(R, 2) = f[r].value("offset_std", 0.0);
+      m.friction_held(R, 0) = f[r].value("coulomb_held", false);
+      m.friction_held(R, 1) = f[r].value("viscous_held", false);
     }
     field = "derivative";
     if (j.contains("derivative")) {
@@ -382,6 +387,7 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
   m.beta_std = (s2 * Ainv.diagonal().head(nb)).cwiseMax(0.0).cwiseSqrt();
   m.friction.resize(n, kFric);
   m.friction_std.resize(n, kFric);
+  m.friction_held.setConstant(n, 2, false);
   for (int j = 0; j < n; ++j)
     for (int f = 0; f < kFric; ++f) {
       m.friction(j, f) = theta(nb + kFric * j + f);
@@ -432,7 +438,33 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
     for (int j = 0; j < n; ++j) {
       const size_t J = static_cast<size_t>(j);
       Eigen::MatrixXd Fi;
-      const Eigen::VectorXd x = solve_normal(F[J], g[J], &Fi, nullptr);
+      Eigen::VectorXd x = solve_normal(F[J], g[J], &Fi, nullptr);
+      if (x(0) < 0.0 || x(1) < 0.0) {
+        // friction that would push the motion along: Coulomb and viscous are held >= 0 (the
+        // offset stays free) and the rest is fitted on the face the bounds leave, as identify's
+        // current-domain fit does. The held coefficient has no spread of its own (std 0, marked).
+        const Eigen::VectorXd xb = nonnegative_ls_normal(F[J], g[J], {true, true, false});
+        std::vector<Eigen::Index> keep;
+        for (Eigen::Index f = 0; f < kFric; ++f) {
+          const bool held = f < 2 && xb(f) == 0.0;
+          if (f < 2) m.friction_held(j, f) = held;
+          if (!held) keep.push_back(f);
+        }
+        const auto K = static_cast<Eigen::Index>(keep.size());
+        Eigen::MatrixXd Fk(K, K), Fik;
+        Eigen::VectorXd gk(K);
+        for (Eigen::Index a = 0; a < K; ++a) {
+          gk(a) = g[J](keep[static_cast<size_t>(a)]);
+          for (Eigen::Index c = 0; c < K; ++c) Fk(a, c) = F[J](keep[static_cast<size_t>(a)], keep[static_cast<size_t>(c)]);
+        }
+        const Eigen::VectorXd xk = solve_normal(Fk, gk, &Fik, nullptr);
+        x.setZero();
+        Fi.setZero(kFric, kFric);
+        for (Eigen::Index a = 0; a < K; ++a) {
+          x(keep[static_cast<size_t>(a)]) = xk(a);
+          for (Eigen::Index c = 0; c < K; ++c) Fi(keep[static_cast<size_t>(a)], keep[static_cast<size_t>(c)]) = Fik(a, c);
+        }
+      }
       const double sse = std::max(0.0, e[J] - 2.0 * x.dot(g[J]) + x.dot(F[J] * x));
       const double s2j = sse / std::max(1.0, static_cast<double>(cnt[J] - kFric));
       // Cov(x) = s_j^2 (F^T F)^-1 + H Cov(beta) H^T,  H = (F^T F)^-1 F^T Y_b,j: the conditional

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/ident/nonnegative_ls.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 namespace twinwatch::ident {
@@ -152,6 +153,34 @@ std::vector<std::pair<double, double>> sine_pairs(const device::Recording& rec, 
   return out;
 }
 
+SineFriction fit_sine_friction(const std::vector<std::pair<double, double>>& pairs) {
+  const auto N = static_cast<Eigen::Index>(pairs.size());
+  Eigen::MatrixXd A(N, 2);
+  Eigen::VectorXd b(N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const auto& [qd, di] = pairs[static_cast<size_t>(k)];
+    A(k, 0) = qd > 0 ? 1.0 : (qd < 0 ? -1.0 : 0.0);
+    A(k, 1) = qd;
+    b(k) = di;
+  }
+  SineFriction f;
+  if (N == 0) return f;
+  // with mirrored pairs the free fit is consistent on a healthy joint, but a sine too slow or too
+  // short to separate the two columns can give them opposite signs, and the twin would then
+  // predict friction that drives the joint at some speeds
+  f.orientation = A.col(0).dot(b) >= 0.0 ? 1.0 : -1.0;
+  const Eigen::VectorXd x = f.orientation * nonnegative_ls(f.orientation * A, b);
+  const Eigen::Vector2d free = A.colPivHouseholderQr().solve(b);
+  f.coulomb = x(0);
+  f.viscous = x(1);
+  f.free_coulomb = free(0);
+  f.free_viscous = free(1);
+  f.coulomb_held = f.orientation * free(0) < 0.0 && x(0) == 0.0;
+  f.viscous_held = f.orientation * free(1) < 0.0 && x(1) == 0.0;
+  f.rmse = std::sqrt((A * x - b).squaredNorm() / static_cast<double>(N));
+  return f;
+}
+
 TwinModel identify_sequential(const std::string& robot, const std::vector<const device::Recording*>& quasi_static,
                               const std::vector<const device::Recording*>& sine, const std::vector<TrainingRun>& general,
                               const SequentialOptions& o, SequentialReport& report, const std::function<void(double)>& progress) {
@@ -280,18 +309,25 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
       throw InvalidArgument(fmt::format("{} (sine recording): {} mirrored sample pairs for joint {} (at least 10 in both directions "
                                         "expected): every joint must follow a sine with common turning points, faster than {} rad/s",
                                         sine.front()->path, pr.size(), j + 1, o.sine_min_speed));
-    Eigen::MatrixXd A(static_cast<long>(pr.size()), 2);
-    Eigen::VectorXd b(static_cast<long>(pr.size()));
-    for (size_t k = 0; k < pr.size(); ++k) {
-      A(static_cast<long>(k), 0) = pr[k].first > 0 ? 1.0 : -1.0;
-      A(static_cast<long>(k), 1) = pr[k].first;
-      b(static_cast<long>(k)) = pr[k].second;
+    const SineFriction f = fit_sine_friction(pr);
+    const char* const unit[2] = {"A", "A·s/rad"};
+    const char* const name[2] = {"Coulomb", "viscous"};
+    const bool held[2] = {f.coulomb_held, f.viscous_held};
+    const double free[2] = {f.free_coulomb, f.free_viscous};
+    for (int c = 0; c < 2; ++c) {
+      if (held[c])
+        report.notes.push_back(fmt::format("J{}: {} friction held at 0 (the sine pairs alone give {:.4g} {}, against the sign of the "
+                                           "joint's friction as a whole): record a sine with a wider speed range on this joint",
+                                           j + 1, name[c], free[c], unit[c]));
     }
-    const Eigen::Vector2d f = (A.transpose() * A).ldlt().solve(A.transpose() * b);
-    seq.joints[static_cast<size_t>(j)].coulomb = f(0);
-    seq.joints[static_cast<size_t>(j)].viscous = f(1);
+    if (f.orientation < 0.0)
+      report.notes.push_back(fmt::format("J{}: the friction current has the opposite sign of the velocity (Coulomb {:.4g} A): the "
+                                         "current channel counts the other way, or the recording is not the joint's",
+                                         j + 1, f.coulomb));
+    seq.joints[static_cast<size_t>(j)].coulomb = f.coulomb;
+    seq.joints[static_cast<size_t>(j)].viscous = f.viscous;
     report.friction_pairs[static_cast<size_t>(j)] = static_cast<long>(pr.size());
-    report.friction_rmse[static_cast<size_t>(j)] = std::sqrt((A * f - b).squaredNorm() / static_cast<double>(pr.size()));
+    report.friction_rmse[static_cast<size_t>(j)] = f.rmse;
   }
   if (progress) progress(0.1);
 

@@ -112,6 +112,10 @@ SequentialModel sequential_from_json(const nlohmann::json& block, int n, const s
     jm.gravity = Eigen::Map<const Eigen::VectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
     jm.coulomb = e.number("coulomb");
     jm.viscous = e.number("viscous");
+    // friction opposes motion: in current, whose sign convention may be either, the two levels
+    // share one sign (identify holds them to it)
+    if (jm.coulomb * jm.viscous < 0.0)
+      e.fail("viscous", fmt::format("expected the sign of coulomb ({}) or 0 (friction opposes the motion), got {}", jm.coulomb, jm.viscous));
     jm.intercept = e.number("intercept");
     jm.lasso_index = json_wholes(e.need("lasso_index"), origin, e.field("lasso_index"));
     jm.lasso_value = e.numbers("lasso_value");

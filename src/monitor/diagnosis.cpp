@@ -10,6 +10,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/quasi_random.hpp"
+#include "twinwatch/ident/nonnegative_ls.hpp"
 
 namespace twinwatch::monitor {
 
@@ -81,28 +82,6 @@ double ls_explained(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double t
   return std::clamp((b.squaredNorm() - sse) / total, 0.0, 1.0);
 }
 
-// least squares A x = b over two columns with x >= 0: the free solution if it is feasible, else
-// the better of the two one-column fits clamped at 0 (the KKT candidates of a two-variable NNLS)
-Eigen::Vector2d nonnegative_pair_fit(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
-  Eigen::Vector2d best = Eigen::Vector2d::Zero();
-  if (A.rows() == 0) return best;
-  const Eigen::Vector2d free = A.colPivHouseholderQr().solve(b);
-  if (free.allFinite() && free(0) >= 0.0 && free(1) >= 0.0) return free;
-  double best_sse = b.squaredNorm();
-  for (int c = 0; c < 2; ++c) {
-    const double aa = A.col(c).squaredNorm();
-    if (!(aa > 0.0)) continue;
-    Eigen::Vector2d x = Eigen::Vector2d::Zero();
-    x(c) = std::max(0.0, A.col(c).dot(b) / aa);
-    const double sse = (A * x - b).squaredNorm();
-    if (sse < best_sse) {
-      best_sse = sse;
-      best = x;
-    }
-  }
-  return best;
-}
-
 Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, double total) {
   const auto K = static_cast<Eigen::Index>(w.size());
   Eigen::MatrixXd A(K, 2);
@@ -123,7 +102,7 @@ Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, d
   // the size and split reported are those of friction that opposes motion, Coulomb and viscous
   // both >= 0: over a short window at nearly constant speed the two columns are almost collinear,
   // and the free fit can split 0.6 N·m into +4.8 N·m Coulomb and -16 N·m·s/rad viscous
-  const Eigen::Vector2d xs = nonnegative_pair_fit(A, b);
+  const Eigen::VectorXd xs = ident::nonnegative_ls(A, b);
   h.magnitude = (A * xs).cwiseAbs().mean();  // mean extra friction torque along the motion
   h.units = "N·m";
   h.detail = fmt::format("extra friction on J{} ≈ {:.2f} N·m (Coulomb {:.2f} N·m, viscous {:.2f} N·m·s/rad)", j + 1,

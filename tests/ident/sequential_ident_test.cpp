@@ -163,6 +163,49 @@ TEST(SequentialSteps, SinePairsRecoverCoulombAndViscousFriction) {
   }
 }
 
+TEST(SequentialSteps, SineFrictionKeepsBothLevelsOfOneSignWhicheverWayTheChannelCounts) {
+  // a healthy joint: the free fit is feasible and returned as is, in either current direction
+  std::vector<std::pair<double, double>> pr;
+  for (int k = 0; k < 400; ++k) {
+    const double v = (k % 2 ? 1.0 : -1.0) * (0.05 + 1.5 * k / 400.0);
+    pr.emplace_back(v, 0.4 * (v > 0 ? 1 : -1) + 0.9 * v);
+  }
+  const SineFriction f = fit_sine_friction(pr);
+  EXPECT_NEAR(f.coulomb, 0.4, 1e-9);
+  EXPECT_NEAR(f.viscous, 0.9, 1e-9);
+  EXPECT_EQ(f.orientation, 1.0);
+  EXPECT_FALSE(f.coulomb_held || f.viscous_held);
+  for (auto& p : pr) p.second = -p.second;  // a channel that counts the other way
+  const SineFriction r = fit_sine_friction(pr);
+  EXPECT_NEAR(r.coulomb, -0.4, 1e-9);
+  EXPECT_NEAR(r.viscous, -0.9, 1e-9);
+  EXPECT_EQ(r.orientation, -1.0);
+  EXPECT_FALSE(r.coulomb_held || r.viscous_held);
+
+  // a sine that only reaches 0.45-0.55 rad/s: sign(qd) and qd are nearly collinear, and noise
+  // splits 0.5 A of friction into a large Coulomb level and a negative viscous one (or the reverse)
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  int held = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<std::pair<double, double>> narrow;
+    for (int k = 0; k < 200; ++k) {
+      const double v = (k % 2 ? 1.0 : -1.0) * (0.45 + 0.1 * (k % 50) / 50.0);
+      narrow.emplace_back(v, 0.5 * (v > 0 ? 1 : -1) + 0.02 * v + noise(rng));
+    }
+    const SineFriction n = fit_sine_friction(narrow);
+    EXPECT_GE(n.coulomb, 0.0);
+    EXPECT_GE(n.viscous, 0.0);
+    if (n.coulomb_held || n.viscous_held) {
+      ++held;
+      // the free fit had one level negative, and the held fit still carries the friction
+      EXPECT_LT(std::min(n.free_coulomb, n.free_viscous), 0.0);
+      EXPECT_NEAR(n.coulomb + 0.5 * n.viscous, 0.5 + 0.02 * 0.5, 0.03);
+    }
+  }
+  EXPECT_GT(held, 5);  // the narrow sine does produce the case
+}
+
 // --- end to end on the virtual UR3e ------------------------------------------------------------
 
 device::Recording simulate(const std::string& file, double duration) {
@@ -256,6 +299,18 @@ TEST_F(Sequential, IdentifiesFromRecordingsAndPredictsAnUntrainedTrajectory) {
     ADD_FAILURE();
   } catch (const ParseError& e) {
     EXPECT_THAT(e.what(), HasSubstr("sequential.joints[0].lasso_"));
+  }
+  // friction that pushes the motion along at some speeds (levels of opposite sign) is refused
+  text = twin.to_json();
+  const auto v = text.find("\"viscous\": ");
+  ASSERT_NE(v, std::string::npos);
+  text.insert(v + 11, "-");
+  try {
+    TwinModel::from_json(text, "bad.json");
+    ADD_FAILURE();
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("sequential.joints[0].viscous"));
+    EXPECT_THAT(e.what(), HasSubstr("expected the sign of coulomb"));
   }
 }
 

@@ -151,12 +151,23 @@ int run_identify(const IdentOpts& o) {
   fmt::print("{:<6} {:>8} {:>8} {:>9} {:>20} {:>20} {:>20}\n", "joint", "rows rb", "rows f", "sigma N·m", "Fc N·m (std %)",
              "Fv N·m·s/rad (std %)", "offset N·m (std %)");
   auto pct = [](double v, double s) { return std::abs(v) > 0 ? 100.0 * s / std::abs(v) : INFINITY; };
+  // a coefficient held at its bound has no spread of its own
+  auto cell = [&](int j, int c) {
+    if (c < 2 && r.friction_held(j, c)) return fmt::format("{:.4f} (held)", r.friction(j, c));
+    return fmt::format("{:.4f} ({:.1f})", r.friction(j, c), pct(r.friction(j, c), r.friction_std(j, c)));
+  };
   for (int j = 0; j < m.n_dof(); ++j) {
     const size_t J = static_cast<size_t>(j);
     fmt::print("J{:<5} {:>8} {:>8} {:>9.4f} {:>20} {:>20} {:>20}\n", j + 1, r.rows_rigid[J], r.rows_friction[J], r.sigma[J],
-               fmt::format("{:.4f} ({:.1f})", r.friction(j, 0), pct(r.friction(j, 0), r.friction_std(j, 0))),
-               fmt::format("{:.4f} ({:.1f})", r.friction(j, 1), pct(r.friction(j, 1), r.friction_std(j, 1))),
-               fmt::format("{:.4f} ({:.1f})", r.friction(j, 2), pct(r.friction(j, 2), r.friction_std(j, 2))));
+               cell(j, 0), cell(j, 1), cell(j, 2));
+  }
+  for (int j = 0; j < m.n_dof(); ++j) {
+    for (int c = 0; c < 2; ++c) {
+      if (r.friction_held(j, c))
+        fmt::print("note: J{}: {} friction held at 0: the fit would make it negative (friction pushing the motion along), "
+                   "which no joint does: the column was taking up something else (too narrow a speed range, or model error)\n",
+                   j + 1, c == 0 ? "Coulomb" : "viscous");
+    }
   }
   int well = 0;
   for (Eigen::Index i = 0; i < r.beta.size(); ++i) well += pct(r.beta(i), r.beta_std(i)) < 10.0 ? 1 : 0;
@@ -246,7 +257,7 @@ twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
   sub->add_option("--order", o->order, "Polynomial order of that local fit")->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str();
   sub->add_flag("--ols", o->ols, "Ordinary least squares instead of weighted");
-  sub->add_flag("--no-refit", o->no_refit, "Keep the friction from the screened joint fit (no re-fit on all rows)");
+  sub->add_flag("--no-refit", o->no_refit, "Keep the friction from the screened joint fit (no re-fit on all rows; that fit does not hold Coulomb and viscous >= 0)");
   sub->add_flag("--json", o->json, "Print the model JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });

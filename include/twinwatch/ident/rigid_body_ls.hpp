@@ -69,6 +69,8 @@ struct RigidBodyModel {
   std::vector<int> base_columns;      ///< standard-parameter columns kept (regressor order, rigid body only)
   Eigen::VectorXd beta, beta_std;     ///< base parameters and their standard deviations
   Eigen::MatrixXd friction, friction_std;  ///< n_dof x 3: [Fc, Fv, offset] and standard deviations
+  /// n_dof x 2: Fc, Fv held at 0 by the friction re-fit (the free fit made them negative)
+  Eigen::Array<bool, Eigen::Dynamic, 2> friction_held;
   std::vector<double> sigma;          ///< per-joint residual std of the fit [N·m]
   std::vector<long> rows_rigid;       ///< per-joint rows used by the rigid-body fit (after the screen)
   std::vector<long> rows_friction;    ///< per-joint rows used for friction

@@ -67,4 +67,17 @@ std::vector<GravitySample> paired_holds(const device::Recording& rec, const Sequ
 /// Friction samples of step 2 for joint j: (qd_j at t1, (i_j(t1) - i_j(t2)) / 2).
 std::vector<std::pair<double, double>> sine_pairs(const device::Recording& rec, int j, const SequentialOptions& options);
 
+/// Step 2's fit of (i1 - i2) / 2 = Fc sign(qd) + Fv qd over those samples, with Fc and Fv of one
+/// sign (friction opposes motion). The sign is the friction's as a whole (the Coulomb-only fit):
+/// the fit is in current, whose direction a channel may count either way.
+struct SineFriction {
+  double coulomb = 0.0;     ///< [A]
+  double viscous = 0.0;     ///< [A·s/rad]
+  double rmse = 0.0;        ///< [A] of the fit over the samples
+  double orientation = 1;   ///< +1: friction current has the sign of qd; -1: the channel counts the other way
+  double free_coulomb = 0.0, free_viscous = 0.0;  ///< the unconstrained fit, for the notes
+  bool coulomb_held = false, viscous_held = false;  ///< held at 0 against the free fit's sign
+};
+SineFriction fit_sine_friction(const std::vector<std::pair<double, double>>& pairs);
+
 }  // namespace twinwatch::ident
