@@ -749,6 +749,29 @@ void Monitor::run_diagnosis(double t) {
   e.confidence = h.explained;
   e.detail = h.detail;
   diagnosed_ = true;
+  if (merge_into_ >= 0) {
+    const int into = merge_into_;
+    merge_into_ = -1;
+    if (e.fault == FaultClass::Collision) {
+      // a contact of its own: the earlier alert ended where it ended
+      pending_close_ = into;
+      report_pending_close();
+    } else {
+      // the earlier fault dipping below its threshold: it continues, as it was diagnosed, and
+      // this raise's own event goes (it was only ever shown as a raise, never stored)
+      Event& old = events_[static_cast<size_t>(into)];
+      old.open = true;
+      old.t_end = e.t_end;
+      old.peak_residual = std::max(old.peak_residual, e.peak_residual);
+      events_.erase(events_.begin() + open_);
+      open_ = into;
+      diagnosed_ = merged_diagnosed_;
+      rediagnosed_ = merged_rediagnosed_;
+      raise_time_ = merged_raise_time_;
+      if (on_event) on_event(events_[static_cast<size_t>(open_)]);
+      return;
+    }
+  }
   if (on_event) on_event(e);
 }
 
@@ -902,13 +925,24 @@ void Monitor::push(const RobotSample& s) {
     joint_active_[static_cast<size_t>(j)] = active;
     if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
-      // the last alert closed continues that alert instead of opening a new one
-      if (pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end < kMergeGap) {
+      // the last alert closed continues that alert when it is on the alert's joint. A raise on
+      // another joint is looked at on its own first (merge_into_), so that a contact during a
+      // persistent fault is not taken for its dip.
+      const bool recent = pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end < kMergeGap;
+      if (recent && events_[static_cast<size_t>(pending_close_)].joint == j) {
         open_ = pending_close_;
         pending_close_ = -1;
         events_[static_cast<size_t>(open_)].open = true;
+        diagnosed_ = merged_diagnosed_;
+        rediagnosed_ = merged_rediagnosed_;
+        raise_time_ = merged_raise_time_;
       } else {
-        report_pending_close();
+        if (recent) {
+          merge_into_ = pending_close_;
+          pending_close_ = -1;
+        } else {
+          report_pending_close();
+        }
         const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
         open_event(j, start, t);
       }
@@ -934,6 +968,9 @@ void Monitor::push(const RobotSample& s) {
         if (on_event) on_event(done);
       } else {
         pending_close_ = open_;
+        merged_diagnosed_ = diagnosed_;
+        merged_rediagnosed_ = rediagnosed_;
+        merged_raise_time_ = raise_time_;
       }
       open_ = -1;
     }

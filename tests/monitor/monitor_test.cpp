@@ -122,6 +122,37 @@ TEST_F(MonitorLoop, AContinuedAlertIsReportedClosedOnceWithFrictionThatOpposesMo
   EXPECT_GT(ev.front().duration(), 10.0) << "the J5 alert should span the dips, not end at the first";
 }
 
+// review of session 18: a raise within the merge gap continued the earlier alert whatever it was,
+// so a 10 N·m contact 0.6 s after a J5 resistance ended vanished into the resistance event. A raise
+// on another joint is now looked at on its own first; the resistance's own dips still continue it.
+TEST_F(MonitorLoop, AContactRightAfterAPersistentFaultIsAnEventOfItsOwn) {
+  const auto rec = run(scenario(153, 20, 0.5,
+                                "  - {type: resistance, joint: 5, onset: 9, ramp: 0.2, magnitude: 0.8, end: 12}\n"
+                                "  - {type: collision, link: 3, onset: 12.6, magnitude: 10, duration: 0.05, "
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, *config);
+  std::vector<Event> closed;
+  m.on_event = [&](const Event& e) {
+    if (!e.open) closed.push_back(e);
+  };
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const auto& ev = m.events();
+  ASSERT_EQ(ev.size(), 2u);
+  EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
+  EXPECT_EQ(ev[0].joint, 4);
+  EXPECT_LT(ev[0].t_end, 12.6) << "the resistance ended before the contact";
+  EXPECT_EQ(ev[1].fault, FaultClass::Collision) << ev[1].detail;
+  EXPECT_LT(ev[1].t_detected - 12.6, 0.05);
+  EXPECT_LT(ev[1].duration(), 0.5);
+  // each reported closed once, the earlier first
+  ASSERT_EQ(closed.size(), 2u);
+  EXPECT_EQ(closed[0].fault, FaultClass::Resistance);
+  EXPECT_EQ(closed[1].fault, FaultClass::Collision);
+}
+
 // UR3e §4.3: 0.5 kg payload loss detected within 100 ms, classified, mass within +-20 %
 TEST_F(MonitorLoop, PayloadLossIsDetectedFastAndSized) {
   const auto ev = monitor(run(scenario(604, 12, 0.5, "  - {type: payload_loss, onset: 8.5}\n")), 0.5);

@@ -269,6 +269,13 @@ class Monitor {
   void report_pending_close();
   bool diagnosed_ = false, rediagnosed_ = false;
   double raise_time_ = 0.0;
+  // a raise within kMergeGap of the pending alert opens an event of its own first: its first
+  // diagnosis decides. A collision stays separate (and the earlier alert is reported closed);
+  // anything else is the earlier fault dipping below its threshold and continues it, with the
+  // diagnosis state it had (merged_*)
+  int merge_into_ = -1;
+  bool merged_diagnosed_ = false, merged_rediagnosed_ = false;
+  double merged_raise_time_ = 0.0;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
