@@ -81,6 +81,8 @@ namespace {
 // the store's numbering version (PRAGMA user_version): 0 before session 17 (0-based, -1 none),
 // 1 since (from 1, NULL none)
 constexpr int kNumberedFromOne = 1;
+// [ms] how long a write waits for another connection's lock before it fails
+constexpr int kBusyTimeoutMs = 10000;
 
 int user_version(sqlite3* db) {
   sqlite3_stmt* s = nullptr;
@@ -111,6 +113,9 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   const int flags = mode == Mode::Read ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
   if (sqlite3_open_v2(path.c_str(), &impl_->db, flags, nullptr) != SQLITE_OK)
     fail("cannot open event store", impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory");
+  // another connection (a second monitor, 'twinwatch events', a dashboard) may hold the lock for a
+  // moment: wait for it rather than stop monitoring with "database is locked"
+  sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
   const int version = user_version(impl_->db);
   if (version > kNumberedFromOne)
     fail("cannot use event store", fmt::format("it was written by a newer twinwatch (user_version {}, this one knows 0 and {})",

@@ -3,7 +3,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <thread>
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 #include <vector>
@@ -117,6 +119,32 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
   EXPECT_EQ(rows[1].first, "robot 10.0.0.2");
   EXPECT_EQ(rows[1].second.fault, FaultClass::PayloadChange);
   EXPECT_TRUE(rows[1].second.other_links.empty());
+  std::filesystem::remove(path);
+}
+
+// review of session 18: while another connection held the lock (a second monitor, 'twinwatch
+// events' mid-read), an insert failed at once with "database is locked" and stopped the monitor
+TEST(EventStore, AnInsertWaitsForAnotherConnectionsLock) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_lock_test.db";
+  std::filesystem::remove(path);
+  EventStore store(path.string());
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open(path.string().c_str(), &other), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE;", nullptr, nullptr, nullptr), SQLITE_OK);  // holds the write lock
+  std::thread release([other] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    sqlite3_exec(other, "COMMIT;", nullptr, nullptr, nullptr);
+  });
+  Event e;
+  e.fault = FaultClass::Collision;
+  e.detail = "contact on link 3";
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_NO_THROW(store.insert(e, "live"));
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  release.join();
+  sqlite3_close(other);
+  EXPECT_EQ(store.count(), 1);
+  EXPECT_GT(waited, 0.2) << "the insert went through while the lock was held";
   std::filesystem::remove(path);
 }
 
