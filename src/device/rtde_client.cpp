@@ -476,7 +476,15 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
       }
     } else {
       const double step = raw_ts - last_raw_ts_;
-      if (step <= 0.0) {
+      if (step == 0.0) {
+        // the same controller cycle again (a resend): delivered twice it would count twice in
+        // every filter and debounce downstream
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++stats_.received;
+        ++stats_.repeated;
+        return;
+      }
+      if (step < 0.0) {
         // Not monotonic without a reconnect: a controller bug or a corrupted value. Keep the
         // sample, mark it, and keep time monotonic.
         ts_offset_ += last_raw_ts_ - raw_ts + period;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <limits>
+#include <string_view>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -30,6 +31,10 @@ constexpr double kContactReference = 0.5;
 constexpr int kObserverSettle = 50;
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
+// after a stream gap, a joint at rest decides again once it has moved this many pre-sliding
+// distances (1 / presliding_alpha): by then the twin's memory is that of the motion it sees (the
+// Dahl state is within exp(-3) = 5 % of saturation)
+constexpr double kMemoryRestore = 3.0;
 // samples at the start of a run (residual filter and acceleration estimate settling, the joint
 // breaking away from rest) that neither the threshold learning nor the decision uses: 0.1 s at 500 Hz
 constexpr long kSettleSamples = 50;
@@ -623,6 +628,9 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
 Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
     : twin_(twin), cfg_(std::move(config)), n_(twin.n_dof()), obs_(std::max(1, twin.n_dof()), cfg_.observer_gain > 0.0 ? cfg_.observer_gain : 1.0) {
   cfg_.validate(n_);
+  settle_until_ = kObserverSettle;
+  memory_unsure_.assign(static_cast<size_t>(n_), 0.0);
+  memory_from_ = VectorJ::Zero(n_);
   obs_on_ = cfg_.observer_level.size() == n_;
   obs_level_ = obs_warm_ = tau_obs_ = rf_dec_ = obs_dec_ = VectorJ::Zero(n_);
   rest_rf_ = RestBaseline(n_);
@@ -794,12 +802,92 @@ VectorJ Monitor::margin_current() const { return peaks(margin_cur_); }
 
 VectorJ Monitor::margin_observer() const { return peaks(margin_obs_); }
 
+bool Monitor::skip_invalid(const RobotSample& s) {
+  // a sample that does not advance the controller's clock: a resend (or a clock fault). Processed
+  // again, it would count twice in every debounce and filter.
+  if (have_prev_ && !(s.timestamp > t_prev_)) {
+    ++n_repeated_;
+    return true;
+  }
+  // a position, velocity or current that is not a number: the recursive filters and the observer
+  // would carry it forever (abs(nan) > level is never true: the joint would go blind)
+  int bad = -1;
+  const char* what = "";
+  for (int j = 0; j < n_ && bad < 0; ++j) {
+    if (!std::isfinite(s.q[j])) bad = j, what = "position";
+    else if (!std::isfinite(s.qd[j])) bad = j, what = "velocity";
+    else if (!std::isfinite(s.current[j])) bad = j, what = "current";
+  }
+  if (bad < 0) {
+    invalid_run_ = false;
+    return false;
+  }
+  ++n_invalid_;
+  if (!invalid_run_) {
+    const double v = std::string_view(what) == "position" ? s.q[bad] : (std::string_view(what) == "velocity" ? s.qd[bad] : s.current[bad]);
+    Event f;
+    f.t_start = f.t_end = f.t_detected = s.timestamp;
+    f.open = false;
+    f.fault = FaultClass::SensorFault;
+    f.joint = bad;
+    f.units = "";
+    f.confidence = 1.0;
+    f.detail = fmt::format("the stream's J{} {} is {}: samples are skipped until every value is finite again", bad + 1, what, v);
+    events_.push_back(f);
+    if (on_event) on_event(f);
+  }
+  invalid_run_ = true;
+  // the clock went on: the next sample is no stream gap, but what was estimated across the
+  // skipped ones restarts as after one
+  t_prev_ = s.timestamp;
+  restart_pending_ = have_prev_;
+  return true;
+}
+
+void Monitor::restart_after_gap(const RobotSample& s) {
+  // what was estimated across the gap is stale: the observer starts again (its first difference
+  // would span the gap and jump by half the drive torque's change across it), the residual filter
+  // and the acceleration estimate restart, frozen-channel runs compare nothing across it, and
+  // decisions wait the start-up samples again, as at the beginning of a run
+  obs_.reset();
+  obs_samples_ = 0;
+  filter_started_ = false;
+  for (auto& f : fir_) f.reset();
+  std::fill(frozen_run_.begin(), frozen_run_.end(), 0);
+  settle_until_ = n_samples_ + kObserverSettle;
+  // the twin's pre-sliding memory cannot follow motion it did not see: a reversal inside the gap
+  // leaves it on the wrong side, and a joint that stands still after the gap (at a turning point)
+  // shows twice its pre-sliding level as a residual. A moving joint has slid in its direction; for
+  // the others the memory is unknown, and their decisions wait until they have moved far enough
+  // to have set it again (kMemoryRestore pre-sliding distances)
+  if (memory_.primed) {
+    for (int j = 0; j < n_; ++j) {
+      const double alpha = twin_.joints[static_cast<size_t>(j)].presliding_alpha;
+      if (!(alpha > 0.0)) continue;  // no memory in this twin's joint
+      if (std::abs(s.qd[j]) > kMovingVelocity) {
+        memory_.h[j] = s.qd[j] > 0.0 ? 1.0 : -1.0;
+      } else {
+        memory_unsure_[static_cast<size_t>(j)] = kMemoryRestore / alpha;
+        memory_from_[j] = s.q[j];
+      }
+    }
+    memory_.q_prev = s.q;
+  }
+}
+
 void Monitor::push(const RobotSample& s) {
+  if (skip_invalid(s)) return;
   const double t = s.timestamp;
   ++n_samples_;
   // stream: gaps in the controller timestamp are events of their own, never interpolated
   const double dt = have_prev_ ? t - t_prev_ : cfg_.nominal_period;
-  if (have_prev_ && (s.gap_before || dt > cfg_.gap_factor * cfg_.nominal_period)) {
+  const bool gap = have_prev_ && (s.gap_before || dt > cfg_.gap_factor * cfg_.nominal_period);
+  const bool restart = gap || restart_pending_;
+  if (restart) {
+    restart_after_gap(s);
+    restart_pending_ = false;
+  }
+  if (gap) {
     ++n_gaps_;
     Event g;
     g.t_start = t_prev_;
@@ -817,7 +905,7 @@ void Monitor::push(const RobotSample& s) {
   // acceleration: the controller's target when streamed, else a filtered difference of qd
   if (s.has(kFieldTargetQdd)) {
     qdd_ = s.target_qdd;
-  } else if (have_prev_ && dt > 0.0) {
+  } else if (have_prev_ && !restart) {  // (not across a gap or skipped samples)
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }
   twin_.advance(memory_, s.q);
@@ -878,7 +966,8 @@ void Monitor::push(const RobotSample& s) {
   // frozen current channel while the joint moves: a sensor fault even below the threshold
   for (int j = 0; j < n_; ++j) {
     int& run = frozen_run_[static_cast<size_t>(j)];
-    run = (s.current[j] == frozen_val_[j] && std::abs(s.qd[j]) > kMovingVelocity) ? run + 1 : 0;
+    // (saturated past the report: a channel frozen for weeks must not overflow and report again)
+    run = (s.current[j] == frozen_val_[j] && std::abs(s.qd[j]) > kMovingVelocity) ? std::min(run + 1, cfg_.frozen_samples + 1) : 0;
     frozen_val_[j] = s.current[j];
     if (run == cfg_.frozen_samples) {
       Event f;
@@ -906,11 +995,14 @@ void Monitor::push(const RobotSample& s) {
   bool any_active = false;
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
-  const bool settled = n_samples_ > kObserverSettle;
+  const bool settled = n_samples_ > settle_until_;
   const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
   for (int j = 0; j < n_; ++j) {
-    const bool over_current = settled && std::abs(rf_dec_[j]) > level_[j];
-    const bool over_observer = observer_decides && std::abs(obs_dec_[j]) > obs_level_[j];
+    double& unsure = memory_unsure_[static_cast<size_t>(j)];
+    if (unsure > 0.0 && std::abs(s.q[j] - memory_from_[j]) >= unsure) unsure = 0.0;
+    const bool decides = unsure == 0.0;
+    const bool over_current = settled && decides && std::abs(rf_dec_[j]) > level_[j];
+    const bool over_observer = observer_decides && decides && std::abs(obs_dec_[j]) > obs_level_[j];
     Debouncer& dc = deb_[static_cast<size_t>(j)];
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);

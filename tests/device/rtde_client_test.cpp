@@ -140,6 +140,33 @@ TEST_F(RtdeLoopback, GapsAreDetectedFromTheControllerTimestamp) {
   EXPECT_EQ(st.gaps, 2);
 }
 
+// review of session 18: a resent package (the same controller cycle twice) was delivered shifted
+// by a period and marked as a gap, so the monitor processed it as a new sample and reported a
+// stream fault of "0 samples missing"
+TEST_F(RtdeLoopback, AResentCycleIsCountedAndNotDelivered) {
+  rtde::Client client(options_for(server->port()));
+  client.start();
+  wait_for_clients(*server, 1);
+  FrameMaker fm;
+  for (long k = 0; k < 200; ++k) {
+    server->publish(fm.make(k, 20.0 + 0.002 * static_cast<double>(k)));
+    if (k == 50 || k == 120) server->publish(fm.make(k, 20.0 + 0.002 * static_cast<double>(k)));  // resent
+    std::this_thread::sleep_for(100us);
+  }
+  const auto got = drain(client, 200);
+  ASSERT_EQ(got.size(), 200u);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_DOUBLE_EQ(got[i].timestamp, 20.0 + 0.002 * static_cast<double>(i));
+    EXPECT_FALSE(got[i].gap_before) << i;
+  }
+  RobotSample extra;
+  EXPECT_FALSE(client.pop(extra, 100ms));
+  const auto st = client.stats();
+  EXPECT_EQ(st.received, 202);
+  EXPECT_EQ(st.repeated, 2);
+  EXPECT_EQ(st.gaps, 0);
+}
+
 TEST_F(RtdeLoopback, NotFoundNamesAreReportedByName) {
   auto o = options_for(server->port());
   o.outputs = {"timestamp", "actual_q", "acutal_qd", "joint_temperatures", "bogus_output"};

@@ -5,6 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <nlohmann/json.hpp>
 #include <regex>
 
@@ -151,6 +153,94 @@ TEST_F(MonitorLoop, AContactRightAfterAPersistentFaultIsAnEventOfItsOwn) {
   ASSERT_EQ(closed.size(), 2u);
   EXPECT_EQ(closed[0].fault, FaultClass::Resistance);
   EXPECT_EQ(closed[1].fault, FaultClass::Collision);
+}
+
+// the samples of `rec` without those in [from, from + seconds) for each (from, seconds): stream gaps
+device::Recording without(const device::Recording& rec, const std::vector<std::pair<double, double>>& cuts) {
+  device::Recording out = rec;
+  out.samples.clear();
+  for (const auto& s : rec.samples) {
+    bool cut = false;
+    for (const auto& [from, len] : cuts) cut |= s.timestamp >= from && s.timestamp < from + len;
+    if (!cut) out.samples.push_back(s);
+  }
+  return out;
+}
+
+// review of session 18: after a stream gap (an RTDE reconnect, a stalled network) the observer's
+// first difference spanned the gap, and the twin's pre-sliding memory had not seen a reversal
+// inside it: gaps of 0.5 s and more were followed by false "collisions" and "sensor faults"
+TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
+  const auto healthy = run(scenario(610, 40, 0.5));
+  const auto gappy = without(healthy, {{4.0, 0.2}, {8.0, 0.5}, {13.0, 1.0}, {19.0, 2.0}, {25.0, 3.0}, {31.9, 1.37}});
+  const auto ev = monitor(gappy, 0.5);
+  ASSERT_EQ(ev.size(), 6u);
+  for (const auto& e : ev) EXPECT_EQ(e.fault, FaultClass::StreamFault) << e.t_start << " s: " << e.detail;
+  // and a contact 0.4 s after a 2 s gap is still found, as a contact
+  const auto hit = without(run(scenario(611, 14, 0.5,
+                                        "  - {type: collision, link: 2, onset: 10.4, magnitude: 10, duration: 0.05, "
+                                        "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n")),
+                           {{8.0, 2.0}});
+  const auto ev2 = monitor(hit, 0.5);
+  ASSERT_EQ(ev2.size(), 2u);
+  EXPECT_EQ(ev2[0].fault, FaultClass::StreamFault);
+  EXPECT_EQ(ev2[1].fault, FaultClass::Collision) << ev2[1].detail;
+  EXPECT_LT(ev2[1].t_detected - 10.4, 0.05);
+}
+
+// a controller that resends a sample: processed twice it counted twice in every debounce
+TEST_F(MonitorLoop, ASampleSentTwiceIsProcessedOnce) {
+  const auto rec = run(scenario(612, 14, 0.5,
+                                "  - {type: collision, link: 3, onset: 9.3, magnitude: 5, duration: 0.05, "
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor once(t, *config), twice(t, *config);
+  for (const auto& s : rec.samples) {
+    once.push(s);
+    twice.push(s);
+    twice.push(s);
+  }
+  once.finish();
+  twice.finish();
+  EXPECT_EQ(twice.repeated(), static_cast<long>(rec.samples.size()));
+  EXPECT_EQ(twice.samples(), once.samples());
+  ASSERT_EQ(twice.events().size(), once.events().size());
+  ASSERT_FALSE(once.events().empty());
+  for (size_t k = 0; k < once.events().size(); ++k) {
+    EXPECT_EQ(twice.events()[k].t_detected, once.events()[k].t_detected);
+    EXPECT_EQ(twice.events()[k].detail, once.events()[k].detail);
+  }
+}
+
+// a value that is not a number (a live stream is not checked like a recording): the recursive
+// filters and the observer kept it forever and the joint, or every joint, went blind
+TEST_F(MonitorLoop, ANonFiniteValueIsASensorFaultAndDoesNotBlindTheMonitor) {
+  auto rec = run(scenario(603, 16, 0.5, "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n"));
+  long spoiled = 0;
+  for (auto& s : rec.samples) {
+    if (std::abs(s.timestamp - 3.0) < 1e-4) s.current[4] = std::numeric_limits<double>::quiet_NaN(), ++spoiled;
+    if (s.timestamp > 4.0 && s.timestamp < 4.01) s.qd[0] = std::numeric_limits<double>::infinity(), ++spoiled;  // a run of them
+  }
+  ASSERT_GE(spoiled, 4);
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, *config);
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  EXPECT_EQ(m.invalid(), spoiled);
+  const auto& ev = m.events();
+  std::string all;
+  for (const auto& e : ev) all += fmt::format("{:.3f} s {}: {}\n", e.t_start, to_string(e.fault), e.detail);
+  ASSERT_EQ(ev.size(), 3u) << all;
+  EXPECT_EQ(ev[0].fault, FaultClass::SensorFault);
+  EXPECT_EQ(ev[0].joint, 4);
+  EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("J5 current is nan"));
+  EXPECT_EQ(ev[1].fault, FaultClass::SensorFault);
+  EXPECT_EQ(ev[1].joint, 0);
+  EXPECT_THAT(ev[1].detail, ::testing::HasSubstr("J1 velocity is inf"));
+  EXPECT_EQ(ev[2].fault, FaultClass::Resistance) << ev[2].detail;
+  EXPECT_EQ(ev[2].joint, 4);
 }
 
 // UR3e §4.3: 0.5 kg payload loss detected within 100 ms, classified, mass within +-20 %

@@ -270,8 +270,8 @@ int run_monitor(const MonitorOptions& o) {
     if (copy) copy->close();
     const auto st = client->stats();
     if (!o.quiet && !o.json)
-      fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors\n", st.received, st.lost, st.gaps,
-                 st.reconnects, st.protocol_errors);
+      fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors, {} resent\n", st.received, st.lost,
+                 st.gaps, st.reconnects, st.protocol_errors, st.repeated);
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
@@ -282,7 +282,11 @@ int run_monitor(const MonitorOptions& o) {
                watch.samples_outside(), watch.samples(), 100.0 * static_cast<double>(watch.samples_outside()) / static_cast<double>(watch.samples()),
                watch.worst().describe(watch.envelope()), watch.worst_time());
   if (!o.quiet && !o.json)
-    fmt::print("{} samples, {} gap(s), {} event(s){}\n", mon.samples(), mon.gaps(), mon.events().size(),
+    fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
+               mon.repeated() + mon.invalid() > 0
+                   ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value not a number)", mon.repeated() + mon.invalid(),
+                                 mon.repeated(), mon.invalid())
+                   : "",
                o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));
   return 0;
 }

@@ -125,6 +125,7 @@ int run_record(const RecordOptions& o) {
                         {"dropped", st.dropped},
                         {"reconnects", st.reconnects},
                         {"protocol_errors", st.protocol_errors},
+                        {"resent", st.repeated},
                         {"text_messages", st.text_messages},
                         {"arrival_jitter_p99_ms", 1e3 * st.arrival_p99_s},
                         {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},

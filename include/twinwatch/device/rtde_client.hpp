@@ -77,6 +77,7 @@ struct ClientStats {
   long gaps = 0;             ///< gaps (timestamp jumps or reconnects)
   long reconnects = 0;       ///< successful handshakes after the first
   long protocol_errors = 0;  ///< malformed packages (skipped) and corrupt streams (reconnected)
+  long repeated = 0;         ///< packages with the previous one's controller timestamp (resends: not delivered)
   long text_messages = 0;
   double max_step_error_s = 0.0;   ///< largest |timestamp step − period| outside gaps
   double arrival_p99_s = 0.0;      ///< 99th percentile of |arrival interval − period|

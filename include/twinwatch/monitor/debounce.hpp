@@ -24,7 +24,7 @@ class Debouncer {
   Change update(bool exceeded, double t) {
     if (exceeded) {
       if (above_ == 0) run_start_ = t;
-      ++above_;
+      if (above_ < raise_after_) ++above_;  // saturated: an alert active for months must not overflow
       below_ = 0;
       if (!active_ && above_ >= raise_after_) {
         active_ = true;

@@ -222,8 +222,13 @@ class Monitor {
   VectorJ margin_observer() const;
   /// All events so far (closed and open).
   const std::vector<Event>& events() const { return events_; }
+  /// Samples processed; gaps in the controller timestamp; samples skipped because their timestamp
+  /// did not advance (a resend); samples skipped because a position, velocity or current was not
+  /// finite (each run of them is one SensorFault event).
   long samples() const { return n_samples_; }
   long gaps() const { return n_gaps_; }
+  long repeated() const { return n_repeated_; }
+  long invalid() const { return n_invalid_; }
   /// The slow-wear trend detector (per-window friction, residual energy, I_total history).
   const TrendDetector& trend() const { return trend_; }
   /// The twin with the monitor's payload (set it when the program changes the payload).
@@ -231,6 +236,8 @@ class Monitor {
 
  private:
   void open_event(int joint, double start, double t);
+  bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
+  void restart_after_gap(const RobotSample& s);
   void run_diagnosis(double t);
   VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
@@ -257,7 +264,12 @@ class Monitor {
   std::vector<int> frozen_run_;
   double i_total_ = 0.0, t_prev_ = 0.0;
   bool have_prev_ = false, filter_started_ = false;
-  long n_samples_ = 0, n_gaps_ = 0;
+  long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
+  bool invalid_run_ = false;  // the last sample was skipped as non-finite (one event per run)
+  bool restart_pending_ = false;  // samples were skipped: the next one restarts the estimators
+  long settle_until_ = 0;     // decisions start after this many samples (kObserverSettle; again after a gap)
+  std::vector<double> memory_unsure_;  // per joint: [rad] it must move after a gap before it decides again (0: decides)
+  VectorJ memory_from_;                // where it stood after the gap
   // ring buffer of recent samples for the diagnosis
   std::vector<DiagnosisSample> ring_;
   size_t ring_head_ = 0, ring_count_ = 0;
