@@ -59,6 +59,7 @@ constexpr TargetInfo kTargets[] = {
 
 constexpr int kHistBins = 2000;  // 10 µs bins up to 20 ms
 constexpr double kHistBin = 10e-6;
+constexpr int kStillTryingEvery = 30;  // [s] between "still no connection" warnings while reconnecting
 
 double cpu_seconds_this_thread() {
   rusage u{};
@@ -306,6 +307,7 @@ ClientStats Client::stats() const {
 
 void Client::read_loop() {
   double backoff = opt_.backoff_initial_s;
+  auto warned = Clock::now();  // the last "still no connection" (a user watching the log must see it is still trying)
   while (!stop_) {
     if (fd_ >= 0) {
       stream(fd_);
@@ -320,6 +322,7 @@ void Client::read_loop() {
       pending_gap_ = true;
       reconnected_ = true;
       backoff = opt_.backoff_initial_s;
+      warned = lost_at_;
     }
     // Back off, then reconnect with the full handshake.
     const auto wake = Clock::now() + std::chrono::duration<double>(backoff);
@@ -346,6 +349,11 @@ void Client::read_loop() {
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.last_error = e.what();
       backoff = std::min(opt_.backoff_max_s, backoff * 2.0);
+      if (Clock::now() - warned >= std::chrono::seconds(kStillTryingEvery)) {
+        warned = Clock::now();
+        log::warn(fmt::format("rtde: still no connection to {}:{} after {:.0f} s ({}); retrying every {:.1f} s", opt_.host, opt_.port,
+                              std::chrono::duration<double>(warned - lost_at_).count(), e.what(), backoff));
+      }
     }
   }
   if (fd_ >= 0 && stop_) {

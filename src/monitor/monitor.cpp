@@ -1085,6 +1085,25 @@ void Monitor::report_pending_close() {
   if (on_event) on_event(e);
 }
 
+void Monitor::stream_silent(double seconds) {
+  if (!have_prev_ || !(seconds > 0.0)) return;
+  ++n_gaps_;
+  Event g;
+  g.t_start = t_prev_;
+  g.t_end = t_prev_ + seconds;
+  g.t_detected = g.t_end;
+  g.open = false;
+  g.fault = FaultClass::StreamFault;
+  g.magnitude = std::round(seconds / cfg_.nominal_period);
+  g.units = "samples";
+  g.confidence = 1.0;
+  g.detail = fmt::format("no data for the last {:.1f} s of monitoring (the connection was lost and not restored): nothing after "
+                         "{:.3f} s was watched",
+                         seconds, t_prev_);
+  events_.push_back(g);
+  if (on_event) on_event(g);
+}
+
 void Monitor::finish() {
   report_pending_close();
   if (open_ < 0) return;

@@ -19,3 +19,10 @@ set_tests_properties(cli.rtde_monitor_live PROPERTIES FIXTURES_REQUIRED twin TIM
 # serve-robot --wait-client waits for a client that streams (START), not one that only connects
 add_test(NAME cli.serve_robot_help_wait_client COMMAND twinwatch serve-robot --help)
 set_tests_properties(cli.serve_robot_help_wait_client PROPERTIES PASS_REGULAR_EXPRESSION "--wait-client[^\n]*until a client starts streaming")
+# a connection lost and not restored before monitoring ends is a stream fault in the event history
+# (it used to read as watched: "0 lost in 0 gaps", no event)
+add_test(NAME cli.rtde_monitor_lost_until_the_end
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35919 --speed 8 --duration 2 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35919 --wait 10 --duration 3 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json; wait")
+set_tests_properties(cli.rtde_monitor_lost_until_the_end PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring")

@@ -41,8 +41,12 @@ struct MonitorOptions {
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   std::string program;  // threshold set of this program ("" = the default set)
-  bool static_threshold = false, quiet = false, json = false;
+  bool static_threshold = false, quiet = false, json = false, no_reconnect = false;
 };
+
+// [s] a live stream silent this long at the end of monitoring was lost (the client gives up on a
+// stalled connection after 1 s and reconnects)
+constexpr double kSilentEnd = 1.5;
 
 constexpr const char* kColumnMapHelp =
     "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
@@ -147,8 +151,8 @@ int run_monitor(const MonitorOptions& o) {
   std::unique_ptr<device::rtde::Client> client;
   const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
   if (o.rtde.empty()) {
-    if (o.duration > 0 || o.wait > 0 || !o.record_to.empty())
-      throw InvalidArgument("--duration, --wait and --record apply to --rtde; a recording is watched whole");
+    if (o.duration > 0 || o.wait > 0 || !o.record_to.empty() || o.no_reconnect)
+      throw InvalidArgument("--duration, --wait, --record and --no-reconnect apply to --rtde; a recording is watched whole");
     const auto map = cli::load_column_map(o.column_map);
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
@@ -161,6 +165,7 @@ int run_monitor(const MonitorOptions& o) {
     cli::RtdeSourceOptions so;
     so.endpoint = o.rtde;
     so.wait_s = o.wait;
+    so.reconnect = !o.no_reconnect;
     cli::install_interrupt_handler();
     client = cli::open_rtde(so);
     cfg.nominal_period = 1.0 / client->stats().frequency;
@@ -205,6 +210,7 @@ int run_monitor(const MonitorOptions& o) {
         fmt::print("{:9.3f} s  ALERT  {} (above the threshold since {:.3f} s)\n", e.t_detected, e.detail, e.t_start);
       else
         fmt::print("{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", e.t_end, e.detail, e.t_detected);
+      std::fflush(stdout);
       raise_shown = e.t_detected;
       return;
     }
@@ -214,9 +220,11 @@ int run_monitor(const MonitorOptions& o) {
     if (jl.is_open()) {
       errno = 0;
       jl << e.to_json_line() << '\n';
+      jl.flush();  // one line per event when it ends: 'tail -f' and a crash must see it
       check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
     }
     if (o.json) fmt::print("{}\n", e.to_json_line());
+    std::fflush(stdout);  // the same for a pipe or a log file
     if (store) store->insert(e, source);
   };
   // --trace: what the decision saw, per sample and joint (to plot a false alarm or a late detection)
@@ -254,9 +262,11 @@ int run_monitor(const MonitorOptions& o) {
     if (!o.record_to.empty()) copy = std::make_unique<device::RecordingWriter>(o.record_to, 6, client->sample_fields());
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.duration > 0 ? o.duration : 1e9);
     RobotSample s;
+    auto last_sample = std::chrono::steady_clock::now();
     while (!cli::interrupted() && std::chrono::steady_clock::now() < end) {
       if (client->pop(s, std::chrono::milliseconds(50))) {
         push(s);
+        last_sample = std::chrono::steady_clock::now();
         if (copy) copy->write(s);
       } else if (client->finished()) {
         break;
@@ -265,8 +275,18 @@ int run_monitor(const MonitorOptions& o) {
     client->stop();
     while (client->pop(s, std::chrono::nanoseconds(0))) {  // what was received is still analysed
       push(s);
+      last_sample = std::chrono::steady_clock::now();
       if (copy) copy->write(s);
     }
+    // a connection lost and not restored before the end: that stretch was not watched, and the
+    // event history must say so (a gap is otherwise only seen when data come back). With
+    // --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for.
+    const auto stopped = std::chrono::steady_clock::now();
+    const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
+    const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
+    if (!cli::interrupted() && client->stats().received > 0 && silent > (cut_short ? 0.1 : kSilentEnd)) mon.stream_silent(silent);
+    if (o.no_reconnect && client->finished() && !cli::interrupted() && !o.quiet && !o.json)
+      fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
     if (copy) copy->close();
     const auto st = client->stats();
     if (!o.quiet && !o.json)
@@ -384,6 +404,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(CLI::NonNegativeNumber);
+  sub->add_flag("--no-reconnect", o->no_reconnect,
+                "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
+                "reconnecting with back-off");
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none)");

@@ -26,6 +26,10 @@
 
 namespace {
 
+// [s] a stream silent this long at the end was lost (the client gives up on a stalled connection
+// after 1 s and reconnects)
+constexpr double kSilentEnd = 1.5;
+
 using namespace twinwatch;
 namespace rtde = device::rtde;
 using Clock = std::chrono::steady_clock;
@@ -83,11 +87,13 @@ int run_record(const RecordOptions& o) {
   auto next_status = t0;
   RobotSample s;
   double t_first = std::numeric_limits<double>::quiet_NaN(), t_last = t_first;
+  auto last_sample = t0;
   while (Clock::now() < end && !interrupted()) {
     if (client.pop(s, std::chrono::milliseconds(50))) {
       writer.write(s);
       if (std::isnan(t_first)) t_first = s.timestamp;
       t_last = s.timestamp;
+      last_sample = Clock::now();
     } else if (client.finished()) {
       break;
     }
@@ -99,12 +105,20 @@ int run_record(const RecordOptions& o) {
       next_status += std::chrono::milliseconds(250);
     }
   }
+  // the connection lost and not restored (or not reconnected, --no-reconnect) before the end: the
+  // recording is shorter than asked, and the summary says by how much
+  const auto stopped = Clock::now();
   client.stop();
   while (client.pop(s, std::chrono::nanoseconds(0))) {  // nothing already received is lost
     writer.write(s);
     t_last = s.timestamp;
+    last_sample = stopped;
   }
   writer.close();
+  // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for)
+  const bool cut_short = stopped + std::chrono::milliseconds(100) < end;
+  const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
+  const bool ended_early = !interrupted() && silent > (cut_short ? 0.1 : kSilentEnd);
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();
@@ -131,6 +145,7 @@ int run_record(const RecordOptions& o) {
                         {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},
                         {"client_cpu_percent", cpu_pct},
                         {"interrupted", interrupted()},
+                        {"silent_at_end_s", ended_early ? silent : 0.0},
                         {"error", fatal.empty() ? nlohmann::json() : nlohmann::json(fatal)}};
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
@@ -139,6 +154,10 @@ int run_record(const RecordOptions& o) {
                o.output, writer.rows(), std::isnan(t_first) ? 0.0 : t_last - t_first, co.host, co.port, st.lost, st.gaps,
                st.reconnects, st.dropped, st.protocol_errors, 1e3 * st.arrival_p99_s, cpu_pct);
   }
+  if (ended_early && !o.quiet)
+    log::warn(fmt::format("{}: no data for the last {:.1f} s of the {:g} s asked for (the connection was lost{}): the recording "
+                          "ends at {:.3f} s of controller time",
+                          o.output, silent, o.duration, o.no_reconnect ? ", and --no-reconnect" : " and not restored", t_last));
   if (!fatal.empty()) {
     std::fprintf(stderr, "error: %s\n", fatal.c_str());
     return 1;

@@ -199,6 +199,10 @@ class Monitor {
   void push(const RobotSample& s);
   /// Closes an open alert at the end of a run.
   void finish();
+  /// The stream went silent for its last `seconds` (a live connection lost and not restored before
+  /// monitoring ended): a StreamFault event from the last sample over that time, so that the event
+  /// history does not read as watched. Call before finish(); nothing before the first sample.
+  void stream_silent(double seconds);
 
   std::function<void(const Event&)> on_event;
 
