@@ -141,10 +141,27 @@ std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
 }
 
 // the monitor's residual filters (first-order IIR, or the FIR where configured) over a whole run
+// The acceleration the monitor uses at each sample (Monitor::push): the controller's target when
+// streamed, else the causal filtered difference of qd (a threshold learned on a zero-phase
+// derivative would not be the one the monitor's residual meets)
+std::vector<VectorJ> monitor_accelerations(const device::Recording& rec, double alpha, double gap_period) {
+  if (rec.present & kFieldTargetQdd) return ident::joint_accelerations(rec);
+  std::vector<VectorJ> out(rec.samples.size());
+  VectorJ qdd = VectorJ::Zero(rec.n_dof);
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    if (k > 0) {
+      const double dt = rec.samples[k].timestamp - rec.samples[k - 1].timestamp;
+      if (dt > 0.0 && dt <= gap_period && !rec.samples[k].gap_before) qdd += alpha * ((rec.samples[k].qd - rec.samples[k - 1].qd) / dt - qdd);
+    }
+    out[k] = qdd;
+  }
+  return out;
+}
+
 std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const device::Recording& rec, double alpha,
                                         std::vector<VectorJ>& qdds, const MonitorConfig& c) {
   auto fir = make_fir_filters(c, twin.n_dof());
-  qdds = ident::joint_accelerations(rec);
+  qdds = monitor_accelerations(rec, alpha, c.gap_factor * (rec.median_period > 0.0 ? rec.median_period : c.nominal_period));
   std::vector<VectorJ> out;
   out.reserve(rec.samples.size());
   VectorJ i, rf;
@@ -500,7 +517,12 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   if (runs.empty()) throw InvalidArgument("learn thresholds: no healthy runs given");
   const int n = twin.n_dof();
   MonitorConfig c = settings;
-  const double alpha = iir_alpha(c.filter_cutoff_hz, c.nominal_period);
+  // the residual filter at each run's own rate, as the monitor runs it (a 1 kHz log filtered with a
+  // 500 Hz coefficient is smoothed half as much, and its thresholds come out too low)
+  if (runs.front().recording != nullptr && runs.front().recording->median_period > 0.0) c.nominal_period = runs.front().recording->median_period;
+  const auto alpha_of = [&](const HealthyRun& h) {
+    return iir_alpha(c.filter_cutoff_hz, h.recording != nullptr && h.recording->median_period > 0.0 ? h.recording->median_period : c.nominal_period);
+  };
   std::vector<std::vector<VectorJ>> res, obs_res;
   std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
       ro(static_cast<size_t>(n));
@@ -510,7 +532,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     ident::TwinModel t = twin;
     t.set_payload(h.payload);
     std::vector<VectorJ> qdds;
-    auto rf = filtered_residuals(t, *h.recording, alpha, qdds, c);
+    auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c);
     // skip the filter's start-up
     const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
     for (size_t k = skip; k < rf.size(); ++k) {

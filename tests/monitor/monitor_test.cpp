@@ -304,6 +304,30 @@ TEST_F(MonitorLoop, TheMarginOfAHealthyRunIsTheSensitivityOfItsFirstAlarm) {
   EXPECT_THROW(late.track_margin(), InvalidArgument);
 }
 
+// review of session 18: thresholds were learned with the residual filter of the twin's stored
+// rate (500 Hz) whatever the recording's, and with a zero-phase acceleration where the monitor uses
+// a causal one: on a 250 Hz log without target accelerations the static thresholds, at least 1.1x
+// the training peak by construction, were exceeded on the very recording they were learned on
+TEST_F(MonitorLoop, ThresholdsLearnedAtARecordingsOwnRateHoldOnThatRecording) {
+  const auto full = run(scenario(613, 24, 0.5));
+  device::Recording slow = full;
+  slow.samples.clear();
+  for (size_t k = 0; k < full.samples.size(); k += 2) slow.samples.push_back(full.samples[k]);
+  slow.median_period = 0.004;
+  slow.present &= ~kFieldTargetQdd;  // a foreign log: the monitor differentiates qd itself
+  MonitorConfig learned = learn_thresholds(*twin, {{&slow, payload}});
+  EXPECT_DOUBLE_EQ(learned.nominal_period, 0.004);
+  learned.use_dynamic = false;  // the static level: 1.1x the training peak at least
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, learned);
+  m.track_margin();
+  for (const auto& s : slow.samples) m.push(s);
+  m.finish();
+  EXPECT_TRUE(m.events().empty()) << m.events().front().detail;
+  EXPECT_LE(m.margin_current().maxCoeff(), 1.0 / 1.1 + 1e-9);
+}
+
 // The observer's debounce per joint, chosen on a healthy validation run the thresholds were not
 // learned on. Checked: one exceedance's peak is never below two's (the run-minimum of two samples);
 // the chosen count of every joint is the smallest whose validation ratio is below 1 and below the

@@ -14,6 +14,7 @@
 
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/envelope.hpp"
@@ -150,6 +151,15 @@ int run_monitor(const MonitorOptions& o) {
   device::Recording rec;
   std::unique_ptr<device::rtde::Client> client;
   const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
+  // the residual filter and the acceleration estimate run at the data's rate; thresholds learned
+  // at another one do not fit them (a 1 kHz log against a 500 Hz set is filtered differently)
+  const auto use_rate = [&](double period, const std::string& what) {
+    if (std::abs(period / cfg.nominal_period - 1.0) > 0.05)
+      log::warn(fmt::format("{} runs at {:.0f} Hz and the thresholds were learned at {:.0f} Hz: they may not fit; learn a set at this "
+                            "rate ('twinwatch thresholds --twin {} HEALTHY.csv...')",
+                            what, 1.0 / period, 1.0 / cfg.nominal_period, o.twin));
+    cfg.nominal_period = period;
+  };
   if (o.rtde.empty()) {
     if (o.duration > 0 || o.wait > 0 || !o.record_to.empty() || o.no_reconnect)
       throw InvalidArgument("--duration, --wait, --record and --no-reconnect apply to --rtde; a recording is watched whole");
@@ -157,7 +167,7 @@ int run_monitor(const MonitorOptions& o) {
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
-    if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
+    if (rec.median_period > 0) use_rate(rec.median_period, o.recording);
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
@@ -168,7 +178,7 @@ int run_monitor(const MonitorOptions& o) {
     so.reconnect = !o.no_reconnect;
     cli::install_interrupt_handler();
     client = cli::open_rtde(so);
-    cfg.nominal_period = 1.0 / client->stats().frequency;
+    use_rate(1.0 / client->stats().frequency, "the stream");
     if (!o.quiet && !o.json)
       fmt::print(stderr, "monitoring {} ({}){}; Ctrl-C stops\n", o.rtde, cli::describe(*client),
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
