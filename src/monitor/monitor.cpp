@@ -696,6 +696,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   TrendConfig tc = cfg_.trend;
   tc.temperature_slope = VectorJ::Zero(n_);
   trend_ = TrendDetector(twin_, tc, g, twin_.gains_known() ? "N·m" : "A");
+  trend_.set_temperature_compensated(cfg_.trend.temperature_slope.size() == n_);
 }
 
 double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
@@ -1094,6 +1095,10 @@ void Monitor::push(const RobotSample& s) {
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0)) {
     events_.push_back(trend_.warning());
     if (on_event) on_event(events_.back());
+  }
+  if (std::string note; trend_.take_note(note)) {
+    notes_.push_back(note);
+    if (on_note) on_note(t, note);
   }
   qd_prev_ = s.qd;
   t_prev_ = t;

@@ -24,6 +24,12 @@ constexpr long kMinFitSamples = 50;
 constexpr int kDebounce = 2;
 // temperature span [°C] a learning run must cover for a slope to be learnable
 constexpr double kMinTemperatureSpan = 1.0;
+// cooling [°C] over the trend windows that, without a learned temperature slope, explains a rise
+// of the friction estimate (TrendDetector::take_note)
+constexpr double kUncompensatedSpan = 1.0;
+// the largest relative change of viscous friction per °C taken as cooling alone [1/°C]: twice the
+// virtual robot's 2 %/°C; gear oils lose about half their viscosity per 15-20 °C
+constexpr double kMaxViscousPerDegree = 0.04;
 
 double sgn(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 }  // namespace
@@ -85,6 +91,7 @@ TrendDetector::TrendDetector(const ident::TwinModel& twin, TrendConfig config, c
   for (int j = 0; j < n_; ++j)
     if (!(gain[j] > 0.0)) throw InvalidArgument(fmt::format("trend gain of joint {} is {}, must be > 0", j + 1, gain[j]));
   gain_ = gain;
+  compensated_ = cfg_.temperature_slope.size() == n_;
   if (cfg_.temperature_slope.size() == 0) cfg_.temperature_slope = VectorJ::Zero(n_);
   // window: whole program periods when the period is known
   window_ = cfg_.window_s;
@@ -104,6 +111,7 @@ TrendDetector::TrendDetector(const ident::TwinModel& twin, TrendConfig config, c
   twin_t_.reserve(H + 1);
   streak_.assign(static_cast<size_t>(n_), 0);
   warned_.assign(static_cast<size_t>(n_), false);
+  noted_.assign(static_cast<size_t>(n_), false);
   xs_.reserve(H + 1);
   ys_.reserve(H + 1);
   scratch_.reserve(H * (H + 1) / 2);
@@ -219,12 +227,14 @@ bool TrendDetector::test_joint(int j, double t) {
   // the valid windows after the baseline (v_ref is settled from there on)
   xs_.clear();
   ys_.clear();
+  ts_.clear();
   const auto& h = hist_[J];
   const long skip = std::max(0L, static_cast<long>(cfg_.baseline_windows) - static_cast<long>(windows_ - static_cast<int>(h.size())));
   for (size_t k = static_cast<size_t>(std::max(0L, skip)); k < h.size(); ++k)
     if (h[k].valid) {
       xs_.push_back(h[k].t / kSecondsPerHour);
       ys_.push_back(h[k].friction);
+      ts_.push_back(h[k].temperature);
     }
   if (static_cast<int>(xs_.size()) < cfg_.min_windows - cfg_.baseline_windows) return false;
   z_[j] = mann_kendall_z(ys_);
@@ -233,6 +243,32 @@ bool TrendDetector::test_joint(int j, double t) {
   const bool significant = z_[j] >= cfg_.z_crit && rate_pct >= cfg_.min_rate_pct_per_h;
   streak_[J] = significant ? streak_[J] + 1 : 0;
   if (warned_[J] || streak_[J] < cfg_.persist) return false;
+  // no temperature slope learned: a joint that cooled over these windows has a healthy viscous
+  // friction that rose with it (a program lighter than the one before it, a robot that started
+  // warm). A rise no larger than cooling could cause at kMaxViscousPerDegree is not taken for wear:
+  // said once, instead of a warning. A larger one is still warned about.
+  if (!compensated_) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    bool all = !ts_.empty();
+    for (const double T : ts_) {
+      all &= std::isfinite(T);
+      lo = std::min(lo, T);
+      hi = std::max(hi, T);
+    }
+    const double cooled = all && theil_sen_slope(xs_, ts_, scratch_) < 0.0 ? hi - lo : 0.0;
+    const double rise = slope_[j] * (xs_.back() - xs_.front());
+    const double by_cooling = kMaxViscousPerDegree * cooled * gain_[j] * twin_fv_[j] * v_ref_[j];
+    if (cooled >= kUncompensatedSpan && rise <= by_cooling) {
+      if (!noted_[J]) {
+        noted_[J] = true;
+        note_ = fmt::format("J{}: friction rising {:+.1f} %/h of nominal while the joint cooled from {:.1f} to {:.1f} °C; the twin has "
+                            "no temperature slope of its viscous friction, so this may be the cooling, not wear: no wear warning "
+                            "(learn the slope on a warm-up from cold: 'twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",
+                            j + 1, rate_pct, ts_.front(), ts_.back());
+      }
+      return false;
+    }
+  }
   warned_[J] = true;
   // the warning: joint, rate, projected time until the excess reaches the threshold
   Event& e = warning_;
@@ -253,6 +289,13 @@ bool TrendDetector::test_joint(int j, double t) {
       "at this rate the residual reaches the alarm threshold in {}",
       j + 1, rate_pct, slope_[j], units_, z_[j], xs_.size(),
       std::isfinite(eta_h) ? fmt::format("{:.1f} h", eta_h) : std::string("(no threshold headroom measured)"));
+  return true;
+}
+
+bool TrendDetector::take_note(std::string& note) {
+  if (note_.empty()) return false;
+  note = std::move(note_);
+  note_.clear();
   return true;
 }
 

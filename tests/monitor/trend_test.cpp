@@ -163,6 +163,29 @@ TEST(TrendDetector, TemperatureCompensationRemovesATemperatureOnlyDrift) {
   EXPECT_TRUE(comp.empty()) << comp[0].detail;
 }
 
+// review of session 18: a twin without a learned temperature slope monitoring a robot that cools
+// (it started warm, or the program is lighter) warned of wear on healthy joints. A rise within what
+// cooling explains (at 4 %/°C of the viscous friction) is a note now; a larger one is still warned
+// about (FlagsAKnownSlopeOnTheRightJointWithItsRate cools as well)
+TEST(TrendDetector, WithoutATemperatureSlopeACoolingJointIsANoteNotWear) {
+  Synthetic s;
+  s.temp_slope = -0.002;  // viscous friction 2 %/°C higher when colder, as the virtual robot's
+  s.joint = -1;
+  TrendConfig cfg;
+  TrendDetector det;
+  const auto ev = run_synthetic(s, cfg, &det);
+  EXPECT_TRUE(ev.empty()) << ev[0].detail;
+  std::string note;
+  ASSERT_TRUE(det.take_note(note));
+  EXPECT_THAT(note, HasSubstr("while the joint cooled from"));
+  EXPECT_THAT(note, HasSubstr("no wear warning"));
+  // with the slope learned the drift is compensated and nothing is said
+  cfg.temperature_slope = VectorJ::Constant(6, s.temp_slope);
+  TrendDetector comp;
+  EXPECT_TRUE(run_synthetic(s, cfg, &comp).empty());
+  EXPECT_FALSE(comp.take_note(note));
+}
+
 TEST(TrendLearning, RecoversTheTemperatureSlopeOfTheViscousFriction) {
   // a recording whose current is the twin's friction plus k_T qd (T - T_ref): warm-up from 22 °C
   const ident::TwinModel twin = friction_only_twin();

@@ -237,6 +237,11 @@ int run_monitor(const MonitorOptions& o) {
     std::fflush(stdout);  // the same for a pipe or a log file
     if (store) store->insert(e, source);
   };
+  mon.on_note = [&](double t, const std::string& note) {
+    if (o.quiet || o.json) return;
+    fmt::print("{:9.3f} s  note: {}\n", t, note);
+    std::fflush(stdout);
+  };
   // --trace: what the decision saw, per sample and joint (to plot a false alarm or a late detection)
   std::ofstream trace;
   if (!o.trace.empty()) {

@@ -205,6 +205,10 @@ class Monitor {
   void stream_silent(double seconds);
 
   std::function<void(const Event&)> on_event;
+  /// What the monitor has to say that is no event (e.g. a friction trend it cannot tell from
+  /// cooling): controller time [s] and the text. Also kept in notes().
+  std::function<void(double, const std::string&)> on_note;
+  const std::vector<std::string>& notes() const { return notes_; }
 
   /// Outputs of the last sample.
   const VectorJ& predicted_current() const { return i_hat_; }
@@ -278,6 +282,7 @@ class Monitor {
   std::vector<DiagnosisSample> ring_;
   size_t ring_head_ = 0, ring_count_ = 0;
   std::vector<Event> events_;
+  std::vector<std::string> notes_;
   int open_ = -1;             // index of the open event
   // a closed alert (not a collision) whose closing is reported only once no raise within
   // kMergeGap continues it: a persistent fault that dips at reversals is one event, reported once

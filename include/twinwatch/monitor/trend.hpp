@@ -100,6 +100,14 @@ class TrendDetector {
 
   /// The warning raised by the last push (valid when push returned true).
   const Event& warning() const { return warning_; }
+  /// A note instead of a warning, once per joint: without a learned temperature slope, a friction
+  /// rise over windows in which the joint cooled by 1 °C or more is what cooling does
+  /// to a healthy joint's viscous friction, not evidence of wear. True (and the note) once after the
+  /// push that found it.
+  bool take_note(std::string& note);
+  /// Whether the residuals pushed are compensated for temperature (default: when the config has a
+  /// slope; an owner that compensates them itself and passes a zero slope says so here).
+  void set_temperature_compensated(bool on) { compensated_ = on; }
   /// Per-window history of joint j (oldest first; bounded by config.history).
   const std::vector<TrendPoint>& history(int j) const { return hist_[static_cast<size_t>(j)]; }
   /// Mean total current of each closed window [A] (UR3e Fig. 12), oldest first.
@@ -137,8 +145,10 @@ class TrendDetector {
   std::vector<std::vector<TrendPoint>> hist_;
   std::vector<double> itot_, twin_t_;
   std::vector<int> streak_;
-  std::vector<bool> warned_;
-  std::vector<double> xs_, ys_, scratch_;
+  std::vector<bool> warned_, noted_;
+  std::vector<double> xs_, ys_, ts_, scratch_;
+  std::string note_;
+  bool compensated_ = false;
   Event warning_;
   bool warn_pending_ = false;
 };
