@@ -679,6 +679,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   joint_active_.assign(static_cast<size_t>(n_), 0);
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
+  frozen_event_.assign(static_cast<size_t>(n_), -1);
+  frozen_since_ = VectorJ::Zero(n_);
   const size_t cap = static_cast<size_t>(std::ceil((kContactReference + cfg_.diagnosis_pre + kLongWindow + 0.2) / cfg_.nominal_period));
   ring_.resize(cap);
   for (auto& d : ring_) {
@@ -795,6 +797,8 @@ void Monitor::run_diagnosis(double t) {
       old.t_end = e.t_end;
       old.peak_residual = std::max(old.peak_residual, e.peak_residual);
       events_.erase(events_.begin() + open_);
+      for (int& k : frozen_event_)
+        if (k > open_) --k;
       open_ = into;
       diagnosed_ = merged_diagnosed_;
       rediagnosed_ = merged_rediagnosed_;
@@ -986,27 +990,40 @@ void Monitor::push(const RobotSample& s) {
   ring_head_ = (ring_head_ + 1) % ring_.size();
   ring_count_ = std::min(ring_count_ + 1, ring_.size());
 
-  // frozen current channel while the joint moves: a sensor fault even below the threshold
+  // frozen current channel while the joint moves: a sensor fault even below the threshold. One
+  // event per frozen stretch, raised once the joint has moved frozen_samples samples on it (a
+  // joint at rest pauses the count: a resting joint's current may be steady) and closed when the
+  // value changes, with the stretch's true start and end
   for (int j = 0; j < n_; ++j) {
-    int& run = frozen_run_[static_cast<size_t>(j)];
-    // (saturated past the report: a channel frozen for weeks must not overflow and report again)
-    run = (s.current[j] == frozen_val_[j] && std::abs(s.qd[j]) > kMovingVelocity) ? std::min(run + 1, cfg_.frozen_samples + 1) : 0;
+    const size_t J = static_cast<size_t>(j);
+    int& run = frozen_run_[J];
+    if (s.current[j] != frozen_val_[j]) {
+      if (frozen_event_[J] >= 0) close_frozen(j);
+      run = 0;
+      frozen_since_[j] = t;
+    } else if (std::abs(s.qd[j]) > kMovingVelocity) {
+      run = std::min(run + 1, cfg_.frozen_samples + 1);  // (saturated: a channel frozen for weeks must not overflow)
+    }
     frozen_val_[j] = s.current[j];
-    if (run == cfg_.frozen_samples) {
+    if (run == cfg_.frozen_samples && frozen_event_[J] < 0) {
       Event f;
-      f.t_start = t - run * cfg_.nominal_period;
+      f.t_start = frozen_since_[j];
       f.t_end = t;
       f.t_detected = t;
-      f.open = false;
+      f.open = true;
       f.fault = FaultClass::SensorFault;
       f.joint = j;
-      f.magnitude = run;
       f.units = "samples";
       f.confidence = 1.0;
       f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves", j + 1, s.current[j]);
       events_.push_back(f);
+      frozen_event_[J] = static_cast<int>(events_.size()) - 1;
       if (on_event) on_event(f);
-
+    }
+    if (frozen_event_[J] >= 0) {
+      Event& f = events_[static_cast<size_t>(frozen_event_[J])];
+      f.t_end = t;
+      f.magnitude = std::round((t - f.t_start) / cfg_.nominal_period) + 1.0;
     }
   }
 
@@ -1023,7 +1040,8 @@ void Monitor::push(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     double& unsure = memory_unsure_[static_cast<size_t>(j)];
     if (unsure > 0.0 && std::abs(s.q[j] - memory_from_[j]) >= unsure) unsure = 0.0;
-    const bool decides = unsure == 0.0;
+    // (nor does a frozen current channel: its residual is the channel's fault, already reported)
+    const bool decides = unsure == 0.0 && frozen_event_[static_cast<size_t>(j)] < 0;
     const bool over_current = settled && decides && std::abs(rf_dec_[j]) > level_[j];
     const bool over_observer = observer_decides && decides && std::abs(obs_dec_[j]) > obs_level_[j];
     Debouncer& dc = deb_[static_cast<size_t>(j)];
@@ -1131,7 +1149,21 @@ void Monitor::stream_silent(double seconds) {
   if (on_event) on_event(g);
 }
 
+void Monitor::close_frozen(int j) {
+  const size_t J = static_cast<size_t>(j);
+  Event& f = events_[static_cast<size_t>(frozen_event_[J])];
+  frozen_event_[J] = -1;
+  f.open = false;
+  f.t_end = t_prev_;  // the last sample that still held the value
+  f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
+  f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples)", j + 1, frozen_val_[j],
+                         f.magnitude);
+  if (on_event) on_event(f);
+}
+
 void Monitor::finish() {
+  for (int j = 0; j < n_; ++j)
+    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j);
   report_pending_close();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);

@@ -217,7 +217,8 @@ int run_monitor(const MonitorOptions& o) {
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
       // diagnosis of the same alert is printed at the time it was made
       if (e.t_detected != raise_shown)
-        fmt::print("{:9.3f} s  ALERT  {} (above the threshold since {:.3f} s)\n", e.t_detected, e.detail, e.t_start);
+        fmt::print("{:9.3f} s  ALERT  {} ({} {:.3f} s)\n", e.t_detected, e.detail,
+                   e.fault == monitor::FaultClass::Unknown ? "above the threshold since" : "since", e.t_start);
       else
         fmt::print("{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", e.t_end, e.detail, e.t_detected);
       std::fflush(stdout);
