@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "twinwatch/core/numbers.hpp"
 
 namespace twinwatch::device {
@@ -251,6 +252,14 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     ++ln;
     if (line.empty() || line == "\r") continue;
     const auto cells = split_csv(line);
+    // the last row of a recording cut off mid-write (a killed recorder, a power loss): fewer cells
+    // and no line end. It is dropped, and said; anywhere else a short row is an error
+    if (cells.size() < header.size() && f.eof()) {
+      log::warn(fmt::format("{}:{}: the last row is cut off ({} of {} cells, no line end): dropped, as a recording interrupted "
+                            "mid-write leaves it",
+                            path, ln, cells.size(), header.size()));
+      break;
+    }
     if (cells.size() != header.size())
       throw ParseError(path, ln, "", fmt::format("expected {} cells (as in the header), got {}", header.size(), cells.size()));
     RobotSample s = RobotSample::empty(n);

@@ -774,6 +774,8 @@ void Monitor::run_diagnosis(double t) {
   const Hypothesis& h = hyps.front();
   e.fault = h.fault;
   if (h.joint >= 0) e.joint = h.joint;
+  // a payload change belongs to no joint (the one that happened to raise first is no property of it)
+  if (h.fault == FaultClass::PayloadChange) e.joint = -1;
   e.link = h.link;
   e.other_links = h.other_links;
   e.contact = h.contact;
@@ -1149,26 +1151,27 @@ void Monitor::stream_silent(double seconds) {
   if (on_event) on_event(g);
 }
 
-void Monitor::close_frozen(int j) {
+void Monitor::close_frozen(int j, bool at_stop) {
   const size_t J = static_cast<size_t>(j);
   Event& f = events_[static_cast<size_t>(frozen_event_[J])];
   frozen_event_[J] = -1;
   f.open = false;
   f.t_end = t_prev_;  // the last sample that still held the value
   f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
-  f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples)", j + 1, frozen_val_[j],
-                         f.magnitude);
+  f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples){}", j + 1, frozen_val_[j],
+                         f.magnitude, at_stop ? "; still frozen when monitoring stopped" : "");
   if (on_event) on_event(f);
 }
 
 void Monitor::finish() {
   for (int j = 0; j < n_; ++j)
-    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j);
+    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
   report_pending_close();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);
   Event& e = events_[static_cast<size_t>(open_)];
   e.open = false;
+  e.detail += "; still active when monitoring stopped";  // its end is the run's, not the fault's
   open_ = -1;
   if (on_event) on_event(e);
 }

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "error_text.hpp"
 
 namespace twinwatch::device {
@@ -73,6 +74,21 @@ TEST(Recording, MarksTimestampGapsWithoutHidingThem) {
   EXPECT_EQ(r.gaps, 1);
   EXPECT_TRUE(r.samples[10].gap_before);
   EXPECT_NEAR(r.median_period, 0.002, 1e-12);
+}
+
+// a recorder killed mid-write leaves its last row cut off, without a line end: that row is dropped
+// and said; a short row anywhere else (or ended by a newline) is still an error
+TEST(Recording, ALastRowCutOffMidWriteIsDroppedAndSaid) {
+  const std::string p = tmp("cut.csv");
+  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1\n0.000,0.1,0.2\n0.002,0.1,0.2\n0.004,0.1";
+  std::string warned;
+  log::set_sink([&](log::Level, std::string_view m) { warned += std::string(m); });
+  const Recording r = read_recording(p);
+  log::set_sink(nullptr);
+  EXPECT_EQ(r.samples.size(), 2u);
+  EXPECT_THAT(warned, HasSubstr("cut.csv:4: the last row is cut off (2 of 3 cells, no line end): dropped"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_1\n0.000,0.1,0.2\n0.002,0.1\n"), HasSubstr("bad.csv:3: expected 3 cells"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_1\n0.000,0.1\n0.002,0.1,0.2"), HasSubstr("bad.csv:2: expected 3 cells"));
 }
 
 TEST(Recording, NonNumericCellNamesLineAndColumn) {

@@ -58,6 +58,7 @@ struct RecordOptions {
 };
 
 int run_record(const RecordOptions& o) {
+  if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing on success": no info lines either
   // (an infinite time would overflow the clock arithmetic below)
   if (!(o.duration > 0.0 && std::isfinite(o.duration)))
     throw InvalidArgument(fmt::format("--duration must be a finite time > 0 s, got {}", o.duration));
@@ -194,6 +195,7 @@ rtde::ControllerVersion parse_version(const std::string& s) {
 }
 
 int run_serve(const ServeOptions& o) {
+  if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing on success": no info lines either
   if (!(o.speed > 0.0 && std::isfinite(o.speed))) throw InvalidArgument(fmt::format("--speed must be a finite factor > 0, got {}", o.speed));
   if (o.port < 0 || o.port > 65535) throw InvalidArgument(fmt::format("--port must be in 0..65535, got {}", o.port));
   if (!(o.wait_client >= 0.0 && std::isfinite(o.wait_client)))

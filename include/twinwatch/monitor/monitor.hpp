@@ -272,7 +272,7 @@ class Monitor {
   std::vector<int> frozen_run_;
   std::vector<int> frozen_event_;  // per joint: index of its open frozen-channel event (-1: none)
   VectorJ frozen_since_;           // per joint: when the channel took its present value
-  void close_frozen(int j);
+  void close_frozen(int j, bool at_stop = false);
   double i_total_ = 0.0, t_prev_ = 0.0;
   bool have_prev_ = false, filter_started_ = false;
   long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
