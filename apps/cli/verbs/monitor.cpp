@@ -350,6 +350,22 @@ int run_thresholds(const ThresholdOptions& o) {
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
+  // the viscous friction's temperature slope, when these runs span joint temperatures (a warm-up
+  // from cold): the monitor and the wear trend compensate with it, and the thresholds below are
+  // learned on the compensated residual. Runs at one temperature keep the slope the twin has.
+  {
+    std::vector<monitor::TrendRun> trend_runs;
+    for (const auto& r : runs) trend_runs.push_back({r.recording, r.payload, 0});
+    try {
+      settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
+      fmt::print("temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
+                 "monitor and the wear trend compensate with it)\n",
+                 fmt::join(settings.trend.temperature_slope, " "));
+    } catch (const InvalidArgument& e) {
+      fmt::print("note: no temperature slope learned ({}){}\n", e.what(),
+                 settings.trend.temperature_slope.size() ? "; the twin's is kept" : "; give a warm-up from cold to learn one");
+    }
+  }
   // cfg is what is stored: the default set re-learned, or a program's set added with the default
   // set (observer thresholds and debounce included) left as it was
   monitor::MonitorConfig cfg = settings;
