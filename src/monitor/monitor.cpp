@@ -1046,6 +1046,7 @@ void Monitor::push(const RobotSample& s) {
     const bool decides = unsure == 0.0 && frozen_event_[static_cast<size_t>(j)] < 0;
     const bool over_current = settled && decides && std::abs(rf_dec_[j]) > level_[j];
     const bool over_observer = observer_decides && decides && std::abs(obs_dec_[j]) > obs_level_[j];
+    if (over_current || over_observer) last_over_ = t;
     Debouncer& dc = deb_[static_cast<size_t>(j)];
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);
@@ -1063,7 +1064,7 @@ void Monitor::push(const RobotSample& s) {
       // the last alert closed continues that alert when it is on the alert's joint. A raise on
       // another joint is looked at on its own first (merge_into_), so that a contact during a
       // persistent fault is not taken for its dip.
-      const bool recent = pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end < kMergeGap;
+      const bool recent = pending_close_ >= 0 && t - cleared_at_ < kMergeGap;
       if (recent && events_[static_cast<size_t>(pending_close_)].joint == j) {
         open_ = pending_close_;
         pending_close_ = -1;
@@ -1099,6 +1100,9 @@ void Monitor::push(const RobotSample& s) {
       if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
+      // it ended at its last exceedance, not when the clearing debounce (clear_after samples) ran out
+      done.t_end = std::max(done.t_start, last_over_);
+      cleared_at_ = t;
       if (done.fault == FaultClass::Collision) {
         if (on_event) on_event(done);
       } else {
@@ -1110,7 +1114,7 @@ void Monitor::push(const RobotSample& s) {
       open_ = -1;
     }
   }
-  if (pending_close_ >= 0 && t - events_[static_cast<size_t>(pending_close_)].t_end >= kMergeGap) report_pending_close();
+  if (pending_close_ >= 0 && t - cleared_at_ >= kMergeGap) report_pending_close();
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0)) {
     events_.push_back(trend_.warning());

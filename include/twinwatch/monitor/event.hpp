@@ -40,8 +40,8 @@ struct ContactImpulse {
 
 /// One alert with its diagnosis.
 struct Event {
-  double t_start = 0.0;     ///< [s] controller time the alert was raised
-  double t_end = 0.0;       ///< [s] when it cleared (== t_start while open)
+  double t_start = 0.0;     ///< [s] controller time of the first exceedance of the alert's run
+  double t_end = 0.0;       ///< [s] the last exceedance once closed (the clearing debounce is not counted); the latest sample while open
   double t_detected = 0.0;  ///< [s] when the alert was raised (t_start + debounce): the detection delay counts to here
   bool open = true;         ///< still active
   FaultClass fault = FaultClass::Unknown;

@@ -298,6 +298,8 @@ class Monitor {
   // anything else is the earlier fault dipping below its threshold and continues it, with the
   // diagnosis state it had (merged_*)
   int merge_into_ = -1;
+  double last_over_ = 0.0;   // [s] the last sample any joint's decision exceeded its threshold
+  double cleared_at_ = 0.0;  // [s] when the last alert cleared (the merge gap counts from here)
   bool merged_diagnosed_ = false, merged_rediagnosed_ = false;
   double merged_raise_time_ = 0.0;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
