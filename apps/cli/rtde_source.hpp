@@ -18,6 +18,10 @@ struct RtdeSourceOptions {
   std::vector<std::string> outputs;  ///< empty: the recording columns
 };
 
+/// [s] a live stream silent this long when recording or monitoring ends was lost (the client gives up
+/// on a stalled connection after 1 s and reconnects): record and monitor report that stretch
+inline constexpr double kSilentAtEnd = 1.5;
+
 /// A started client. Throws (RecipeError, connection errors) with the controller's address.
 std::unique_ptr<device::rtde::Client> open_rtde(const RtdeSourceOptions& o);
 

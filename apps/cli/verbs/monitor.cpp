@@ -45,9 +45,6 @@ struct MonitorOptions {
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false;
 };
 
-// [s] a live stream silent this long at the end of monitoring was lost (the client gives up on a
-// stalled connection after 1 s and reconnects)
-constexpr double kSilentEnd = 1.5;
 
 constexpr const char* kColumnMapHelp =
     "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
@@ -301,7 +298,7 @@ int run_monitor(const MonitorOptions& o) {
     const auto stopped = std::chrono::steady_clock::now();
     const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
     const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-    if (!cli::interrupted() && client->stats().received > 0 && silent > (cut_short ? 0.1 : kSilentEnd)) mon.stream_silent(silent);
+    if (!cli::interrupted() && client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd)) mon.stream_silent(silent);
     if (o.no_reconnect && client->finished() && !cli::interrupted() && !o.quiet && !o.json)
       fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
     if (copy) copy->close();

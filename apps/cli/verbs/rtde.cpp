@@ -26,10 +26,6 @@
 
 namespace {
 
-// [s] a stream silent this long at the end was lost (the client gives up on a stalled connection
-// after 1 s and reconnects)
-constexpr double kSilentEnd = 1.5;
-
 using namespace twinwatch;
 namespace rtde = device::rtde;
 using Clock = std::chrono::steady_clock;
@@ -119,7 +115,7 @@ int run_record(const RecordOptions& o) {
   // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for)
   const bool cut_short = stopped + std::chrono::milliseconds(100) < end;
   const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-  const bool ended_early = !interrupted() && silent > (cut_short ? 0.1 : kSilentEnd);
+  const bool ended_early = !interrupted() && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();
