@@ -1,5 +1,8 @@
 // `twinwatch identify REC.csv... -o twin.json` and `twinwatch validate --twin twin.json REC.csv`.
 #include <fmt/format.h>
+
+#include <algorithm>
+#include <limits>
 #include <unistd.h>
 
 #include <cmath>
@@ -159,6 +162,14 @@ int run_identify(const IdentifyOptions& o) {
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);
     fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gen %", "gain N·m/A");
+    // a gain the recordings did not fix is shown as the monitor uses it: the median of the identified
+    // ones (the fitted number itself can be anything, e.g. 3240 on a joint no payload loads)
+    std::vector<double> fixed;
+    for (const auto& d : twin.joints)
+      if (d.gain_identified) fixed.push_back(d.gain);
+    std::sort(fixed.begin(), fixed.end());
+    const double median = fixed.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                        : (fixed.size() % 2 ? fixed[fixed.size() / 2] : 0.5 * (fixed[fixed.size() / 2 - 1] + fixed[fixed.size() / 2]));
     for (int j = 0; j < twin.n_dof(); ++j) {
       const size_t J = static_cast<size_t>(j);
       const auto& m = twin.joints[J];
@@ -167,11 +178,14 @@ int run_identify(const IdentifyOptions& o) {
       const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
                  fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
-                 !twin.gains_known() ? fmt::format("({:.3f})", m.gain) : fmt::format("{:.3f}{}", m.gain, m.gain_identified ? "" : "*"));
+                 !twin.gains_known()  ? fmt::format("({:.3f})", m.gain)
+                 : m.gain_identified  ? fmt::format("{:.3f}", m.gain)
+                                      : fmt::format("{:.3f}*", std::isfinite(median) ? median : m.gain));
     }
     // the notes say why; the mark keeps a reader of the table alone from taking the number as measured
     if (std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
-      fmt::print("* gain: not identified (no recording loads the joint enough; the monitor uses the median of the identified ones)\n");
+      fmt::print("* gain: not identified (no recording loads the joint enough); shown is the median of the identified ones, which the "
+                 "monitor uses\n");
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
       const auto& mo = twin.learned->net;
