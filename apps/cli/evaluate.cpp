@@ -325,6 +325,59 @@ ident::TwinModel load_twin(const std::string& path) {
   return twin;
 }
 
+model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::string& twin_path, double mass,
+                                    const std::vector<double>& com) {
+  if (!(mass >= 0.0 && std::isfinite(mass))) throw InvalidArgument(fmt::format("--payload-mass must be a finite mass >= 0 kg, got {}", mass));
+  model::RigidBodyInertia p;
+  p.mass = mass;
+  if (com.size() == 3) {
+    if (!(mass > 0.0)) throw InvalidArgument("--payload-com is given without --payload-mass (a centre of mass needs a mass)");
+    p.com = Eigen::Vector3d(com[0], com[1], com[2]);
+  }
+  if (mass > 0.0 && !twin.gains_known())
+    throw InvalidArgument(fmt::format(
+        "{} was identified without a known payload: its current-to-torque gains are relative, so a payload in kg cannot be "
+        "added to it (--payload-mass {:g}). Run without --payload-mass and --payload-com, on recordings made with the payload "
+        "the twin was identified with, or identify the twin again with a known payload ('twinwatch identify ... "
+        "--known-payload REC.csv=MASS,CX,CY,CZ')",
+        twin_path, mass));
+  return p;
+}
+
+void check_units(const device::Recording& rec, const model::RobotModel& robot) {
+  if (rec.median_period > kUnitsMaxPeriod)
+    throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "
+                                      "column in milliseconds? Scale it to seconds with a column map ('TIME_COLUMN,timestamp,0.001', "
+                                      "docs/recordings.md)",
+                                      rec.path, rec.median_period));
+  const int n = std::min(rec.n_dof, robot.n_dof());
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    for (int j = 0; j < n; ++j) {
+      const model::JointLimits& l = robot.joint(j).limits;
+      const double t = s.timestamp - rec.samples.front().timestamp;
+      if (s.q[j] < l.q_min - kUnitsPositionMargin || s.q[j] > l.q_max + kUnitsPositionMargin)
+        throw InvalidArgument(fmt::format("{}: J{} is at {:.4g} rad at t = {:.3f} s (sample {}), beyond the {}'s range {:.3g} to {:.3g} "
+                                          "rad: are the positions in degrees? Scale them with a column map "
+                                          "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
+                                          rec.path, j + 1, s.q[j], t, k + 1, robot.name(), l.q_min, l.q_max, j));
+      if (std::abs(s.qd[j]) > kUnitsSpeedFactor * l.qd_max)
+        throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), more than {:g} times the {}'s limit "
+                                          "{:.3g} rad/s: are the speeds in degrees/s? Scale them with a column map "
+                                          "('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
+                                          rec.path, j + 1, s.qd[j], t, k + 1, kUnitsSpeedFactor, robot.name(), l.qd_max, j));
+    }
+  }
+}
+
+std::string robot_reference(const std::string& name_or_path) {
+  const std::filesystem::path p(name_or_path);
+  if (p.extension() != ".json" && p.extension() != ".urdf") return name_or_path;
+  std::error_code ec;
+  const std::filesystem::path a = std::filesystem::absolute(p, ec);
+  return ec ? name_or_path : a.lexically_normal().string();
+}
+
 std::optional<device::ColumnMap> load_column_map(const std::string& path) {
   if (path.empty()) return std::nullopt;
   return device::ColumnMap::load(path);

@@ -19,6 +19,28 @@ namespace twinwatch::cli {
 /// ones that monitor. Throws ParseError naming the file and the field.
 ident::TwinModel load_twin(const std::string& path);
 
+/// `--payload-mass` / `--payload-com` of the verbs that run a twin, checked: a centre of mass needs a
+/// mass, and a twin identified without a known payload (relative drive gains, an arbitrary torque
+/// scale) cannot take a payload in kg: its torque would be added in N·m to a model in other units
+/// (0.5 kg read as a -76 kg payload change, a validation RMSE of 228 A). Throws InvalidArgument.
+model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::string& twin_path, double mass,
+                                    const std::vector<double>& com);
+
+/// A recording that cannot be in the robot's units, refused before it is fitted or watched: a joint
+/// position beyond the robot's range by more than kUnitsPositionMargin (degrees read as radians), a
+/// speed above kUnitsSpeedFactor times the joint's limit, or a median sample period above
+/// kUnitsMaxPeriod (milliseconds read as seconds). The message names the file, the joint, the
+/// time, the value and the limit, and the column map scale that fixes it (docs/recordings.md).
+/// Throws InvalidArgument.
+inline constexpr double kUnitsPositionMargin = 0.5;  ///< [rad] beyond q_min / q_max
+inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
+inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
+void check_units(const device::Recording& rec, const model::RobotModel& robot);
+
+/// `--robot`: a built-in name as given, a description file (.json, .urdf) as an absolute path, so
+/// that the twin (or model) that stores it still finds it from another working directory.
+std::string robot_reference(const std::string& name_or_path);
+
 /// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
 /// RTDE names (device::ColumnMap::load), none when `path` is empty.
 std::optional<device::ColumnMap> load_column_map(const std::string& path);

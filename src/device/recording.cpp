@@ -119,6 +119,9 @@ ColumnMap ColumnMap::load(const std::string& path) {
   int ln = 0;
   while (std::getline(f, line)) {
     ++ln;
+    // a byte-order mark (spreadsheet programs write one) as the recordings accept it
+    if (ln == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
     const auto cells = split_csv(line);
     if (cells.size() < 2 || cells.size() > 3)
@@ -180,7 +183,16 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
                        fmt::format("expected a joint 0 to {} (at most {} joints supported), got '{}'", kMaxDof - 1, kMaxDof, names[c]));
     n = std::max(n, j + 1);
   }
-  if (n == 0) throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)");
+  if (n == 0) {
+    // a header in one cell that another separator splits, or quoted names: say so, not only "missing"
+    std::string hint;
+    if (header.size() == 1 && (line.find(';') != std::string::npos || line.find('\t') != std::string::npos))
+      hint = fmt::format(": the header is one cell, its names separated by {}; twinwatch reads comma-separated files",
+                         line.find(';') != std::string::npos ? "';'" : "tabs");
+    else if (line.find('"') != std::string::npos)
+      hint = ": the header's names are quoted; twinwatch reads them unquoted";
+    throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)" + hint);
+  }
   rec.n_dof = n;
   struct Target {
     int group;

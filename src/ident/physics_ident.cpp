@@ -1,6 +1,7 @@
 #include "twinwatch/ident/physics_ident.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -34,6 +35,15 @@ constexpr double kMinGeneratingFraction = 0.02;
 // 0.6-0.9 each, so c below 0.25 would mean a model error rather than a drive)
 constexpr double kCGenMin = 0.25;
 constexpr double kCGenMax = 1.0;
+// viscous friction against temperature (the column qd (T - T_ref)) is fitted for a joint only when
+// its temperature spans at least this much over the samples used. UR controllers report 0.1 °C
+// steps; on the README's four runs (each within 0.3 °C of 35 °C) the column fitted the misfit, not
+// the temperature: J3 came out +0.068 N·m·s/rad/°C (viscous friction rising with temperature,
+// 6x the simulator's -0.011 and of the wrong sign) and J2 -0.058, and on a healthy 20-min run that
+// cooled 3.7 °C the monitor then read J3's mispredicted friction as wear (docs/validation.md)
+constexpr double kMinViscousTemperatureSpan = 2.0;
+// a joint whose speed never reaches this in any recording is refused [rad/s]
+constexpr double kMinJointSpeed = 0.02;
 // a drive gain counts as identified when the known payload's current on the joint (rms) is at
 // least this multiple of the joint's fit RMSE. Set on the simulated UR3e (docs/validation.md):
 // ratios J2 4.2, J3 5.7, J4 1.9 (gains within 1, 0.3, 12 %) against J5 1.4, J1 0.02, J6 0
@@ -395,6 +405,32 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
                                         j + 1, used, total, o.decimate, o.reversal_screen));
   }
 
+  // a joint the recordings never move has nothing to fit: its twin would predict a constant
+  // (R² 0), and a monitor would read every later motion of it as a contact of 10^5 N
+  for (int j = 0; j < n; ++j) {
+    double fastest = 0.0;
+    for (const TrainingRun& r : runs)
+      for (const RobotSample& s : r.recording->samples) fastest = std::max(fastest, std::abs(s.qd[j]));
+    if (!(fastest >= kMinJointSpeed))
+      throw InvalidArgument(fmt::format("identify: J{} never moves in the recordings (|qd| at most {:.4f} rad/s, expected at least "
+                                        "{:g} somewhere): its friction and drive cannot be identified from them; record motion of "
+                                        "every joint (e.g. a trajectory from 'twinwatch excite')",
+                                        j + 1, fastest, kMinJointSpeed));
+  }
+  // joints whose temperature the recordings do not vary enough keep viscous_temperature at 0
+  std::vector<bool> fit_temperature(static_cast<size_t>(n), false);
+  VectorJ t_lo = VectorJ::Constant(n, std::numeric_limits<double>::infinity()), t_hi = -t_lo;
+  for (const TrainingRun& r : runs)
+    for (size_t k = 0; k < r.recording->samples.size(); k += static_cast<size_t>(o.decimate)) {
+      const RobotSample& s = r.recording->samples[k];
+      for (int j = 0; j < n && s.temperature.size() == n; ++j) {
+        if (!std::isfinite(s.temperature[j]) || (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen)) continue;
+        t_lo[j] = std::min(t_lo[j], s.temperature[j]);
+        t_hi[j] = std::max(t_hi[j], s.temperature[j]);
+      }
+    }
+  for (int j = 0; j < n; ++j) fit_temperature[static_cast<size_t>(j)] = t_hi[j] - t_lo[j] >= kMinViscousTemperatureSpan;
+
   TwinModel twin(robot, rm);
   twin.temperature_ref = o.temperature_ref;
   twin.direction_blend = o.direction_blend;
@@ -474,6 +510,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           r.setZero();
           for (int c = 0; c < nb; ++c) r(c) = Y(j, twin.base_columns[static_cast<size_t>(c)]);
           twin.friction_row(j, s.qd, qdd, s.temperature, f);
+          if (!fit_temperature[static_cast<size_t>(j)]) f(kViscousTemperature) = 0.0;
           r.segment(nb + nfx * j, nf) = f;
           low_speed_row(ri, k, s.qd, j, r);
           fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p));
@@ -795,6 +832,25 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         "determine it (e.g. the joint moves one way only, or too little); record motion in both directions ('twinwatch excite') "
         "and check the joint with 'twinwatch validate'",
         j + 1, what));
+  }
+  {
+    // one note per temperature span (usually one for every joint)
+    std::vector<std::pair<std::string, std::vector<std::string>>> unfitted;  // span text -> joints
+    for (int j = 0; j < n; ++j) {
+      if (fit_temperature[static_cast<size_t>(j)]) continue;
+      twin.joints[static_cast<size_t>(j)].friction(kViscousTemperature) = 0.0;
+      const double span = t_hi[j] - t_lo[j];
+      const std::string what = std::isfinite(span) ? fmt::format("spans {:.1f} °C", span) : std::string("is not recorded");
+      auto it = std::find_if(unfitted.begin(), unfitted.end(), [&](const auto& u) { return u.first == what; });
+      if (it == unfitted.end()) it = unfitted.insert(unfitted.end(), {what, {}});
+      it->second.push_back(fmt::format("J{}", j + 1));
+    }
+    for (const auto& [what, joints] : unfitted)
+      report.notes.push_back(fmt::format(
+          "{}: viscous friction against temperature not fitted (kept at 0): the recordings' temperature {}, expected a span "
+          ">= {:.0f} °C; record a warm-up from cold to fit it, or let the monitor's trend learn it "
+          "('twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",
+          fmt::join(joints, ", "), what, kMinViscousTemperatureSpan));
   }
   twin.gains_absolute = any_payload;
   check_gains();

@@ -496,10 +496,25 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
               "motion_envelope"});
     const std::string robot = top.text("robot");
     TwinModel t;
+    // a robot file named by a relative path (twins written before identify stored it absolute) is
+    // looked for from the working directory, then beside the twin file (a twin copied with its robot)
+    std::string where = robot;
+    {
+      namespace fs = std::filesystem;
+      std::error_code ec;
+      const fs::path rp(robot);
+      const bool is_file = rp.extension() == ".json" || rp.extension() == ".urdf";
+      if (is_file && rp.is_relative() && !fs::exists(rp, ec)) {
+        const fs::path beside = fs::path(origin).parent_path() / rp;
+        if (fs::exists(beside, ec)) where = beside.string();
+      }
+    }
     try {
-      t = TwinModel(robot, model::load_robot(robot));
+      t = TwinModel(robot, model::load_robot(where));
     } catch (const InvalidArgument& e) {
       throw ParseError(origin, 0, "robot", e.what());
+    } catch (const ParseError& e) {
+      throw ParseError(origin, 0, "robot", fmt::format("the robot description cannot be read: {}", e.what()));
     }
     const int n = t.n_dof();
     t.origin = origin;

@@ -783,6 +783,13 @@ void Monitor::run_diagnosis(double t) {
   e.units = h.units;
   e.confidence = h.explained;
   e.detail = h.detail;
+  // a twin identified without a known payload has an arbitrary torque scale: its N·m, N and kg are
+  // not physical (an extra 0.8 N·m of friction read as 0.11), which the event says instead of
+  // presenting them as sizes
+  if (!twin_.gains_known() && (e.units == "N·m" || e.units == "N" || e.units == "kg")) {
+    e.units += " (relative)";
+    e.detail += "; sizes in the twin's relative torque units, not physical: it was identified without a known payload";
+  }
   diagnosed_ = true;
   if (merge_into_ >= 0) {
     const int into = merge_into_;

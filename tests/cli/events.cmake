@@ -42,7 +42,7 @@ set_tests_properties(cli.evaluate_link_ceiling_negative PROPERTIES PASS_REGULAR_
 add_test(NAME cli.monitor_observer_raise_after_zero COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --observer-raise-after 0)
 set_tests_properties(cli.monitor_observer_raise_after_zero PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
                      PASS_REGULAR_EXPRESSION "--observer-raise-after: Value 0 not in range 1 to 1000")
-add_test(NAME cli.evaluate_sensitivity_count COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --sensitivity 1 1 1)
+add_test(NAME cli.evaluate_sensitivity_count COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --sensitivity 1,1,1)
 set_tests_properties(cli.evaluate_sensitivity_count PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "sensitivity has size 3, expected 6 \\(one per joint\\)")
 # evaluate reports the false-alarm margin of its healthy scenarios: per joint and channel the largest
@@ -83,3 +83,7 @@ add_test(NAME cli.monitor_beyond_training_motion COMMAND twinwatch monitor --twi
 set_tests_properties(cli.monitor_beyond_training_motion PROPERTIES FIXTURES_REQUIRED "twin;fast_collision_recording"
   PASS_REGULAR_EXPRESSION "s  note: J[1-6] at [0-9.]+ rad/s, identified up to [0-9.]+ rad/s: beyond the motion the twin was identified on.*collision +contact on link 3 [^\n]*; raised where the robot moves beyond what the twin was identified on \\(J[1-6] at [0-9.]+ rad/s, identified up to [0-9.]+ rad/s\\): it may be model error, not a fault.*[0-9]+ of 5000 samples \\([0-9.]+ %\\) beyond the motion the twin was identified on")
 set_tests_properties(cli.monitor_alert_line PROPERTIES FAIL_REGULAR_EXPRESSION "beyond the motion|does not record the motion")
+# the sizes a relative-gain twin gives are marked as such, not presented as N·m / N / kg
+add_test(NAME cli.monitor_relative_twin_marks_its_sizes COMMAND twinwatch monitor --twin ${d}/twin_relative.json ${d}/collision.csv --db '' --json)
+set_tests_properties(cli.monitor_relative_twin_marks_its_sizes PROPERTIES FIXTURES_REQUIRED "twin_relative;collision_recording"
+                     PASS_REGULAR_EXPRESSION "\"units\":\"(N·m|N|kg) \\(relative\\)\"[^\n]*not physical: it was identified without a known payload|not physical: it was identified without a known payload[^\n]*\"units\":\"(N·m|N|kg) \\(relative\\)\"")

@@ -37,3 +37,55 @@ add_test(NAME cli.monitor_rtde_column_map COMMAND twinwatch monitor --twin ${d}/
          --column-map ${PROJECT_SOURCE_DIR}/data/column_maps/kinova_gen3_chiha.csv --db "")
 set_tests_properties(cli.monitor_rtde_column_map PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "--column-map applies to a RECORDING")
+# a twin identified without a known payload has relative drive gains: a payload in kg is refused
+# (it was added in N·m to a model in other units: 0.5 kg read as a -76 kg payload change), and the
+# sizes its diagnoses give are marked relative
+add_test(NAME cli.identify_relative COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv -o ${d}/twin_relative.json)
+set_tests_properties(cli.identify_relative PROPERTIES FIXTURES_REQUIRED recordings FIXTURES_SETUP twin_relative
+                     PASS_REGULAR_EXPRESSION "gains are relative")
+add_test(NAME cli.monitor_relative_twin_refuses_a_payload
+  COMMAND twinwatch monitor --twin ${d}/twin_relative.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '')
+set_tests_properties(cli.monitor_relative_twin_refuses_a_payload PROPERTIES FIXTURES_REQUIRED twin_relative
+                     PASS_REGULAR_EXPRESSION "twin_relative.json was identified without a known payload: its current-to-torque gains are relative, so a payload in kg cannot be added")
+add_test(NAME cli.validate_relative_twin_refuses_a_payload
+  COMMAND twinwatch validate --twin ${d}/twin_relative.json ${d}/fig.csv --payload-mass 0.5)
+set_tests_properties(cli.validate_relative_twin_refuses_a_payload PROPERTIES FIXTURES_REQUIRED twin_relative
+                     PASS_REGULAR_EXPRESSION "identified without a known payload")
+# options that take a fixed number of values stop there: the recordings may follow them (the
+# README's thresholds lines); --sensitivity takes one value or a comma-separated list
+add_test(NAME cli.monitor_recording_after_payload_com
+  COMMAND twinwatch monitor --twin ${d}/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --sensitivity 1.0 ${d}/fig.csv --db '')
+set_tests_properties(cli.monitor_recording_after_payload_com PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "samples, 0 gap")
+add_test(NAME cli.identify_recordings_after_known_payload
+  COMMAND twinwatch identify --known-payload ${d}/fig.csv=0.5,0,0,0.04 ${d}/exc.csv ${d}/fig.csv -o ${d}/twin_order.json)
+set_tests_properties(cli.identify_recordings_after_known_payload PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "J6")
+# a recording that cannot be in the robot's units (degrees, milliseconds left unscaled in a user's
+# log) is refused with the column map scale that fixes it, instead of a twin fitted on it or a
+# "2948 N contact" on a 54 N·m robot
+add_test(NAME cli.validate_positions_in_degrees
+  COMMAND twinwatch validate --twin ${d}/twin.json ${d}/fig.csv --column-map ${s}/units_degrees_map.csv)
+set_tests_properties(cli.validate_positions_in_degrees PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "fig.csv: J2 is at -?[0-9.]+ rad at t = [0-9.]+ s \\(sample [0-9]+\\), beyond the ur3e's range -6.28 to 6.28 rad: are the positions in degrees\\?")
+add_test(NAME cli.identify_time_in_milliseconds
+  COMMAND twinwatch identify ${d}/exc.csv --column-map ${s}/units_ms_map.csv -o ${d}/never_ms.json)
+set_tests_properties(cli.identify_time_in_milliseconds PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "exc.csv: the samples are 2 s apart \\(median\\)[^\n]*is the time column in milliseconds\\?")
+# an output given the name of an input would destroy it; a bad output path is refused before the fit
+add_test(NAME cli.monitor_events_onto_the_recording COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --events ${d}/fig.csv --db '')
+set_tests_properties(cli.monitor_events_onto_the_recording PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "fig.csv: cannot write: it is the input [^\n]*fig.csv, which it would replace")
+add_test(NAME cli.identify_output_directory_missing COMMAND twinwatch identify ${d}/exc.csv -o ${d}/no-such-dir/twin.json --progress)
+set_tests_properties(cli.identify_output_directory_missing PROPERTIES FIXTURES_REQUIRED recordings
+                     PASS_REGULAR_EXPRESSION "no-such-dir/twin.json: cannot write: directory [^\n]*no-such-dir does not exist"
+                     FAIL_REGULAR_EXPRESSION "identifying")
+# a twin made with a robot file works from another working directory (the file is stored by its
+# absolute path; a twin naming it relatively finds it beside itself)
+add_test(NAME cli.twin_with_a_robot_file_from_another_directory
+  COMMAND sh -c "set -e; rm -rf ${d}/robotdir; mkdir -p ${d}/robotdir/sub; cp ${PROJECT_SOURCE_DIR}/data/robots/ur3e.json ${d}/robotdir/myarm.json; \
+cd ${d}/robotdir && $<TARGET_FILE:twinwatch> identify ${d}/exc.csv --robot myarm.json -o sub/twin.json -q; \
+cd ${d} && $<TARGET_FILE:twinwatch> validate --twin robotdir/sub/twin.json ${d}/exc.csv --json; \
+sed 's|\"robot\": *\"[^\"]*myarm.json\"|\"robot\": \"../myarm.json\"|' robotdir/sub/twin.json > robotdir/sub/rel.json; \
+grep -q '\"robot\": \"../myarm.json\"' robotdir/sub/rel.json; \
+$<TARGET_FILE:twinwatch> validate --twin robotdir/sub/rel.json ${d}/exc.csv --json")
+set_tests_properties(cli.twin_with_a_robot_file_from_another_directory PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "\"joints\":\\[\\{[^\n]*\n[^\n]*\"joints\":\\[\\{")

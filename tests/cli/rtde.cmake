@@ -26,3 +26,14 @@ add_test(NAME cli.rtde_monitor_lost_until_the_end
 $<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35919 --wait 10 --duration 3 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json; wait")
 set_tests_properties(cli.rtde_monitor_lost_until_the_end PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
   PASS_REGULAR_EXPRESSION "\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring")
+# an output path that cannot be written is refused before connecting: not after a --wait spent on a
+# robot that is not there yet (here: nothing listens, and the 30 s wait would run out first)
+add_test(NAME cli.rtde_record_bad_output_before_connecting
+  COMMAND twinwatch record --rtde 127.0.0.1:1 --wait 30 --duration 1 -o ${PROJECT_BINARY_DIR}/no-such-dir/rec.csv)
+set_tests_properties(cli.rtde_record_bad_output_before_connecting PROPERTIES TIMEOUT 10
+  PASS_REGULAR_EXPRESSION "no-such-dir/rec.csv: cannot write: directory [^\n]*no-such-dir does not exist")
+add_test(NAME cli.rtde_monitor_bad_output_before_connecting
+  COMMAND twinwatch monitor --rtde 127.0.0.1:1 --wait 30 --duration 1 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --db ''
+          --events ${PROJECT_BINARY_DIR}/no-such-dir/events.jsonl)
+set_tests_properties(cli.rtde_monitor_bad_output_before_connecting PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 10
+  PASS_REGULAR_EXPRESSION "no-such-dir/events.jsonl: cannot write: directory [^\n]*no-such-dir does not exist")

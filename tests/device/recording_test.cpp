@@ -149,6 +149,24 @@ TEST(Recording, ColumnMapDuplicateColumnNamesBothLines) {
   EXPECT_THAT(map_error("q1,actual_q_0\nq1,actual_q_1\n"), HasSubstr("bad.map:2: field 'file_column': 'q1' is already mapped on line 1"));
 }
 
+// a map saved by a spreadsheet program (byte-order mark, CRLF) loads as the recordings do
+TEST(Recording, ColumnMapWithAByteOrderMarkAndCrlfLoads) {
+  const std::string mp = tmp("bom.map");
+  std::ofstream(mp) << "\xEF\xBB\xBFTime,timestamp,0.001\r\nq1,actual_q_0\r\n";
+  const ColumnMap map = ColumnMap::load(mp);
+  ASSERT_EQ(map.columns.count("Time"), 1u);
+  EXPECT_EQ(map.columns.at("Time").scale, 0.001);
+  EXPECT_EQ(map.columns.at("q1").rtde_name, "actual_q_0");
+}
+
+// a file another separator splits (a European spreadsheet's ';', tabs) or with quoted names says so,
+// instead of only "missing required column" for a name that is visibly in its header
+TEST(Recording, AnotherSeparatorOrQuotedNamesAreNamedAsTheCause) {
+  EXPECT_THAT(error_of("timestamp;actual_q_0;actual_qd_0\n0;0.1;0\n"), HasSubstr("the header is one cell, its names separated by ';'"));
+  EXPECT_THAT(error_of("timestamp\tactual_q_0\n0\t0.1\n"), HasSubstr("separated by tabs"));
+  EXPECT_THAT(error_of("\"timestamp\",\"actual_q_0\"\n0,0.1\n"), HasSubstr("the header's names are quoted"));
+}
+
 TEST(Recording, ColumnMapColumnAbsentFromTheFileIsAnError) {
   const std::string p = tmp("foreign.csv");
   std::ofstream(p) << "Time,q1\n0,1\n1,2\n";

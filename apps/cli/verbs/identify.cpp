@@ -6,15 +6,18 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/learned_ident.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/ident/sequential_ident.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "evaluate.hpp"
@@ -105,6 +108,12 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
 int run_identify_sequential(const IdentifyOptions& o);
 
 int run_identify(const IdentifyOptions& o) {
+  // before the fit: a bad output path found after minutes of fitting costs the fit
+  {
+    std::vector<std::string> inputs = o.recordings;
+    inputs.push_back(o.column_map);
+    require_output(o.output, inputs);
+  }
   if (o.method == "sequential") return run_identify_sequential(o);
   if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
     throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", o.method));
@@ -118,18 +127,27 @@ int run_identify(const IdentifyOptions& o) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, fmt::format("identify --method {}", o.method));
   }
+  {
+    const model::RobotModel robot = model::load_robot(o.robot);
+    for (const auto& r : recs) cli::check_units(r, robot);
+  }
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
+  // the same file under another name (./fig.csv, an absolute path) is the same recording
+  const auto same = [](const std::string& a, const std::string& b) {
+    std::error_code ec;
+    return a == b || std::filesystem::equivalent(a, b, ec);
+  };
   for (const auto& r : recs) {
     ident::TrainingRun t{&r, {}};
     for (const auto& p : pay)
-      if (p.file == r.path) t.payload = p.payload;
+      if (same(p.file, r.path)) t.payload = p.payload;
     runs.push_back(t);
   }
   for (const auto& p : pay) {
     bool found = false;
-    for (const auto& r : recs) found |= r.path == p.file;
+    for (const auto& r : recs) found |= same(r.path, p.file);
     if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the recordings", p.file));
   }
   ident::IdentOptions io;
@@ -183,7 +201,7 @@ int run_identify(const IdentifyOptions& o) {
                                       : fmt::format("{:.3f}*", std::isfinite(median) ? median : m.gain));
     }
     // the notes say why; the mark keeps a reader of the table alone from taking the number as measured
-    if (std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
+    if (twin.gains_known() && std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
       fmt::print("* gain: not identified (no recording loads the joint enough); shown is the median of the identified ones, which the "
                  "monitor uses\n");
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
@@ -201,6 +219,12 @@ int run_identify(const IdentifyOptions& o) {
 
 // Cao's sequential identification: gravity (--quasi-static), friction (--sine), Lasso (RECORDINGS)
 int run_identify_sequential(const IdentifyOptions& o) {
+  {
+    std::vector<std::string> inputs = o.recordings;
+    for (const auto* v : {&o.quasi_static, &o.sine}) inputs.insert(inputs.end(), v->begin(), v->end());
+    inputs.push_back(o.column_map);
+    require_output(o.output, inputs);
+  }
   if (o.quasi_static.empty())
     throw InvalidArgument("--method sequential needs --quasi-static FILE: a recording of poses reached from both directions "
                           "(e.g. scenarios/ur3e/validation/quasi_static_train.yaml)");
@@ -214,6 +238,11 @@ int run_identify_sequential(const IdentifyOptions& o) {
     return v;
   };
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
+  {
+    const model::RobotModel robot = model::load_robot(o.robot);
+    for (const auto* v : {&qs, &sn, &gen})
+      for (const auto& r : *v) cli::check_units(r, robot);
+  }
   std::vector<const device::Recording*> qsp, snp;
   for (const auto& r : qs) qsp.push_back(&r);
   for (const auto& r : sn) snp.push_back(&r);
@@ -263,6 +292,8 @@ int run_identify_sequential(const IdentifyOptions& o) {
   return 0;
 }
 
+constexpr size_t kMinValidateSamples = 10;
+
 struct ValidateOptions {
   std::string twin, recording, column_map, predictions;
   double payload_mass = 0.0;
@@ -277,10 +308,12 @@ int run_validate(const ValidateOptions& o) {
   if (rec.n_dof != twin.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "validate");
-  model::RigidBodyInertia p;
-  p.mass = o.payload_mass;
-  if (o.payload_com.size() == 3) p.com = Eigen::Vector3d(o.payload_com[0], o.payload_com[1], o.payload_com[2]);
-  twin.set_payload(p);
+  cli::check_units(rec, twin.robot());
+  // R² and NRMSE need a spread of measured currents: on fewer samples they would print 0 as numbers
+  if (rec.samples.size() < kMinValidateSamples)
+    throw InvalidArgument(fmt::format("validate: {} has {} sample(s), expected at least {}", o.recording, rec.samples.size(),
+                                      kMinValidateSamples));
+  twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
   const auto qdd = ident::joint_accelerations(rec);
   const int n = twin.n_dof();
   std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
@@ -296,6 +329,7 @@ int run_validate(const ValidateOptions& o) {
     }
   }
   if (!o.predictions.empty()) {
+    require_output(o.predictions, {o.recording, o.twin, o.column_map});
     // per sample: time, measured and predicted current of every joint (for plots)
     std::FILE* f = std::fopen(o.predictions.c_str(), "w");
     if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
@@ -318,7 +352,7 @@ int run_validate(const ValidateOptions& o) {
     fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
                rec.samples.size());
     fmt::print("{:<8}", "metric");
-    for (int j = 0; j < n; ++j) fmt::print("{:>9}", fmt::format("J{}", j + 1));
+    for (int j = 0; j < n; ++j) fmt::print(" {:>8}", fmt::format("J{}", j + 1));
     fmt::print("\n");
   }
   std::vector<signal::FitMetrics> ms;
@@ -331,7 +365,8 @@ int run_validate(const ValidateOptions& o) {
   }
   auto row = [&](const char* name, auto get, const char* f) {
     fmt::print("{:<8}", name);
-    for (const auto& m : ms) fmt::print("{:>9}", fmt::format(fmt::runtime(f), get(m)));
+    // a space before every cell: a large number (a twin far off) must not run into its neighbour
+    for (const auto& m : ms) fmt::print(" {:>8}", fmt::format(fmt::runtime(f), get(m)));
     fmt::print("\n");
   };
   row("RMSE", [](const signal::FitMetrics& m) { return m.rmse; }, "{:.4f}");
@@ -347,7 +382,9 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   auto* sub = app.add_subcommand("identify", "Build the reference model (twin file) from recordings of a healthy robot");
   sub->add_option("RECORDINGS", o->recordings, "Recording CSV files (RTDE column names)")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "Twin file to write (JSON)")->required();
-  sub->add_option("--robot", o->robot, "Robot description (built-in name or file)")->capture_default_str();
+  sub->add_option("--robot", o->robot, "Robot description (built-in name or .json/.urdf file; a file is stored in the twin by its absolute path)")
+      ->capture_default_str()
+      ->transform([](std::string s) { return cli::robot_reference(s); });
   sub->add_option("--method", o->method,
                   "physics (rigid body + friction + drive, current domain); mlp (UR3e §3.5: a network on q and smoothed qd "
                   "predicts the currents; torque only through known gains); hybrid (physics + a network trained on its "
@@ -375,7 +412,8 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
-                  "identifies the current-to-torque gains");
+                  "identifies the current-to-torque gains; repeat the option for several recordings")
+      ->allow_extra_args(false);
   sub->add_option("--efficiency-passes", o->efficiency_passes,
                   "physics: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
                   "(scenarios/ur3e/train/swing_train*.yaml)")
@@ -407,7 +445,7 @@ twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried during the recording [kg]");
-  sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3);
+  sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
   sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current per sample to this CSV");
   sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");

@@ -49,17 +49,6 @@ struct MonitorOptions {
 constexpr const char* kColumnMapHelp =
     "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
 
-// --payload-mass/--payload-com: a COM without a mass would be dropped silently, so it is refused
-model::RigidBodyInertia payload_of(double mass, const std::vector<double>& com) {
-  model::RigidBodyInertia p;
-  p.mass = mass;
-  if (com.size() == 3) {
-    if (!(mass > 0.0)) throw InvalidArgument("--payload-com is given without --payload-mass (a centre of mass needs a mass)");
-    p.com = Eigen::Vector3d(com[0], com[1], com[2]);
-  }
-  return p;
-}
-
 // --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
 std::vector<std::string> split_filter(const std::string& s) {
   std::vector<std::string> out;
@@ -71,6 +60,8 @@ std::vector<std::string> split_filter(const std::string& s) {
     }
   return out;
 }
+constexpr const char* kSensitivityHelp =
+    "Threshold factor (< 1: more sensitive): one value, or one per joint separated by commas (0.9,0.9,1,1,1,1)";
 constexpr const char* kFilterHelp =
     "Residual filter: 'iir' (first order at the twin's filter_cutoff_hz, AGV §4.3), 'fir' (Cao eq. 29: 6 taps, "
     "-3 dB at 42.8 Hz at 500 Hz, 2.5-sample delay), or one per joint, e.g. iir,iir,iir,iir,fir,iir";
@@ -158,6 +149,10 @@ int run_monitor(const MonitorOptions& o) {
                             what, 1.0 / period, 1.0 / cfg.nominal_period, o.twin));
     cfg.nominal_period = period;
   };
+  // every output path is checked before the robot is connected (or the recording read): a typo
+  // found after a long --wait or the first samples of a live run costs the run
+  for (const std::string* out : {&o.events_path, &o.trace, &o.record_to, &o.db_path})
+    if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
   if (o.rtde.empty()) {
     if (o.duration > 0 || o.wait > 0 || !o.record_to.empty() || o.no_reconnect)
       throw InvalidArgument("--duration, --wait, --record and --no-reconnect apply to --rtde; a recording is watched whole");
@@ -165,6 +160,7 @@ int run_monitor(const MonitorOptions& o) {
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
+    cli::check_units(rec, twin.robot());
     if (rec.median_period > 0) use_rate(rec.median_period, o.recording);
   } else {
     if (!o.column_map.empty())
@@ -181,7 +177,7 @@ int run_monitor(const MonitorOptions& o) {
       fmt::print(stderr, "monitoring {} ({}){}; Ctrl-C stops\n", o.rtde, cli::describe(*client),
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
   }
-  twin.set_payload(payload_of(o.payload_mass, o.payload_com));
+  twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
   monitor::Monitor mon(twin, cfg);
   std::ofstream jl;
   if (!o.events_path.empty()) {
@@ -339,9 +335,10 @@ int run_thresholds(const ThresholdOptions& o) {
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
+    cli::check_units(recs.back(), twin.robot());
   }
   std::vector<monitor::HealthyRun> runs;
-  const model::RigidBodyInertia p = payload_of(o.payload_mass, o.payload_com);
+  const model::RigidBodyInertia p = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   for (const auto& r : recs) runs.push_back({&r, p});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
@@ -389,6 +386,7 @@ int run_thresholds(const ThresholdOptions& o) {
                                           f));
     vrecs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
+    cli::check_units(vrecs.back(), twin.robot());
   }
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
@@ -442,8 +440,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
-  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
-  sub->add_option("--sensitivity", o->sensitivity, "Threshold factor, one value or one per joint (< 1: more sensitive)");
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
+  sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
@@ -469,7 +467,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(CLI::NonNegativeNumber);
-  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"))
       ->check(CLI::ExistingFile);
@@ -553,6 +551,7 @@ struct ReportOptions {
 };
 
 int run_report(const ReportOptions& o) {
+  require_output(o.output, {o.recording, o.twin, o.labels, o.column_map});
   const ident::TwinModel twin = cli::load_twin(o.twin);
   std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
@@ -560,7 +559,7 @@ int run_report(const ReportOptions& o) {
     if (!f) throw std::runtime_error(o.labels + ": cannot open");
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
-  const model::RigidBodyInertia payload = payload_of(o.payload_mass, o.payload_com);  // a COM without a mass is refused here
+  const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
   cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
@@ -584,8 +583,9 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                 "pick-and-place) instead of one set per program; wider thresholds (misses payload loss on the figure-eight); "
                 "for comparison");
   sub->add_option("--sensitivity", o->sensitivity,
-                  "Threshold factor, one value or one per joint (< 1: more sensitive), over the twin's; e.g. to measure the "
-                  "false-alarm margin of the long runs");
+                  std::string(kSensitivityHelp) + ", over the twin's; e.g. to measure the false-alarm margin of the long runs")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--filter", o->filter, kFilterHelp);
@@ -622,7 +622,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
-  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3);
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/device/rtde_client.hpp"
@@ -70,6 +71,7 @@ int run_record(const RecordOptions& o) {
   for (const auto& name : so.outputs)
     if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
       log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
+  require_writable(o.output);  // before connecting: a bad path must not cost a --wait or a connection
   install_interrupt_handler();
   const auto client_ptr = cli::open_rtde(so);
   rtde::Client& client = *client_ptr;

@@ -108,7 +108,10 @@ int run_identify(const IdentOpts& o) {
   const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs, revs;
   recs.reserve(o.recordings.size());
-  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+  for (const auto& f : o.recordings) {
+    recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+    cli::check_units(recs.back(), m);
+  }
   // FWD=REV pairs: REV is FWD's trajectory played backwards
   std::vector<std::pair<std::string, std::string>> pairs;
   for (const auto& p : o.reverse) {
@@ -124,6 +127,7 @@ int run_identify(const IdentOpts& o) {
     auto it = std::find_if(segs.begin(), segs.end(), [&](const ident::Segment& s) { return s.recording->path == fw; });
     if (it == segs.end()) throw InvalidArgument(fmt::format("--reverse names '{}', which is not one of the recordings", fw));
     revs.push_back(device::read_recording(rv, map ? &*map : nullptr));
+    cli::check_units(revs.back(), m);
     it->reverse = &revs.back();
   }
   ident::RigidBodyLsOptions io;
@@ -191,6 +195,7 @@ int run_validate(const ValidateOpts& o) {
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
   if (rec.n_dof != m.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the model's robot {}", o.recording, rec.n_dof, m.n_dof()));
+  cli::check_units(rec, m);
   const auto [from, to] = parse_segment(o.segment);
   const ident::TorqueData d =
       ident::torque_data({&rec, from, to, nullptr}, rb.signal, rb.derivative_half_window, rb.derivative_order);
@@ -246,7 +251,9 @@ twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
       "fit only (HESR III-E); weighted LS with per-joint residual variances (or --ols); parameter standard\n"
       "deviations. Foreign logs load through --column-map (docs/recordings.md).");
   sub->add_option("RECORDINGS", o->recordings, "Recording CSV file(s)")->required()->check(CLI::ExistingFile);
-  sub->add_option("--robot", o->robot, "Robot description (built-in name or .json/.urdf)")->capture_default_str();
+  sub->add_option("--robot", o->robot, "Robot description (built-in name or .json/.urdf file; a file is stored in the model by its absolute path)")
+      ->capture_default_str()
+      ->transform([](std::string s) { return cli::robot_reference(s); });
   sub->add_option("-o,--output", o->output, "Model JSON to write")->required();
   sub->add_option("--column-map", o->column_map, "Column map for foreign CSV logs (file column -> RTDE name, scale)");
   sub->add_option("--signal", o->signal, "Torque signal: joint_torque, current_as_torque or target_moment")->capture_default_str();

@@ -2,11 +2,15 @@
 /// @file file_io.hpp
 /// Output files that fail loudly: a full disk or a vanished directory is an error naming the path,
 /// not a truncated file behind exit code 0.
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 namespace twinwatch {
 
@@ -37,6 +41,37 @@ inline void write_text_file(const std::string& path, const std::string& text) {
   if (!f) throw std::runtime_error(path + ": cannot open for writing: " + (errno ? std::strerror(errno) : "unknown reason"));
   f << text;
   close_written(f, path);
+}
+
+/// Throws std::runtime_error "PATH: cannot write: REASON" unless PATH could be written: an existing
+/// regular file that is writable, or a new file in an existing, writable directory. Touches
+/// nothing, so a command that connects to a robot first can refuse a bad output path before the
+/// connection (and an existing file is not replaced by an input that fails to load).
+inline void require_writable(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path p(path);
+  const auto fail = [&](const std::string& why) { throw std::runtime_error(path + ": cannot write: " + why); };
+  if (path.empty()) fail("empty path");
+  const fs::file_status st = fs::status(p, ec);
+  if (fs::exists(st)) {
+    if (fs::is_directory(st)) fail("it is a directory");
+    if (::access(path.c_str(), W_OK) != 0) fail(std::strerror(errno));
+    return;
+  }
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec)) fail("directory " + dir.string() + " does not exist");
+  if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
+}
+
+/// require_writable, and OUT is none of `inputs` (the same file under another name too): an output
+/// given the name of an input would destroy the input (monitor rec.csv --events rec.csv).
+inline void require_output(const std::string& out, const std::vector<std::string>& inputs) {
+  require_writable(out);
+  std::error_code ec;
+  for (const std::string& in : inputs)
+    if (!in.empty() && std::filesystem::equivalent(out, in, ec))
+      throw std::runtime_error(out + ": cannot write: it is the input " + in + ", which it would replace");
 }
 
 }  // namespace twinwatch
