@@ -834,6 +834,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
+  cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);  // a jittery logger clock (device::Recording)
   monitor::Monitor mon(twin, cfg);
   const int n = rec.n_dof;
   std::vector<double> t;

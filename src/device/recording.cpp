@@ -38,6 +38,10 @@ const Group kGroups[] = {
 };
 // a timestamp step longer than this many median periods marks a gap (lost samples)
 constexpr double kGapFactor = 1.5;
+// timestamps whose steps spread more than this fraction of the period are a jittery clock, whose gap
+// factor is 1 + kJitterSigmas spreads (a controller's own clock: spread ~0)
+constexpr double kJitterFraction = 0.05;
+constexpr double kJitterSigmas = 5.0;
 
 std::vector<std::string> split_csv(const std::string& line) {
   std::vector<std::string> out;
@@ -324,8 +328,22 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     std::vector<double> sorted = dts;
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
     rec.median_period = sorted[sorted.size() / 2];
+    // a logger's own clock (a PC stamping what it receives) jitters: its steps spread around the
+    // period, and a lost sample (a step of two periods) cannot be told from a late stamp. The
+    // spread (1.4826 x the median absolute deviation of the steps) then raises the gap factor to
+    // kJitterSigmas spreads above the period, and the file says so once
+    std::vector<double> dev(dts.size());
+    for (size_t k = 0; k < dts.size(); ++k) dev[k] = std::abs(dts[k] - rec.median_period);
+    std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
+    rec.period_jitter = 1.4826 * dev[dev.size() / 2];
+    if (rec.median_period > 0.0 && rec.period_jitter > kJitterFraction * rec.median_period) {
+      rec.gap_factor = std::max(kGapFactor, 1.0 + kJitterSigmas * rec.period_jitter / rec.median_period);
+      log::warn(fmt::format("{}: the timestamps jitter (spread {:.2f} ms around the {:.2f} ms period; a logger's own clock?): a step "
+                            "counts as lost samples only above {:.1f} ms, shorter losses cannot be told from the jitter",
+                            path, 1000.0 * rec.period_jitter, 1000.0 * rec.median_period, 1000.0 * rec.gap_factor * rec.median_period));
+    }
     for (size_t k = 0; k < dts.size(); ++k)
-      if (dts[k] > kGapFactor * rec.median_period) rec.samples[k + 1].gap_before = true;
+      if (dts[k] > rec.gap_factor * rec.median_period) rec.samples[k + 1].gap_before = true;
   }
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
   for (const RobotSample& s : rec.samples) rec.gaps += s.gap_before ? 1 : 0;

@@ -149,6 +149,28 @@ TEST(Recording, ColumnMapDuplicateColumnNamesBothLines) {
   EXPECT_THAT(map_error("q1,actual_q_0\nq1,actual_q_1\n"), HasSubstr("bad.map:2: field 'file_column': 'q1' is already mapped on line 1"));
 }
 
+// A logger's own clock stamps 500 Hz samples with +-0.9 ms of jitter: no sample is lost, and the
+// 1.5-period rule counted 374 "lost samples" in such a log. The spread raises the gap factor (said
+// in a warning), so only the real loss of 10 samples is a gap.
+TEST(Recording, AJitteryLoggerClockIsNotReadAsLostSamples) {
+  const std::string p = tmp("jitter.csv");
+  {
+    std::ofstream f(p);
+    f << "timestamp,actual_q_0\n";
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-0.0009, 0.0009);
+    for (int k = 0; k < 5000; ++k) {
+      if (k >= 3000 && k < 3010) continue;  // ten samples lost
+      f << 0.002 * k + u(rng) << "," << 0.001 * k << "\n";
+    }
+  }
+  const Recording rec = read_recording(p);
+  EXPECT_NEAR(rec.median_period, 0.002, 1e-4);
+  EXPECT_GT(rec.gap_factor, 2.0);
+  EXPECT_EQ(rec.gaps, 1);
+  EXPECT_TRUE(rec.samples[3000].gap_before);
+}
+
 // a map saved by a spreadsheet program (byte-order mark, CRLF) loads as the recordings do
 TEST(Recording, ColumnMapWithAByteOrderMarkAndCrlfLoads) {
   const std::string mp = tmp("bom.map");

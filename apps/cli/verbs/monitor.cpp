@@ -162,6 +162,8 @@ int run_monitor(const MonitorOptions& o) {
     if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
     cli::check_units(rec, twin.robot());
     if (rec.median_period > 0) use_rate(rec.median_period, o.recording);
+    // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
+    cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");

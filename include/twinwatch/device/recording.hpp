@@ -41,8 +41,11 @@ struct Recording {
   int n_dof = 0;
   std::vector<RobotSample> samples;
   std::uint32_t present = 0;  ///< fields present in the file (SampleField flags)
-  int gaps = 0;               ///< timestamp steps > 1.5 x the median period (marked gap_before)
+  int gaps = 0;               ///< timestamp steps > gap_factor x the median period (marked gap_before)
   double median_period = 0.0; ///< [s]
+  double period_jitter = 0.0; ///< [s] robust spread of the timestamp steps (1.4826 x their MAD)
+  /// a step longer than gap_factor x median_period is a gap: 1.5, more for a jittery clock
+  double gap_factor = 1.5;
 };
 
 /// Reads a recording. Throws twinwatch::ParseError naming the file, line and column for a
