@@ -357,8 +357,27 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
     res.qd_peak = res.qd_peak.cwiseMax(qd.cwiseAbs());
     res.qdd_peak = res.qdd_peak.cwiseMax(qdd.cwiseAbs());
   }
+  res.lowest = excitation_lowest_point(model, t, o.check_samples);
   if (progress) progress(1.0, res.cond_final);
   return res;
+}
+
+ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& t, int samples) {
+  if (samples < 1) throw InvalidArgument(fmt::format("samples is {}, must be >= 1", samples));
+  model::DynamicsData d(model);
+  ExcitationLowestPoint low;
+  VectorJ q, qd, qdd;
+  for (int m = 0; m <= samples; ++m) {
+    const double time = t.period() * m / samples;
+    t.evaluate(time, q, qd, qdd);
+    model::forward_kinematics(model, d, q);
+    // the body frames after the first (the first turns about the base's own axis) and the flange
+    for (int b = 1; b <= model.n_dof(); ++b) {
+      const double z = b < model.n_dof() ? d.oMi[static_cast<size_t>(b)].translation().z() : d.oMf.translation().z();
+      if (z < low.z) low = {z, time, b};
+    }
+  }
+  return low;
 }
 
 std::string excitation_scenario_yaml(const ExcitationTrajectory& t, const std::string& robot, int cycles,

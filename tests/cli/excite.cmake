@@ -37,3 +37,12 @@ set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRE
 add_test(NAME cli.excite_duration_negative COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/neg.yaml -q --duration -10 2>&1; echo exit \$?")
 set_tests_properties(cli.excite_duration_negative PROPERTIES PASS_REGULAR_EXPRESSION
   "error: --duration: expected a time > 0 s and at most 1e\\+06 s \\(the longest run the simulator accepts\\), got -10\nexit [1-9]")
+# the design checks joint limits only: how low the arm comes over the base's mounting plane is said
+# (a warning without --min-height), and a design below --min-height is refused, no file written
+add_test(NAME cli.excite_min_height
+  COMMAND twinwatch excite ur3e -o ${d}/never_low.yaml --global-evals 100 --local-evals 100 --min-height 0)
+set_tests_properties(cli.excite_min_height PROPERTIES
+  PASS_REGULAR_EXPRESSION "the design goes below --min-height 0 m: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m [^\n]*no file written")
+add_test(NAME cli.excite_lowest_point_warning COMMAND twinwatch excite ur3e -o ${d}/low.yaml --global-evals 100 --local-evals 100)
+set_tests_properties(cli.excite_lowest_point_warning PROPERTIES
+  PASS_REGULAR_EXPRESSION "WARNING: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m[^\n]*may hit the table")

@@ -59,6 +59,37 @@ TEST(Excitation, StartsAndEndsAtRestAtQ0) {
   for (int j = 0; j < d.model.n_dof(); ++j) EXPECT_GT(d.result.qd_peak[j], 0.05 * d.result.qd_lim[j]) << "joint " << j;
 }
 
+// The lowest point along a trajectory, against the UR3e's geometry (DH, docs/robot-description.md):
+// at q = 0 the arm lies horizontal at the shoulder height d1 = 0.15185 m and the wrist hangs the J6
+// axis and the flange d5 = 0.08535 m below it: 0.0665 m. Tilting J2 one way takes the arm (a2 + a3 =
+// 0.45675 m) down by sin 0.5 and turns the wrist offset with it: d1 - (a2 + a3) sin 0.5 - d5 cos 0.5
+// = -0.1420 m, below the table; the other way raises everything above the shoulder, whose height is
+// then the lowest. The design's own result carries the point.
+TEST(Excitation, TheLowestPointFollowsTheArmsGeometry) {
+  constexpr double d1 = 0.15185, d5 = 0.08535, arm = 0.24355 + 0.2132;
+  const model::RobotModel m = model::load_robot("ur3e");
+  ExcitationTrajectory t;
+  t.w_f = 2.0 * M_PI * 0.2;
+  t.q0 = VectorJ::Zero(6);
+  t.a = t.b = Eigen::MatrixXd::Zero(6, 3);
+  const ExcitationLowestPoint flat = excitation_lowest_point(m, t, 50);
+  EXPECT_NEAR(flat.z, d1 - d5, 1e-4);
+  EXPECT_GE(flat.body, 5);  // the J6 axis (and the flange, level with it)
+  t.q0[1] = 0.5;
+  const double a = excitation_lowest_point(m, t, 50).z;
+  t.q0[1] = -0.5;
+  const double b = excitation_lowest_point(m, t, 50).z;
+  EXPECT_NEAR(std::min(a, b), d1 - arm * std::sin(0.5) - d5 * std::cos(0.5), 1e-4);
+  EXPECT_NEAR(std::max(a, b), d1, 1e-4);
+  // a moving trajectory: the lowest point is found where it happens (J2 swinging by 0.5 rad)
+  t.q0[1] = 0.0;
+  t.a(1, 0) = 0.5 * t.w_f;  // q2(t) = 0.5 sin(w t) (a / (l w_f) sin(l w_f t), l = 1)
+  const ExcitationLowestPoint swing = excitation_lowest_point(m, t, 400);
+  EXPECT_NEAR(swing.z, d1 - arm * std::sin(0.5) - d5 * std::cos(0.5), 1e-4);
+  EXPECT_GE(designed().result.lowest.body, 1);
+  EXPECT_TRUE(std::isfinite(designed().result.lowest.z));
+}
+
 TEST(Excitation, MatchesTheSimulatorsIndependentFourierEvaluator) {
   const auto& d = designed();
   const ExcitationTrajectory& t = d.result.trajectory;

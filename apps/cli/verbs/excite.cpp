@@ -4,9 +4,11 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
@@ -19,6 +21,11 @@ namespace {
 
 using namespace twinwatch;
 
+// without --min-height, a design whose lowest point comes below this height over the base's mounting
+// plane is warned about [m] (5 cm: the flange and the wrist bodies are that wide)
+constexpr double kWarnHeight = 0.05;
+constexpr const char* kBodyNames[] = {"", "J2", "J3", "J4", "J5", "J6", "J7"};
+
 // a duration is a whole number of periods when it is within this of one (relative)
 constexpr double kWholeCycleTolerance = 1e-9;
 
@@ -26,6 +33,7 @@ struct Options {
   std::string robot, output;
   int harmonics = 5, samples = 100, global = 3000, local = 3000;
   double base_frequency = 0.1, duration = 0.0, amplitude = 1.0, qdd_default = 5.0, fraction = 0.9;
+  double min_height = std::numeric_limits<double>::quiet_NaN();  // [m] (NaN: not given, warn only)
   unsigned seed = 1;
   std::vector<double> q0;
   bool duration_given = false;  // (else one period)
@@ -76,6 +84,21 @@ int run(const Options& o) {
     if (f >= 1.0) std::fprintf(stderr, "\n");
   });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // the design knows the joint limits, not the cell: how low the arm goes is checked here, before the
+  // file a real robot program may run is written
+  const ident::ExcitationLowestPoint& low = r.lowest;
+  const std::string where = low.body >= m.n_dof() ? std::string("the flange")
+                                                   : fmt::format("the {} axis", kBodyNames[std::min(low.body, 6)]);
+  const std::string low_text = fmt::format("{} comes down to z = {:+.3f} m (z = 0: the base's mounting plane) at t = {:.2f} s", where, low.z, low.t);
+  if (std::isfinite(o.min_height) && low.z < o.min_height)
+    throw InvalidArgument(fmt::format("the design goes below --min-height {:g} m: {}; no file written. Raise the centre pose "
+                                      "(--q0), reduce --amplitude, or try another --seed",
+                                      o.min_height, low_text));
+  if (!std::isfinite(o.min_height) && low.z < kWarnHeight)
+    fmt::print(stderr,
+               "WARNING: {}: the design checks joint limits only, not your cell; on a real robot this may hit the table "
+               "or the robot itself. Check it in simulation first; '--min-height H' refuses designs below H m\n",
+               low_text);
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
@@ -107,7 +130,8 @@ int run(const Options& o) {
                      {"q_min", vec(r.q_min_seen)},
                      {"q_max", vec(r.q_max_seen)},
                      {"qd_peak", vec(r.qd_peak)},
-                     {"qdd_peak", vec(r.qdd_peak)}};
+                     {"qdd_peak", vec(r.qdd_peak)},
+                     {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}}};
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
@@ -122,6 +146,7 @@ int run(const Options& o) {
     fmt::print("J{:<5} {:>22} {:>22} {:>16} {:>16}\n", j + 1, fmt::format("[{:.3f}, {:.3f}]", r.q_min_seen[j], r.q_max_seen[j]),
                fmt::format("[{:.3f}, {:.3f}]", r.q_lo[j], r.q_hi[j]), fmt::format("{:.3f}/{:.3f}", r.qd_peak[j], r.qd_lim[j]),
                fmt::format("{:.2f}/{:.2f}", r.qdd_peak[j], r.qdd_lim[j]));
+  fmt::print("lowest point: {} (no collision check beyond this)\n", low_text);
   fmt::print("run it: twinwatch simulate {} -o excitation.csv\n", o.output);
   return 0;
 }
@@ -150,6 +175,9 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   sub->add_option("--samples", o->samples, "Points per period at which cond(W) is evaluated")->capture_default_str();
   sub->add_option("--global-evals", o->global, "Objective evaluations of the global step (0: skip)")->capture_default_str();
   sub->add_option("--local-evals", o->local, "Objective evaluations of the local step (0: skip)")->capture_default_str();
+  sub->add_option("--min-height", o->min_height,
+                  "Refuse a design whose body origins or flange come below this height [m] over the base's mounting plane "
+                  "(default: only warn below 0.05 m); no other collision check is made");
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");

@@ -29,6 +29,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include <Eigen/Core>
@@ -67,6 +68,18 @@ struct ExcitationTrajectory {
   void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const;
 };
 
+/// The lowest point the arm reaches along a trajectory, in the base frame (z up from the mounting
+/// surface the base stands on): over the origins of the body frames after the first, and the flange.
+struct ExcitationLowestPoint {
+  double z = std::numeric_limits<double>::infinity();  ///< [m]
+  double t = 0.0;                                      ///< [s] when
+  int body = -1;  ///< which: 1..n_dof-1 the origin of body (joint) body+1, n_dof the flange
+};
+
+/// excitation_lowest_point on `samples` points of one period. The design checks only joint limits;
+/// this is what tells a trajectory that would drive the arm into the table it stands on.
+ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& trajectory, int samples);
+
 struct ExcitationResult {
   ExcitationTrajectory trajectory;
   double cond_start = 0.0;        ///< cond(W) of the (projected) random start
@@ -76,6 +89,7 @@ struct ExcitationResult {
   int base_columns = 0;           ///< columns of W (base parameters incl. friction)
   VectorJ q_lo, q_hi, qd_lim, qdd_lim;  ///< the limits enforced [rad], [rad/s], [rad/s²]
   VectorJ q_min_seen, q_max_seen, qd_peak, qdd_peak;  ///< extremes on the dense grid
+  ExcitationLowestPoint lowest;   ///< on the dense grid (no collision check: the user's cell is unknown)
 };
 
 /// Designs an excitation trajectory for `model`. `progress` (may be empty) gets (fraction done,
