@@ -371,11 +371,13 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot) {
 }
 
 std::string robot_reference(const std::string& name_or_path) {
-  const std::filesystem::path p(name_or_path);
+  const auto hash = name_or_path.rfind(".urdf#");
+  const std::string file = hash == std::string::npos ? name_or_path : name_or_path.substr(0, hash + 5);
+  const std::filesystem::path p(file);
   if (p.extension() != ".json" && p.extension() != ".urdf") return name_or_path;
   std::error_code ec;
   const std::filesystem::path a = std::filesystem::absolute(p, ec);
-  return ec ? name_or_path : a.lexically_normal().string();
+  return (ec ? file : a.lexically_normal().string()) + (hash == std::string::npos ? "" : name_or_path.substr(hash + 5));
 }
 
 std::optional<device::ColumnMap> load_column_map(const std::string& path) {

@@ -260,6 +260,9 @@ std::vector<std::string> builtin_robot_names() {
 }
 
 RobotModel load_robot(const std::string& name_or_path) {
+  // FILE.urdf#TIP: the chain from the root to the link TIP (a tree with several arms or tools)
+  if (const auto hash = name_or_path.rfind(".urdf#"); hash != std::string::npos)
+    return RobotModel(load_description_urdf(name_or_path.substr(0, hash + 5), "", name_or_path.substr(hash + 6)));
   const fs::path p(name_or_path);
   if (p.extension() == ".json") return RobotModel(load_description_json(name_or_path));
   if (p.extension() == ".urdf") return RobotModel(load_description_urdf(name_or_path));

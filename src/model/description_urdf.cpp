@@ -81,16 +81,37 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   if (!urdf_model->getLink(base)) throw ParseError(path, 0, "link", fmt::format("base link '{}' does not exist", base));
   std::string tip = tip_link;
   if (tip.empty()) {
+    // the leaf below the most revolute/continuous joints: a description with frames beside the
+    // chain (a massless 'base' or 'tool0', a sensor frame) has several leaves, but one arm
     std::vector<std::string> leaves;
     for (const auto& [name, link] : urdf_model->links_)
       if (link->child_links.empty()) leaves.push_back(name);
-    if (leaves.size() != 1) {
-      std::string list;
-      for (const auto& l : leaves) list += (list.empty() ? "" : ", ") + l;
-      throw ParseError(path, 0, "link",
-                       fmt::format("the tree has {} leaves ({}), expected one: name the tip link", leaves.size(), list));
+    auto movable = [&](const std::string& leaf) {
+      int count = 0;
+      for (urdf::LinkConstSharedPtr l = urdf_model->getLink(leaf); l && l->parent_joint && l->name != base;
+           l = urdf_model->getLink(l->parent_joint->parent_link_name))
+        count += l->parent_joint->type == urdf::Joint::REVOLUTE || l->parent_joint->type == urdf::Joint::CONTINUOUS ? 1 : 0;
+      return count;
+    };
+    int most = -1;
+    std::vector<std::string> best;
+    for (const auto& l : leaves) {
+      const int c = movable(l);
+      if (c > most) best.clear();
+      if (c >= most) {
+        most = c;
+        best.push_back(l);
+      }
     }
-    tip = leaves.front();
+    if (best.size() != 1) {
+      std::string list;
+      for (const auto& l : best) list += (list.empty() ? "" : ", ") + l;
+      throw ParseError(path, 0, "link",
+                       fmt::format("the tree has {} leaves below {} revolute joints ({}), expected one: name the tip link "
+                                   "after the file, e.g. --robot {}#{}",
+                                   best.size(), most, list, path, best.front()));
+    }
+    tip = best.front();
   }
   if (!urdf_model->getLink(tip)) throw ParseError(path, 0, "link", fmt::format("tip link '{}' does not exist", tip));
 

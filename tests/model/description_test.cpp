@@ -192,8 +192,28 @@ TEST(DescriptionUrdf, BranchingTreeNeedsATip) {
     load_description_urdf(path);
     FAIL();
   } catch (const ParseError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("the tree has 2 leaves"));
+    EXPECT_THAT(e.what(), HasSubstr("the tree has 2 leaves below 1 revolute joints (l1, l2), expected one: name the tip link "
+                                    "after the file, e.g. --robot "));
+    EXPECT_THAT(e.what(), HasSubstr("branch.urdf#l1"));
   }
+  // named: the chain to that leaf
+  EXPECT_EQ(load_robot(path + "#l2").description().joints.front().name, "j2");
+}
+
+// A description with frames beside the arm (ur_description's massless 'base' and 'tool0', a
+// sensor frame) has several leaves but one chain with the most revolute joints: that one is taken.
+TEST(DescriptionUrdf, FramesBesideTheChainDoNotHideTheArm) {
+  const std::string path = ::testing::TempDir() + "description_test_frames.urdf";
+  std::ofstream(path) << R"(<robot name="f"><link name="base_link"/><link name="base"/><link name="l1"/><link name="l2"/><link name="tool0"/><link name="cam"/>
+    <joint name="base_fixed" type="fixed"><parent link="base_link"/><child link="base"/></joint>
+    <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    <joint name="cam_fixed" type="fixed"><parent link="l1"/><child link="cam"/></joint>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    <joint name="tool_fixed" type="fixed"><parent link="l2"/><child link="tool0"/></joint></robot>)";
+  const RobotDescription d = load_description_urdf(path);
+  ASSERT_EQ(d.joints.size(), 2u);
+  EXPECT_EQ(d.joints[0].name, "j1");
+  EXPECT_EQ(d.joints[1].name, "j2");
 }
 
 TEST(Payload, ChangesGravityTorqueByJTransposeMg) {

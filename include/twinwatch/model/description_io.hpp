@@ -20,13 +20,15 @@ RobotDescription load_description_json(const std::string& path);
 /// Parses a JSON description from a string; `origin` names it in error messages.
 RobotDescription parse_description_json(const std::string& text, const std::string& origin);
 
-/// Loads a serial chain from a URDF file, from `base_link` to `tip_link` (empty: the root and the
-/// single leaf). Fixed joints are merged; revolute/continuous joints become joints.
+/// Loads a serial chain from a URDF file, from `base_link` to `tip_link` (empty: the root, and the
+/// leaf below the most revolute/continuous joints; a tie is an error naming the leaves). Fixed
+/// joints on the chain are merged; revolute/continuous joints become joints.
 RobotDescription load_description_urdf(const std::string& path, const std::string& base_link = "",
                                        const std::string& tip_link = "");
 
 /// Loads a robot by built-in name ("ur3e", "ur5e", "panda": data/robots/<name>.json) or by path
-/// to a .json or .urdf file.
+/// to a .json or .urdf file; "FILE.urdf#TIP" takes the chain from the root to the link TIP (without
+/// it, the leaf below the most revolute joints).
 RobotModel load_robot(const std::string& name_or_path);
 
 /// Names of the built-in robots (files in the data/robots directory).
