@@ -41,6 +41,10 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot);
 /// that the twin (or model) that stores it still finds it from another working directory.
 std::string robot_reference(const std::string& name_or_path);
 
+/// An event's magnitude for a table: 3 significant digits, a whole count in full ("1001 samples",
+/// not "1e+03 samples").
+std::string magnitude_text(double value, const std::string& units);
+
 /// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
 /// RTDE names (device::ColumnMap::load), none when `path` is empty.
 std::optional<device::ColumnMap> load_column_map(const std::string& path);
@@ -156,6 +160,7 @@ std::string evaluation_json(const Evaluation& e);
 /// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
 /// `map`: a foreign log's column map (none: RTDE column names).
 void write_report(const ident::TwinModel& twin, const std::string& recording, const model::RigidBodyInertia& payload,
-                  const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt, const device::ColumnMap* map = nullptr);
+                  const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt, const device::ColumnMap* map = nullptr,
+                  const std::string& program = "");
 
 }  // namespace twinwatch::cli

@@ -880,17 +880,21 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   return true;
 }
 
+void Monitor::restart_estimators() {
+  obs_.reset();
+  obs_samples_ = 0;
+  filter_started_ = false;
+  for (auto& f : fir_) f.reset();
+  settle_until_ = n_samples_ + kObserverSettle;
+}
+
 void Monitor::restart_after_gap(const RobotSample& s) {
   // what was estimated across the gap is stale: the observer starts again (its first difference
   // would span the gap and jump by half the drive torque's change across it), the residual filter
   // and the acceleration estimate restart, frozen-channel runs compare nothing across it, and
   // decisions wait the start-up samples again, as at the beginning of a run
-  obs_.reset();
-  obs_samples_ = 0;
-  filter_started_ = false;
-  for (auto& f : fir_) f.reset();
+  restart_estimators();
   std::fill(frozen_run_.begin(), frozen_run_.end(), 0);
-  settle_until_ = n_samples_ + kObserverSettle;
   // the twin's pre-sliding memory cannot follow motion it did not see: a reversal inside the gap
   // leaves it on the wrong side, and a joint that stands still after the gap (at a turning point)
   // shows twice its pre-sliding level as a residual. A moving joint has slid in its direction; for
@@ -1172,6 +1176,9 @@ void Monitor::close_frozen(int j, bool at_stop) {
   f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples){}", j + 1, frozen_val_[j],
                          f.magnitude, at_stop ? "; still frozen when monitoring stopped" : "");
   if (on_event) on_event(f);
+  // the observer and the residual filter integrated the frozen value for the whole stretch: they
+  // restart as after a gap (the release read as a contact on link 1 in stream_and_sensor_faults)
+  if (!at_stop) restart_estimators();
 }
 
 void Monitor::finish() {

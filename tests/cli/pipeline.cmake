@@ -89,3 +89,7 @@ grep -q '\"robot\": \"../myarm.json\"' robotdir/sub/rel.json; \
 $<TARGET_FILE:twinwatch> validate --twin robotdir/sub/rel.json ${d}/exc.csv --json")
 set_tests_properties(cli.twin_with_a_robot_file_from_another_directory PROPERTIES FIXTURES_REQUIRED recordings
   PASS_REGULAR_EXPRESSION "\"joints\":\\[\\{[^\n]*\n[^\n]*\"joints\":\\[\\{")
+# report takes the threshold set monitor --program takes (it used the default set whatever the program)
+add_test(NAME cli.report_program COMMAND twinwatch report --twin ${d}/twin.json ${d}/fig.csv --program nosuch -o ${d}/never_report.html)
+set_tests_properties(cli.report_program PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "no thresholds learned for program 'nosuch'")

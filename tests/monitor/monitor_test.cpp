@@ -284,6 +284,17 @@ TEST_F(MonitorLoop, StreamGapsAndFrozenChannelsAreTheirOwnEvents) {
   EXPECT_LT(ev[1].t_detected - 8.0, 0.2);
 }
 
+// When a frozen current channel comes back, the observer and the residual filter have integrated
+// the frozen value for the whole stretch; they restart as after a gap, and the stretch stays the one
+// event. (The reference twin's release read as a contact on link 1: cli.evaluate_stuck_channel_release.)
+TEST_F(MonitorLoop, AFrozenChannelThatComesBackIsNoContact) {
+  const auto ev = monitor(run(scenario(19, 20, 0.5, "  - {type: stuck_current, joint: 2, onset: 14, end: 16}\n")), 0.5);
+  ASSERT_EQ(ev.size(), 1u) << ev.back().detail;
+  EXPECT_EQ(ev[0].fault, FaultClass::SensorFault);
+  EXPECT_EQ(ev[0].joint, 1);
+  EXPECT_NEAR(ev[0].t_end, 16.0, 0.0041);
+}
+
 // The false-alarm margin a healthy run reports (Monitor::track_margin) is exactly the sensitivity of
 // its first alarm: every threshold scaled by a factor just above it raises nothing, just below it raises.
 TEST_F(MonitorLoop, TheMarginOfAHealthyRunIsTheSensitivityOfItsFirstAlarm) {

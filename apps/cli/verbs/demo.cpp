@@ -9,6 +9,7 @@
 #include <random>
 
 #include "evaluate.hpp"
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/description_io.hpp"
@@ -58,6 +59,13 @@ int run(const Options& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (step_model_check(o.robot) != 0) return 1;
   if (o.quick) return 0;
+  // the scenarios must be of the twin's robot: checked before the minute of training, not after
+  const auto files = scenario_files(o.scenarios);
+  for (const auto& f : files)
+    if (const sim::Scenario sc = sim::load_scenario(f); sc.robot != o.robot)
+      throw InvalidArgument(fmt::format("--robot {}: {} runs robot '{}'; give --scenarios DIR with scenarios of '{}' (the built-in "
+                                        "library, scenarios/ur3e, is for the UR3e)",
+                                        o.robot, f, sc.robot, o.robot));
   std::filesystem::create_directories(o.out);
 
   fmt::print("== step 2: identify the twin from simulated healthy runs (recordings only, DESIGN.md rule 1)\n");
@@ -67,7 +75,6 @@ int run(const Options& o) {
   fmt::print("   twin written to {}\n", twin_path);
 
   fmt::print("== step 3: monitor the scenario library ({})\n", o.scenarios);
-  const auto files = scenario_files(o.scenarios);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, false, o.max_duration, false);
   cli::print_evaluation(ev);
   write_text_file((std::filesystem::path(o.out) / "evaluation.json").string(), cli::evaluation_json(ev) + '\n');

@@ -8,6 +8,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/monitor/event.hpp"
+#include "evaluate.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -56,7 +57,7 @@ void run_events(const EventsOptions& o) {
     fmt::print("{:<24} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n",
                source.size() > 24 ? "…" + source.substr(source.size() - 23) : source, e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
-               fmt::format("{:.3g} {}", e.magnitude, e.units), e.detail);
+               cli::magnitude_text(e.magnitude, e.units), e.detail);
   fmt::print("{} event(s) of {} stored in {}\n", rows.size(), store.count(), o.db);
 }
 

@@ -366,6 +366,13 @@ int run_thresholds(const ThresholdOptions& o) {
   // set (observer thresholds and debounce included) left as it was
   monitor::MonitorConfig cfg = settings;
   bool program_is_default = false;
+  {
+    double seconds = 0.0;
+    for (const auto& r : recs)
+      if (r.samples.size() > 1) seconds += r.samples.back().timestamp - r.samples.front().timestamp;
+    fmt::print(stderr, "learning thresholds on {} recording(s), {:.0f} s of data (the monitor runs over them, then a linear program "
+                       "per joint) ...\n", recs.size(), seconds);
+  }
   if (o.program.empty()) {
     cfg = monitor::learn_thresholds(twin, runs, settings);
   } else {
@@ -546,7 +553,7 @@ int run_evaluate(const EvaluateOptions& o) {
 }
 
 struct ReportOptions {
-  std::string twin, recording, output = "report.html", labels, column_map;
+  std::string twin, recording, output = "report.html", labels, column_map, program;
   bool quiet = false;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
@@ -563,7 +570,7 @@ int run_report(const ReportOptions& o) {
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
-  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr);
+  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }
@@ -622,6 +629,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
+  sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)");
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);

@@ -246,6 +246,7 @@ class Monitor {
   void open_event(int joint, double start, double t);
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
   void restart_after_gap(const RobotSample& s);
+  void restart_estimators();  // observer, residual filter and FIR restart; decisions wait the start-up samples
   void run_diagnosis(double t);
   VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
