@@ -791,6 +791,18 @@ void Monitor::run_diagnosis(double t) {
     e.detail += "; sizes in the twin's relative torque units, not physical: it was identified without a known payload";
   }
   diagnosed_ = true;
+  if (background_ >= 0 && open_ != background_ && e.fault != FaultClass::Collision) {
+    // not a contact: the persistent fault seen on another joint; the raise's event goes
+    Event& old = events_[static_cast<size_t>(background_)];
+    old.peak_residual = std::max(old.peak_residual, e.peak_residual);
+    events_.erase(events_.begin() + open_);
+    for (int& k : frozen_event_)
+      if (k > open_) --k;
+    if (pending_close_ > open_) --pending_close_;
+    last_over_ = std::max(last_over_, background_last_over_);
+    resume_background();
+    return;
+  }
   if (merge_into_ >= 0) {
     const int into = merge_into_;
     merge_into_ = -1;
@@ -1045,7 +1057,7 @@ void Monitor::push(const RobotSample& s) {
   rest_rf_.apply(s, rf_dec_);
   obs_dec_ = obs_.residual();
   rest_obs_.apply(s, obs_dec_);
-  bool any_active = false;
+  bool any_active = false, background_active = false;
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
   const bool settled = n_samples_ > settle_until_;
@@ -1057,7 +1069,7 @@ void Monitor::push(const RobotSample& s) {
     const bool decides = unsure == 0.0 && frozen_event_[static_cast<size_t>(j)] < 0;
     const bool over_current = settled && decides && std::abs(rf_dec_[j]) > level_[j];
     const bool over_observer = observer_decides && decides && std::abs(obs_dec_[j]) > obs_level_[j];
-    if (over_current || over_observer) last_over_ = t;
+    if (over_current || over_observer) (j == background_joint_ && background_ >= 0 ? background_last_over_ : last_over_) = t;
     Debouncer& dc = deb_[static_cast<size_t>(j)];
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);
@@ -1070,7 +1082,20 @@ void Monitor::push(const RobotSample& s) {
     const bool active = dc.active() || dob.active();
     const bool raised = active && !joint_active_[static_cast<size_t>(j)];
     joint_active_[static_cast<size_t>(j)] = active;
-    if (raised && open_ < 0) {
+    if (raised && open_ >= 0 && background_ < 0 && diagnosed_ && j != events_[static_cast<size_t>(open_)].joint &&
+        events_[static_cast<size_t>(open_)].joint >= 0 &&
+        (events_[static_cast<size_t>(open_)].fault == FaultClass::Resistance ||
+         events_[static_cast<size_t>(open_)].fault == FaultClass::SensorFault)) {
+      // a persistent alert is open on its joint and another joint raises: park it, look at this raise
+      background_ = open_;
+      background_joint_ = events_[static_cast<size_t>(open_)].joint;
+      background_rediagnosed_ = rediagnosed_;
+      background_raise_time_ = raise_time_;
+      background_last_over_ = last_over_;
+      const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
+      open_event(j, start, t);
+      last_over_ = t;
+    } else if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
       // the last alert closed continues that alert when it is on the alert's joint. A raise on
       // another joint is looked at on its own first (merge_into_), so that a contact during a
@@ -1094,7 +1119,15 @@ void Monitor::push(const RobotSample& s) {
         open_event(j, start, t);
       }
     }
-    any_active |= active;
+    if (background_ >= 0 && j == background_joint_) {
+      background_active = active;
+    } else {
+      any_active |= active;
+    }
+  }
+  if (background_ >= 0) {
+    Event& b = events_[static_cast<size_t>(background_)];
+    if (background_active) b.t_end = t;
   }
   if (open_ >= 0) {
     Event& e = events_[static_cast<size_t>(open_)];
@@ -1106,7 +1139,19 @@ void Monitor::push(const RobotSample& s) {
       run_diagnosis(t);
       rediagnosed_ = true;
     }
-    if (!any_active) {
+    const bool parked = background_ >= 0;
+    if (!any_active && parked) {
+      // the raise that parked a persistent alert has cleared: its last look decides, then the
+      // parked alert is the open one again (or it merged back already)
+      if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
+      if (background_ >= 0) {
+        Event& done = events_[static_cast<size_t>(open_)];
+        done.open = false;
+        done.t_end = std::max(done.t_start, last_over_);
+        if (on_event) on_event(done);
+        resume_background();
+      }
+    } else if (!any_active) {
       // an alert that lasted well beyond a pulse gets its final look with everything seen
       if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
       Event& done = events_[static_cast<size_t>(open_)];
@@ -1127,7 +1172,7 @@ void Monitor::push(const RobotSample& s) {
   }
   if (pending_close_ >= 0 && t - cleared_at_ >= kMergeGap) report_pending_close();
   // slow wear: per-window friction trend (samples of an open alert are left out)
-  if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0)) {
+  if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0 || background_ >= 0)) {
     events_.push_back(trend_.warning());
     if (on_event) on_event(events_.back());
   }
@@ -1138,6 +1183,17 @@ void Monitor::push(const RobotSample& s) {
   qd_prev_ = s.qd;
   t_prev_ = t;
   have_prev_ = true;
+}
+
+void Monitor::resume_background() {
+  open_ = background_;
+  background_ = -1;
+  background_joint_ = -1;
+  diagnosed_ = true;
+  rediagnosed_ = background_rediagnosed_;
+  raise_time_ = background_raise_time_;
+  last_over_ = std::max(last_over_, background_last_over_);
+  events_[static_cast<size_t>(open_)].open = true;
 }
 
 void Monitor::report_pending_close() {
@@ -1187,11 +1243,14 @@ void Monitor::finish() {
   report_pending_close();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);
-  Event& e = events_[static_cast<size_t>(open_)];
-  e.open = false;
-  e.detail += "; still active when monitoring stopped";  // its end is the run's, not the fault's
-  open_ = -1;
-  if (on_event) on_event(e);
+  for (const int k : {open_, background_}) {
+    if (k < 0) continue;
+    Event& e = events_[static_cast<size_t>(k)];
+    e.open = false;
+    e.detail += "; still active when monitoring stopped";  // its end is the run's, not the fault's
+    if (on_event) on_event(e);
+  }
+  open_ = background_ = background_joint_ = -1;
 }
 
 }  // namespace twinwatch::monitor

@@ -157,6 +157,40 @@ TEST_F(MonitorLoop, AContactRightAfterAPersistentFaultIsAnEventOfItsOwn) {
   EXPECT_EQ(closed[1].fault, FaultClass::Collision);
 }
 
+// A contact DURING a persistent fault (session 19, the output audit): the monitor kept one open
+// event, and a 20 N·m contact on link 2 while a J5 resistance was open was reported nowhere. The
+// resistance is parked while the raise is looked at on its own: a contact is its own event, and
+// the resistance goes on, one event, still open at the stop.
+TEST_F(MonitorLoop, AContactDuringAPersistentFaultIsAnEventOfItsOwn) {
+  const auto rec = run(scenario(153, 20, 0.5,
+                                "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n"
+                                "  - {type: collision, link: 2, onset: 15.3, magnitude: 20, duration: 0.05, "
+                                "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, *config);
+  std::vector<Event> closed;
+  m.on_event = [&](const Event& e) {
+    if (!e.open) closed.push_back(e);
+  };
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const auto& ev = m.events();
+  ASSERT_EQ(ev.size(), 2u) << ev.back().detail;
+  EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
+  EXPECT_EQ(ev[0].joint, 4);
+  EXPECT_NEAR(ev[0].t_end, 20.0, 0.01) << "the resistance goes on past the contact";
+  EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("still active when monitoring stopped"));
+  EXPECT_EQ(ev[1].fault, FaultClass::Collision) << ev[1].detail;
+  EXPECT_EQ(ev[1].link, 1);  // link 2
+  EXPECT_LT(ev[1].t_detected - 15.3, 0.02);
+  EXPECT_LT(ev[1].duration(), 0.15);
+  // the contact is reported when it ends, the resistance at the stop
+  ASSERT_EQ(closed.size(), 2u);
+  EXPECT_EQ(closed[0].fault, FaultClass::Collision);
+  EXPECT_EQ(closed[1].fault, FaultClass::Resistance);
+}
+
 // the samples of `rec` without those in [from, from + seconds) for each (from, seconds): stream gaps
 device::Recording without(const device::Recording& rec, const std::vector<std::pair<double, double>>& cuts) {
   device::Recording out = rec;

@@ -303,6 +303,16 @@ class Monitor {
   double cleared_at_ = 0.0;  // [s] when the last alert cleared (the merge gap counts from here)
   bool merged_diagnosed_ = false, merged_rediagnosed_ = false;
   double merged_raise_time_ = 0.0;
+  // a persistent alert on one joint (resistance, a sensor offset) that is open when another joint
+  // raises is parked (background_): the raise opens an event of its own, whose first diagnosis
+  // decides. A collision stays its own event while the parked one stays open (updated on its
+  // joint); anything else is the persistent fault spreading and merges back into it. When the
+  // collision clears, the parked alert is the open one again. (Before: a contact during a J5
+  // resistance was not reported at all, session 19.)
+  int background_ = -1, background_joint_ = -1;
+  bool background_rediagnosed_ = false;
+  double background_raise_time_ = 0.0, background_last_over_ = 0.0;
+  void resume_background();
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
