@@ -124,6 +124,20 @@ TEST_F(MonitorLoop, AContinuedAlertIsReportedClosedOnceWithFrictionThatOpposesMo
   EXPECT_GT(ev.front().duration(), 10.0) << "the J5 alert should span the dips, not end at the first";
 }
 
+// the events of a monitored recording, and the events in the order they were reported closed
+std::pair<std::vector<Event>, std::vector<Event>> events_and_closings(const device::Recording& rec) {
+  ident::TwinModel t = *MonitorLoop::twin;
+  t.set_payload(MonitorLoop::payload);
+  Monitor m(t, *MonitorLoop::config);
+  std::vector<Event> closed;
+  m.on_event = [&](const Event& e) {
+    if (!e.open) closed.push_back(e);
+  };
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  return {m.events(), closed};
+}
+
 // review of session 18: a raise within the merge gap continued the earlier alert whatever it was,
 // so a 10 N·m contact 0.6 s after a J5 resistance ended vanished into the resistance event. A raise
 // on another joint is now looked at on its own first; the resistance's own dips still continue it.
@@ -132,16 +146,7 @@ TEST_F(MonitorLoop, AContactRightAfterAPersistentFaultIsAnEventOfItsOwn) {
                                 "  - {type: resistance, joint: 5, onset: 9, ramp: 0.2, magnitude: 0.8, end: 12}\n"
                                 "  - {type: collision, link: 3, onset: 12.6, magnitude: 10, duration: 0.05, "
                                 "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
-  Monitor m(t, *config);
-  std::vector<Event> closed;
-  m.on_event = [&](const Event& e) {
-    if (!e.open) closed.push_back(e);
-  };
-  for (const auto& s : rec.samples) m.push(s);
-  m.finish();
-  const auto& ev = m.events();
+  const auto [ev, closed] = events_and_closings(rec);
   ASSERT_EQ(ev.size(), 2u);
   EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
   EXPECT_EQ(ev[0].joint, 4);
@@ -166,16 +171,7 @@ TEST_F(MonitorLoop, AContactDuringAPersistentFaultIsAnEventOfItsOwn) {
                                 "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n"
                                 "  - {type: collision, link: 2, onset: 15.3, magnitude: 20, duration: 0.05, "
                                 "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
-  Monitor m(t, *config);
-  std::vector<Event> closed;
-  m.on_event = [&](const Event& e) {
-    if (!e.open) closed.push_back(e);
-  };
-  for (const auto& s : rec.samples) m.push(s);
-  m.finish();
-  const auto& ev = m.events();
+  const auto [ev, closed] = events_and_closings(rec);
   ASSERT_EQ(ev.size(), 2u) << ev.back().detail;
   EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
   EXPECT_EQ(ev[0].joint, 4);
