@@ -20,6 +20,7 @@
 #include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/monitor.hpp"
@@ -378,13 +379,12 @@ std::string magnitude_text(double value, const std::string& units) {
 }
 
 std::string robot_reference(const std::string& name_or_path) {
-  const auto hash = name_or_path.rfind(".urdf#");
-  const std::string file = hash == std::string::npos ? name_or_path : name_or_path.substr(0, hash + 5);
-  const std::filesystem::path p(file);
-  if (p.extension() != ".json" && p.extension() != ".urdf") return name_or_path;
+  std::string tip;
+  const std::string file = model::robot_file(name_or_path, &tip);
+  if (file.empty()) return name_or_path;  // a built-in robot
   std::error_code ec;
-  const std::filesystem::path a = std::filesystem::absolute(p, ec);
-  return (ec ? file : a.lexically_normal().string()) + (hash == std::string::npos ? "" : name_or_path.substr(hash + 5));
+  const std::filesystem::path a = std::filesystem::absolute(file, ec);
+  return (ec ? file : a.lexically_normal().string()) + (tip.empty() ? "" : "#" + tip);
 }
 
 std::optional<device::ColumnMap> load_column_map(const std::string& path) {

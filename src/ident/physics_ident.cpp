@@ -405,31 +405,32 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
                                         j + 1, used, total, o.decimate, o.reversal_screen));
   }
 
-  // a joint the recordings never move has nothing to fit: its twin would predict a constant
-  // (R² 0), and a monitor would read every later motion of it as a contact of 10^5 N
-  for (int j = 0; j < n; ++j) {
-    double fastest = 0.0;
-    for (const TrainingRun& r : runs)
-      for (const RobotSample& s : r.recording->samples) fastest = std::max(fastest, std::abs(s.qd[j]));
-    if (!(fastest >= kMinJointSpeed))
-      throw InvalidArgument(fmt::format("identify: J{} never moves in the recordings (|qd| at most {:.4f} rad/s, expected at least "
-                                        "{:g} somewhere): its friction and drive cannot be identified from them; record motion of "
-                                        "every joint (e.g. a trajectory from 'twinwatch excite')",
-                                        j + 1, fastest, kMinJointSpeed));
-  }
-  // joints whose temperature the recordings do not vary enough keep viscous_temperature at 0
-  std::vector<bool> fit_temperature(static_cast<size_t>(n), false);
+  // one pass over the samples: each joint's fastest speed (a joint the recordings never move has
+  // nothing to fit: its twin would predict a constant, R² 0, and a monitor would read every later
+  // motion of it as a contact of 10^5 N), and the temperature span of the samples the fit uses
+  // (joints whose temperature the recordings do not vary enough keep viscous_temperature at 0)
+  VectorJ fastest = VectorJ::Zero(n);
   VectorJ t_lo = VectorJ::Constant(n, std::numeric_limits<double>::infinity()), t_hi = -t_lo;
   for (const TrainingRun& r : runs)
-    for (size_t k = 0; k < r.recording->samples.size(); k += static_cast<size_t>(o.decimate)) {
+    for (size_t k = 0; k < r.recording->samples.size(); ++k) {
       const RobotSample& s = r.recording->samples[k];
-      for (int j = 0; j < n && s.temperature.size() == n; ++j) {
+      fastest = fastest.cwiseMax(s.qd.cwiseAbs());
+      if (k % static_cast<size_t>(o.decimate) != 0 || s.temperature.size() != n) continue;
+      for (int j = 0; j < n; ++j) {
         if (!std::isfinite(s.temperature[j]) || (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen)) continue;
         t_lo[j] = std::min(t_lo[j], s.temperature[j]);
         t_hi[j] = std::max(t_hi[j], s.temperature[j]);
       }
     }
-  for (int j = 0; j < n; ++j) fit_temperature[static_cast<size_t>(j)] = t_hi[j] - t_lo[j] >= kMinViscousTemperatureSpan;
+  std::vector<bool> fit_temperature(static_cast<size_t>(n), false);
+  for (int j = 0; j < n; ++j) {
+    if (!(fastest[j] >= kMinJointSpeed))
+      throw InvalidArgument(fmt::format("identify: J{} never moves in the recordings (|qd| at most {:.4f} rad/s, expected at least "
+                                        "{:g} somewhere): its friction and drive cannot be identified from them; record motion of "
+                                        "every joint (e.g. a trajectory from 'twinwatch excite')",
+                                        j + 1, fastest[j], kMinJointSpeed));
+    fit_temperature[static_cast<size_t>(j)] = t_hi[j] - t_lo[j] >= kMinViscousTemperatureSpan;
+  }
 
   TwinModel twin(robot, rm);
   twin.temperature_ref = o.temperature_ref;

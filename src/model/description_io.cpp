@@ -259,13 +259,20 @@ std::vector<std::string> builtin_robot_names() {
   return names;
 }
 
-RobotModel load_robot(const std::string& name_or_path) {
+std::string robot_file(const std::string& name_or_path, std::string* tip) {
   // FILE.urdf#TIP: the chain from the root to the link TIP (a tree with several arms or tools)
-  if (const auto hash = name_or_path.rfind(".urdf#"); hash != std::string::npos)
-    return RobotModel(load_description_urdf(name_or_path.substr(0, hash + 5), "", name_or_path.substr(hash + 6)));
-  const fs::path p(name_or_path);
-  if (p.extension() == ".json") return RobotModel(load_description_json(name_or_path));
-  if (p.extension() == ".urdf") return RobotModel(load_description_urdf(name_or_path));
+  const auto hash = name_or_path.rfind(".urdf#");
+  if (tip) *tip = hash == std::string::npos ? std::string() : name_or_path.substr(hash + 6);
+  if (hash != std::string::npos) return name_or_path.substr(0, hash + 5);
+  const std::string ext = fs::path(name_or_path).extension().string();
+  return ext == ".json" || ext == ".urdf" ? name_or_path : std::string();
+}
+
+RobotModel load_robot(const std::string& name_or_path) {
+  std::string tip;
+  const std::string file = robot_file(name_or_path, &tip);
+  if (fs::path(file).extension() == ".json") return RobotModel(load_description_json(file));
+  if (!file.empty()) return RobotModel(load_description_urdf(file, "", tip));
   const fs::path builtin = fs::path(robots_directory()) / (name_or_path + ".json");
   // (a name the file system rejects, e.g. too long, is simply not a built-in robot)
   std::error_code ec;

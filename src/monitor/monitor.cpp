@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cctype>
 #include <limits>
-#include <string_view>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -795,11 +794,7 @@ void Monitor::run_diagnosis(double t) {
     // not a contact: the persistent fault seen on another joint; the raise's event goes
     Event& old = events_[static_cast<size_t>(background_)];
     old.peak_residual = std::max(old.peak_residual, e.peak_residual);
-    events_.erase(events_.begin() + open_);
-    for (int& k : frozen_event_)
-      if (k > open_) --k;
-    if (pending_close_ > open_) --pending_close_;
-    last_over_ = std::max(last_over_, background_last_over_);
+    drop_open_event();
     resume_background();
     return;
   }
@@ -817,9 +812,7 @@ void Monitor::run_diagnosis(double t) {
       old.open = true;
       old.t_end = e.t_end;
       old.peak_residual = std::max(old.peak_residual, e.peak_residual);
-      events_.erase(events_.begin() + open_);
-      for (int& k : frozen_event_)
-        if (k > open_) --k;
+      drop_open_event();
       open_ = into;
       diagnosed_ = merged_diagnosed_;
       rediagnosed_ = merged_rediagnosed_;
@@ -861,10 +854,11 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   // would carry it forever (abs(nan) > level is never true: the joint would go blind)
   int bad = -1;
   const char* what = "";
+  double v = 0.0;
   for (int j = 0; j < n_ && bad < 0; ++j) {
-    if (!std::isfinite(s.q[j])) bad = j, what = "position";
-    else if (!std::isfinite(s.qd[j])) bad = j, what = "velocity";
-    else if (!std::isfinite(s.current[j])) bad = j, what = "current";
+    if (!std::isfinite(s.q[j])) bad = j, what = "position", v = s.q[j];
+    else if (!std::isfinite(s.qd[j])) bad = j, what = "velocity", v = s.qd[j];
+    else if (!std::isfinite(s.current[j])) bad = j, what = "current", v = s.current[j];
   }
   if (bad < 0) {
     invalid_run_ = false;
@@ -872,7 +866,6 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   }
   ++n_invalid_;
   if (!invalid_run_) {
-    const double v = std::string_view(what) == "position" ? s.q[bad] : (std::string_view(what) == "velocity" ? s.qd[bad] : s.current[bad]);
     Event f;
     f.t_start = f.t_end = f.t_detected = s.timestamp;
     f.open = false;
@@ -1081,6 +1074,10 @@ void Monitor::push(const RobotSample& s) {
     // the joint's alert is active while either channel's is; it is raised when the first one raises
     const bool active = dc.active() || dob.active();
     const bool raised = active && !joint_active_[static_cast<size_t>(j)];
+    // an alert starts where the first of its channels went over
+    const auto raise_start = [&] {
+      return dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
+    };
     joint_active_[static_cast<size_t>(j)] = active;
     if (raised && open_ >= 0 && background_ < 0 && diagnosed_ && j != events_[static_cast<size_t>(open_)].joint &&
         events_[static_cast<size_t>(open_)].joint >= 0 &&
@@ -1092,8 +1089,7 @@ void Monitor::push(const RobotSample& s) {
       background_rediagnosed_ = rediagnosed_;
       background_raise_time_ = raise_time_;
       background_last_over_ = last_over_;
-      const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
-      open_event(j, start, t);
+      open_event(j, raise_start(), t);
       last_over_ = t;
     } else if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
@@ -1115,8 +1111,7 @@ void Monitor::push(const RobotSample& s) {
         } else {
           report_pending_close();
         }
-        const double start = dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
-        open_event(j, start, t);
+        open_event(j, raise_start(), t);
       }
     }
     if (background_ >= 0 && j == background_joint_) {
@@ -1140,20 +1135,19 @@ void Monitor::push(const RobotSample& s) {
       rediagnosed_ = true;
     }
     const bool parked = background_ >= 0;
-    if (!any_active && parked) {
-      // the raise that parked a persistent alert has cleared: its last look decides, then the
-      // parked alert is the open one again (or it merged back already)
+    if (!any_active) {
+      // an alert that lasted well beyond a pulse gets its final look with everything seen (a raise
+      // that parked a persistent alert may merge back into it there)
       if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
-      if (background_ >= 0) {
-        Event& done = events_[static_cast<size_t>(open_)];
-        done.open = false;
-        done.t_end = std::max(done.t_start, last_over_);
-        if (on_event) on_event(done);
-        resume_background();
-      }
-    } else if (!any_active) {
-      // an alert that lasted well beyond a pulse gets its final look with everything seen
-      if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
+    }
+    if (!any_active && parked && background_ >= 0) {
+      // the contact that parked a persistent alert has cleared: the parked alert is the open one again
+      Event& done = events_[static_cast<size_t>(open_)];
+      done.open = false;
+      done.t_end = std::max(done.t_start, last_over_);
+      if (on_event) on_event(done);
+      resume_background();
+    } else if (!any_active && !parked) {
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
       // it ended at its last exceedance, not when the clearing debounce (clear_after samples) ran out
@@ -1183,6 +1177,16 @@ void Monitor::push(const RobotSample& s) {
   qd_prev_ = s.qd;
   t_prev_ = t;
   have_prev_ = true;
+}
+
+void Monitor::drop_open_event() {
+  // the indices kept into events_ after it move down by one
+  events_.erase(events_.begin() + open_);
+  for (int* k : {&pending_close_, &merge_into_, &background_})
+    if (*k > open_) --*k;
+  for (int& k : frozen_event_)
+    if (k > open_) --k;
+  open_ = -1;
 }
 
 void Monitor::resume_background() {

@@ -6,7 +6,6 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <filesystem>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -135,19 +134,15 @@ int run_identify(const IdentifyOptions& o) {
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
   // the same file under another name (./fig.csv, an absolute path) is the same recording
-  const auto same = [](const std::string& a, const std::string& b) {
-    std::error_code ec;
-    return a == b || std::filesystem::equivalent(a, b, ec);
-  };
   for (const auto& r : recs) {
     ident::TrainingRun t{&r, {}};
     for (const auto& p : pay)
-      if (same(p.file, r.path)) t.payload = p.payload;
+      if (same_file(p.file, r.path)) t.payload = p.payload;
     runs.push_back(t);
   }
   for (const auto& p : pay) {
     bool found = false;
-    for (const auto& r : recs) found |= same(r.path, p.file);
+    for (const auto& r : recs) found |= same_file(r.path, p.file);
     if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the recordings", p.file));
   }
   ident::IdentOptions io;

@@ -389,7 +389,7 @@ int run_thresholds(const ThresholdOptions& o) {
   std::vector<device::Recording> vrecs;
   for (const auto& f : o.debounce_validation) {
     for (const auto& r : o.recordings)
-      if (std::filesystem::equivalent(f, r))
+      if (same_file(f, r))
         throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
                                           "the choice needs healthy runs they were not learned on",
                                           f));

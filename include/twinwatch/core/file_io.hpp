@@ -64,13 +64,19 @@ inline void require_writable(const std::string& path) {
   if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
 }
 
+/// Whether two paths name the same file (the same name, or another name of one existing file:
+/// ./fig.csv and fig.csv, a link, an absolute path).
+inline bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  return a == b || std::filesystem::equivalent(a, b, ec);
+}
+
 /// require_writable, and OUT is none of `inputs` (the same file under another name too): an output
 /// given the name of an input would destroy the input (monitor rec.csv --events rec.csv).
 inline void require_output(const std::string& out, const std::vector<std::string>& inputs) {
   require_writable(out);
-  std::error_code ec;
   for (const std::string& in : inputs)
-    if (!in.empty() && std::filesystem::equivalent(out, in, ec))
+    if (!in.empty() && same_file(out, in))
       throw std::runtime_error(out + ": cannot write: it is the input " + in + ", which it would replace");
 }
 

@@ -31,6 +31,10 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
 /// it, the leaf below the most revolute joints).
 RobotModel load_robot(const std::string& name_or_path);
 
+/// The description file of a robot reference as load_robot takes it ("arm.urdf#tool0" -> "arm.urdf",
+/// "arm.json" -> "arm.json"), or "" for a built-in name; `tip` gets the "#TIP" part ("" without one).
+std::string robot_file(const std::string& name_or_path, std::string* tip = nullptr);
+
 /// Names of the built-in robots (files in the data/robots directory).
 std::vector<std::string> builtin_robot_names();
 

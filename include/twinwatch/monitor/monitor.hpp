@@ -313,6 +313,7 @@ class Monitor {
   bool background_rediagnosed_ = false;
   double background_raise_time_ = 0.0, background_last_over_ = 0.0;
   void resume_background();
+  void drop_open_event();  // erases the open event (a raise merged into an earlier alert); open_ = -1
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
