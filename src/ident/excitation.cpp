@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -24,6 +25,36 @@ constexpr double kCondInfinite = 1e16;
 constexpr double kRescaleSafety = 1e-9;
 // NLopt stops a step when the relative change of log cond(W) falls below this
 constexpr double kFtolRel = 1e-6;
+
+// the height constraint (ExcitationOptions::min_height) is a penalty on the design grid: a design
+// below it scores above any design that keeps it (log cond(W) <= log kCondInfinite ~ 37), and the
+// further below the worse (one unit per cm), so that the derivative-free search is led up and out.
+// It is held kHeightMargin above the asked height, for what happens between grid points.
+constexpr double kHeightPenalty = 40.0;
+constexpr double kHeightScale = 0.01;  // [m]
+constexpr double kHeightMargin = 0.01;  // [m]
+
+// excitation_raised_centre: the weight of the bodies' mean height next to the lowest one's, and the
+// search's budget (a 6-joint pose settles in a few hundred evaluations)
+constexpr double kCentreTieBreak = 0.1;
+// ... and a pull back to the middle of the ranges [m/rad²]: joints that do not change the height
+// stay there, and a UR's upper arm stands up at -pi/2, not at the equivalent 3 pi/2
+constexpr double kCentreStay = 0.002;
+// the search's first step [rad] (NLopt's default, a fraction of a 4 pi range, jumps to far poses)
+constexpr double kCentreStep = 0.2;
+constexpr int kCentreEvaluations = 3000;
+
+// the lowest body origin after the first, or the flange, at the configuration forward_kinematics
+// last computed into d: (z [m], body: 1..n_dof-1 the origin of that body, n_dof the flange)
+std::pair<double, int> lowest_body(const model::RobotModel& m, const model::DynamicsData& d) {
+  std::pair<double, int> low{std::numeric_limits<double>::infinity(), -1};
+  // the body frames after the first (the first turns about the base's own axis) and the flange
+  for (int b = 1; b <= m.n_dof(); ++b) {
+    const double z = b < m.n_dof() ? d.oMi[static_cast<size_t>(b)].translation().z() : d.oMf.translation().z();
+    if (z < low.first) low = {z, b};
+  }
+  return low;
+}
 
 // free coefficients per joint: a_2..a_L and b_3..b_L
 int free_per_joint(int L) { return 2 * L - 3; }
@@ -139,7 +170,26 @@ class Design {
     coefficients(x, traj_);
     project(traj_, S_, C_, 0.0);
     ++evaluations;
-    return std::log(cond_fast(traj_));
+    double f = std::log(cond_fast(traj_));
+    if (std::isfinite(o_.min_height)) {
+      const double below = o_.min_height + kHeightMargin - lowest_on_grid(traj_);
+      if (below > 0.0) f += kHeightPenalty + below / kHeightScale;
+    }
+    return f;
+  }
+
+  // the lowest point (lowest_body) over the design grid [m]
+  double lowest_on_grid(const ExcitationTrajectory& t) {
+    double low = std::numeric_limits<double>::infinity();
+    VectorJ q(n_);
+    for (Eigen::Index m = 0; m < S_.rows(); ++m) {
+      q = t.q0;
+      for (int j = 0; j < n_; ++j)
+        for (int k = 1; k <= L_; ++k) q[j] += (t.a(j, k - 1) * S_(m, k - 1) - t.b(j, k - 1) * C_(m, k - 1)) / (k * w_);
+      model::forward_kinematics(m_, d_, q);
+      low = std::min(low, lowest_body(m_, d_).first);
+    }
+    return low;
   }
 
   void build_W(const ExcitationTrajectory& t, Eigen::MatrixXd& W) {
@@ -243,6 +293,7 @@ void ExcitationOptions::validate(int n_dof) const {
   if (!(limit_fraction > 0.0 && limit_fraction <= 1.0))
     throw InvalidArgument(fmt::format("limit_fraction is {}, must be in (0, 1]", limit_fraction));
   if (!(default_qdd_max > 0.0)) throw InvalidArgument(fmt::format("default_qdd_max is {} rad/s², must be > 0", default_qdd_max));
+  if (std::isnan(min_height)) throw InvalidArgument("min_height is NaN, must be a height [m] or -infinity (none)");
   if (global_evaluations < 0) throw InvalidArgument(fmt::format("global_evaluations is {}, must be >= 0", global_evaluations));
   if (local_evaluations < 0) throw InvalidArgument(fmt::format("local_evaluations is {}, must be >= 0", local_evaluations));
 }
@@ -362,6 +413,48 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
   return res;
 }
 
+VectorJ excitation_raised_centre(const model::RobotModel& model, const ExcitationOptions& o) {
+  o.validate(model.n_dof());
+  const int n = model.n_dof();
+  std::vector<double> lo(static_cast<size_t>(n)), hi(static_cast<size_t>(n)), x(static_cast<size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    const auto& l = model.joint(j).limits;
+    const size_t i = static_cast<size_t>(j);
+    lo[i] = std::isfinite(l.q_min) ? l.q_min + o.position_margin : -M_PI;
+    hi[i] = std::isfinite(l.q_max) ? l.q_max - o.position_margin : M_PI;
+    if (!(lo[i] < hi[i]))
+      throw InvalidArgument(fmt::format("joint {}'s limits [{}, {}] leave no room with a margin of {} rad", j + 1, l.q_min, l.q_max,
+                                        o.position_margin));
+    x[i] = std::isfinite(l.q_min) && std::isfinite(l.q_max) ? 0.5 * (l.q_min + l.q_max) : 0.0;
+  }
+  struct Ctx {
+    const model::RobotModel* m;
+    model::DynamicsData d;
+    VectorJ mid;
+  } ctx{&model, model::DynamicsData(model), Eigen::Map<const Eigen::VectorXd>(x.data(), n)};
+  const auto height = [](unsigned nv, const double* v, double* grad, void* data) {
+    (void)grad;  // derivative-free
+    auto* c = static_cast<Ctx*>(data);
+    const VectorJ q = Eigen::Map<const Eigen::VectorXd>(v, static_cast<Eigen::Index>(nv));
+    model::forward_kinematics(*c->m, c->d, q);
+    double mean = 0.0;
+    for (int b = 1; b <= c->m->n_dof(); ++b)
+      mean += b < c->m->n_dof() ? c->d.oMi[static_cast<size_t>(b)].translation().z() : c->d.oMf.translation().z();
+    return lowest_body(*c->m, c->d).first + kCentreTieBreak * mean / c->m->n_dof() - kCentreStay * (q - c->mid).squaredNorm();
+  };
+  nlopt_opt opt = nlopt_create(NLOPT_LN_SBPLX, static_cast<unsigned>(n));
+  nlopt_set_lower_bounds(opt, lo.data());
+  nlopt_set_upper_bounds(opt, hi.data());
+  nlopt_set_max_objective(opt, height, &ctx);
+  nlopt_set_maxeval(opt, kCentreEvaluations);
+  nlopt_set_xtol_abs1(opt, 1e-4);
+  nlopt_set_initial_step1(opt, kCentreStep);
+  double f = 0.0;
+  nlopt_optimize(opt, x.data(), &f);  // x holds the best point whatever the status
+  nlopt_destroy(opt);
+  return Eigen::Map<const Eigen::VectorXd>(x.data(), n);
+}
+
 ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& t, int samples) {
   if (samples < 1) throw InvalidArgument(fmt::format("samples is {}, must be >= 1", samples));
   model::DynamicsData d(model);
@@ -371,11 +464,7 @@ ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, co
     const double time = t.period() * m / samples;
     t.evaluate(time, q, qd, qdd);
     model::forward_kinematics(model, d, q);
-    // the body frames after the first (the first turns about the base's own axis) and the flange
-    for (int b = 1; b <= model.n_dof(); ++b) {
-      const double z = b < model.n_dof() ? d.oMi[static_cast<size_t>(b)].translation().z() : d.oMf.translation().z();
-      if (z < low.z) low = {z, time, b};
-    }
+    if (const auto [z, body] = lowest_body(model, d); z < low.z) low = {z, time, body};
   }
   return low;
 }

@@ -37,12 +37,20 @@ set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRE
 add_test(NAME cli.excite_duration_negative COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/neg.yaml -q --duration -10 2>&1; echo exit \$?")
 set_tests_properties(cli.excite_duration_negative PROPERTIES PASS_REGULAR_EXPRESSION
   "error: --duration: expected a time > 0 s and at most 1e\\+06 s \\(the longest run the simulator accepts\\), got -10\nexit [1-9]")
-# the design checks joint limits only: how low the arm comes over the base's mounting plane is said
-# (a warning without --min-height), and a design below --min-height is refused, no file written
-add_test(NAME cli.excite_min_height
-  COMMAND twinwatch excite ur3e -o ${d}/never_low.yaml --global-evals 100 --local-evals 100 --min-height 0)
-set_tests_properties(cli.excite_min_height PROPERTIES
-  PASS_REGULAR_EXPRESSION "the design goes below --min-height 0 m: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m [^\n]*no file written")
-add_test(NAME cli.excite_lowest_point_warning COMMAND twinwatch excite ur3e -o ${d}/low.yaml --global-evals 100 --local-evals 100)
+# the search keeps the arm above --min-height (default 0.05 m over the base's mounting plane). The
+# middle of the UR3e's ranges (its stretched-out zero pose, the wrist 7 cm over the table) leaves no
+# design above it: the centre is raised and the design run again, and the file says so. A height the
+# arm cannot keep (its shoulder axis is at 0.152 m) is refused, no file written; a negative height
+# (an arm on a pedestal) lets the design go low, with a warning.
+add_test(NAME cli.excite_min_height_default
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/high.yaml --global-evals 300 --local-evals 300 --json && grep -c 'centre was raised' ${d}/high.yaml")
+set_tests_properties(cli.excite_min_height_default PROPERTIES
+  PASS_REGULAR_EXPRESSION "\"centre_raised\": true,[^}]*\"lowest_point\": {[^}]*\"z\": 0\\.(0[5-9]|[1-9])[0-9]*[^}]*}[^}]*\"min_height\": 0\\.05[^}]*}\n1\n")
+add_test(NAME cli.excite_min_height_unreachable
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/never_high.yaml --global-evals 100 --local-evals 100 --min-height 0.3 2>&1; echo exit \$?; test -e ${d}/never_high.yaml && echo FILE-EXISTS")
+set_tests_properties(cli.excite_min_height_unreachable PROPERTIES
+  PASS_REGULAR_EXPRESSION "error: the search found no design above --min-height 0\\.3 m: the best the (flange|J[2-6] axis) comes down to z = \\+0\\.[0-2][0-9]* m [^\n]*no file written[^\n]*\nexit [1-9]\n$"
+  FAIL_REGULAR_EXPRESSION "FILE-EXISTS")
+add_test(NAME cli.excite_lowest_point_warning COMMAND twinwatch excite ur3e -o ${d}/low.yaml --global-evals 100 --local-evals 100 --min-height -1)
 set_tests_properties(cli.excite_lowest_point_warning PROPERTIES
-  PASS_REGULAR_EXPRESSION "WARNING: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m[^\n]*may hit the table")
+  PASS_REGULAR_EXPRESSION "WARNING: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m[^\n]*\\(--min-height -1 m\\): [^\n]*may hit the table")

@@ -21,8 +21,9 @@ namespace {
 
 using namespace twinwatch;
 
-// without --min-height, a design whose lowest point comes below this height over the base's mounting
-// plane is warned about [m] (5 cm: the flange and the wrist bodies are that wide)
+// the default --min-height, and the height below which a design is warned about when the user asked
+// for a lower one [m] (5 cm over the base's mounting plane: the flange and the wrist bodies are that
+// wide). Without it the default UR3e design took the wrist 0.28-0.38 m below the table (session 19).
 constexpr double kWarnHeight = 0.05;
 constexpr const char* kBodyNames[] = {"", "J2", "J3", "J4", "J5", "J6", "J7"};
 
@@ -33,7 +34,7 @@ struct Options {
   std::string robot, output;
   int harmonics = 5, samples = 100, global = 3000, local = 3000;
   double base_frequency = 0.1, duration = 0.0, amplitude = 1.0, qdd_default = 5.0, fraction = 0.9;
-  double min_height = std::numeric_limits<double>::quiet_NaN();  // [m] (NaN: not given, warn only)
+  double min_height = kWarnHeight;  // [m] over the base's mounting plane
   unsigned seed = 1;
   std::vector<double> q0;
   bool duration_given = false;  // (else one period)
@@ -58,6 +59,7 @@ int run(const Options& o) {
   eo.limit_fraction = o.fraction;
   eo.global_evaluations = o.global;
   eo.local_evaluations = o.local;
+  eo.min_height = o.min_height;
   if (!o.q0.empty()) eo.q0 = Eigen::Map<const Eigen::VectorXd>(o.q0.data(), static_cast<Eigen::Index>(o.q0.size()));
   eo.validate(m.n_dof());
   // the run must end at rest: a whole number of periods
@@ -76,37 +78,52 @@ int run(const Options& o) {
   }
   const bool bar = !o.quiet && !o.json && (o.progress || isatty(STDERR_FILENO));
   const auto t0 = std::chrono::steady_clock::now();
-  const ident::ExcitationResult r = ident::design_excitation(m, eo, [&](double f, double best) {
+  const auto progress = [&](double f, double best) {
     if (!bar) return;
     const int w = 30, k = static_cast<int>(f * w);
     std::fprintf(stderr, "\r  optimising [%.*s%*s] %3.0f %%  best cond %.4g   ", k, "##############################", w - k, "",
                  100 * f, best);
     if (f >= 1.0) std::fprintf(stderr, "\n");
-  });
+  };
+  ident::ExcitationResult r = ident::design_excitation(m, eo, progress);
+  std::string raised;  // what was done when the default centre left no room above --min-height
+  if (o.q0.empty() && r.lowest.z < o.min_height) {
+    // the middle of the ranges (a UR's stretched-out zero pose) holds the wrist a few cm over the
+    // table: the centre is raised and the design run again
+    eo.q0 = ident::excitation_raised_centre(m, eo);
+    std::string q;
+    for (Eigen::Index j = 0; j < eo.q0.size(); ++j) q += fmt::format("{}{:.3f}", j ? " " : "", eo.q0[j]);
+    raised = fmt::format("the middle of the joint ranges left no design above --min-height {:g} m (lowest {:+.3f} m); the centre "
+                         "was raised to --q0 {}", o.min_height, r.lowest.z, q);
+    if (!o.quiet && !o.json) fmt::print(stderr, "{}; designing again\n", raised);
+    r = ident::design_excitation(m, eo, progress);
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  // the design knows the joint limits, not the cell: how low the arm goes is checked here, before the
-  // file a real robot program may run is written
+  // the design keeps the arm above --min-height on its grid; whether it held on the dense grid is
+  // checked here, before the file a real robot program may run is written
   const ident::ExcitationLowestPoint& low = r.lowest;
   const std::string where = low.body >= m.n_dof() ? std::string("the flange")
                                                    : fmt::format("the {} axis", kBodyNames[std::min(low.body, 6)]);
   const std::string low_text = fmt::format("{} comes down to z = {:+.3f} m (z = 0: the base's mounting plane) at t = {:.2f} s", where, low.z, low.t);
-  if (std::isfinite(o.min_height) && low.z < o.min_height)
-    throw InvalidArgument(fmt::format("the design goes below --min-height {:g} m: {}; no file written. Raise the centre pose "
-                                      "(--q0), reduce --amplitude, or try another --seed",
+  if (low.z < o.min_height)
+    throw InvalidArgument(fmt::format("the search found no design above --min-height {:g} m: the best {}; no file written. "
+                                      "Raise the centre pose (--q0), reduce --amplitude, give more --global-evals, or try "
+                                      "another --seed",
                                       o.min_height, low_text));
-  if (!std::isfinite(o.min_height) && low.z < kWarnHeight)
+  if (low.z < kWarnHeight)
     fmt::print(stderr,
-               "WARNING: {}: the design checks joint limits only, not your cell; on a real robot this may hit the table "
-               "or the robot itself. Check it in simulation first; '--min-height H' refuses designs below H m\n",
-               low_text);
+               "WARNING: {} (--min-height {:g} m): on a real robot this may hit the table or the robot itself. Check it in "
+               "simulation first\n",
+               low_text, o.min_height);
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
       "cond(W) over {} base-parameter columns on {} points: random start {:.6g}, global {:.6g}, final {:.6g}",
       m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final);
+  const std::string comment_all = raised.empty() ? comment : comment + "\n" + raised;
   std::ofstream f(o.output);
   if (!f) throw InvalidArgument(fmt::format("{}: cannot open for writing", o.output));
-  f << ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment);
+  f << ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment_all);
   f.close();
   if (!f) throw InvalidArgument(fmt::format("{}: write error", o.output));
   if (o.json) {
@@ -131,7 +148,10 @@ int run(const Options& o) {
                      {"q_max", vec(r.q_max_seen)},
                      {"qd_peak", vec(r.qd_peak)},
                      {"qdd_peak", vec(r.qdd_peak)},
-                     {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}}};
+                     {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}},
+                     {"min_height", o.min_height},
+                     {"q0", vec(r.trajectory.q0)},
+                     {"centre_raised", !raised.empty()}};
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
@@ -146,7 +166,7 @@ int run(const Options& o) {
     fmt::print("J{:<5} {:>22} {:>22} {:>16} {:>16}\n", j + 1, fmt::format("[{:.3f}, {:.3f}]", r.q_min_seen[j], r.q_max_seen[j]),
                fmt::format("[{:.3f}, {:.3f}]", r.q_lo[j], r.q_hi[j]), fmt::format("{:.3f}/{:.3f}", r.qd_peak[j], r.qd_lim[j]),
                fmt::format("{:.2f}/{:.2f}", r.qdd_peak[j], r.qdd_lim[j]));
-  fmt::print("lowest point: {} (no collision check beyond this)\n", low_text);
+  fmt::print("lowest point: {} (kept above --min-height {:g} m; no other collision check)\n", low_text, o.min_height);
   fmt::print("run it: twinwatch simulate {} -o excitation.csv\n", o.output);
   return 0;
 }
@@ -158,7 +178,8 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
       "A finite Fourier series per joint (Cao eq. 21) that starts and ends at rest (zero velocity and\n"
       "acceleration, position back at q0), stays inside the joint position, velocity and acceleration limits,\n"
       "and whose coefficients NLopt chooses (global CRS2 then local Subplex) to minimise the condition number of\n"
-      "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction). Writes a scenario\n"
+      "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction), keeping the arm above\n"
+      "--min-height over the table it stands on. Writes a scenario\n"
       "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too.");
   sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, panda) or a .json/.urdf description")->required();
   sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
@@ -166,7 +187,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   sub->add_option("--base-frequency", o->base_frequency, "Base frequency [Hz]; the period is its inverse")->capture_default_str();
   auto* duration = sub->add_option("--duration", o->duration, "Total run time [s], a whole number of periods (default: one period)");
   sub->add_option("--seed", o->seed, "Seed of the random start and of the global search")->capture_default_str();
-  sub->add_option("--q0", o->q0, "Centre (start and end) position per joint [rad] (default: middle of each range)");
+  sub->add_option("--q0", o->q0, "Centre (start and end) position per joint [rad] (default: middle of each range, raised to a pose that holds the arm up when that leaves no design above --min-height)");
   sub->add_option("--amplitude", o->amplitude, "Largest excursion from q0 [rad] besides the joint limits")->capture_default_str();
   sub->add_option("--limit-fraction", o->fraction, "Share of the velocity/acceleration limits and position range used")
       ->capture_default_str();
@@ -176,8 +197,10 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   sub->add_option("--global-evals", o->global, "Objective evaluations of the global step (0: skip)")->capture_default_str();
   sub->add_option("--local-evals", o->local, "Objective evaluations of the local step (0: skip)")->capture_default_str();
   sub->add_option("--min-height", o->min_height,
-                  "Refuse a design whose body origins or flange come below this height [m] over the base's mounting plane "
-                  "(default: only warn below 0.05 m); no other collision check is made");
+                  "Keep the body origins and the flange above this height [m] over the base's mounting plane: a constraint "
+                  "of the search, and a design that still comes lower is refused, no file written. Negative for an arm on "
+                  "a pedestal (e.g. -0.3); below 0.05 m a warning is printed. No other collision check is made")
+      ->capture_default_str();
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");

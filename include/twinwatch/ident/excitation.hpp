@@ -54,6 +54,11 @@ struct ExcitationOptions {
   int global_evaluations = 3000;  ///< NLopt GN_CRS2_LM budget (0: skip the global step)
   int local_evaluations = 3000;   ///< NLopt LN_SBPLX budget (0: skip the local step)
   model::FrictionColumns friction = model::FrictionColumns::CoulombViscousOffset;  ///< columns in W
+  /// Lowest height [m] over the base's mounting plane (z = 0) the body origins after the first and
+  /// the flange may reach (excitation_lowest_point): a constraint of the search (a penalty on the
+  /// design grid, kept 1 cm inside). -infinity: none. The result's `lowest`, on the dense grid, tells
+  /// whether it held.
+  double min_height = -std::numeric_limits<double>::infinity();
   /// Throws InvalidArgument naming the first bad field (q0 is checked against the model's joints).
   void validate(int n_dof) const;
 };
@@ -76,9 +81,18 @@ struct ExcitationLowestPoint {
   int body = -1;  ///< which: 1..n_dof-1 the origin of body (joint) body+1, n_dof the flange
 };
 
-/// excitation_lowest_point on `samples` points of one period. The design checks only joint limits;
-/// this is what tells a trajectory that would drive the arm into the table it stands on.
+/// excitation_lowest_point on `samples` points of one period: what tells a trajectory that would
+/// drive the arm into the table it stands on (the design keeps above ExcitationOptions::min_height).
 ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& trajectory, int samples);
+
+/// A centre pose that holds the arm high: within each joint's limits (less position_margin; +-pi
+/// where unbounded), the configuration that maximises the lowest point of the static pose (body
+/// origins after the first and the flange) plus a tenth of their mean height (the tie-break that
+/// stands the arm up), less a small pull to the middle of the ranges, from there (NLopt Subplex).
+/// For `excite` when the middle
+/// of the ranges (a UR's stretched-out zero pose, its flange 7 cm over the table) leaves the design
+/// no room above min_height.
+VectorJ excitation_raised_centre(const model::RobotModel& model, const ExcitationOptions& options);
 
 struct ExcitationResult {
   ExcitationTrajectory trajectory;
@@ -89,7 +103,7 @@ struct ExcitationResult {
   int base_columns = 0;           ///< columns of W (base parameters incl. friction)
   VectorJ q_lo, q_hi, qd_lim, qdd_lim;  ///< the limits enforced [rad], [rad/s], [rad/s²]
   VectorJ q_min_seen, q_max_seen, qd_peak, qdd_peak;  ///< extremes on the dense grid
-  ExcitationLowestPoint lowest;   ///< on the dense grid (no collision check: the user's cell is unknown)
+  ExcitationLowestPoint lowest;   ///< on the dense grid (no other collision check: the user's cell is unknown)
 };
 
 /// Designs an excitation trajectory for `model`. `progress` (may be empty) gets (fraction done,
