@@ -23,6 +23,7 @@
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
+#include "twinwatch/monitor/envelope.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "twinwatch/sim/scenario.hpp"
@@ -863,20 +864,27 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);  // a jittery logger clock (device::Recording)
   monitor::Monitor mon(twin, cfg);
+  monitor::EnvelopeWatch watch(twin.envelope);  // where the robot moves beyond the identified motion
   const int n = rec.n_dof;
+  const bool observer = cfg.observer_level.size() == n;  // (as Monitor turns it on)
   std::vector<double> t;
   std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n)), res(static_cast<size_t>(n)),
-      lev(static_cast<size_t>(n)), q(static_cast<size_t>(n)), qt(static_cast<size_t>(n));
+      lev(static_cast<size_t>(n)), q(static_cast<size_t>(n)), qt(static_cast<size_t>(n)), obs(static_cast<size_t>(n)),
+      obs_lev(static_cast<size_t>(n));
   std::vector<double> itot;
   std::vector<VectorJ> resv, qdv;
   for (const auto& s : rec.samples) {
     mon.push(s);
+    watch.check(s);
     t.push_back(s.timestamp);
+    const VectorJ tau_ext = mon.observer_torque(), tau_lev = mon.observer_torque_threshold();
     for (int j = 0; j < n; ++j) {
       meas[static_cast<size_t>(j)].push_back(s.current[j]);
       pred[static_cast<size_t>(j)].push_back(mon.predicted_current()[j]);
       res[static_cast<size_t>(j)].push_back(mon.filtered_residual()[j]);
       lev[static_cast<size_t>(j)].push_back(mon.level()[j]);
+      obs[static_cast<size_t>(j)].push_back(tau_ext[j]);
+      obs_lev[static_cast<size_t>(j)].push_back(tau_lev[j]);
       q[static_cast<size_t>(j)].push_back(s.q[j]);
       qt[static_cast<size_t>(j)].push_back(s.target_q.size() ? s.target_q[j] : NAN);
     }
@@ -889,6 +897,15 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   r.add_paragraph(fmt::format("Recording {} ({} samples, {:.1f} s), twin {} identified from: {}. Thresholds: {}.", recording,
                               rec.samples.size(), t.empty() ? 0.0 : t.back() - t.front(), twin.robot_name(), fmt::join(twin.recordings, ", "),
                               program.empty() ? std::string("the default set") : fmt::format("the set of program '{}'", program)));
+  // the twin is only known where it was identified: beyond that motion a residual may be its model error
+  if (!watch.known())
+    r.add_paragraph("The twin does not record the motion it was identified on (written before session 17): alerts raised where the "
+                    "robot moves beyond it are not marked. Identify again to have them marked.");
+  else if (watch.samples_outside() > 0)
+    r.add_paragraph("Caution: " + watch.summary() + ". There the twin extrapolates; an alert raised there says so, and may be model "
+                    "error, not a fault.");
+  else
+    r.add_paragraph("The whole recording stays within the motion the twin was identified on (speeds and positions per joint).");
   std::vector<ui::PlotSpan> spans;
   for (const auto& e : mon.events()) spans.push_back({e.t_start, std::max(e.t_end, e.t_start + 0.02), e.detail});
   if (labels) {
@@ -903,7 +920,8 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   for (const auto& e : mon.events())
     rows.push_back({fmt::format("{:.3f}", e.t_start), fmt::format("{:.3f}", e.duration()), std::string(monitor::to_string(e.fault)),
                     e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", magnitude_text(e.magnitude, e.units),
-                    fmt::format("{:.0f} %", 100 * e.confidence), e.detail});
+                    fmt::format("{:.0f} %", 100 * e.confidence),
+                    e.detail + (e.fault == monitor::FaultClass::Wear ? "" : watch.alert_note(e.t_start, e.t_detected))});
   r.add_heading("Events");
   r.add_table("alerts with diagnosis", {"start s", "duration s", "class", "joint", "magnitude", "confidence", "detail"}, rows);
   std::vector<std::vector<std::string>> mrows(5);
@@ -942,6 +960,17 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
     r.add_plot({fmt::format("J{} filtered residual and threshold", j + 1), "time [s]", "A",
                 {{"residual", t, res[J], "", false}, {"+threshold", t, lev[J], "#859900", true}, {"-threshold", t, neg, "#859900", true}},
                 spans});
+  }
+  if (observer) {
+    r.add_heading("Momentum-observer estimate of the external joint torque, with its threshold (the second residual)");
+    for (int j = 0; j < n; ++j) {
+      const size_t J = static_cast<size_t>(j);
+      std::vector<double> neg(obs_lev[J].size());
+      for (size_t k = 0; k < neg.size(); ++k) neg[k] = -obs_lev[J][k];
+      r.add_plot({fmt::format("J{} observer estimate and threshold", j + 1), "time [s]", "N·m",
+                  {{"estimate", t, obs[J], "", false}, {"+threshold", t, obs_lev[J], "#859900", true}, {"-threshold", t, neg, "#859900", true}},
+                  spans});
+    }
   }
   r.add_heading("Joint positions, target vs actual (UR3e Fig. 9)");
   for (int j = 0; j < n; ++j)

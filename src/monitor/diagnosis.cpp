@@ -117,10 +117,12 @@ Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, d
 // named a contact on a neighbouring link (7 alerts in the 6 h of wear ramps, docs/validation.md,
 // session 20). It is one when, on the momentum observer's estimate,
 // - only the alert joint crosses its threshold in the window, and it moves one way throughout the
-//   reference and the window (no reversal: there the twin's friction misfit drifts of its own);
+//   window and at least the last kOffsetMinReference samples of the reference (no reversal: there
+//   the twin's friction misfit drifts of its own);
 // - its estimate was already there before the raise, against the motion: the line through the
-//   reference (kContactReference before the window) stands at >= kOffsetShare of the threshold at
-//   the crossing, with the sign of extra resistance (opposite to qd);
+//   reference (kContactReference before the window) since the joint last started moving this way
+//   stands at >= kOffsetShare of the threshold at the crossing, with the sign of extra resistance
+//   (opposite to qd);
 // - nothing new arrived: no window sample departs from that line by more than kOffsetDeparture
 //   times the reference's spread about it. Measured: the worn J3's crossings depart by 3.5-4.5
 //   spreads from a line at 33-52 % of the threshold; the held-out contacts (scenarios/ur3e/
@@ -132,12 +134,15 @@ constexpr size_t kOffsetMinReference = 50;
 std::optional<Hypothesis> offset_raise(const std::vector<DiagnosisSample>& w, const std::vector<DiagnosisSample>& ref,
                                        int j) {
   const int n = static_cast<int>(w.front().tau_ext.size());
-  if (j < 0 || j >= n || ref.size() < kOffsetMinReference || w.front().tau_ext_level.size() != n) return std::nullopt;
-  // one direction of motion throughout, and only joint j over its threshold
+  if (j < 0 || j >= n || w.front().tau_ext_level.size() != n) return std::nullopt;
+  // one direction of motion throughout the window and the reference's end (the part since the joint
+  // last started this way: a pick-and-place move starts from rest), and only joint j over its threshold
   const double dir = w.front().qd[j] > 0.0 ? 1.0 : -1.0;
-  for (const auto* v : {&ref, &w})
-    for (const auto& s : *v)
-      if (dir * s.qd[j] <= kMovingVelocity) return std::nullopt;
+  for (const auto& s : w)
+    if (dir * s.qd[j] <= kMovingVelocity) return std::nullopt;
+  size_t from = ref.size();
+  while (from > 0 && dir * ref[from - 1].qd[j] > kMovingVelocity) --from;
+  if (ref.size() - from < kOffsetMinReference) return std::nullopt;
   bool crossed = false;
   size_t k_cross = 0;
   for (size_t k = 0; k < w.size(); ++k)
@@ -147,15 +152,16 @@ std::optional<Hypothesis> offset_raise(const std::vector<DiagnosisSample>& w, co
         if (!crossed) crossed = true, k_cross = k;
       }
   if (!crossed) return std::nullopt;
-  // the line through the reference, and the spread about it
+  // the line through that part of the reference, and the spread about it
   const double t0 = ref.back().t;
-  const auto R = static_cast<Eigen::Index>(ref.size());
+  const auto R = static_cast<Eigen::Index>(ref.size() - from);
   Eigen::MatrixXd X(R, 2);
   Eigen::VectorXd y(R);
   for (Eigen::Index i = 0; i < R; ++i) {
+    const DiagnosisSample& s = ref[from + static_cast<size_t>(i)];
     X(i, 0) = 1.0;
-    X(i, 1) = ref[static_cast<size_t>(i)].t - t0;
-    y(i) = ref[static_cast<size_t>(i)].tau_ext[j];
+    X(i, 1) = s.t - t0;
+    y(i) = s.tau_ext[j];
   }
   const Eigen::Vector2d line = X.colPivHouseholderQr().solve(y);
   const double spread = std::sqrt((X * line - y).squaredNorm() / static_cast<double>(R - 2));
@@ -170,11 +176,14 @@ std::optional<Hypothesis> offset_raise(const std::vector<DiagnosisSample>& w, co
   h.joint = j;
   h.magnitude = std::abs(base);
   h.units = "N·m";
-  // how much of the estimate's energy over the window the steady offset on joint j explains
+  // how much of the estimate's energy over the window the steady offset on joint j explains, each
+  // joint in units of its threshold (J2's healthy noise is ten times J5's)
   double all = 0.0, left = 0.0;
   for (const auto& s : w) {
-    all += s.tau_ext.squaredNorm();
-    left += s.tau_ext.squaredNorm() - sq(s.tau_ext[j]) + sq(s.tau_ext[j] - at(s.t));
+    const VectorJ z = s.tau_ext.cwiseQuotient(s.tau_ext_level.cwiseMax(kImpulseFloor));
+    const double zj = (s.tau_ext[j] - at(s.t)) / std::max(s.tau_ext_level[j], kImpulseFloor);
+    all += z.squaredNorm();
+    left += z.squaredNorm() - sq(z[j]) + sq(zj);
   }
   h.explained = all > 0.0 ? std::clamp(1.0 - left / all, 0.0, 1.0) : 0.0;
   h.detail = fmt::format(

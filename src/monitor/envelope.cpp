@@ -73,4 +73,18 @@ Excursion EnvelopeWatch::outside_during(double t0, double t1) const {
   return out;
 }
 
+std::string EnvelopeWatch::alert_note(double t_start, double t_detected) const {
+  const Excursion x = outside_during(t_start - kAlertLead, t_detected + kAlertLag);
+  if (x.inside()) return "";
+  return fmt::format("; raised where the robot moves beyond what the twin was identified on ({}): it may be model error, not a fault",
+                     x.describe(envelope_));
+}
+
+std::string EnvelopeWatch::summary() const {
+  if (outside_ == 0) return "";
+  return fmt::format("{} of {} samples ({:.1f} %) beyond the motion the twin was identified on; the farthest: {} at {:.3f} s", outside_,
+                     samples_, 100.0 * static_cast<double>(outside_) / static_cast<double>(samples_), worst_.describe(envelope_),
+                     worst_t_);
+}
+
 }  // namespace twinwatch::monitor

@@ -12,7 +12,14 @@ set_tests_properties(cli.validate_json PROPERTIES FIXTURES_REQUIRED twin PASS_RE
 add_test(NAME cli.monitor_healthy COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events.db)
 set_tests_properties(cli.monitor_healthy PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "samples, 0 gap\\(s\\)")
 add_test(NAME cli.report COMMAND twinwatch report --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 -o ${d}/report.html)
-set_tests_properties(cli.report PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "report written")
+set_tests_properties(cli.report PROPERTIES FIXTURES_REQUIRED twin FIXTURES_SETUP report PASS_REGULAR_EXPRESSION "report written")
+# the report plots the second residual (the momentum observer's estimate against its threshold, per
+# joint) and says whether the recording stays within the motion the twin was identified on (this one
+# was one of its recordings)
+add_test(NAME cli.report_observer_and_envelope
+  COMMAND sh -c "grep -c 'observer estimate and threshold' ${d}/report.html; grep -o 'The whole recording stays within the motion the twin was identified on' ${d}/report.html")
+set_tests_properties(cli.report_observer_and_envelope PROPERTIES FIXTURES_REQUIRED report
+  PASS_REGULAR_EXPRESSION "^[1-9][0-9]*\nThe whole recording stays within the motion the twin was identified on\n$")
 add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.yaml -o ${d}/bad.csv)
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)

@@ -190,11 +190,8 @@ int run_monitor(const MonitorOptions& o) {
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
-  // twin's model error; the alert says so when it was raised there (from kEnvelopeLead s before the
-  // exceedance began to kEnvelopeLag s after the raise; a long alert is not marked for a later excursion)
+  // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
   monitor::EnvelopeWatch watch(twin.envelope);
-  constexpr double kEnvelopeLead = 0.5;  // [s] a filtered residual lags the motion that caused it
-  constexpr double kEnvelopeLag = 0.1;   // [s]
   const bool chatty = !o.quiet && !o.json;
   if (!watch.known() && chatty)
     fmt::print(stderr, "note: {} does not record the motion it was identified on (written before session 17): alerts raised where "
@@ -203,11 +200,7 @@ int run_monitor(const MonitorOptions& o) {
   std::vector<bool> noted(static_cast<size_t>(2 * twin.n_dof()), false);  // per joint: speed, position
   mon.on_event = [&](const monitor::Event& raw) {
     monitor::Event e = raw;
-    const monitor::Excursion x = watch.outside_during(e.t_start - kEnvelopeLead, e.t_detected + kEnvelopeLag);
-    if (!x.inside())
-      e.detail += fmt::format("; raised where the robot moves beyond what the twin was identified on ({}): it may be model error, "
-                              "not a fault",
-                              x.describe(watch.envelope()));
+    e.detail += watch.alert_note(e.t_start, e.t_detected);
     if (e.open) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
@@ -262,9 +255,9 @@ int run_monitor(const MonitorOptions& o) {
     mon.push(s);
     if (!trace.is_open()) return;
     trace << fmt::format("{:.6f}", s.timestamp);
+    const VectorJ obs = mon.observer_torque(), obs_level = mon.observer_torque_threshold();
     for (int j = 0; j < twin.n_dof(); ++j)
-      trace << fmt::format(",{:.6g},{:.6g},{:.6g},{:.6g}", mon.filtered_residual()[j], mon.level()[j], mon.observer_residual()[j],
-                           mon.observer_threshold()[j]);
+      trace << fmt::format(",{:.6g},{:.6g},{:.6g},{:.6g}", mon.filtered_residual()[j], mon.level()[j], obs[j], obs_level[j]);
     trace << '\n';
   };
   if (!client) {
@@ -309,10 +302,7 @@ int run_monitor(const MonitorOptions& o) {
   mon.finish();
   close_written(jl, o.events_path);
   close_written(trace, o.trace);
-  if (chatty && watch.samples_outside() > 0)
-    fmt::print("{} of {} samples ({:.1f} %) beyond the motion the twin was identified on; the farthest: {} at {:.3f} s\n",
-               watch.samples_outside(), watch.samples(), 100.0 * static_cast<double>(watch.samples_outside()) / static_cast<double>(watch.samples()),
-               watch.worst().describe(watch.envelope()), watch.worst_time());
+  if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
                mon.repeated() + mon.invalid() > 0

@@ -52,6 +52,17 @@ class EnvelopeWatch {
   /// The largest excursion of the stretches outside that overlap [t0, t1] (inside when none). The
   /// last kEpisodes stretches are kept (a stretch ends after kEpisodeGap s back inside).
   Excursion outside_during(double t0, double t1) const;
+  /// What an alert whose exceedance began at t_start and was raised at t_detected adds to its detail
+  /// when it was raised where the robot moved beyond the training motion (from kAlertLead s before
+  /// t_start, as a filtered residual lags the motion that caused it, to kAlertLag s after the raise;
+  /// a long alert is not marked for a later excursion): "; raised where ... (J2 at ...): it may be
+  /// model error, not a fault". "" when inside.
+  std::string alert_note(double t_start, double t_detected) const;
+  /// "N of M samples (x %) beyond the motion the twin was identified on; the farthest: ... at T s";
+  /// "" when none was.
+  std::string summary() const;
+  static constexpr double kAlertLead = 0.5;  ///< [s]
+  static constexpr double kAlertLag = 0.1;   ///< [s]
   static constexpr size_t kEpisodes = 1000;
   static constexpr double kEpisodeGap = 0.1;  ///< [s]
 

@@ -103,7 +103,7 @@ struct MonitorConfig {
   /// the observer's threshold raises alerts too (else the observer only feeds the contact isolation).
   /// On by default since its residual is temperature-compensated like the current residual and its
   /// dynamic threshold hugs the misfit (threshold.hpp): 3 N·m contacts in 20 ms, 0 false alarms in
-  /// 8 h of long runs and wear ramps (docs/validation.md, 2026-11-23)
+  /// the 2.07 h of nominal long runs (docs/validation.md)
   bool observer_alerts = true;
   VectorJ observer_level;                              ///< [N·m] static threshold per joint (empty: off)
   std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] Cao eq. 24 on the observer output
@@ -219,6 +219,10 @@ class Monitor {
   /// evaluated even when observer_alerts is off).
   const VectorJ& observer_residual() const { return obs_.residual(); }
   const VectorJ& observer_threshold() const { return obs_level_; }
+  /// The same two in N·m through the trusted drive gains (what the diagnosis reads; the twin's own
+  /// units differ on a joint whose gain the recordings did not fix). Allocate: for traces and reports.
+  VectorJ observer_torque() const { return obs_.residual().cwiseProduct(obs_to_nm_); }
+  VectorJ observer_torque_threshold() const { return obs_level_.cwiseProduct(obs_to_nm_); }
   double total_current() const { return i_total_; }
   /// Turns on the false-alarm margin (off by default: it costs a little per sample). From then on each
   /// joint and channel keeps the largest ratio |residual| / threshold that its debounce's raise_after
