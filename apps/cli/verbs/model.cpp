@@ -44,7 +44,7 @@ nlohmann::json to_json(const RobotModel& m) {
 
 void print_summary(const RobotModel& m) {
   fmt::print("robot {} ({} joints) from {}\n", m.name(), m.n_dof(), m.description().source);
-  fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9}  {}\n", "#", "joint", "mass kg", "COM (body frame) m",
+  fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9}  {}\n", "#", "joint", "mass kg", "COM (joint frame) m",
              "q range rad", "qd rad/s", "tau N·m", "drive N / kt");
   double total = 0.0;
   for (int i = 0; i < m.n_dof(); ++i) {
@@ -60,6 +60,10 @@ void print_summary(const RobotModel& m) {
   }
   fmt::print("moving mass {:.4f} kg; gravity [{:g} {:g} {:g}] m/s²\n", total, m.gravity().x(), m.gravity().y(),
              m.gravity().z());
+  // the model keeps each body in its joint's frame (origin on the axis, z along it); a DH file gives
+  // it in DH frame i, a URDF in its link frame: the same point, other coordinates
+  fmt::print("centres of mass in each joint's own frame (origin on its axis, z along it), which the model uses; a DH "
+             "description gives them in DH frame i, a URDF in its link frame (docs/robot-description.md)\n");
   twinwatch::model::DynamicsData d(m);
   const auto& T = twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof()));
   fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", T.translation().x(), T.translation().y(),
