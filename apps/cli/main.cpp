@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
       "twinwatch — a digital twin for sensorless condition monitoring of robots.\n"
       "It predicts what a healthy robot draws from what its controller already streams and turns\n"
       "the difference into diagnoses. Run 'twinwatch VERB --help' for each verb."};
+  app.footer("Exit status: 0 success; 2 bad usage or bad input (an option, a file's content, an output path), the\n"
+             "message naming it; 1 any other failure while running (e.g. a robot that stops answering, a recipe the\n"
+             "controller refuses).");
   app.set_version_flag("-V,--version", std::string("twinwatch ") + twinwatch::kVersion);
   app.require_subcommand(1);
   app.fallthrough();
@@ -36,7 +39,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; every usage error exits 2 like bad input (CLI11's own codes,
+    // 105-114 by kind, told a script nothing it could act on)
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const twinwatch::ParseError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -100,3 +100,7 @@ set_tests_properties(cli.twin_with_a_robot_file_from_another_directory PROPERTIE
 add_test(NAME cli.report_program COMMAND twinwatch report --twin ${d}/twin.json ${d}/fig.csv --program nosuch -o ${d}/never_report.html)
 set_tests_properties(cli.report_program PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "no thresholds learned for program 'nosuch'")
+# exit status: a usage error exits 2 like bad input (CLI11's own codes were 105-114 by kind), --help 0
+add_test(NAME cli.usage_error_exits_2
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> monitor --twin x.json --sensitivity 2>/dev/null; echo exit $?; $<TARGET_FILE:twinwatch> validate --help >/dev/null; echo exit $?")
+set_tests_properties(cli.usage_error_exits_2 PROPERTIES PASS_REGULAR_EXPRESSION "^exit 2\nexit 0\n$")
