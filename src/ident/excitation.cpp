@@ -10,7 +10,6 @@
 #include <limits>
 #include <random>
 #include <sstream>
-#include <utility>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -44,16 +43,23 @@ constexpr double kCentreStay = 0.002;
 constexpr double kCentreStep = 0.2;
 constexpr int kCentreEvaluations = 3000;
 
-// the lowest body origin after the first, or the flange, at the configuration forward_kinematics
-// last computed into d: (z [m], body: 1..n_dof-1 the origin of that body, n_dof the flange)
-std::pair<double, int> lowest_body(const model::RobotModel& m, const model::DynamicsData& d) {
-  std::pair<double, int> low{std::numeric_limits<double>::infinity(), -1};
-  // the body frames after the first (the first turns about the base's own axis) and the flange
+// heights of the body origins after the first (the first turns about the base's own axis) and the
+// flange, at the configuration forward_kinematics last computed into d: the lowest (z [m], body:
+// 1..n_dof-1 the origin of that body, n_dof the flange) and their mean [m]
+struct BodyHeights {
+  double lowest = std::numeric_limits<double>::infinity();
+  int body = -1;
+  double mean = 0.0;
+};
+BodyHeights body_heights(const model::RobotModel& m, const model::DynamicsData& d) {
+  BodyHeights h;
   for (int b = 1; b <= m.n_dof(); ++b) {
     const double z = b < m.n_dof() ? d.oMi[static_cast<size_t>(b)].translation().z() : d.oMf.translation().z();
-    if (z < low.first) low = {z, b};
+    if (z < h.lowest) h.lowest = z, h.body = b;
+    h.mean += z;
   }
-  return low;
+  h.mean /= m.n_dof();
+  return h;
 }
 
 // free coefficients per joint: a_2..a_L and b_3..b_L
@@ -178,16 +184,28 @@ class Design {
     return f;
   }
 
-  // the lowest point (lowest_body) over the design grid [m]
+  // q, qd, qdd at point m of the design grid
+  void grid_state(const ExcitationTrajectory& t, Eigen::Index m, VectorJ& q, VectorJ& qd, VectorJ& qdd) const {
+    q = t.q0;
+    qd.setZero(n_);
+    qdd.setZero(n_);
+    for (int j = 0; j < n_; ++j)
+      for (int k = 1; k <= L_; ++k) {
+        const double a = t.a(j, k - 1), b = t.b(j, k - 1), s = S_(m, k - 1), c = C_(m, k - 1), kw = k * w_;
+        q[j] += (a * s - b * c) / kw;
+        qd[j] += a * c + b * s;
+        qdd[j] += kw * (b * c - a * s);
+      }
+  }
+
+  // the lowest point (body_heights) over the design grid [m]
   double lowest_on_grid(const ExcitationTrajectory& t) {
     double low = std::numeric_limits<double>::infinity();
-    VectorJ q(n_);
+    VectorJ q(n_), qd(n_), qdd(n_);
     for (Eigen::Index m = 0; m < S_.rows(); ++m) {
-      q = t.q0;
-      for (int j = 0; j < n_; ++j)
-        for (int k = 1; k <= L_; ++k) q[j] += (t.a(j, k - 1) * S_(m, k - 1) - t.b(j, k - 1) * C_(m, k - 1)) / (k * w_);
+      grid_state(t, m, q, qd, qdd);
       model::forward_kinematics(m_, d_, q);
-      low = std::min(low, lowest_body(m_, d_).first);
+      low = std::min(low, body_heights(m_, d_).lowest);
     }
     return low;
   }
@@ -197,16 +215,7 @@ class Design {
     W.resize(M * n_, base_.rank);
     VectorJ q(n_), qd(n_), qdd(n_);
     for (Eigen::Index m = 0; m < M; ++m) {
-      q = t.q0;
-      qd.setZero(n_);
-      qdd.setZero(n_);
-      for (int j = 0; j < n_; ++j)
-        for (int k = 1; k <= L_; ++k) {
-          const double a = t.a(j, k - 1), b = t.b(j, k - 1), s = S_(m, k - 1), c = C_(m, k - 1), kw = k * w_;
-          q[j] += (a * s - b * c) / kw;
-          qd[j] += a * c + b * s;
-          qdd[j] += kw * (b * c - a * s);
-        }
+      grid_state(t, m, q, qd, qdd);
       model::regressor(m_, d_, q, qd, qdd, Y_, o_.friction);
       for (int c = 0; c < base_.rank; ++c) W.block(m * n_, c, n_, 1) = Y_.col(base_.independent[static_cast<size_t>(c)]);
     }
@@ -437,10 +446,8 @@ VectorJ excitation_raised_centre(const model::RobotModel& model, const Excitatio
     auto* c = static_cast<Ctx*>(data);
     const VectorJ q = Eigen::Map<const Eigen::VectorXd>(v, static_cast<Eigen::Index>(nv));
     model::forward_kinematics(*c->m, c->d, q);
-    double mean = 0.0;
-    for (int b = 1; b <= c->m->n_dof(); ++b)
-      mean += b < c->m->n_dof() ? c->d.oMi[static_cast<size_t>(b)].translation().z() : c->d.oMf.translation().z();
-    return lowest_body(*c->m, c->d).first + kCentreTieBreak * mean / c->m->n_dof() - kCentreStay * (q - c->mid).squaredNorm();
+    const BodyHeights h = body_heights(*c->m, c->d);
+    return h.lowest + kCentreTieBreak * h.mean - kCentreStay * (q - c->mid).squaredNorm();
   };
   nlopt_opt opt = nlopt_create(NLOPT_LN_SBPLX, static_cast<unsigned>(n));
   nlopt_set_lower_bounds(opt, lo.data());
@@ -464,7 +471,7 @@ ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, co
     const double time = t.period() * m / samples;
     t.evaluate(time, q, qd, qdd);
     model::forward_kinematics(model, d, q);
-    if (const auto [z, body] = lowest_body(model, d); z < low.z) low = {z, time, body};
+    if (const BodyHeights h = body_heights(model, d); h.lowest < low.z) low = {h.lowest, time, h.body};
   }
   return low;
 }

@@ -1000,8 +1000,8 @@ void Monitor::push(const RobotSample& s) {
   ds.qdd = qdd_;
   for (int j = 0; j < n_; ++j) ds.r_tau[j] = torque_gain(j) * rf_[j];
   ds.current = s.current;
-  ds.tau_ext = obs_.residual().cwiseProduct(obs_to_nm_);
-  ds.tau_ext_level = obs_level_.cwiseProduct(obs_to_nm_);
+  ds.tau_ext = observer_torque();
+  ds.tau_ext_level = observer_torque_threshold();
   ds.presliding = memory_.h;
   ds.digital_outputs = s.digital_outputs;
   ds.gap_before = false;  // gaps are reported as their own events

@@ -220,7 +220,7 @@ class Monitor {
   const VectorJ& observer_residual() const { return obs_.residual(); }
   const VectorJ& observer_threshold() const { return obs_level_; }
   /// The same two in N·m through the trusted drive gains (what the diagnosis reads; the twin's own
-  /// units differ on a joint whose gain the recordings did not fix). Allocate: for traces and reports.
+  /// units differ on a joint whose gain the recordings did not fix).
   VectorJ observer_torque() const { return obs_.residual().cwiseProduct(obs_to_nm_); }
   VectorJ observer_torque_threshold() const { return obs_level_.cwiseProduct(obs_to_nm_); }
   double total_current() const { return i_total_; }
