@@ -165,6 +165,11 @@ TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
   robot_->clear_payload();
 }
 
+bool TwinModel::predicts_payload() const {
+  if (sequential) return sequential->has_payload();
+  return !(learned && learned->role == LearnedRole::Current);
+}
+
 void TwinModel::regress(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, model::RegressorMatrix& Y,
                         VectorJ& tau_payload) const {
   const int n = robot_->n_dof();

@@ -102,3 +102,16 @@ set_tests_properties(cli.demo_scenarios_of_another_robot PROPERTIES TIMEOUT 60
 add_test(NAME cli.evaluate_stuck_channel_release COMMAND twinwatch evaluate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/stream_and_sensor_faults.yaml)
 set_tests_properties(cli.evaluate_stuck_channel_release PROPERTIES TIMEOUT 600
                      PASS_REGULAR_EXPRESSION "false alarms: 0 in 0.01 h")
+# a payload change is followed (session 21): 2.5 s after the raise the twin takes the diagnosed
+# payload (the dropped part: none), the alert closes, and a contact after it is an event of its own;
+# --keep-payload keeps the declared payload and the alert open to the end, the contact inside it
+add_test(NAME cli.simulate_payload_loss COMMAND twinwatch simulate ${s}/short_payload_loss.yaml -o ${d}/payload_loss.csv)
+set_tests_properties(cli.simulate_payload_loss PROPERTIES FIXTURES_SETUP payload_loss_recording PASS_REGULAR_EXPRESSION "samples")
+add_test(NAME cli.monitor_follows_payload COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5
+         --payload-com 0 0 0.04 --db "")
+set_tests_properties(cli.monitor_follows_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
+                     PASS_REGULAR_EXPRESSION "3\\.0[0-9]+ s  payload_change payload -0\\.[3-6][0-9] kg; from 5\\.[0-9]+ s the twin predicts with no payload and monitoring goes on with it[^\n]*\n[^\n]*\n[^\n]*\n +8\\.2[0-9]+ s  collision +contact on link 3.*payload: the twin followed the diagnosed change; it ended with 0\\.00 kg \\(declared 0\\.50 kg\\)\n5000 samples, 0 gap\\(s\\), 2 event\\(s\\)")
+add_test(NAME cli.monitor_keep_payload COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5
+         --payload-com 0 0 0.04 --db "" --keep-payload)
+set_tests_properties(cli.monitor_keep_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
+                     PASS_REGULAR_EXPRESSION "payload_change payload -0\\.[3-6][0-9] kg; still active when monitoring stopped[^\n]*\n5000 samples, 0 gap\\(s\\), 1 event\\(s\\)")

@@ -136,6 +136,10 @@ class TwinModel {
 
   /// True when the current-to-torque gains are absolute (a known payload was in the training data).
   bool gains_known() const { return gains_absolute; }
+  /// True when the prediction changes with the payload (set_payload): the physics and hybrid twins,
+  /// and a sequential one identified with payload columns; not a network that predicts the current
+  /// alone (method "mlp"), which never saw a payload as an input.
+  bool predicts_payload() const;
 
   /// Predicted joint torque [N·m] (incl. friction) and current [A] for one state; temperature
   /// may be NaN (then T_ref is used). Torque is in arbitrary units unless gains_known().

@@ -97,6 +97,14 @@ struct MonitorConfig {
   /// robot program); static_level/dynamic above are the default set for any other program.
   std::map<std::string, ThresholdSet> programs;
   std::string program;                        ///< the set in use ("": the default); not stored
+  /// A payload change diagnosed on the alert's longer look (2.5 s after the raise, when the estimate
+  /// has seen the motion both ways) becomes the twin's payload: the mass it had plus the change, at
+  /// the same centre of mass, when the twin's torques are physical and its prediction carries a
+  /// payload. The alert then clears and monitoring goes on with what the robot now holds: a contact
+  /// or the next pick after a dropped part is an event of its own. Off: the twin keeps the declared
+  /// payload and the alert stays open while the robot runs without it (before session 21, with
+  /// everything after it, e.g. a contact, read as part of it). Not stored.
+  bool follow_payload = true;
   /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
   /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
   double observer_gain = 150.0;
@@ -243,15 +251,22 @@ class Monitor {
   long invalid() const { return n_invalid_; }
   /// The slow-wear trend detector (per-window friction, residual energy, I_total history).
   const TrendDetector& trend() const { return trend_; }
-  /// The twin with the monitor's payload (set it when the program changes the payload).
+  /// The twin with the monitor's payload (set it when the program changes the payload; the monitor
+  /// changes it itself when it follows a diagnosed payload change, MonitorConfig::follow_payload).
   ident::TwinModel& twin() { return twin_; }
+  const ident::TwinModel& twin() const { return twin_; }
 
  private:
   void open_event(int joint, double start, double t);
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
   void restart_after_gap(const RobotSample& s);
   void restart_estimators();  // observer, residual filter and FIR restart; decisions wait the start-up samples
-  void run_diagnosis(double t);
+  /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
+  /// change is followed on (follow_payload)
+  void run_diagnosis(double t, bool long_look = false);
+  /// The twin takes the payload change event e diagnosed (cfg_.follow_payload); says so in e's
+  /// detail and a note. Nothing when the change cannot be a payload the twin predicts.
+  void follow_payload(Event& e, double t);
   VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
   double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
