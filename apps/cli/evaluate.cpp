@@ -332,6 +332,10 @@ ident::TwinModel load_twin(const std::string& path) {
 model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::string& twin_path, double mass,
                                     const std::vector<double>& com) {
   if (!(mass >= 0.0 && std::isfinite(mass))) throw InvalidArgument(fmt::format("--payload-mass must be a finite mass >= 0 kg, got {}", mass));
+  // beyond what the arm may carry: a typo (5 for 0.5 kg), which every residual would then carry
+  if (mass > twin.robot().payload_limit())
+    throw InvalidArgument(fmt::format("--payload-mass {:g}: expected at most {:g} kg ({})", mass, twin.robot().payload_limit(),
+                                      twin.robot().payload_limit_text()));
   model::RigidBodyInertia p;
   p.mass = mass;
   if (com.size() == 3) {

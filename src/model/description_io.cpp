@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::model {
@@ -152,7 +153,7 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
     throw ParseError(origin, 0, "", fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
   const Reader r(origin);
-  r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment"});
+  r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment", "rated_payload"});
   RobotDescription d;
   d.source = origin;
   d.name = r.text(root, "", "name");
@@ -161,6 +162,10 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
     r.fail("convention", fmt::format("expected \"dh\" (standard DH) or \"mdh\" (modified DH), got \"{}\"", conv));
   const bool standard = conv == "dh";
   if (root.contains("gravity")) d.gravity = r.vec<3>(root, "", "gravity");
+  if (root.contains("rated_payload")) {
+    d.rated_payload = r.number(root, "", "rated_payload");
+    if (!(d.rated_payload > 0.0)) r.fail("rated_payload", fmt::format("expected a mass > 0 kg, got {}", d.rated_payload));
+  }
 
   const json& joints = r.required(root, "", "joints");
   if (!joints.is_array()) r.fail("joints", fmt::format("expected an array, got {}", type_name(joints)));
@@ -244,11 +249,7 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
 
 RobotDescription load_description_json(const std::string& path) { return parse_description_json(read_file(path), path); }
 
-std::string robots_directory() {
-  if (const char* env = std::getenv("TWINWATCH_DATA_DIR"); env != nullptr && *env != '\0')
-    return (fs::path(env) / "robots").string();
-  return (fs::path(TWINWATCH_SOURCE_DIR) / "data" / "robots").string();
-}
+std::string robots_directory() { return data_directory("robots"); }
 
 std::vector<std::string> builtin_robot_names() {
   std::vector<std::string> names;

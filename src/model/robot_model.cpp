@@ -127,7 +127,23 @@ RobotModel::RobotModel(RobotDescription description) : description_(std::move(de
       throw InvalidArgument(fmt::format("current limit of {} is {}, must be > 0", who, d.current_limit));
   }
   if (!description_.gravity.allFinite()) throw InvalidArgument("gravity vector is not finite");
+  if (!std::isnan(description_.rated_payload) && !(description_.rated_payload > 0.0 && std::isfinite(description_.rated_payload)))
+    throw InvalidArgument(fmt::format("rated payload of robot '{}' is {} kg, must be > 0 (or not given)", description_.name,
+                                      description_.rated_payload));
   rebuild_cache();
+}
+
+double RobotModel::payload_limit() const {
+  if (std::isfinite(description_.rated_payload)) return description_.rated_payload;
+  double moving = 0.0;
+  for (const Joint& j : description_.joints) moving += j.body.mass;
+  return moving;
+}
+
+std::string RobotModel::payload_limit_text() const {
+  return std::isfinite(description_.rated_payload)
+             ? fmt::format("the rated payload of {}", description_.name)
+             : fmt::format("the moving mass of {}: its description gives no rated payload", description_.name);
 }
 
 void RobotModel::set_payload(const RigidBodyInertia& payload_in_flange) {

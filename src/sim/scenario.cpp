@@ -23,26 +23,6 @@ namespace twinwatch::sim {
 
 namespace {
 
-// rated payloads of the built-in robots [kg], from the manufacturers' data sheets
-struct RatedPayload {
-  const char* robot;
-  double kg;
-};
-constexpr RatedPayload kRatedPayloads[] = {{"ur3e", 3.0}, {"ur5e", 5.0}, {"panda", 3.0}};
-
-std::optional<double> rated_payload(const model::RobotModel& m) {
-  for (const RatedPayload& r : kRatedPayloads)
-    if (m.name() == r.robot) return r.kg;
-  return std::nullopt;
-}
-
-// mass of the links the joints move [kg] (the limit of a description without a rated payload)
-double moving_mass(const model::RobotModel& m) {
-  double sum = 0.0;
-  for (int i = 0; i < m.n_dof(); ++i) sum += m.joint(i).body.mass;
-  return sum;
-}
-
 class Y {
  public:
   Y(std::string origin) : origin_(std::move(origin)) {}
@@ -152,10 +132,7 @@ class Y {
 
 // the payload check's "expected" text, e.g. "expected at most 3 kg (the rated payload of ur3e), got 500 kg"
 std::string payload_above_limit(const model::RobotModel& m, double mass) {
-  return fmt::format("expected at most {:g} kg ({}), got {} kg", payload_limit(m),
-                     rated_payload(m) ? fmt::format("the rated payload of {}", m.name())
-                                      : fmt::format("the moving mass of {}: its description gives no rated payload", m.name()),
-                     mass);
+  return fmt::format("expected at most {:g} kg ({}), got {} kg", m.payload_limit(), m.payload_limit_text(), mass);
 }
 
 model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std::string& path, const model::RobotModel& m) {
@@ -301,7 +278,7 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
 
 }  // namespace
 
-double payload_limit(const model::RobotModel& m) { return rated_payload(m).value_or(moving_mass(m)); }
+double payload_limit(const model::RobotModel& m) { return m.payload_limit(); }
 
 Scenario parse_scenario(const std::string& text, const std::string& origin) {
   YAML::Node root;

@@ -104,3 +104,15 @@ set_tests_properties(cli.report_program PROPERTIES FIXTURES_REQUIRED twin
 add_test(NAME cli.usage_error_exits_2
   COMMAND sh -c "$<TARGET_FILE:twinwatch> monitor --twin x.json --sensitivity 2>/dev/null; echo exit $?; $<TARGET_FILE:twinwatch> validate --help >/dev/null; echo exit $?")
 set_tests_properties(cli.usage_error_exits_2 PROPERTIES PASS_REGULAR_EXPRESSION "^exit 2\nexit 0\n$")
+# a declared payload beyond what the arm may carry is a typo (5 for 0.5 kg): refused with the limit
+# and where it comes from (the description's rated_payload), before a recording is read (session 21)
+add_test(NAME cli.monitor_payload_above_rated
+  COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --payload-mass 5 --db "")
+set_tests_properties(cli.monitor_payload_above_rated PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "^error: --payload-mass 5: expected at most 3 kg \\(the rated payload of ur3e\\)\n$")
+add_test(NAME cli.identify_known_payload_above_rated
+  COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=30 -o ${d}/twin_heavy.json)
+set_tests_properties(cli.identify_known_payload_above_rated PROPERTIES FIXTURES_REQUIRED recordings
+                     PASS_REGULAR_EXPRESSION "--known-payload '[^']*fig.csv=30': expected a mass of at most 3 kg \\(the rated payload of ur3e\\), got 30 kg")
+add_test(NAME cli.model_show_payload_limit COMMAND twinwatch model show ur3e)
+set_tests_properties(cli.model_show_payload_limit PROPERTIES PASS_REGULAR_EXPRESSION "payloads up to 3 kg \\(the rated payload of ur3e\\)")

@@ -54,6 +54,28 @@ TEST(DescriptionJson, NegativeMassIsRejected) {
               HasSubstr("mass of link is -1, must be >= 0"));
 }
 
+// the rated payload (session 21): what --payload-mass, --known-payload and scenarios are checked
+// against; without it, the arm's own moving mass
+TEST(DescriptionJson, TheRatedPayloadIsTheLimitOfADeclaredPayload) {
+  const std::string with = R"({"name": "t", "convention": "dh", "rated_payload": 2.5, "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" +
+                           kGood + "}]}";
+  const RobotModel rated(parse_description_json(with, "robot.json"));
+  EXPECT_EQ(rated.payload_limit(), 2.5);
+  EXPECT_EQ(rated.payload_limit_text(), "the rated payload of t");
+  const RobotModel unrated(parse_description_json(one_joint(kGood), "robot.json"));
+  EXPECT_EQ(unrated.payload_limit(), 1.0);  // its one link's mass
+  EXPECT_THAT(unrated.payload_limit_text(), HasSubstr("the moving mass of t: its description gives no rated payload"));
+  EXPECT_EQ(load_robot("ur3e").payload_limit(), 3.0);
+  EXPECT_EQ(load_robot("ur5e").payload_limit(), 5.0);
+  EXPECT_EQ(load_robot("panda").payload_limit(), 3.0);
+  std::string bad = with;
+  bad.replace(bad.find("2.5"), 3, "-1");
+  EXPECT_THAT(error_of(bad), HasSubstr("robot.json: field 'rated_payload': expected a mass > 0 kg, got -1"));
+  bad = with;
+  bad.replace(bad.find("2.5"), 3, "\"3 kg\"");
+  EXPECT_THAT(error_of(bad), HasSubstr("field 'rated_payload': expected a number, got string"));
+}
+
 TEST(DescriptionJson, NonPositiveDefiniteInertiaIsRejected) {
   EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0,0], "inertia": [0.01,0,0,-0.01,0,0.01])")),
               HasSubstr("not positive semi-definite"));

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "evaluate.hpp"
+#include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
@@ -99,7 +100,7 @@ int run(const Options& o) {
 
 twinwatch::cli::VerbRegistrar reg{"demo", 1, [](CLI::App& app) {
   auto o = std::make_shared<Options>();
-  o->scenarios = std::string(TWINWATCH_SOURCE_DIR) + "/scenarios/ur3e";
+  o->scenarios = twinwatch::data_directory("scenarios") + "/ur3e";
   auto* demo = app.add_subcommand("demo", "Run the whole story on the built-in virtual UR3e (identify, monitor faults, report)");
   demo->add_option("--robot", o->robot, "Robot to use")->capture_default_str();
   demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();

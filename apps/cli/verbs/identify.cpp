@@ -32,7 +32,7 @@ struct PayloadArg {
   model::RigidBodyInertia payload;
 };
 
-PayloadArg parse_payload(const std::string& s) {
+PayloadArg parse_payload(const std::string& s, const model::RobotModel& robot) {
   const auto eq = s.rfind('=');
   if (eq == std::string::npos)
     throw InvalidArgument(fmt::format("--known-payload '{}': expected FILE=MASS[,CX,CY,CZ]", s));
@@ -53,6 +53,10 @@ PayloadArg parse_payload(const std::string& s) {
   a.payload.mass = v[0];
   if (v.size() == 4) a.payload.com = Eigen::Vector3d(v[1], v[2], v[3]);
   a.payload.validate("--known-payload");
+  // a mass beyond what the arm may carry is a typo (5 for 0.5 kg): it would set every drive gain wrong
+  if (a.payload.mass > robot.payload_limit())
+    throw InvalidArgument(fmt::format("--known-payload '{}': expected a mass of at most {:g} kg ({}), got {:g} kg", s,
+                                      robot.payload_limit(), robot.payload_limit_text(), a.payload.mass));
   return a;
 }
 
@@ -126,13 +130,11 @@ int run_identify(const IdentifyOptions& o) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, fmt::format("identify --method {}", o.method));
   }
-  {
-    const model::RobotModel robot = model::load_robot(o.robot);
-    for (const auto& r : recs) cli::check_units(r, robot);
-  }
+  const model::RobotModel robot = model::load_robot(o.robot);
+  for (const auto& r : recs) cli::check_units(r, robot);
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
-  for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
+  for (const auto& p : o.payloads) pay.push_back(parse_payload(p, robot));
   // the same file under another name (./fig.csv, an absolute path) is the same recording
   for (const auto& r : recs) {
     ident::TrainingRun t{&r, {}};
@@ -233,17 +235,15 @@ int run_identify_sequential(const IdentifyOptions& o) {
     return v;
   };
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
-  {
-    const model::RobotModel robot = model::load_robot(o.robot);
-    for (const auto* v : {&qs, &sn, &gen})
-      for (const auto& r : *v) cli::check_units(r, robot);
-  }
+  const model::RobotModel robot = model::load_robot(o.robot);
+  for (const auto* v : {&qs, &sn, &gen})
+    for (const auto& r : *v) cli::check_units(r, robot);
   std::vector<const device::Recording*> qsp, snp;
   for (const auto& r : qs) qsp.push_back(&r);
   for (const auto& r : sn) snp.push_back(&r);
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
-  for (const auto& p : o.payloads) pay.push_back(parse_payload(p));
+  for (const auto& p : o.payloads) pay.push_back(parse_payload(p, robot));
   for (const auto& p : pay) {
     bool found = false;
     for (const auto& r : gen) found |= r.path == p.file;

@@ -39,6 +39,9 @@ nlohmann::json to_json(const RobotModel& m) {
                            {"efficiency", jt.drive.efficiency}});
   }
   j["moving_mass"] = total;
+  const double rated = m.description().rated_payload;
+  j["rated_payload"] = std::isfinite(rated) ? nlohmann::json(rated) : nlohmann::json(nullptr);  // null: not given
+  j["payload_limit"] = m.payload_limit();
   return j;
 }
 
@@ -60,6 +63,8 @@ void print_summary(const RobotModel& m) {
   }
   fmt::print("moving mass {:.4f} kg; gravity [{:g} {:g} {:g}] m/s²\n", total, m.gravity().x(), m.gravity().y(),
              m.gravity().z());
+  // what --payload-mass, --known-payload and a scenario's payload are checked against
+  fmt::print("payloads up to {:g} kg ({})\n", m.payload_limit(), m.payload_limit_text());
   // the model keeps each body in its joint's frame (origin on the axis, z along it); a DH file gives
   // it in DH frame i, a URDF in its link frame: the same point, other coordinates
   fmt::print("centres of mass in each joint's own frame (origin on its axis, z along it), which the model uses; a DH "

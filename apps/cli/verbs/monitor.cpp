@@ -42,7 +42,7 @@ struct MonitorOptions {
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   std::string program;  // threshold set of this program ("" = the default set)
-  bool static_threshold = false, quiet = false, json = false, no_reconnect = false;
+  bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
 };
 
 
@@ -106,8 +106,11 @@ constexpr const char* kObserverRaiseAfterHelp =
 int run_monitor(const MonitorOptions& o) {
   if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing": no info lines either (warnings still show)
   ident::TwinModel twin = cli::load_twin(o.twin);
+  // the declared payload is checked before anything is read or connected
+  twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
+  cfg.follow_payload = !o.keep_payload;
   cfg.select_program(o.program);
   if (!o.quiet && !o.json && !cfg.programs.empty())
     fmt::print(stderr, "thresholds: {}\n",
@@ -179,7 +182,6 @@ int run_monitor(const MonitorOptions& o) {
       fmt::print(stderr, "monitoring {} ({}){}; Ctrl-C stops\n", o.rtde, cli::describe(*client),
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
   }
-  twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
   monitor::Monitor mon(twin, cfg);
   std::ofstream jl;
   if (!o.events_path.empty()) {
@@ -303,6 +305,9 @@ int run_monitor(const MonitorOptions& o) {
   close_written(jl, o.events_path);
   close_written(trace, o.trace);
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
+  if (chatty && mon.twin().payload().mass != twin.payload().mass)
+    fmt::print("payload: the twin followed the diagnosed change; it ended with {:.2f} kg (declared {:.2f} kg)\n", mon.twin().payload().mass,
+               twin.payload().mass);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
                mon.repeated() + mon.invalid() > 0
@@ -444,6 +449,10 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
+  sub->add_flag("--keep-payload", o->keep_payload,
+                "Keep the declared payload after a payload change is diagnosed. Default: 2.5 s after the raise the twin takes "
+                "the diagnosed payload (a dropped part: none), the alert clears and monitoring goes on, so that a contact or "
+                "the next pick is an event of its own; with this flag the alert stays open while the robot runs without it");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
                   "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "

@@ -38,8 +38,8 @@ std::string robot_file(const std::string& name_or_path, std::string* tip = nullp
 /// Names of the built-in robots (files in the data/robots directory).
 std::vector<std::string> builtin_robot_names();
 
-/// Directory holding the built-in robot files: $TWINWATCH_DATA_DIR/robots if set, else the
-/// source tree's data/robots.
+/// Directory holding the built-in robot files: data_directory("robots") ($TWINWATCH_DATA_DIR/robots,
+/// an installed share/twinwatch/robots, or the source tree's data/robots; core/data_dir.hpp).
 std::string robots_directory();
 
 }  // namespace twinwatch::model

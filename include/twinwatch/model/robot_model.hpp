@@ -95,6 +95,8 @@ struct RobotDescription {
   std::vector<Joint> joints;        ///< base to tip
   Eigen::Isometry3d flange = Eigen::Isometry3d::Identity();  ///< last body → flange (tool0)
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};                  ///< [m/s²] in the base frame
+  /// [kg] the manufacturer's rated payload (the description's "rated_payload"); NaN: not given
+  double rated_payload = std::numeric_limits<double>::quiet_NaN();
 };
 
 namespace detail {
@@ -150,6 +152,13 @@ class RobotModel {
   /// True when every placement rotation is exactly Rx(alpha) (DH and modified DH descriptions);
   /// the forward pass then rotates with 12 instead of 15 flops per vector.
   bool placements_about_x() const { return placements_about_x_; }
+
+  /// The largest payload a program may declare or a scenario may carry [kg]: the rated payload, or
+  /// for a description without one the mass of the links the joints move (a payload heavier than the
+  /// arm itself is a typo, not a program). payload_limit_text() says which, e.g. "the rated payload
+  /// of ur3e".
+  double payload_limit() const;
+  std::string payload_limit_text() const;
 
   /// Cached per-link data for the dynamics kernels.
   const detail::LinkCache& link_cache(int i) const { return cache_[static_cast<size_t>(i)]; }

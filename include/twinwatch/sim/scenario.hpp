@@ -38,9 +38,9 @@ Scenario parse_scenario(const std::string& text, const std::string& origin);
 /// @param option the override's name in errors, e.g. "--duration". Throws InvalidArgument.
 void override_duration(Scenario& s, double duration, const std::string& option);
 
-/// Heaviest payload [kg] a scenario may give the robot (at start or picked): the manufacturer's rated
-/// payload of the built-in robots (UR3e 3 kg, UR5e 5 kg, Panda 3 kg), else, for a description file,
-/// the mass of the robot's own moving links (no arm carries more than itself).
+/// Heaviest payload [kg] a scenario may give the robot (at start or picked): model.payload_limit(),
+/// the rated payload its description gives (UR3e 3 kg, UR5e 5 kg, Panda 3 kg), else the mass of the
+/// robot's own moving links (no arm carries more than itself).
 double payload_limit(const model::RobotModel& model);
 
 /// Builds the simulator for a scenario (nominal robot loaded by name/path).
