@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/file_io.hpp"
+#include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
@@ -394,7 +395,19 @@ std::string robot_reference(const std::string& name_or_path) {
 
 std::optional<device::ColumnMap> load_column_map(const std::string& path) {
   if (path.empty()) return std::nullopt;
-  return device::ColumnMap::load(path);
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(path, ec) || path.find('/') != std::string::npos) return device::ColumnMap::load(path);
+  // a bare name: one of the maps twinwatch ships (data/column_maps, or an installed share/twinwatch)
+  const fs::path dir = data_directory("column_maps");
+  for (const fs::path& f : {dir / path, dir / (path + ".csv")})
+    if (fs::is_regular_file(f, ec)) return device::ColumnMap::load(f.string());
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".csv") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  throw InvalidArgument(fmt::format("--column-map {}: no such file, and no map of that name among those twinwatch ships ({}: {})", path,
+                                    dir.string(), names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }
 
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,

@@ -215,7 +215,7 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
   Matrix6J J;
   const auto K = static_cast<Eigen::Index>(w.size());
   Eigen::MatrixXd A(K * n, 1);
-  Eigen::VectorXd b(K * n);
+  Eigen::VectorXd b(K * n), b_drive(K * n);
   for (Eigen::Index k = 0; k < K; ++k) {
     const DiagnosisSample& s = w[static_cast<size_t>(k)];
     // motion of the last link (w, wd, a incl. -g) from the RNEA forward pass
@@ -231,11 +231,15 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
     const Eigen::Vector3d N = com.cross(acc);
     A.col(0).segment(k * n, n) = J.topRows<3>().transpose() * (R * F) + J.bottomRows<3>().transpose() * (R * N);
     b.segment(k * n, n) = s.r_tau;
+    b_drive.segment(k * n, n) = s.r_drive.size() == n ? s.r_drive : s.r_tau;
   }
-  Eigen::VectorXd x;
+  Eigen::VectorXd x, size;
   Hypothesis h;
   h.fault = FaultClass::PayloadChange;
   h.explained = ls_explained(A, b, total, x);
+  // scored on r_tau like every hypothesis, sized on the drive torque (DiagnosisSample::r_drive)
+  ls_explained(A, b_drive, b_drive.squaredNorm(), size);
+  x = size;
   h.magnitude = x(0);
   h.units = "kg";
   h.detail = fmt::format("payload {:+.2f} kg", x(0));

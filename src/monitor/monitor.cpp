@@ -32,6 +32,14 @@ constexpr int kObserverSettle = 50;
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
 // look's estimate errs by about 12 % (-0.44 kg for a 0.5 kg loss, docs/validation.md)
 constexpr double kPayloadFollowShare = 0.3, kPayloadFollowFloor = 0.05;
+// a payload change is followed when the gripper's outputs changed in its window or the payload
+// signature explains this share of the residual (dropped parts 0.88-0.89; a held push 0.76)
+constexpr double kPayloadFollowExplained = 0.85;
+// how far before an alert's exceedance began [s] a change of the gripper's outputs counts as the
+// evidence of a payload change (a vacuum valve or jaws take tens to a few hundred ms)
+constexpr double kPayloadIoLookback = 0.5;
+// a followed payload whose alert is still up this long [s] after it was not the payload: undone
+constexpr double kPayloadFollowSettle = 0.5;
 // where a part picked with no payload declared sits: 4 cm out along the flange's axis [m] (the
 // diagnosis assumes the same, run_diagnosis)
 constexpr double kGrippedComZ = 0.04;
@@ -736,12 +744,14 @@ void Monitor::open_event(int joint, double start, double t) {
   open_ = static_cast<int>(events_.size()) - 1;
   diagnosed_ = false;
   rediagnosed_ = false;
+  followed_ = false;
   raise_time_ = t;
   if (on_event) on_event(events_.back());
 }
 
 void Monitor::run_diagnosis(double t, bool long_look) {
   Event& e = events_[static_cast<size_t>(open_)];
+  const Event earlier = e;  // what an earlier look said (Unknown before the first)
   window_.clear();
   reference_.clear();
   const double from = e.t_start - cfg_.diagnosis_pre;
@@ -764,10 +774,21 @@ void Monitor::run_diagnosis(double t, bool long_look) {
   }
   ident::FrictionMemory at;  // the stream's memory as it was at each window sample
   at.primed = true;
+  VectorJ tau_meas;
   for (auto& d : window_) {
     at.h = d.presliding;
     twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur, &at);
-    for (int j = 0; j < n_; ++j) d.r_tau[j] = torque_gain(j) * (d.current[j] - cur[j]);
+    // r_tau: the current residual times the gain, what the hypotheses are scored on; r_drive: the
+    // measured drive torque through the twin's own current model, back-driven phases included (as
+    // the observer reads it), less the twin's torque, in N·m through the trusted gains, what sizes
+    // a payload change (r_tau reads it 10-15 % small: a back-driven joint's torque c_gen low).
+    // Scoring on r_drive too turned a resistance's onset into a short "contact" (session 21)
+    measured_drive_torque(twin_, d.current, d.qd, tau_meas);
+    d.r_drive.resize(n_);
+    for (int j = 0; j < n_; ++j) {
+      d.r_tau[j] = torque_gain(j) * (d.current[j] - cur[j]);
+      d.r_drive[j] = obs_to_nm_[j] * (tau_meas[j] - tau[j]);
+    }
   }
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
@@ -797,8 +818,17 @@ void Monitor::run_diagnosis(double t, bool long_look) {
     e.detail += "; sizes in the twin's relative torque units, not physical: it was identified without a known payload";
   }
   diagnosed_ = true;
-  if (background_ >= 0 && open_ != background_ && e.fault != FaultClass::Collision) {
-    // not a contact: the persistent fault seen on another joint; the raise's event goes
+  if (background_ >= 0 && open_ != background_ && earlier.fault == FaultClass::Collision && e.fault != FaultClass::Collision) {
+    // a contact the first look reported, whose alert the parked fault's residual kept up until this
+    // look: it stays the contact it was reported as (it must not vanish into the parked fault)
+    const double end = e.t_end;
+    e = earlier;
+    e.t_end = end;
+    return;
+  }
+  if (background_ >= 0 && open_ != background_ && e.fault != FaultClass::Collision && e.fault != FaultClass::PayloadChange) {
+    // not a contact (nor a payload change, which belongs to no joint): the persistent fault seen on
+    // another joint; the raise's event goes
     Event& old = events_[static_cast<size_t>(background_)];
     old.peak_residual = std::max(old.peak_residual, e.peak_residual);
     drop_open_event();
@@ -862,6 +892,37 @@ void Monitor::follow_payload(Event& e, double t) {
     return;
   }
   if (mass <= tolerance) mass = 0.0;
+  // a payload beyond the arm's limit is no payload: a sustained push read as one (a 20 N·m push on
+  // the flange fits a 3.85 kg "payload", session 21 review)
+  const double limit = twin_.robot().payload_limit();
+  if (mass > limit) {
+    say(fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
+                    "payload, above {:g} kg ({}); the alert stays open",
+                    e.t_start, change, mass, limit, twin_.robot().payload_limit_text()));
+    return;
+  }
+  // the evidence that it is the payload: the gripper's outputs changed in the window, or the payload
+  // signature explains the residual nearly alone (a dropped part reads 88-89 %; a 12 N·m push on the
+  // flange held for 6 s, 76 %: not followed, so the alert stays open and ends with the push)
+  // (a gripper's output changes before the part moves: its valve or jaws take tens of ms, so the
+  // look goes back kPayloadIoLookback before the exceedance began)
+  bool io_change = false;
+  const double from = e.t_start - kPayloadIoLookback;
+  bool have_prev = false;
+  std::uint64_t prev = 0;
+  for (size_t k = 0; k < ring_count_; ++k) {
+    const DiagnosisSample& d = ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()];
+    if (d.t < from) continue;
+    io_change |= have_prev && d.digital_outputs != prev;
+    prev = d.digital_outputs;
+    have_prev = true;
+  }
+  if (!io_change && !(e.confidence >= kPayloadFollowExplained)) {
+    say(fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
+                    "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
+                    e.t_start, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
+    return;
+  }
   model::RigidBodyInertia now;
   if (mass > 0.0) {
     now.mass = mass;
@@ -869,12 +930,35 @@ void Monitor::follow_payload(Event& e, double t) {
     // the declared payload's shape at the new mass; a part picked without one: a point mass
     if (had.mass > 0.0) now.inertia_com = had.inertia_com * (mass / had.mass);
   }
+  followed_from_ = had;
   twin_.set_payload(now);
+  followed_ = true;
+  followed_at_ = t;
+  // what a resting joint was held at was measured with the old payload: it is measured again
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
   e.detail += fmt::format("; from {:.3f} s the twin predicts with {} and monitoring goes on with it", t, what);
   say(fmt::format("the twin now predicts with {} (it had {:.2f} kg; the payload change of the alert raised at {:.3f} s); "
                   "monitor --keep-payload keeps the declared one",
                   what, had.mass, e.t_start));
+}
+
+void Monitor::undo_follow(double t) {
+  // the residual did not fall back when the twin took the payload: the change was not (only) the
+  // payload, and the twin goes back to what it carried
+  followed_ = false;
+  twin_.set_payload(followed_from_);
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
+  Event& e = events_[static_cast<size_t>(open_)];
+  const std::string what = followed_from_.mass > 0.0 ? fmt::format("its {:.2f} kg payload", followed_from_.mass) : std::string("no payload");
+  e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
+  const std::string text = fmt::format("the payload change of the alert raised at {:.3f} s is undone: {:.1f} s after the twin took it "
+                                       "the alert was still up (not a payload the twin can carry); the twin predicts with {} again",
+                                       e.t_start, t - followed_at_, what);
+  notes_.push_back(text);
+  if (on_note) on_note(t, text);
 }
 
 void Monitor::track_margin(bool on) {
@@ -1190,15 +1274,20 @@ void Monitor::push(const RobotSample& s) {
     const bool parked = background_ >= 0;
     if (!any_active) {
       // an alert that lasted well beyond a pulse gets its final look with everything seen (a raise
-      // that parked a persistent alert may merge back into it there)
-      if (!diagnosed_ || (!rediagnosed_ && t - events_[static_cast<size_t>(open_)].t_start > kPulseMax)) run_diagnosis(t);
+      // that parked a persistent alert may merge back into it there). A payload change it finds is
+      // followed there too: in a program that rests between moves, the held-at-rest baseline takes
+      // up the residual and the alert clears before the longer look
+      const bool beyond_pulse = t - events_[static_cast<size_t>(open_)].t_start > kPulseMax;
+      if (!diagnosed_ || (!rediagnosed_ && beyond_pulse)) run_diagnosis(t, diagnosed_ && beyond_pulse);
     }
+    if (followed_ && any_active && t - followed_at_ >= kPayloadFollowSettle) undo_follow(t);
     if (!any_active && parked && background_ >= 0) {
       // the contact that parked a persistent alert has cleared: the parked alert is the open one again
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
       done.t_end = std::max(done.t_start, last_over_);
       if (on_event) on_event(done);
+      followed_ = false;
       resume_background();
     } else if (!any_active && !parked) {
       Event& done = events_[static_cast<size_t>(open_)];
@@ -1206,8 +1295,11 @@ void Monitor::push(const RobotSample& s) {
       // it ended at its last exceedance, not when the clearing debounce (clear_after samples) ran out
       done.t_end = std::max(done.t_start, last_over_);
       cleared_at_ = t;
-      if (done.fault == FaultClass::Collision) {
+      if (done.fault == FaultClass::Collision || followed_) {
+        // a contact, or a payload change the twin now carries: nothing after it continues it (a
+        // pick right after a followed drop is a change of its own, to be followed in turn)
         if (on_event) on_event(done);
+        followed_ = false;
       } else {
         pending_close_ = open_;
         merged_diagnosed_ = diagnosed_;

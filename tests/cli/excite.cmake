@@ -23,7 +23,7 @@ set_tests_properties(cli.identify_torque_no_torque PROPERTIES FIXTURES_REQUIRED 
 set(panda ${PROJECT_SOURCE_DIR}/../shared/data/real/franka_panda_gaz2019_excitation/panda_excitation_combined.csv)
 if(EXISTS ${panda})
   add_test(NAME cli.identify_torque_panda COMMAND twinwatch identify-torque ${panda} --robot panda
-           --column-map ${PROJECT_SOURCE_DIR}/data/column_maps/franka_panda_gaz2019.csv --segment 0:0.65 -o ${d}/panda.json)
+           --column-map franka_panda_gaz2019 --segment 0:0.65 -o ${d}/panda.json)
   set_tests_properties(cli.identify_torque_panda PROPERTIES PASS_REGULAR_EXPRESSION "J7 ")
 endif()
 add_test(NAME cli.validate_torque_bad_table COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e

@@ -116,3 +116,14 @@ set_tests_properties(cli.identify_known_payload_above_rated PROPERTIES FIXTURES_
                      PASS_REGULAR_EXPRESSION "--known-payload '[^']*fig.csv=30': expected a mass of at most 3 kg \\(the rated payload of ur3e\\), got 30 kg")
 add_test(NAME cli.model_show_payload_limit COMMAND twinwatch model show ur3e)
 set_tests_properties(cli.model_show_payload_limit PROPERTIES PASS_REGULAR_EXPRESSION "payloads up to 3 kg \\(the rated payload of ur3e\\)")
+# --column-map takes a bare name for the maps twinwatch ships (data/column_maps, or an installed
+# share/twinwatch/column_maps): the Kinova map is found (and then finds this log is not Kinova's);
+# an unknown name lists the shipped maps (session 21)
+add_test(NAME cli.column_map_builtin_name
+  COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --column-map kinova_gen3_chiha --db "")
+set_tests_properties(cli.column_map_builtin_name PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "column map \\([^\n]*data/column_maps/kinova_gen3_chiha.csv line [0-9]+\\) maps column 'Cur1'")
+add_test(NAME cli.column_map_unknown_name
+  COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --column-map kinova_nope --db "")
+set_tests_properties(cli.column_map_unknown_name PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "--column-map kinova_nope: no such file, and no map of that name among those twinwatch ships \\([^\n]*: franka_panda_gaz2019, kinova_gen3_chiha, kinova_gen3_chiha_current_torque\\)")

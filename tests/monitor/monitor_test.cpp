@@ -172,7 +172,9 @@ TEST_F(MonitorLoop, AContactDuringAPersistentFaultIsAnEventOfItsOwn) {
                                 "  - {type: collision, link: 2, onset: 15.3, magnitude: 20, duration: 0.05, "
                                 "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n"));
   const auto [ev, closed] = events_and_closings(rec);
-  ASSERT_EQ(ev.size(), 2u) << ev.back().detail;
+  std::string all;
+  for (const auto& e : ev) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  ASSERT_EQ(ev.size(), 2u) << all;
   EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
   EXPECT_EQ(ev[0].joint, 4);
   EXPECT_NEAR(ev[0].t_end, 20.0, 0.01) << "the resistance goes on past the contact";
@@ -333,6 +335,67 @@ TEST_F(MonitorLoop, AFollowedPayloadChangeLeavesTheMonitorWatching) {
   EXPECT_EQ(kept[0].fault, FaultClass::PayloadChange) << kept[0].detail;
   EXPECT_GT(kept[0].t_end, 13.0) << kept[0].detail;
   EXPECT_EQ(at_end, 0.0);
+}
+
+// Review of session 21: what following a payload change must not do. A sustained push on the
+// flange fits a payload too (a 12 N·m push for 6 s: "+2 kg", 76 % explained): with no gripper output
+// changing and the payload explaining less than 85 %, it is not followed, so its alert ends with
+// the push and a contact after it is found. A pick 3 s after a followed drop (within the old merge
+// gap of its clearing) is a change of its own and is followed in turn. Both sized on the drive
+// torque, back-driven phases included (the current residual times the gain read them 10-15 % small).
+TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTurn) {
+  const auto push = monitor(run(scenario(155, 24, 0.5,
+                                         "  - {type: collision, link: 6, onset: 8.5, magnitude: 12, duration: 6, "
+                                         "point: [0, 0, 0.04], direction: [0, 0, -1]}\n"
+                                         "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
+                                         "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")),
+                            0.5);
+  std::string all;
+  for (const auto& e : push) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  ASSERT_EQ(push.size(), 2u) << all;
+  EXPECT_THAT(push[0].detail, ::testing::Not(::testing::HasSubstr("the twin predicts with"))) << all;
+  EXPECT_LT(push[0].t_end, 15.0) << "the push's alert ends with the push" << all;
+  EXPECT_EQ(push[1].fault, FaultClass::Collision) << all;
+  EXPECT_LT(push[1].t_detected - 19.3, 0.02);
+
+  const auto swap = monitor(run(scenario(156, 24, 0.5,
+                                         "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
+                                         "  - {type: payload_pick, onset: 11.5, io_bit: 1, mass: 1.0, com: [0, 0, 0.04]}\n"
+                                         "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
+                                         "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")),
+                            0.5);
+  all.clear();
+  for (const auto& e : swap) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  ASSERT_EQ(swap.size(), 3u) << all;
+  EXPECT_EQ(swap[0].fault, FaultClass::PayloadChange) << all;
+  EXPECT_NEAR(swap[0].magnitude, -0.5, 0.05) << all;
+  EXPECT_EQ(swap[1].fault, FaultClass::PayloadChange) << all;
+  EXPECT_NEAR(swap[1].magnitude, 1.0, 0.1) << all;
+  EXPECT_THAT(swap[1].detail, ::testing::ContainsRegex("the twin predicts with a (0\\.9|1\\.0)[0-9] kg payload"));
+  EXPECT_EQ(swap[2].fault, FaultClass::Collision) << all;
+}
+
+// A followed payload change that was not one is undone: a gripper output toggles (no part) and a
+// push on the flange held for 2.8 s reads as a payload gain, which is followed; when the push ends
+// the alert does not fall back, and the twin returns to the payload it carried
+TEST_F(MonitorLoop, AFollowedPayloadThatWasNotOneIsUndone) {
+  const auto rec = run(scenario(157, 20, 0.5,
+                                "  - {type: payload_pick, onset: 8.3, io_bit: 1, mass: 0.5, com: [0, 0, 0.04]}\n"
+                                "  - {type: collision, link: 6, onset: 8.5, magnitude: 8, duration: 2.8, "
+                                "point: [0, 0, 0.04], direction: [0, 0, -1]}\n"));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  Monitor m(t, *config);
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  std::string all;
+  for (const auto& e : m.events()) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  ASSERT_FALSE(m.events().empty());
+  const Event& e = m.events().front();
+  EXPECT_EQ(e.fault, FaultClass::PayloadChange) << all;
+  EXPECT_THAT(e.detail, ::testing::HasSubstr("the twin predicts with a")) << all;
+  EXPECT_THAT(e.detail, ::testing::HasSubstr("the residual had not fallen back, so the twin predicts with its 0.50 kg payload again")) << all;
+  EXPECT_EQ(m.twin().payload().mass, 0.5);
 }
 
 TEST_F(MonitorLoop, CollisionIsDetectedAsAPulse) {

@@ -545,8 +545,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "--closed-loop: the model enters only through e_tau of eq. 19 (no inner-loop inverse feed-forward of "
                 "tau_d); with a time-aligned e_tau even the true friction then cannot beat no feed-forward");
   sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
-  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs")
-      ->check(CLI::ExistingFile);
+  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
   CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(CLI::PositiveNumber);
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();

@@ -47,7 +47,8 @@ struct MonitorOptions {
 
 
 constexpr const char* kColumnMapHelp =
-    "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'";
+    "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'; a bare "
+    "name is one of the maps twinwatch ships (e.g. kinova_gen3_chiha)";
 
 // --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
 std::vector<std::string> split_filter(const std::string& s) {
@@ -440,7 +441,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                 "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
                 "reconnecting with back-off");
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
@@ -477,8 +478,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"))
-      ->check(CLI::ExistingFile);
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"));
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
                   "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
@@ -632,7 +632,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp)->check(CLI::ExistingFile);
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};

@@ -27,7 +27,12 @@ namespace twinwatch::monitor {
 struct DiagnosisSample {
   double t = 0.0;
   VectorJ q, qd, qdd;
-  VectorJ r_tau;       ///< residual torque [N·m]
+  VectorJ r_tau;       ///< residual torque [N·m]: the current residual times the drive gain
+  /// the measured drive torque, a back-driven joint's through its c_gen (the observer's reading),
+  /// less the twin's [N·m]: what sizes a payload change (empty: r_tau). r_tau reads a back-driven
+  /// joint's torque c_gen (0.77) low and a payload change 10-15 % small; the hypotheses are still
+  /// scored on r_tau, whose shape the rules were tuned on
+  VectorJ r_drive;
   VectorJ current;     ///< measured current [A] (for frozen-channel checks)
   VectorJ tau_ext;     ///< momentum-observer estimate of the external torque [N·m] (empty: none)
   VectorJ tau_ext_level;  ///< the observer's healthy bound (its threshold) at this sample [N·m]

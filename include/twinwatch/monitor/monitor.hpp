@@ -312,6 +312,12 @@ class Monitor {
   int pending_close_ = -1;
   void report_pending_close();
   bool diagnosed_ = false, rediagnosed_ = false;
+  // the open alert's payload change is followed (follow_payload): since followed_at_ [s] the twin
+  // carries it instead of followed_from_; reported at once when it clears, undone if it does not
+  bool followed_ = false;
+  double followed_at_ = 0.0;
+  model::RigidBodyInertia followed_from_;
+  void undo_follow(double t);
   double raise_time_ = 0.0;
   // a raise within kMergeGap of the pending alert opens an event of its own first: its first
   // diagnosis decides. A collision stays separate (and the earlier alert is reported closed);
