@@ -871,13 +871,14 @@ std::string evaluation_json(const Evaluation& e) {
 
 void write_report(const ident::TwinModel& twin_in, const std::string& recording, const model::RigidBodyInertia& payload,
                   const std::string& out, const std::optional<sim::Labels>& labels, const device::ColumnMap* map,
-                  const std::string& program) {
+                  const std::string& program, bool keep_payload) {
   ident::TwinModel twin = twin_in;
   twin.set_payload(payload);
   const device::Recording rec = device::read_recording(recording, map);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
+  cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);  // a jittery logger clock (device::Recording)
   monitor::Monitor mon(twin, cfg);

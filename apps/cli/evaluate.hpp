@@ -158,9 +158,10 @@ std::string evaluation_json(const Evaluation& e);
 
 /// Writes a self-contained HTML report for one recording monitored by the twin (UR3e Fig. 8-13
 /// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
-/// `map`: a foreign log's column map (none: RTDE column names).
+/// `map`: a foreign log's column map (none: RTDE column names). `keep_payload`: as `monitor
+/// --keep-payload` (MonitorConfig::follow_payload off).
 void write_report(const ident::TwinModel& twin, const std::string& recording, const model::RigidBodyInertia& payload,
                   const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt, const device::ColumnMap* map = nullptr,
-                  const std::string& program = "");
+                  const std::string& program = "", bool keep_payload = false);
 
 }  // namespace twinwatch::cli

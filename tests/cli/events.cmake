@@ -115,3 +115,7 @@ add_test(NAME cli.monitor_keep_payload COMMAND twinwatch monitor --twin ${d}/twi
          --payload-com 0 0 0.04 --db "" --keep-payload)
 set_tests_properties(cli.monitor_keep_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
                      PASS_REGULAR_EXPRESSION "payload_change payload -0\\.[3-6][0-9] kg; still active when monitoring stopped[^\n]*\n5000 samples, 0 gap\\(s\\), 1 event\\(s\\)")
+# report follows the payload change as monitor does, and --keep-payload there too
+add_test(NAME cli.report_follows_payload
+  COMMAND sh -c "twinwatch=$0; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_follow.html -q && grep -c 'the twin predicts with no payload and monitoring goes on with it' ${d}/report_follow.html; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_keep.html -q --keep-payload && grep -c 'the twin predicts with' ${d}/report_keep.html" $<TARGET_FILE:twinwatch>)
+set_tests_properties(cli.report_follows_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording" PASS_REGULAR_EXPRESSION "^[1-9][0-9]*\n0\n$")

@@ -553,7 +553,7 @@ int run_evaluate(const EvaluateOptions& o) {
 
 struct ReportOptions {
   std::string twin, recording, output = "report.html", labels, column_map, program;
-  bool quiet = false;
+  bool quiet = false, keep_payload = false;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
 };
@@ -569,7 +569,7 @@ int run_report(const ReportOptions& o) {
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
-  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program);
+  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }
@@ -633,6 +633,9 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
+  sub->add_flag("--keep-payload", o->keep_payload,
+                "Keep the declared payload after a payload change is diagnosed, as 'monitor --keep-payload' (default: the twin "
+                "follows the change, as 'monitor' does)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};
