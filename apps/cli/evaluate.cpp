@@ -447,8 +447,18 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     t.set_payload(s.options.payload);  // what the program declares
     monitor::MonitorConfig scfg = cfg;
     scfg.trend.cycle_period = s.trajectory->period();  // the program's cycle time
-    // the thresholds learned for the program that runs (its trajectory type), else the default set
-    if (scfg.programs.count(s.trajectory_type)) scfg.select_program(s.trajectory_type);
+    // the thresholds learned for the program that runs: the one the file names (a set the twin must
+    // have: select_program names the known ones), else its trajectory type's if the twin has one,
+    // else the default set
+    if (!s.program.empty()) {
+      try {
+        scfg.select_program(s.program);
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument(fmt::format("{}: field 'program': {}", s.path, e.what()));
+      }
+    } else if (scfg.programs.count(s.trajectory_type)) {
+      scfg.select_program(s.trajectory_type);
+    }
     monitor::Monitor mon(t, scfg);
     const bool healthy = s.faults.empty();
     if (healthy) mon.track_margin();

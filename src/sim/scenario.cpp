@@ -289,11 +289,16 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   }
   const Y y(origin);
   y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
-                         "payload_declared", "trajectory", "noise", "faults", "description"});
+                         "payload_declared", "trajectory", "noise", "faults", "description", "program"});
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
   s.robot = y.text(root, "", "robot", "ur3e");
+  s.program = y.text(root, "", "program", "");
+  if (root["program"] && (s.program.empty() || s.program.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") !=
+                                                   std::string::npos))
+    y.fail(root["program"], "program", fmt::format("expected a program name of letters, digits, '_', '.' and '-' (as 'twinwatch "
+                                                   "thresholds --program' takes), got '{}'", s.program));
   model::RobotModel m = [&] {
     try {
       return model::load_robot(s.robot);

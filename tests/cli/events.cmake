@@ -119,3 +119,8 @@ set_tests_properties(cli.monitor_keep_payload PROPERTIES FIXTURES_REQUIRED "twin
 add_test(NAME cli.report_follows_payload
   COMMAND sh -c "twinwatch=$0; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_follow.html -q && grep -c 'the twin predicts with no payload and monitoring goes on with it' ${d}/report_follow.html; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_keep.html -q --keep-payload && grep -c 'the twin predicts with' ${d}/report_keep.html" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.report_follows_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording" PASS_REGULAR_EXPRESSION "^[1-9][0-9]*\n0\n$")
+# a scenario's `program` picks the twin's threshold set for it in evaluate; one the twin lacks is an
+# error naming the file, the field and the sets it has (session 21)
+add_test(NAME cli.evaluate_program_unknown COMMAND twinwatch evaluate ${s}/program_unknown --twin ${d}/twin.json)
+set_tests_properties(cli.evaluate_program_unknown PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "program_unknown.yaml: field 'program': no thresholds learned for program 'palletising' \\(known: none\\)")

@@ -109,6 +109,17 @@ TEST(Scenario, TrajectoryBeyondTheJointLimitsIsRefused) {
   EXPECT_THAT(error_of("robot: ur3e\nduration: 4\n" + slow), HasSubstr("outside its range [-6.28319, 6.28319] rad (ur3e)"));
 }
 
+// `program` names the threshold set evaluate uses (session 21); a name thresholds --program would not
+// take is refused where it is written
+TEST(Scenario, ProgramNamesAThresholdSet) {
+  EXPECT_EQ(error_of("robot: ur3e\nduration: 1\nprogram: pick_place-2.b\n" + kSine), "no error");
+  EXPECT_EQ(parse_scenario("robot: ur3e\nduration: 1\nprogram: palletising\n" + kSine, "test.yaml").program, "palletising");
+  EXPECT_EQ(parse_scenario("robot: ur3e\nduration: 1\n" + kSine, "test.yaml").program, "");
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nprogram: pick place\n" + kSine),
+              HasSubstr("test.yaml:3: field 'program': expected a program name of letters, digits, '_', '.' and '-' (as 'twinwatch "
+                        "thresholds --program' takes), got 'pick place'"));
+}
+
 // payloads above the robot's rated payload (UR3e: 3 kg) are refused, at start and when picked
 TEST(Scenario, PayloadAboveTheRatedPayloadIsRefused) {
   EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "payload: {mass: 500, com: [0, 0, 0.04]}\n"),

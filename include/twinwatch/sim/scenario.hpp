@@ -23,6 +23,10 @@ struct Scenario {
   std::vector<FaultSpec> faults;
   std::vector<double> current_sigma;  ///< per-joint override of the truth's noise (empty: defaults)
   std::string trajectory_type;
+  /// The robot program this run is (the file's optional `program`): whose threshold set `evaluate`
+  /// monitors it with, as 'monitor --program' would; empty: the trajectory type's set, if the twin
+  /// has one, else the default set
+  std::string program;
   int trajectory_line = 0;  ///< line of `trajectory:` in the file (0: unknown), for later errors
   unsigned serial = 1;  ///< which physical robot (hidden parameters); the seed only changes noise
 };
