@@ -318,6 +318,12 @@ class Monitor {
   double followed_at_ = 0.0;
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
+  // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
+  // steps seen, and the gap factor in effect (cfg_.gap_factor, widened for a jittery clock)
+  double jitter_mad_ = 0.0;
+  long jitter_steps_ = 0;
+  double gap_factor_ = 1.5;
+  void track_jitter(double dt, double t);
   double raise_time_ = 0.0;
   // a raise within kMergeGap of the pending alert opens an event of its own first: its first
   // diagnosis decides. A collision stays separate (and the earlier alert is reported closed);
