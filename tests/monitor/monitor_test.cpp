@@ -73,6 +73,13 @@ ident::TwinModel* MonitorLoop::twin = nullptr;
 MonitorConfig* MonitorLoop::config = nullptr;
 model::RigidBodyInertia MonitorLoop::payload;
 
+// every event on a line of its own (start-end, class, text), for a failure's message
+std::string listing(const std::vector<Event>& events) {
+  std::string all;
+  for (const auto& e : events) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  return all;
+}
+
 TEST_F(MonitorLoop, NoFalseAlarmOnHealthyRunsWithNewSeeds) {
   EXPECT_TRUE(monitor(run(scenario(601, 40, 0.5)), 0.5).empty());
   EXPECT_TRUE(monitor(run(scenario(602, 40, 0.0)), 0.0).empty());
@@ -172,8 +179,7 @@ TEST_F(MonitorLoop, AContactDuringAPersistentFaultIsAnEventOfItsOwn) {
                                 "  - {type: collision, link: 2, onset: 15.3, magnitude: 20, duration: 0.05, "
                                 "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n"));
   const auto [ev, closed] = events_and_closings(rec);
-  std::string all;
-  for (const auto& e : ev) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  const std::string all = listing(ev);
   ASSERT_EQ(ev.size(), 2u) << all;
   EXPECT_EQ(ev[0].fault, FaultClass::Resistance) << ev[0].detail;
   EXPECT_EQ(ev[0].joint, 4);
@@ -241,8 +247,7 @@ TEST_F(MonitorLoop, AJitteryLiveClockIsNotReadAsLostSamples) {
   EXPECT_GT(over, 10) << "the jitter must put steps beyond the configured factor, or the test shows nothing";
   for (const auto& s : rec.samples) m.push(s);
   m.finish();
-  std::string all;
-  for (const auto& e : m.events()) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  const std::string all = listing(m.events());
   ASSERT_EQ(m.events().size(), 1u) << all;
   EXPECT_EQ(m.events()[0].fault, FaultClass::StreamFault) << all;
   EXPECT_NEAR(m.events()[0].t_start, 20.0, 0.02) << all;
@@ -379,12 +384,11 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
                                          "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
                                          "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")),
                             0.5);
-  std::string all;
-  for (const auto& e : push) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
-  ASSERT_EQ(push.size(), 2u) << all;
-  EXPECT_THAT(push[0].detail, ::testing::Not(::testing::HasSubstr("the twin predicts with"))) << all;
-  EXPECT_LT(push[0].t_end, 15.0) << "the push's alert ends with the push" << all;
-  EXPECT_EQ(push[1].fault, FaultClass::Collision) << all;
+  const std::string push_listing = listing(push);
+  ASSERT_EQ(push.size(), 2u) << push_listing;
+  EXPECT_THAT(push[0].detail, ::testing::Not(::testing::HasSubstr("the twin predicts with"))) << push_listing;
+  EXPECT_LT(push[0].t_end, 15.0) << "the push's alert ends with the push" << push_listing;
+  EXPECT_EQ(push[1].fault, FaultClass::Collision) << push_listing;
   EXPECT_LT(push[1].t_detected - 19.3, 0.02);
 
   const auto swap = monitor(run(scenario(156, 24, 0.5,
@@ -393,15 +397,14 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
                                          "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
                                          "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")),
                             0.5);
-  all.clear();
-  for (const auto& e : swap) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
-  ASSERT_EQ(swap.size(), 3u) << all;
-  EXPECT_EQ(swap[0].fault, FaultClass::PayloadChange) << all;
-  EXPECT_NEAR(swap[0].magnitude, -0.5, 0.05) << all;
-  EXPECT_EQ(swap[1].fault, FaultClass::PayloadChange) << all;
-  EXPECT_NEAR(swap[1].magnitude, 1.0, 0.1) << all;
+  const std::string swap_listing = listing(swap);
+  ASSERT_EQ(swap.size(), 3u) << swap_listing;
+  EXPECT_EQ(swap[0].fault, FaultClass::PayloadChange) << swap_listing;
+  EXPECT_NEAR(swap[0].magnitude, -0.5, 0.05) << swap_listing;
+  EXPECT_EQ(swap[1].fault, FaultClass::PayloadChange) << swap_listing;
+  EXPECT_NEAR(swap[1].magnitude, 1.0, 0.1) << swap_listing;
   EXPECT_THAT(swap[1].detail, ::testing::ContainsRegex("the twin predicts with a (0\\.9|1\\.0)[0-9] kg payload"));
-  EXPECT_EQ(swap[2].fault, FaultClass::Collision) << all;
+  EXPECT_EQ(swap[2].fault, FaultClass::Collision) << swap_listing;
 }
 
 // A followed payload change that was not one is undone: a gripper output toggles (no part) and a
@@ -417,8 +420,7 @@ TEST_F(MonitorLoop, AFollowedPayloadThatWasNotOneIsUndone) {
   Monitor m(t, *config);
   for (const auto& s : rec.samples) m.push(s);
   m.finish();
-  std::string all;
-  for (const auto& e : m.events()) all += fmt::format("\n{:.3f}-{:.3f} s {}: {}", e.t_start, e.t_end, to_string(e.fault), e.detail);
+  const std::string all = listing(m.events());
   ASSERT_FALSE(m.events().empty());
   const Event& e = m.events().front();
   EXPECT_EQ(e.fault, FaultClass::PayloadChange) << all;
