@@ -402,10 +402,7 @@ std::optional<device::ColumnMap> load_column_map(const std::string& path) {
   const fs::path dir = data_directory("column_maps");
   for (const fs::path& f : {dir / path, dir / (path + ".csv")})
     if (fs::is_regular_file(f, ec)) return device::ColumnMap::load(f.string());
-  std::vector<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (e.path().extension() == ".csv") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
+  const std::vector<std::string> names = data_names("column_maps", ".csv");
   throw InvalidArgument(fmt::format("--column-map {}: no such file, and no map of that name among those twinwatch ships ({}: {})", path,
                                     dir.string(), names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }

@@ -1,5 +1,6 @@
 #include "twinwatch/core/data_dir.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -25,6 +26,15 @@ std::string data_directory(const std::string& kind) {
     if (fs::is_directory(installed, ec)) return installed.string();
   }
   return (fs::path(TWINWATCH_SOURCE_DIR) / in_source).string();
+}
+
+std::vector<std::string> data_names(const std::string& kind, const std::string& extension) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(data_directory(kind), ec))
+    if (e.path().extension() == extension) names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 }  // namespace twinwatch

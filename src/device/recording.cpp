@@ -337,7 +337,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
     rec.period_jitter = 1.4826 * dev[dev.size() / 2];
     if (rec.median_period > 0.0 && rec.period_jitter > kJitterFraction * rec.median_period) {
-      rec.gap_factor = std::max(kGapFactor, 1.0 + kJitterSigmas * rec.period_jitter / rec.median_period);
+      rec.gap_factor = jitter_gap_factor(rec.period_jitter, rec.median_period, kGapFactor);
       log::warn(fmt::format("{}: the timestamps jitter (spread {:.2f} ms around the {:.2f} ms period; a logger's own clock?): a step "
                             "counts as lost samples only above {:.1f} ms, shorter losses cannot be told from the jitter",
                             path, 1000.0 * rec.period_jitter, 1000.0 * rec.median_period, 1000.0 * rec.gap_factor * rec.median_period));
@@ -348,6 +348,10 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
   for (const RobotSample& s : rec.samples) rec.gaps += s.gap_before ? 1 : 0;
   return rec;
+}
+
+double jitter_gap_factor(double spread, double period, double floor) {
+  return std::max(floor, 1.0 + kJitterSigmas * spread / period);
 }
 
 void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user) {

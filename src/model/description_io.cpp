@@ -251,14 +251,7 @@ RobotDescription load_description_json(const std::string& path) { return parse_d
 
 std::string robots_directory() { return data_directory("robots"); }
 
-std::vector<std::string> builtin_robot_names() {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(robots_directory(), ec))
-    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+std::vector<std::string> builtin_robot_names() { return data_names("robots", ".json"); }
 
 std::string robot_file(const std::string& name_or_path, std::string* tip) {
   // FILE.urdf#TIP: the chain from the root to the link TIP (a tree with several arms or tools)

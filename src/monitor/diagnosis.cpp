@@ -233,13 +233,12 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
     b.segment(k * n, n) = s.r_tau;
     b_drive.segment(k * n, n) = s.r_drive.size() == n ? s.r_drive : s.r_tau;
   }
-  Eigen::VectorXd x, size;
+  Eigen::VectorXd x;
   Hypothesis h;
   h.fault = FaultClass::PayloadChange;
-  h.explained = ls_explained(A, b, total, x);
   // scored on r_tau like every hypothesis, sized on the drive torque (DiagnosisSample::r_drive)
-  ls_explained(A, b_drive, b_drive.squaredNorm(), size);
-  x = size;
+  h.explained = ls_explained(A, b, total, x);
+  ls_explained(A, b_drive, b_drive.squaredNorm(), x);
   h.magnitude = x(0);
   h.units = "kg";
   h.detail = fmt::format("payload {:+.2f} kg", x(0));

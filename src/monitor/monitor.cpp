@@ -44,11 +44,9 @@ constexpr double kPayloadFollowSettle = 0.5;
 // diagnosis assumes the same, run_diagnosis)
 constexpr double kGrippedComZ = 0.04;
 // the stream's timestamp jitter (Monitor::track_jitter): steps averaged over (at most), steps before it
-// applies, spreads above the period a lost-sample step must be (device::Recording's kJitterSigmas),
-// and the growth of the widened factor that is said again in a note
+// applies, and the growth of the widened factor that is said again in a note
 constexpr double kJitterWindow = 500.0;
 constexpr long kJitterMinSteps = 100;
-constexpr double kJitterSpreads = 5.0;
 constexpr double kJitterNoteStep = 1.1;
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
@@ -764,9 +762,9 @@ void Monitor::run_diagnosis(double t, bool long_look) {
   reference_.clear();
   const double from = e.t_start - cfg_.diagnosis_pre;
   for (size_t k = 0; k < ring_count_; ++k) {
-    const size_t idx = (ring_head_ + ring_.size() - ring_count_ + k) % ring_.size();
-    if (ring_[idx].t >= from) window_.push_back(ring_[idx]);
-    else if (obs_on_ && ring_[idx].t >= from - kContactReference) reference_.push_back(ring_[idx]);
+    const DiagnosisSample& d = ring_at(k);
+    if (d.t >= from) window_.push_back(d);
+    else if (obs_on_ && d.t >= from - kContactReference) reference_.push_back(d);
   }
   // the window is complete, so the residual can use the actual (not the target) acceleration:
   // a centred difference of qd over +-kDiagHalfWidth samples. Then r = tau_meas - tau_hat is the
@@ -875,13 +873,9 @@ void Monitor::follow_payload(Event& e, double t) {
   // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
   const model::RigidBodyInertia had = twin_.payload();  // a copy: set_payload below replaces it
   const double change = e.magnitude;
-  const auto say = [&](const std::string& text) {
-    notes_.push_back(text);
-    if (on_note) on_note(t, text);
-  };
   // kg in the twin's relative units (no known payload fixed its gains) are no mass to carry
   if (!twin_.gains_known() || !twin_.predicts_payload() || !std::isfinite(change)) {
-    say(fmt::format("the payload change of the alert raised at {:.3f} s is not followed: {}; the alert stays open while the "
+    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is not followed: {}; the alert stays open while the "
                     "robot runs with it",
                     e.t_start,
                     !twin_.gains_known() ? "the twin's torques are relative (it was identified without a known payload)"
@@ -894,7 +888,7 @@ void Monitor::follow_payload(Event& e, double t) {
   // than the payload held is no payload change the twin could carry
   const double tolerance = std::max(kPayloadFollowFloor, kPayloadFollowShare * std::abs(change));
   if (mass < -tolerance) {
-    say(fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
+    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
                     "payload the twin carried; the alert stays open",
                     e.t_start, change, had.mass));
     return;
@@ -904,7 +898,7 @@ void Monitor::follow_payload(Event& e, double t) {
   // the flange fits a 3.85 kg "payload", session 21 review)
   const double limit = twin_.robot().payload_limit();
   if (mass > limit) {
-    say(fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
+    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
                     "payload, above {:g} kg ({}); the alert stays open",
                     e.t_start, change, mass, limit, twin_.robot().payload_limit_text()));
     return;
@@ -919,14 +913,14 @@ void Monitor::follow_payload(Event& e, double t) {
   bool have_prev = false;
   std::uint64_t prev = 0;
   for (size_t k = 0; k < ring_count_; ++k) {
-    const DiagnosisSample& d = ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()];
+    const DiagnosisSample& d = ring_at(k);
     if (d.t < from) continue;
     io_change |= have_prev && d.digital_outputs != prev;
     prev = d.digital_outputs;
     have_prev = true;
   }
   if (!io_change && !(e.confidence >= kPayloadFollowExplained)) {
-    say(fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
+    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
                     "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
                     e.t_start, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
     return;
@@ -947,7 +941,7 @@ void Monitor::follow_payload(Event& e, double t) {
   rest_obs_ = RestBaseline(n_);
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
   e.detail += fmt::format("; from {:.3f} s the twin predicts with {} and monitoring goes on with it", t, what);
-  say(fmt::format("the twin now predicts with {} (it had {:.2f} kg; the payload change of the alert raised at {:.3f} s); "
+  add_note(t, fmt::format("the twin now predicts with {} (it had {:.2f} kg; the payload change of the alert raised at {:.3f} s); "
                   "monitor --keep-payload keeps the declared one",
                   what, had.mass, e.t_start));
 }
@@ -962,11 +956,9 @@ void Monitor::undo_follow(double t) {
   Event& e = events_[static_cast<size_t>(open_)];
   const std::string what = followed_from_.mass > 0.0 ? fmt::format("its {:.2f} kg payload", followed_from_.mass) : std::string("no payload");
   e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
-  const std::string text = fmt::format("the payload change of the alert raised at {:.3f} s is undone: {:.1f} s after the twin took it "
-                                       "the alert was still up (not a payload the twin can carry); the twin predicts with {} again",
-                                       e.t_start, t - followed_at_, what);
-  notes_.push_back(text);
-  if (on_note) on_note(t, text);
+  add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is undone: {:.1f} s after the twin took it the alert "
+                          "was still up (not a payload the twin can carry); the twin predicts with {} again",
+                          e.t_start, t - followed_at_, what));
 }
 
 void Monitor::track_margin(bool on) {
@@ -1324,10 +1316,7 @@ void Monitor::push(const RobotSample& s) {
     events_.push_back(trend_.warning());
     if (on_event) on_event(events_.back());
   }
-  if (std::string note; trend_.take_note(note)) {
-    notes_.push_back(note);
-    if (on_note) on_note(t, note);
-  }
+  if (std::string note; trend_.take_note(note)) add_note(t, note);
   qd_prev_ = s.qd;
   t_prev_ = t;
   have_prev_ = true;
@@ -1337,8 +1326,8 @@ void Monitor::track_jitter(double dt, double t) {
   // a stream whose stamps jitter (a logger's or a PC's clock rather than the controller's): a late
   // stamp followed by an early one is no lost sample. The mean absolute deviation of the steps from
   // the period (exponentially weighted) gives their spread (sqrt(pi/2) x it for Gaussian steps), and
-  // a step counts as lost samples only kJitterSpreads spreads above the period, as the recording
-  // reader does for files (device::Recording::gap_factor). A controller's own clock: spread ~0, the
+  // a step counts as lost samples only 5 spreads above the period, as the recording reader does for
+  // files (device::jitter_gap_factor). A controller's own clock: spread ~0, the
   // configured factor. Measured: the simulator's 0.25 ms timestamp jitter at 500 Hz gave ~70
   // "1 sample missing" in 60 s with the configured 1.5 periods, none with this (MonitorLoop test)
   const double dev = std::abs(dt - cfg_.nominal_period);
@@ -1347,16 +1336,21 @@ void Monitor::track_jitter(double dt, double t) {
   ++jitter_steps_;
   if (jitter_steps_ < kJitterMinSteps) return;
   const double spread = std::sqrt(M_PI / 2.0) * jitter_mad_;
-  const double widened = std::max(cfg_.gap_factor, 1.0 + kJitterSpreads * spread / cfg_.nominal_period);
+  const double widened = device::jitter_gap_factor(spread, cfg_.nominal_period, cfg_.gap_factor);
   if (widened > gap_factor_ * kJitterNoteStep) {
-    const std::string text = fmt::format("the stream's timestamps jitter (spread {:.2f} ms around the {:.2f} ms period: a logger's clock, "
-                                         "not the controller's?): a step counts as lost samples only above {:.1f} ms; shorter losses "
-                                         "cannot be told from the jitter",
-                                         1000.0 * spread, 1000.0 * cfg_.nominal_period, 1000.0 * widened * cfg_.nominal_period);
-    notes_.push_back(text);
-    if (on_note) on_note(t, text);
+    add_note(t, fmt::format("the stream's timestamps jitter (spread {:.2f} ms around the {:.2f} ms period: a logger's clock, not the "
+                            "controller's?): a step counts as lost samples only above {:.1f} ms; shorter losses cannot be told from "
+                            "the jitter",
+                            1000.0 * spread, 1000.0 * cfg_.nominal_period, 1000.0 * widened * cfg_.nominal_period));
+    gap_factor_ = widened;
+  } else if (widened < gap_factor_) {
+    gap_factor_ = widened;
   }
-  if (widened > gap_factor_ * kJitterNoteStep || widened < gap_factor_) gap_factor_ = widened;
+}
+
+void Monitor::add_note(double t, const std::string& text) {
+  notes_.push_back(text);
+  if (on_note) on_note(t, text);
 }
 
 void Monitor::drop_open_event() {

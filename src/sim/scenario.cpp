@@ -140,7 +140,7 @@ model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std:
   model::RigidBodyInertia p;
   p.mass = y.number(n, path, "mass");
   if (!(p.mass >= 0.0)) y.fail(n["mass"], path + ".mass", fmt::format("must be >= 0, got {}", p.mass));
-  if (p.mass > payload_limit(m)) y.fail(n["mass"], path + ".mass", payload_above_limit(m, p.mass));
+  if (p.mass > m.payload_limit()) y.fail(n["mass"], path + ".mass", payload_above_limit(m, p.mass));
   if (n["com"]) p.com = y.vec(n, path, "com", 3);
   if (n["inertia"]) {
     const VectorJ I = y.vec(n, path, "inertia", 6);
@@ -278,7 +278,6 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
 
 }  // namespace
 
-double payload_limit(const model::RobotModel& m) { return m.payload_limit(); }
 
 Scenario parse_scenario(const std::string& text, const std::string& origin) {
   YAML::Node root;
@@ -408,7 +407,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       if (fs.type == FaultType::PayloadPick) {
         fs.payload.mass = y.number(f, p, "mass");
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
-        if (fs.payload.mass > payload_limit(m)) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
+        if (fs.payload.mass > m.payload_limit()) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
         if (f["com"]) fs.payload.com = y.vec(f, p, "com", 3);
         fs.magnitude = fs.payload.mass;
       }

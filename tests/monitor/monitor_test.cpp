@@ -65,6 +65,12 @@ struct MonitorLoop : ::testing::Test {
     m.finish();
     return m.events();
   }
+  // the twin with the 0.5 kg payload the test scenarios declare
+  static ident::TwinModel declared_twin() {
+    ident::TwinModel t = *twin;
+    t.set_payload(payload);
+    return t;
+  }
   static ident::TwinModel* twin;
   static MonitorConfig* config;
   static model::RigidBodyInertia payload;
@@ -101,8 +107,7 @@ TEST_F(MonitorLoop, J5ResistanceIsDetectedAndAttributedToJ5) {
 // diagnosis also split the extra friction into Coulomb +4.8 N·m and viscous -16 N·m·s/rad.
 TEST_F(MonitorLoop, AContinuedAlertIsReportedClosedOnceWithFrictionThatOpposesMotion) {
   const auto rec = run(scenario(603, 30, 0.5, "  - {type: resistance, joint: 5, onset: 6, ramp: 0.2, magnitude: 0.8}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   Monitor m(t, *config);
   std::vector<Event> closed;
   int resistance_updates = 0;
@@ -133,8 +138,7 @@ TEST_F(MonitorLoop, AContinuedAlertIsReportedClosedOnceWithFrictionThatOpposesMo
 
 // the events of a monitored recording, and the events in the order they were reported closed
 std::pair<std::vector<Event>, std::vector<Event>> events_and_closings(const device::Recording& rec) {
-  ident::TwinModel t = *MonitorLoop::twin;
-  t.set_payload(MonitorLoop::payload);
+  ident::TwinModel t = MonitorLoop::declared_twin();
   Monitor m(t, *MonitorLoop::config);
   std::vector<Event> closed;
   m.on_event = [&](const Event& e) {
@@ -236,8 +240,7 @@ TEST_F(MonitorLoop, AJitteryLiveClockIsNotReadAsLostSamples) {
   const auto rec = run(scenario(158, 30, 0.5,
                                 "  - {type: timestamp_jitter, onset: 0, magnitude: 0.00025}\n"
                                 "  - {type: dropped_samples, onset: 20, magnitude: 5, end: 20.1}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   MonitorConfig c = *config;
   c.gap_factor = 1.5;  // what a live run starts from (no recording to measure the clock on)
   Monitor m(t, c);
@@ -261,8 +264,7 @@ TEST_F(MonitorLoop, ASampleSentTwiceIsProcessedOnce) {
   const auto rec = run(scenario(612, 14, 0.5,
                                 "  - {type: collision, link: 3, onset: 9.3, magnitude: 5, duration: 0.05, "
                                 "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   Monitor once(t, *config), twice(t, *config);
   for (const auto& s : rec.samples) {
     once.push(s);
@@ -291,8 +293,7 @@ TEST_F(MonitorLoop, ANonFiniteValueIsASensorFaultAndDoesNotBlindTheMonitor) {
     if (s.timestamp > 4.0 && s.timestamp < 4.01) s.qd[0] = std::numeric_limits<double>::infinity(), ++spoiled;  // a run of them
   }
   ASSERT_GE(spoiled, 4);
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   Monitor m(t, *config);
   for (const auto& s : rec.samples) m.push(s);
   m.finish();
@@ -415,8 +416,7 @@ TEST_F(MonitorLoop, AFollowedPayloadThatWasNotOneIsUndone) {
                                 "  - {type: payload_pick, onset: 8.3, io_bit: 1, mass: 0.5, com: [0, 0, 0.04]}\n"
                                 "  - {type: collision, link: 6, onset: 8.5, magnitude: 8, duration: 2.8, "
                                 "point: [0, 0, 0.04], direction: [0, 0, -1]}\n"));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   Monitor m(t, *config);
   for (const auto& s : rec.samples) m.push(s);
   m.finish();
@@ -474,8 +474,7 @@ TEST_F(MonitorLoop, AFrozenChannelThatComesBackIsNoContact) {
 // its first alarm: every threshold scaled by a factor just above it raises nothing, just below it raises.
 TEST_F(MonitorLoop, TheMarginOfAHealthyRunIsTheSensitivityOfItsFirstAlarm) {
   const auto rec = run(scenario(607, 16, 0.5));
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   const auto alerts = [&](double sensitivity, double* margin) {
     MonitorConfig c = *config;
     c.sensitivity = VectorJ::Constant(t.n_dof(), sensitivity);
@@ -511,8 +510,7 @@ TEST_F(MonitorLoop, ThresholdsLearnedAtARecordingsOwnRateHoldOnThatRecording) {
   MonitorConfig learned = learn_thresholds(*twin, {{&slow, payload}});
   EXPECT_DOUBLE_EQ(learned.nominal_period, 0.004);
   learned.use_dynamic = false;  // the static level: 1.1x the training peak at least
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   Monitor m(t, learned);
   m.track_margin();
   for (const auto& s : slow.samples) m.push(s);
@@ -546,8 +544,7 @@ TEST_F(MonitorLoop, TheObserverDebouncePerJointKeepsTheSharedCountsMargin) {
     fewer += one_fits;
   }
   EXPECT_GE(fewer, 1) << "no joint keeps the worst joint's margin with one sample: nothing to check";
-  ident::TwinModel t = *twin;
-  t.set_payload(payload);
+  ident::TwinModel t = declared_twin();
   MonitorConfig chosen = *config;
   chosen.observer_choice.raise_after = choice.raise_after;
   Monitor m(t, chosen);

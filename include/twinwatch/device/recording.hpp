@@ -48,6 +48,12 @@ struct Recording {
   double gap_factor = 1.5;
 };
 
+/// The gap factor for a clock whose timestamp steps spread `spread` [s] around `period` [s]: a step
+/// counts as lost samples only 5 spreads above the period (a late stamp followed by an early one is
+/// no loss), and never below `floor` periods. Shared by the recording reader (Recording::gap_factor)
+/// and the live monitor (Monitor's jitter estimate).
+double jitter_gap_factor(double spread, double period, double floor);
+
 /// Reads a recording. Throws twinwatch::ParseError naming the file, line and column for a
 /// non-numeric or non-finite cell (nan, inf), a wrong number of cells, a missing required column,
 /// a column that names a signal another column already carries, a timestamp that goes backwards,

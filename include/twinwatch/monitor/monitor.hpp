@@ -304,6 +304,8 @@ class Monitor {
   // ring buffer of recent samples for the diagnosis
   std::vector<DiagnosisSample> ring_;
   size_t ring_head_ = 0, ring_count_ = 0;
+  /// the k-th oldest sample the ring holds (k < ring_count_)
+  const DiagnosisSample& ring_at(size_t k) const { return ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()]; }
   std::vector<Event> events_;
   std::vector<std::string> notes_;
   int open_ = -1;             // index of the open event
@@ -324,6 +326,7 @@ class Monitor {
   long jitter_steps_ = 0;
   double gap_factor_ = 1.5;
   void track_jitter(double dt, double t);
+  void add_note(double t, const std::string& text);  // into notes() and on_note
   double raise_time_ = 0.0;
   // a raise within kMergeGap of the pending alert opens an event of its own first: its first
   // diagnosis decides. A collision stays separate (and the earlier alert is reported closed);

@@ -4,7 +4,8 @@
 /// rehearsal a user wants to run on the virtual robot. See docs/scenarios.md for every field.
 /// Every malformed field is reported as ParseError(file, line, field, "expected X, got Y"), and so is
 /// a scenario the robot cannot run: a trajectory beyond its joint position or velocity limits, a
-/// payload above payload_limit(), a fault that would start after the end, a repeated key.
+/// payload above model::RobotModel::payload_limit() (the rated payload, else the moving mass), a
+/// fault that would start after the end, a repeated key.
 #include <limits>
 #include <memory>
 #include <string>
@@ -41,11 +42,6 @@ Scenario parse_scenario(const std::string& text, const std::string& origin);
 /// after the new end stays in the scenario (and its labels) but does not fire: a warning is logged.
 /// @param option the override's name in errors, e.g. "--duration". Throws InvalidArgument.
 void override_duration(Scenario& s, double duration, const std::string& option);
-
-/// Heaviest payload [kg] a scenario may give the robot (at start or picked): model.payload_limit(),
-/// the rated payload its description gives (UR3e 3 kg, UR5e 5 kg, Panda 3 kg), else the mass of the
-/// robot's own moving links (no arm carries more than itself).
-double payload_limit(const model::RobotModel& model);
 
 /// Builds the simulator for a scenario (nominal robot loaded by name/path).
 std::unique_ptr<Simulator> make_simulator(const Scenario& s);
