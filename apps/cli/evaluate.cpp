@@ -231,6 +231,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
 
 namespace {
 
+constexpr size_t kMinReportSamples = 10;  // as validate's kMinValidateSamples
 // --link-ceiling (evaluation only): noise draws per contact and their seed
 constexpr int kCeilingDraws = 20;
 // an event that starts this long before a fault's onset may still be its detection (sample timing) [s]
@@ -341,16 +342,27 @@ model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::str
   p.mass = mass;
   if (com.size() == 3) {
     if (!(mass > 0.0)) throw InvalidArgument("--payload-com is given without --payload-mass (a centre of mass needs a mass)");
+    for (double c : com)
+      if (!std::isfinite(c)) throw InvalidArgument(fmt::format("--payload-com {} {} {}: expected three finite numbers [m]", com[0], com[1], com[2]));
     p.com = Eigen::Vector3d(com[0], com[1], com[2]);
   }
   if (mass > 0.0 && !twin.gains_known())
     throw InvalidArgument(fmt::format(
-        "{} was identified without a known payload: its current-to-torque gains are relative, so a payload in kg cannot be "
+        "{} was identified without a known payload that fixes its gains (none, or the same in every recording): its "
+        "current-to-torque gains are relative, so a payload in kg cannot be "
         "added to it (--payload-mass {:g}). Run without --payload-mass and --payload-com, on recordings made with the payload "
         "the twin was identified with, or identify the twin again with a known payload ('twinwatch identify ... "
         "--known-payload REC.csv=MASS,CX,CY,CZ')",
         twin_path, mass));
   return p;
+}
+
+void require_distinct(const std::vector<std::string>& files, const std::string& what) {
+  for (size_t a = 0; a < files.size(); ++a)
+    for (size_t b = a + 1; b < files.size(); ++b)
+      if (same_file(files[a], files[b]))
+        throw InvalidArgument(fmt::format("{}: '{}' and '{}' are the same file; a recording given twice would count twice", what,
+                                          files[a], files[b]));
 }
 
 void check_units(const device::Recording& rec, const model::RobotModel& robot) {
@@ -468,6 +480,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<double> own_share(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
     // and (link ceiling) its joint impulse over the half-sine pulse, 2 T / pi of the peak, and the pose
     std::vector<VectorJ> true_impulse(s.faults.size()), true_q(s.faults.size());
+    std::vector<double> true_force(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
     const model::RobotModel& kin = t.robot();  // the arm's kinematics (the twin's inertia is not used)
     model::DynamicsData dkin(kin);
     simulator->run([&](const RobotSample& x) {
@@ -480,6 +493,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                        const double peak = tau.cwiseAbs().maxCoeff();
                        own_share[fi] = peak > 0.0 ? std::abs(tau[f.link]) / peak : 0.0;
                        if (peak > kLeverFloor) {
+                         true_force[fi] = f.magnitude / peak;
                          true_impulse[fi] = tau * (f.magnitude / peak * 2.0 * f.duration / M_PI);
                          true_q[fi] = x.q;
                        }
@@ -504,6 +518,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       const sim::FaultLabel& lf = labels.faults[fi];
       ScenarioScore sc;
       if (fi < own_share.size()) sc.own_joint_share = own_share[fi];
+      if (fi < true_force.size()) sc.true_force = true_force[fi];
       sc.name = s.name;
       sc.duration_s = s.options.duration;
       sc.has_fault = true;
@@ -539,6 +554,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
             ll >= 0 && (e.link == ll || std::find(e.other_links.begin(), e.other_links.end(), ll) != e.other_links.end());
         sc.magnitude = e.magnitude;
         sc.detail = e.detail;
+        if (e.fault == monitor::FaultClass::Collision && e.units == "N") sc.force = e.magnitude;
         if (link_ceiling > 0.0 && ll >= 0 && fi < true_impulse.size() && true_impulse[fi].size() > 0 &&
             e.contact.noise.size() == true_impulse[fi].size()) {
           // the same impulse, exact and with kCeilingDraws draws of the observer's noise, through
@@ -782,6 +798,16 @@ void print_evaluation(const Evaluation& e) {
   if (contacts > 0)
     fmt::print("contact link: named {}/{}; named or reported as also possible {}/{} ({} events report a second link)\n",
                named, contacts, among, contacts, ambiguous);
+  // the reported contact force against the true peak force (evaluation only)
+  std::vector<double> ratio;
+  for (const auto& s : e.scores)
+    if (std::isfinite(s.force) && std::isfinite(s.true_force) && s.true_force > 0.0) ratio.push_back(s.force / s.true_force);
+  if (!ratio.empty()) {
+    std::sort(ratio.begin(), ratio.end());
+    const auto within = std::count_if(ratio.begin(), ratio.end(), [](double r) { return r >= 0.5 && r <= 2.0; });
+    fmt::print("contact force (reported / true peak): median {:.2f}, range {:.2f}-{:.2f}, within a factor of 2 for {}/{}\n",
+               ratio[ratio.size() / 2], ratio.front(), ratio.back(), within, ratio.size());
+  }
   int ceiling_n = 0;
   std::array<double, 4> ref_noisy{};
   std::array<int, 4> ref_exact{};
@@ -859,6 +885,8 @@ std::string evaluation_json(const Evaluation& e) {
                                  return r;
                                }()},
                               {"magnitude", s.detected ? nlohmann::json(s.magnitude) : nlohmann::json(nullptr)},
+                              {"force_n", std::isfinite(s.force) ? nlohmann::json(s.force) : nlohmann::json(nullptr)},
+                              {"true_force_n", std::isfinite(s.true_force) ? nlohmann::json(s.true_force) : nlohmann::json(nullptr)},
                               {"false_alarms", s.false_alarms},
                               {"wear_false_alarms", s.wear_false_alarms},
                               {"duration_s", s.duration_s},
@@ -883,6 +911,10 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   twin.set_payload(payload);
   const device::Recording rec = device::read_recording(recording, map);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
+  // its tables' R², NRMSE and correlations need a spread of samples: on one row they printed 0 and
+  // 2155 % as results (audit of session 22); validate refuses the same
+  if (rec.samples.size() < kMinReportSamples)
+    throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", recording, rec.samples.size(), kMinReportSamples));
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
   cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`

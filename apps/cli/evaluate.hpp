@@ -37,6 +37,11 @@ inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
 
+/// Throws InvalidArgument when two of `files` are the same file (the same name, or another name of
+/// it: ./fig.csv and fig.csv): a recording given twice counts twice in a fit (`what` names the list,
+/// e.g. "RECORDINGS").
+void require_distinct(const std::vector<std::string>& files, const std::string& what);
+
 /// `--robot`: a built-in name as given, a description file (.json, .urdf) as an absolute path, so
 /// that the twin (or model) that stores it still finds it from another working directory.
 std::string robot_reference(const std::string& name_or_path);
@@ -87,6 +92,10 @@ struct ScenarioScore {
   /// collisions (evaluation only): the contact's torque on its own link's joint over its largest
   /// joint torque, at the middle of the pulse (near 0: the contact acts like one on the link before)
   double own_joint_share = std::numeric_limits<double>::quiet_NaN();
+  /// collisions (evaluation only): the contact's true peak force [N] at the middle of the pulse
+  /// (the label's joint-equivalent magnitude over the largest joint torque per newton), and the
+  /// force the detecting event reported (NaN: none, e.g. its size was a joint torque)
+  double true_force = std::numeric_limits<double>::quiet_NaN(), force = std::numeric_limits<double>::quiet_NaN();
   /// collisions, with evaluate_scenarios' `link_ceiling` (evaluation only): link choices on the true
   /// joint impulse (LinkReference), in the order of kLinkReferences
   std::array<LinkReference, 4> link_reference;

@@ -48,6 +48,9 @@ int main(int argc, char** argv) {
   } catch (const twinwatch::InvalidArgument& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
+  } catch (const twinwatch::PathError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

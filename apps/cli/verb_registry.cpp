@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <vector>
 
 namespace twinwatch::cli {
@@ -36,6 +38,33 @@ VerbRegistrar::VerbRegistrar(std::string name, int order, VerbSetup setup) {
 
 void set_exit_code(int code) { g_exit_code = code; }
 int exit_code() { return g_exit_code; }
+
+namespace {
+// a number the option's text is, in full and finite; else "" and false
+bool read_number(const std::string& text, double& v) {
+  char* end = nullptr;
+  v = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size() && std::isfinite(v);
+}
+CLI::Validator bound_check(const char* name, const char* expected, bool (*ok)(double)) {
+  return CLI::Validator(
+      [expected, ok](std::string& text) -> std::string {
+        double v = 0.0;
+        if (read_number(text, v) && ok(v)) return {};
+        return std::string("expected ") + expected + ", got '" + text + "'";
+      },
+      name);
+}
+}  // namespace
+
+const CLI::Validator& positive_number() {
+  static const CLI::Validator v = bound_check("POSITIVE", "a number > 0", [](double x) { return x > 0.0; });
+  return v;
+}
+const CLI::Validator& nonnegative_number() {
+  static const CLI::Validator v = bound_check("NONNEGATIVE", "a number >= 0", [](double x) { return x >= 0.0; });
+  return v;
+}
 
 void register_all_verbs(CLI::App& app) {
   auto& r = registry();

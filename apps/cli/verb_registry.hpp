@@ -30,6 +30,12 @@ int exit_code();
 void install_interrupt_handler();
 bool interrupted();
 
+/// Option checks with a readable message: CLI11's PositiveNumber and NonNegativeNumber said
+/// "Value 0 not in range 0.000000 to 1797693134862315708...", a 300-digit bound (audit, session 22).
+/// The message CLI11 prefixes with the option: "--cycle-period: expected a number > 0, got 0".
+const CLI::Validator& positive_number();
+const CLI::Validator& nonnegative_number();
+
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);
 

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -367,7 +369,7 @@ RecordingWriter::RecordingWriter(const std::string& path, int n_dof, std::uint32
   if (n_dof < 1 || n_dof > kMaxDof)
     throw InvalidArgument(fmt::format("recording n_dof is {}, expected 1 to {}", n_dof, kMaxDof));
   f_ = std::fopen(path.c_str(), "w");
-  if (!f_) throw std::runtime_error(path + ": cannot open for writing");
+  if (!f_) throw PathError(path + ": cannot open for writing: " + std::strerror(errno));
   std::string h;
   for (const auto& c : recording_columns(n_, fields_)) h += (h.empty() ? "" : ",") + c;
   h += '\n';

@@ -376,10 +376,35 @@ std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
   return out;
 }
 
-TwinModel identify_physics(const std::string& robot, const std::vector<TrainingRun>& runs, const IdentOptions& o,
+TwinModel identify_physics(const std::string& robot, const std::vector<TrainingRun>& given, const IdentOptions& o,
                            IdentReport& report, const std::function<void(double)>& progress) {
   o.validate();
-  if (runs.empty()) throw InvalidArgument("identify: no recordings given");
+  if (given.empty()) throw InvalidArgument("identify: no recordings given");
+  // the torque scale (the drive gains in N·m/A) is fixed by a known payload only where it differs
+  // between recordings: one carried in every recording adds the same mass, centre of mass and
+  // inertia to the last link in all of them, which the last link's own parameters absorb, and the
+  // gains came out arbitrary (audit of session 22: a single recording with its 0.5 kg gave J2-J5
+  // gains of 0.95-2.0 N·m/A, 11.4 N·m/A from a pair, marked as identified). Such a payload is fitted
+  // as part of the last link: the relative twin predicts the arm carrying it, undeclared
+  bool any_payload = false, contrast = false;
+  for (const auto& r : given) {
+    const model::RigidBodyInertia& a = given.front().payload;
+    const model::RigidBodyInertia& b = r.payload;
+    any_payload |= b.mass > 0.0;
+    contrast |= a.mass != b.mass || (a.mass > 0.0 && (a.com != b.com || a.inertia_com != b.inertia_com));
+  }
+  std::vector<TrainingRun> runs = given;
+  std::string same_payload_note;  // said with the fit's notes (the fit starts its report afresh)
+  if (any_payload && !contrast) {
+    same_payload_note = (fmt::format(
+        "every recording carries the same known payload ({:.2f} kg): to the fit it is part of the last link, so it fixes no "
+        "current-to-torque gain; the gains are relative (torque outputs disabled) and the twin predicts the arm with that payload "
+        "held (monitor it without --payload-mass); for gains in N·m/A add a recording with another payload, or one with none "
+        "(given without --known-payload)",
+        given.front().payload.mass));
+    for (auto& r : runs) r.payload = model::RigidBodyInertia{};
+  }
+  const bool scale_known = any_payload && contrast;
   const model::RobotModel rm = model::load_robot(robot);
   const int n = rm.n_dof();
   long total = 0;
@@ -453,8 +478,6 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   std::vector<int> nonneg, held;
   for (int j = 0; j < n; ++j)
     for (const int c : {int(kCoulomb), int(kViscous), nf, nf + 1}) nonneg.push_back(nb + nfx * j + c);
-  bool any_payload = false;
-  for (const auto& r : runs) any_payload |= r.payload.mass > 0.0;
 
   std::vector<std::vector<VectorJ>> qdds;
   for (const TrainingRun& r : runs) qdds.push_back(joint_accelerations(*r.recording));
@@ -640,7 +663,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           st[2 * J + 1] = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
           hg[2 * J] = h[J];
         }
-        held = fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), any_payload, theta, hg, bounds_of(pass));
+        held = fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), scale_known, theta, hg, bounds_of(pass));
         for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = hg[static_cast<size_t>(2 * j)];
         std::vector<double> g(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
@@ -721,8 +744,8 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
             // the gain is fixed by the known payload only where the payload's current stands out
             // of what the model leaves unexplained
             report.payload_current_rms[J] = pay_cnt[J] > 0 ? std::sqrt(pay2[J] / static_cast<double>(pay_cnt[J])) : 0.0;
-            m.gain_identified = any_payload && report.payload_current_rms[J] >= kPayloadSignalMin * m.rmse;
-            if (any_payload && !m.gain_identified)
+            m.gain_identified = scale_known && report.payload_current_rms[J] >= kPayloadSignalMin * m.rmse;
+            if (scale_known && !m.gain_identified)
               report.notes.push_back(fmt::format("J{}: the known payload's current on this joint (rms {:.4f} A) is below {} x the fit RMSE "
                                                  "({:.4f} A): its gain {:.3f} N·m/A is not identified (gain_identified false in the twin)",
                                                  j + 1, report.payload_current_rms[J], kPayloadSignalMin, m.rmse, m.gain));
@@ -782,7 +805,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
         // the joint fitted again with it
         for (int attempt = 0; attempt < 2; ++attempt) {
-          held = fit_bilinear(st, free_gen, any_payload, theta, h, bounds_of(pass));
+          held = fit_bilinear(st, free_gen, scale_known, theta, h, bounds_of(pass));
           bool refit = false;
           for (int j = 0; j < n; ++j) {
             const size_t J = static_cast<size_t>(j);
@@ -853,17 +876,26 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           "('twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",
           fmt::join(joints, ", "), what, kMinViscousTemperatureSpan));
   }
-  twin.gains_absolute = any_payload;
+  // a payload whose current shows on no joint fixes no gain either (recordings declared without a
+  // payload that carry one: the gains came out 430-3660 N·m/A, and the monitor, finding none it
+  // could trust, used 1 N·m/A and printed N·m)
+  const bool any_identified = std::any_of(twin.joints.begin(), twin.joints.end(), [](const JointDrive& d) { return d.gain_identified; });
+  if (scale_known && !any_identified)
+    report.notes.push_back("the known payload's current stands out on no joint, so no gain is identified and the gains are relative "
+                           "(torque outputs disabled): check that the recordings given without --known-payload carry no payload, and "
+                           "that the declared masses are right");
+  twin.gains_absolute = scale_known && any_identified;
   check_gains();
   for (int j = 0; j < n && o.low_speed_friction; ++j) {
     const JointDrive& d = twin.joints[static_cast<size_t>(j)];
     // levels in the joint's torque scale: N·m only where the known payload fixed its gain
-    const char* units = any_payload && d.gain_identified ? "N·m" : "(relative torque units: gain not identified)";
+    const char* units = twin.gains_absolute && d.gain_identified ? "N·m" : "(relative torque units: gain not identified)";
     report.notes.push_back(fmt::format(
         "J{}: low-speed friction: pre-sliding {}, Stribeck {}", j + 1,
         d.presliding_alpha > 0.0 ? fmt::format("{:.3f} {} over {:.2f} mrad", d.presliding, units, 1000.0 / d.presliding_alpha) : std::string("none"),
         d.stribeck_velocity > 0.0 ? fmt::format("{:+.3f} {} below {:.3f} rad/s", d.stribeck, units, d.stribeck_velocity) : std::string("none")));
   }
+  if (!same_payload_note.empty()) report.notes.push_back(same_payload_note);
   if (!any_payload)
     report.notes.push_back("no recording with a known payload: current-to-torque gains are relative (torque outputs disabled); "
                            "add one with --known-payload FILE=MASS,CX,CY,CZ");

@@ -100,7 +100,8 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   const auto fail = [&](const char* what, const std::string& msg) {
     sqlite3_close(impl_->db);
     impl_->db = nullptr;
-    throw std::runtime_error(fmt::format("{}: {}: {}", path, what, msg));
+    // (a store the user named that cannot be opened or is no event store: bad input)
+    throw PathError(fmt::format("{}: {}: {}", path, what, msg));
   };
   // a statement run once; SQLite's own message on failure
   const auto exec = [&](const char* sql, const char* what) {

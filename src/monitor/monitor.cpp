@@ -40,6 +40,10 @@ constexpr double kPayloadFollowExplained = 0.85;
 constexpr double kPayloadIoLookback = 0.5;
 // a followed payload whose alert is still up this long [s] after it was not the payload: undone
 constexpr double kPayloadFollowSettle = 0.5;
+// a gripper output that changes this long [s] after a payload change's alert began ends that change
+// (split_payload_change); sooner, it is the same handling (a vacuum gripper's blow-off pulse after the
+// release), and the estimate would have too little motion to go on
+constexpr double kPayloadSplitAfter = 0.5;
 // where a part picked with no payload declared sits: 4 cm out along the flange's axis [m] (the
 // diagnosis assumes the same, run_diagnosis)
 constexpr double kGrippedComZ = 0.04;
@@ -352,15 +356,15 @@ ObserverDebounceChoice get_choice(const JsonFields& j, int n) {
   return c;
 }
 
-void check_program_name(const std::string& name) {
-  if (name.empty()) throw InvalidArgument("threshold set: the program name is empty");
+}  // namespace
+
+void check_program_name(const std::string& name, const std::string& what) {
+  if (name.empty()) throw InvalidArgument(fmt::format("{}: the program name is empty", what));
   for (char ch : name)
     if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-' && ch != '.')
-      throw InvalidArgument(fmt::format("threshold set: program name '{}' has the character '{}'; use letters, digits, '_', '-', '.'",
+      throw InvalidArgument(fmt::format("{}: program name '{}' has the character '{}'; use letters, digits, '_', '-', '.'", what,
                                         name, ch));
 }
-
-}  // namespace
 
 void MonitorConfig::select_program(const std::string& name) {
   if (name.empty()) return;
@@ -755,7 +759,7 @@ void Monitor::open_event(int joint, double start, double t) {
   if (on_event) on_event(events_.back());
 }
 
-void Monitor::run_diagnosis(double t, bool long_look) {
+void Monitor::run_diagnosis(double t, bool long_look, double until) {
   Event& e = events_[static_cast<size_t>(open_)];
   const Event earlier = e;  // what an earlier look said (Unknown before the first)
   window_.clear();
@@ -763,6 +767,7 @@ void Monitor::run_diagnosis(double t, bool long_look) {
   const double from = e.t_start - cfg_.diagnosis_pre;
   for (size_t k = 0; k < ring_count_; ++k) {
     const DiagnosisSample& d = ring_at(k);
+    if (d.t >= until) break;
     if (d.t >= from) window_.push_back(d);
     else if (obs_on_ && d.t >= from - kContactReference) reference_.push_back(d);
   }
@@ -821,7 +826,7 @@ void Monitor::run_diagnosis(double t, bool long_look) {
   // presenting them as sizes
   if (!twin_.gains_known() && (e.units == "N·m" || e.units == "N" || e.units == "kg")) {
     e.units += " (relative)";
-    e.detail += "; sizes in the twin's relative torque units, not physical: it was identified without a known payload";
+    e.detail += "; sizes in the twin's relative torque units, not physical: it was identified without a known payload that fixes its gains";
   }
   diagnosed_ = true;
   if (background_ >= 0 && open_ != background_ && earlier.fault == FaultClass::Collision && e.fault != FaultClass::Collision) {
@@ -877,8 +882,8 @@ void Monitor::follow_payload(Event& e, double t) {
   if (!twin_.gains_known() || !twin_.predicts_payload() || !std::isfinite(change)) {
     add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is not followed: {}; the alert stays open while the "
                     "robot runs with it",
-                    e.t_start,
-                    !twin_.gains_known() ? "the twin's torques are relative (it was identified without a known payload)"
+                    e.t_detected,
+                    !twin_.gains_known() ? "the twin's torques are relative (it was identified without a known payload that fixes its gains)"
                                          : "the twin's prediction does not carry a payload (method '" + twin_.method + "')"));
     return;
   }
@@ -890,7 +895,7 @@ void Monitor::follow_payload(Event& e, double t) {
   if (mass < -tolerance) {
     add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
                     "payload the twin carried; the alert stays open",
-                    e.t_start, change, had.mass));
+                    e.t_detected, change, had.mass));
     return;
   }
   if (mass <= tolerance) mass = 0.0;
@@ -900,7 +905,7 @@ void Monitor::follow_payload(Event& e, double t) {
   if (mass > limit) {
     add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
                     "payload, above {:g} kg ({}); the alert stays open",
-                    e.t_start, change, mass, limit, twin_.robot().payload_limit_text()));
+                    e.t_detected, change, mass, limit, twin_.robot().payload_limit_text()));
     return;
   }
   // the evidence that it is the payload: the gripper's outputs changed in the window, or the payload
@@ -922,7 +927,7 @@ void Monitor::follow_payload(Event& e, double t) {
   if (!io_change && !(e.confidence >= kPayloadFollowExplained)) {
     add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
                     "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
-                    e.t_start, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
+                    e.t_detected, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
     return;
   }
   model::RigidBodyInertia now;
@@ -943,7 +948,7 @@ void Monitor::follow_payload(Event& e, double t) {
   e.detail += fmt::format("; from {:.3f} s the twin predicts with {} and monitoring goes on with it", t, what);
   add_note(t, fmt::format("the twin now predicts with {} (it had {:.2f} kg; the payload change of the alert raised at {:.3f} s); "
                   "monitor --keep-payload keeps the declared one",
-                  what, had.mass, e.t_start));
+                  what, had.mass, e.t_detected));
 }
 
 void Monitor::undo_follow(double t) {
@@ -958,7 +963,28 @@ void Monitor::undo_follow(double t) {
   e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
   add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is undone: {:.1f} s after the twin took it the alert "
                           "was still up (not a payload the twin can carry); the twin predicts with {} again",
-                          e.t_start, t - followed_at_, what));
+                          e.t_detected, t - followed_at_, what));
+}
+
+void Monitor::split_payload_change(double t) {
+  // the window ends before the output changed: the samples after it belong to the next payload
+  run_diagnosis(t, true, t);
+  // not followed (a note says why): the alert goes on, and its longer look sees everything
+  if (open_ < 0 || !followed_) return;
+  rediagnosed_ = true;
+  Event& done = events_[static_cast<size_t>(open_)];
+  done.open = false;
+  done.t_end = std::max(done.t_start, std::min(last_over_, t_prev_));
+  done.detail += fmt::format("; it ended at {:.3f} s, where a gripper output changed again", t);
+  if (on_event) on_event(done);
+  followed_ = false;
+  open_ = -1;
+  cleared_at_ = t;
+  // every joint starts over: a residual still above its threshold is the next change's, and raises
+  // an alert of its own (its diagnosis window sees the samples before t through the new payload)
+  for (auto& d : deb_) d.reset();
+  for (auto& d : deb_obs_) d.reset();
+  std::fill(joint_active_.begin(), joint_active_.end(), 0);
 }
 
 void Monitor::track_margin(bool on) {
@@ -1081,7 +1107,13 @@ void Monitor::push(const RobotSample& s) {
     g.magnitude = std::round(dt / cfg_.nominal_period) - 1.0;
     g.units = "samples";
     g.confidence = 1.0;
-    g.detail = fmt::format("{:.0f} sample(s) missing ({:.1f} ms gap in the controller timestamp)", g.magnitude, 1000 * dt);
+    // a gap the source flagged (a reconnection) whose stamps are a period apart lost no sample the
+    // stamps can show: said so, not "0 sample(s) missing" (audit of session 22)
+    g.detail = g.magnitude >= 1.0
+                   ? fmt::format("{:.0f} sample(s) missing ({:.1f} ms gap in the controller timestamp)", g.magnitude, 1000 * dt)
+                   : fmt::format("the stream was interrupted before this sample (flagged by its source; the timestamps are {:.1f} ms "
+                                 "apart, no sample missing by them)",
+                                 1000 * dt);
     events_.push_back(g);
     if (on_event) on_event(g);
   }
@@ -1262,6 +1294,14 @@ void Monitor::push(const RobotSample& s) {
     Event& b = events_[static_cast<size_t>(background_)];
     if (background_active) b.t_end = t;
   }
+  // a gripper output changes while a payload change waits for its longer look: a part swapped (a
+  // drop and a pick 1 s apart, a dual gripper tending a machine). Left to the longer look, one
+  // window held both changes, which no single signature fits (it read as a contact on link 6 that
+  // never cleared, and hid what came after it)
+  if (open_ >= 0 && have_prev_ && s.digital_outputs != outputs_prev_ && cfg_.follow_payload && diagnosed_ && !rediagnosed_ &&
+      !followed_ && background_ < 0 && merge_into_ < 0 && events_[static_cast<size_t>(open_)].fault == FaultClass::PayloadChange &&
+      t - events_[static_cast<size_t>(open_)].t_start >= kPayloadSplitAfter)
+    split_payload_change(t);
   if (open_ >= 0) {
     Event& e = events_[static_cast<size_t>(open_)];
     e.t_end = t;
@@ -1318,6 +1358,7 @@ void Monitor::push(const RobotSample& s) {
   }
   if (std::string note; trend_.take_note(note)) add_note(t, note);
   qd_prev_ = s.qd;
+  outputs_prev_ = s.digital_outputs;
   t_prev_ = t;
   have_prev_ = true;
 }

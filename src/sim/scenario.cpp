@@ -108,6 +108,13 @@ class Y {
     if (!n) fail(parent, f, "missing required field");
     return as_vec(n, f, size, allow_scalar);
   }
+  VectorJ finite_vec(const YAML::Node& parent, const std::string& path, const std::string& key, int size) const {
+    const VectorJ v = vec(parent, path, key, size);
+    for (int i = 0; i < size; ++i)
+      if (!std::isfinite(v[i]))
+        fail(parent[key][static_cast<size_t>(i)], fmt::format("{}[{}]", join(path, key), i), fmt::format("expected a finite number, got {}", v[i]));
+    return v;
+  }
   VectorJ as_vec(const YAML::Node& n, const std::string& f, int size, bool allow_scalar = false) const {
     if (allow_scalar && n.IsScalar()) return VectorJ::Constant(size, as_number(n, f));
     if (!n.IsSequence()) fail(n, f, fmt::format("expected a list of {} numbers", size));
@@ -183,8 +190,10 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
     }
     if (type == "fourier") {
       y.only_keys(t, p, {"type", "start", "amplitude", "period", "harmonics", "seed"});
+      const int fseed = y.integer(t, p, "seed", 1);
+      if (fseed < 0) y.fail(t["seed"], p + ".seed", fmt::format("expected a whole number >= 0, got {}", fseed));
       const auto c = random_fourier(start, y.number_or(t, p, "amplitude", 0.8), y.number_or(t, p, "period", 10.0),
-                                    y.integer(t, p, "harmonics", 5), static_cast<unsigned>(y.integer(t, p, "seed", 1)));
+                                    y.integer(t, p, "harmonics", 5), static_cast<unsigned>(fseed));
       return make_fourier(c);
     }
     if (type == "fourier_series") {
@@ -263,6 +272,23 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
   }
   y.fail(t["type"] ? t["type"] : t, p + ".type",
          fmt::format("expected one of figure_eight, triangle, fourier, fourier_series, sine, chirp, point_to_point, quasi_static; got '{}'", type));
+}
+
+// the keys a fault of each type takes (parse_scenario)
+std::set<std::string> fault_keys(FaultType t) {
+  std::set<std::string> k{"type", "onset", "ramp", "end"};
+  switch (t) {
+    case FaultType::Resistance:
+    case FaultType::FrictionGrowth:
+    case FaultType::CurrentOffset: k.insert({"joint", "magnitude"}); break;
+    case FaultType::StuckCurrent: k.insert("joint"); break;
+    case FaultType::Collision: k = {"type", "onset", "link", "point", "direction", "duration", "magnitude"}; break;
+    case FaultType::PayloadPick: k.insert({"mass", "com", "io_bit"}); break;
+    case FaultType::PayloadLoss: k.insert("io_bit"); break;
+    case FaultType::DroppedSamples: k.insert({"magnitude", "period"}); break;
+    case FaultType::TimestampJitter: k.insert("magnitude"); break;
+  }
+  return k;
 }
 
 FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
@@ -369,10 +395,12 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     for (size_t k = 0; k < fl.size(); ++k) {
       const YAML::Node f = fl[k];
       const std::string p = fmt::format("faults[{}]", k);
-      y.only_keys(f, p, {"type", "onset", "ramp", "end", "magnitude", "joint", "link", "point", "direction", "duration",
-                         "period", "mass", "com", "io_bit"});
+      if (!f.IsMap()) y.fail(f, p, "expected a mapping of keys");
       FaultSpec fs;
       fs.type = fault_type(y, f, p);
+      // each type takes its own keys: another type's key would be ignored silently (a stuck
+      // current's 'magnitude', a resistance's 'link', a collision's 'end', which its duration sets)
+      y.only_keys(f, p, fault_keys(fs.type));
       fs.onset = y.number(f, p, "onset");
       if (!(fs.onset >= 0.0)) y.fail(f["onset"], p + ".onset", fmt::format("must be >= 0 s, got {}", fs.onset));
       fs.ramp = y.number_or(f, p, "ramp", 0.0);
@@ -390,14 +418,23 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       }
       const bool needs_magnitude = fs.type != FaultType::PayloadPick && fs.type != FaultType::PayloadLoss &&
                                    fs.type != FaultType::StuckCurrent;
-      if (needs_magnitude) fs.magnitude = y.number(f, p, "magnitude");
+      if (needs_magnitude) {
+        fs.magnitude = y.number(f, p, "magnitude");
+        if (!std::isfinite(fs.magnitude)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("expected a finite number, got {}", fs.magnitude));
+      }
+      if (fs.type == FaultType::Resistance && !(fs.magnitude > 0.0))
+        y.fail(f["magnitude"], p + ".magnitude",
+               fmt::format("expected extra friction > 0 N·m (it opposes the motion), got {}", fs.magnitude));
+      if (fs.type == FaultType::FrictionGrowth && !(fs.magnitude > -1.0))
+        y.fail(f["magnitude"], p + ".magnitude",
+               fmt::format("expected a relative change > -1 (friction x (1 + magnitude) stays positive), got {}", fs.magnitude));
       if (fs.type == FaultType::Collision) {
         if (!f["link"]) y.fail(f, p + ".link", "missing required field");
         const int l = y.integer(f, p, "link", 0);
         if (l < 1 || l > n) y.fail(f["link"] ? f["link"] : f, p + ".link", fmt::format("expected 1 to {}, got {}", n, l));
         fs.link = l - 1;
-        if (f["point"]) fs.point = y.vec(f, p, "point", 3);
-        if (f["direction"]) fs.direction = y.vec(f, p, "direction", 3);
+        if (f["point"]) fs.point = y.finite_vec(f, p, "point", 3);
+        if (f["direction"]) fs.direction = y.finite_vec(f, p, "direction", 3);
         if (!(fs.direction.norm() > 0)) y.fail(f["direction"], p + ".direction", "must not be zero");
         fs.duration = y.number_or(f, p, "duration", 0.05);
         if (!(fs.duration > 0)) y.fail(f["duration"], p + ".duration", fmt::format("must be > 0 s, got {}", fs.duration));
@@ -408,10 +445,8 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
         fs.payload.mass = y.number(f, p, "mass");
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
         if (fs.payload.mass > m.payload_limit()) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
-        if (f["com"]) fs.payload.com = y.vec(f, p, "com", 3);
-        fs.magnitude = fs.payload.mass;
+        if (f["com"]) fs.payload.com = y.finite_vec(f, p, "com", 3);
       }
-      if (fs.type == FaultType::PayloadLoss) fs.magnitude = -s.options.payload.mass;
       fs.io_bit = y.integer(f, p, "io_bit", 0);
       if (fs.io_bit < 0 || fs.io_bit > kMaxDigitalOutputBit)
         y.fail(f["io_bit"], p + ".io_bit",
@@ -426,13 +461,37 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       }
       if (fs.type == FaultType::DroppedSamples) {
         fs.period = y.number_or(f, p, "period", 0.0);
-        if (!(fs.magnitude >= 1)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("must be >= 1 sample, got {}", fs.magnitude));
+        if (!(fs.magnitude >= 1) || fs.magnitude != std::floor(fs.magnitude))
+          y.fail(f["magnitude"], p + ".magnitude", fmt::format("expected a whole number of samples >= 1, got {}", fs.magnitude));
+        if (!(fs.period >= 0.0) || !std::isfinite(fs.period))
+          y.fail(f["period"], p + ".period", fmt::format("expected a repeat period >= 0 s (0: once), got {}", fs.period));
       }
       // the fault's own fields first, then whether it happens at all in this run
       if (!(fs.onset < s.options.duration))
         y.fail(f["onset"], p + ".onset", fmt::format("expected a time before the end of the run ({} s), got {} s: the {} would never fire",
                                                      s.options.duration, fs.onset, to_string(fs.type)));
       s.faults.push_back(fs);
+    }
+    // a payload fault's label is the change of the mass the flange carries: a pick replaces what it
+    // held (the simulator's set_payload), a loss takes all of it; in the order they happen
+    std::vector<size_t> order(s.faults.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return s.faults[a].onset < s.faults[b].onset; });
+    double carried = s.options.payload.mass;
+    for (size_t k : order) {
+      FaultSpec& fs = s.faults[k];
+      if (fs.type == FaultType::PayloadPick) {
+        fs.magnitude = fs.payload.mass - carried;
+        carried = fs.payload.mass;
+      } else if (fs.type == FaultType::PayloadLoss) {
+        if (!(carried > 0.0))
+          y.fail(fl[k], fmt::format("faults[{}]", k),
+                 fmt::format("a payload_loss at {} s, but the arm carries nothing then (give the scenario a 'payload' or an earlier "
+                             "payload_pick)",
+                             fs.onset));
+        fs.magnitude = -carried;
+        carried = 0.0;
+      }
     }
   }
   return s;

@@ -193,7 +193,7 @@ std::string HtmlReport::render() const {
 
 void HtmlReport::write(const std::string& path) const {
   std::ofstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  if (!f) throw PathError(path + ": cannot open for writing");
   f << render();
   if (!f) throw std::runtime_error(path + ": write failed");
 }

@@ -54,3 +54,6 @@ set_tests_properties(cli.excite_min_height_unreachable PROPERTIES
 add_test(NAME cli.excite_lowest_point_warning COMMAND twinwatch excite ur3e -o ${d}/low.yaml --global-evals 100 --local-evals 100 --min-height -1)
 set_tests_properties(cli.excite_lowest_point_warning PROPERTIES
   PASS_REGULAR_EXPRESSION "WARNING: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m[^\n]*\\(--min-height -1 m\\): [^\n]*may hit the table")
+# the library's field names are told as the options the user typed (audit of session 22: "q0 has 3 values")
+add_test(NAME cli.excite_option_named COMMAND twinwatch excite ur3e -o ${d}/bad.yaml --q0 0 0 0)
+set_tests_properties(cli.excite_option_named PROPERTIES PASS_REGULAR_EXPRESSION "error: --q0 has 3 values, expected 6 \\(model.n_dof\\) or none \\(ur3e\\)")

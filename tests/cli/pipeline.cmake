@@ -53,7 +53,7 @@ set_tests_properties(cli.identify_relative PROPERTIES FIXTURES_REQUIRED recordin
 add_test(NAME cli.monitor_relative_twin_refuses_a_payload
   COMMAND twinwatch monitor --twin ${d}/twin_relative.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '')
 set_tests_properties(cli.monitor_relative_twin_refuses_a_payload PROPERTIES FIXTURES_REQUIRED twin_relative
-                     PASS_REGULAR_EXPRESSION "twin_relative.json was identified without a known payload: its current-to-torque gains are relative, so a payload in kg cannot be added")
+                     PASS_REGULAR_EXPRESSION "twin_relative.json was identified without a known payload that fixes its gains \\(none, or the same in every recording\\): its current-to-torque gains are relative, so a payload in kg cannot be added")
 add_test(NAME cli.validate_relative_twin_refuses_a_payload
   COMMAND twinwatch validate --twin ${d}/twin_relative.json ${d}/fig.csv --payload-mass 0.5)
 set_tests_properties(cli.validate_relative_twin_refuses_a_payload PROPERTIES FIXTURES_REQUIRED twin_relative
@@ -85,6 +85,32 @@ add_test(NAME cli.identify_output_directory_missing COMMAND twinwatch identify $
 set_tests_properties(cli.identify_output_directory_missing PROPERTIES FIXTURES_REQUIRED recordings
                      PASS_REGULAR_EXPRESSION "no-such-dir/twin.json: cannot write: directory [^\n]*no-such-dir does not exist"
                      FAIL_REGULAR_EXPRESSION "identifying")
+# audit of session 22: a bad output path or input store is bad input (exit 2, as --help says), not a
+# failure while running (exit 1); the same recording twice, or two payloads for one, is refused
+add_test(NAME cli.bad_output_path_exits_2
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> identify ${d}/exc.csv -o ${d}/no-such-dir/t.json -q 2>&1; echo exit \$?; \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/fig.csv --events ${d}/fig.csv --db '' 2>&1; echo exit \$?; \
+echo hello > ${d}/garbage.db; $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/fig.csv --db ${d}/garbage.db -q 2>&1; echo exit \$?")
+set_tests_properties(cli.bad_output_path_exits_2 PROPERTIES FIXTURES_REQUIRED "recordings;twin"
+  PASS_REGULAR_EXPRESSION "does not exist\nexit 2\n[^\n]*which it would replace\nexit 2\n[^\n]*garbage.db[^\n]*\nexit 2")
+add_test(NAME cli.identify_same_recording_twice COMMAND twinwatch identify ${d}/exc.csv ${d}/../cli-pipeline/exc.csv -o ${d}/dup.json)
+set_tests_properties(cli.identify_same_recording_twice PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "RECORDINGS: '[^']*exc.csv' and '[^']*exc.csv' are the same file; a recording given twice would count twice")
+add_test(NAME cli.identify_two_payloads_for_one_recording
+  COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5 --known-payload ${d}/fig.csv=1.0 -o ${d}/dup.json)
+set_tests_properties(cli.identify_two_payloads_for_one_recording PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "--known-payload names '[^']*fig.csv' twice \\(0.5 kg and 1 kg\\)")
+add_test(NAME cli.identify_one_payload_in_every_recording_is_relative
+  COMMAND twinwatch identify ${d}/fig.csv --known-payload ${d}/fig.csv=0.5,0,0,0.04 -o ${d}/same_payload.json)
+set_tests_properties(cli.identify_one_payload_in_every_recording_is_relative PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "every recording carries the same known payload \\(0.50 kg\\)[^\n]*the gains are relative")
+add_test(NAME cli.thresholds_program_name_checked_first
+  COMMAND twinwatch thresholds --twin ${d}/twin.json --program "a b" ${d}/fig.csv)
+set_tests_properties(cli.thresholds_program_name_checked_first PROPERTIES FIXTURES_REQUIRED "recordings;twin"
+  PASS_REGULAR_EXPRESSION "^error: --program: program name 'a b' has the character ' '" FAIL_REGULAR_EXPRESSION "learning")
+add_test(NAME cli.option_range_message COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --cycle-period 0)
+set_tests_properties(cli.option_range_message PROPERTIES FIXTURES_REQUIRED "recordings;twin"
+  PASS_REGULAR_EXPRESSION "--cycle-period: expected a number > 0, got '0'" FAIL_REGULAR_EXPRESSION "179769")
 # a twin made with a robot file works from another working directory (the file is stored by its
 # absolute path; a twin naming it relatively finds it beside itself)
 add_test(NAME cli.twin_with_a_robot_file_from_another_directory

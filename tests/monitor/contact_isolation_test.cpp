@@ -3,6 +3,7 @@
 // The twin is identified from recordings only; the simulator's truth (drive constants, the contact's
 // force) is read here, by the test, to score it.
 #include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -218,7 +219,15 @@ TEST_F(Collisions, ContactIsIsolatedToItsLinkWithItsForce) {
     EXPECT_EQ(e.link, c.link - 1) << e.detail;
     EXPECT_LT(e.t_detected - onset, 0.03) << e.detail;
     ASSERT_GT(force, 0.0);
-    EXPECT_NEAR(e.magnitude / force, 1.0, 0.35) << e.detail << " truth " << force << " N";
+    if (c.link == 2) {
+      // two joints carry a force on link 2: its size is what they require at least (the smallest of
+      // the points that fit; the force at the link's centre of mass once read 90x the truth, session 22)
+      EXPECT_THAT(e.detail, ::testing::HasSubstr("at least")) << e.detail;
+      EXPECT_LT(e.magnitude / force, 1.35) << e.detail << " truth " << force << " N";
+      EXPECT_GT(e.magnitude / force, 0.3) << e.detail << " truth " << force << " N";
+    } else {
+      EXPECT_NEAR(e.magnitude / force, 1.0, 0.35) << e.detail << " truth " << force << " N";
+    }
   }
 }
 

@@ -230,6 +230,16 @@ TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
   EXPECT_EQ(ev2[0].fault, FaultClass::StreamFault);
   EXPECT_EQ(ev2[1].fault, FaultClass::Collision) << ev2[1].detail;
   EXPECT_LT(ev2[1].t_detected - 10.4, 0.05);
+  // a gap its source flagged (a reconnection) on evenly spaced stamps: said as an interruption, not
+  // "0 sample(s) missing" (audit of session 22)
+  auto flagged = healthy;
+  for (auto& x : flagged.samples)
+    if (std::abs(x.timestamp - 6.0) < 1e-4) x.gap_before = true;
+  const auto ev3 = monitor(flagged, 0.5);
+  ASSERT_EQ(ev3.size(), 1u);
+  EXPECT_EQ(ev3[0].fault, FaultClass::StreamFault);
+  EXPECT_EQ(ev3[0].magnitude, 0.0);
+  EXPECT_THAT(ev3[0].detail, ::testing::HasSubstr("interrupted before this sample")) << ev3[0].detail;
 }
 
 // Session 21: a live stream whose stamps jitter (a logger's clock; the recording reader widens the
@@ -406,6 +416,48 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
   EXPECT_NEAR(swap[1].magnitude, 1.0, 0.1) << swap_listing;
   EXPECT_THAT(swap[1].detail, ::testing::ContainsRegex("the twin predicts with a (0\\.9|1\\.0)[0-9] kg payload"));
   EXPECT_EQ(swap[2].fault, FaultClass::Collision) << swap_listing;
+}
+
+// Session 22: a part swapped (a drop, then a pick 1 s later on another gripper output, as a dual
+// gripper tending a machine does) put both changes in the longer look's window; no single signature
+// fits that, and it read as one contact on link 6 that stayed open to the end, hiding the contact
+// after it. The second output change now ends the first change there (followed on the samples
+// before it), and the pick is an alert of its own.
+TEST_F(MonitorLoop, APartSwappedWithinTheLongerLookIsTwoPayloadChanges) {
+  const auto rec = run(scenario(158, 24, 0.5,
+                                "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
+                                "  - {type: payload_pick, onset: 9.5, io_bit: 1, mass: 1.0, com: [0, 0, 0.04]}\n"
+                                "  - {type: collision, link: 3, onset: 17.3, magnitude: 10, duration: 0.05, "
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+  const auto watch = [&](bool follow, double* payload_at_end) {
+    MonitorConfig c = *config;
+    c.follow_payload = follow;
+    Monitor m(declared_twin(), c);
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    *payload_at_end = m.twin().payload().mass;
+    return m.events();
+  };
+  double at_end = -1.0;
+  const auto ev = watch(true, &at_end);
+  const std::string all = listing(ev);
+  ASSERT_EQ(ev.size(), 3u) << all;
+  EXPECT_EQ(ev[0].fault, FaultClass::PayloadChange) << all;
+  EXPECT_NEAR(ev[0].magnitude, -0.5, 0.1) << all;
+  EXPECT_NEAR(ev[0].t_end, 9.5, 0.02) << "the drop ends where the pick's output changed" << all;
+  EXPECT_EQ(ev[1].fault, FaultClass::PayloadChange) << all;
+  EXPECT_NEAR(ev[1].t_start, 9.5, 0.05) << all;
+  EXPECT_NEAR(ev[1].magnitude, 1.0, 0.1) << all;
+  EXPECT_FALSE(ev[1].open) << all;
+  EXPECT_NEAR(at_end, 1.0, 0.1);
+  EXPECT_EQ(ev[2].fault, FaultClass::Collision) << all;
+  EXPECT_EQ(ev[2].link, 2) << all;  // link 3
+  EXPECT_LT(ev[2].t_detected - 17.3, 0.02) << all;
+  // keeping the declared payload, the swap is one payload event (the net change) that stays open
+  const auto kept = watch(false, &at_end);
+  ASSERT_FALSE(kept.empty());
+  EXPECT_EQ(at_end, 0.5);
+  EXPECT_GT(kept[0].t_end, 17.0) << listing(kept);
 }
 
 // A followed payload change that was not one is undone: a gripper output toggles (no part) and a

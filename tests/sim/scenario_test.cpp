@@ -23,6 +23,56 @@ std::string error_of(const std::string& yaml) {
 const std::string kSine = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
 const std::string kFig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n";
 
+// audit of session 22: a fault's magnitude was read unchecked (a NaN resistance made a recording of
+// NaN from its first sample, before the onset, exit 0), other types' keys were ignored silently,
+// and a payload fault's label was not the change the arm saw
+TEST(Scenario, AFaultsValuesAreCheckedForItsType) {
+  const std::string head = "robot: ur3e\nduration: 10\n" + kFig8 + "faults:\n";
+  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, onset: 0.5, magnitude: .nan}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].magnitude': expected a finite number, got nan"));
+  EXPECT_THAT(error_of(head + "  - {type: current_offset, joint: 2, onset: 0.5, magnitude: .inf}\n"),
+              HasSubstr("field 'faults[0].magnitude': expected a finite number, got inf"));
+  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, onset: 0.5, magnitude: -5}\n"),
+              HasSubstr("field 'faults[0].magnitude': expected extra friction > 0 N·m (it opposes the motion), got -5"));
+  EXPECT_THAT(error_of(head + "  - {type: friction_growth, joint: 2, onset: 0.5, magnitude: -2}\n"),
+              HasSubstr("field 'faults[0].magnitude': expected a relative change > -1"));
+  EXPECT_THAT(error_of(head + "  - {type: collision, link: 3, onset: 1, magnitude: 5, point: [.nan, 0, 0]}\n"),
+              HasSubstr("field 'faults[0].point[0]': expected a finite number, got nan"));
+  EXPECT_THAT(error_of(head + "  - {type: payload_pick, onset: 1, mass: 0.5, com: [0, .inf, 0]}\n"),
+              HasSubstr("field 'faults[0].com[1]': expected a finite number, got inf"));
+  EXPECT_THAT(error_of(head + "  - {type: dropped_samples, onset: 1, magnitude: 2.5}\n"),
+              HasSubstr("field 'faults[0].magnitude': expected a whole number of samples >= 1, got 2.5"));
+  EXPECT_THAT(error_of(head + "  - {type: dropped_samples, onset: 1, magnitude: 2, period: -1}\n"),
+              HasSubstr("field 'faults[0].period': expected a repeat period >= 0 s (0: once), got -1"));
+  // another type's key
+  EXPECT_THAT(error_of(head + "  - {type: stuck_current, joint: 2, onset: 1, magnitude: 3}\n"),
+              HasSubstr("field 'faults[0].magnitude': unknown key 'magnitude', expected one of: end, joint, onset, ramp, type"));
+  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, link: 3, onset: 1, magnitude: 1}\n"),
+              HasSubstr("unknown key 'link'"));
+  EXPECT_THAT(error_of(head + "  - {type: collision, link: 3, onset: 1, end: 2, magnitude: 5}\n"), HasSubstr("unknown key 'end'"));
+  EXPECT_THAT(error_of(head + "  - {type: payload_loss, onset: 1, mass: 2}\n"), HasSubstr("unknown key 'mass'"));
+  // a loss with nothing carried
+  EXPECT_THAT(error_of(head + "  - {type: payload_loss, onset: 1}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0]': a payload_loss at 1 s, but the arm carries nothing then"));
+}
+
+TEST(Scenario, APayloadFaultsLabelIsTheChangeOfTheMassCarried) {
+  const std::string head = "robot: ur3e\nduration: 10\n" + kFig8;
+  // listed out of order: the labels follow the time they happen
+  const Scenario s = parse_scenario(head + "payload: {mass: 2.5}\nfaults:\n"
+                                           "  - {type: payload_loss, onset: 6}\n"
+                                           "  - {type: payload_pick, onset: 2, mass: 2.0}\n"
+                                           "  - {type: payload_pick, onset: 8, mass: 1.0}\n",
+                                    "test.yaml");
+  ASSERT_EQ(s.faults.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.faults[1].magnitude, -0.5);  // 2.5 kg held, 2.0 kg now
+  EXPECT_DOUBLE_EQ(s.faults[0].magnitude, -2.0);  // the 2.0 kg dropped
+  EXPECT_DOUBLE_EQ(s.faults[2].magnitude, 1.0);
+  const Scenario none = parse_scenario(head + "faults:\n  - {type: payload_pick, onset: 1, mass: 1.0}\n  - {type: payload_loss, onset: 2.5}\n",
+                                       "test.yaml");
+  EXPECT_DOUBLE_EQ(none.faults[1].magnitude, -1.0);  // was -0: the scenario's (absent) payload
+}
+
 // a duration that cannot be run is reported at its own line, with the value
 TEST(Scenario, DurationOutOfRangeIsNamedAtItsLine) {
   EXPECT_THAT(error_of("robot: ur3e\nseed: 3\nduration: -5\n" + kSine),

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <utility>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
@@ -61,7 +62,21 @@ int run(const Options& o) {
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
   if (!o.q0.empty()) eo.q0 = Eigen::Map<const Eigen::VectorXd>(o.q0.data(), static_cast<Eigen::Index>(o.q0.size()));
-  eo.validate(m.n_dof());
+  try {
+    eo.validate(m.n_dof());
+  } catch (const InvalidArgument& e) {
+    // the library names its fields; the user typed options (audit of session 22: "q0 has 3 values")
+    std::string what = e.what();
+    for (const auto& [field, option] : std::initializer_list<std::pair<const char*, const char*>>{
+             {"harmonics", "--harmonics"}, {"base_frequency", "--base-frequency"}, {"samples", "--samples"}, {"q0", "--q0"},
+             {"amplitude", "--amplitude"}, {"limit_fraction", "--limit-fraction"}, {"default_qdd_max", "--default-qdd-max"},
+             {"min_height", "--min-height"}, {"global_evaluations", "--global-evals"}, {"local_evaluations", "--local-evals"}})
+      if (what.rfind(field, 0) == 0) {
+        what = std::string(option) + what.substr(std::string(field).size());
+        break;
+      }
+    throw InvalidArgument(what + fmt::format(" ({})", m.name()));
+  }
   // the run must end at rest: a whole number of periods
   const double period = 1.0 / o.base_frequency;
   int cycles = 1;

@@ -547,7 +547,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
   sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
-  CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(CLI::PositiveNumber);
+  CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(twinwatch::cli::positive_number());
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (e.g. 5: 1 kHz -> 200 Hz)")->capture_default_str();
   sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str();

@@ -110,6 +110,15 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
 
 int run_identify_sequential(const IdentifyOptions& o);
 
+// one --known-payload per recording: of two, one would win silently
+void require_one_payload_each(const std::vector<PayloadArg>& pay) {
+  for (size_t a = 0; a < pay.size(); ++a)
+    for (size_t b = a + 1; b < pay.size(); ++b)
+      if (same_file(pay[a].file, pay[b].file))
+        throw InvalidArgument(fmt::format("--known-payload names '{}' twice ({} kg and {} kg); give one payload per recording",
+                                          pay[b].file, pay[a].payload.mass, pay[b].payload.mass));
+}
+
 int run_identify(const IdentifyOptions& o) {
   // before the fit: a bad output path found after minutes of fitting costs the fit
   {
@@ -117,6 +126,7 @@ int run_identify(const IdentifyOptions& o) {
     inputs.push_back(o.column_map);
     require_output(o.output, inputs);
   }
+  cli::require_distinct(o.recordings, "RECORDINGS");
   if (o.method == "sequential") return run_identify_sequential(o);
   if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
     throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", o.method));
@@ -135,6 +145,7 @@ int run_identify(const IdentifyOptions& o) {
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p, robot));
+  require_one_payload_each(pay);
   // the same file under another name (./fig.csv, an absolute path) is the same recording
   for (const auto& r : recs) {
     ident::TrainingRun t{&r, {}};
@@ -244,20 +255,25 @@ int run_identify_sequential(const IdentifyOptions& o) {
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p, robot));
+  require_one_payload_each(pay);
   for (const auto& p : pay) {
     bool found = false;
-    for (const auto& r : gen) found |= r.path == p.file;
+    for (const auto& r : gen) found |= same_file(r.path, p.file);
     if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the general recordings", p.file));
   }
   for (const auto& r : gen) {
     ident::TrainingRun t{&r, {}};
     for (const auto& p : pay)
-      if (p.file == r.path) t.payload = p.payload;
+      if (same_file(p.file, r.path)) t.payload = p.payload;
     runs.push_back(t);
   }
   ident::SequentialOptions so;
   so.library.config_joints.clear();
-  for (int j : o.lasso_joints) so.library.config_joints.push_back(j - 1);
+  for (int j : o.lasso_joints) {
+    if (j < 1 || j > robot.n_dof())
+      throw InvalidArgument(fmt::format("--lasso-joints {}: expected joints from 1 to {} ({})", j, robot.n_dof(), robot.name()));
+    so.library.config_joints.push_back(j - 1);
+  }
   so.prune_ratio = o.prune;
   so.use_1se = o.lasso_1se;
   so.decimate = std::max(o.decimate, 2);

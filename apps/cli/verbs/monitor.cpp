@@ -187,7 +187,7 @@ int run_monitor(const MonitorOptions& o) {
   std::ofstream jl;
   if (!o.events_path.empty()) {
     jl.open(o.events_path);
-    if (!jl) throw std::runtime_error(o.events_path + ": cannot open for writing");
+    if (!jl) throw PathError(o.events_path + ": cannot open for writing");
   }
   std::unique_ptr<monitor::EventStore> store;
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
@@ -239,7 +239,7 @@ int run_monitor(const MonitorOptions& o) {
   std::ofstream trace;
   if (!o.trace.empty()) {
     trace.open(o.trace);
-    if (!trace) throw std::runtime_error(o.trace + ": cannot open for writing");
+    if (!trace) throw PathError(o.trace + ": cannot open for writing");
     trace << "timestamp";
     for (int j = 1; j <= twin.n_dof(); ++j)
       trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
@@ -327,6 +327,9 @@ struct ThresholdOptions {
 };
 
 int run_thresholds(const ThresholdOptions& o) {
+  // before the learning run, which takes minutes on long recordings
+  if (!o.program.empty()) monitor::check_program_name(o.program, "--program");
+  cli::require_distinct(o.recordings, "RECORDINGS");
   ident::TwinModel twin = cli::load_twin(o.twin);
   const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs;
@@ -435,8 +438,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
   sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(CLI::NonNegativeNumber);
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(twinwatch::cli::nonnegative_number());
   sub->add_flag("--no-reconnect", o->no_reconnect,
                 "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
                 "reconnecting with back-off");
@@ -444,7 +447,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
@@ -461,7 +464,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--cycle-period", o->cycle_period,
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
                   "trend.window_s)")
-      ->check(CLI::PositiveNumber);
+      ->check(twinwatch::cli::positive_number());
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only (the --events format)");
   sub->add_option("--trace", o->trace,
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
@@ -475,7 +478,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   auto* sub = app.add_subcommand("thresholds", "Re-learn the monitor's thresholds from healthy recordings (per payload/program)");
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
-  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"));
@@ -564,7 +567,7 @@ int run_report(const ReportOptions& o) {
   std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
     std::ifstream f(o.labels);
-    if (!f) throw std::runtime_error(o.labels + ": cannot open");
+    if (!f) throw PathError(o.labels + ": cannot open the labels file");
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
@@ -584,7 +587,7 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
-  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")->check(twinwatch::cli::nonnegative_number());
   sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
   sub->add_flag("--all-programs", o->all_programs,
                 "Learn ONE threshold set over every program of scenarios/ur3e/long (figure-eight, triangle at 3 speeds, "
@@ -630,7 +633,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
   sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)");
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(CLI::NonNegativeNumber);
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_flag("--keep-payload", o->keep_payload,

@@ -17,6 +17,15 @@ class InvalidArgument : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// A path the user named that cannot be used as asked: an output in a missing or read-only directory,
+/// an output that is an input, an input that does not exist or is not what it should be (an event
+/// store that is not a database). Bad input like InvalidArgument (the command line exits 2); a
+/// failure while writing to a good path (a full disk) stays a std::runtime_error (exit 1).
+class PathError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// A malformed file: CSV, URDF, JSON description, YAML scenario, twin file.
 class ParseError : public std::runtime_error {
  public:

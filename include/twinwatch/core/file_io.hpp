@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "twinwatch/core/error.hpp"
+
 namespace twinwatch {
 
 /// Throws std::runtime_error "PATH: cannot write: REASON" unless the stream is still good. The
@@ -38,12 +40,12 @@ inline void close_written(std::ofstream& f, const std::string& path) {
 inline void write_text_file(const std::string& path, const std::string& text) {
   std::ofstream f(path, std::ios::binary);
   errno = 0;
-  if (!f) throw std::runtime_error(path + ": cannot open for writing: " + (errno ? std::strerror(errno) : "unknown reason"));
+  if (!f) throw PathError(path + ": cannot open for writing: " + (errno ? std::strerror(errno) : "unknown reason"));
   f << text;
   close_written(f, path);
 }
 
-/// Throws std::runtime_error "PATH: cannot write: REASON" unless PATH could be written: an existing
+/// Throws PathError "PATH: cannot write: REASON" unless PATH could be written: an existing
 /// regular file that is writable, or a new file in an existing, writable directory. Touches
 /// nothing, so a command that connects to a robot first can refuse a bad output path before the
 /// connection (and an existing file is not replaced by an input that fails to load).
@@ -51,7 +53,7 @@ inline void require_writable(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path p(path);
-  const auto fail = [&](const std::string& why) { throw std::runtime_error(path + ": cannot write: " + why); };
+  const auto fail = [&](const std::string& why) { throw PathError(path + ": cannot write: " + why); };
   if (path.empty()) fail("empty path");
   const fs::file_status st = fs::status(p, ec);
   if (fs::exists(st)) {
@@ -77,7 +79,7 @@ inline void require_output(const std::string& out, const std::vector<std::string
   require_writable(out);
   for (const std::string& in : inputs)
     if (!in.empty() && same_file(out, in))
-      throw std::runtime_error(out + ": cannot write: it is the input " + in + ", which it would replace");
+      throw PathError(out + ": cannot write: it is the input " + in + ", which it would replace");
 }
 
 }  // namespace twinwatch

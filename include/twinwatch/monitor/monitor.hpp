@@ -8,7 +8,9 @@
 /// alert is raised, the residual window around it is handed to the signature diagnosis
 /// (diagnosis.hpp) once `diagnosis_delay` seconds of it are available; the event is reported when
 /// raised (class pending), when diagnosed, and when cleared.
+#include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -190,6 +192,10 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
 ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, const MonitorConfig& config,
                                                 const std::vector<HealthyRun>& validation);
 
+/// Throws InvalidArgument "WHAT: program name 'a b' has the character ' '; ..." unless `name` is
+/// a program name a threshold set can have (letters, digits, '_', '-', '.').
+void check_program_name(const std::string& name, const std::string& what = "threshold set");
+
 /// Learns the thresholds of one program on its healthy runs and stores them in config.programs
 /// under `name` (replacing an earlier set of that name); config's other settings are used as is.
 /// Throws InvalidArgument for an empty name or one with characters other than [A-Za-z0-9_.-].
@@ -262,8 +268,13 @@ class Monitor {
   void restart_after_gap(const RobotSample& s);
   void restart_estimators();  // observer, residual filter and FIR restart; decisions wait the start-up samples
   /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
-  /// change is followed on (follow_payload)
-  void run_diagnosis(double t, bool long_look = false);
+  /// change is followed on (follow_payload). The window holds the ring's samples from before the
+  /// alert's start up to, not including, `until` [s] (default: all of them)
+  void run_diagnosis(double t, bool long_look = false, double until = std::numeric_limits<double>::infinity());
+  /// A gripper output changed at t while the open alert's payload change waits for its longer look:
+  /// the change so far is followed on the samples before t and its event ends there, so that what
+  /// the new output brings (a part picked right after one was dropped) is an alert of its own
+  void split_payload_change(double t);
   /// The twin takes the payload change event e diagnosed (cfg_.follow_payload); says so in e's
   /// detail and a note. Nothing when the change cannot be a payload the twin predicts.
   void follow_payload(Event& e, double t);
@@ -318,6 +329,7 @@ class Monitor {
   // carries it instead of followed_from_; reported at once when it clears, undone if it does not
   bool followed_ = false;
   double followed_at_ = 0.0;
+  std::uint64_t outputs_prev_ = 0;  // the last sample's digital outputs (split_payload_change)
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
