@@ -44,6 +44,10 @@ constexpr double kPayloadFollowSettle = 0.5;
 // (split_payload_change); sooner, it is the same handling (a vacuum gripper's blow-off pulse after the
 // release), and the estimate would have too little motion to go on
 constexpr double kPayloadSplitAfter = 0.5;
+// finish(): with the default set in use, a program whose thresholds would not have raised at least
+// this share of at least this many alerts is named in a note
+constexpr int kProgramHintRaises = 3;
+constexpr double kProgramHintShare = 2.0 / 3.0;
 // where a part picked with no payload declared sits: 4 cm out along the flange's axis [m] (the
 // diagnosis assumes the same, run_diagnosis)
 constexpr double kGrippedComZ = 0.04;
@@ -756,7 +760,33 @@ void Monitor::open_event(int joint, double start, double t) {
   rediagnosed_ = false;
   followed_ = false;
   raise_time_ = t;
+  check_program_sets();
   if (on_event) on_event(events_.back());
+}
+
+void Monitor::check_program_sets() {
+  if (!cfg_.program.empty() || cfg_.programs.empty() || ring_count_ == 0) return;
+  if (below_program_.empty()) below_program_.assign(cfg_.programs.size(), 0);
+  ++raises_;
+  // the raising sample: would any joint of either channel be above that program's thresholds?
+  const DiagnosisSample& d = ring_at(ring_count_ - 1);
+  const bool observer = obs_on_ && cfg_.observer_alerts;
+  size_t k = 0;
+  for (const auto& [name, set] : cfg_.programs) {
+    const bool own_obs = set.observer_level.size() != 0;
+    const auto& obs_dyn = own_obs ? set.observer_dynamic : cfg_.observer_dynamic;
+    const VectorJ& obs_static = own_obs ? set.observer_level : cfg_.observer_level;
+    bool over = false;
+    for (int j = 0; j < n_ && !over; ++j) {
+      const size_t J = static_cast<size_t>(j);
+      const double sens = cfg_.sensitivity[j];
+      over = std::abs(rf_dec_[j]) > sens * (cfg_.use_dynamic ? set.dynamic[J].evaluate(d.qd[j], qdd_[j]) : set.static_level[j]);
+      if (!over && observer)
+        over = std::abs(obs_dec_[j]) >
+               sens * (cfg_.use_dynamic && !obs_dyn.empty() ? obs_dyn[J].evaluate(d.qd[j], qdd_[j]) : obs_static[j]);
+    }
+    below_program_[k++] += over ? 0 : 1;
+  }
 }
 
 void Monitor::run_diagnosis(double t, bool long_look, double until) {
@@ -1459,6 +1489,20 @@ void Monitor::close_frozen(int j, bool at_stop) {
 void Monitor::finish() {
   for (int j = 0; j < n_; ++j)
     if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
+  // the default set on a run that looks like one of the twin's programs: most alerts would not have
+  // been raised by that program's thresholds (a pick-and-place watched with the default set: 26
+  // events, 23 of them "contacts" at its stops; docs/validation.md, session 22). Said, not acted on:
+  // which program runs is the user's to say
+  if (raises_ >= kProgramHintRaises) {
+    size_t k = 0;
+    for (const auto& [name, set] : cfg_.programs) {
+      const int below = below_program_[k++];
+      if (below >= kProgramHintShare * raises_)
+        add_note(t_prev_, fmt::format("{} of the {} alerts of this run were below the thresholds learned for program '{}' (the default "
+                                      "set is in use): if the robot ran that program, monitor with --program {}",
+                                      below, raises_, name, name));
+    }
+  }
   report_pending_close();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);

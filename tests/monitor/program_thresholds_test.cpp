@@ -61,6 +61,26 @@ TEST(ProgramThresholds, EachProgramsSetIsNarrowerThanOneSetOverAllAndRaisesNoAla
   pp.select_program("point_to_point");
   EXPECT_EQ(alarms(twin, fig, run(scenario(611, 20, 0.0))), 0);
   EXPECT_EQ(alarms(twin, pp, run(pick_place(612, 20))), 0);
+
+  // session 22: the default set learned on the figure-eight alone watching the pick-and-place (a
+  // user who forgot --program) raises alerts at its transfers; a note at the end names the program
+  // whose thresholds would not have raised most of them, and not the figure-eight's
+  MonitorConfig fig_default = learn_thresholds(twin, {{&f1, {}}, {&f2, {}}});
+  fig_default.programs = per.programs;
+  Monitor m(twin, fig_default);
+  for (const auto& s : run(pick_place(612, 20)).samples) m.push(s);
+  m.finish();
+  ASSERT_GE(m.events().size(), 3u);
+  std::string notes;
+  for (const auto& n : m.notes()) notes += n + "\n";
+  EXPECT_THAT(notes, ::testing::HasSubstr("below the thresholds learned for program 'point_to_point' (the default set is in use): if the "
+                                          "robot ran that program, monitor with --program point_to_point"));
+  EXPECT_THAT(notes, ::testing::Not(::testing::HasSubstr("program 'figure_eight'")));
+  // with the program's set selected nothing is said
+  Monitor quiet(twin, pp);
+  for (const auto& s : run(pick_place(612, 20)).samples) quiet.push(s);
+  quiet.finish();
+  for (const auto& n : quiet.notes()) EXPECT_THAT(n, ::testing::Not(::testing::HasSubstr("below the thresholds learned")));
 }
 
 TEST(ProgramThresholds, SetsSurviveTheTwinFileAndBadNamesAndSizesAreNamed) {

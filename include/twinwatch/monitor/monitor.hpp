@@ -330,6 +330,12 @@ class Monitor {
   bool followed_ = false;
   double followed_at_ = 0.0;
   std::uint64_t outputs_prev_ = 0;  // the last sample's digital outputs (split_payload_change)
+  // with the default set in use and sets learned for programs: the alerts raised, and per program
+  // (cfg_.programs' order) how many of them its thresholds would not have raised at that sample. A
+  // program that would have raised few of them is probably the one the robot runs: finish() says so
+  int raises_ = 0;
+  std::vector<int> below_program_;
+  void check_program_sets();
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
