@@ -705,6 +705,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   deb_obs_.clear();
   for (int j = 0; j < n_; ++j) deb_obs_.emplace_back(cfg_.observer_debounce(j), cfg_.clear_after);
   joint_active_.assign(static_cast<size_t>(n_), 0);
+  below_program_.assign(cfg_.programs.size(), 0);  // (allocated here: push allocates nothing)
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
   frozen_event_.assign(static_cast<size_t>(n_), -1);
@@ -766,7 +767,6 @@ void Monitor::open_event(int joint, double start, double t) {
 
 void Monitor::check_program_sets() {
   if (!cfg_.program.empty() || cfg_.programs.empty() || ring_count_ == 0) return;
-  if (below_program_.empty()) below_program_.assign(cfg_.programs.size(), 0);
   ++raises_;
   // the raising sample: would any joint of either channel be above that program's thresholds?
   const DiagnosisSample& d = ring_at(ring_count_ - 1);
