@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <utility>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/device/recording.hpp"
@@ -28,32 +29,27 @@ const std::string kFig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], 
 // and a payload fault's label was not the change the arm saw
 TEST(Scenario, AFaultsValuesAreCheckedForItsType) {
   const std::string head = "robot: ur3e\nduration: 10\n" + kFig8 + "faults:\n";
-  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, onset: 0.5, magnitude: .nan}\n"),
-              HasSubstr("test.yaml:5: field 'faults[0].magnitude': expected a finite number, got nan"));
-  EXPECT_THAT(error_of(head + "  - {type: current_offset, joint: 2, onset: 0.5, magnitude: .inf}\n"),
-              HasSubstr("field 'faults[0].magnitude': expected a finite number, got inf"));
-  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, onset: 0.5, magnitude: -5}\n"),
-              HasSubstr("field 'faults[0].magnitude': expected extra friction > 0 N·m (it opposes the motion), got -5"));
-  EXPECT_THAT(error_of(head + "  - {type: friction_growth, joint: 2, onset: 0.5, magnitude: -2}\n"),
-              HasSubstr("field 'faults[0].magnitude': expected a relative change > -1"));
-  EXPECT_THAT(error_of(head + "  - {type: collision, link: 3, onset: 1, magnitude: 5, point: [.nan, 0, 0]}\n"),
-              HasSubstr("field 'faults[0].point[0]': expected a finite number, got nan"));
-  EXPECT_THAT(error_of(head + "  - {type: payload_pick, onset: 1, mass: 0.5, com: [0, .inf, 0]}\n"),
-              HasSubstr("field 'faults[0].com[1]': expected a finite number, got inf"));
-  EXPECT_THAT(error_of(head + "  - {type: dropped_samples, onset: 1, magnitude: 2.5}\n"),
-              HasSubstr("field 'faults[0].magnitude': expected a whole number of samples >= 1, got 2.5"));
-  EXPECT_THAT(error_of(head + "  - {type: dropped_samples, onset: 1, magnitude: 2, period: -1}\n"),
-              HasSubstr("field 'faults[0].period': expected a repeat period >= 0 s (0: once), got -1"));
-  // another type's key
-  EXPECT_THAT(error_of(head + "  - {type: stuck_current, joint: 2, onset: 1, magnitude: 3}\n"),
-              HasSubstr("field 'faults[0].magnitude': unknown key 'magnitude', expected one of: end, joint, onset, ramp, type"));
-  EXPECT_THAT(error_of(head + "  - {type: resistance, joint: 2, link: 3, onset: 1, magnitude: 1}\n"),
-              HasSubstr("unknown key 'link'"));
-  EXPECT_THAT(error_of(head + "  - {type: collision, link: 3, onset: 1, end: 2, magnitude: 5}\n"), HasSubstr("unknown key 'end'"));
-  EXPECT_THAT(error_of(head + "  - {type: payload_loss, onset: 1, mass: 2}\n"), HasSubstr("unknown key 'mass'"));
-  // a loss with nothing carried
-  EXPECT_THAT(error_of(head + "  - {type: payload_loss, onset: 1}\n"),
-              HasSubstr("test.yaml:5: field 'faults[0]': a payload_loss at 1 s, but the arm carries nothing then"));
+  // (a fault's line, what the error must say)
+  const std::pair<const char*, const char*> cases[] = {
+      {"{type: resistance, joint: 2, onset: 0.5, magnitude: .nan}", "test.yaml:5: field 'faults[0].magnitude': expected a finite number, got nan"},
+      {"{type: current_offset, joint: 2, onset: 0.5, magnitude: .inf}", "field 'faults[0].magnitude': expected a finite number, got inf"},
+      {"{type: resistance, joint: 2, onset: 0.5, magnitude: -5}",
+       "field 'faults[0].magnitude': expected extra friction > 0 N·m (it opposes the motion), got -5"},
+      {"{type: friction_growth, joint: 2, onset: 0.5, magnitude: -2}", "field 'faults[0].magnitude': expected a relative change > -1"},
+      {"{type: collision, link: 3, onset: 1, magnitude: 5, point: [.nan, 0, 0]}", "field 'faults[0].point[0]': expected a finite number, got nan"},
+      {"{type: payload_pick, onset: 1, mass: 0.5, com: [0, .inf, 0]}", "field 'faults[0].com[1]': expected a finite number, got inf"},
+      {"{type: dropped_samples, onset: 1, magnitude: 2.5}", "field 'faults[0].magnitude': expected a whole number of samples >= 1, got 2.5"},
+      {"{type: dropped_samples, onset: 1, magnitude: 2, period: -1}", "field 'faults[0].period': expected a repeat period >= 0 s (0: once), got -1"},
+      // another type's key
+      {"{type: stuck_current, joint: 2, onset: 1, magnitude: 3}",
+       "field 'faults[0].magnitude': unknown key 'magnitude', expected one of: end, joint, onset, ramp, type"},
+      {"{type: resistance, joint: 2, link: 3, onset: 1, magnitude: 1}", "unknown key 'link'"},
+      {"{type: collision, link: 3, onset: 1, end: 2, magnitude: 5}", "unknown key 'end'"},
+      {"{type: payload_loss, onset: 1, mass: 2}", "unknown key 'mass'"},
+      // a loss with nothing carried
+      {"{type: payload_loss, onset: 1}", "test.yaml:5: field 'faults[0]': a payload_loss at 1 s, but the arm carries nothing then"},
+  };
+  for (const auto& [fault, message] : cases) EXPECT_THAT(error_of(head + "  - " + fault + "\n"), HasSubstr(message)) << fault;
 }
 
 TEST(Scenario, APayloadFaultsLabelIsTheChangeOfTheMassCarried) {
