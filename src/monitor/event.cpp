@@ -55,6 +55,8 @@ std::string Event::to_json_line() const {
   j["t_detected"] = t_detected;
   j["duration_s"] = duration();
   j["open"] = open;
+  // written when it ended: one still active when monitoring stopped ended there (open is false)
+  j["active_at_stop"] = active_at_stop;
   j["class"] = std::string(to_string(fault));
   // numbered from 1, as the labels and every table; null: none
   const auto number = [](int index) { return index >= 0 ? nlohmann::json(index + 1) : nlohmann::json(nullptr); };
@@ -73,7 +75,7 @@ struct EventStore::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string path;
-  bool has_other_links = false, has_t_detected = false;
+  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false;
   bool from_one = true;  // joint/link/other_links numbered from 1 (user_version 1); false: a 0-based store from before
 };
 
@@ -135,7 +137,8 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     exec("CREATE TABLE IF NOT EXISTS events ("
          " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
          " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
-         " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL);",
+         " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL,"
+         " active_at_stop INTEGER);",
          "cannot create the events table");
   // the table's columns: a table from an older version lacks the later ones
   std::vector<std::string> columns;
@@ -202,6 +205,9 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     // its old rows read as none, and as t_start
     if (!has("other_links")) exec("ALTER TABLE events ADD COLUMN other_links TEXT;", "cannot add the other_links column to the events table");
     if (!has("t_detected")) exec("ALTER TABLE events ADD COLUMN t_detected REAL;", "cannot add the t_detected column to the events table");
+    // (session 22) whether the fault was still there when monitoring stopped; older rows read as no
+    if (!has("active_at_stop"))
+      exec("ALTER TABLE events ADD COLUMN active_at_stop INTEGER;", "cannot add the active_at_stop column to the events table");
     if (!existed) {
       exec("PRAGMA user_version = 1;", "cannot mark the event store's numbering");
     } else if (version == 0) {
@@ -211,10 +217,11 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   impl_->from_one = mode == Mode::Write || version == kNumberedFromOne;
   impl_->has_other_links = mode == Mode::Write || has("other_links");
   impl_->has_t_detected = mode == Mode::Write || has("t_detected");
+  impl_->has_active_at_stop = mode == Mode::Write || has("active_at_stop");
   if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail, other_links, t_detected) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links, t_detected, active_at_stop) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
@@ -244,6 +251,7 @@ void EventStore::insert(const Event& e, const std::string& source) {
   const std::string others = nlohmann::json(shifted(e.other_links, 1)).dump();
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 14, e.t_detected);
+  sqlite3_bind_int(s, 15, e.active_at_stop ? 1 : 0);
   if (sqlite3_step(s) != SQLITE_DONE)
     throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
 }
@@ -261,8 +269,9 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
   const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " {}, {} FROM events ORDER BY id;",
-      impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL");
+      " {}, {}, {} FROM events ORDER BY id;",
+      impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL",
+      impl_->has_active_at_stop ? "active_at_stop" : "NULL");
   if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
@@ -309,6 +318,7 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     e.confidence = number(9);
     e.peak_residual = number(10);
     e.detail = text(11);
+    e.active_at_stop = sqlite3_column_type(s, 14) == SQLITE_INTEGER && sqlite3_column_int64(s, 14) != 0;
     try {
       e.fault = fault_class_from_string(text(4));
       const std::string others = text(12);

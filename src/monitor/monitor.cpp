@@ -1476,6 +1476,7 @@ void Monitor::close_frozen(int j, bool at_stop) {
   Event& f = events_[static_cast<size_t>(frozen_event_[J])];
   frozen_event_[J] = -1;
   f.open = false;
+  f.active_at_stop = at_stop;
   f.t_end = t_prev_;  // the last sample that still held the value
   f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
   f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples){}", j + 1, frozen_val_[j],
@@ -1510,6 +1511,7 @@ void Monitor::finish() {
     if (k < 0) continue;
     Event& e = events_[static_cast<size_t>(k)];
     e.open = false;
+    e.active_at_stop = true;
     e.detail += "; still active when monitoring stopped";  // its end is the run's, not the fault's
     if (on_event) on_event(e);
   }

@@ -59,6 +59,10 @@ TEST(Event, JsonLineCarriesClassJointMagnitudeAndDuration) {
   // none is null, not -1
   EXPECT_TRUE(j["joint"].is_null());
   EXPECT_TRUE(j["link"].is_null());
+  // a fault still there when monitoring stopped says so (session 22: "open" is false on every line)
+  EXPECT_EQ(j["active_at_stop"], false);
+  e.active_at_stop = true;
+  EXPECT_EQ(nlohmann::json::parse(e.to_json_line())["active_at_stop"], true);
   // numbered from 1 as the labels: index 4 is J5 / link 5
   e.fault = FaultClass::Collision;
   e.joint = 3;
@@ -100,6 +104,7 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
     e.fault = FaultClass::PayloadChange;
     e.link = -1;
     e.other_links.clear();
+    e.active_at_stop = true;
     store.insert(e, "robot 10.0.0.2");
     EXPECT_EQ(store.count(), 2);
   }
@@ -119,6 +124,8 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
   EXPECT_EQ(rows[1].first, "robot 10.0.0.2");
   EXPECT_EQ(rows[1].second.fault, FaultClass::PayloadChange);
   EXPECT_TRUE(rows[1].second.other_links.empty());
+  EXPECT_FALSE(rows[0].second.active_at_stop);
+  EXPECT_TRUE(rows[1].second.active_at_stop);
   std::filesystem::remove(path);
 }
 

@@ -189,7 +189,9 @@ TEST_F(MonitorLoop, AContactDuringAPersistentFaultIsAnEventOfItsOwn) {
   EXPECT_EQ(ev[0].joint, 4);
   EXPECT_NEAR(ev[0].t_end, 20.0, 0.01) << "the resistance goes on past the contact";
   EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("still active when monitoring stopped"));
+  EXPECT_TRUE(ev[0].active_at_stop);
   EXPECT_EQ(ev[1].fault, FaultClass::Collision) << ev[1].detail;
+  EXPECT_FALSE(ev[1].active_at_stop);
   EXPECT_EQ(ev[1].link, 1);  // link 2
   EXPECT_LT(ev[1].t_detected - 15.3, 0.02);
   EXPECT_LT(ev[1].duration(), 0.15);

@@ -445,7 +445,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                 "reconnecting with back-off");
   sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);

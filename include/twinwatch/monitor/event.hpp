@@ -44,6 +44,9 @@ struct Event {
   double t_end = 0.0;       ///< [s] the last exceedance once closed (the clearing debounce is not counted); the latest sample while open
   double t_detected = 0.0;  ///< [s] when the alert was raised (t_start + debounce): the detection delay counts to here
   bool open = true;         ///< still active
+  /// the alert was still active when monitoring stopped (finish() closed it; its t_end is the run's
+  /// end, not the fault's)
+  bool active_at_stop = false;
   FaultClass fault = FaultClass::Unknown;
   int joint = -1;           ///< 0-based joint most affected, -1 if none
   int link = -1;            ///< 0-based link for contacts, -1 if none
