@@ -1010,6 +1010,11 @@ void Monitor::split_payload_change(double t) {
   followed_ = false;
   open_ = -1;
   cleared_at_ = t;
+  // the twin's torque changed in one step: the observer, which integrates it, and the residual
+  // filters start again on it (their states held the old payload's residual, which raised a 2 ms
+  // "contact" on the next samples when the output change was no part: a vacuum gripper's blow-off
+  // 0.6 s after a drop). The current channel decides on, the observer after its start-up samples
+  restart_estimators(false);
   // every joint starts over: a residual still above its threshold is the next change's, and raises
   // an alert of its own (its diagnosis window sees the samples before t through the new payload)
   for (auto& d : deb_) d.reset();
@@ -1078,12 +1083,12 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   return true;
 }
 
-void Monitor::restart_estimators() {
+void Monitor::restart_estimators(bool settle) {
   obs_.reset();
   obs_samples_ = 0;
   filter_started_ = false;
   for (auto& f : fir_) f.reset();
-  settle_until_ = n_samples_ + kObserverSettle;
+  if (settle) settle_until_ = n_samples_ + kObserverSettle;
 }
 
 void Monitor::restart_after_gap(const RobotSample& s) {

@@ -460,6 +460,20 @@ TEST_F(MonitorLoop, APartSwappedWithinTheLongerLookIsTwoPayloadChanges) {
   ASSERT_FALSE(kept.empty());
   EXPECT_EQ(at_end, 0.5);
   EXPECT_GT(kept[0].t_end, 17.0) << listing(kept);
+  // an output pulse that is no part (a vacuum gripper's blow-off 0.6 s after the drop) ends the drop
+  // there and raises nothing after it: the observer and the residual filter restart on the new
+  // payload (their old states raised a 2 ms "contact on link 1" at the split)
+  auto blow = run(scenario(159, 14, 0.5, "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"));
+  for (auto& s : blow.samples)
+    if (s.timestamp >= 9.1 && s.timestamp < 9.3) s.digital_outputs |= 8u;
+  Monitor m(declared_twin(), *config);
+  for (const auto& s : blow.samples) m.push(s);
+  m.finish();
+  const std::string blown = listing(m.events());
+  ASSERT_EQ(m.events().size(), 1u) << blown;
+  EXPECT_EQ(m.events()[0].fault, FaultClass::PayloadChange) << blown;
+  EXPECT_NEAR(m.events()[0].magnitude, -0.5, 0.1) << blown;
+  EXPECT_EQ(m.twin().payload().mass, 0.0);
 }
 
 // A followed payload change that was not one is undone: a gripper output toggles (no part) and a

@@ -266,7 +266,9 @@ class Monitor {
   void open_event(int joint, double start, double t);
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
   void restart_after_gap(const RobotSample& s);
-  void restart_estimators();  // observer, residual filter and FIR restart; decisions wait the start-up samples
+  /// observer, residual filter and FIR restart; with `settle`, every decision waits the start-up
+  /// samples (without: the observer's alone, as it always does after its start)
+  void restart_estimators(bool settle = true);
   /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
   /// change is followed on (follow_payload). The window holds the ring's samples from before the
   /// alert's start up to, not including, `until` [s] (default: all of them)
