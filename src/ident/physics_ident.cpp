@@ -387,8 +387,8 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   // gains of 0.95-2.0 N·m/A, 11.4 N·m/A from a pair, marked as identified). Such a payload is fitted
   // as part of the last link: the relative twin predicts the arm carrying it, undeclared
   bool any_payload = false, contrast = false;
+  const model::RigidBodyInertia& a = given.front().payload;
   for (const auto& r : given) {
-    const model::RigidBodyInertia& a = given.front().payload;
     const model::RigidBodyInertia& b = r.payload;
     any_payload |= b.mass > 0.0;
     contrast |= a.mass != b.mass || (a.mass > 0.0 && (a.com != b.com || a.inertia_com != b.inertia_com));

@@ -56,6 +56,12 @@ constexpr double kGrippedComZ = 0.04;
 constexpr double kJitterWindow = 500.0;
 constexpr long kJitterMinSteps = 100;
 constexpr double kJitterNoteStep = 1.1;
+// joint j's threshold at (qd, qdd) times its sensitivity: the dynamic one (Cao eq. 24) when in use
+// and learned, else the static level (push for the set in use, check_program_sets for the others)
+inline double level_at(bool use_dynamic, const std::vector<DynamicThresholdJoint>& dynamic, const VectorJ& static_level, int j,
+                       double qd, double qdd, double sensitivity) {
+  return sensitivity * (use_dynamic && !dynamic.empty() ? dynamic[static_cast<size_t>(j)].evaluate(qd, qdd) : static_level[j]);
+}
 // a raise within this long [s] after an alert closed continues it (persistent faults dip at reversals)
 constexpr double kMergeGap = 1.0;
 // after a stream gap, a joint at rest decides again once it has moved this many pre-sliding
@@ -773,17 +779,15 @@ void Monitor::check_program_sets() {
   const bool observer = obs_on_ && cfg_.observer_alerts;
   size_t k = 0;
   for (const auto& [name, set] : cfg_.programs) {
+    // (a set learned without observer thresholds uses the default set's, as select_program does)
     const bool own_obs = set.observer_level.size() != 0;
     const auto& obs_dyn = own_obs ? set.observer_dynamic : cfg_.observer_dynamic;
     const VectorJ& obs_static = own_obs ? set.observer_level : cfg_.observer_level;
     bool over = false;
     for (int j = 0; j < n_ && !over; ++j) {
-      const size_t J = static_cast<size_t>(j);
       const double sens = cfg_.sensitivity[j];
-      over = std::abs(rf_dec_[j]) > sens * (cfg_.use_dynamic ? set.dynamic[J].evaluate(d.qd[j], qdd_[j]) : set.static_level[j]);
-      if (!over && observer)
-        over = std::abs(obs_dec_[j]) >
-               sens * (cfg_.use_dynamic && !obs_dyn.empty() ? obs_dyn[J].evaluate(d.qd[j], qdd_[j]) : obs_static[j]);
+      over = std::abs(rf_dec_[j]) > level_at(cfg_.use_dynamic, set.dynamic, set.static_level, j, d.qd[j], qdd_[j], sens) ||
+             (observer && std::abs(obs_dec_[j]) > level_at(cfg_.use_dynamic, obs_dyn, obs_static, j, d.qd[j], qdd_[j], sens));
     }
     below_program_[k++] += over ? 0 : 1;
   }
@@ -1187,15 +1191,12 @@ void Monitor::push(const RobotSample& s) {
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds
-  const bool obs_dynamic = cfg_.use_dynamic && !cfg_.observer_dynamic.empty();
   for (int j = 0; j < n_; ++j) {
-    const double base = cfg_.use_dynamic ? cfg_.dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j]) : cfg_.static_level[j];
-    level_[j] = base * cfg_.sensitivity[j];
+    level_[j] = level_at(cfg_.use_dynamic, cfg_.dynamic, cfg_.static_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]);
     // the observer's threshold is evaluated even when it raises no alert (the trace and the
     // diagnosis show it); only the decisions below depend on observer_alerts
     if (obs_on_)
-      obs_level_[j] = cfg_.sensitivity[j] * (obs_dynamic ? cfg_.observer_dynamic[static_cast<size_t>(j)].evaluate(s.qd[j], qdd_[j])
-                                                         : cfg_.observer_level[j]);
+      obs_level_[j] = level_at(cfg_.use_dynamic, cfg_.observer_dynamic, cfg_.observer_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]);
   }
   // ring buffer for the diagnosis (torque-domain residual through the drive gains)
   DiagnosisSample& ds = ring_[ring_head_];

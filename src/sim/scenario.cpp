@@ -400,25 +400,23 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       fs.type = fault_type(y, f, p);
       // each type takes its own keys: another type's key would be ignored silently (a stuck
       // current's 'magnitude', a resistance's 'link', a collision's 'end', which its duration sets)
-      y.only_keys(f, p, fault_keys(fs.type));
+      const std::set<std::string> keys = fault_keys(fs.type);
+      y.only_keys(f, p, keys);
       fs.onset = y.number(f, p, "onset");
       if (!(fs.onset >= 0.0)) y.fail(f["onset"], p + ".onset", fmt::format("must be >= 0 s, got {}", fs.onset));
       fs.ramp = y.number_or(f, p, "ramp", 0.0);
       if (!(fs.ramp >= 0.0)) y.fail(f["ramp"], p + ".ramp", fmt::format("must be >= 0 s, got {}", fs.ramp));
       fs.end = y.number_or(f, p, "end", std::numeric_limits<double>::infinity());
       if (!(fs.end > fs.onset)) y.fail(f["end"], p + ".end", fmt::format("must be after onset ({} s), got {}", fs.onset, fs.end));
-      const bool joint_fault = fs.type == FaultType::Resistance || fs.type == FaultType::FrictionGrowth ||
-                               fs.type == FaultType::CurrentOffset || fs.type == FaultType::StuckCurrent;
-      if (joint_fault) {
+      // (the keys a type takes say what it needs: one list, fault_keys)
+      if (keys.count("joint")) {
         // users count joints from 1 (J1..J6), as the papers do
         if (!f["joint"]) y.fail(f, p + ".joint", "missing required field");
         const int j = y.integer(f, p, "joint", 0);
         if (j < 1 || j > n) y.fail(f["joint"] ? f["joint"] : f, p + ".joint", fmt::format("expected 1 to {}, got {}", n, j));
         fs.joint = j - 1;
       }
-      const bool needs_magnitude = fs.type != FaultType::PayloadPick && fs.type != FaultType::PayloadLoss &&
-                                   fs.type != FaultType::StuckCurrent;
-      if (needs_magnitude) {
+      if (keys.count("magnitude")) {
         fs.magnitude = y.number(f, p, "magnitude");
         if (!std::isfinite(fs.magnitude)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("expected a finite number, got {}", fs.magnitude));
       }
