@@ -39,9 +39,10 @@ device::Recording simulate_to_memory(const sim::Scenario& s, const std::string& 
   device::Recording rec;
   rec.path = name;
   rec.n_dof = 6;
-  rec.present = sim::Simulator::fields();
   rec.median_period = 1.0 / s.options.rate;
-  sim::make_simulator(s)->run([&](const RobotSample& x) { rec.samples.push_back(x); });
+  const auto simulator = sim::make_simulator(s);
+  rec.present = simulator->sample_fields();
+  simulator->run([&](const RobotSample& x) { rec.samples.push_back(x); });
   rec.n_dof = rec.samples.empty() ? 0 : rec.samples.front().n_dof();
   return rec;
 }

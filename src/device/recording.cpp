@@ -77,7 +77,9 @@ int joint_index(const std::string& nm, std::size_t prefix_len) {
 
 // an RTDE name a recording column may carry
 bool known_name(const std::string& nm) {
-  if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "stream_gap") return true;
+  if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "stream_gap" || nm == "payload" ||
+      nm == "payload_cog_0" || nm == "payload_cog_1" || nm == "payload_cog_2")
+    return true;
   for (const Group& g : kGroups) {
     const std::string p = g.prefix;
     if (nm.rfind(p, 0) == 0 && nm.size() > p.size() &&
@@ -113,6 +115,8 @@ std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
   if (fields & kFieldDigitalOutputs) cols.push_back("actual_digital_output_bits");
   if (fields & kFieldRobotMode) cols.push_back("robot_mode");
   if (fields & kFieldStreamGap) cols.push_back("stream_gap");
+  if (fields & kFieldPayload)
+    for (const char* c : {"payload", "payload_cog_0", "payload_cog_1", "payload_cog_2"}) cols.push_back(c);
   return cols;
 }
 
@@ -179,7 +183,8 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // locate columns: each known name -> (group, joint)
   Recording rec;
   rec.path = path;
-  int ts_col = -1, do_col = -1, mode_col = -1, gap_col = -1;
+  int ts_col = -1, do_col = -1, mode_col = -1, gap_col = -1, payload_col = -1;
+  int cog_col[3] = {-1, -1, -1};  // payload_cog_0..2
   int n = 0;
   for (size_t c = 0; c < names.size(); ++c) {
     if (names[c].rfind("actual_q_", 0) != 0) continue;
@@ -212,6 +217,8 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     else if (nm == "actual_digital_output_bits") do_col = static_cast<int>(c);
     else if (nm == "robot_mode") mode_col = static_cast<int>(c);
     else if (nm == "stream_gap") gap_col = static_cast<int>(c);
+    else if (nm == "payload") payload_col = static_cast<int>(c);
+    else if (nm.size() == 13 && nm.rfind("payload_cog_", 0) == 0 && nm[12] >= '0' && nm[12] <= '2') cog_col[nm[12] - '0'] = static_cast<int>(c);
     else {
       // longest matching prefix first (actual_qd_ before actual_q_)
       int best = -1;
@@ -261,6 +268,17 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   if (do_col >= 0) present |= kFieldDigitalOutputs;
   if (mode_col >= 0) present |= kFieldRobotMode;
   if (gap_col >= 0) present |= kFieldStreamGap;
+  // the declared payload: its mass and centre of mass together (a mass without its centre, or the
+  // reverse, cannot be taken by the twin and would be dropped without a word)
+  {
+    const int cogs = (cog_col[0] >= 0) + (cog_col[1] >= 0) + (cog_col[2] >= 0);
+    if ((payload_col >= 0 || cogs > 0) && !(payload_col >= 0 && cogs == 3))
+      throw ParseError(path, 1, payload_col >= 0 ? "payload_cog_*" : "payload",
+                       fmt::format("the declared payload needs its mass and centre of mass together: expected the columns payload, "
+                                   "payload_cog_0, payload_cog_1 and payload_cog_2, the header has {}{} of the three payload_cog_*",
+                                   payload_col >= 0 ? "payload and " : "no payload and ", cogs));
+    if (payload_col >= 0) present |= kFieldPayload;
+  }
   rec.present = present;
 
   // rows
@@ -283,8 +301,9 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     RobotSample s = RobotSample::empty(n);
     s.present = present;
     for (size_t c = 0; c < cells.size(); ++c) {
-      const bool used = static_cast<int>(c) == ts_col || static_cast<int>(c) == do_col || static_cast<int>(c) == mode_col ||
-                        static_cast<int>(c) == gap_col || target[c].group >= 0;
+      const int ci = static_cast<int>(c);
+      const bool cog = ci == cog_col[0] || ci == cog_col[1] || ci == cog_col[2];
+      const bool used = ci == ts_col || ci == do_col || ci == mode_col || ci == gap_col || ci == payload_col || cog || target[c].group >= 0;
       if (!used) continue;
       double v;
       if (!parse_double(cells[c], v))
@@ -313,6 +332,11 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       else if (static_cast<int>(c) == gap_col) {
         if (v != 0.0 && v != 1.0) throw ParseError(path, ln, header[c], fmt::format("expected 0 or 1, got '{}'", cells[c]));
         s.gap_before = v != 0.0;
+      } else if (ci == payload_col) {
+        if (v < 0.0) throw ParseError(path, ln, header[c], fmt::format("expected a payload mass >= 0 kg, got '{}'", cells[c]));
+        s.payload = v;
+      } else if (cog) {
+        s.payload_cog[ci == cog_col[0] ? 0 : (ci == cog_col[1] ? 1 : 2)] = v;
       } else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
     }
     if (!rec.samples.empty()) {
@@ -399,6 +423,14 @@ void RecordingWriter::write(const RobotSample& s) {
   if (fields_ & kFieldDigitalOutputs) line_ += fmt::format(",{}", s.digital_outputs);
   if (fields_ & kFieldRobotMode) line_ += fmt::format(",{}", s.robot_mode);
   if (fields_ & kFieldStreamGap) line_ += s.gap_before ? ",1" : ",0";
+  if (fields_ & kFieldPayload) {
+    line_ += ',';
+    put(s.payload);
+    for (double c : s.payload_cog) {
+      line_ += ',';
+      put(c);
+    }
+  }
   line_ += '\n';
   std::fwrite(line_.data(), 1, line_.size(), f_);
   ++rows_;

@@ -34,6 +34,8 @@ enum Target : int {
   kTemperature,
   kDigitalOutputs,
   kRobotMode,
+  kPayload,
+  kPayloadCog,
   kNone,
 };
 
@@ -55,7 +57,24 @@ constexpr TargetInfo kTargets[] = {
     {"joint_temperatures", kTemperature, kFieldTemperature},
     {"actual_digital_output_bits", kDigitalOutputs, kFieldDigitalOutputs},
     {"robot_mode", kRobotMode, kFieldRobotMode},
+    {"payload", kPayload, 0},  // kFieldPayload once payload_cog is in the recipe too (build_mapping)
+    {"payload_cog", kPayloadCog, 0},
 };
+
+// Outputs a controller streams only from some version on: asked for only then, so that the default
+// recipe works on every controller (an unknown name makes the whole recipe NOT_FOUND). payload and
+// payload_cog: 5.5.1 ([URRTDE] RTDEReceiveInterface asks for them from there; fact sheet §10).
+struct VersionGate {
+  const char* name;
+  ControllerVersion since;
+};
+constexpr VersionGate kVersionGates[] = {{"payload", {5, 5, 1, 0}}, {"payload_cog", {5, 5, 1, 0}}};
+
+bool at_least(const ControllerVersion& v, const ControllerVersion& since) {
+  if (v.major != since.major) return v.major > since.major;
+  if (v.minor != since.minor) return v.minor > since.minor;
+  return v.bugfix >= since.bugfix;
+}
 
 constexpr int kHistBins = 2000;  // 10 µs bins up to 20 ms
 constexpr double kHistBin = 10e-6;
@@ -184,14 +203,27 @@ static OutputRecipe run_handshake(int fd, const ClientOptions& opt, Framer& fram
   send_or_throw(fd, out, opt.reply_timeout_ms);
   version = decode_urcontrol_version_reply(as_package(PackageType::GetUrcontrolVersion, replies.wait(PackageType::GetUrcontrolVersion, opt.reply_timeout_ms)));
 
+  // outputs this controller does not have yet are left out of the recipe (said once per connection)
+  std::vector<std::string> outputs;
+  for (const std::string& name : opt.outputs) {
+    const auto gate = std::find_if(std::begin(kVersionGates), std::end(kVersionGates), [&](const VersionGate& g) { return name == g.name; });
+    if (gate != std::end(kVersionGates) && !at_least(version, gate->since)) {
+      log::info(fmt::format("rtde: controller {}.{}.{} has no output '{}' (from {}.{}.{} on): not asked for", version.major, version.minor,
+                            version.bugfix, name, gate->since.major, gate->since.minor, gate->since.bugfix));
+      continue;
+    }
+    outputs.push_back(name);
+  }
+  if (outputs.empty())
+    throw RecipeError(fmt::format("controller {}.{}.{} has none of the outputs asked for", version.major, version.minor, version.bugfix));
   out.clear();
-  encode_setup_outputs(out, protocol, opt.frequency, opt.outputs);
+  encode_setup_outputs(out, protocol, opt.frequency, outputs);
   send_or_throw(fd, out, opt.reply_timeout_ms);
   const SetupReply reply =
       decode_setup_reply(as_package(PackageType::SetupOutputs, replies.wait(PackageType::SetupOutputs, opt.reply_timeout_ms)), protocol);
   OutputRecipe recipe;
   try {
-    recipe = OutputRecipe::from_reply(opt.outputs, reply, protocol);
+    recipe = OutputRecipe::from_reply(outputs, reply, protocol);
   } catch (const ProtocolError& e) {
     throw RecipeError(e.what());  // NOT_FOUND / IN_USE: retrying cannot help
   }
@@ -234,6 +266,9 @@ void Client::build_mapping() {
       fields_ |= t.field;
     }
   }
+  // the declared payload is its mass and centre of mass together (a recording has both or neither)
+  const auto has = [&](Target t) { return std::any_of(mapping_.begin(), mapping_.end(), [&](const Slot& m) { return m.target == t; }); };
+  if (has(kPayload) && has(kPayloadCog)) fields_ |= kFieldPayload;
 }
 
 // ---- start / stop -------------------------------------------------------------------------
@@ -462,6 +497,8 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
       case kTemperature: s.temperature = Eigen::Map<const Eigen::VectorXd>(v, 6); break;
       case kDigitalOutputs: s.digital_outputs = static_cast<std::uint64_t>(v[0]); break;
       case kRobotMode: s.robot_mode = static_cast<std::int32_t>(v[0]); break;
+      case kPayload: s.payload = v[0]; break;
+      case kPayloadCog: std::copy(v, v + 3, s.payload_cog); break;
       default: break;
     }
   }

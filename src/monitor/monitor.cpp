@@ -907,7 +907,66 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   if (on_event) on_event(e);
 }
 
+void Monitor::take_declared_payload(const RobotSample& s) {
+  const double t = s.timestamp;
+  const double m = s.payload;
+  const double* c = s.payload_cog;
+  const bool valid = std::isfinite(m) && m >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
+  if (!valid) return;  // (the recording reader refuses such a row; a live stream's odd value is not taken)
+  if (have_declared_ && m == declared_mass_ && c[0] == declared_cog_[0] && c[1] == declared_cog_[1] && c[2] == declared_cog_[2]) return;
+  const bool first = !have_declared_;
+  const double was = declared_mass_;
+  have_declared_ = true;
+  declared_mass_ = m;
+  std::copy(c, c + 3, declared_cog_);
+  const model::RigidBodyInertia had = twin_.payload();
+  model::RigidBodyInertia now;
+  if (m > 0.0) {
+    now.mass = m;
+    now.com = Eigen::Vector3d(c[0], c[1], c[2]);
+    // the declaration has no shape (payload_inertia is not read): the twin's own when it is the
+    // same part, else a point mass
+    if (had.mass == m && had.com == now.com) now.inertia_com = had.inertia_com;
+  }
+  // the first declaration is news only where it differs from what the twin was given
+  if (first && had.mass == now.mass && (m == 0.0 || had.com == now.com)) return;
+  const std::string what = m > 0.0 ? fmt::format("{:.2f} kg at ({:.3f}, {:.3f}, {:.3f}) m", m, c[0], c[1], c[2]) : std::string("no payload");
+  if (!twin_.gains_known() || !twin_.predicts_payload() || m > twin_.robot().payload_limit()) {
+    if (!declared_refused_)
+      add_note(t, fmt::format("the controller declares {}, which the twin cannot take: {}", what,
+                              !twin_.gains_known() ? "its torques are relative (it was identified without a known payload that fixes its gains)"
+                              : !twin_.predicts_payload() ? "its prediction does not carry a payload (method '" + twin_.method + "')"
+                                                          : fmt::format("above {:g} kg ({})", twin_.robot().payload_limit(),
+                                                                        twin_.robot().payload_limit_text())));
+    declared_refused_ = true;
+    return;
+  }
+  twin_.set_payload(now);
+  declared_at_ = t;
+  // a diagnosed change the twin followed is superseded: the program has said what it carries
+  followed_ = false;
+  // what a resting joint is held at was measured with the old payload; the observer integrates the
+  // twin's torque, which changed in one step (as at a split, split_payload_change)
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
+  if (have_prev_) restart_estimators(false);
+  add_note(t, first ? fmt::format("the controller declares {} (the twin had {:.2f} kg): the twin predicts with the declaration", what, had.mass)
+                    : fmt::format("the program declared {} (it had declared {:.2f} kg): the twin predicts with it, and a part lost or "
+                                  "never picked shows as a payload change",
+                                  what, was));
+}
+
 void Monitor::follow_payload(Event& e, double t) {
+  // the controller declared its payload after this alert began: the declaration is what the twin
+  // carries now, and the diagnosed change (measured partly against the old payload) is not added to
+  // it. (An alert that began after the declaration measures against it: a pick declared with no part
+  // in the gripper reads as the declared mass lost, and is followed as one.)
+  if (declared_at_ > e.t_start) {
+    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is not followed: the controller declared its payload at "
+                            "{:.3f} s, and the twin predicts with that",
+                            e.t_detected, declared_at_));
+    return;
+  }
   // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
   // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
   const model::RigidBodyInertia had = twin_.payload();  // a copy: set_payload below replaces it
@@ -1156,6 +1215,8 @@ void Monitor::push(const RobotSample& s) {
     events_.push_back(g);
     if (on_event) on_event(g);
   }
+  // the payload the program declares, when the stream carries it (before the prediction uses it)
+  if (cfg_.follow_payload && s.has(kFieldPayload)) take_declared_payload(s);
   // acceleration: the controller's target when streamed, else a filtered difference of qd
   if (s.has(kFieldTargetQdd)) {
     qdd_ = s.target_qdd;

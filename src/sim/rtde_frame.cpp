@@ -100,11 +100,17 @@ void RtdeFrameBuilder::fill(const RobotSample& s, double* f) {
   model::point_jacobian(model_, data_, 5, model_.description().flange.translation(), J_);
   Eigen::Map<Eigen::Matrix<double, 6, 1>>(f + tspeed_) = J_ * s.target_qd;
 
+  // the payload the program declared: the sample's when the simulator streams it (it follows the
+  // program's set_payload at a pick), else the one the controller was set up with
   const model::RigidBodyInertia& p = model_.payload();
-  f[payload_] = p.mass;
-  for (int k = 0; k < 3; ++k) f[payload_cog_ + k] = p.com[k];
-  // payload_inertia: Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the COM [kg·m²]
-  const Eigen::Matrix3d& I = p.inertia_com;
+  const bool streamed = s.has(kFieldPayload);
+  const bool same = !streamed || (s.payload == p.mass && s.payload_cog[0] == p.com[0] && s.payload_cog[1] == p.com[1] &&
+                                  s.payload_cog[2] == p.com[2]);
+  f[payload_] = streamed ? s.payload : p.mass;
+  for (int k = 0; k < 3; ++k) f[payload_cog_ + k] = streamed ? s.payload_cog[k] : p.com[k];
+  // payload_inertia: Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the COM [kg·m²] (a declared part other than
+  // the set-up one: a point mass, as the simulator's picks are)
+  const Eigen::Matrix3d I = same ? p.inertia_com : Eigen::Matrix3d::Zero();
   const double pi[6] = {I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2)};
   std::copy(pi, pi + 6, f + payload_inertia_);
 }

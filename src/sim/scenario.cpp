@@ -314,7 +314,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   }
   const Y y(origin);
   y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
-                         "payload_declared", "trajectory", "noise", "faults", "description", "program"});
+                         "payload_declared", "streams_payload", "trajectory", "noise", "faults", "description", "program"});
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
@@ -351,6 +351,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
                        rate, substeps, kMinPhysicsRate, min_substeps));
   s.options.cold_start = y.boolean(root, "", "cold_start", false);
   s.options.payload_declared = y.boolean(root, "", "payload_declared", true);
+  s.options.streams_payload = y.boolean(root, "", "streams_payload", true);
   if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload", m);
   s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type, rate);
   // duration, given or as cycles of the trajectory (default one cycle), each checked at its own line

@@ -110,9 +110,7 @@ std::uint32_t Simulator::fields() {
          kFieldTargetMoment | kFieldTemperature | kFieldDigitalOutputs | kFieldRobotMode;
 }
 
-namespace {
-
-}  // namespace
+std::uint32_t Simulator::sample_fields() const { return fields() | (opt_.streams_payload ? kFieldPayload : 0u); }
 
 // armature: motor rotor inertia reflected through the gear, J_m N^2 [kg m^2]; rotor inertia grows
 // with the joint size
@@ -296,7 +294,13 @@ bool Simulator::step(RobotSample& s) {
 
   // drive, thermal, measurement
   s = RobotSample::empty(n_);
-  s.present = fields();
+  s.present = sample_fields();
+  if (opt_.streams_payload) {
+    // what the controller is told it carries (set_payload), not what it carries
+    const model::RigidBodyInertia& declared = controller_model_.payload();
+    s.payload = declared.mass;
+    for (int k = 0; k < 3; ++k) s.payload_cog[k] = declared.mass > 0.0 ? declared.com[k] : 0.0;
+  }
   s.q = ((q_.array() / truth_.encoder_lsb).round() * truth_.encoder_lsb).matrix();
   s.qd = (s.q - q_meas) / dt;
   s.target_q = qt;

@@ -23,6 +23,7 @@ namespace {
 
 using test::run;
 using test::scenario;
+using test::undeclared;
 
 // a complete monitor block as the writer writes it: default set with dynamic thresholds, the
 // observer's, and a program's set
@@ -339,11 +340,12 @@ TEST_F(MonitorLoop, PayloadLossIsDetectedFastAndSized) {
 // twin now takes the diagnosed payload: the alert clears, and the next pick, the drop and a
 // contact are events of their own, each sized.
 TEST_F(MonitorLoop, AFollowedPayloadChangeLeavesTheMonitorWatching) {
-  const auto rec = run(scenario(154, 24, 0.0,
+  // (a stream without the controller's declared payload: its picks are the monitor's to find)
+  const auto rec = undeclared(run(scenario(154, 24, 0.0,
                                 "  - {type: payload_pick, onset: 6.1, io_bit: 0, mass: 0.5, com: [0, 0, 0.04]}\n"
                                 "  - {type: payload_loss, onset: 13.7, io_bit: 0}\n"
                                 "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
-                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")));
   const auto watch = [&](bool follow, double* payload_at_end, std::vector<std::string>* notes) {
     MonitorConfig c = *config;
     c.follow_payload = follow;
@@ -404,11 +406,11 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
   EXPECT_EQ(push[1].fault, FaultClass::Collision) << push_listing;
   EXPECT_LT(push[1].t_detected - 19.3, 0.02);
 
-  const auto swap = monitor(run(scenario(156, 24, 0.5,
+  const auto swap = monitor(undeclared(run(scenario(156, 24, 0.5,
                                          "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
                                          "  - {type: payload_pick, onset: 11.5, io_bit: 1, mass: 1.0, com: [0, 0, 0.04]}\n"
                                          "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
-                                         "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")),
+                                         "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"))),
                             0.5);
   const std::string swap_listing = listing(swap);
   ASSERT_EQ(swap.size(), 3u) << swap_listing;
@@ -426,11 +428,11 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
 // after it. The second output change now ends the first change there (followed on the samples
 // before it), and the pick is an alert of its own.
 TEST_F(MonitorLoop, APartSwappedWithinTheLongerLookIsTwoPayloadChanges) {
-  const auto rec = run(scenario(158, 24, 0.5,
+  const auto rec = undeclared(run(scenario(158, 24, 0.5,
                                 "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
                                 "  - {type: payload_pick, onset: 9.5, io_bit: 1, mass: 1.0, com: [0, 0, 0.04]}\n"
                                 "  - {type: collision, link: 3, onset: 17.3, magnitude: 10, duration: 0.05, "
-                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n")));
   const auto watch = [&](bool follow, double* payload_at_end) {
     MonitorConfig c = *config;
     c.follow_payload = follow;
@@ -480,10 +482,10 @@ TEST_F(MonitorLoop, APartSwappedWithinTheLongerLookIsTwoPayloadChanges) {
 // push on the flange held for 2.8 s reads as a payload gain, which is followed; when the push ends
 // the alert does not fall back, and the twin returns to the payload it carried
 TEST_F(MonitorLoop, AFollowedPayloadThatWasNotOneIsUndone) {
-  const auto rec = run(scenario(157, 20, 0.5,
+  const auto rec = undeclared(run(scenario(157, 20, 0.5,
                                 "  - {type: payload_pick, onset: 8.3, io_bit: 1, mass: 0.5, com: [0, 0, 0.04]}\n"
                                 "  - {type: collision, link: 6, onset: 8.5, magnitude: 8, duration: 2.8, "
-                                "point: [0, 0, 0.04], direction: [0, 0, -1]}\n"));
+                                "point: [0, 0, 0.04], direction: [0, 0, -1]}\n")));
   ident::TwinModel t = declared_twin();
   Monitor m(t, *config);
   for (const auto& s : rec.samples) m.push(s);
@@ -495,6 +497,72 @@ TEST_F(MonitorLoop, AFollowedPayloadThatWasNotOneIsUndone) {
   EXPECT_THAT(e.detail, ::testing::HasSubstr("the twin predicts with a")) << all;
   EXPECT_THAT(e.detail, ::testing::HasSubstr("the residual had not fallen back, so the twin predicts with its 0.50 kg payload again")) << all;
   EXPECT_EQ(m.twin().payload().mass, 0.5);
+}
+
+// Session 23: the payload the controller declares (RTDE payload / payload_cog, kFieldPayload). A
+// pick the program declares (set_payload) is taken by the twin as it happens: no alert (the same
+// run without the declaration in the stream raises one, AFollowedPayloadChangeLeavesTheMonitorWatching).
+// A part lost without a declaration is still a payload change. A pick declared with nothing in the
+// gripper (a missed grip: the controller believes it carries 1 kg) is one too, sized as the mass
+// the arm lacks, and followed, so that a contact after it is found.
+TEST_F(MonitorLoop, ADeclaredPickRaisesNothingAndAMissedPickIsAPayloadChange) {
+  const auto rec = run(scenario(154, 24, 0.0,
+                                "  - {type: payload_pick, onset: 6.1, io_bit: 0, mass: 0.5, com: [0, 0, 0.04]}\n"
+                                "  - {type: payload_loss, onset: 13.7, io_bit: 0}\n"
+                                "  - {type: collision, link: 3, onset: 19.3, magnitude: 10, duration: 0.05, "
+                                "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+  ASSERT_TRUE(rec.samples.front().has(kFieldPayload));
+  EXPECT_EQ(rec.samples.back().payload, 0.5) << "the controller still declares the part it lost";
+  Monitor m(*twin, *config);  // no payload given: the stream says what the program declares
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const std::string all = listing(m.events());
+  ASSERT_EQ(m.events().size(), 2u) << all;
+  const Event& loss = m.events()[0];
+  EXPECT_EQ(loss.fault, FaultClass::PayloadChange) << all;
+  EXPECT_LT(loss.t_detected - 13.7, 0.1) << all;
+  EXPECT_NEAR(loss.magnitude, -0.5, 0.1) << all;
+  EXPECT_EQ(m.events()[1].fault, FaultClass::Collision) << all;
+  EXPECT_EQ(m.events()[1].link, 2) << all;  // link 3
+  EXPECT_LT(m.events()[1].t_detected - 19.3, 0.02) << all;
+  EXPECT_THAT(m.notes(), ::testing::Contains(::testing::HasSubstr("the program declared 0.50 kg at (0.000, 0.000, 0.040) m")));
+  EXPECT_EQ(m.twin().payload().mass, 0.0) << "the loss was followed";
+  // with follow_payload off the twin keeps what it was given and takes no declaration either
+  MonitorConfig keep = *config;
+  keep.follow_payload = false;
+  Monitor k(*twin, keep);
+  for (const auto& s : rec.samples) k.push(s);
+  k.finish();
+  ASSERT_FALSE(k.events().empty());
+  EXPECT_EQ(k.events()[0].fault, FaultClass::PayloadChange) << listing(k.events());
+  EXPECT_NEAR(k.events()[0].t_start, 6.1, 0.1) << listing(k.events());
+
+  // a missed grip: the program declares 1 kg at 9.5 s and closes the gripper on nothing
+  auto miss = run(scenario(160, 22, 0.0,
+                           "  - {type: collision, link: 3, onset: 17.3, magnitude: 10, duration: 0.05, "
+                           "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"));
+  for (auto& s : miss.samples)
+    if (s.timestamp >= 9.5) {
+      s.payload = 1.0;
+      s.payload_cog[2] = 0.04;
+      s.digital_outputs |= 2u;
+    }
+  Monitor mm(*twin, *config);
+  for (const auto& s : miss.samples) mm.push(s);
+  mm.finish();
+  const std::string missed = listing(mm.events());
+  ASSERT_EQ(mm.events().size(), 2u) << missed;
+  const Event& lack = mm.events()[0];
+  EXPECT_EQ(lack.fault, FaultClass::PayloadChange) << missed;
+  EXPECT_GE(lack.t_start, 9.5 - 0.002) << missed;
+  EXPECT_LT(lack.t_detected - 9.5, 0.1) << missed;
+  EXPECT_NEAR(lack.magnitude, -1.0, 0.2) << missed;
+  // the contact after it: found in time (at this pose links 3 and 4 read almost alike: 48 / 52 %)
+  const Event& contact = mm.events()[1];
+  EXPECT_EQ(contact.fault, FaultClass::Collision) << missed;
+  EXPECT_LT(contact.t_detected - 17.3, 0.02) << missed;
+  EXPECT_TRUE(contact.link == 2 || std::find(contact.other_links.begin(), contact.other_links.end(), 2) != contact.other_links.end()) << missed;
+  EXPECT_EQ(mm.twin().payload().mass, 0.0) << "the twin follows what the arm carries, not the declaration";
 }
 
 TEST_F(MonitorLoop, CollisionIsDetectedAsAPulse) {

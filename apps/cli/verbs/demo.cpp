@@ -84,8 +84,9 @@ int run(const Options& o) {
   sim::Scenario s = sim::load_scenario((std::filesystem::path(o.scenarios) / "j5_resistance.yaml").string());
   const std::string rec = (std::filesystem::path(o.out) / "j5_resistance.csv").string();
   {
-    device::RecordingWriter w(rec, 6, sim::Simulator::fields());
-    sim::make_simulator(s)->run([&](const RobotSample& x) { w.write(x); });
+    const auto simulator = sim::make_simulator(s);
+    device::RecordingWriter w(rec, 6, simulator->sample_fields());
+    simulator->run([&](const RobotSample& x) { w.write(x); });
     w.close();
   }
   const std::string html = (std::filesystem::path(o.out) / "report.html").string();

@@ -42,7 +42,7 @@ int run(const Options& o) {
   if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
   auto simulator = sim::make_simulator(s);
   const int n = simulator->truth_model().n_dof();
-  device::RecordingWriter writer(o.output, n, sim::Simulator::fields());
+  device::RecordingWriter writer(o.output, n, simulator->sample_fields());
   const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   const auto t0 = std::chrono::steady_clock::now();
   simulator->run([&](const RobotSample& smp) { writer.write(smp); },

@@ -27,6 +27,7 @@ enum SampleField : std::uint32_t {
   kFieldStreamGap = 1u << 10,  ///< the source marks stream gaps itself (RTDE client: lost samples, reconnects)
   kFieldJointTorque = 1u << 11,      ///< measured joint torque (joint torque sensors; not an RTDE output)
   kFieldCurrentAsTorque = 1u << 12,  ///< actual_current_as_torque (the controller's current-derived torque)
+  kFieldPayload = 1u << 13,  ///< payload + payload_cog: the payload the program declares (RTDE, controller >= 5.5.1)
 };
 
 /// One controller cycle. Units: rad, rad/s, rad/s², A, °C, N·m, s.
@@ -45,6 +46,11 @@ struct RobotSample {
   VectorJ current_as_torque;        ///< actual_current_as_torque [N·m] (RTDE; or a foreign log's current-derived torque)
   std::uint64_t digital_outputs = 0;  ///< actual_digital_output_bits
   std::int32_t robot_mode = 7;        ///< robot_mode (7 = RUNNING)
+  /// payload [kg] and payload_cog [m, in the tool flange frame]: what the program declares it
+  /// carries (set_payload; RTDE outputs of controllers >= 5.5.1). NaN unless kFieldPayload.
+  double payload = std::numeric_limits<double>::quiet_NaN();
+  double payload_cog[3] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::quiet_NaN()};
   std::uint32_t present = 0;          ///< OR of SampleField flags
   bool gap_before = false;            ///< samples were lost just before this one (stream fault marker)
 

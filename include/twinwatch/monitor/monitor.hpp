@@ -106,6 +106,11 @@ struct MonitorConfig {
   /// or the next pick after a dropped part is an event of its own. Off: the twin keeps the declared
   /// payload and the alert stays open while the robot runs without it (before session 21, with
   /// everything after it, e.g. a contact, read as part of it). Not stored.
+  /// Also: when the stream carries the payload the controller is told (kFieldPayload: the program's
+  /// set_payload, RTDE payload / payload_cog), the twin takes the first declaration that differs from
+  /// its payload and every change of it, so a pick the program declares raises no alert, and what
+  /// the arm carries is then checked against what the controller believes (a part lost, or a pick
+  /// declared with no part in the gripper, is a payload change). Off: the twin keeps its payload.
   bool follow_payload = true;
   /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
   /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
@@ -340,6 +345,14 @@ class Monitor {
   void check_program_sets();
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
+  // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
+  // set_payload. The twin takes each new declaration (take_declared_payload); declared_at_ [s] is when
+  // it last did, so that an alert raised before it is not followed on top of it
+  bool have_declared_ = false;
+  double declared_mass_ = 0.0, declared_cog_[3] = {0.0, 0.0, 0.0};
+  double declared_at_ = -std::numeric_limits<double>::infinity();
+  bool declared_refused_ = false;  // a declaration the twin cannot take was said once
+  void take_declared_payload(const RobotSample& s);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
   // steps seen, and the gap factor in effect (cfg_.gap_factor, widened for a jittery clock)
   double jitter_mad_ = 0.0;

@@ -153,6 +153,9 @@ struct SimOptions {
   bool cold_start = false;      ///< joints start at ambient temperature (else warmed up, ~T_ref)
   model::RigidBodyInertia payload;  ///< carried at start (truth), also declared to the controller
   bool payload_declared = true; ///< the controller's model includes the payload
+  /// the controller streams the payload it is told (RTDE payload / payload_cog, controllers >= 5.5.1):
+  /// every sample carries it (kFieldPayload). False: a controller or a recording without it
+  bool streams_payload = true;
   VectorJ kp, kd;               ///< PD gains [N·m/rad], [N·m·s/rad]; empty: defaults from the inertia
   void validate(int n_dof) const;
 };
@@ -178,8 +181,10 @@ class Simulator {
   const VectorJ& q() const { return q_; }
   const VectorJ& qd() const { return qd_; }
   const model::RobotModel& truth_model() const { return truth_model_; }
-  /// Fields every sample carries.
+  /// Fields every sample carries, whatever the options.
   static std::uint32_t fields();
+  /// Fields this simulator's samples carry: fields() and, with options.streams_payload, kFieldPayload.
+  std::uint32_t sample_fields() const;
 
  private:
   double friction_torque(int j, double qd, double dt);
