@@ -75,6 +75,10 @@ inline constexpr std::array<const char*, 4> kLinkReferenceNames{
 struct ScenarioScore {
   std::string name, fault, predicted_class, detail;
   bool has_fault = false, detected = false, class_ok = false, joint_ok = false;
+  /// a payload_pick the program declared on a stream that carries the declaration (the scenario's
+  /// streams_payload): the twin takes it, so no alert is expected and any event in its window is a
+  /// false alarm
+  bool declared = false;
   double delay_ms = 0.0, magnitude = 0.0, true_magnitude = 0.0;
   int false_alarms = 0;
   int wear_false_alarms = 0;   ///< false alarms that were wear warnings

@@ -941,6 +941,10 @@ void Monitor::take_declared_payload(const RobotSample& s) {
     declared_refused_ = true;
     return;
   }
+  // a payload change waiting for its longer look (a part dropped, then the next one picked and
+  // declared) ends here, sized on the samples before the declaration, as at a gripper output's
+  // change (split_payload_change): else the look would measure the drop partly against the new part
+  if (payload_change_waits(t)) split_payload_change(t, "the program declared its next payload");
   twin_.set_payload(now);
   declared_at_ = t;
   // a diagnosed change the twin followed is superseded: the program has said what it carries
@@ -1059,7 +1063,13 @@ void Monitor::undo_follow(double t) {
                           e.t_detected, t - followed_at_, what));
 }
 
-void Monitor::split_payload_change(double t) {
+bool Monitor::payload_change_waits(double t) const {
+  return open_ >= 0 && cfg_.follow_payload && diagnosed_ && !rediagnosed_ && !followed_ && background_ < 0 && merge_into_ < 0 &&
+         events_[static_cast<size_t>(open_)].fault == FaultClass::PayloadChange &&
+         t - events_[static_cast<size_t>(open_)].t_start >= kPayloadSplitAfter;
+}
+
+void Monitor::split_payload_change(double t, const char* where) {
   // the window ends before the output changed: the samples after it belong to the next payload
   run_diagnosis(t, true, t);
   // not followed (a note says why): the alert goes on, and its longer look sees everything
@@ -1068,7 +1078,7 @@ void Monitor::split_payload_change(double t) {
   Event& done = events_[static_cast<size_t>(open_)];
   done.open = false;
   done.t_end = std::max(done.t_start, std::min(last_over_, t_prev_));
-  done.detail += fmt::format("; it ended at {:.3f} s, where a gripper output changed again", t);
+  done.detail += fmt::format("; it ended at {:.3f} s, where {}", t, where);
   if (on_event) on_event(done);
   followed_ = false;
   open_ = -1;
@@ -1149,7 +1159,12 @@ bool Monitor::skip_invalid(const RobotSample& s) {
 void Monitor::restart_estimators(bool settle) {
   obs_.reset();
   obs_samples_ = 0;
-  filter_started_ = false;
+  // with the start-up wait, the residual filter starts on the first sample's residual, as at the
+  // start of a run; without it (a payload change the twin takes, where decisions go on) it starts
+  // from zero and follows the residual with its own time constant: started on one raw sample, its
+  // noise alone went over a threshold (a 4 ms "contact" right after a declared pick, session 23)
+  filter_started_ = !settle;
+  if (!settle) rf_.setZero(n_);
   for (auto& f : fir_) f.reset();
   if (settle) settle_until_ = n_samples_ + kObserverSettle;
 }
@@ -1395,10 +1410,7 @@ void Monitor::push(const RobotSample& s) {
   // drop and a pick 1 s apart, a dual gripper tending a machine). Left to the longer look, one
   // window held both changes, which no single signature fits (it read as a contact on link 6 that
   // never cleared, and hid what came after it)
-  if (open_ >= 0 && have_prev_ && s.digital_outputs != outputs_prev_ && cfg_.follow_payload && diagnosed_ && !rediagnosed_ &&
-      !followed_ && background_ < 0 && merge_into_ < 0 && events_[static_cast<size_t>(open_)].fault == FaultClass::PayloadChange &&
-      t - events_[static_cast<size_t>(open_)].t_start >= kPayloadSplitAfter)
-    split_payload_change(t);
+  if (have_prev_ && s.digital_outputs != outputs_prev_ && payload_change_waits(t)) split_payload_change(t, "a gripper output changed again");
   if (open_ >= 0) {
     Event& e = events_[static_cast<size_t>(open_)];
     e.t_end = t;

@@ -283,7 +283,8 @@ std::set<std::string> fault_keys(FaultType t) {
     case FaultType::CurrentOffset: k.insert({"joint", "magnitude"}); break;
     case FaultType::StuckCurrent: k.insert("joint"); break;
     case FaultType::Collision: k = {"type", "onset", "link", "point", "direction", "duration", "magnitude"}; break;
-    case FaultType::PayloadPick: k.insert({"mass", "com", "io_bit"}); break;
+    case FaultType::PayloadPick:
+    case FaultType::MissedPick: k.insert({"mass", "com", "io_bit"}); break;
     case FaultType::PayloadLoss: k.insert("io_bit"); break;
     case FaultType::DroppedSamples: k.insert({"magnitude", "period"}); break;
     case FaultType::TimestampJitter: k.insert("magnitude"); break;
@@ -295,11 +296,11 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
   const std::string s = y.text(n, f, "type", "");
   for (FaultType t : {FaultType::Resistance, FaultType::FrictionGrowth, FaultType::PayloadPick, FaultType::PayloadLoss,
                       FaultType::Collision, FaultType::CurrentOffset, FaultType::StuckCurrent, FaultType::DroppedSamples,
-                      FaultType::TimestampJitter})
+                      FaultType::TimestampJitter, FaultType::MissedPick})
     if (s == to_string(t)) return t;
   y.fail(n["type"] ? n["type"] : n, f + ".type",
          fmt::format("expected one of resistance, friction_growth, payload_pick, payload_loss, collision, current_offset, "
-                     "stuck_current, dropped_samples, timestamp_jitter; got '{}'", s));
+                     "stuck_current, dropped_samples, timestamp_jitter, missed_pick; got '{}'", s));
 }
 
 }  // namespace
@@ -440,7 +441,11 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
         if (!(fs.magnitude > 0)) y.fail(f["magnitude"], p + ".magnitude", fmt::format("must be > 0 N·m, got {}", fs.magnitude));
         fs.end = fs.onset + fs.duration;
       }
-      if (fs.type == FaultType::PayloadPick) {
+      if (fs.type == FaultType::MissedPick && !s.options.streams_payload)
+        y.fail(f["type"], p + ".type",
+               "a missed_pick is a payload the program declares and the arm does not carry: it needs 'streams_payload: true' (without "
+               "the declaration in the stream nothing of it shows)");
+      if (fs.type == FaultType::PayloadPick || fs.type == FaultType::MissedPick) {
         fs.payload.mass = y.number(f, p, "mass");
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
         if (fs.payload.mass > m.payload_limit()) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
@@ -476,12 +481,16 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     std::vector<size_t> order(s.faults.size());
     for (size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return s.faults[a].onset < s.faults[b].onset; });
+    // a missed pick's label is what the arm carries less than the controller now believes (the
+    // truth does not change; the declaration does)
     double carried = s.options.payload.mass;
     for (size_t k : order) {
       FaultSpec& fs = s.faults[k];
       if (fs.type == FaultType::PayloadPick) {
         fs.magnitude = fs.payload.mass - carried;
         carried = fs.payload.mass;
+      } else if (fs.type == FaultType::MissedPick) {
+        fs.magnitude = carried - fs.payload.mass;
       } else if (fs.type == FaultType::PayloadLoss) {
         if (!(carried > 0.0))
           y.fail(fl[k], fmt::format("faults[{}]", k),
@@ -529,14 +538,15 @@ namespace {
 
 constexpr FaultType kFaultTypes[] = {FaultType::Resistance,    FaultType::FrictionGrowth, FaultType::PayloadPick,
                                      FaultType::PayloadLoss,   FaultType::Collision,      FaultType::CurrentOffset,
-                                     FaultType::StuckCurrent,  FaultType::DroppedSamples, FaultType::TimestampJitter};
+                                     FaultType::StuckCurrent,  FaultType::DroppedSamples, FaultType::TimestampJitter,
+                                     FaultType::MissedPick};
 
 // the units of a fault type's magnitude in the labels
 const char* units_of(FaultType t) {
   switch (t) {
     case FaultType::Resistance: case FaultType::Collision: return "N·m";
     case FaultType::FrictionGrowth: return "relative";
-    case FaultType::PayloadPick: case FaultType::PayloadLoss: return "kg";
+    case FaultType::PayloadPick: case FaultType::PayloadLoss: case FaultType::MissedPick: return "kg";
     case FaultType::CurrentOffset: return "A";
     case FaultType::StuckCurrent: return "";
     case FaultType::DroppedSamples: return "samples";
@@ -602,7 +612,7 @@ Labels parse_labels(const std::string& text, const std::string& origin) {
     const auto* t = std::find_if(std::begin(kFaultTypes), std::end(kFaultTypes), [&](FaultType x) { return type == to_string(x); });
     if (t == std::end(kFaultTypes))
       f.fail("type", fmt::format("expected one of resistance, friction_growth, payload_pick, payload_loss, collision, current_offset, "
-                                 "stuck_current, dropped_samples, timestamp_jitter; got \"{}\"", type));
+                                 "stuck_current, dropped_samples, timestamp_jitter, missed_pick; got \"{}\"", type));
     e.type = *t;
     e.onset = f.nonnegative("onset");
     e.ramp = f.nonnegative("ramp");

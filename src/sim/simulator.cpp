@@ -31,6 +31,7 @@ const char* to_string(FaultType t) {
     case FaultType::StuckCurrent: return "stuck_current";
     case FaultType::DroppedSamples: return "dropped_samples";
     case FaultType::TimestampJitter: return "timestamp_jitter";
+    case FaultType::MissedPick: return "missed_pick";
   }
   return "unknown";
 }
@@ -236,6 +237,10 @@ void Simulator::apply_payload_faults(double t) {
       controller_model_.set_payload(f.payload);  // the program declares what it picks
       dout_ |= (1ull << f.io_bit);
       payload_on_ = true;
+      fault_applied_[k] = true;
+    } else if (f.type == FaultType::MissedPick) {
+      controller_model_.set_payload(f.payload);  // declared, but nothing is gripped: the truth keeps what it had
+      dout_ |= (1ull << f.io_bit);
       fault_applied_[k] = true;
     } else if (f.type == FaultType::PayloadLoss) {
       truth_model_.clear_payload();  // the controller still believes it carries it

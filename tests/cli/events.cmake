@@ -110,11 +110,30 @@ set_tests_properties(cli.simulate_payload_loss PROPERTIES FIXTURES_SETUP payload
 add_test(NAME cli.monitor_follows_payload COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5
          --payload-com 0 0 0.04 --db "")
 set_tests_properties(cli.monitor_follows_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
-                     PASS_REGULAR_EXPRESSION "3\\.0[0-9]+ s  payload_change payload -0\\.[3-6][0-9] kg; from 5\\.[0-9]+ s the twin predicts with no payload and monitoring goes on with it[^\n]*\n[^\n]*\n[^\n]*\n +8\\.2[0-9]+ s  collision +contact on link 3.*payload: the twin followed the diagnosed change; it ended with 0\\.00 kg \\(declared 0\\.50 kg\\)\n5000 samples, 0 gap\\(s\\), 2 event\\(s\\)")
+                     PASS_REGULAR_EXPRESSION "3\\.0[0-9]+ s  payload_change payload -0\\.[3-6][0-9] kg; from 5\\.[0-9]+ s the twin predicts with no payload and monitoring goes on with it[^\n]*\n[^\n]*\n[^\n]*\n +8\\.2[0-9]+ s  collision +contact on link 3.*payload: the twin ended with 0\\.00 kg, the controller declares 0\\.50 kg: the arm does not carry what its program declared[^\n]*\n5000 samples, 0 gap\\(s\\), 2 event\\(s\\)")
 add_test(NAME cli.monitor_keep_payload COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5
          --payload-com 0 0 0.04 --db "" --keep-payload)
 set_tests_properties(cli.monitor_keep_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
                      PASS_REGULAR_EXPRESSION "payload_change payload -0\\.[3-6][0-9] kg; still active when monitoring stopped[^\n]*\n5000 samples, 0 gap\\(s\\), 1 event\\(s\\)")
+# the payload the controller declares (session 23): the simulator streams it, as a controller from
+# 5.5.1 on does over RTDE. A declared pick is taken by the twin and raises nothing; a pick declared
+# with nothing gripped is a payload change of the declared mass, and the run ends saying the arm does
+# not carry what the program declared
+add_test(NAME cli.simulate_declared_pick COMMAND twinwatch simulate ${s}/short_declared_pick.yaml -o ${d}/declared_pick.csv)
+set_tests_properties(cli.simulate_declared_pick PROPERTIES FIXTURES_SETUP declared_pick_recording PASS_REGULAR_EXPRESSION "samples")
+add_test(NAME cli.monitor_takes_a_declared_pick COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/declared_pick.csv --db "")
+set_tests_properties(cli.monitor_takes_a_declared_pick PROPERTIES FIXTURES_REQUIRED "twin;declared_pick_recording"
+                     PASS_REGULAR_EXPRESSION "note: the program declared 0\\.50 kg at \\(0\\.000, 0\\.000, 0\\.040\\) m \\(it had declared 0\\.00 kg\\).*payload: the twin took the controller's declarations; it ended with 0\\.50 kg, as declared\n4000 samples, 0 gap\\(s\\), 0 event\\(s\\)")
+add_test(NAME cli.simulate_missed_pick COMMAND twinwatch simulate ${s}/short_missed_pick.yaml -o ${d}/missed_pick.csv)
+set_tests_properties(cli.simulate_missed_pick PROPERTIES FIXTURES_SETUP missed_pick_recording PASS_REGULAR_EXPRESSION "samples")
+add_test(NAME cli.monitor_finds_a_missed_pick COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/missed_pick.csv --db "")
+set_tests_properties(cli.monitor_finds_a_missed_pick PROPERTIES FIXTURES_REQUIRED "twin;missed_pick_recording"
+                     PASS_REGULAR_EXPRESSION "3\\.0[0-9]+ s  payload_change payload -(0\\.[89]|1\\.[01])[0-9] kg.*payload: the twin ended with 0\\.00 kg, the controller declares 1\\.00 kg[^\n]*\n4000 samples, 0 gap\\(s\\), 1 event\\(s\\)")
+# a missed pick on a stream without the declaration shows nothing: the scenario refuses it
+add_test(NAME cli.simulate_missed_pick_needs_the_stream
+  COMMAND sh -c "sed 's/^duration: 8$/duration: 8\\nstreams_payload: false/' ${s}/short_missed_pick.yaml > ${d}/missed_pick_unstreamed.yaml && $0 simulate ${d}/missed_pick_unstreamed.yaml -o ${d}/missed_pick_unstreamed.csv" $<TARGET_FILE:twinwatch>)
+set_tests_properties(cli.simulate_missed_pick_needs_the_stream PROPERTIES
+                     PASS_REGULAR_EXPRESSION "missed_pick_unstreamed\\.yaml:[0-9]+: field 'faults\\[0\\]\\.type': a missed_pick is a payload the program declares and the arm does not carry: it needs 'streams_payload: true'")
 # report follows the payload change as monitor does, and --keep-payload there too
 add_test(NAME cli.report_follows_payload
   COMMAND sh -c "twinwatch=$0; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_follow.html -q && grep -c 'the twin predicts with no payload and monitoring goes on with it' ${d}/report_follow.html; $twinwatch report --twin ${d}/twin.json ${d}/payload_loss.csv --payload-mass 0.5 --payload-com 0 0 0.04 -o ${d}/report_keep.html -q --keep-payload && grep -c 'the twin predicts with' ${d}/report_keep.html" $<TARGET_FILE:twinwatch>)

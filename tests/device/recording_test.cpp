@@ -283,6 +283,57 @@ TEST(Recording, NonFiniteCellsAreRefusedWithFileLineAndColumn) {
   }
 }
 
+// session 23: the payload the controller declares (RTDE payload / payload_cog) has columns of its
+// own, written and read back exactly; its mass and centre of mass come together, the mass is >= 0
+TEST(Recording, TheDeclaredPayloadRoundTripsAndComesWithItsCentreOfMass) {
+  const std::string p = tmp("payload.csv");
+  {
+    RecordingWriter w(p, 2, kFieldPayload);
+    for (int k = 0; k < 3; ++k) {
+      RobotSample s = RobotSample::empty(2);
+      s.timestamp = 0.002 * k;
+      s.q.setZero(2);
+      s.qd.setZero(2);
+      s.payload = k < 2 ? 0.0 : 1.25;
+      s.payload_cog[0] = 0.0;
+      s.payload_cog[1] = -0.001;
+      s.payload_cog[2] = k < 2 ? 0.0 : 0.0437;
+      w.write(s);
+    }
+    w.close();
+  }
+  std::ifstream in(p);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_THAT(header, ::testing::EndsWith(",payload,payload_cog_0,payload_cog_1,payload_cog_2"));
+  const Recording r = read_recording(p);
+  EXPECT_TRUE(r.present & kFieldPayload);
+  ASSERT_EQ(r.samples.size(), 3u);
+  EXPECT_TRUE(r.samples[2].has(kFieldPayload));
+  EXPECT_EQ(r.samples[0].payload, 0.0);
+  EXPECT_EQ(r.samples[2].payload, 1.25);
+  EXPECT_EQ(r.samples[2].payload_cog[1], -0.001);
+  EXPECT_EQ(r.samples[2].payload_cog[2], 0.0437);
+  // a file without the columns: no declaration, NaN
+  const std::string q = tmp("none.csv");
+  std::ofstream(q) << "timestamp,actual_q_0\n0,0\n";
+  const Recording none = read_recording(q);
+  EXPECT_FALSE(none.present & kFieldPayload);
+  EXPECT_TRUE(std::isnan(none.samples[0].payload));
+  // half a declaration, a negative mass, the same column twice
+  EXPECT_THAT(error_of("timestamp,actual_q_0,payload\n0,0,1\n"),
+              HasSubstr("bad.csv:1: field 'payload_cog_*': the declared payload needs its mass and centre of mass together: expected the "
+                        "columns payload, payload_cog_0, payload_cog_1 and payload_cog_2, the header has payload and 0 of the three"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,payload_cog_0,payload_cog_1,payload_cog_2\n0,0,0,0,0\n"),
+              HasSubstr("field 'payload': the declared payload needs its mass and centre of mass together"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,payload,payload_cog_0,payload_cog_1,payload_cog_2\n0,0,-0.5,0,0,0\n"),
+              HasSubstr("bad.csv:2: field 'payload': expected a payload mass >= 0 kg, got '-0.5'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,payload,payload_cog_0,payload_cog_1,payload_cog_2\n0,0,0.5,0,nan,0\n"),
+              HasSubstr("bad.csv:2: field 'payload_cog_1': expected a finite number, got 'nan'"));
+  EXPECT_THAT(error_of("timestamp,actual_q_0,payload,payload_cog_0,payload_cog_1,payload_cog_2,payload\n0,0,0.5,0,0,0,0.5\n"),
+              HasSubstr("column 7 is 'payload' again"));
+}
+
 TEST(Recording, ASignalInTwoColumnsIsRefusedNamingBoth) {
   EXPECT_THAT(error_of("timestamp,actual_q_0,actual_current_0,actual_current_0\n0,0,1,0\n"),
               HasSubstr("bad.csv:1: field 'actual_current_0': column 4 is 'actual_current_0' again (column 3 is 'actual_current_0')"));

@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -200,6 +201,50 @@ TEST(RtdeClient, FallsBackToProtocolV1) {
   ASSERT_EQ(got.size(), 50u);
   EXPECT_DOUBLE_EQ(got[49].timestamp, 1.0 + 0.002 * 49);
   EXPECT_EQ(got[49].q[5], 0.001 * 49 + 5);
+}
+
+// session 23: the payload the program declares (payload, payload_cog) is in the default recipe and
+// asked for from controller 5.5.1 on; an older controller has no such outputs (its NOT_FOUND would
+// refuse the whole recipe), so they are left out there and the samples carry no declaration
+TEST(RtdeClient, TheDeclaredPayloadIsAskedForFrom551On) {
+  twinwatch::log::set_sink(nullptr);
+  for (const rtde::ControllerVersion v : {rtde::ControllerVersion{5, 23, 0, 0}, rtde::ControllerVersion{5, 5, 1, 0},
+                                          rtde::ControllerVersion{5, 5, 0, 0}, rtde::ControllerVersion{5, 4, 3, 0}}) {
+    SCOPED_TRACE(::testing::Message() << "controller " << v.major << "." << v.minor << "." << v.bugfix);
+    const bool has = v.minor > 5 || (v.minor == 5 && v.bugfix >= 1);
+    rtde::ServerOptions so;
+    so.port = 0;
+    so.version = v;
+    rtde::Server server(so);
+    server.start();
+    rtde::Client client(options_for(server.port()));
+    client.start();
+    wait_for_clients(server, 1);
+    const auto names = client.recipe().names;
+    EXPECT_EQ(std::count(names.begin(), names.end(), "payload"), has ? 1 : 0);
+    EXPECT_EQ(std::count(names.begin(), names.end(), "payload_cog"), has ? 1 : 0);
+    EXPECT_EQ((client.sample_fields() & twinwatch::kFieldPayload) != 0, has);
+    FrameMaker fm;
+    const int mass = rtde::find_output_field("payload")->slot, cog = rtde::find_output_field("payload_cog")->slot;
+    for (long k = 0; k < 20; ++k) {
+      fm.f[static_cast<std::size_t>(mass)] = k < 10 ? 0.0 : 1.5;
+      fm.f[static_cast<std::size_t>(cog + 2)] = k < 10 ? 0.0 : 0.045;
+      server.publish(fm.make(k, 1.0 + 0.002 * static_cast<double>(k)));
+      std::this_thread::sleep_for(100us);
+    }
+    const auto got = drain(client, 20);
+    ASSERT_EQ(got.size(), 20u);
+    EXPECT_EQ(got[19].has(twinwatch::kFieldPayload), has);
+    if (has) {
+      EXPECT_EQ(got[9].payload, 0.0);
+      EXPECT_EQ(got[19].payload, 1.5);
+      EXPECT_EQ(got[19].payload_cog[2], 0.045);
+    } else {
+      EXPECT_TRUE(std::isnan(got[19].payload));
+    }
+    client.stop();
+    server.stop();
+  }
 }
 
 TEST(RtdeClient, ReconnectsAfterTheControllerRestartsWithAGapMarker) {

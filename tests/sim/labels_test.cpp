@@ -70,7 +70,7 @@ TEST(Labels, AMalformedFileIsNamedWithTheFieldAndTheValue) {
               HasSubstr("field 'faults[1].end': expected null or a time after onset (2 s), got 1"));
   EXPECT_THAT(error_of([](json& j) { j["faults"][0]["type"] = "meteor"; }),
               HasSubstr("field 'faults[0].type': expected one of resistance, friction_growth, payload_pick, payload_loss, collision, "
-                        "current_offset, stuck_current, dropped_samples, timestamp_jitter; got \"meteor\""));
+                        "current_offset, stuck_current, dropped_samples, timestamp_jitter, missed_pick; got \"meteor\""));
   EXPECT_THAT(error_of([](json& j) { j["faults"][0].erase("type"); }), HasSubstr("field 'faults[0].type': missing required field"));
   EXPECT_THAT(error_of([](json& j) { j["faults"][1]["joint"] = 0; }), HasSubstr("field 'faults[1].joint': expected null or a whole number from 1 to"));
   EXPECT_THAT(error_of([](json& j) { j["faults"][1]["units"] = "A"; }),

@@ -69,6 +69,45 @@ TEST(Scenario, APayloadFaultsLabelIsTheChangeOfTheMassCarried) {
   EXPECT_DOUBLE_EQ(none.faults[1].magnitude, -1.0);  // was -0: the scenario's (absent) payload
 }
 
+// session 23: the controller streams the payload its program declares (default), which a pick
+// changes and an undeclared loss does not; a missed pick changes the declaration only, and its label
+// is the mass the arm carries less than declared. Without the stream a missed pick is refused.
+TEST(Scenario, TheDeclaredPayloadIsStreamedAndAMissedPickChangesOnlyIt) {
+  const std::string head = "robot: ur3e\nduration: 6\n" + kFig8;
+  const Scenario s = parse_scenario(head + "payload: {mass: 0.5, com: [0, 0, 0.04]}\nfaults:\n"
+                                           "  - {type: payload_loss, onset: 1}\n"
+                                           "  - {type: payload_pick, onset: 2, mass: 1.0, com: [0, 0.01, 0.05], io_bit: 1}\n"
+                                           "  - {type: missed_pick, onset: 4, mass: 2.0, io_bit: 2}\n",
+                                    "test.yaml");
+  ASSERT_EQ(s.faults.size(), 3u);
+  EXPECT_TRUE(s.options.streams_payload);
+  EXPECT_DOUBLE_EQ(s.faults[2].magnitude, -1.0);  // carries 1.0 kg, declared 2.0 kg
+  const auto sim = make_simulator(s);
+  EXPECT_TRUE(sim->sample_fields() & kFieldPayload);
+  std::vector<RobotSample> at;  // the samples at 0.5, 1.5, 3 and 5 s
+  sim->run([&](const RobotSample& x) {
+    for (double t : {0.5, 1.5, 3.0, 5.0})
+      if (std::abs(x.timestamp - t) < 1e-9) at.push_back(x);
+  });
+  ASSERT_EQ(at.size(), 4u);
+  EXPECT_TRUE(at[0].has(kFieldPayload));
+  EXPECT_EQ(at[0].payload, 0.5);
+  EXPECT_EQ(at[0].payload_cog[2], 0.04);
+  EXPECT_EQ(at[1].payload, 0.5) << "an undeclared loss leaves the declaration";
+  EXPECT_EQ(at[2].payload, 1.0);
+  EXPECT_EQ(at[2].payload_cog[1], 0.01);
+  EXPECT_EQ(at[3].payload, 2.0);
+  EXPECT_EQ(at[3].digital_outputs & 4u, 4u) << "the gripper closed on nothing";
+  EXPECT_EQ(sim->truth_model().payload().mass, 1.0) << "the arm still carries the part picked at 2 s";
+  // a controller without the stream
+  const Scenario quiet = parse_scenario(head + "streams_payload: false\n", "test.yaml");
+  EXPECT_FALSE(make_simulator(quiet)->sample_fields() & kFieldPayload);
+  EXPECT_THAT(error_of(head + "streams_payload: false\nfaults:\n  - {type: missed_pick, onset: 1, mass: 1.0}\n"),
+              HasSubstr("field 'faults[0].type': a missed_pick is a payload the program declares and the arm does not carry: it needs "
+                        "'streams_payload: true'"));
+  EXPECT_THAT(error_of(head + "faults:\n  - {type: missed_pick, onset: 1, mass: 0}\n"), HasSubstr("faults[0].mass': must be > 0 kg"));
+}
+
 // a duration that cannot be run is reported at its own line, with the value
 TEST(Scenario, DurationOutOfRangeIsNamedAtItsLine) {
   EXPECT_THAT(error_of("robot: ur3e\nseed: 3\nduration: -5\n" + kSine),

@@ -306,8 +306,15 @@ int run_monitor(const MonitorOptions& o) {
   close_written(jl, o.events_path);
   close_written(trace, o.trace);
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
-  if (chatty && mon.twin().payload().mass != twin.payload().mass)
-    fmt::print("payload: the twin followed the diagnosed change; it ended with {:.2f} kg (declared {:.2f} kg)\n", mon.twin().payload().mass,
+  const double declared = mon.declared_payload(), ended = mon.twin().payload().mass;
+  if (chatty && std::isfinite(declared) && ended != declared)
+    fmt::print("payload: the twin ended with {:.2f} kg, the controller declares {:.2f} kg: the arm does not carry what its program "
+               "declared (a part lost, or a pick with nothing gripped; see the payload events)\n",
+               ended, declared);
+  else if (chatty && std::isfinite(declared) && ended != twin.payload().mass)
+    fmt::print("payload: the twin took the controller's declarations; it ended with {:.2f} kg, as declared\n", ended);
+  else if (chatty && ended != twin.payload().mass)
+    fmt::print("payload: the twin followed the diagnosed change; it ended with {:.2f} kg (it started with {:.2f} kg)\n", ended,
                twin.payload().mass);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),

@@ -286,7 +286,7 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->add_option("--outputs", o->outputs,
                   "Comma-separated RTDE output names (default: every recording column: timestamp, actual_q, actual_qd, "
                   "target_q, target_qd, target_qdd, actual_current, target_current, target_moment, joint_temperatures, "
-                  "actual_digital_output_bits, robot_mode)");
+                  "actual_digital_output_bits, robot_mode, and from controller 5.5.1 on the declared payload and payload_cog)");
   sub->add_option("--wait", o->wait, "Keep trying the first connection for this long [s]")->capture_default_str();
   sub->add_option("--protocol", o->protocol, "Highest RTDE protocol version to ask for (2, or 1 for old controllers)")
       ->check(CLI::IsMember({1, 2}))

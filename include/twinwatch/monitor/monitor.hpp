@@ -265,6 +265,9 @@ class Monitor {
   /// The twin with the monitor's payload (set it when the program changes the payload; the monitor
   /// changes it itself when it follows a diagnosed payload change, MonitorConfig::follow_payload).
   ident::TwinModel& twin() { return twin_; }
+  /// The payload mass [kg] the controller declared last (the stream's kFieldPayload); NaN when the
+  /// stream carried no declaration.
+  double declared_payload() const { return have_declared_ ? declared_mass_ : std::numeric_limits<double>::quiet_NaN(); }
   const ident::TwinModel& twin() const { return twin_; }
 
  private:
@@ -281,7 +284,10 @@ class Monitor {
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
-  void split_payload_change(double t);
+  void split_payload_change(double t, const char* where);  // where: why it ends there, for the event text
+  /// the open alert is a payload change diagnosed once and waiting for its longer look, at least
+  /// kPayloadSplitAfter old: a gripper output's change or a new declaration ends it (split_payload_change)
+  bool payload_change_waits(double t) const;
   /// The twin takes the payload change event e diagnosed (cfg_.follow_payload); says so in e's
   /// detail and a note. Nothing when the change cannot be a payload the twin predicts.
   void follow_payload(Event& e, double t);

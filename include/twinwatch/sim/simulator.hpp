@@ -91,6 +91,7 @@ enum class FaultType {
   StuckCurrent,    ///< sensor: one current channel frozen at its last value
   DroppedSamples,  ///< stream: `magnitude` consecutive samples are not delivered (every `period` s)
   TimestampJitter, ///< stream: controller timestamp jitter of sigma = magnitude [s] (clipped, see kJitterClipSigmas)
+  MissedPick,      ///< the program declares a payload of `mass` (set_payload) and closes the gripper on nothing
 };
 
 /// Lower-case YAML name ("resistance", "friction_growth", ...).
