@@ -454,7 +454,11 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--payload-mass", o->payload_mass,
+                  "Payload the program declares [kg]. A stream that carries the controller's declared payload (RTDE payload / "
+                  "payload_cog, controllers 5.5.1 and newer; a recording's payload columns) overrides it: the twin takes the first "
+                  "declaration that differs and every change of it, so a declared pick raises nothing")
+      ->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
@@ -463,7 +467,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Keep the declared payload after a payload change is diagnosed. Default: 2.5 s after the raise the twin takes "
                 "the diagnosed payload (a dropped part: none), the alert clears and monitoring goes on, so that a contact or "
-                "the next pick is an event of its own; with this flag the alert stays open while the robot runs without it");
+                "the next pick is an event of its own; with this flag the alert stays open while the robot runs without it, and "
+                "the twin does not take the controller's declared payload either");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
                   "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
