@@ -1231,7 +1231,11 @@ void Monitor::push(const RobotSample& s) {
     if (on_event) on_event(g);
   }
   // the payload the program declares, when the stream carries it (before the prediction uses it)
-  if (cfg_.follow_payload && s.has(kFieldPayload)) take_declared_payload(s);
+  // (per sample the declaration is compared in line; only a new one costs the call)
+  if (cfg_.follow_payload && s.has(kFieldPayload) &&
+      !(have_declared_ && s.payload == declared_mass_ && s.payload_cog[0] == declared_cog_[0] && s.payload_cog[1] == declared_cog_[1] &&
+        s.payload_cog[2] == declared_cog_[2]))
+    take_declared_payload(s);
   // acceleration: the controller's target when streamed, else a filtered difference of qd
   if (s.has(kFieldTargetQdd)) {
     qdd_ = s.target_qdd;
