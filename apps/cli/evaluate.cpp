@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -237,6 +238,9 @@ constexpr size_t kMinReportSamples = 10;  // as validate's kMinValidateSamples
 constexpr int kCeilingDraws = 20;
 // an event that starts this long before a fault's onset may still be its detection (sample timing) [s]
 constexpr double kOnsetTolerance = 0.01;
+// an event that starts this long after a declared pick is at it: a false alarm, which no other
+// fault's window takes as one of its own (a missed pick's window runs to the end of the run) [s]
+constexpr double kDeclaredWindow = 1.0;
 constexpr unsigned kCeilingSeedStride = 7919;  // draws of scenario seed s, fault f: seed s * stride + f
 constexpr double kLeverFloor = 1e-9;  // [m] below it the simulator applies no contact (collision_torque_per_newton)
 constexpr int kBayesPoints = 1024;      // contact points per link of the generator's Bayes choice
@@ -484,8 +488,26 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<double> true_force(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
     const model::RobotModel& kin = t.robot();  // the arm's kinematics (the twin's inertia is not used)
     model::DynamicsData dkin(kin);
+    // evaluation only: whether the stream's declaration changed at each pick's onset (a pick that
+    // declares what was declared already, or a stream without declarations, declares nothing new):
+    // the last sample before the onset against the first one a tolerance past it (the simulator
+    // applies a pick on the step that starts at or after its onset)
+    using Declaration = std::array<double, 4>;  // mass, centre of mass
+    std::vector<Declaration> declared_before(s.faults.size());
+    std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
     simulator->run([&](const RobotSample& x) {
                      mon.push(x);
+                     if (x.has(kFieldPayload))
+                       for (size_t fi = 0; fi < s.faults.size(); ++fi) {
+                         const Declaration d{x.payload, x.payload_cog[0], x.payload_cog[1], x.payload_cog[2]};
+                         if (x.timestamp < s.faults[fi].onset) {
+                           declared_before[fi] = d;
+                           have_before[fi] = 1;
+                         } else if (!onset_seen[fi] && x.timestamp >= s.faults[fi].onset + kOnsetTolerance) {
+                           onset_seen[fi] = 1;
+                           declaration_changed[fi] = have_before[fi] && d != declared_before[fi];
+                         }
+                       }
                      for (size_t fi = 0; fi < s.faults.size(); ++fi) {
                        const sim::FaultSpec& f = s.faults[fi];
                        if (f.type != sim::FaultType::Collision || std::isfinite(own_share[fi]) || x.timestamp < f.onset + 0.5 * f.duration) continue;
@@ -515,6 +537,23 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     // false alarm of its 2 h)
     std::vector<bool> used(mon.events().size(), false);
     std::vector<ScenarioScore> scs;
+    // a pick the stream declares is the program's doing, not a fault, when the twin takes the
+    // declaration (its torques physical, its prediction carrying a payload, the part within the
+    // rated payload, the monitor following declarations); else it is a payload change to detect.
+    // An event that starts at it is a false alarm that no other fault's window takes
+    const auto declared_pick = [&](size_t fi) {
+      if (fi >= s.faults.size()) return false;
+      const sim::FaultSpec& f = s.faults[fi];
+      return f.type == sim::FaultType::PayloadPick && s.options.streams_payload && declaration_changed[fi] && scfg.follow_payload &&
+             t.gains_known() && t.predicts_payload() && f.payload.mass <= t.robot().payload_limit();
+    };
+    std::vector<bool> at_declaration(mon.events().size(), false);
+    for (size_t fi = 0; fi < s.faults.size(); ++fi)
+      if (declared_pick(fi))
+        for (size_t k = 0; k < mon.events().size(); ++k) {
+          const double ts = mon.events()[k].t_start;
+          at_declaration[k] = at_declaration[k] || (ts >= s.faults[fi].onset - kOnsetTolerance && ts <= s.faults[fi].onset + kDeclaredWindow);
+        }
     for (size_t fi = 0; fi < labels.faults.size(); ++fi) {
       const sim::FaultLabel& lf = labels.faults[fi];
       ScenarioScore sc;
@@ -529,8 +568,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       const double window_end = std::max(end, onset + lf.ramp) + 1.0;
       sc.true_magnitude = lf.magnitude;
       const std::string want = expected_class(sc.fault);
-      // a pick the stream declares is the program's doing, not a fault: nothing is to be detected
-      sc.declared = lf.type == sim::FaultType::PayloadPick && s.options.streams_payload;
+      sc.declared = declared_pick(fi);
       for (size_t k = 0; k < mon.events().size() && !sc.declared; ++k) {
         const auto& e = mon.events()[k];
         if (e.t_start < onset - kOnsetTolerance || e.t_start > window_end) continue;
@@ -540,7 +578,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         const bool same_class = cls == want || (want == "wear" && cls == "resistance");
         const bool same_place = lf.link >= 0 ? e.link == lf.link : (lf.joint >= 0 && e.joint == lf.joint);
         if (sc.detected) {
-          if (same_class || same_place) used[k] = true;
+          if ((same_class || same_place) && !at_declaration[k]) used[k] = true;
           continue;
         }
         used[k] = true;

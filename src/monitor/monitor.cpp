@@ -38,6 +38,10 @@ constexpr double kDeclarationSettle = 0.05;
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
 // look's estimate errs by about 12 % (-0.44 kg for a 0.5 kg loss, docs/validation.md)
 constexpr double kPayloadFollowShare = 0.3, kPayloadFollowFloor = 0.05;
+// a declared centre of mass farther than this from the flange is no part a UR arm carries (its
+// reach is 0.5-1.3 m): most likely a value in mm. It is not taken (it made the monitor blind: a
+// declared centre of mass of 40 "m" hid a part lost and a 10 N·m contact, session 23 review) [m]
+constexpr double kDeclaredCogMax = 1.0;
 // a payload change is followed when the gripper's outputs changed in its window or the payload
 // signature explains this share of the residual (dropped parts 0.88-0.89; a held push 0.76)
 constexpr double kPayloadFollowExplained = 0.85;
@@ -744,6 +748,11 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
 
 double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
 
+bool Monitor::carries_declared() const {
+  // (a followed change within its error of the declaration takes the declared mass: follow_payload)
+  return declaration_taken() && std::abs(twin_.payload().mass - declared_mass_) <= kPayloadFollowFloor;
+}
+
 double Monitor::trusted_gain(int j) const {
   // a gain the recordings did not fix (JointDrive::gain_identified) or outside the plausible range
   // is not trusted: the median of the trusted ones converts that joint's residual to torque
@@ -935,22 +944,40 @@ void Monitor::take_declared_payload(const RobotSample& s) {
     if (had.mass == m && had.com == now.com) now.inertia_com = had.inertia_com;
   }
   // the first declaration is news only where it differs from what the twin was given
-  if (first && had.mass == now.mass && (m == 0.0 || had.com == now.com)) return;
-  const std::string what = m > 0.0 ? fmt::format("{:.2f} kg at ({:.3f}, {:.3f}, {:.3f}) m", m, c[0], c[1], c[2]) : std::string("no payload");
-  if (!twin_.gains_known() || !twin_.predicts_payload() || m > twin_.robot().payload_limit()) {
-    if (!declared_refused_)
-      add_note(t, fmt::format("the controller declares {}, which the twin cannot take: {}", what,
-                              !twin_.gains_known() ? "its torques are relative (it was identified without a known payload that fixes its gains)"
-                              : !twin_.predicts_payload() ? "its prediction does not carry a payload (method '" + twin_.method + "')"
-                                                          : fmt::format("above {:g} kg ({})", twin_.robot().payload_limit(),
-                                                                        twin_.robot().payload_limit_text())));
-    declared_refused_ = true;
+  if (first && had.mass == now.mass && (m == 0.0 || had.com == now.com)) {
+    declared_taken_ = true;
     return;
   }
+  const std::string what = m > 0.0 ? fmt::format("{:.2f} kg at ({:.3f}, {:.3f}, {:.3f}) m", m, c[0], c[1], c[2]) : std::string("no payload");
+  const double cog_distance = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  const bool cog_implausible = m > 0.0 && cog_distance > kDeclaredCogMax;
+  if (!twin_.gains_known() || !twin_.predicts_payload() || m > twin_.robot().payload_limit() || cog_implausible) {
+    // a twin-wide reason is said once; a declaration refused for its own values, each time
+    const bool twin_wide = !twin_.gains_known() || !twin_.predicts_payload();
+    if (!(twin_wide && declared_refused_))
+      add_note(t, fmt::format("the controller declares {}, which the twin does not take: {}; it predicts with {:.2f} kg, and a change "
+                              "of what the arm carries shows as a payload change",
+                              what,
+                              !twin_.gains_known() ? "its torques are relative (it was identified without a known payload that fixes its gains)"
+                              : !twin_.predicts_payload() ? "its prediction does not carry a payload (method '" + twin_.method + "')"
+                              : m > twin_.robot().payload_limit()
+                                  ? fmt::format("above {:g} kg ({})", twin_.robot().payload_limit(), twin_.robot().payload_limit_text())
+                                  : fmt::format("its centre of mass is {:.3g} m from the flange, more than {:g} m (a value in mm?)", cog_distance,
+                                                kDeclaredCogMax),
+                              twin_.payload().mass));
+    declared_refused_ = true;
+    declared_taken_ = false;
+    return;
+  }
+  declared_taken_ = true;
   // a payload change waiting for its longer look (a part dropped, then the next one picked and
   // declared) ends here, sized on the samples before the declaration, as at a gripper output's
   // change (split_payload_change): else the look would measure the drop partly against the new part
-  if (payload_change_waits(t)) split_payload_change(t, "the program declared its next payload");
+  if (payload_change_waits(t)) {
+    declaring_ = true;
+    split_payload_change(t, "the program declared its next payload, which the twin predicts with from there");
+    declaring_ = false;
+  }
   twin_.set_payload(now);
   declared_at_ = t;
   // a diagnosed change the twin followed is superseded: the program has said what it carries
@@ -1008,6 +1035,11 @@ void Monitor::follow_payload(Event& e, double t) {
     return;
   }
   if (mass <= tolerance) mass = 0.0;
+  // a change that lands within the estimate's error of the declared payload is the declared part
+  // (the retry after a missed grip, which declares what was declared already): the twin takes the
+  // declaration, not the estimate (0.98 kg for a declared 1 kg)
+  const bool as_declared = have_declared_ && declared_taken_ && std::abs(mass - declared_mass_) <= tolerance;
+  if (as_declared) mass = declared_mass_;
   // a payload beyond the arm's limit is no payload: a sustained push read as one (a 20 N·m push on
   // the flange fits a 3.85 kg "payload", session 21 review)
   const double limit = twin_.robot().payload_limit();
@@ -1040,7 +1072,10 @@ void Monitor::follow_payload(Event& e, double t) {
     return;
   }
   model::RigidBodyInertia now;
-  if (mass > 0.0) {
+  if (mass > 0.0 && as_declared) {
+    now.mass = mass;
+    now.com = Eigen::Vector3d(declared_cog_[0], declared_cog_[1], declared_cog_[2]);
+  } else if (mass > 0.0) {
     now.mass = mass;
     now.com = had.mass > 0.0 ? had.com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
     // the declared payload's shape at the new mass; a part picked without one: a point mass
@@ -1054,6 +1089,9 @@ void Monitor::follow_payload(Event& e, double t) {
   rest_rf_ = RestBaseline(n_);
   rest_obs_ = RestBaseline(n_);
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
+  // ended by the program's next declaration (take_declared_payload), which the twin takes at once:
+  // the followed payload is never predicted with, and is not said to be
+  if (declaring_) return;
   e.detail += fmt::format("; from {:.3f} s the twin predicts with {} and monitoring goes on with it", t, what);
   add_note(t, fmt::format("the twin now predicts with {} (it had {:.2f} kg; the payload change of the alert raised at {:.3f} s); "
                   "monitor --keep-payload keeps the declared one",

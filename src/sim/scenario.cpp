@@ -283,9 +283,11 @@ std::set<std::string> fault_keys(FaultType t) {
     case FaultType::CurrentOffset: k.insert({"joint", "magnitude"}); break;
     case FaultType::StuckCurrent: k.insert("joint"); break;
     case FaultType::Collision: k = {"type", "onset", "link", "point", "direction", "duration", "magnitude"}; break;
+    // (a pick or a loss happens at its onset: it has no ramp and no end, which the simulator would
+    // ignore while the label's window used them)
     case FaultType::PayloadPick:
-    case FaultType::MissedPick: k.insert({"mass", "com", "io_bit"}); break;
-    case FaultType::PayloadLoss: k.insert("io_bit"); break;
+    case FaultType::MissedPick: k = {"type", "onset", "mass", "com", "io_bit"}; break;
+    case FaultType::PayloadLoss: k = {"type", "onset", "io_bit"}; break;
     case FaultType::DroppedSamples: k.insert({"magnitude", "period"}); break;
     case FaultType::TimestampJitter: k.insert("magnitude"); break;
   }

@@ -587,6 +587,25 @@ TEST_F(MonitorLoop, ADeclarationAfterAnUndeclaredDropRaisesNoContact) {
   }
 }
 
+// A declared centre of mass no part has (40 "m": a value in mm) is not taken: the twin keeps its
+// payload, a note says why, and the pick is found as a payload change (taken, it made the monitor
+// blind to the part lost and a contact after it, session 23 review)
+TEST_F(MonitorLoop, ADeclaredCentreOfMassInMillimetresIsNotTaken) {
+  auto rec = run(scenario(154, 12, 0.0, "  - {type: payload_pick, onset: 6.1, io_bit: 0, mass: 0.5, com: [0, 0, 0.04]}\n"));
+  for (auto& s : rec.samples)
+    if (s.payload > 0.0) s.payload_cog[2] = 40.0;
+  Monitor m(*twin, *config);
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const std::string all = listing(m.events());
+  EXPECT_THAT(m.notes(), ::testing::Contains(::testing::HasSubstr("its centre of mass is 40 m from the flange, more than 1 m")));
+  EXPECT_FALSE(m.declaration_taken());
+  ASSERT_EQ(m.events().size(), 1u) << all;
+  EXPECT_EQ(m.events()[0].fault, FaultClass::PayloadChange) << all;
+  EXPECT_LT(m.events()[0].t_detected - 6.1, 0.1) << all;
+  EXPECT_NEAR(m.events()[0].magnitude, 0.5, 0.1) << all;
+}
+
 TEST_F(MonitorLoop, CollisionIsDetectedAsAPulse) {
   const auto ev = monitor(run(scenario(605, 12, 0.5,
                                       "  - {type: collision, link: 2, onset: 9.3, magnitude: 10, duration: 0.05, "

@@ -46,6 +46,9 @@ TEST(Scenario, AFaultsValuesAreCheckedForItsType) {
       {"{type: resistance, joint: 2, link: 3, onset: 1, magnitude: 1}", "unknown key 'link'"},
       {"{type: collision, link: 3, onset: 1, end: 2, magnitude: 5}", "unknown key 'end'"},
       {"{type: payload_loss, onset: 1, mass: 2}", "unknown key 'mass'"},
+      // a pick or a loss happens at its onset (the simulator ignored an end the label used)
+      {"{type: missed_pick, onset: 1, end: 2, mass: 1, io_bit: 1}", "field 'faults[0].end': unknown key 'end', expected one of: com, io_bit, mass, onset, type"},
+      {"{type: payload_pick, onset: 1, ramp: 0.5, mass: 1}", "unknown key 'ramp'"},
       // a loss with nothing carried
       {"{type: payload_loss, onset: 1}", "test.yaml:5: field 'faults[0]': a payload_loss at 1 s, but the arm carries nothing then"},
   };

@@ -307,7 +307,10 @@ int run_monitor(const MonitorOptions& o) {
   close_written(trace, o.trace);
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
   const double declared = mon.declared_payload(), ended = mon.twin().payload().mass;
-  if (chatty && std::isfinite(declared) && ended != declared)
+  if (chatty && std::isfinite(declared) && !mon.declaration_taken())
+    fmt::print("payload: the controller declares {:.2f} kg, which the twin did not take (see the note); it ended with {:.2f} kg\n", declared,
+               ended);
+  else if (chatty && std::isfinite(declared) && !mon.carries_declared())
     fmt::print("payload: the twin ended with {:.2f} kg, the controller declares {:.2f} kg: the arm does not carry what its program "
                "declared (a part lost, or a pick with nothing gripped; see the payload events)\n",
                ended, declared);
@@ -465,10 +468,11 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_flag("--keep-payload", o->keep_payload,
-                "Keep the declared payload after a payload change is diagnosed. Default: 2.5 s after the raise the twin takes "
-                "the diagnosed payload (a dropped part: none), the alert clears and monitoring goes on, so that a contact or "
-                "the next pick is an event of its own; with this flag the alert stays open while the robot runs without it, and "
-                "the twin does not take the controller's declared payload either");
+                "Keep the payload the twin starts with (--payload-mass, else the twin file's) for the whole run. Default: 2.5 s "
+                "after a payload change is raised the twin takes the diagnosed payload (a dropped part: none), the alert clears "
+                "and monitoring goes on, so that a contact or the next pick is an event of its own; and the twin takes each "
+                "payload the stream declares (RTDE payload, controllers 5.5.1+). With this flag neither: a payload change stays "
+                "open while the robot runs with it, and a pick the program declares is an alert too");
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
                   "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
@@ -649,8 +653,8 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_flag("--keep-payload", o->keep_payload,
-                "Keep the declared payload after a payload change is diagnosed, as 'monitor --keep-payload' (default: the twin "
-                "follows the change, as 'monitor' does)");
+                "Keep the payload the twin starts with for the whole run, as 'monitor --keep-payload': no diagnosed change is "
+                "followed and no declared payload taken (default: the twin follows both, as 'monitor' does)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};

@@ -268,6 +268,12 @@ class Monitor {
   /// The payload mass [kg] the controller declared last (the stream's kFieldPayload); NaN when the
   /// stream carried no declaration.
   double declared_payload() const { return have_declared_ ? declared_mass_ : std::numeric_limits<double>::quiet_NaN(); }
+  /// Whether the twin took the controller's last declaration (false: it refused it, a note says why,
+  /// or the stream carried none).
+  bool declaration_taken() const { return have_declared_ && declared_taken_; }
+  /// Whether the twin took the last declaration and its payload mass is the declared one (within
+  /// 0.05 kg); false without a declaration.
+  bool carries_declared() const;
   const ident::TwinModel& twin() const { return twin_; }
 
  private:
@@ -358,6 +364,8 @@ class Monitor {
   double declared_mass_ = 0.0, declared_cog_[3] = {0.0, 0.0, 0.0};
   double declared_at_ = -std::numeric_limits<double>::infinity();
   bool declared_refused_ = false;  // a declaration the twin cannot take was said once
+  bool declared_taken_ = false;    // the twin took the last declaration (else it was refused)
+  bool declaring_ = false;         // a declaration ends a waiting payload change (follow_payload words it)
   void take_declared_payload(const RobotSample& s);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
   // steps seen, and the gap factor in effect (cfg_.gap_factor, widened for a jittery clock)
