@@ -142,8 +142,8 @@ ColumnMap ColumnMap::load(const std::string& path) {
     if (cells[0].empty()) throw ParseError(path, ln, "file_column", "empty column name");
     if (!known_name(e.rtde_name))
       throw ParseError(path, ln, "rtde_name",
-                       fmt::format("unknown name '{}', expected timestamp, actual_digital_output_bits, robot_mode, stream_gap "
-                                   "or one of {}<joint> (joints from 0)", e.rtde_name, group_prefixes()));
+                       fmt::format("unknown name '{}', expected timestamp, actual_digital_output_bits, robot_mode, stream_gap, "
+                                   "payload, payload_cog_0..2 or one of {}<joint> (joints from 0)", e.rtde_name, group_prefixes()));
     if (m.columns.count(cells[0]))
       throw ParseError(path, ln, "file_column", fmt::format("'{}' is already mapped on line {}", cells[0], m.lines[cells[0]]));
     m.columns[cells[0]] = e;

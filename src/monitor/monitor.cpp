@@ -398,6 +398,7 @@ void MonitorConfig::select_program(const std::string& name) {
   }
   static_level = it->second.static_level;
   dynamic = it->second.dynamic;
+  payload_max = it->second.payload_max;
   if (it->second.observer_level.size() != 0) {
     observer_level = it->second.observer_level;
     observer_dynamic = it->second.observer_dynamic;
@@ -447,9 +448,12 @@ std::string MonitorConfig::to_json() const {
   j["nominal_period"] = nominal_period;
   if (!residual_filter.empty()) j["residual_filter"] = residual_filter;
   j["trend"] = trend_json(trend);
-  for (const auto& [name, set] : programs)
+  if (std::isfinite(payload_max)) j["payload_max_kg"] = payload_max;
+  for (const auto& [name, set] : programs) {
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
+    if (std::isfinite(set.payload_max)) j["programs"][name]["payload_max_kg"] = set.payload_max;
+  }
   for (const auto& [name, set] : programs)
     if (set.observer_level.size() != 0) {
       j["programs"][name]["observer_level_Nm"] = vec_json(set.observer_level);
@@ -471,7 +475,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     const JsonFields m(j, origin, "monitor");
     m.only({"static_level_A", "dynamic", "use_dynamic", "filter_cutoff_hz", "raise_after", "clear_after", "observer_raise_after",
             "observer_raise_after_joint", "observer_validation_ratio", "sensitivity", "nominal_period", "residual_filter", "trend", "programs",
-            "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic"});
+            "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic", "payload_max_kg"});
     // the joint count: the twin's, or (a block read on its own) that of the static levels
     const nlohmann::json& levels = m.need("static_level_A");
     const int n = n_dof > 0 ? n_dof : levels.is_array() ? static_cast<int>(std::min<size_t>(levels.size(), kMaxDof + 1)) : 0;
@@ -501,6 +505,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
           throw ParseError(origin, 0, json_element(m.field("residual_filter"), k), fmt::format("expected \"iir\" or \"fir\", got \"{}\"", c.residual_filter[k]));
     }
     c.trend = trend_from_json(m.object("trend"), n);
+    if (m.has("payload_max_kg")) c.payload_max = m.nonnegative("payload_max_kg");
     // the sets learned per program
     if (m.has("programs")) {
       const JsonFields programs = m.object("programs");
@@ -512,13 +517,14 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         }
         const JsonFields p(value, origin, programs.field(name));
         p.only({"static_level_A", "dynamic", "runs", "seconds", "observer_level_Nm", "observer_dynamic", "observer_raise_after_joint",
-                "observer_validation_ratio"});
+                "observer_validation_ratio", "payload_max_kg"});
         ThresholdSet set;
         set.static_level = joint_values(p, "static_level_A", n, true);
         set.dynamic = dynamic_from_json(p, "dynamic", n, !c.use_dynamic);
         set.runs = p.whole("runs");
         if (set.runs < 0) p.fail("runs", fmt::format("expected a whole number >= 0, got {}", set.runs));
         set.seconds = p.nonnegative("seconds");
+        if (p.has("payload_max_kg")) set.payload_max = p.nonnegative("payload_max_kg");
         // the observer's set comes whole (written together)
         if (p.has("observer_level_Nm") || p.has("observer_dynamic")) {
           set.observer_level = joint_values(p, "observer_level_Nm", n, true);
@@ -625,6 +631,8 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     }
   }
   c.observer_choice = {};  // a per-joint debounce belongs to the thresholds it was chosen for
+  c.payload_max = 0.0;
+  for (const HealthyRun& h : runs) c.payload_max = std::max(c.payload_max, h.payload.mass);
   return c;
 }
 
@@ -683,6 +691,7 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.dynamic = learned.dynamic;
   set.observer_level = learned.observer_level;
   set.observer_dynamic = learned.observer_dynamic;
+  set.payload_max = learned.payload_max;
   // no per-joint observer debounce: a choice belongs to the thresholds it was made for (choose_observer_debounce)
   set.runs = static_cast<int>(runs.size());
   for (const auto& r : runs)
@@ -747,6 +756,19 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
 }
 
 double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
+
+void Monitor::check_payload_envelope(double t) {
+  const double mass = twin_.payload().mass, learned = cfg_.payload_max;
+  const bool beyond = std::isfinite(learned) && mass > learned + kPayloadEnvelopeMargin;
+  if (beyond && !payload_beyond_)
+    add_note(t, fmt::format("the twin predicts with {:.2f} kg, more than {:g} kg above the {:.2f} kg of the heaviest healthy run its "
+                            "thresholds{} were learned on: its model error grows with the payload (on the virtual UR3e, thresholds "
+                            "learned at 0-0.5 kg raised 4 false alarms a minute at 1.5 and 2 kg), and an alert raised now may be that. "
+                            "Learn thresholds on a healthy run with this payload: twinwatch thresholds --twin TWIN --payload-mass "
+                            "{:.2f} --program NAME HEALTHY.csv, then monitor --program NAME",
+                            mass, kPayloadEnvelopeMargin, learned, cfg_.program.empty() ? "" : " (program '" + cfg_.program + "')", mass));
+  payload_beyond_ = beyond;
+}
 
 bool Monitor::carries_declared() const {
   // (a followed change within its error of the declaration takes the declared mass: follow_payload)
@@ -870,6 +892,10 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   e.units = h.units;
   e.confidence = h.explained;
   e.detail = h.detail;
+  if (payload_beyond_)
+    e.detail += fmt::format("; raised with a {:.2f} kg payload, heavier than the thresholds were learned with ({:.2f} kg): it may be the "
+                            "twin's model error",
+                            twin_.payload().mass, cfg_.payload_max);
   // a twin identified without a known payload has an arbitrary torque scale: its N·m, N and kg are
   // not physical (an extra 0.8 N·m of friction read as 0.11), which the event says instead of
   // presenting them as sizes
@@ -997,6 +1023,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
                     : fmt::format("the program declared {} (it had declared {:.2f} kg): the twin predicts with it, and a part lost or "
                                   "never picked shows as a payload change",
                                   what, was));
+  check_payload_envelope(t);
 }
 
 void Monitor::follow_payload(Event& e, double t) {
@@ -1083,6 +1110,7 @@ void Monitor::follow_payload(Event& e, double t) {
   }
   followed_from_ = had;
   twin_.set_payload(now);
+  check_payload_envelope(t);
   followed_ = true;
   followed_at_ = t;
   // what a resting joint was held at was measured with the old payload: it is measured again
@@ -1103,6 +1131,7 @@ void Monitor::undo_follow(double t) {
   // payload, and the twin goes back to what it carried
   followed_ = false;
   twin_.set_payload(followed_from_);
+  check_payload_envelope(t);
   rest_rf_ = RestBaseline(n_);
   rest_obs_ = RestBaseline(n_);
   Event& e = events_[static_cast<size_t>(open_)];
@@ -1250,6 +1279,7 @@ void Monitor::push(const RobotSample& s) {
   if (skip_invalid(s)) return;
   const double t = s.timestamp;
   ++n_samples_;
+  if (n_samples_ == 1) check_payload_envelope(t);
   // stream: gaps in the controller timestamp are events of their own, never interpolated
   const double dt = have_prev_ ? t - t_prev_ : cfg_.nominal_period;
   const bool gap = have_prev_ && (s.gap_before || dt > gap_factor_ * cfg_.nominal_period);

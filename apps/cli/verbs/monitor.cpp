@@ -430,9 +430,10 @@ int run_thresholds(const ThresholdOptions& o) {
   stored.program.clear();
   out.monitor_json = stored.to_json();
   out.save(o.twin);
-  fmt::print("thresholds {} learned from {} healthy recording(s) with residual filter '{}' and stored in {}\n",
+  fmt::print("thresholds {} learned from {} healthy recording(s) with residual filter '{}' and stored in {}; the heaviest payload "
+             "among them, {:.2f} kg, is recorded (the monitor says when it predicts with more than {:g} kg above it)\n",
              o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program), recs.size(),
-             o.filter.empty() ? "iir" : o.filter, o.twin);
+             o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::kPayloadEnvelopeMargin);
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];
     fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,

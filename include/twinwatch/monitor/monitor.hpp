@@ -49,6 +49,8 @@ struct ThresholdSet {
   int runs = 0;                               ///< healthy runs it was learned on
   double seconds = 0.0;                       ///< their total duration [s]
   ObserverDebounceChoice observer_choice;     ///< the observer's debounce per joint for these thresholds (empty: the shared count)
+  /// the heaviest payload [kg] of the runs it was learned on (NaN: not recorded, a twin from before session 24)
+  double payload_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
@@ -122,6 +124,12 @@ struct MonitorConfig {
   bool observer_alerts = true;
   VectorJ observer_level;                              ///< [N·m] static threshold per joint (empty: off)
   std::vector<DynamicThresholdJoint> observer_dynamic; ///< [N·m] Cao eq. 24 on the observer output
+  /// The heaviest payload [kg] of the healthy runs the thresholds in use were learned on (NaN: not
+  /// recorded, a twin from before session 24). The twin's model error grows with the payload, and
+  /// thresholds learned light do not cover a heavy one (on the virtual UR3e, thresholds learned at
+  /// 0-0.5 kg: no false alarm at 1.0 kg, 4 a minute at 1.5 and 2 kg): the monitor says so when its
+  /// payload is more than Monitor::kPayloadEnvelopeMargin heavier, and marks the alerts raised then.
+  double payload_max = std::numeric_limits<double>::quiet_NaN();
 
   /// Makes the set learned for `name` the active one (static_level, dynamic). Empty: keep the
   /// default. Throws InvalidArgument naming the known programs when there is no such set.
@@ -274,6 +282,12 @@ class Monitor {
   /// Whether the twin took the last declaration and its payload mass is the declared one (within
   /// 0.05 kg); false without a declaration.
   bool carries_declared() const;
+  /// A payload this much heavier [kg] than MonitorConfig::payload_max is beyond what the thresholds
+  /// were learned on (1.0 kg raised no false alarm with thresholds learned up to 0.5 kg, 1.5 kg did).
+  static constexpr double kPayloadEnvelopeMargin = 0.5;
+  /// Whether the twin's payload is now beyond what the thresholds were learned on (payload_max
+  /// + kPayloadEnvelopeMargin); false when payload_max is not recorded.
+  bool payload_beyond_thresholds() const { return payload_beyond_; }
   const ident::TwinModel& twin() const { return twin_; }
 
  private:
@@ -366,6 +380,10 @@ class Monitor {
   bool declared_refused_ = false;  // a declaration the twin cannot take was said once
   bool declared_taken_ = false;    // the twin took the last declaration (else it was refused)
   bool declaring_ = false;         // a declaration ends a waiting payload change (follow_payload words it)
+  // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
+  // at the first sample and whenever the payload changes, said in a note each time it goes beyond
+  bool payload_beyond_ = false;
+  void check_payload_envelope(double t);
   void take_declared_payload(const RobotSample& s);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
   // steps seen, and the gap factor in effect (cfg_.gap_factor, widened for a jittery clock)
