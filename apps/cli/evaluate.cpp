@@ -488,10 +488,11 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<double> true_force(s.faults.size(), std::numeric_limits<double>::quiet_NaN());
     const model::RobotModel& kin = t.robot();  // the arm's kinematics (the twin's inertia is not used)
     model::DynamicsData dkin(kin);
-    // evaluation only: whether the stream's declaration changed at each pick's onset (a pick that
-    // declares what was declared already, or a stream without declarations, declares nothing new):
-    // the last sample before the onset against the first one a tolerance past it (the simulator
-    // applies a pick on the step that starts at or after its onset)
+    // evaluation only: whether the stream's declaration changed at each pick (a pick that declares
+    // what was declared already, or a stream without declarations, declares nothing new): the last
+    // sample before the grip or the declaration, whichever comes first (declare_delay), against the
+    // first one a tolerance past the later (the simulator applies them on the step that starts at or
+    // after their times)
     using Declaration = std::array<double, 4>;  // mass, centre of mass
     std::vector<Declaration> declared_before(s.faults.size());
     std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
@@ -500,10 +501,11 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                      if (x.has(kFieldPayload))
                        for (size_t fi = 0; fi < s.faults.size(); ++fi) {
                          const Declaration d{x.payload, x.payload_cog[0], x.payload_cog[1], x.payload_cog[2]};
-                         if (x.timestamp < s.faults[fi].onset) {
+                         const double delay = s.faults[fi].declare_delay;
+                         if (x.timestamp < s.faults[fi].onset + std::min(0.0, delay)) {
                            declared_before[fi] = d;
                            have_before[fi] = 1;
-                         } else if (!onset_seen[fi] && x.timestamp >= s.faults[fi].onset + kOnsetTolerance) {
+                         } else if (!onset_seen[fi] && x.timestamp >= s.faults[fi].onset + std::max(0.0, delay) + kOnsetTolerance) {
                            onset_seen[fi] = 1;
                            declaration_changed[fi] = have_before[fi] && d != declared_before[fi];
                          }
@@ -552,7 +554,9 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       if (declared_pick(fi))
         for (size_t k = 0; k < mon.events().size(); ++k) {
           const double ts = mon.events()[k].t_start;
-          at_declaration[k] = at_declaration[k] || (ts >= s.faults[fi].onset - kOnsetTolerance && ts <= s.faults[fi].onset + kDeclaredWindow);
+          const double from = s.faults[fi].onset + std::min(0.0, s.faults[fi].declare_delay);
+          const double to = s.faults[fi].onset + std::max(0.0, s.faults[fi].declare_delay);
+          at_declaration[k] = at_declaration[k] || (ts >= from - kOnsetTolerance && ts <= to + kDeclaredWindow);
         }
     for (size_t fi = 0; fi < labels.faults.size(); ++fi) {
       const sim::FaultLabel& lf = labels.faults[fi];

@@ -34,6 +34,15 @@ constexpr int kObserverSettle = 50;
 // undeclared, then a declared pick, still raised a 4 ms "contact" 34 ms after the declaration with a
 // 30 ms wait, none with 40-80 ms; a real controller's slower loop would need a longer wait
 constexpr double kDeclarationSettle = 0.05;
+// a program declares its pick up to this long after the gripper closed on it (a gripper's URCap
+// declares once it has seen the grip), or before it closes: the payload change raised in between is
+// the pick the program declared, not a fault, and is withdrawn (declaration_explains,
+// grip_completes_declaration) [s]
+constexpr double kDeclarationLag = 1.0;
+// a declaration this close to a raise leaves a step shorter than a diagnosis window, which reads as
+// a pulse (a contact where the part hangs) or is not yet diagnosed [s]
+constexpr double kShortStep = 0.25;
+constexpr double kDeclaredPickShare = 0.5;  // a payload change within this share of a declared change is that pick (declared_pick_candidate)
 // a payload change the monitor follows (MonitorConfig::follow_payload) that leaves a mass within this
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
 // look's estimate errs by about 12 % (-0.44 kg for a 0.5 kg loss, docs/validation.md)
@@ -948,6 +957,61 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   if (on_event) on_event(e);
 }
 
+bool Monitor::declared_pick_candidate(const Event& e, double declared_at, double change) const {
+  // an alert raised within kDeclarationLag of a declaration, reading as that part's weight: before
+  // the declaration the arm already carries it (+change), after it the arm does not yet (-change).
+  // A step shorter than a diagnosis window is read as a pulse, a contact where the part hangs (the
+  // last link), or is not yet diagnosed: taken within kShortStep of the declaration
+  if (!std::isfinite(declared_at) || change == 0.0 || std::abs(e.t_start - declared_at) > kDeclarationLag) return false;
+  if (background_ >= 0 || merge_into_ >= 0 || followed_) return false;
+  if (e.fault == FaultClass::PayloadChange) {
+    // (within half the declared change: the first look reads a step at a rest short, +0.67 kg for 1 kg)
+    const double expected = e.t_start < declared_at ? change : -change;
+    return std::abs(e.magnitude - expected) <= std::max(kPayloadFollowFloor, kDeclaredPickShare * std::abs(change));
+  }
+  const bool short_step = std::abs(e.t_start - declared_at) <= kShortStep;
+  const bool at_last_link = e.link == n_ - 1 || std::find(e.other_links.begin(), e.other_links.end(), n_ - 1) != e.other_links.end();
+  return short_step && (e.fault == FaultClass::Unknown || (e.fault == FaultClass::Collision && at_last_link));
+}
+
+bool Monitor::declared_pick_explains(double t) const {
+  // the candidate cleared soon after both the declaration and the grip (a gripper output change
+  // around it) had happened: the twin's declared payload and the arm's load agree again, and what
+  // was raised in between was their timing, not a fault. A missed grip does not clear, a part lost
+  // has no output change, and both stay events
+  const Event& e = events_[static_cast<size_t>(open_)];
+  if (!declared_pick_candidate(e, declared_at_, declared_change_) || t - std::max(declared_at_, e.t_start) > kDeclarationLag + kPulseMax)
+    return false;
+  // the grip apart from the declaration, on the side the alert says: before it (the arm carried the
+  // part first: the gripper closed before the declaration, around the raise), or after it (the
+  // gripper closed after the declaration). A grip with the declaration in one sample leaves no step,
+  // and an alert after it is something else (a contact at the gripper stays an event)
+  const double half = 0.5 * cfg_.nominal_period;
+  return e.t_start < declared_at_ ? outputs_changed_within(e.t_start - kPayloadIoLookback, declared_at_ - half)
+                                  : outputs_changed_within(declared_at_ + half, t);
+}
+
+bool Monitor::outputs_changed_within(double from, double to) const {
+  bool have = false;
+  std::uint64_t prev = 0;
+  for (size_t k = 0; k < ring_count_; ++k) {
+    const DiagnosisSample& d = ring_at(k);
+    if (d.t < from || d.t > to) continue;
+    if (have && d.digital_outputs != prev) return true;
+    prev = d.digital_outputs;
+    have = true;
+  }
+  return false;
+}
+
+void Monitor::withdraw_open_alert() {
+  drop_open_event();
+  for (auto& d : deb_) d.reset();
+  for (auto& d : deb_obs_) d.reset();
+  std::fill(joint_active_.begin(), joint_active_.end(), 0);
+  diagnosed_ = rediagnosed_ = false;
+}
+
 void Monitor::take_declared_payload(const RobotSample& s) {
   const double t = s.timestamp;
   const double m = s.payload;
@@ -999,13 +1063,32 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // a payload change waiting for its longer look (a part dropped, then the next one picked and
   // declared) ends here, sized on the samples before the declaration, as at a gripper output's
   // change (split_payload_change): else the look would measure the drop partly against the new part
-  if (payload_change_waits(t)) {
+  // an alert raised at a grip shortly before and already cleared (a pick at a rest: the held-at-rest
+  // baseline took it up), waiting for its merge gap: the pick this declares, declared late
+  if (pending_close_ >= 0) {
+    const Event& pc = events_[static_cast<size_t>(pending_close_)];
+    const double change = m - (first ? had.mass : was);
+    if (pc.t_start < t && declared_pick_candidate(pc, t, change) &&
+        outputs_changed_within(pc.t_start - kPayloadIoLookback, t - 0.5 * cfg_.nominal_period)) {
+      add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
+                              "withdrawn, not an event",
+                              pc.t_detected, pc.detail));
+      drop_event(pending_close_);
+    }
+  }
+  // (an alert raised at a grip shortly before: the pick this declares, declared late, which its close
+  // decides: declared_pick_explains)
+  const bool late_for_open = open_ >= 0 && events_[static_cast<size_t>(open_)].t_start < t &&
+                             declared_pick_candidate(events_[static_cast<size_t>(open_)], t, m - (first ? had.mass : was)) &&
+                             outputs_changed_within(events_[static_cast<size_t>(open_)].t_start - kPayloadIoLookback, t - 0.5 * cfg_.nominal_period);
+  if (payload_change_waits(t) && !late_for_open) {
     declaring_ = true;
     split_payload_change(t, "the program declared its next payload, which the twin predicts with from there");
     declaring_ = false;
   }
   twin_.set_payload(now);
   declared_at_ = t;
+  declared_change_ = m - (first ? had.mass : was);
   // a diagnosed change the twin followed is superseded: the program has said what it carries
   followed_ = false;
   // what a resting joint is held at was measured with the old payload; the observer integrates the
@@ -1494,7 +1577,9 @@ void Monitor::push(const RobotSample& s) {
   // drop and a pick 1 s apart, a dual gripper tending a machine). Left to the longer look, one
   // window held both changes, which no single signature fits (it read as a contact on link 6 that
   // never cleared, and hid what came after it)
-  if (have_prev_ && s.digital_outputs != outputs_prev_ && payload_change_waits(t)) split_payload_change(t, "a gripper output changed again");
+  if (have_prev_ && s.digital_outputs != outputs_prev_ && payload_change_waits(t) &&
+      !declared_pick_candidate(events_[static_cast<size_t>(open_)], declared_at_, declared_change_))
+    split_payload_change(t, "a gripper output changed again");
   if (open_ >= 0) {
     Event& e = events_[static_cast<size_t>(open_)];
     e.t_end = t;
@@ -1506,7 +1591,14 @@ void Monitor::push(const RobotSample& s) {
       rediagnosed_ = true;
     }
     const bool parked = background_ >= 0;
-    if (!any_active) {
+    if (!any_active && declared_pick_explains(t)) {
+      const Event& w = events_[static_cast<size_t>(open_)];
+      add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declared at {:.3f} s, {} the gripper closed: "
+                              "the twin's payload and the arm's load agree again, so it is withdrawn, not an event",
+                              w.t_detected, w.fault == FaultClass::Unknown ? std::string("not yet diagnosed") : w.detail, declared_at_,
+                              declared_at_ < w.t_start ? "before" : "after"));
+      withdraw_open_alert();
+    } else if (!any_active) {
       // an alert that lasted well beyond a pulse gets its final look with everything seen (a raise
       // that parked a persistent alert may merge back into it there). A payload change it finds is
       // followed there too: in a program that rests between moves, the held-at-rest baseline takes
@@ -1515,7 +1607,9 @@ void Monitor::push(const RobotSample& s) {
       if (!diagnosed_ || (!rediagnosed_ && beyond_pulse)) run_diagnosis(t, diagnosed_ && beyond_pulse);
     }
     if (followed_ && any_active && t - followed_at_ >= kPayloadFollowSettle) undo_follow(t);
-    if (!any_active && parked && background_ >= 0) {
+    if (open_ < 0) {
+      // withdrawn above
+    } else if (!any_active && parked && background_ >= 0) {
       // the contact that parked a persistent alert has cleared: the parked alert is the open one again
       Event& done = events_[static_cast<size_t>(open_)];
       done.open = false;
@@ -1587,14 +1681,17 @@ void Monitor::add_note(double t, const std::string& text) {
   if (on_note) on_note(t, text);
 }
 
-void Monitor::drop_open_event() {
-  // the indices kept into events_ after it move down by one
-  events_.erase(events_.begin() + open_);
-  for (int* k : {&pending_close_, &merge_into_, &background_})
-    if (*k > open_) --*k;
+void Monitor::drop_open_event() { drop_event(open_); }
+
+void Monitor::drop_event(int index) {
+  // the indices kept into events_ after it move down by one, one that pointed at it is cleared
+  events_.erase(events_.begin() + index);
+  for (int* k : {&open_, &pending_close_, &merge_into_, &background_})
+    if (*k == index) *k = -1;
+    else if (*k > index) --*k;
   for (int& k : frozen_event_)
-    if (k > open_) --k;
-  open_ = -1;
+    if (k == index) k = -1;
+    else if (k > index) --k;
 }
 
 void Monitor::resume_background() {

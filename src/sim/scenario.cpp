@@ -285,7 +285,7 @@ std::set<std::string> fault_keys(FaultType t) {
     case FaultType::Collision: k = {"type", "onset", "link", "point", "direction", "duration", "magnitude"}; break;
     // (a pick or a loss happens at its onset: it has no ramp and no end, which the simulator would
     // ignore while the label's window used them)
-    case FaultType::PayloadPick:
+    case FaultType::PayloadPick: k = {"type", "onset", "mass", "com", "io_bit", "declare_delay"}; break;
     case FaultType::MissedPick: k = {"type", "onset", "mass", "com", "io_bit"}; break;
     case FaultType::PayloadLoss: k = {"type", "onset", "io_bit"}; break;
     case FaultType::DroppedSamples: k.insert({"magnitude", "period"}); break;
@@ -452,6 +452,20 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
         if (fs.payload.mass > m.payload_limit()) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
         if (f["com"]) fs.payload.com = y.finite_vec(f, p, "com", 3);
+      }
+      if (f["declare_delay"]) {
+        fs.declare_delay = y.number(f, p, "declare_delay");
+        if (!(std::abs(fs.declare_delay) <= kMaxDeclareDelay))
+          y.fail(f["declare_delay"], p + ".declare_delay",
+                 fmt::format("expected a time from -{0:g} to {0:g} s (the program declares the part this long after the grip; "
+                             "negative: before it), got {1}",
+                             kMaxDeclareDelay, fs.declare_delay));
+        if (!(fs.onset + fs.declare_delay >= 0.0))
+          y.fail(f["declare_delay"], p + ".declare_delay",
+                 fmt::format("the declaration would come at {:g} s, before the run starts", fs.onset + fs.declare_delay));
+        if (fs.declare_delay != 0.0 && !s.options.streams_payload)
+          y.fail(f["declare_delay"], p + ".declare_delay",
+                 "a declaration's timing needs 'streams_payload: true' (without it the stream carries no declaration)");
       }
       fs.io_bit = y.integer(f, p, "io_bit", 0);
       if (fs.io_bit < 0 || fs.io_bit > kMaxDigitalOutputBit)

@@ -176,6 +176,7 @@ Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Tra
                                         max_jitter));
   }
   fault_applied_.assign(faults_.size(), false);
+  declaration_applied_.assign(faults_.size(), false);
   if (opt_.payload.mass > 0.0) {
     truth_model_.set_payload(opt_.payload);
     if (opt_.payload_declared) controller_model_.set_payload(opt_.payload);
@@ -231,10 +232,14 @@ double Simulator::friction_torque(int j, double v, double h) {
 void Simulator::apply_payload_faults(double t) {
   for (size_t k = 0; k < faults_.size(); ++k) {
     const FaultSpec& f = faults_[k];
+    // the program declares what it picks: with the grip, or declare_delay after (before) it
+    if (f.type == FaultType::PayloadPick && !declaration_applied_[k] && t >= f.onset + f.declare_delay) {
+      controller_model_.set_payload(f.payload);
+      declaration_applied_[k] = true;
+    }
     if (fault_applied_[k] || t < f.onset) continue;
     if (f.type == FaultType::PayloadPick) {
       truth_model_.set_payload(f.payload);
-      controller_model_.set_payload(f.payload);  // the program declares what it picks
       dout_ |= (1ull << f.io_bit);
       payload_on_ = true;
       fault_applied_[k] = true;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 #include <utility>
 
 #include "twinwatch/core/error.hpp"
@@ -109,6 +110,45 @@ TEST(Scenario, TheDeclaredPayloadIsStreamedAndAMissedPickChangesOnlyIt) {
               HasSubstr("field 'faults[0].type': a missed_pick is a payload the program declares and the arm does not carry: it needs "
                         "'streams_payload: true'"));
   EXPECT_THAT(error_of(head + "faults:\n  - {type: missed_pick, onset: 1, mass: 0}\n"), HasSubstr("faults[0].mass': must be > 0 kg"));
+}
+
+// session 24: a program declares its pick before or after the gripper closes (declare_delay): the
+// arm carries the part from the grip (the onset), the stream declares it declare_delay later
+TEST(Scenario, APicksDeclarationCanComeBeforeOrAfterTheGrip) {
+  const std::string head = "robot: ur3e\nduration: 6\n" + kFig8;
+  const Scenario s = parse_scenario(head + "faults:\n"
+                                           "  - {type: payload_pick, onset: 1, mass: 1.0, io_bit: 1, declare_delay: 0.3}\n"
+                                           "  - {type: payload_loss, onset: 2, io_bit: 1}\n"
+                                           "  - {type: payload_pick, onset: 4, mass: 0.5, io_bit: 2, declare_delay: -0.5}\n",
+                                    "test.yaml");
+  ASSERT_EQ(s.faults.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.faults[0].declare_delay, 0.3);
+  const auto sim = make_simulator(s);
+  std::map<double, RobotSample> at;  // the stream at these times
+  sim->run([&](const RobotSample& x) {
+    for (double t : {1.2, 1.4, 3.4, 3.6, 4.2})
+      if (std::abs(x.timestamp - t) < 1e-9) at[t] = x;
+  });
+  ASSERT_EQ(at.size(), 5u);
+  EXPECT_EQ(at[1.2].digital_outputs & 2u, 2u) << "gripped at 1 s";
+  EXPECT_EQ(at[1.2].payload, 0.0) << "declared only at 1.3 s";
+  EXPECT_EQ(at[1.4].payload, 1.0);
+  EXPECT_EQ(at[3.4].payload, 1.0) << "the loss at 2 s is undeclared";
+  EXPECT_EQ(at[3.6].payload, 0.5) << "declared at 3.5 s";
+  EXPECT_EQ(at[3.6].digital_outputs & 4u, 0u) << "before the gripper closes at 4 s";
+  EXPECT_EQ(at[4.2].digital_outputs & 4u, 4u);
+  EXPECT_EQ(sim->truth_model().payload().mass, 0.5);
+  // what it may be
+  const std::string f = head + "faults:\n  - ";
+  EXPECT_THAT(error_of(f + "{type: payload_pick, onset: 1, mass: 1, declare_delay: 3}\n"),
+              HasSubstr("field 'faults[0].declare_delay': expected a time from -2 to 2 s (the program declares the part this long after "
+                        "the grip; negative: before it), got 3"));
+  EXPECT_THAT(error_of(f + "{type: payload_pick, onset: 0.5, mass: 1, declare_delay: -1}\n"),
+              HasSubstr("field 'faults[0].declare_delay': the declaration would come at -0.5 s, before the run starts"));
+  EXPECT_THAT(error_of(f + "{type: payload_pick, onset: 1, mass: 1, declare_delay: .nan}\n"), HasSubstr("faults[0].declare_delay"));
+  EXPECT_THAT(error_of(f + "{type: missed_pick, onset: 1, mass: 1, declare_delay: 0.2}\n"), HasSubstr("unknown key 'declare_delay'"));
+  EXPECT_THAT(error_of(head + "streams_payload: false\nfaults:\n  - {type: payload_pick, onset: 1, mass: 1, declare_delay: 0.2}\n"),
+              HasSubstr("field 'faults[0].declare_delay': a declaration's timing needs 'streams_payload: true'"));
 }
 
 // a duration that cannot be run is reported at its own line, with the value

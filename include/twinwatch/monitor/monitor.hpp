@@ -380,6 +380,14 @@ class Monitor {
   bool declared_refused_ = false;  // a declaration the twin cannot take was said once
   bool declared_taken_ = false;    // the twin took the last declaration (else it was refused)
   bool declaring_ = false;         // a declaration ends a waiting payload change (follow_payload words it)
+  double declared_change_ = 0.0;   // the change of the declared mass at the last declaration the twin took [kg]
+  // the declaration's timing against the grip (kDeclarationLag): a payload change raised between the
+  // two is the declared pick and is withdrawn
+  bool declared_pick_candidate(const Event& e, double declared_at, double change) const;
+  bool declared_pick_explains(double t) const;
+  bool outputs_changed_within(double from, double to) const;
+  void withdraw_open_alert();
+  void drop_event(int index);  // erases events_[index], keeping the indices into events_ right
   // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
   // at the first sample and whenever the payload changes, said in a note each time it goes beyond
   bool payload_beyond_ = false;

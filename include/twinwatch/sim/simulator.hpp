@@ -111,6 +111,11 @@ struct FaultSpec {
   double period = 0.0;     ///< dropped samples: repeat every period [s] (0: once)
   model::RigidBodyInertia payload;  ///< payload pick
   int io_bit = 0;          ///< digital output bit of the gripper, 0 to kMaxDigitalOutputBit
+  /// payload pick: the program declares the part (set_payload) this long after the gripper closes
+  /// on it [s], as a gripper's URCap does once it has seen the grip; negative: before (the program
+  /// declares, then closes the gripper). 0: at once. Between the two the controller's feed-forward
+  /// and the stream's declaration differ from what the arm carries.
+  double declare_delay = 0.0;
 
   /// 0 before onset, ramps to 1, 0 after end.
   double level(double t) const;
@@ -136,6 +141,9 @@ inline constexpr double kMaxDuration = 1e6;
 /// Highest digital output bit a fault may drive: a UR controller's actual_digital_output_bits holds
 /// the standard outputs in bits 0-7, the configurable ones in 8-15 and the tool's in 16-17.
 inline constexpr int kMaxDigitalOutputBit = 17;
+/// The longest a program may declare a pick before or after the grip in a scenario [s]
+/// (FaultSpec::declare_delay): a gripper's URCap declares within a second of the grip.
+inline constexpr double kMaxDeclareDelay = 2.0;
 /// Timestamp jitter: each draw is clipped to kJitterClipSigmas sigmas and sigma may be at most
 /// kMaxJitterFraction of the sample period, so that consecutive timestamps stay at least
 /// 1 - 2 * 3 / 8 = a quarter period apart (the recording reader requires increasing timestamps).
@@ -209,6 +217,7 @@ class Simulator {
   std::uint64_t dout_ = 0;
   bool payload_on_ = false;
   std::vector<bool> fault_applied_;
+  std::vector<bool> declaration_applied_;  // a payload pick's declaration (FaultSpec::declare_delay)
   long dropped_left_ = 0;
 };
 
