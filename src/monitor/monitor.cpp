@@ -36,12 +36,14 @@ constexpr int kObserverSettle = 50;
 constexpr double kDeclarationSettle = 0.05;
 // a program declares its pick up to this long after the gripper closed on it (a gripper's URCap
 // declares once it has seen the grip), or before it closes: the payload change raised in between is
-// the pick the program declared, not a fault, and is withdrawn (declaration_explains,
-// grip_completes_declaration) [s]
+// the pick the program declared, not a fault, and is withdrawn (declared_pick_candidate,
+// declared_pick_explains) [s]
 constexpr double kDeclarationLag = 1.0;
 // a declaration this close to a raise leaves a step shorter than a diagnosis window, which reads as
 // a pulse (a contact where the part hangs) or is not yet diagnosed [s]
 constexpr double kShortStep = 0.25;
+constexpr double kDeclaredForceShare = 2.5;  // a contact read from a declared part's step: at most this many times its weight
+constexpr double kGravity = 9.81;             // [m/s^2]
 constexpr double kDeclaredPickShare = 0.5;  // a payload change within this share of a declared change is that pick (declared_pick_candidate)
 // a payload change the monitor follows (MonitorConfig::follow_payload) that leaves a mass within this
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
@@ -969,9 +971,13 @@ bool Monitor::declared_pick_candidate(const Event& e, double declared_at, double
     const double expected = e.t_start < declared_at ? change : -change;
     return std::abs(e.magnitude - expected) <= std::max(kPayloadFollowFloor, kDeclaredPickShare * std::abs(change));
   }
+  // (a contact's force no more than kDeclaredForceShare times the part's weight: a hit on the
+  // gripper reads tens of newtons against the 2-10 N of a part; the declared parts' steps read
+  // 1.7-2.0 times their weight)
   const bool short_step = std::abs(e.t_start - declared_at) <= kShortStep;
   const bool at_last_link = e.link == n_ - 1 || std::find(e.other_links.begin(), e.other_links.end(), n_ - 1) != e.other_links.end();
-  return short_step && (e.fault == FaultClass::Unknown || (e.fault == FaultClass::Collision && at_last_link));
+  const bool weight_sized = e.units == "N" && e.magnitude <= kDeclaredForceShare * std::abs(change) * kGravity;
+  return short_step && e.fault == FaultClass::Collision && at_last_link && weight_sized;
 }
 
 bool Monitor::declared_pick_explains(double t) const {
@@ -986,9 +992,15 @@ bool Monitor::declared_pick_explains(double t) const {
   // part first: the gripper closed before the declaration, around the raise), or after it (the
   // gripper closed after the declaration). A grip with the declaration in one sample leaves no step,
   // and an alert after it is something else (a contact at the gripper stays an event)
+  // The grip is what raised it: for a late declaration the gripper closed before the alert began
+  // (within kPayloadIoLookback: at a rest the step shows when the arm moves on), not after it (a
+  // release after a part lost in transit, then a declaration of none, is no pick); for an early one
+  // it closed after the alert began, or just before it while the decisions still waited out the
+  // declaration (kDeclarationSettle)
   const double half = 0.5 * cfg_.nominal_period;
-  return e.t_start < declared_at_ ? outputs_changed_within(e.t_start - kPayloadIoLookback, declared_at_ - half)
-                                  : outputs_changed_within(declared_at_ + half, t);
+  return e.t_start < declared_at_
+             ? outputs_changed_within(e.t_start - kPayloadIoLookback, std::min(e.t_start + half, declared_at_ - half))
+             : outputs_changed_within(std::max(declared_at_ + half, e.t_start - kDeclarationSettle - 2 * cfg_.nominal_period), t);
 }
 
 bool Monitor::outputs_changed_within(double from, double to) const {
@@ -1057,6 +1069,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
                               twin_.payload().mass));
     declared_refused_ = true;
     declared_taken_ = false;
+    declared_change_ = 0.0;  // (no declared pick to explain an alert by: the twin did not take it)
     return;
   }
   declared_taken_ = true;
@@ -1067,9 +1080,9 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // baseline took it up), waiting for its merge gap: the pick this declares, declared late
   if (pending_close_ >= 0) {
     const Event& pc = events_[static_cast<size_t>(pending_close_)];
-    const double change = m - (first ? had.mass : was);
+    const double change = now.mass - had.mass;
     if (pc.t_start < t && declared_pick_candidate(pc, t, change) &&
-        outputs_changed_within(pc.t_start - kPayloadIoLookback, t - 0.5 * cfg_.nominal_period)) {
+        outputs_changed_within(pc.t_start - kPayloadIoLookback, pc.t_start + 0.5 * cfg_.nominal_period)) {
       add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
                               "withdrawn, not an event",
                               pc.t_detected, pc.detail));
@@ -1079,8 +1092,9 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // (an alert raised at a grip shortly before: the pick this declares, declared late, which its close
   // decides: declared_pick_explains)
   const bool late_for_open = open_ >= 0 && events_[static_cast<size_t>(open_)].t_start < t &&
-                             declared_pick_candidate(events_[static_cast<size_t>(open_)], t, m - (first ? had.mass : was)) &&
-                             outputs_changed_within(events_[static_cast<size_t>(open_)].t_start - kPayloadIoLookback, t - 0.5 * cfg_.nominal_period);
+                             declared_pick_candidate(events_[static_cast<size_t>(open_)], t, now.mass - had.mass) &&
+                             outputs_changed_within(events_[static_cast<size_t>(open_)].t_start - kPayloadIoLookback,
+                                                    events_[static_cast<size_t>(open_)].t_start + 0.5 * cfg_.nominal_period);
   if (payload_change_waits(t) && !late_for_open) {
     declaring_ = true;
     split_payload_change(t, "the program declared its next payload, which the twin predicts with from there");
@@ -1088,7 +1102,8 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   }
   twin_.set_payload(now);
   declared_at_ = t;
-  declared_change_ = m - (first ? had.mass : was);
+  // (against what the twin predicted with: an alert measures the arm against the twin)
+  declared_change_ = now.mass - had.mass;
   // a diagnosed change the twin followed is superseded: the program has said what it carries
   followed_ = false;
   // what a resting joint is held at was measured with the old payload; the observer integrates the
@@ -1591,14 +1606,16 @@ void Monitor::push(const RobotSample& s) {
       rediagnosed_ = true;
     }
     const bool parked = background_ >= 0;
-    if (!any_active && declared_pick_explains(t)) {
+    // (an alert that clears before its diagnosis gets it first: the withdrawal goes by its class)
+    if (!any_active && !diagnosed_) run_diagnosis(t);
+    if (!any_active && open_ >= 0 && declared_pick_explains(t)) {
       const Event& w = events_[static_cast<size_t>(open_)];
       add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declared at {:.3f} s, {} the gripper closed: "
                               "the twin's payload and the arm's load agree again, so it is withdrawn, not an event",
-                              w.t_detected, w.fault == FaultClass::Unknown ? std::string("not yet diagnosed") : w.detail, declared_at_,
+                              w.t_detected, w.detail, declared_at_,
                               declared_at_ < w.t_start ? "before" : "after"));
       withdraw_open_alert();
-    } else if (!any_active) {
+    } else if (!any_active && open_ >= 0) {
       // an alert that lasted well beyond a pulse gets its final look with everything seen (a raise
       // that parked a persistent alert may merge back into it there). A payload change it finds is
       // followed there too: in a program that rests between moves, the held-at-rest baseline takes
