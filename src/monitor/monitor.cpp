@@ -960,10 +960,11 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
 }
 
 bool Monitor::declared_pick_candidate(const Event& e, double declared_at, double change) const {
-  // an alert raised within kDeclarationLag of a declaration, reading as that part's weight: before
+  // an alert raised within kDeclarationLag of a declaration, diagnosed as that part's weight: before
   // the declaration the arm already carries it (+change), after it the arm does not yet (-change).
-  // A step shorter than a diagnosis window is read as a pulse, a contact where the part hangs (the
-  // last link), or is not yet diagnosed: taken within kShortStep of the declaration
+  // A step shorter than a diagnosis window reads as a pulse, a contact where the part hangs (the
+  // last link): taken within kShortStep of the declaration when its force is the part's weight. An
+  // undiagnosed alert is none (a 4 ms hit on the forearm near a grip was withdrawn as one, review)
   if (!std::isfinite(declared_at) || change == 0.0 || std::abs(e.t_start - declared_at) > kDeclarationLag) return false;
   if (background_ >= 0 || merge_into_ >= 0 || followed_) return false;
   if (e.fault == FaultClass::PayloadChange) {
@@ -988,15 +989,12 @@ bool Monitor::declared_pick_explains(double t) const {
   const Event& e = events_[static_cast<size_t>(open_)];
   if (!declared_pick_candidate(e, declared_at_, declared_change_) || t - std::max(declared_at_, e.t_start) > kDeclarationLag + kPulseMax)
     return false;
-  // the grip apart from the declaration, on the side the alert says: before it (the arm carried the
-  // part first: the gripper closed before the declaration, around the raise), or after it (the
-  // gripper closed after the declaration). A grip with the declaration in one sample leaves no step,
-  // and an alert after it is something else (a contact at the gripper stays an event)
-  // The grip is what raised it: for a late declaration the gripper closed before the alert began
-  // (within kPayloadIoLookback: at a rest the step shows when the arm moves on), not after it (a
-  // release after a part lost in transit, then a declaration of none, is no pick); for an early one
-  // it closed after the alert began, or just before it while the decisions still waited out the
-  // declaration (kDeclarationSettle)
+  // The grip raised it, apart from the declaration: for a late declaration the gripper closed before
+  // the alert began (within kPayloadIoLookback: at a rest the step shows when the arm moves on), not
+  // after it (a release after a part lost in transit, then a declaration of none, is no pick); for
+  // an early one it closed after the alert began, or just before it while the decisions still
+  // waited out the declaration (kDeclarationSettle). A grip in the declaration's own sample leaves
+  // no step, and an alert after it is something else (a contact at the gripper stays an event)
   const double half = 0.5 * cfg_.nominal_period;
   return e.t_start < declared_at_
              ? outputs_changed_within(e.t_start - kPayloadIoLookback, std::min(e.t_start + half, declared_at_ - half))
