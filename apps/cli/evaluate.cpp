@@ -10,6 +10,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <utility>
 #include <memory>
 #include <random>
 #include <filesystem>
@@ -241,6 +242,11 @@ constexpr double kOnsetTolerance = 0.01;
 // an event that starts this long after a declared pick is at it: a false alarm, which no other
 // fault's window takes as one of its own (a missed pick's window runs to the end of the run) [s]
 constexpr double kDeclaredWindow = 1.0;
+
+// a pick's grip (its onset) and its declaration (declare_delay after it), the earlier first [s]
+std::pair<double, double> grip_and_declaration(const sim::FaultSpec& f) {
+  return {f.onset + std::min(0.0, f.declare_delay), f.onset + std::max(0.0, f.declare_delay)};
+}
 constexpr unsigned kCeilingSeedStride = 7919;  // draws of scenario seed s, fault f: seed s * stride + f
 constexpr double kLeverFloor = 1e-9;  // [m] below it the simulator applies no contact (collision_torque_per_newton)
 constexpr int kBayesPoints = 1024;      // contact points per link of the generator's Bayes choice
@@ -498,18 +504,20 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
     simulator->run([&](const RobotSample& x) {
                      mon.push(x);
-                     if (x.has(kFieldPayload))
+                     if (x.has(kFieldPayload)) {
+                       const Declaration d{x.payload, x.payload_cog[0], x.payload_cog[1], x.payload_cog[2]};
                        for (size_t fi = 0; fi < s.faults.size(); ++fi) {
-                         const Declaration d{x.payload, x.payload_cog[0], x.payload_cog[1], x.payload_cog[2]};
-                         const double delay = s.faults[fi].declare_delay;
-                         if (x.timestamp < s.faults[fi].onset + std::min(0.0, delay)) {
+                         if (s.faults[fi].type != sim::FaultType::PayloadPick) continue;
+                         const auto [first, last] = grip_and_declaration(s.faults[fi]);
+                         if (x.timestamp < first) {
                            declared_before[fi] = d;
                            have_before[fi] = 1;
-                         } else if (!onset_seen[fi] && x.timestamp >= s.faults[fi].onset + std::max(0.0, delay) + kOnsetTolerance) {
+                         } else if (!onset_seen[fi] && x.timestamp >= last + kOnsetTolerance) {
                            onset_seen[fi] = 1;
                            declaration_changed[fi] = have_before[fi] && d != declared_before[fi];
                          }
                        }
+                     }
                      for (size_t fi = 0; fi < s.faults.size(); ++fi) {
                        const sim::FaultSpec& f = s.faults[fi];
                        if (f.type != sim::FaultType::Collision || std::isfinite(own_share[fi]) || x.timestamp < f.onset + 0.5 * f.duration) continue;
@@ -551,13 +559,13 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     };
     std::vector<bool> at_declaration(mon.events().size(), false);
     for (size_t fi = 0; fi < s.faults.size(); ++fi)
-      if (declared_pick(fi))
+      if (declared_pick(fi)) {
+        const auto [first, last] = grip_and_declaration(s.faults[fi]);
         for (size_t k = 0; k < mon.events().size(); ++k) {
           const double ts = mon.events()[k].t_start;
-          const double from = s.faults[fi].onset + std::min(0.0, s.faults[fi].declare_delay);
-          const double to = s.faults[fi].onset + std::max(0.0, s.faults[fi].declare_delay);
-          at_declaration[k] = at_declaration[k] || (ts >= from - kOnsetTolerance && ts <= to + kDeclaredWindow);
+          at_declaration[k] = at_declaration[k] || (ts >= first - kOnsetTolerance && ts <= last + kDeclaredWindow);
         }
+      }
     for (size_t fi = 0; fi < labels.faults.size(); ++fi) {
       const sim::FaultLabel& lf = labels.faults[fi];
       ScenarioScore sc;

@@ -43,7 +43,6 @@ constexpr double kDeclarationLag = 1.0;
 // a pulse (a contact where the part hangs) or is not yet diagnosed [s]
 constexpr double kShortStep = 0.25;
 constexpr double kDeclaredForceShare = 2.5;  // a contact read from a declared part's step: at most this many times its weight
-constexpr double kGravity = 9.81;             // [m/s^2]
 constexpr double kDeclaredPickShare = 0.5;  // a payload change within this share of a declared change is that pick (declared_pick_candidate)
 // a payload change the monitor follows (MonitorConfig::follow_payload) that leaves a mass within this
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
@@ -768,6 +767,14 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
 
 double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
 
+void Monitor::carry(const model::RigidBodyInertia& payload, double t) {
+  twin_.set_payload(payload);
+  // what a resting joint is held at was measured with the old payload: it is measured again
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
+  check_payload_envelope(t);
+}
+
 void Monitor::check_payload_envelope(double t) {
   const double mass = twin_.payload().mass, learned = cfg_.payload_max;
   const bool beyond = std::isfinite(learned) && mass > learned + kPayloadEnvelopeMargin;
@@ -977,7 +984,7 @@ bool Monitor::declared_pick_candidate(const Event& e, double declared_at, double
   // 1.7-2.0 times their weight)
   const bool short_step = std::abs(e.t_start - declared_at) <= kShortStep;
   const bool at_last_link = e.link == n_ - 1 || std::find(e.other_links.begin(), e.other_links.end(), n_ - 1) != e.other_links.end();
-  const bool weight_sized = e.units == "N" && e.magnitude <= kDeclaredForceShare * std::abs(change) * kGravity;
+  const bool weight_sized = e.units == "N" && e.magnitude <= kDeclaredForceShare * std::abs(change) * twin_.robot().gravity().norm();
   return short_step && e.fault == FaultClass::Collision && at_last_link && weight_sized;
 }
 
@@ -996,9 +1003,20 @@ bool Monitor::declared_pick_explains(double t) const {
   // waited out the declaration (kDeclarationSettle). A grip in the declaration's own sample leaves
   // no step, and an alert after it is something else (a contact at the gripper stays an event)
   const double half = 0.5 * cfg_.nominal_period;
-  return e.t_start < declared_at_
-             ? outputs_changed_within(e.t_start - kPayloadIoLookback, std::min(e.t_start + half, declared_at_ - half))
-             : outputs_changed_within(std::max(declared_at_ + half, e.t_start - kDeclarationSettle - 2 * cfg_.nominal_period), t);
+  return e.t_start < declared_at_ ? gripped_before(e, declared_at_)
+                                  : outputs_changed_within(std::max(declared_at_ + half, e.t_start - kDeclarationSettle - 2 * cfg_.nominal_period), t);
+}
+
+bool Monitor::gripped_before(const Event& e, double declared_at) const {
+  // a gripper output changed within kPayloadIoLookback before the alert began, and before the
+  // declaration's own sample
+  const double half = 0.5 * cfg_.nominal_period;
+  return outputs_changed_within(e.t_start - kPayloadIoLookback, std::min(e.t_start + half, declared_at - half));
+}
+
+bool Monitor::late_declared_pick(const Event& e, double t, double change) const {
+  // the pick the declaration at t comes late for: the alert began at its grip, before t
+  return e.t_start < t && declared_pick_candidate(e, t, change) && gripped_before(e, t);
 }
 
 bool Monitor::outputs_changed_within(double from, double to) const {
@@ -1016,10 +1034,14 @@ bool Monitor::outputs_changed_within(double from, double to) const {
 
 void Monitor::withdraw_open_alert() {
   drop_open_event();
+  reset_decisions();
+  diagnosed_ = rediagnosed_ = false;
+}
+
+void Monitor::reset_decisions() {
   for (auto& d : deb_) d.reset();
   for (auto& d : deb_obs_) d.reset();
   std::fill(joint_active_.begin(), joint_active_.end(), 0);
-  diagnosed_ = rediagnosed_ = false;
 }
 
 void Monitor::take_declared_payload(const RobotSample& s) {
@@ -1028,7 +1050,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   const double* c = s.payload_cog;
   const bool valid = std::isfinite(m) && m >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
   if (!valid) return;  // (the recording reader refuses such a row; a live stream's odd value is not taken)
-  if (have_declared_ && m == declared_mass_ && c[0] == declared_cog_[0] && c[1] == declared_cog_[1] && c[2] == declared_cog_[2]) return;
+  // (push calls this only for a declaration that differs from the last: same_declaration)
   const bool first = !have_declared_;
   const double was = declared_mass_;
   have_declared_ = true;
@@ -1076,11 +1098,11 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // change (split_payload_change): else the look would measure the drop partly against the new part
   // an alert raised at a grip shortly before and already cleared (a pick at a rest: the held-at-rest
   // baseline took it up), waiting for its merge gap: the pick this declares, declared late
+  // (the change against what the twin predicted with: an alert measures the arm against the twin)
+  const double change = now.mass - had.mass;
   if (pending_close_ >= 0) {
     const Event& pc = events_[static_cast<size_t>(pending_close_)];
-    const double change = now.mass - had.mass;
-    if (pc.t_start < t && declared_pick_candidate(pc, t, change) &&
-        outputs_changed_within(pc.t_start - kPayloadIoLookback, pc.t_start + 0.5 * cfg_.nominal_period)) {
+    if (late_declared_pick(pc, t, change)) {
       add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
                               "withdrawn, not an event",
                               pc.t_detected, pc.detail));
@@ -1089,25 +1111,17 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   }
   // (an alert raised at a grip shortly before: the pick this declares, declared late, which its close
   // decides: declared_pick_explains)
-  const bool late_for_open = open_ >= 0 && events_[static_cast<size_t>(open_)].t_start < t &&
-                             declared_pick_candidate(events_[static_cast<size_t>(open_)], t, now.mass - had.mass) &&
-                             outputs_changed_within(events_[static_cast<size_t>(open_)].t_start - kPayloadIoLookback,
-                                                    events_[static_cast<size_t>(open_)].t_start + 0.5 * cfg_.nominal_period);
-  if (payload_change_waits(t) && !late_for_open) {
+  if (payload_change_waits(t) && !late_declared_pick(events_[static_cast<size_t>(open_)], t, change)) {
     declaring_ = true;
     split_payload_change(t, "the program declared its next payload, which the twin predicts with from there");
     declaring_ = false;
   }
-  twin_.set_payload(now);
   declared_at_ = t;
-  // (against what the twin predicted with: an alert measures the arm against the twin)
-  declared_change_ = now.mass - had.mass;
+  declared_change_ = change;
   // a diagnosed change the twin followed is superseded: the program has said what it carries
   followed_ = false;
-  // what a resting joint is held at was measured with the old payload; the observer integrates the
-  // twin's torque, which changed in one step (as at a split, split_payload_change)
-  rest_rf_ = RestBaseline(n_);
-  rest_obs_ = RestBaseline(n_);
+  // the observer integrates the twin's torque, which changes in one step (as at a split,
+  // split_payload_change)
   if (have_prev_) restart_estimators(false);
   // the controller's feed-forward changed with the declaration: a tracking error its position loop
   // carried for a payload it did not know (a part dropped undeclared) unwinds over the loop's
@@ -1119,7 +1133,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
                     : fmt::format("the program declared {} (it had declared {:.2f} kg): the twin predicts with it, and a part lost or "
                                   "never picked shows as a payload change",
                                   what, was));
-  check_payload_envelope(t);
+  carry(now, t);
 }
 
 void Monitor::follow_payload(Event& e, double t) {
@@ -1195,23 +1209,20 @@ void Monitor::follow_payload(Event& e, double t) {
     return;
   }
   model::RigidBodyInertia now;
-  if (mass > 0.0 && as_declared) {
+  if (mass > 0.0) {
     now.mass = mass;
-    now.com = Eigen::Vector3d(declared_cog_[0], declared_cog_[1], declared_cog_[2]);
-  } else if (mass > 0.0) {
-    now.mass = mass;
-    now.com = had.mass > 0.0 ? had.com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
-    // the declared payload's shape at the new mass; a part picked without one: a point mass
-    if (had.mass > 0.0) now.inertia_com = had.inertia_com * (mass / had.mass);
+    if (as_declared) {
+      now.com = Eigen::Vector3d(declared_cog_[0], declared_cog_[1], declared_cog_[2]);
+    } else {
+      now.com = had.mass > 0.0 ? had.com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
+      // the declared payload's shape at the new mass; a part picked without one: a point mass
+      if (had.mass > 0.0) now.inertia_com = had.inertia_com * (mass / had.mass);
+    }
   }
   followed_from_ = had;
-  twin_.set_payload(now);
-  check_payload_envelope(t);
+  carry(now, t);
   followed_ = true;
   followed_at_ = t;
-  // what a resting joint was held at was measured with the old payload: it is measured again
-  rest_rf_ = RestBaseline(n_);
-  rest_obs_ = RestBaseline(n_);
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
   // ended by the program's next declaration (take_declared_payload), which the twin takes at once:
   // the followed payload is never predicted with, and is not said to be
@@ -1226,10 +1237,7 @@ void Monitor::undo_follow(double t) {
   // the residual did not fall back when the twin took the payload: the change was not (only) the
   // payload, and the twin goes back to what it carried
   followed_ = false;
-  twin_.set_payload(followed_from_);
-  check_payload_envelope(t);
-  rest_rf_ = RestBaseline(n_);
-  rest_obs_ = RestBaseline(n_);
+  carry(followed_from_, t);
   Event& e = events_[static_cast<size_t>(open_)];
   const std::string what = followed_from_.mass > 0.0 ? fmt::format("its {:.2f} kg payload", followed_from_.mass) : std::string("no payload");
   e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
@@ -1265,9 +1273,7 @@ void Monitor::split_payload_change(double t, const char* where) {
   restart_estimators(false);
   // every joint starts over: a residual still above its threshold is the next change's, and raises
   // an alert of its own (its diagnosis window sees the samples before t through the new payload)
-  for (auto& d : deb_) d.reset();
-  for (auto& d : deb_obs_) d.reset();
-  std::fill(joint_active_.begin(), joint_active_.end(), 0);
+  reset_decisions();
 }
 
 void Monitor::track_margin(bool on) {
@@ -1408,10 +1414,7 @@ void Monitor::push(const RobotSample& s) {
   }
   // the payload the program declares, when the stream carries it (before the prediction uses it)
   // (per sample the declaration is compared in line; only a new one costs the call)
-  if (cfg_.follow_payload && s.has(kFieldPayload) &&
-      !(have_declared_ && s.payload == declared_mass_ && s.payload_cog[0] == declared_cog_[0] && s.payload_cog[1] == declared_cog_[1] &&
-        s.payload_cog[2] == declared_cog_[2]))
-    take_declared_payload(s);
+  if (cfg_.follow_payload && s.has(kFieldPayload) && !same_declaration(s)) take_declared_payload(s);
   // acceleration: the controller's target when streamed, else a filtered difference of qd
   if (s.has(kFieldTargetQdd)) {
     qdd_ = s.target_qdd;
@@ -1619,7 +1622,8 @@ void Monitor::push(const RobotSample& s) {
       // followed there too: in a program that rests between moves, the held-at-rest baseline takes
       // up the residual and the alert clears before the longer look
       const bool beyond_pulse = t - events_[static_cast<size_t>(open_)].t_start > kPulseMax;
-      if (!diagnosed_ || (!rediagnosed_ && beyond_pulse)) run_diagnosis(t, diagnosed_ && beyond_pulse);
+      // (diagnosed by now: just above)
+      if (!rediagnosed_ && beyond_pulse) run_diagnosis(t, true);
     }
     if (followed_ && any_active && t - followed_at_ >= kPayloadFollowSettle) undo_follow(t);
     if (open_ < 0) {

@@ -385,6 +385,9 @@ class Monitor {
   // two is the declared pick and is withdrawn
   bool declared_pick_candidate(const Event& e, double declared_at, double change) const;
   bool declared_pick_explains(double t) const;
+  bool gripped_before(const Event& e, double declared_at) const;
+  bool late_declared_pick(const Event& e, double t, double change) const;
+  void reset_decisions();  // every joint's debouncers start over
   bool outputs_changed_within(double from, double to) const;
   void withdraw_open_alert();
   void drop_event(int index);  // erases events_[index], keeping the indices into events_ right
@@ -393,6 +396,13 @@ class Monitor {
   bool payload_beyond_ = false;
   void check_payload_envelope(double t);
   void take_declared_payload(const RobotSample& s);
+  // the sample declares what was declared last (compared per sample in push)
+  bool same_declaration(const RobotSample& s) const {
+    return have_declared_ && s.payload == declared_mass_ && s.payload_cog[0] == declared_cog_[0] && s.payload_cog[1] == declared_cog_[1] &&
+           s.payload_cog[2] == declared_cog_[2];
+  }
+  // the twin predicts with `payload` from t: held-at-rest baselines measured again, the envelope checked
+  void carry(const model::RigidBodyInertia& payload, double t);
   // the stream's timestamp jitter: the mean absolute deviation of the steps from the period, the
   // steps seen, and the gap factor in effect (cfg_.gap_factor, widened for a jittery clock)
   double jitter_mad_ = 0.0;
