@@ -72,14 +72,15 @@ $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_keep.json ${da}/full.csv --pa
 cmp ${da}/keep_before.csv ${da}/keep_after.csv && echo DEFAULT-KEPT && (cmp -s ${da}/keep_before.csv ${da}/keep_other.csv || echo PROGRAM-DIFFERS)")
 set_tests_properties(cli.thresholds_program_keeps_the_default_set PROPERTIES FIXTURES_REQUIRED "twin;align_pair"
   PASS_REGULAR_EXPRESSION "DEFAULT-KEPT.*PROGRAM-DIFFERS")
-# thresholds per program: learned into a named set, selected with --program; the default set stays
+# thresholds per program: learned into a named set (with the largest load each joint reversed under,
+# session 25), selected with --program; the default set stays
 add_test(NAME cli.thresholds_program
   COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_prog.json && \
 $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --program fig8_loop && \
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --program fig8_loop 2>&1 && \
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_program PROPERTIES FIXTURES_REQUIRED twin
-  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
+  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording[^\n]*\nthe largest load each joint reversed under in them \\[N[^]]*m\\], beyond which both of its thresholds widen[^\n]*: J1 [0-9]+\\.[0-9][0-9]  J2 [0-9]+\\.[0-9][0-9]  J3 .*  J6 [0-9]+\\.[0-9][0-9]\n.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
 add_test(NAME cli.monitor_unknown_program COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --program palletizing)
 set_tests_properties(cli.monitor_unknown_program PROPERTIES FIXTURES_REQUIRED twin

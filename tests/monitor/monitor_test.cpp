@@ -607,10 +607,11 @@ TEST_F(MonitorLoop, ADeclaredCentreOfMassInMillimetresIsNotTaken) {
 }
 
 // The thresholds remember the heaviest payload they were learned on (payload_max_kg in the twin
-// file, per program too). A payload more than 0.5 kg heavier is beyond them: the twin's model error
-// grows with the payload (thresholds learned at 0-0.5 kg raised 4 false alarms a minute at 1.5 and
-// 2 kg on the virtual UR3e, none at 1.0 kg), which a note says once, naming the remedy, and every
-// alert raised then says too. A twin file from before keeps working without the note.
+// file, per program too). A payload more than 1.5 kg heavier is beyond them: the twin's model error
+// grows with the payload (thresholds learned at 0-0.5 kg, widened at loaded reversals, raised no
+// false alarm at 1.5-2.5 kg on the virtual UR3e but 7 in 12 minutes at 3 kg), which a note says
+// once, naming the remedy, and every alert raised then says too. A twin file from before keeps
+// working without the note.
 TEST_F(MonitorLoop, APayloadHeavierThanTheThresholdsWereLearnedWithIsSaid) {
   EXPECT_EQ(config->payload_max, 0.5);
   const MonitorConfig back = MonitorConfig::from_json(config->to_json(), "twin.json", 6);
@@ -642,20 +643,84 @@ TEST_F(MonitorLoop, APayloadHeavierThanTheThresholdsWereLearnedWithIsSaid) {
     m->finish();
     return m;
   };
-  const auto heavy = watch(1.5, *config);
+  const auto heavy = watch(2.5, *config);
   EXPECT_TRUE(heavy->payload_beyond_thresholds());
   EXPECT_THAT(heavy->notes(), ::testing::Contains(::testing::HasSubstr(
-                                  "the twin predicts with 1.50 kg, more than 0.5 kg above the 0.50 kg of the heaviest healthy run")));
+                                  "the twin predicts with 2.50 kg, more than 1.5 kg above the 0.50 kg of the heaviest healthy run")));
   for (const Event& e : heavy->events())
     if (e.fault != FaultClass::StreamFault) {
       EXPECT_THAT(e.detail, ::testing::HasSubstr("heavier than the thresholds were learned with"));
     }
-  EXPECT_FALSE(watch(1.0, *config)->payload_beyond_thresholds());
+  EXPECT_FALSE(watch(2.0, *config)->payload_beyond_thresholds());
   MonitorConfig unknown = *config;
   unknown.payload_max = std::numeric_limits<double>::quiet_NaN();
-  const auto old = watch(1.5, unknown);
+  const auto old = watch(2.5, unknown);
   EXPECT_FALSE(old->payload_beyond_thresholds());
   EXPECT_THAT(old->notes(), ::testing::Not(::testing::Contains(::testing::HasSubstr("heaviest healthy run"))));
+}
+
+// At a reversal the drive goes from motoring to back-driven (or back), and its current for the same
+// torque steps by (1 - c_gen); the measured velocity cannot time it (a count is 3 mrad/s), so the
+// twin's blended prediction misses part of the step. The step grows with the load: thresholds
+// learned at 0-0.5 kg raised false contacts at J4's reversals under a 2 kg payload (4 a minute on
+// the virtual UR3e, session 24). They now remember the largest reversal load they saw per joint and
+// widen by (1 - c_gen) times the excess, through each channel's filter; within what they saw they
+// are untouched, and a contact under the heavy payload is still found.
+TEST_F(MonitorLoop, ThresholdsWidenAtReversalsUnderMoreLoadThanTheyWereLearnedWith) {
+  ASSERT_EQ(config->reversal_load_max.size(), 6);
+  for (int j = 0; j < 6; ++j) EXPECT_TRUE(config->reversal_load_max[j] >= 0.0 && std::isfinite(config->reversal_load_max[j])) << j;
+  // the shoulder and elbow hold the arm: they reverse under the most load
+  EXPECT_GT(std::min(config->reversal_load_max[1], config->reversal_load_max[2]), 2.0 * config->reversal_load_max[3]);
+  // the twin file keeps it; a bad value is named; a file from before has none (no widening)
+  const MonitorConfig back = MonitorConfig::from_json(config->to_json(), "twin.json", 6);
+  EXPECT_TRUE(back.reversal_load_max.isApprox(config->reversal_load_max, 1e-12));
+  auto block = nlohmann::json::parse(config->to_json());
+  block["reversal_load_max"][1] = -1.0;
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(block.dump(), "twin.json", 6); }),
+              ::testing::HasSubstr("twin.json: field 'monitor.reversal_load_max[1]': expected a number >= 0, got -1"));
+  block["reversal_load_max"] = {1.0, 2.0};
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(block.dump(), "twin.json", 6); }),
+              ::testing::HasSubstr("field 'monitor.reversal_load_max': expected 6 values (one per joint), got 2"));
+  block.erase("reversal_load_max");
+  EXPECT_EQ(MonitorConfig::from_json(block.dump(), "twin.json", 6).reversal_load_max.size(), 0);
+  MonitorConfig old = *config;
+  old.reversal_load_max.resize(0);
+
+  // a run the thresholds were learned on: not one sample's threshold changes
+  {
+    const auto rec = run(scenario(503, 24, 0.5));
+    Monitor a(declared_twin(), *config), b(declared_twin(), old);
+    int widened = 0;
+    for (const auto& x : rec.samples) {
+      a.push(x);
+      b.push(x);
+      if (a.level() != b.level() || a.observer_threshold() != b.observer_threshold()) ++widened;
+    }
+    EXPECT_EQ(widened, 0);
+  }
+  // a healthy run with 2 kg: false contacts at the loaded reversals before, none now
+  const auto watch = [&](const device::Recording& rec, const MonitorConfig& c) {
+    ident::TwinModel t = *twin;
+    model::RigidBodyInertia p = payload;
+    p.mass = 2.0;
+    t.set_payload(p);
+    Monitor m(t, c);
+    for (const auto& x : rec.samples) m.push(x);
+    m.finish();
+    return m.events();
+  };
+  const auto heavy = undeclared(run(scenario(2501, 30, 2.0)));
+  EXPECT_GE(watch(heavy, old).size(), 1u) << "the case this guards against";
+  EXPECT_TRUE(watch(heavy, *config).empty()) << listing(watch(heavy, *config));
+  // a 3 N·m contact on the forearm under the 2 kg payload: found within 20 ms, on its link
+  const auto hit = undeclared(run(scenario(2502, 12, 2.0,
+                                           "  - {type: collision, link: 3, onset: 6.03, magnitude: 3, duration: 0.05, "
+                                           "point: [-0.175, -0.028, 0.041], direction: [-0.327, 0.43, 0.841]}\n")));
+  const auto ev = watch(hit, *config);
+  ASSERT_EQ(ev.size(), 1u) << listing(ev);
+  EXPECT_EQ(ev[0].fault, FaultClass::Collision) << listing(ev);
+  EXPECT_LE(ev[0].t_detected - 6.03, 0.020) << listing(ev);
+  EXPECT_EQ(ev[0].link, 2) << listing(ev);
 }
 
 // A program declares its pick when it is done: a gripper's URCap once it has seen the grip (after

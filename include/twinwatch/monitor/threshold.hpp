@@ -83,6 +83,28 @@ struct DynamicThresholdFit {
 DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<const double> qd,
                                           std::span<const double> qdd, const DynamicThresholdOptions& options = {});
 
+/// The load a joint reverses under, as far as the direction of its drive is in doubt.
+///
+/// A drive's current for a torque tau is tau / g when it drives the joint (motoring) and
+/// c_gen tau / g when the load drives it (back-driven, tau qd < 0; twin_model.hpp). Within a few
+/// encoder counts of a reversal the measured velocity cannot say which: its sign is no better than
+/// its resolution (3 mrad/s a count on a UR3e at 500 Hz), and a loaded joint may stick-slip across
+/// zero for tens of ms. There the twin's blended prediction can be off by up to (1 - c_gen) times
+/// the load. Measured on the virtual UR3e (docs/validation.md, "Thresholds that grow with the load"):
+/// J4 reversing under 4 N·m (a 2 kg payload) stepped its current 0.50 -> 0.33 A and back twice
+/// within 30 ms while the measured velocity read 0 or one count.
+///
+/// This returns |tau| times how much in doubt the direction is: 1 at qd = 0, falling to 0 as |qd|
+/// passes a few `width` [rad/s]: 1 - |tanh(qd / width)|. The thresholds learned on healthy runs
+/// already cover the reversals they saw; the monitor widens them only by the part of this load
+/// beyond the largest one learned (MonitorConfig::reversal_load_max), times the step the switch
+/// puts into each residual for it (Monitor::widen_for_load).
+inline double reversal_load(double tau, double qd, double width) {
+  const double x = std::abs(qd) / width;
+  if (x > 20.0) return 0.0;  // (1 - tanh(20) < 1e-17; most samples are far from a reversal)
+  return std::abs(tau) * (1.0 - std::tanh(x));
+}
+
 /// Dynamic thresholds for all joints.
 struct DynamicThreshold {
   std::vector<DynamicThresholdJoint> joints;
