@@ -42,7 +42,9 @@ const Setup& setup() {
 
 // one healthy replay after another, a fresh monitor per replay (made outside the timing); observer
 // 1: the momentum observer on the sample path with its alerts (as evaluate runs it), 0: without it
-// (observer_level cleared: the current residual alone, as before issue 7's observer)
+// (observer_level cleared: the current residual alone, as before issue 7's observer); 2: as 1 with
+// every reversal beyond the learned loads (reversal_load_max 0: the thresholds widen at each one,
+// the worst case of Monitor::widen_for_load)
 struct Replayer {
   const Setup& s;
   const monitor::MonitorConfig cfg;
@@ -51,7 +53,8 @@ struct Replayer {
   static monitor::MonitorConfig config(const Setup& s, std::int64_t observer) {
     monitor::MonitorConfig c = s.cfg;
     if (observer == 0) c.observer_level.resize(0);
-    c.observer_alerts = observer == 1;
+    c.observer_alerts = observer >= 1;
+    if (observer == 2) c.reversal_load_max = VectorJ::Zero(s.twin.n_dof());
     return c;
   }
   Replayer(const Setup& setup, std::int64_t observer) : s(setup), cfg(config(setup, observer)), mon(setup.twin, cfg) {}
@@ -102,7 +105,7 @@ void BM_MonitorThroughput(benchmark::State& st) {
   benchmark::DoNotOptimize(r.mon.observer_residual().data());
   r.count(st);
 }
-BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->MinTime(2.0);
+BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->MinTime(2.0);
 
 // the twin prediction alone (the regressor dominates), with its friction memory
 void BM_TwinPredict(benchmark::State& st) {
