@@ -430,6 +430,45 @@ std::optional<device::ColumnMap> load_column_map(const std::string& path) {
                                     dir.string(), names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }
 
+ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings) {
+  std::string all_value;
+  std::vector<std::string> own_value;  // the value that gave own_[k]
+  std::error_code ec;
+  for (const std::string& v : values) {
+    const size_t eq = v.find('=');
+    if (eq == std::string::npos || std::filesystem::exists(v, ec)) {
+      if (!all_value.empty())
+        throw InvalidArgument(fmt::format("--column-map '{}' and '{}': two maps for every recording; give one, or REC=MAP for each "
+                                          "recording that needs its own",
+                                          all_value, v));
+      all_ = load_column_map(v);
+      all_value = v;
+      files_.push_back(v);
+      continue;
+    }
+    const std::string rec = v.substr(0, eq), map = v.substr(eq + 1);
+    if (map.empty()) throw InvalidArgument(fmt::format("--column-map '{}': expected REC=MAP, the map after '=' is missing", v));
+    bool found = false;
+    for (const std::string& r : recordings) found |= same_file(r, rec);
+    if (!found)
+      throw InvalidArgument(fmt::format("--column-map '{}': '{}' is not one of the recordings ({}); REC=MAP gives one of them its map",
+                                        v, rec, fmt::join(recordings, ", ")));
+    for (size_t k = 0; k < own_.size(); ++k)
+      if (same_file(own_[k].first, rec))
+        throw InvalidArgument(fmt::format("--column-map '{}' and '{}': two maps for {}; give one", own_value[k], v, rec));
+    auto m = load_column_map(map);
+    own_.emplace_back(rec, std::move(*m));
+    own_value.push_back(v);
+    files_.push_back(map);
+  }
+}
+
+const device::ColumnMap* ColumnMaps::of(const std::string& recording) const {
+  for (const auto& [rec, map] : own_)
+    if (same_file(rec, recording)) return &map;
+  return all_ ? &*all_ : nullptr;
+}
+
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
                               double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
                               double link_ceiling) {

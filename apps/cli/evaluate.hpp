@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "twinwatch/device/recording.hpp"
@@ -53,6 +54,28 @@ std::string magnitude_text(double value, const std::string& units);
 /// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
 /// RTDE names (device::ColumnMap::load), none when `path` is empty.
 std::optional<device::ColumnMap> load_column_map(const std::string& path);
+
+/// `--column-map` of the verbs that read several recordings (identify, thresholds): each value is
+/// MAP, the map of every recording that has none of its own, or REC=MAP, the map of that recording
+/// alone (a log from another source among the robot's own recordings). Repeatable. MAP is a file or
+/// a shipped map's name, as for load_column_map; a value that names an existing file is a MAP even
+/// with a '=' in it.
+class ColumnMaps {
+ public:
+  ColumnMaps() = default;
+  /// `recordings`: every recording the verb reads. Throws InvalidArgument naming the value: REC not
+  /// one of the recordings, a recording given two maps, two maps for all, an empty MAP, a bad map.
+  ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings);
+  /// The map to read `recording` with (nullptr: its own column names).
+  const device::ColumnMap* of(const std::string& recording) const;
+  /// The map files given (inputs an output must not replace).
+  const std::vector<std::string>& files() const { return files_; }
+
+ private:
+  std::optional<device::ColumnMap> all_;
+  std::vector<std::pair<std::string, device::ColumnMap>> own_;  // (recording, its map)
+  std::vector<std::string> files_;
+};
 
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.

@@ -33,4 +33,24 @@ cmp "$dir/cm_ev_rtde.jsonl" "$dir/cm_ev_foreign.jsonl" || { echo "monitor saw th
 # without the map the foreign log has no currents: refused by name
 if "$tw" monitor --twin "$t" "$dir/cm_fault.csv" --db '' 2> "$dir/cm_err.txt"; then echo "foreign log read without its map"; exit 1; fi
 grep -q "cm_fault.csv:1: field .timestamp.: missing required column" "$dir/cm_err.txt" || { echo "refusal does not name the missing field:"; cat "$dir/cm_err.txt"; exit 1; }
+# mixed sources (session 25): the robot's own recording and a foreign log, each read with its own map
+# (REC=MAP), learn what the two RTDE recordings learn; identify too (its validation on the fault
+# recording is the same to the last digit)
+cp "$twin" "$dir/cm_twin_mixed.json"
+"$tw" thresholds --twin "$dir/cm_twin_mixed.json" "$a" --payload-mass 0.5 --debounce-validation "$dir/cm_b.csv" \
+  --column-map "$dir/cm_b.csv=$map" > "$dir/cm_thr_mixed.txt"
+cmp "$dir/cm_twin_rtde.json" "$dir/cm_twin_mixed.json" || { echo "thresholds learned differently from a mixed set"; exit 1; }
+"$tw" identify "$a" "$b" -q -o "$dir/cm_id_rtde.json"
+"$tw" identify "$a" "$dir/cm_b.csv" --column-map "$dir/cm_b.csv=$map" -q -o "$dir/cm_id_mixed.json"
+# (the JSON names the twin file: left out)
+"$tw" validate --twin "$dir/cm_id_rtde.json" "$fault" --json | sed 's/,"twin":"[^"]*"//' > "$dir/cm_val_rtde.json"
+"$tw" validate --twin "$dir/cm_id_mixed.json" "$fault" --json | sed 's/,"twin":"[^"]*"//' > "$dir/cm_val_mixed.json"
+grep -q '"joints":\[{"d_tau_pct"' "$dir/cm_val_rtde.json" || { echo "no validation"; exit 1; }
+cmp "$dir/cm_val_rtde.json" "$dir/cm_val_mixed.json" || { echo "identify learned differently from a mixed set"; exit 1; }
+# a map for a file that is not one of the recordings, and two maps for all, are refused by name
+if "$tw" identify "$a" --column-map "nope.csv=$map" -q -o "$dir/cm_never.json" 2> "$dir/cm_err2.txt"; then echo "a map for no recording taken"; exit 1; fi
+grep -q "column-map 'nope.csv=.*': 'nope.csv' is not one of the recordings" "$dir/cm_err2.txt" || { cat "$dir/cm_err2.txt"; exit 1; }
+if "$tw" identify "$a" --column-map "$map" --column-map kinova_gen3_chiha -q -o "$dir/cm_never.json" 2> "$dir/cm_err3.txt"; then echo "two maps for all taken"; exit 1; fi
+grep -q "two maps for every recording" "$dir/cm_err3.txt" || { cat "$dir/cm_err3.txt"; exit 1; }
+[ ! -e "$dir/cm_never.json" ] || { echo "a twin was written after a refused map"; exit 1; }
 echo "SAME-THROUGH-THE-COLUMN-MAP: $(wc -l < "$dir/cm_ev_rtde.jsonl") event(s)"

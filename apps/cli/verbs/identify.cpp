@@ -61,8 +61,8 @@ PayloadArg parse_payload(const std::string& s, const model::RobotModel& robot) {
 }
 
 struct IdentifyOptions {
-  std::vector<std::string> recordings, payloads;
-  std::string output, robot = "ur3e", method = "physics", column_map;
+  std::vector<std::string> recordings, payloads, column_maps;
+  std::string output, robot = "ur3e", method = "physics";
   double reversal_screen = 0.0;
   bool no_low_speed_friction = false;
   double direction_blend = ident::IdentOptions{}.direction_blend;
@@ -121,23 +121,23 @@ void require_one_payload_each(const std::vector<PayloadArg>& pay) {
 
 int run_identify(const IdentifyOptions& o) {
   // before the fit: a bad output path found after minutes of fitting costs the fit
-  {
-    std::vector<std::string> inputs = o.recordings;
-    inputs.push_back(o.column_map);
-    require_output(o.output, inputs);
-  }
   cli::require_distinct(o.recordings, "RECORDINGS");
   if (o.method == "sequential") return run_identify_sequential(o);
+  const cli::ColumnMaps maps(o.column_maps, o.recordings);
+  {
+    std::vector<std::string> inputs = o.recordings;
+    inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
+    require_output(o.output, inputs);
+  }
   if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
     throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", o.method));
   const bool learned = o.method == "mlp" || o.method == "hybrid";
   if (!learned && (!o.hidden.empty() || o.l2 || o.seed || o.max_evaluations || !o.inputs.empty()))
     throw InvalidArgument(fmt::format("--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp|hybrid, not {}", o.method));
   const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
-  const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
-    recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+    recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, fmt::format("identify --method {}", o.method));
   }
   const model::RobotModel robot = model::load_robot(o.robot);
@@ -227,10 +227,12 @@ int run_identify(const IdentifyOptions& o) {
 
 // Cao's sequential identification: gravity (--quasi-static), friction (--sine), Lasso (RECORDINGS)
 int run_identify_sequential(const IdentifyOptions& o) {
+  std::vector<std::string> all = o.recordings;
+  for (const auto* v : {&o.quasi_static, &o.sine}) all.insert(all.end(), v->begin(), v->end());
+  const cli::ColumnMaps maps(o.column_maps, all);
   {
-    std::vector<std::string> inputs = o.recordings;
-    for (const auto* v : {&o.quasi_static, &o.sine}) inputs.insert(inputs.end(), v->begin(), v->end());
-    inputs.push_back(o.column_map);
+    std::vector<std::string> inputs = all;
+    inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
     require_output(o.output, inputs);
   }
   if (o.quasi_static.empty())
@@ -239,10 +241,9 @@ int run_identify_sequential(const IdentifyOptions& o) {
   if (o.sine.empty())
     throw InvalidArgument("--method sequential needs --sine FILE: a recording of a sine with common turning points on every joint "
                           "(e.g. scenarios/ur3e/validation/sine_train.yaml)");
-  const auto map = cli::load_column_map(o.column_map);
   auto read_all = [&](const std::vector<std::string>& files) {
     std::vector<device::Recording> v;
-    for (const auto& f : files) v.push_back(device::read_recording(f, map ? &*map : nullptr));
+    for (const auto& f : files) v.push_back(device::read_recording(f, maps.of(f)));
     return v;
   };
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
@@ -444,7 +445,10 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "between passes; biased towards 1)")
       ->capture_default_str();
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
-  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
+  sub->add_option("--column-map", o->column_maps,
+                  "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), or the name of one twinwatch ships. "
+                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each; e.g. a log from "
+                  "another source among the robot's own recordings)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });

@@ -330,8 +330,8 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
-  std::string twin, filter, program, column_map;
-  std::vector<std::string> recordings, debounce_validation;
+  std::string twin, filter, program;
+  std::vector<std::string> recordings, debounce_validation, column_maps;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
 };
@@ -341,10 +341,12 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!o.program.empty()) monitor::check_program_name(o.program, "--program");
   cli::require_distinct(o.recordings, "RECORDINGS");
   ident::TwinModel twin = cli::load_twin(o.twin);
-  const auto map = cli::load_column_map(o.column_map);
+  std::vector<std::string> all = o.recordings;
+  all.insert(all.end(), o.debounce_validation.begin(), o.debounce_validation.end());
+  const cli::ColumnMaps maps(o.column_maps, all);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
-    recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+    recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
     cli::check_units(recs.back(), twin.robot());
   }
@@ -402,7 +404,7 @@ int run_thresholds(const ThresholdOptions& o) {
         throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
                                           "the choice needs healthy runs they were not learned on",
                                           f));
-    vrecs.push_back(device::read_recording(f, map ? &*map : nullptr));
+    vrecs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
     cli::check_units(vrecs.back(), twin.robot());
   }
@@ -505,7 +507,9 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp + std::string(" (applies to --debounce-validation too)"));
+  sub->add_option("--column-map", o->column_maps,
+                  kColumnMapHelp + std::string(". MAP: every recording without one of its own (--debounce-validation's too); REC=MAP: that "
+                                               "recording alone (repeat for each)"));
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
                   "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
