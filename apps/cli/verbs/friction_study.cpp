@@ -28,7 +28,8 @@ struct StudyOptions {
   std::vector<std::string> recordings;
   bool simulated = false, closed_loop = false;
   std::vector<int> joints;  // 1-based
-  std::string column_map, torque = "current", save_twin;
+  std::vector<std::string> column_maps;
+  std::string torque = "current", save_twin;
   double gain = 1.0;
   bool gain_given = false;  // --gain on the command line (its default 1 leaves currents in A)
   double split = 0.5;
@@ -93,9 +94,9 @@ JointRecord slice(const JointRecord& r, long a, long b) {
 std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
   if (o.recordings.size() > 3)
     throw InvalidArgument(fmt::format("{} recordings given, expected 1 to 3 (TRAIN [VALIDATION [CHIRP]])", o.recordings.size()));
-  const auto map = cli::load_column_map(o.column_map);
+  const cli::ColumnMaps maps(o.column_maps, o.recordings);
   std::vector<device::Recording> recs;
-  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, map ? &*map : nullptr));
+  for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, maps.of(f)));
   for (const auto& r : recs)
     if (r.n_dof != recs[0].n_dof)
       throw InvalidArgument(fmt::format("{} has {} joints, {} has {}", r.path, r.n_dof, recs[0].path, recs[0].n_dof));
@@ -545,7 +546,9 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                 "--closed-loop: the model enters only through e_tau of eq. 19 (no inner-loop inverse feed-forward of "
                 "tau_d); with a time-aligned e_tau even the true friction then cannot beat no feed-forward");
   sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
-  sub->add_option("--column-map", o->column_map, "CSV map 'file_column,rtde_name[,scale]' for foreign logs");
+  sub->add_option("--column-map", o->column_maps,
+                  "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), or the name of one twinwatch ships. "
+                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each)");
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
   CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(twinwatch::cli::positive_number());
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();
