@@ -80,7 +80,7 @@ $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_prog.json ${PROJECT_BINARY
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --program fig8_loop 2>&1 && \
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_program PROPERTIES FIXTURES_REQUIRED twin
-  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording[^\n]*\nthe largest load each joint reversed under in them \\[N[^]]*m\\], beyond which both of its thresholds widen[^\n]*: J1 [0-9]+\\.[0-9][0-9]  J2 [0-9]+\\.[0-9][0-9]  J3 .*  J6 [0-9]+\\.[0-9][0-9]\n.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
+  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording[^\n]*\nthe largest load each joint reversed under in them \\[the twin's torque units: N[^]]*m on the joints whose gain the known payload fixed\\], beyond which both of its thresholds widen[^\n]*: J1 [0-9]+\\.[0-9][0-9]  J2 [0-9]+\\.[0-9][0-9]  J3 .*  J6 [0-9]+\\.[0-9][0-9]\n.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
 add_test(NAME cli.monitor_unknown_program COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --program palletizing)
 set_tests_properties(cli.monitor_unknown_program PROPERTIES FIXTURES_REQUIRED twin

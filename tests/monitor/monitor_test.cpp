@@ -652,6 +652,13 @@ TEST_F(MonitorLoop, APayloadHeavierThanTheThresholdsWereLearnedWithIsSaid) {
       EXPECT_THAT(e.detail, ::testing::HasSubstr("heavier than the thresholds were learned with"));
     }
   EXPECT_FALSE(watch(2.0, *config)->payload_beyond_thresholds());
+  // thresholds that do not widen with the load (a twin file from before session 25) keep the 0.5 kg margin
+  MonitorConfig unwidened = *config;
+  unwidened.reversal_load_max.resize(0);
+  const auto narrow = watch(1.5, unwidened);
+  EXPECT_TRUE(narrow->payload_beyond_thresholds());
+  EXPECT_THAT(narrow->notes(), ::testing::Contains(::testing::HasSubstr("more than 0.5 kg above the 0.50 kg")));
+  EXPECT_FALSE(watch(1.5, *config)->payload_beyond_thresholds());
   MonitorConfig unknown = *config;
   unknown.payload_max = std::numeric_limits<double>::quiet_NaN();
   const auto old = watch(2.5, unknown);
@@ -712,6 +719,38 @@ TEST_F(MonitorLoop, ThresholdsWidenAtReversalsUnderMoreLoadThanTheyWereLearnedWi
   const auto heavy = undeclared(run(scenario(2501, 30, 2.0)));
   EXPECT_GE(watch(heavy, old).size(), 1u) << "the case this guards against";
   EXPECT_TRUE(watch(heavy, *config).empty()) << listing(watch(heavy, *config));
+  // the widening is never more than the switch's step for the largest excess load of the run
+  // (the twin's torque as the monitor predicts it: measured q, qd, the controller's target qdd)
+  const auto widening = [&](const device::Recording& rec, const std::string& what) {
+    ident::TwinModel t = *twin;
+    model::RigidBodyInertia p = payload;
+    p.mass = 2.0;
+    t.set_payload(p);
+    Monitor a(t, *config), b(t, old);
+    ident::FrictionMemory memory;
+    VectorJ tau, cur, tau_max = VectorJ::Zero(6), wc = VectorJ::Zero(6), wo = VectorJ::Zero(6);
+    for (const auto& x : rec.samples) {
+      a.push(x);
+      b.push(x);
+      t.advance(memory, x.q);
+      t.predict(x.q, x.qd, x.target_qdd, x.temperature, tau, cur, &memory);
+      tau_max = tau_max.cwiseMax(tau.cwiseAbs());
+      wc = wc.cwiseMax(a.level() - b.level());
+      wo = wo.cwiseMax(a.observer_threshold() - b.observer_threshold());
+    }
+    for (int j = 0; j < 6; ++j) {
+      const ident::JointDrive& d = twin->joints[static_cast<size_t>(j)];
+      const double excess = std::max(0.0, tau_max[j] - config->reversal_load_max[j]);
+      EXPECT_LE(wc[j], std::abs(1.0 - d.c_gen) * excess / d.gain + 1e-12) << what << " J" << j + 1;
+      EXPECT_LE(wo[j], std::max(std::abs(1.0 - d.c_gen), std::abs(1.0 / d.c_gen - 1.0)) * excess + 1e-12) << what << " J" << j + 1;
+    }
+    EXPECT_GT(wo.maxCoeff(), 0.0) << what << ": nothing widened";
+  };
+  widening(heavy, "figure-eight");
+  widening(undeclared(run("robot: ur3e\nseed: 2503\nduration: 8\ntrajectory: {type: point_to_point, waypoints: [[-0.6, -1.4, 1.3, "
+                          "-1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [0.6, -1.4, 1.3, "
+                          "-1.5, -1.85, -0.3]], durations: [1.2, 0.8, 1.2, 1.5]}\npayload: {mass: 2.0, com: [0, 0, 0.04]}\n")),
+           "pick-and-place with 1.2 s rests");
   // a 3 N·m contact on the forearm under the 2 kg payload: found within 20 ms, on its link
   const auto hit = undeclared(run(scenario(2502, 12, 2.0,
                                            "  - {type: collision, link: 3, onset: 6.03, magnitude: 3, duration: 0.05, "

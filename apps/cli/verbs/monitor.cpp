@@ -435,13 +435,13 @@ int run_thresholds(const ThresholdOptions& o) {
   fmt::print("thresholds {} learned from {} healthy recording(s) with residual filter '{}' and stored in {}; the heaviest payload "
              "among them, {:.2f} kg, is recorded (the monitor says when it predicts with more than {:g} kg above it)\n",
              o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program), recs.size(),
-             o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::kPayloadEnvelopeMargin);
+             o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::payload_envelope_margin(shown));
   if (shown.reversal_load_max.size() == twin.n_dof()) {
     std::string loads;
     for (int j = 0; j < twin.n_dof(); ++j) loads += fmt::format("{}J{} {:.2f}", j ? "  " : "", j + 1, shown.reversal_load_max[j]);
-    fmt::print("the largest load each joint reversed under in them [{}], beyond which both of its thresholds widen by the drive's "
-               "motoring/back-driven step: {}\n",
-               twin.gains_known() ? "N·m" : "the twin's torque units", loads);
+    fmt::print("the largest load each joint reversed under in them [the twin's torque units{}], beyond which both of its "
+               "thresholds widen by the drive's motoring/back-driven step: {}\n",
+               twin.gains_known() ? ": N·m on the joints whose gain the known payload fixed" : "", loads);
   }
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];

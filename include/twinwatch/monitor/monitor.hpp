@@ -137,9 +137,10 @@ struct MonitorConfig {
   /// reversal, weighted by how much the drive's direction is in doubt) of the healthy runs the
   /// thresholds in use were learned on [the twin's torque units: N·m when its gains are known].
   /// Where a joint reverses under more, the monitor widens both of its thresholds by the step the
-  /// drive's motoring/back-driven switch can put into each residual for the excess ((1 - c_gen)
-  /// times it, Monitor::widen_for_load), through each channel's own filter: that step is larger
-  /// there than any the thresholds saw. Measured on the virtual UR3e with thresholds
+  /// drive's motoring/back-driven switch can put into each residual for the excess
+  /// (Monitor::widen_for_load: |1 - c_gen| times it in the current, max(|1 - c_gen|, |1/c_gen - 1|)
+  /// in the observer), low-passed like the residual: that step is larger there than any the
+  /// thresholds saw. A joint standing still counts as reversing (its direction stays in doubt). Measured on the virtual UR3e with thresholds
   /// learned at 0-0.5 kg: a 1.5-2 kg payload raised 4 false alarms a minute at J4's loaded
   /// reversals before, none with it (docs/validation.md, "Thresholds that grow with the load").
   /// Empty: not recorded (a twin from before session 25): no widening.
@@ -182,6 +183,11 @@ class RestBaseline {
   /// Returns value minus the baseline of each settled joint (value unchanged elsewhere).
   /// Joints without a streamed target velocity are never at rest here.
   void apply(const RobotSample& s, VectorJ& value);
+  /// Whether joint j of s is commanded to rest and not moving (what apply counts).
+  static bool at_rest(const RobotSample& s, int j) {
+    return s.has(kFieldTargetQd) && s.target_qd.size() > j && std::abs(s.target_qd[j]) < kTargetRest && std::abs(s.qd[j]) < kMeasuredRest;
+  }
+
  private:
   std::vector<int> run_;
   VectorJ sum_, base_;
@@ -297,12 +303,20 @@ class Monitor {
   /// 0.05 kg); false without a declaration.
   bool carries_declared() const;
   /// A payload this much heavier [kg] than MonitorConfig::payload_max is beyond what the thresholds
-  /// were learned on. Measured with thresholds learned up to 0.5 kg: before they widened at loaded
-  /// reversals (reversal_load_max), 1.0 kg raised no false alarm and 1.5 kg did (the margin was
-  /// 0.5 kg); with it, 1.5-2.5 kg raised none in 0.5 h of four programs, 3 kg raised 7 in 12 min
-  /// (docs/validation.md, "Thresholds that grow with the load"). 1.5 leaves 2.5 kg, where healthy
-  /// peaks came within 6 % of the thresholds, to the note.
-  static constexpr double kPayloadEnvelopeMargin = 1.5;
+  /// were learned on. Measured with thresholds learned up to 0.5 kg: 1.0 kg raised no false alarm
+  /// and 1.5 kg did (4 a minute, session 24).
+  static constexpr double kPayloadEnvelopeMargin = 0.5;
+  /// The same for thresholds that widen at reversals under more load than they saw
+  /// (MonitorConfig::reversal_load_max set): with thresholds learned up to 0.5 kg, 1.5-3 kg raised
+  /// 1 false alarm in 0.67 h of held-out runs of four programs (docs/validation.md, "Thresholds that
+  /// grow with the load"); 1.5 leaves 2.5 kg, where the design set's healthy peaks came within 6 %
+  /// of the thresholds, to the note.
+  static constexpr double kPayloadEnvelopeMarginWidened = 1.5;
+  /// The margin that applies to `config`: kPayloadEnvelopeMarginWidened when its thresholds widen
+  /// with the load, else kPayloadEnvelopeMargin.
+  static double payload_envelope_margin(const MonitorConfig& config) {
+    return config.reversal_load_max.size() != 0 ? kPayloadEnvelopeMarginWidened : kPayloadEnvelopeMargin;
+  }
   /// Whether the twin's payload is now beyond what the thresholds were learned on (payload_max
   /// + kPayloadEnvelopeMargin); false when payload_max is not recorded.
   bool payload_beyond_thresholds() const { return payload_beyond_; }
@@ -457,6 +471,9 @@ class Monitor {
   double reversal_width_ = 0.01, obs_band_alpha_ = 0.0;
   bool load_band_on_ = false;
   void widen_for_load(const VectorJ& qd);
+  // the switch's step for joint j at this sample, for reversal loads above load_max: in the current
+  // residual [A] (observer false) or the observer's [the twin's torque units]; 0 when not finite
+  double load_step(int j, double qd, double load_max, bool observer) const;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
