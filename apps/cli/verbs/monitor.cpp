@@ -438,10 +438,15 @@ int run_thresholds(const ThresholdOptions& o) {
              o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::payload_envelope_margin(shown));
   if (shown.reversal_load_max.size() == twin.n_dof()) {
     std::string loads;
-    for (int j = 0; j < twin.n_dof(); ++j) loads += fmt::format("{}J{} {:.2f}", j ? "  " : "", j + 1, shown.reversal_load_max[j]);
-    fmt::print("the largest load each joint reversed under in them [the twin's torque units{}], beyond which both of its "
-               "thresholds widen by the drive's motoring/back-driven step: {}\n",
-               twin.gains_known() ? ": N·m on the joints whose gain the known payload fixed" : "", loads);
+    bool relative = false;  // a joint whose gain no known payload fixed: its load is in the twin's own scale
+    for (int j = 0; j < twin.n_dof(); ++j) {
+      const bool nm = twin.gains_known() && twin.joints[static_cast<size_t>(j)].gain_identified;
+      relative |= !nm;
+      loads += fmt::format("{}J{} {:.2f}{}", j ? "  " : "", j + 1, shown.reversal_load_max[j], nm ? "" : "*");
+    }
+    fmt::print("the largest load each joint reversed under in them [N·m{}], beyond which both of its thresholds widen by the drive's "
+               "motoring/back-driven step: {}\n",
+               relative ? "; *: in the twin's own torque scale, the joint's gain not fixed by a known payload" : "", loads);
   }
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];
