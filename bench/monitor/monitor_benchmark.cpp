@@ -44,7 +44,8 @@ const Setup& setup() {
 // 1: the momentum observer on the sample path with its alerts (as evaluate runs it), 0: without it
 // (observer_level cleared: the current residual alone, as before issue 7's observer); 2: as 1 with
 // every reversal beyond the learned loads (reversal_load_max 0: the thresholds widen at each one,
-// the worst case of Monitor::widen_for_load)
+// the worst case of Monitor::widen_for_load); 3: as 1 without the widening (a twin file from before
+// session 25), for its cost in the same binary
 struct Replayer {
   const Setup& s;
   const monitor::MonitorConfig cfg;
@@ -55,6 +56,7 @@ struct Replayer {
     if (observer == 0) c.observer_level.resize(0);
     c.observer_alerts = observer >= 1;
     if (observer == 2) c.reversal_load_max = VectorJ::Zero(s.twin.n_dof());
+    if (observer == 3) c.reversal_load_max.resize(0);
     return c;
   }
   Replayer(const Setup& setup, std::int64_t observer) : s(setup), cfg(config(setup, observer)), mon(setup.twin, cfg) {}
@@ -105,7 +107,7 @@ void BM_MonitorThroughput(benchmark::State& st) {
   benchmark::DoNotOptimize(r.mon.observer_residual().data());
   r.count(st);
 }
-BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->MinTime(2.0);
+BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->MinTime(2.0);
 
 // the twin prediction alone (the regressor dominates), with its friction memory
 void BM_TwinPredict(benchmark::State& st) {

@@ -183,10 +183,6 @@ class RestBaseline {
   /// Returns value minus the baseline of each settled joint (value unchanged elsewhere).
   /// Joints without a streamed target velocity are never at rest here.
   void apply(const RobotSample& s, VectorJ& value);
-  /// Whether joint j of s is commanded to rest and not moving (what apply counts).
-  static bool at_rest(const RobotSample& s, int j) {
-    return s.has(kFieldTargetQd) && s.target_qd.size() > j && std::abs(s.target_qd[j]) < kTargetRest && std::abs(s.qd[j]) < kMeasuredRest;
-  }
 
  private:
   std::vector<int> run_;
