@@ -416,50 +416,82 @@ std::string robot_reference(const std::string& name_or_path) {
   return (ec ? file : a.lexically_normal().string()) + (tip.empty() ? "" : "#" + tip);
 }
 
-std::optional<device::ColumnMap> load_column_map(const std::string& path) {
-  if (path.empty()) return std::nullopt;
+std::string column_map_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (fs::exists(path, ec) || path.find('/') != std::string::npos) return device::ColumnMap::load(path);
+  if (fs::exists(path, ec) || path.find('/') != std::string::npos) return path;
   // a bare name: one of the maps twinwatch ships (data/column_maps, or an installed share/twinwatch)
   const fs::path dir = data_directory("column_maps");
   for (const fs::path& f : {dir / path, dir / (path + ".csv")})
-    if (fs::is_regular_file(f, ec)) return device::ColumnMap::load(f.string());
+    if (fs::is_regular_file(f, ec)) return f.string();
   const std::vector<std::string> names = data_names("column_maps", ".csv");
   throw InvalidArgument(fmt::format("--column-map {}: no such file, and no map of that name among those twinwatch ships ({}: {})", path,
                                     dir.string(), names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
+}
+
+std::optional<device::ColumnMap> load_column_map(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  return device::ColumnMap::load(column_map_file(path));
 }
 
 ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings) {
   std::string all_value;
   std::vector<std::string> own_value;  // the value that gave own_[k]
   std::error_code ec;
+  const auto is_recording = [&](const std::string& name) {
+    for (const std::string& r : recordings)
+      if (same_file(r, name)) return true;
+    return false;
+  };
+  // a map's errors name the --column-map value it came from
+  // (a bad map's content is a ParseError naming the map file and line)
+  const auto load = [](const std::string& value, const std::string& map, std::string& file) {
+    try {
+      file = column_map_file(map);
+    } catch (const InvalidArgument& e) {
+      if (value == map) throw;
+      const std::string why = e.what(), prefix = "--column-map " + map + ": ";
+      throw InvalidArgument(fmt::format("--column-map '{}': {}", value, why.rfind(prefix, 0) == 0 ? why.substr(prefix.size()) : why));
+    }
+    std::error_code missing;
+    if (!std::filesystem::is_regular_file(file, missing))
+      throw InvalidArgument(fmt::format("--column-map '{}': no map file '{}'", value, file));
+    return device::ColumnMap::load(file);
+  };
   for (const std::string& v : values) {
-    const size_t eq = v.find('=');
-    if (eq == std::string::npos || std::filesystem::exists(v, ec)) {
+    if (v.empty()) throw InvalidArgument("--column-map '': expected MAP or REC=MAP, got an empty value");
+    // REC=MAP: the first '=' whose left part names one of the recordings (a recording's name may
+    // hold a '=' too); a value that names an existing file is a MAP
+    size_t eq = std::string::npos;
+    if (!std::filesystem::exists(v, ec))
+      for (size_t at = v.find('='); at != std::string::npos && eq == std::string::npos; at = v.find('=', at + 1))
+        if (is_recording(v.substr(0, at))) eq = at;
+    if (eq == std::string::npos) {
+      if (v.find('=') != std::string::npos && !std::filesystem::exists(v, ec))
+        throw InvalidArgument(fmt::format("--column-map '{}': no map file of that name, and {} ({}); REC=MAP gives one of them its own "
+                                          "map",
+                                          v, v.front() == '=' ? std::string("no recording is named before '='")
+                                                              : "'" + v.substr(0, v.find('=')) + "' before '=' is none of the recordings",
+                                          fmt::join(recordings, ", ")));
       if (!all_value.empty())
         throw InvalidArgument(fmt::format("--column-map '{}' and '{}': two maps for every recording; give one, or REC=MAP for each "
                                           "recording that needs its own",
                                           all_value, v));
-      all_ = load_column_map(v);
+      std::string file;
+      all_ = load(v, v, file);
       all_value = v;
-      files_.push_back(v);
+      files_.push_back(file);
       continue;
     }
     const std::string rec = v.substr(0, eq), map = v.substr(eq + 1);
     if (map.empty()) throw InvalidArgument(fmt::format("--column-map '{}': expected REC=MAP, the map after '=' is missing", v));
-    bool found = false;
-    for (const std::string& r : recordings) found |= same_file(r, rec);
-    if (!found)
-      throw InvalidArgument(fmt::format("--column-map '{}': '{}' is not one of the recordings ({}); REC=MAP gives one of them its map",
-                                        v, rec, fmt::join(recordings, ", ")));
     for (size_t k = 0; k < own_.size(); ++k)
       if (same_file(own_[k].first, rec))
         throw InvalidArgument(fmt::format("--column-map '{}' and '{}': two maps for {}; give one", own_value[k], v, rec));
-    auto m = load_column_map(map);
-    own_.emplace_back(rec, std::move(*m));
+    std::string file;
+    own_.emplace_back(rec, load(v, map, file));
     own_value.push_back(v);
-    files_.push_back(map);
+    files_.push_back(file);
   }
 }
 

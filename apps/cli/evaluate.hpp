@@ -54,12 +54,16 @@ std::string magnitude_text(double value, const std::string& units);
 /// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
 /// RTDE names (device::ColumnMap::load), none when `path` is empty.
 std::optional<device::ColumnMap> load_column_map(const std::string& path);
+/// The file `--column-map path` reads: the path itself, or a shipped map's file for a bare name.
+/// Throws InvalidArgument (listing the shipped maps) when it is neither.
+std::string column_map_file(const std::string& path);
 
 /// `--column-map` of the verbs that read several recordings (identify, thresholds): each value is
 /// MAP, the map of every recording that has none of its own, or REC=MAP, the map of that recording
 /// alone (a log from another source among the robot's own recordings). Repeatable. MAP is a file or
 /// a shipped map's name, as for load_column_map; a value that names an existing file is a MAP even
-/// with a '=' in it.
+/// with a '=' in it, and REC is the part before the first '=' that names a recording (its name may
+/// hold a '=').
 class ColumnMaps {
  public:
   ColumnMaps() = default;
@@ -68,7 +72,7 @@ class ColumnMaps {
   ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings);
   /// The map to read `recording` with (nullptr: its own column names).
   const device::ColumnMap* of(const std::string& recording) const;
-  /// The map files given (inputs an output must not replace).
+  /// The map files read, a shipped map's as its file (inputs an output must not replace).
   const std::vector<std::string>& files() const { return files_; }
 
  private:

@@ -49,8 +49,21 @@ grep -q '"joints":\[{"d_tau_pct"' "$dir/cm_val_rtde.json" || { echo "no validati
 cmp "$dir/cm_val_rtde.json" "$dir/cm_val_mixed.json" || { echo "identify learned differently from a mixed set"; exit 1; }
 # a map for a file that is not one of the recordings, and two maps for all, are refused by name
 if "$tw" identify "$a" --column-map "nope.csv=$map" -q -o "$dir/cm_never.json" 2> "$dir/cm_err2.txt"; then echo "a map for no recording taken"; exit 1; fi
-grep -q "column-map 'nope.csv=.*': 'nope.csv' is not one of the recordings" "$dir/cm_err2.txt" || { cat "$dir/cm_err2.txt"; exit 1; }
+grep -q "column-map 'nope.csv=.*': no map file of that name, and 'nope.csv' before '=' is none of the recordings" "$dir/cm_err2.txt" || { cat "$dir/cm_err2.txt"; exit 1; }
 if "$tw" identify "$a" --column-map "$map" --column-map kinova_gen3_chiha -q -o "$dir/cm_never.json" 2> "$dir/cm_err3.txt"; then echo "two maps for all taken"; exit 1; fi
 grep -q "two maps for every recording" "$dir/cm_err3.txt" || { cat "$dir/cm_err3.txt"; exit 1; }
 [ ! -e "$dir/cm_never.json" ] || { echo "a twin was written after a refused map"; exit 1; }
+if "$tw" identify "$a" --column-map '' -q -o "$dir/cm_never.json" 2> "$dir/cm_err4.txt"; then echo "an empty map taken"; exit 1; fi
+grep -q "got an empty value" "$dir/cm_err4.txt" || { cat "$dir/cm_err4.txt"; exit 1; }
+# a recording whose name holds a '=' gets its own map; a shipped map given by name is an input that
+# -o must not replace (the file it resolves to, not the name)
+cp "$dir/cm_b.csv" "$dir/run=1.csv"
+"$tw" identify "$a" "$dir/run=1.csv" --column-map "$dir/run=1.csv=$map" -q -o "$dir/cm_id_eq.json"
+"$tw" validate --twin "$dir/cm_id_eq.json" "$fault" --json | sed 's/,"twin":"[^"]*"//' > "$dir/cm_val_eq.json"
+cmp "$dir/cm_val_rtde.json" "$dir/cm_val_eq.json" || { echo "a recording named with '=' was mapped differently"; exit 1; }
+mkdir -p "$dir/data/column_maps" && cp "$map" "$dir/data/column_maps/shipped.csv"
+if TWINWATCH_DATA_DIR="$dir/data" "$tw" identify "$a" "$dir/cm_b.csv" --column-map "$dir/cm_b.csv=shipped" -q \
+     -o "$dir/data/column_maps/shipped.csv" 2> "$dir/cm_err5.txt"; then echo "a shipped map overwritten"; exit 1; fi
+grep -q "cannot write: it is the input" "$dir/cm_err5.txt" || { cat "$dir/cm_err5.txt"; exit 1; }
+cmp "$map" "$dir/data/column_maps/shipped.csv" || { echo "the shipped map changed"; exit 1; }
 echo "SAME-THROUGH-THE-COLUMN-MAP: $(wc -l < "$dir/cm_ev_rtde.jsonl") event(s)"

@@ -438,6 +438,7 @@ int run(const StudyOptions& o) {
     if (given) throw InvalidArgument(fmt::format("{} applies to --closed-loop only", flag));
   if (o.simulated == !o.recordings.empty())
     throw InvalidArgument("give either recordings (TRAIN [VALIDATION [CHIRP]]) or --simulated, not both and not neither");
+  if (o.simulated && !o.column_maps.empty()) throw InvalidArgument("--column-map applies to recordings, not to --simulated");
   if (o.torque != "current" && o.torque != "moment")
     throw InvalidArgument(fmt::format("--torque is '{}', expected 'current' or 'moment'", o.torque));
   if (!(o.split > 0.0 && o.split < 1.0)) throw InvalidArgument(fmt::format("--split is {}, must be in (0, 1)", o.split));
@@ -548,7 +549,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--joint", o->joints, "Joint(s) to study, 1-based (default: every joint that moves)");
   sub->add_option("--column-map", o->column_maps,
                   "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), or the name of one twinwatch ships. "
-                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each)");
+                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each)")->type_name("[REC=]MAP");
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
   CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(twinwatch::cli::positive_number());
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();

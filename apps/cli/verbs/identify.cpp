@@ -447,8 +447,8 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
   sub->add_option("--column-map", o->column_maps,
                   "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), or the name of one twinwatch ships. "
-                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each; e.g. a log from "
-                  "another source among the robot's own recordings)");
+                  "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each; REC is any name of the "
+                  "file, --quasi-static and --sine recordings included; e.g. a log from another source among the robot's own)")->type_name("[REC=]MAP");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });

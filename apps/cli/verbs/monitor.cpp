@@ -514,7 +514,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--column-map", o->column_maps,
                   kColumnMapHelp + std::string(". MAP: every recording without one of its own (--debounce-validation's too); REC=MAP: that "
-                                               "recording alone (repeat for each)"));
+                                               "recording alone (repeat for each; REC is any name of the file)"))
+      ->type_name("[REC=]MAP");
   sub->add_option("--debounce-validation", o->debounce_validation,
                   "Healthy recordings NOT among RECORDINGS (same program and payload; the longer the better: the largest "
                   "healthy peak grows with the time watched) on which to choose the momentum observer's debounce per joint: "
