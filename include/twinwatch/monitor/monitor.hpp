@@ -130,8 +130,8 @@ struct MonitorConfig {
   /// recorded, a twin from before session 24). The twin's model error grows with the payload, and
   /// thresholds learned light do not cover a heavy one (on the virtual UR3e, thresholds learned at
   /// 0-0.5 kg: no false alarm at 1.0 kg, 4 a minute at 1.5 and 2 kg, before reversal_load_max):
-  /// the monitor says so when its payload is more than Monitor::kPayloadEnvelopeMargin heavier, and
-  /// marks the alerts raised then.
+  /// the monitor says so when its payload is more than Monitor::payload_envelope_margin heavier,
+  /// and marks the alerts raised then.
   double payload_max = std::numeric_limits<double>::quiet_NaN();
   /// Per joint, the largest reversal load (threshold.hpp, reversal_load: the twin's |torque| at a
   /// reversal, weighted by how much the drive's direction is in doubt) of the healthy runs the
@@ -314,7 +314,7 @@ class Monitor {
     return config.reversal_load_max.size() != 0 ? kPayloadEnvelopeMarginWidened : kPayloadEnvelopeMargin;
   }
   /// Whether the twin's payload is now beyond what the thresholds were learned on (payload_max
-  /// + kPayloadEnvelopeMargin); false when payload_max is not recorded.
+  /// + payload_envelope_margin); false when payload_max is not recorded.
   bool payload_beyond_thresholds() const { return payload_beyond_; }
   const ident::TwinModel& twin() const { return twin_; }
 
