@@ -782,6 +782,18 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   reversal_width_ = reversal_width(twin_);
   obs_band_alpha_ = 1.0 - std::exp(-cfg_.observer_gain * cfg_.nominal_period);
   load_band_on_ = cfg_.reversal_load_max.size() == n_;
+  // the switch's step per unit of excess load. The current for a torque tau is f tau / g, f = 1
+  // motoring and c_gen back-driven: the twin's blended f is off the drive's by at most |1 - c_gen|,
+  // |1 - c_gen| tau / g in the current residual. The observer converts the measured current back to
+  // torque with a hard switch on the measured velocity's sign (measured_drive_torque), which leaves
+  // (c_gen - 1) tau or (1/c_gen - 1) tau. (A non-finite factor, c_gen or gain 0: none.)
+  load_step_cur_ = load_step_obs_ = VectorJ::Zero(n_);
+  for (int j = 0; j < n_; ++j) {
+    const ident::JointDrive& d = twin_.joints[static_cast<size_t>(j)];
+    const double cur = std::abs(1.0 - d.c_gen) / d.gain, obs = std::max(std::abs(1.0 - d.c_gen), std::abs(1.0 / d.c_gen - 1.0));
+    load_step_cur_[j] = std::isfinite(cur) ? cur : 0.0;
+    load_step_obs_[j] = std::isfinite(obs) ? obs : 0.0;
+  }
   fir_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   deb_obs_.clear();
@@ -814,28 +826,20 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
 
 double Monitor::torque_gain(int j) const { return tau_gain_[j]; }
 
-// The current for a torque tau is f tau / g, f = 1 motoring and c_gen back-driven. The twin's blended
-// f is off the drive's by at most |1 - c_gen|: |1 - c_gen| tau / g in the current residual. The
-// observer converts the measured current back to torque with a hard switch on the measured
-// velocity's sign (measured_drive_torque), which leaves (c_gen - 1) tau or (1/c_gen - 1) tau.
-double Monitor::load_step(int j, double qd, double load_max, bool observer) const {
+double Monitor::load_excess(int j, double qd, double load_max) const {
   // (most samples end here, without the tanh of reversal_load: the load is at most
   // |tau| 2 / (exp(2x) + 1) <= |tau| / (1 + x), x = |qd| / width; evaluated for every joint below
   // 0.2 rad/s, the tanh cost ~60 ns a sample)
   const double atau = std::abs(tau_hat_[j]);
   if (atau <= load_max * (1.0 + std::abs(qd) / reversal_width_)) return 0.0;
   const double excess = reversal_load(tau_hat_[j], qd, reversal_width_) - load_max;
-  if (!(excess > 0.0)) return 0.0;
-  const ident::JointDrive& d = twin_.joints[static_cast<size_t>(j)];
-  const double step = observer ? std::max(std::abs(1.0 - d.c_gen), std::abs(1.0 / d.c_gen - 1.0)) * excess
-                               : std::abs(1.0 - d.c_gen) * excess / d.gain;
-  return std::isfinite(step) ? step : 0.0;
+  return excess > 0.0 && std::isfinite(excess) ? excess : 0.0;
 }
 
 // Where a joint reverses under more load than any reversal the thresholds were learned on, the
 // drive's motoring/back-driven step the twin cannot time (reversal_load, threshold.hpp) is larger
 // than any they saw: both thresholds grow by the step the excess load can put into each residual
-// (load_step), times the joint's sensitivity like the rest of its threshold, low-passed so that the
+// (load_excess times the joint's step, load_step_cur_ / load_step_obs_), times the joint's sensitivity like the rest of its threshold, low-passed so that the
 // widening lasts as long as the step's trace in the residual does: through the residual's IIR
 // (a first-order low-pass of a bound bounds the low-pass of what it bounds; a joint on Cao's FIR,
 // -3 dB at 42.8 Hz against the IIR's 40, gets the same IIR: close, not a strict bound) and the
@@ -849,14 +853,13 @@ void Monitor::widen_for_load(const VectorJ& qd) {
   for (int j = 0; j < n_; ++j) {
     double& cur = load_band_cur_[j];
     double& obs = load_band_obs_[j];
-    const double cur_step = load_step(j, qd[j], cfg_.reversal_load_max[j], false);
-    if (cur_step == 0.0 && cur < 1e-12 && obs < 1e-12) {  // (most samples: no excess, the bands decayed)
+    const double excess = load_excess(j, qd[j], cfg_.reversal_load_max[j]);
+    if (excess == 0.0 && cur < 1e-12 && obs < 1e-12) {  // (most samples: no excess, the bands decayed)
       cur = obs = 0.0;
       continue;
     }
-    const double obs_step = load_step(j, qd[j], cfg_.reversal_load_max[j], true);
-    cur += alpha_ * (cur_step - cur);
-    obs += obs_band_alpha_ * (obs_step - obs);
+    cur += alpha_ * (load_step_cur_[j] * excess - cur);
+    obs += obs_band_alpha_ * (load_step_obs_[j] * excess - obs);
     level_[j] += cfg_.sensitivity[j] * cur;
     if (obs_on_) obs_level_[j] += cfg_.sensitivity[j] * obs;
   }
@@ -943,8 +946,8 @@ void Monitor::check_program_sets() {
       const double sens = cfg_.sensitivity[j];
       // the set's own widening at loaded reversals (widen_for_load), at this sample, unfiltered
       const bool widens = set.reversal_load_max.size() == n_;
-      const double cur = widens ? sens * load_step(j, d.qd[j], set.reversal_load_max[j], false) : 0.0;
-      const double obs = widens ? sens * load_step(j, d.qd[j], set.reversal_load_max[j], true) : 0.0;
+      const double excess = widens ? load_excess(j, d.qd[j], set.reversal_load_max[j]) : 0.0;
+      const double cur = sens * load_step_cur_[j] * excess, obs = sens * load_step_obs_[j] * excess;
       over = std::abs(rf_dec_[j]) > level_at(cfg_.use_dynamic, set.dynamic, set.static_level, j, d.qd[j], qdd_[j], sens) + cur ||
              (observer && std::abs(obs_dec_[j]) > level_at(cfg_.use_dynamic, obs_dyn, obs_static, j, d.qd[j], qdd_[j], sens) + obs);
     }

@@ -22,6 +22,16 @@ std::string error_of(const std::string& yaml) {
   return twinwatch::test::error_text<ParseError>([&] { parse_scenario(yaml, "test.yaml"); });
 }
 
+// the simulator's stream at these times (the sample stamped at each)
+std::map<double, RobotSample> stream_at(Simulator& sim, std::initializer_list<double> times) {
+  std::map<double, RobotSample> at;
+  sim.run([&](const RobotSample& x) {
+    for (double t : times)
+      if (std::abs(x.timestamp - t) < 1e-9) at[t] = x;
+  });
+  return at;
+}
+
 const std::string kSine = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
 const std::string kFig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n";
 
@@ -88,20 +98,16 @@ TEST(Scenario, TheDeclaredPayloadIsStreamedAndAMissedPickChangesOnlyIt) {
   EXPECT_DOUBLE_EQ(s.faults[2].magnitude, -1.0);  // carries 1.0 kg, declared 2.0 kg
   const auto sim = make_simulator(s);
   EXPECT_TRUE(sim->sample_fields() & kFieldPayload);
-  std::vector<RobotSample> at;  // the samples at 0.5, 1.5, 3 and 5 s
-  sim->run([&](const RobotSample& x) {
-    for (double t : {0.5, 1.5, 3.0, 5.0})
-      if (std::abs(x.timestamp - t) < 1e-9) at.push_back(x);
-  });
+  auto at = stream_at(*sim, {0.5, 1.5, 3.0, 5.0});
   ASSERT_EQ(at.size(), 4u);
-  EXPECT_TRUE(at[0].has(kFieldPayload));
-  EXPECT_EQ(at[0].payload, 0.5);
-  EXPECT_EQ(at[0].payload_cog[2], 0.04);
-  EXPECT_EQ(at[1].payload, 0.5) << "an undeclared loss leaves the declaration";
-  EXPECT_EQ(at[2].payload, 1.0);
-  EXPECT_EQ(at[2].payload_cog[1], 0.01);
-  EXPECT_EQ(at[3].payload, 2.0);
-  EXPECT_EQ(at[3].digital_outputs & 4u, 4u) << "the gripper closed on nothing";
+  EXPECT_TRUE(at[0.5].has(kFieldPayload));
+  EXPECT_EQ(at[0.5].payload, 0.5);
+  EXPECT_EQ(at[0.5].payload_cog[2], 0.04);
+  EXPECT_EQ(at[1.5].payload, 0.5) << "an undeclared loss leaves the declaration";
+  EXPECT_EQ(at[3.0].payload, 1.0);
+  EXPECT_EQ(at[3.0].payload_cog[1], 0.01);
+  EXPECT_EQ(at[5.0].payload, 2.0);
+  EXPECT_EQ(at[5.0].digital_outputs & 4u, 4u) << "the gripper closed on nothing";
   EXPECT_EQ(sim->truth_model().payload().mass, 1.0) << "the arm still carries the part picked at 2 s";
   // a controller without the stream
   const Scenario quiet = parse_scenario(head + "streams_payload: false\n", "test.yaml");
@@ -124,11 +130,7 @@ TEST(Scenario, APicksDeclarationCanComeBeforeOrAfterTheGrip) {
   ASSERT_EQ(s.faults.size(), 3u);
   EXPECT_DOUBLE_EQ(s.faults[0].declare_delay, 0.3);
   const auto sim = make_simulator(s);
-  std::map<double, RobotSample> at;  // the stream at these times
-  sim->run([&](const RobotSample& x) {
-    for (double t : {1.2, 1.4, 3.4, 3.6, 4.2})
-      if (std::abs(x.timestamp - t) < 1e-9) at[t] = x;
-  });
+  auto at = stream_at(*sim, {1.2, 1.4, 3.4, 3.6, 4.2});
   ASSERT_EQ(at.size(), 5u);
   EXPECT_EQ(at[1.2].digital_outputs & 2u, 2u) << "gripped at 1 s";
   EXPECT_EQ(at[1.2].payload, 0.0) << "declared only at 1.3 s";

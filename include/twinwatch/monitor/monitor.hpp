@@ -466,10 +466,12 @@ class Monitor {
   VectorJ load_band_cur_, load_band_obs_;
   double reversal_width_ = 0.01, obs_band_alpha_ = 0.0;
   bool load_band_on_ = false;
+  // the drive switch's step per unit of excess load, per joint (set once): in the current residual
+  // [A per twin torque unit] and the observer's [1]
+  VectorJ load_step_cur_, load_step_obs_;
   void widen_for_load(const VectorJ& qd);
-  // the switch's step for joint j at this sample, for reversal loads above load_max: in the current
-  // residual [A] (observer false) or the observer's [the twin's torque units]; 0 when not finite
-  double load_step(int j, double qd, double load_max, bool observer) const;
+  // joint j's reversal load at this sample beyond load_max (0: none, or not finite)
+  double load_excess(int j, double qd, double load_max) const;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
