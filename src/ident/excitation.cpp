@@ -43,15 +43,17 @@ constexpr double kCentreStay = 0.002;
 constexpr double kCentreStep = 0.2;
 constexpr int kCentreEvaluations = 3000;
 
-// heights of the body origins after the first (the first turns about the base's own axis) and the
-// flange, at the configuration forward_kinematics last computed into d: the lowest (z [m], body:
-// 1..n_dof-1 the origin of that body, n_dof the flange) and their mean [m]
+// heights of the body origins after the first (the first turns about the base's own axis), the
+// flange and the tool points (flange frame), at the configuration forward_kinematics last computed
+// into d: the lowest (z [m], body: 1..n_dof-1 the origin of that body, n_dof the flange, n_dof+1+k
+// tool point k) and the mean of the bodies and the flange [m] (the raised centre's tie-break; a tool
+// point is a constraint, not a reason to stand the arm up)
 struct BodyHeights {
   double lowest = std::numeric_limits<double>::infinity();
   int body = -1;
   double mean = 0.0;
 };
-BodyHeights body_heights(const model::RobotModel& m, const model::DynamicsData& d) {
+BodyHeights body_heights(const model::RobotModel& m, const model::DynamicsData& d, const std::vector<Eigen::Vector3d>& tool) {
   BodyHeights h;
   for (int b = 1; b <= m.n_dof(); ++b) {
     const double z = b < m.n_dof() ? d.oMi[static_cast<size_t>(b)].translation().z() : d.oMf.translation().z();
@@ -59,7 +61,24 @@ BodyHeights body_heights(const model::RobotModel& m, const model::DynamicsData& 
     h.mean += z;
   }
   h.mean /= m.n_dof();
+  for (size_t k = 0; k < tool.size(); ++k)
+    if (const double z = (d.oMf * tool[k]).z(); z < h.lowest) h.lowest = z, h.body = m.n_dof() + 1 + static_cast<int>(k);
   return h;
+}
+
+// a tool point farther than this from the flange [m] is a typing error (a value in mm), not a tool
+constexpr double kToolPointMax = 2.0;
+
+void validate_tool_points(const std::vector<Eigen::Vector3d>& tool) {
+  for (size_t k = 0; k < tool.size(); ++k) {
+    const Eigen::Vector3d& p = tool[k];
+    if (!p.allFinite())
+      throw InvalidArgument(fmt::format("tool_points[{}] is ({}, {}, {}), must be finite [m]", k, p.x(), p.y(), p.z()));
+    if (p.norm() > kToolPointMax)
+      throw InvalidArgument(fmt::format("tool_points[{}] is ({:g}, {:g}, {:g}) m, {:.3g} m from the flange: expected at most {:g} m "
+                                        "(a value in mm?)",
+                                        k, p.x(), p.y(), p.z(), p.norm(), kToolPointMax));
+  }
 }
 
 // free coefficients per joint: a_2..a_L and b_3..b_L
@@ -205,7 +224,7 @@ class Design {
     for (Eigen::Index m = 0; m < S_.rows(); ++m) {
       grid_state(t, m, q, qd, qdd);
       model::forward_kinematics(m_, d_, q);
-      low = std::min(low, body_heights(m_, d_).lowest);
+      low = std::min(low, body_heights(m_, d_, o_.tool_points).lowest);
     }
     return low;
   }
@@ -303,6 +322,7 @@ void ExcitationOptions::validate(int n_dof) const {
     throw InvalidArgument(fmt::format("limit_fraction is {}, must be in (0, 1]", limit_fraction));
   if (!(default_qdd_max > 0.0)) throw InvalidArgument(fmt::format("default_qdd_max is {} rad/s², must be > 0", default_qdd_max));
   if (std::isnan(min_height)) throw InvalidArgument("min_height is NaN, must be a height [m] or -infinity (none)");
+  validate_tool_points(tool_points);
   if (global_evaluations < 0) throw InvalidArgument(fmt::format("global_evaluations is {}, must be >= 0", global_evaluations));
   if (local_evaluations < 0) throw InvalidArgument(fmt::format("local_evaluations is {}, must be >= 0", local_evaluations));
 }
@@ -417,7 +437,7 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
     res.qd_peak = res.qd_peak.cwiseMax(qd.cwiseAbs());
     res.qdd_peak = res.qdd_peak.cwiseMax(qdd.cwiseAbs());
   }
-  res.lowest = excitation_lowest_point(model, t, o.check_samples);
+  res.lowest = excitation_lowest_point(model, t, o.check_samples, o.tool_points);
   if (progress) progress(1.0, res.cond_final);
   return res;
 }
@@ -440,13 +460,14 @@ VectorJ excitation_raised_centre(const model::RobotModel& model, const Excitatio
     const model::RobotModel* m;
     model::DynamicsData d;
     VectorJ mid;
-  } ctx{&model, model::DynamicsData(model), Eigen::Map<const Eigen::VectorXd>(x.data(), n)};
+    const std::vector<Eigen::Vector3d>* tool;
+  } ctx{&model, model::DynamicsData(model), Eigen::Map<const Eigen::VectorXd>(x.data(), n), &o.tool_points};
   const auto height = [](unsigned nv, const double* v, double* grad, void* data) {
     (void)grad;  // derivative-free
     auto* c = static_cast<Ctx*>(data);
     const VectorJ q = Eigen::Map<const Eigen::VectorXd>(v, static_cast<Eigen::Index>(nv));
     model::forward_kinematics(*c->m, c->d, q);
-    const BodyHeights h = body_heights(*c->m, c->d);
+    const BodyHeights h = body_heights(*c->m, c->d, *c->tool);
     return h.lowest + kCentreTieBreak * h.mean - kCentreStay * (q - c->mid).squaredNorm();
   };
   nlopt_opt opt = nlopt_create(NLOPT_LN_SBPLX, static_cast<unsigned>(n));
@@ -462,8 +483,10 @@ VectorJ excitation_raised_centre(const model::RobotModel& model, const Excitatio
   return Eigen::Map<const Eigen::VectorXd>(x.data(), n);
 }
 
-ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& t, int samples) {
+ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& t, int samples,
+                                              const std::vector<Eigen::Vector3d>& tool_points) {
   if (samples < 1) throw InvalidArgument(fmt::format("samples is {}, must be >= 1", samples));
+  validate_tool_points(tool_points);
   model::DynamicsData d(model);
   ExcitationLowestPoint low;
   VectorJ q, qd, qdd;
@@ -471,7 +494,7 @@ ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, co
     const double time = t.period() * m / samples;
     t.evaluate(time, q, qd, qdd);
     model::forward_kinematics(model, d, q);
-    if (const BodyHeights h = body_heights(model, d); h.lowest < low.z) low = {h.lowest, time, h.body};
+    if (const BodyHeights h = body_heights(model, d, tool_points); h.lowest < low.z) low = {h.lowest, time, h.body};
   }
   return low;
 }

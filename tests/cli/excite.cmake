@@ -49,11 +49,30 @@ set_tests_properties(cli.excite_min_height_default PROPERTIES
 add_test(NAME cli.excite_min_height_unreachable
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/never_high.yaml --global-evals 100 --local-evals 100 --min-height 0.3 2>&1; echo exit \$?; test -e ${d}/never_high.yaml && echo FILE-EXISTS")
 set_tests_properties(cli.excite_min_height_unreachable PROPERTIES
-  PASS_REGULAR_EXPRESSION "error: the search found no design above --min-height 0\\.3 m: the best the (flange|J[2-6] axis) comes down to z = \\+0\\.[0-2][0-9]* m [^\n]*no file written[^\n]*\nexit [1-9]\n$"
+  PASS_REGULAR_EXPRESSION "error: the search found no design above --min-height 0\\.3 m: in the best one, the (flange|J[2-6] axis) comes down to z = \\+0\\.[0-2][0-9]* m [^\n]*no file written[^\n]*\nexit [1-9]\n$"
   FAIL_REGULAR_EXPRESSION "FILE-EXISTS")
 add_test(NAME cli.excite_lowest_point_warning COMMAND twinwatch excite ur3e -o ${d}/low.yaml --global-evals 100 --local-evals 100 --min-height -1)
 set_tests_properties(cli.excite_lowest_point_warning PROPERTIES
   PASS_REGULAR_EXPRESSION "WARNING: the (flange|J[2-6] axis) comes down to z = -0\\.[0-9]+ m[^\n]*\\(--min-height -1 m\\): [^\n]*may hit the table")
+# a tool on the flange is kept above --min-height when its points are given (flange frame, m; three
+# numbers an occurrence, repeated for more points): the file says which points were kept up, and
+# without one the output says a tool was not checked. A point in mm is refused by its option.
+add_test(NAME cli.excite_tool_point
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/tool.yaml --global-evals 300 --local-evals 300 --tool-point 0 0 0.2 --tool-point 0.03 0 0.18 && grep 'lowest point' ${d}/tool.yaml")
+set_tests_properties(cli.excite_tool_point PROPERTIES PASS_REGULAR_EXPRESSION
+  "kept above --min-height 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m; tool point 2 \\(0\\.03, 0, 0\\.18\\) m; no other collision check\\)
+.*# lowest point: [^
+]*comes down to z = \\+0\\.(0[5-9]|[1-9])[0-9]* m [^
+]*\\(kept above 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m; tool point 2")
+add_test(NAME cli.excite_no_tool_point COMMAND twinwatch excite ur3e -o ${d}/notool.yaml --global-evals 100 --local-evals 100)
+set_tests_properties(cli.excite_no_tool_point PROPERTIES PASS_REGULAR_EXPRESSION
+  "a tool on the flange was not checked: give its lowest points with --tool-point X Y Z")
+add_test(NAME cli.excite_tool_point_in_mm COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/mm.yaml --tool-point 0 0 0.1 --tool-point 0 0 150 2>&1; echo exit \$?")
+set_tests_properties(cli.excite_tool_point_in_mm PROPERTIES PASS_REGULAR_EXPRESSION
+  "error: --tool-point \\(number 2 of 2\\) is \\(0, 0, 150\\) m, 150 m from the flange: expected at most 2 m \\(a value in mm\\?\\) \\(ur3e\\)
+exit [1-9]")
+add_test(NAME cli.excite_tool_point_two_numbers COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/two.yaml --tool-point 0 0.1 2>&1; echo exit \$?")
+set_tests_properties(cli.excite_tool_point_two_numbers PROPERTIES PASS_REGULAR_EXPRESSION "--tool-point: 3 required FLOAT missing[^\n]*\n.*exit [1-9]")
 # the library's field names are told as the options the user typed (audit of session 22: "q0 has 3 values")
 add_test(NAME cli.excite_option_named COMMAND twinwatch excite ur3e -o ${d}/bad.yaml --q0 0 0 0)
 set_tests_properties(cli.excite_option_named PROPERTIES PASS_REGULAR_EXPRESSION "error: --q0 has 3 values, expected 6 \\(model.n_dof\\) or none \\(ur3e\\)")

@@ -123,6 +123,56 @@ TEST(Excitation, TheMinimumHeightIsAConstraintOfTheSearch) {
   EXPECT_THROW(design_excitation(m, o), InvalidArgument);
 }
 
+// A tool on the flange reaches lower than the flange, and the check covers it when it is given. At
+// q = 0 the UR3e's flange faces sideways (level with the J6 axis, d1 - d5 up): one of its x and y
+// axes is vertical, so of four points L out along +-x and +-y one is L lower than the flange, and the
+// lowest point is d1 - d5 - L, a tool point (n_dof + 1 + k). In a design, a 0.25 m tool the search
+// was not told about swings below the table while the flange stays above 0.05 m; told about it, the
+// design keeps the tool tip up on the dense grid. Tool
+// points that are not finite or farther than 2 m (a value in mm) are refused.
+TEST(Excitation, AToolOnTheFlangeIsKeptAboveTheTableWhenItIsGiven) {
+  constexpr double d1 = 0.15185, d5 = 0.08535, L = 0.2;
+  const model::RobotModel m = model::load_robot("ur3e");
+  ExcitationTrajectory still;
+  still.w_f = 1.0;
+  still.q0 = VectorJ::Zero(6);
+  still.a = still.b = Eigen::MatrixXd::Zero(6, 3);
+  const std::vector<Eigen::Vector3d> sideways{Eigen::Vector3d(L, 0, 0), Eigen::Vector3d(-L, 0, 0), Eigen::Vector3d(0, L, 0),
+                                              Eigen::Vector3d(0, -L, 0)};
+  const ExcitationLowestPoint with_tool = excitation_lowest_point(m, still, 1, sideways);
+  EXPECT_NEAR(with_tool.z, d1 - d5 - L, 1e-4);
+  EXPECT_GE(with_tool.body, m.n_dof() + 1);
+  EXPECT_LE(with_tool.body, m.n_dof() + 4);
+  // along the flange's own axis the tool stays level with it
+  EXPECT_NEAR(excitation_lowest_point(m, still, 1, {Eigen::Vector3d(0, 0, L)}).z, d1 - d5, 1e-4);
+
+  ExcitationOptions o = small_options(5);
+  o.amplitude = 2.0;  // room to swing low
+  o.q0 = excitation_raised_centre(m, o);
+  o.min_height = 0.05;
+  const std::vector<Eigen::Vector3d> tool{Eigen::Vector3d(0, 0, 0.25)};
+  const ExcitationResult blind = design_excitation(m, o);
+  ASSERT_GE(blind.lowest.z, 0.05);
+  ASSERT_LT(excitation_lowest_point(m, blind.trajectory, kDenseSamples, tool).z, 0.05)
+      << "the design that does not know the tool must take it low for the test to mean anything";
+  o.tool_points = tool;
+  const ExcitationResult told = design_excitation(m, o);
+  EXPECT_GE(told.lowest.z, 0.05);
+  EXPECT_GE(excitation_lowest_point(m, told.trajectory, kDenseSamples, tool).z, 0.05);
+  EXPECT_LT(told.cond_final, 1e6);
+
+  for (const Eigen::Vector3d& bad : {Eigen::Vector3d(0, 0, std::numeric_limits<double>::quiet_NaN()), Eigen::Vector3d(0, 0, 150.0)}) {
+    o.tool_points = {Eigen::Vector3d(0, 0, 0.1), bad};
+    try {
+      design_excitation(m, o);
+      ADD_FAILURE() << "a tool point " << bad.transpose() << " was taken";
+    } catch (const InvalidArgument& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("tool_points[1]"));
+    }
+    EXPECT_THROW(excitation_lowest_point(m, still, 1, {bad}), InvalidArgument);
+  }
+}
+
 TEST(Excitation, MatchesTheSimulatorsIndependentFourierEvaluator) {
   const auto& d = designed();
   const ExcitationTrajectory& t = d.result.trajectory;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -38,9 +39,16 @@ struct Options {
   double min_height = kWarnHeight;  // [m] over the base's mounting plane
   unsigned seed = 1;
   std::vector<double> q0;
+  std::vector<double> tool;  // --tool-point, three numbers per point [m, flange frame]
   bool duration_given = false;  // (else one period)
   bool json = false, quiet = false, progress = false;
 };
+
+nlohmann::json tool_json(const std::vector<Eigen::Vector3d>& points) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const Eigen::Vector3d& p : points) a.push_back({p.x(), p.y(), p.z()});
+  return a;
+}
 
 nlohmann::json vec(const VectorJ& v) {
   nlohmann::json a = nlohmann::json::array();
@@ -62,11 +70,19 @@ int run(const Options& o) {
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
   if (!o.q0.empty()) eo.q0 = Eigen::Map<const Eigen::VectorXd>(o.q0.data(), static_cast<Eigen::Index>(o.q0.size()));
+  // (CLI11 takes exactly three numbers per --tool-point)
+  for (size_t k = 0; k + 2 < o.tool.size(); k += 3) eo.tool_points.emplace_back(o.tool[k], o.tool[k + 1], o.tool[k + 2]);
   try {
     eo.validate(m.n_dof());
   } catch (const InvalidArgument& e) {
     // the library names its fields; the user typed options (audit of session 22: "q0 has 3 values")
     std::string what = e.what();
+    // "tool_points[k] is ..." -> "--tool-point (the (k+1)th) is ..."
+    if (what.rfind("tool_points[", 0) == 0) {
+      const auto close = what.find(']');
+      const int k = std::atoi(what.c_str() + 12);
+      what = fmt::format("--tool-point (number {} of {})", k + 1, eo.tool_points.size()) + what.substr(close + 1);
+    }
     for (const auto& [field, option] : std::initializer_list<std::pair<const char*, const char*>>{
              {"harmonics", "--harmonics"}, {"base_frequency", "--base-frequency"}, {"samples", "--samples"}, {"q0", "--q0"},
              {"amplitude", "--amplitude"}, {"limit_fraction", "--limit-fraction"}, {"default_qdd_max", "--default-qdd-max"},
@@ -117,14 +133,22 @@ int run(const Options& o) {
   // the design keeps the arm above --min-height on its grid; whether it held on the dense grid is
   // checked here, before the file a real robot program may run is written
   const ident::ExcitationLowestPoint& low = r.lowest;
-  const std::string where = low.body >= m.n_dof() ? std::string("the flange")
-                                                   : fmt::format("the {} axis", kBodyNames[std::min(low.body, 6)]);
+  const auto tool_text = [&](size_t k) {
+    const Eigen::Vector3d& p = eo.tool_points[k];
+    return fmt::format("tool point {} ({:g}, {:g}, {:g}) m", k + 1, p.x(), p.y(), p.z());
+  };
+  const std::string where = low.body > m.n_dof()    ? "the " + tool_text(static_cast<size_t>(low.body - m.n_dof() - 1))
+                            : low.body == m.n_dof() ? std::string("the flange")
+                                                    : fmt::format("the {} axis", kBodyNames[std::min(low.body, 6)]);
   const std::string low_text = fmt::format("{} comes down to z = {:+.3f} m (z = 0: the base's mounting plane) at t = {:.2f} s", where, low.z, low.t);
   if (low.z < o.min_height)
-    throw InvalidArgument(fmt::format("the search found no design above --min-height {:g} m: the best {}; no file written. "
+    throw InvalidArgument(fmt::format("the search found no design above --min-height {:g} m: in the best one, {}; no file written. "
                                       "Raise the centre pose (--q0), reduce --amplitude, give more --global-evals, or try "
                                       "another --seed",
                                       o.min_height, low_text));
+  // which points were kept up: the tool's, when the user gave them
+  std::string tools_checked;
+  for (size_t k = 0; k < eo.tool_points.size(); ++k) tools_checked += (k ? "; " : " with ") + tool_text(k);
   if (low.z < kWarnHeight)
     fmt::print(stderr,
                "WARNING: {} (--min-height {:g} m): on a real robot this may hit the table or the robot itself. Check it in "
@@ -133,8 +157,10 @@ int run(const Options& o) {
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
-      "cond(W) over {} base-parameter columns on {} points: random start {:.6g}, global {:.6g}, final {:.6g}",
-      m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final);
+      "cond(W) over {} base-parameter columns on {} points: random start {:.6g}, global {:.6g}, final {:.6g}\n"
+      "lowest point: {} (kept above {:g} m{})",
+      m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final, low_text,
+      o.min_height, tools_checked);
   const std::string comment_all = raised.empty() ? comment : comment + "\n" + raised;
   std::ofstream f(o.output);
   if (!f) throw InvalidArgument(fmt::format("{}: cannot open for writing", o.output));
@@ -164,6 +190,7 @@ int run(const Options& o) {
                      {"qd_peak", vec(r.qd_peak)},
                      {"qdd_peak", vec(r.qdd_peak)},
                      {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}},
+                     {"tool_points", tool_json(eo.tool_points)},
                      {"min_height", o.min_height},
                      {"q0", vec(r.trajectory.q0)},
                      {"centre_raised", !raised.empty()}};
@@ -181,7 +208,11 @@ int run(const Options& o) {
     fmt::print("J{:<5} {:>22} {:>22} {:>16} {:>16}\n", j + 1, fmt::format("[{:.3f}, {:.3f}]", r.q_min_seen[j], r.q_max_seen[j]),
                fmt::format("[{:.3f}, {:.3f}]", r.q_lo[j], r.q_hi[j]), fmt::format("{:.3f}/{:.3f}", r.qd_peak[j], r.qd_lim[j]),
                fmt::format("{:.2f}/{:.2f}", r.qdd_peak[j], r.qdd_lim[j]));
-  fmt::print("lowest point: {} (kept above --min-height {:g} m; no other collision check)\n", low_text, o.min_height);
+  fmt::print("lowest point: {} (kept above --min-height {:g} m{}; no other collision check)\n", low_text, o.min_height,
+             tools_checked);
+  if (eo.tool_points.empty())
+    fmt::print("  a tool on the flange was not checked: give its lowest points with --tool-point X Y Z (flange frame, m), e.g. a "
+               "gripper's fingertips 0.15 m out: --tool-point 0 0 0.15\n");
   fmt::print("run it: twinwatch simulate {} -o excitation.csv\n", o.output);
   return 0;
 }
@@ -194,7 +225,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
       "acceleration, position back at q0), stays inside the joint position, velocity and acceleration limits,\n"
       "and whose coefficients NLopt chooses (global CRS2 then local Subplex) to minimise the condition number of\n"
       "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction), keeping the arm above\n"
-      "--min-height over the table it stands on. Writes a scenario\n"
+      "--min-height over the table it stands on (the tool too, with --tool-point). Writes a scenario\n"
       "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too.");
   sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, panda) or a .json/.urdf description")->required();
   sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
@@ -216,6 +247,11 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
                   "of the search, and a design that still comes lower is refused, no file written. Negative for an arm on "
                   "a pedestal (e.g. -0.3); below 0.05 m a warning is printed. No other collision check is made")
       ->capture_default_str();
+  sub->add_option("--tool-point", o->tool,
+                  "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points, e.g. a "
+                  "gripper's two fingertips): kept above --min-height like the flange. Without it a tool is not checked")
+      ->type_size(-3)  // three numbers an occurrence, any number of occurrences
+      ->allow_extra_args(false);
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");

@@ -31,8 +31,10 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "twinwatch/core/types.hpp"
 #include "twinwatch/model/regressor.hpp"
@@ -54,11 +56,15 @@ struct ExcitationOptions {
   int global_evaluations = 3000;  ///< NLopt GN_CRS2_LM budget (0: skip the global step)
   int local_evaluations = 3000;   ///< NLopt LN_SBPLX budget (0: skip the local step)
   model::FrictionColumns friction = model::FrictionColumns::CoulombViscousOffset;  ///< columns in W
-  /// Lowest height [m] over the base's mounting plane (z = 0) the body origins after the first and
-  /// the flange may reach (excitation_lowest_point): a constraint of the search (a penalty on the
-  /// design grid, kept 1 cm inside). -infinity: none. The result's `lowest`, on the dense grid, tells
-  /// whether it held.
+  /// Lowest height [m] over the base's mounting plane (z = 0) the body origins after the first, the
+  /// flange and the tool points may reach (excitation_lowest_point): a constraint of the search (a
+  /// penalty on the design grid, kept 1 cm inside). -infinity: none. The result's `lowest`, on the
+  /// dense grid, tells whether it held.
   double min_height = -std::numeric_limits<double>::infinity();
+  /// Points of the tool mounted on the flange, in the flange frame [m] (a gripper's fingertips, a
+  /// tool's corners): kept above min_height like the flange. A gripper 15 cm long reaches 15 cm
+  /// lower than the flange the check would otherwise stop at. Each finite and within 2 m.
+  std::vector<Eigen::Vector3d> tool_points;
   /// Throws InvalidArgument naming the first bad field (q0 is checked against the model's joints).
   void validate(int n_dof) const;
 };
@@ -74,21 +80,26 @@ struct ExcitationTrajectory {
 };
 
 /// The lowest point the arm reaches along a trajectory, in the base frame (z up from the mounting
-/// surface the base stands on): over the origins of the body frames after the first, and the flange.
+/// surface the base stands on): over the origins of the body frames after the first, the flange and
+/// the tool points. (A link between two of these points comes no lower than its ends: height is
+/// linear along a segment.)
 struct ExcitationLowestPoint {
   double z = std::numeric_limits<double>::infinity();  ///< [m]
   double t = 0.0;                                      ///< [s] when
-  int body = -1;  ///< which: 1..n_dof-1 the origin of body (joint) body+1, n_dof the flange
+  /// which: 1..n_dof-1 the origin of body (joint) body+1, n_dof the flange, n_dof+1+k tool point k
+  int body = -1;
 };
 
 /// excitation_lowest_point on `samples` points of one period: what tells a trajectory that would
-/// drive the arm into the table it stands on (the design keeps above ExcitationOptions::min_height).
-ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& trajectory, int samples);
+/// drive the arm or its tool (`tool_points`, flange frame [m]) into the table it stands on (the
+/// design keeps above ExcitationOptions::min_height). Throws InvalidArgument on a bad tool point.
+ExcitationLowestPoint excitation_lowest_point(const model::RobotModel& model, const ExcitationTrajectory& trajectory, int samples,
+                                              const std::vector<Eigen::Vector3d>& tool_points = {});
 
 /// A centre pose that holds the arm high: within each joint's limits (less position_margin; +-pi
 /// where unbounded), the configuration that maximises the lowest point of the static pose (body
-/// origins after the first and the flange) plus a tenth of their mean height (the tie-break that
-/// stands the arm up), less a small pull to the middle of the ranges, from there (NLopt Subplex).
+/// origins after the first, the flange and the tool points) plus a tenth of the mean height of the bodies
+/// and the flange (the tie-break that stands the arm up), less a small pull to the middle of the ranges, from there (NLopt Subplex).
 /// For `excite` when the middle
 /// of the ranges (a UR's stretched-out zero pose, its flange 7 cm over the table) leaves the design
 /// no room above min_height.
