@@ -339,12 +339,101 @@ std::vector<std::vector<VectorJ>> presliding_states(const TwinModel& twin, const
 }
 }  // namespace
 
+// estimate_velocity_lag: a step longer than this many median periods is left out; the least samples
+// and acceleration rms [rad/s²] that measure a lag; the largest lag a controller's stream has [s]
+// (TwinModel's file bound)
+constexpr double kLagStepMax = 1.5;
+constexpr long kLagMinSamples = 100;
+constexpr double kLagMinAcceleration = 0.05;
+constexpr double kLagMax = 0.1;
+// ... and how far the velocity's scale against the positions' derivative may be from 1 (a deg/s
+// column read as rad/s is 57)
+constexpr double kLagScaleTolerance = 0.05;
+
 void IdentOptions::validate() const {
   if (!(reversal_screen >= 0.0)) throw InvalidArgument(fmt::format("reversal_screen is {}, must be >= 0", reversal_screen));
   if (efficiency_passes < 0) throw InvalidArgument(fmt::format("efficiency_passes is {}, must be >= 0", efficiency_passes));
   if (decimate < 1) throw InvalidArgument(fmt::format("decimate is {}, must be >= 1", decimate));
   if (!(direction_blend >= 0.0) || !std::isfinite(direction_blend))
     throw InvalidArgument(fmt::format("direction_blend is {} rad/s, must be finite and >= 0", direction_blend));
+  if (!std::isnan(velocity_lag) && !(std::abs(velocity_lag) <= kLagMax))
+    throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, kLagMax));
+}
+
+VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& recordings,
+                                  const std::vector<std::vector<VectorJ>>& accelerations) {
+  if (recordings.size() != accelerations.size())
+    throw InvalidArgument(fmt::format("estimate_velocity_lag: {} recordings, {} acceleration series", recordings.size(), accelerations.size()));
+  VelocityLag lag;
+  // least squares of  qd_k = s c_k - m a_k  (s: the velocity's scale against the positions'
+  // derivative, 1 for a velocity in rad/s; m = s lambda): the normal equations' sums
+  double cc = 0.0, ca = 0.0, aa = 0.0, cv = 0.0, av = 0.0, vv = 0.0;
+  std::vector<double> periods;
+  for (size_t ri = 0; ri < recordings.size(); ++ri) {
+    const device::Recording& rec = *recordings[ri];
+    const std::vector<VectorJ>& acc = accelerations[ri];
+    if (acc.size() != rec.samples.size())
+      throw InvalidArgument(fmt::format("estimate_velocity_lag: {} has {} samples, {} accelerations", rec.path, rec.samples.size(), acc.size()));
+    if (!(rec.present & kFieldActualQd) || rec.samples.size() < 3) continue;
+    // the median step (a recording built in memory may not carry median_period)
+    std::vector<double> steps;
+    for (size_t k = 1; k < rec.samples.size(); ++k) steps.push_back(rec.samples[k].timestamp - rec.samples[k - 1].timestamp);
+    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+    const double period = steps[steps.size() / 2];
+    if (!(period > 0.0)) continue;
+    periods.push_back(period);
+    for (size_t k = 1; k + 1 < rec.samples.size(); ++k) {
+      const RobotSample &a = rec.samples[k - 1], &s = rec.samples[k], &b = rec.samples[k + 1];
+      const double span = b.timestamp - a.timestamp;
+      if (s.gap_before || b.gap_before || s.timestamp - a.timestamp > kLagStepMax * period || b.timestamp - s.timestamp > kLagStepMax * period)
+        continue;
+      for (int j = 0; j < rec.n_dof; ++j) {
+        const double c = (b.q[j] - a.q[j]) / span;  // the velocity at t_k, from the positions
+        const double x = acc[k][j], v = s.qd[j];
+        if (!std::isfinite(c) || !std::isfinite(x) || !std::isfinite(v)) continue;
+        cc += c * c, ca += c * x, aa += x * x, cv += c * v, av += x * v, vv += v * v;
+        ++lag.samples;
+      }
+    }
+  }
+  if (!periods.empty()) {
+    std::nth_element(periods.begin(), periods.begin() + static_cast<long>(periods.size() / 2), periods.end());
+    lag.period = periods[periods.size() / 2];
+  }
+  const double N = static_cast<double>(std::max(1L, lag.samples));
+  if (lag.samples < kLagMinSamples || !(aa / N >= kLagMinAcceleration * kLagMinAcceleration) || !(cc > 0.0)) {
+    lag.note = fmt::format("the streamed velocity's lag was not measured: {} samples, acceleration rms {:.3g} rad/s² (expected at least {} "
+                           "samples and {:g} rad/s²); the velocity is read as at its sample's instant",
+                           lag.samples, std::sqrt(aa / N), kLagMinSamples, kLagMinAcceleration);
+    return lag;
+  }
+  // [cc -ca; -ca aa] [s; m] = [cv; -av]
+  const double det = cc * aa - ca * ca;
+  if (!(det > 0.0)) {
+    lag.note = "the streamed velocity's lag was not measured: the positions' velocity and the acceleration move together";
+    return lag;
+  }
+  const double sc = (cv * aa - ca * av) / det;
+  const double m = (ca * cv - cc * av) / det;
+  if (!(std::abs(sc - 1.0) <= kLagScaleTolerance)) {
+    lag.note = fmt::format("actual_qd is {:.4g} x the derivative of actual_q (expected 1: a velocity in rad/s of the same joint): a unit or "
+                           "scale of the velocity columns? The streamed velocity's lag was not measured, and the velocity is read as at "
+                           "its sample's instant",
+                           sc);
+    return lag;
+  }
+  const double l = m / sc;
+  // the fit's residual: its standard error
+  const double sse = std::max(0.0, vv - 2.0 * (sc * cv - m * av) + sc * sc * cc - 2.0 * sc * m * ca + m * m * aa);
+  lag.stderr_s = std::sqrt(sse / std::max(1.0, N - 2.0) * cc / det) / std::abs(sc);
+  if (!(std::abs(l) <= kLagMax)) {
+    lag.note = fmt::format("the streamed velocity came out {:.3g} s late against its positions, beyond +-{:g} s (no controller's): read as "
+                           "at its sample's instant",
+                           l, kLagMax);
+    return lag;
+  }
+  lag.seconds = l;
+  return lag;
 }
 
 std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
@@ -481,6 +570,18 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
 
   std::vector<std::vector<VectorJ>> qdds;
   for (const TrainingRun& r : runs) qdds.push_back(joint_accelerations(*r.recording));
+  // how late the streamed velocity is: the drive's direction is read on the velocity at each
+  // sample's instant, in the fit as in the prediction
+  VelocityLag lag;  // (the report is reset per stage below: set at the end)
+  if (std::isnan(o.velocity_lag)) {
+    std::vector<const device::Recording*> recs;
+    for (const TrainingRun& r : runs) recs.push_back(r.recording);
+    lag = estimate_velocity_lag(recs, qdds);
+  } else {
+    lag.seconds = o.velocity_lag;
+    lag.given = true;
+  }
+  twin.velocity_lag = lag.seconds;
   // the low-speed columns of joint j at sample k of run ri (zero while its shapes are off)
   std::vector<std::vector<VectorJ>> hs;  // pre-sliding state per run and sample (stage 1)
   auto low_speed_row = [&](size_t ri, size_t k, const VectorJ& qd, int j, Eigen::VectorXd& row) {
@@ -537,7 +638,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           if (!fit_temperature[static_cast<size_t>(j)]) f(kViscousTemperature) = 0.0;
           r.segment(nb + nfx * j, nf) = f;
           low_speed_row(ri, k, s.qd, j, r);
-          fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p));
+          fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p), twin.direction_velocity(s.qd[j], qdd[j]));
         }
         if (progress && (++done % 20000) == 0)
           progress((stage + (pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1)) / stages);
@@ -589,12 +690,13 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         std::vector<double> gen_num(static_cast<size_t>(n), 0.0), gen_den(static_cast<size_t>(n), 0.0);
         std::vector<double> sse(static_cast<size_t>(n), 0.0), si(static_cast<size_t>(n), 0.0), si2(static_cast<size_t>(n), 0.0);
         std::vector<long> cnt(static_cast<size_t>(n), 0);
-        for_each_row(pass, passes, [&](size_t /*ri*/, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p) {
+        for_each_row(pass, passes, [&](size_t /*ri*/, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p, double v) {
           JointDrive& jd = twin.joints[static_cast<size_t>(j)];
           const double i = s.current[j];
-          // the previous pass's torque decides the drive direction (first pass: motoring)
+          // the previous pass's torque decides the drive direction (first pass: motoring), on the
+          // velocity the prediction reads it on (TwinModel::direction_velocity)
           const double tau_hat = r.dot(theta) + tau_p[j];
-          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+          const bool gen = pass > 0 && tau_hat * v < 0.0;
           const double c = gen ? jd.c_gen : 1.0;
           if (final_stats) {
             const double err = i - c * tau_hat / jd.gain;
@@ -700,13 +802,14 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         std::vector<long> cnt(static_cast<size_t>(n), 0), gen_cnt(static_cast<size_t>(n), 0);
         std::vector<double> pay2(static_cast<size_t>(n), 0.0);  // sum (tau_payload / g)^2 over runs with a known payload
         std::vector<long> pay_cnt(static_cast<size_t>(n), 0);
-        for_each_row(pass, passes, [&](size_t ri, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p) {
+        for_each_row(pass, passes, [&](size_t ri, const RobotSample& s, int j, const Eigen::VectorXd& r, const VectorJ& tau_p, double v) {
           const JointDrive& jd = twin.joints[static_cast<size_t>(j)];
           const double i = s.current[j];
           // the previous pass's torque decides the drive direction (first pass: all motoring);
-          // back-driven when the motor's power tau qd is negative (UR3e eq. 3)
+          // back-driven when the motor's power tau qd is negative (UR3e eq. 3; qd as the prediction
+          // reads it, TwinModel::direction_velocity)
           const double tau_hat = r.dot(theta) + tau_p[j];
-          const bool gen = pass > 0 && tau_hat * s.qd[j] < 0.0;
+          const bool gen = pass > 0 && tau_hat * v < 0.0;
           gen_cnt[static_cast<size_t>(j)] += gen ? 1 : 0;
           if (final_stats) {
             const double err = i - (gen ? jd.c_gen : 1.0) * tau_hat / jd.gain;
@@ -840,6 +943,8 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       }
     }
   }
+  report.velocity_lag = lag;
+  if (!lag.note.empty()) report.notes.push_back(lag.note);
   for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,

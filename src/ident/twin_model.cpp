@@ -35,6 +35,9 @@ const std::array<std::string, 4> kMethods{"physics", "mlp", "hybrid", "sequentia
 // file takes up to 10. Zero or less would zero or flip the back-driven current, and the learned
 // block divides by it.
 constexpr double kCGenFileMax = 10.0;
+// the velocity lag a file may hold [s]: a streamed velocity a tenth of a second late is no
+// controller's (a 500 Hz stream's backward difference lags 1 ms)
+constexpr double kVelocityLagFileMax = 0.1;
 
 // JSON has no NaN: write it as null (the reader takes finite numbers only)
 nlohmann::json numbers(const Eigen::VectorXd& v) {
@@ -261,12 +264,12 @@ void TwinModel::physics_torque(const VectorJ& q, const VectorJ& qd, const Vector
   }
 }
 
-void TwinModel::drive_current(const VectorJ& qd, const VectorJ& torque, VectorJ& current) const {
+void TwinModel::drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current) const {
   const int n = robot_->n_dof();
   current.resize(n);
   for (int j = 0; j < n; ++j) {
     const JointDrive& d = joints[static_cast<size_t>(j)];
-    current[j] = direction_factor(d.c_gen, torque[j], qd[j], direction_blend) * torque[j] / d.gain;
+    current[j] = direction_factor(d.c_gen, torque[j], direction_velocity(qd[j], qdd[j]), direction_blend) * torque[j] / d.gain;
   }
 }
 
@@ -274,7 +277,7 @@ void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd,
                         VectorJ& current, const FrictionMemory* memory) const {
   if (sequential) return predict_sequential(q, qd, qdd, torque, current);
   physics_torque(q, qd, qdd, temperature, torque, memory);
-  drive_current(qd, torque, current);
+  drive_current(qd, qdd, torque, current);
   if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
 }
 
@@ -285,7 +288,7 @@ void TwinModel::predict_pair(const VectorJ& q, const VectorJ& qd, const VectorJ&
     return predict_torque(q, qd, qdd2, temperature, torque2, memory);
   }
   physics_torque(q, qd, qdd, temperature, torque, memory, &qdd2, &torque2);
-  drive_current(qd, torque, current);
+  drive_current(qd, qdd, torque, current);
 }
 
 void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
@@ -299,9 +302,9 @@ void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ
     const JointDrive& d = joints[static_cast<size_t>(j)];
     if (learned->role == LearnedRole::Current) {
       current[j] = y[j];
-      torque[j] = d.gain * y[j] / direction_factor(d.c_gen, y[j], qd[j], direction_blend);
+      torque[j] = d.gain * y[j] / direction_factor(d.c_gen, y[j], direction_velocity(qd[j], qdd[j]), direction_blend);
     } else {
-      const double c = direction_factor(d.c_gen, torque[j], qd[j], direction_blend);
+      const double c = direction_factor(d.c_gen, torque[j], direction_velocity(qd[j], qdd[j]), direction_blend);
       current[j] += y[j];
       torque[j] += d.gain * y[j] / c;
     }
@@ -361,6 +364,7 @@ std::string TwinModel::to_json() const {
                             {"qd_max", numbers(Eigen::VectorXd(envelope.qd_max))}};
   j["temperature_ref"] = temperature_ref;
   j["direction_blend"] = direction_blend;
+  j["velocity_lag"] = velocity_lag;
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
@@ -496,7 +500,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
   const std::vector<std::string> filled = version == 1 ? upgrade_version_1(j) : std::vector<std::string>{};
   try {
     const JsonFields top(j, origin, "");
-    top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "payload",
+    top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "velocity_lag", "payload",
               "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
               "motion_envelope"});
     const std::string robot = top.text("robot");
@@ -530,6 +534,13 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     t.recordings = top.texts("recordings");
     t.temperature_ref = top.number("temperature_ref");
     t.direction_blend = top.nonnegative("direction_blend");
+    // optional (since session 26; a twin from before reads the streamed velocity as it is)
+    if (top.has("velocity_lag")) {
+      t.velocity_lag = top.number("velocity_lag");
+      if (!(std::abs(t.velocity_lag) <= kVelocityLagFileMax))
+        top.fail("velocity_lag", fmt::format("expected a lag in seconds within +-{:g} s (the streamed velocity against its sample's instant), got {}",
+                                             kVelocityLagFileMax, t.velocity_lag));
+    }
     t.gains_absolute = top.boolean("gains_absolute");
     const JsonFields pl = top.object("payload");
     pl.only({"mass", "com"});

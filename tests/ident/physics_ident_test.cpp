@@ -236,6 +236,65 @@ TEST_F(Fixture, PredictsAnUntrainedRunWithAnotherSeed) {
   EXPECT_LT(m.rmse, 0.05);
 }
 
+// The velocity's lag is measured on recordings against the central difference of the positions.
+// A synthetic joint on a 500 Hz clock, q = 0.5 sin(2 pi 0.7 t) quantised to a 20-bit encoder
+// count, streams as its velocity (a) the backward difference of the counts, which lags half a period
+// (1 ms), (b) the exact derivative at the sample, no lag, (c) the exact derivative 4 ms late (a
+// filter), and (d) in deg/s (a wrong unit), which is refused by its scale against the positions'
+// derivative; (e) a joint at constant speed has no acceleration to measure it by. The identified twin of the fixture (simulated UR3e, which
+// streams the backward difference) has 1 ms.
+TEST_F(Fixture, TheStreamedVelocitysLagIsMeasuredAgainstThePositions) {
+  EXPECT_NEAR(twin->velocity_lag, 0.001, 0.00005);
+  EXPECT_NEAR(fit_report->velocity_lag.seconds, 0.001, 0.00005);
+  EXPECT_NEAR(fit_report->velocity_lag.period, 0.002, 1e-9);
+  const double dt = 0.002, w = 2.0 * M_PI * 0.7, lsb = 2.0 * M_PI / (1 << 20);
+  const auto make = [&](int kind) {
+    device::Recording rec;
+    rec.path = "synthetic.csv";
+    rec.n_dof = 1;
+    rec.present = kFieldActualQd | kFieldTargetQdd;
+    rec.median_period = dt;
+    double q_prev = 0.0;
+    for (int k = 0; k < 5000; ++k) {
+      const double t = k * dt;
+      RobotSample s = RobotSample::empty(1);
+      s.timestamp = t;
+      s.present = rec.present;
+      const bool still = kind == 4;
+      const double q = still ? 0.3 * t : 0.5 * std::sin(w * t);
+      s.q[0] = std::round(q / lsb) * lsb;
+      const double v = still ? 0.3 : 0.5 * w * std::cos(w * t), v_late = 0.5 * w * std::cos(w * (t - 0.004));
+      s.target_qdd[0] = still ? 0.0 : -0.5 * w * w * std::sin(w * t);
+      s.qd[0] = kind == 0 ? (k == 0 ? v : (s.q[0] - q_prev) / dt) : kind == 1 ? v : kind == 2 ? v_late : v * 180.0 / M_PI;
+      q_prev = s.q[0];
+      rec.samples.push_back(s);
+    }
+    std::vector<std::vector<VectorJ>> acc{joint_accelerations(rec)};
+    return estimate_velocity_lag({&rec}, acc);
+  };
+  const VelocityLag backward = make(0), exact = make(1), late = make(2), degrees = make(3), still = make(4);
+  EXPECT_NEAR(backward.seconds, 0.001, 0.00003) << backward.note;
+  EXPECT_TRUE(backward.note.empty());
+  EXPECT_LT(backward.stderr_s, 0.0001);
+  EXPECT_NEAR(exact.seconds, 0.0, 0.00003);
+  EXPECT_NEAR(late.seconds, 0.004, 0.0001);
+  EXPECT_EQ(degrees.seconds, 0.0);
+  EXPECT_THAT(degrees.note, ::testing::HasSubstr("actual_qd is 57.3 x the derivative of actual_q"));
+  EXPECT_EQ(still.seconds, 0.0);
+  EXPECT_THAT(still.note, ::testing::HasSubstr("acceleration rms 0 rad/s²"));
+  // a lag the user gives is taken as given; out of range is refused
+  IdentOptions given;
+  given.velocity_lag = 0.0;
+  IdentReport rep;
+  model::RigidBodyInertia p;
+  p.mass = 0.5;
+  p.com = Eigen::Vector3d(0, 0, 0.04);
+  EXPECT_EQ(identify_physics("ur3e", {{excitation, {}}, {figure8, p}}, given, rep).velocity_lag, 0.0);
+  EXPECT_TRUE(rep.velocity_lag.given);
+  given.velocity_lag = 0.5;
+  EXPECT_THROW(given.validate(), InvalidArgument);
+}
+
 TEST_F(Fixture, TwinFileRoundTrips) {
   const TwinModel back = TwinModel::from_json(twin->to_json(), "twin.json");
   VectorJ a, b;

@@ -202,6 +202,10 @@ TEST(TwinFile, ValuesOutOfTheirRangeAreNamedWithExpectedAndActual) {
   EXPECT_THAT(with([](json& j) { j["payload"]["mass"] = -1.0; }), HasSubstr("twin.json: field 'payload.mass': expected a number >= 0, got -1"));
   EXPECT_THAT(with([](json& j) { j["payload"]["com"] = {0.0, 0.04}; }), HasSubstr("twin.json: field 'payload.com': expected 3 values, got 2"));
   EXPECT_THAT(with([](json& j) { j["direction_blend"] = -1.0; }), HasSubstr("twin.json: field 'direction_blend': expected a number >= 0, got -1"));
+  EXPECT_THAT(with([](json& j) { j["velocity_lag"] = 1.0; }),
+              HasSubstr("twin.json: field 'velocity_lag': expected a lag in seconds within +-0.1 s (the streamed velocity against its sample's "
+                        "instant), got 1"));
+  EXPECT_THAT(with([](json& j) { j["velocity_lag"] = "1 ms"; }), HasSubstr("twin.json: field 'velocity_lag': expected a number, got \"1 ms\""));
   EXPECT_THAT(with([](json& j) { j["temperature_ref"] = "hot"; }), HasSubstr("twin.json: field 'temperature_ref': expected a number, got \"hot\""));
   EXPECT_THAT(with([](json& j) { j["gains_absolute"] = "yes"; }), HasSubstr("twin.json: field 'gains_absolute': expected true or false, got \"yes\""));
   EXPECT_THAT(with([](json& j) {
@@ -210,6 +214,36 @@ TEST(TwinFile, ValuesOutOfTheirRangeAreNamedWithExpectedAndActual) {
               }),
               HasSubstr("twin.json: field 'base_columns[2]': expected each standard column once, got column 10 again (also at base_columns[0])"));
   EXPECT_THAT(with([](json& j) { j["monitor"] = 3; }), HasSubstr("twin.json: field 'monitor': expected an object, got 3"));
+}
+
+// The velocity lag (session 26) round-trips and may be absent (a twin from before reads the streamed
+// velocity as it is: 0). The drive's direction is read on qd + lag qdd: a joint still moving
+// forward at one count (3 mrad/s) but decelerating at 5 rad/s² is, 1 ms later, at -2 mrad/s, so a
+// positive torque there is back-driven: the current is c_gen tau / g with the lag, tau / g without.
+TEST(TwinFile, TheVelocityLagRoundTripsMayBeAbsentAndTurnsTheDrivesDirection) {
+  json j = valid_twin();
+  j["direction_blend"] = 0.0;  // the hard switch: the factor is exactly 1 or c_gen
+  j["velocity_lag"] = 0.001;
+  TwinModel t = TwinModel::from_json(j.dump(), "twin.json");
+  EXPECT_EQ(t.velocity_lag, 0.001);
+  EXPECT_EQ(json::parse(t.to_json())["velocity_lag"], 0.001);
+  EXPECT_DOUBLE_EQ(t.direction_velocity(0.003, -5.0), -0.002);
+  j.erase("velocity_lag");
+  TwinModel before = TwinModel::from_json(j.dump(), "twin.json");
+  EXPECT_EQ(before.velocity_lag, 0.0);
+  const int n = t.n_dof();
+  VectorJ q = VectorJ::Zero(n), qd = VectorJ::Zero(n), qdd = VectorJ::Zero(n), temp = VectorJ::Constant(n, 35.0), tau, cur, tau0, cur0;
+  qd.setConstant(0.003);
+  qdd.setConstant(-5.0);
+  t.predict(q, qd, qdd, temp, tau, cur);
+  before.predict(q, qd, qdd, temp, tau0, cur0);
+  for (int k = 0; k < n; ++k) {
+    const JointDrive& d = t.joints[static_cast<size_t>(k)];
+    ASSERT_DOUBLE_EQ(tau[k], tau0[k]) << "the torque does not depend on the lag, J" << k + 1;
+    const double back = tau[k] > 0.0 ? d.c_gen : 1.0;  // with the lag: v < 0, so tau > 0 is back-driven
+    EXPECT_NEAR(cur[k], back * tau[k] / d.gain, 1e-12) << "J" << k + 1;
+    EXPECT_NEAR(cur0[k], (tau[k] > 0.0 ? 1.0 : d.c_gen) * tau[k] / d.gain, 1e-12) << "J" << k + 1;
+  }
 }
 
 // the values the identifier itself writes load: a hard switch, no low-speed friction, c_gen up to

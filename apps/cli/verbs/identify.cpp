@@ -66,6 +66,7 @@ struct IdentifyOptions {
   double reversal_screen = 0.0;
   bool no_low_speed_friction = false;
   double direction_blend = ident::IdentOptions{}.direction_blend;
+  double velocity_lag = std::numeric_limits<double>::quiet_NaN();  // NaN: measured on the recordings
   int decimate = 1;
   std::string efficiency_fit = "joint";
   int efficiency_passes = 2;
@@ -102,6 +103,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.decimate = o.decimate;
   lo.physics.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   lo.physics.direction_blend = o.direction_blend;
+  lo.physics.velocity_lag = o.velocity_lag;
   lo.physics.low_speed_friction = !o.no_low_speed_friction;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
@@ -163,6 +165,7 @@ int run_identify(const IdentifyOptions& o) {
   io.decimate = o.decimate;
   io.efficiency_fit = efficiency_fit_of(o.efficiency_fit);
   io.direction_blend = o.direction_blend;
+  io.velocity_lag = o.velocity_lag;
   io.low_speed_friction = !o.no_low_speed_friction;
   io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
@@ -212,6 +215,14 @@ int run_identify(const IdentifyOptions& o) {
     if (twin.gains_known() && std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
       fmt::print("* gain: not identified (no recording loads the joint enough); shown is the median of the identified ones, which the "
                  "monitor uses\n");
+    const ident::VelocityLag& vl = report.velocity_lag;
+    if (vl.given)
+      fmt::print("velocity lag: {:.3f} ms, as given (--velocity-lag): the drive's direction is read on actual_qd + lag x qdd\n",
+                 1000.0 * twin.velocity_lag);
+    else if (vl.note.empty())
+      fmt::print("velocity lag: actual_qd is {:.3f} ms (+-{:.3f}) late against its positions ({:.2f} of the {:.3g} ms period; {} joint "
+                 "samples): the drive's direction is read on the velocity carried forward by it\n",
+                 1000.0 * vl.seconds, 1000.0 * vl.stderr_s, vl.period > 0.0 ? vl.seconds / vl.period : 0.0, 1000.0 * vl.period, vl.samples);
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
       const auto& mo = twin.learned->net;
@@ -439,6 +450,11 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
                   "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")
       ->capture_default_str();
+  sub->add_option("--velocity-lag", o->velocity_lag,
+                  "physics/mlp/hybrid: how late actual_qd is against its sample's instant [s]; the drive's motoring/back-driven "
+                  "switch is read on actual_qd + lag x qdd (default: measured on the recordings against the central difference "
+                  "of actual_q; 0: actual_qd as it is, the twin of before)")
+      ->check(CLI::Range(-0.1, 0.1));
   sub->add_option("--efficiency-fit", o->efficiency_fit,
                   "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
                   "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "

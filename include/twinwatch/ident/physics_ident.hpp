@@ -9,6 +9,7 @@
 /// [HESR §III-E]. The drive gain g_j comes out as 1 / (payload coefficient) when some recordings
 /// were made with a known payload.
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,9 @@ struct IdentOptions {
   /// fit the low-speed friction (pre-sliding memory and Stribeck rise, twin_model.cpp): shapes on the
   /// plain fit's residual, then the whole fit again with them; false: plain Coulomb sign(qd), the twin of before
   bool low_speed_friction = true;
+  /// [s] TwinModel::velocity_lag: NaN (default) estimates it from the recordings
+  /// (estimate_velocity_lag); a number sets it (0: the streamed velocity read as it is, the twin of before)
+  double velocity_lag = std::numeric_limits<double>::quiet_NaN();
   void validate() const;
 };
 
@@ -51,7 +55,30 @@ struct TrainingRun {
   model::RigidBodyInertia payload;
 };
 
+/// How late the streamed velocity (actual_qd) is against the instant of its sample, measured on
+/// recordings: the least-squares lag lambda of  qd_k = v(t_k - lambda) ~ c_k - lambda a_k,  with c_k
+/// the central difference of actual_q at t_k (the velocity at the positions' instant, to O(dt^2))
+/// and a_k the joint acceleration (joint_accelerations), pooled over every joint and recording:
+/// lambda = sum (c_k - qd_k) a_k / sum a_k^2. A velocity the controller differences backwards over
+/// one period lags half of it (1 ms at 500 Hz); a filtered one lags more, a predicted one less.
+struct VelocityLag {
+  double seconds = 0.0;   ///< lambda [s] (0 when not measurable: see note)
+  double stderr_s = 0.0;  ///< its standard error [s]
+  double period = 0.0;    ///< the recordings' median sample period [s]
+  long samples = 0;       ///< joint samples used
+  bool given = false;     ///< set by IdentOptions::velocity_lag, not measured
+  std::string note;       ///< why it was left at 0, when it was
+};
+
+/// estimate_velocity_lag over recordings and their joint accelerations (one per sample, as
+/// joint_accelerations returns). Steps across a stream gap or longer than 1.5 median periods are
+/// left out. Too little acceleration to measure it (rms below 0.05 rad/s^2 or fewer than 100
+/// samples), or a lag beyond +-0.1 s (no controller's): 0, with a note.
+VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& recordings,
+                                  const std::vector<std::vector<VectorJ>>& accelerations);
+
 struct IdentReport {
+  VelocityLag velocity_lag;         ///< TwinModel::velocity_lag, and how it was measured
   std::vector<long> samples_used;   ///< per joint
   std::vector<double> rmse, r2;     ///< training fit per joint
   std::vector<double> generating_fraction;  ///< per joint: share of samples classed back-driven (tau qd < 0)

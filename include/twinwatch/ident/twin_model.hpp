@@ -7,8 +7,11 @@
 ///   tau_j = Y_b,j(q, qd, qdd) beta + tau_payload_j(q, qd, qdd)             (rigid body)
 ///         + Fc_j sign(qd_j) + Fv_j qd_j + off_j + Ia_j qdd_j                (friction, rotor inertia)
 ///         + Ft_j qd_j (T_j - T_ref)                                         (viscous vs temperature)
-///   i_j   = tau_j / g_j            when the drive is motoring (tau_j qd_j >= 0)
+///   i_j   = tau_j / g_j            when the drive is motoring (tau_j v_j >= 0)
 ///         = c_gen_j tau_j / g_j    when it is back-driven
+/// with v_j = qd_j + velocity_lag qdd_j the joint's velocity at the sample's instant
+/// (direction_velocity): a streamed velocity that lags the positions (a backward difference of the
+/// encoder lags half a period) is carried forward by its identified lag.
 /// The gains are absolute (N·m/A) when the training data included a known payload; otherwise the
 /// common scale of beta and g is arbitrary (fixed so that prod g_j = 1) and only currents are
 /// meaningful (gains_known() is false).
@@ -110,6 +113,25 @@ class TwinModel {
   /// [rad/s] width of the smooth motoring/back-driven switch of the current factor (0: hard switch
   /// at qd = 0); about the resolution of the measured velocity (twin_model.cpp, direction_factor)
   double direction_blend = 0.0;
+  /// [s] how far the streamed velocity (actual_qd) lags the instant of its sample, identified from
+  /// the recordings (ident::estimate_velocity_lag): the drive's direction is read on
+  /// direction_velocity(), the velocity carried forward by this lag. Near a reversal under load the
+  /// drive's current factor switches when the joint's velocity crosses zero; a velocity read half a
+  /// sample late put the switch a sample late in the prediction (a step of |1 - c_gen| tau / g in
+  /// the residual). 0: the streamed velocity as it is (a twin from before)
+  double velocity_lag = 0.0;
+  /// The joint's velocity at its sample's instant, qd + velocity_lag qdd [rad/s]: what the drive's
+  /// motoring/back-driven switch is read on. A lead below kDirectionLeadMin is none: a joint at rest
+  /// or crawling has no acceleration the lead could time, and there the target acceleration's noise
+  /// (0.05 rad/s², 0.05 mrad/s of lead) would decide the hard switch of a streamed velocity of 0
+  /// (the observer's torque at a loaded stop read back-driven: 2.7 N·m on J3, a false contact).
+  double direction_velocity(double qd, double qdd) const {
+    const double lead = velocity_lag * qdd;
+    return std::abs(lead) >= kDirectionLeadMin ? qd + lead : qd;
+  }
+  /// [rad/s] the smallest lead direction_velocity applies: a sixth of one encoder count of velocity
+  /// on a UR at 500 Hz (2 pi / 2^20 rad / 2 ms = 3 mrad/s), i.e. 0.5 rad/s² at the 1 ms lag
+  static constexpr double kDirectionLeadMin = 5e-4;
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
   MotionEnvelope envelope;              ///< the motion of those files (empty: not recorded, an older twin)
@@ -205,7 +227,7 @@ class TwinModel {
   void physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                       const FrictionMemory* memory, const VectorJ* qdd2 = nullptr, VectorJ* torque2 = nullptr) const;
   // the drive's current of a physics torque
-  void drive_current(const VectorJ& qd, const VectorJ& torque, VectorJ& current) const;
+  void drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current) const;
   void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
   // adds (hybrid) or substitutes (mlp) the learned block's output
   void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
