@@ -388,8 +388,10 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
       if (s.gap_before || b.gap_before || s.timestamp - a.timestamp > kLagStepMax * period || b.timestamp - s.timestamp > kLagStepMax * period)
         continue;
       for (int j = 0; j < rec.n_dof; ++j) {
-        const double c = (b.q[j] - a.q[j]) / span;  // the velocity at t_k, from the positions
+        // the velocity at t_k from the positions: the central difference is the velocity at the
+        // midpoint of the two steps, carried to t_k when the steps differ (a logger's jittery clock)
         const double x = acc[k][j], v = s.qd[j];
+        const double c = (b.q[j] - a.q[j]) / span + x * (s.timestamp - 0.5 * (a.timestamp + b.timestamp));
         if (!std::isfinite(c) || !std::isfinite(x) || !std::isfinite(v)) continue;
         cc += c * c, ca += c * x, aa += x * x, cv += c * v, av += x * v, vv += v * v;
         ++lag.samples;
@@ -401,7 +403,11 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
     lag.period = periods[periods.size() / 2];
   }
   const double N = static_cast<double>(std::max(1L, lag.samples));
-  if (lag.samples < kLagMinSamples || !(aa / N >= kLagMinAcceleration * kLagMinAcceleration) || !(cc > 0.0)) {
+  if (lag.samples >= kLagMinSamples && !(cc > 0.0)) {
+    lag.note = "the streamed velocity's lag was not measured: actual_q does not change in the recordings";
+    return lag;
+  }
+  if (lag.samples < kLagMinSamples || !(aa / N >= kLagMinAcceleration * kLagMinAcceleration)) {
     lag.note = fmt::format("the streamed velocity's lag was not measured: {} samples, acceleration rms {:.3g} rad/s² (expected at least {} "
                            "samples and {:g} rad/s²); the velocity is read as at its sample's instant",
                            lag.samples, std::sqrt(aa / N), kLagMinSamples, kLagMinAcceleration);

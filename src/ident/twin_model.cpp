@@ -364,7 +364,9 @@ std::string TwinModel::to_json() const {
                             {"qd_max", numbers(Eigen::VectorXd(envelope.qd_max))}};
   j["temperature_ref"] = temperature_ref;
   j["direction_blend"] = direction_blend;
-  j["velocity_lag"] = velocity_lag;
+  // (only when set: a twin without it reads the streamed velocity as it is, and older readers,
+  // which refuse unknown keys, still load it)
+  if (velocity_lag != 0.0) j["velocity_lag"] = velocity_lag;
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);

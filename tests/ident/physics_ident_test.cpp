@@ -265,7 +265,7 @@ TEST_F(Fixture, TheStreamedVelocitysLagIsMeasuredAgainstThePositions) {
       s.q[0] = std::round(q / lsb) * lsb;
       const double v = still ? 0.3 : 0.5 * w * std::cos(w * t), v_late = 0.5 * w * std::cos(w * (t - 0.004));
       s.target_qdd[0] = still ? 0.0 : -0.5 * w * w * std::sin(w * t);
-      s.qd[0] = kind == 0 ? (k == 0 ? v : (s.q[0] - q_prev) / dt) : kind == 1 ? v : kind == 2 ? v_late : v * 180.0 / M_PI;
+      s.qd[0] = kind == 0 ? (k == 0 ? v : (s.q[0] - q_prev) / dt) : kind == 1 || kind == 4 ? v : kind == 2 ? v_late : v * 180.0 / M_PI;
       q_prev = s.q[0];
       rec.samples.push_back(s);
     }

@@ -217,13 +217,18 @@ TEST(TwinFile, ValuesOutOfTheirRangeAreNamedWithExpectedAndActual) {
 }
 
 // The velocity lag (session 26) round-trips and may be absent (a twin from before reads the streamed
-// velocity as it is: 0). The drive's direction is read on qd + lag qdd: a joint still moving
-// forward at one count (3 mrad/s) but decelerating at 5 rad/s² is, 1 ms later, at -2 mrad/s, so a
-// positive torque there is back-driven: the current is c_gen tau / g with the lag, tau / g without.
+// velocity as it is: 0); a twin without one writes no key (older readers refuse unknown keys). The
+// drive's direction is read on qd + lag qdd: a joint still moving forward at one count (3 mrad/s)
+// but decelerating at 5 rad/s² is, 1 ms later, at -2 mrad/s, so the positive torque of its Coulomb
+// friction is back-driven there: the current is c_gen tau / g with the lag, tau / g without.
 TEST(TwinFile, TheVelocityLagRoundTripsMayBeAbsentAndTurnsTheDrivesDirection) {
   json j = valid_twin();
   j["direction_blend"] = 0.0;  // the hard switch: the factor is exactly 1 or c_gen
   j["velocity_lag"] = 0.001;
+  for (auto& e : j["joints"]) {
+    e["c_gen"] = 0.7;
+    e["friction"][0] = 1.0;  // Coulomb: tau = +1 while qd > 0
+  }
   TwinModel t = TwinModel::from_json(j.dump(), "twin.json");
   EXPECT_EQ(t.velocity_lag, 0.001);
   EXPECT_EQ(json::parse(t.to_json())["velocity_lag"], 0.001);
@@ -231,6 +236,7 @@ TEST(TwinFile, TheVelocityLagRoundTripsMayBeAbsentAndTurnsTheDrivesDirection) {
   j.erase("velocity_lag");
   TwinModel before = TwinModel::from_json(j.dump(), "twin.json");
   EXPECT_EQ(before.velocity_lag, 0.0);
+  EXPECT_FALSE(json::parse(before.to_json()).contains("velocity_lag"));
   const int n = t.n_dof();
   VectorJ q = VectorJ::Zero(n), qd = VectorJ::Zero(n), qdd = VectorJ::Zero(n), temp = VectorJ::Constant(n, 35.0), tau, cur, tau0, cur0;
   qd.setConstant(0.003);
@@ -240,6 +246,8 @@ TEST(TwinFile, TheVelocityLagRoundTripsMayBeAbsentAndTurnsTheDrivesDirection) {
   for (int k = 0; k < n; ++k) {
     const JointDrive& d = t.joints[static_cast<size_t>(k)];
     ASSERT_DOUBLE_EQ(tau[k], tau0[k]) << "the torque does not depend on the lag, J" << k + 1;
+    ASSERT_GT(tau[k], 0.5) << "the Coulomb friction of a joint moving forward, J" << k + 1;
+    EXPECT_NEAR(cur[k] / cur0[k], 0.7, 1e-12) << "back-driven with the lag, motoring without, J" << k + 1;
     const double back = tau[k] > 0.0 ? d.c_gen : 1.0;  // with the lag: v < 0, so tau > 0 is back-driven
     EXPECT_NEAR(cur[k], back * tau[k] / d.gain, 1e-12) << "J" << k + 1;
     EXPECT_NEAR(cur0[k], (tau[k] > 0.0 ? 1.0 : d.c_gen) * tau[k] / d.gain, 1e-12) << "J" << k + 1;

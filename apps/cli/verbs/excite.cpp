@@ -77,7 +77,7 @@ int run(const Options& o) {
   } catch (const InvalidArgument& e) {
     // the library names its fields; the user typed options (audit of session 22: "q0 has 3 values")
     std::string what = e.what();
-    // "tool_points[k] is ..." -> "--tool-point (the (k+1)th) is ..."
+    // "tool_points[k] is ..." -> "--tool-point (number k+1 of n) is ..."
     if (what.rfind("tool_points[", 0) == 0) {
       const auto close = what.find(']');
       const int k = std::atoi(what.c_str() + 12);

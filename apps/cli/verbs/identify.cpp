@@ -220,8 +220,8 @@ int run_identify(const IdentifyOptions& o) {
       fmt::print("velocity lag: {:.3f} ms, as given (--velocity-lag): the drive's direction is read on actual_qd + lag x qdd\n",
                  1000.0 * twin.velocity_lag);
     else if (vl.note.empty())
-      fmt::print("velocity lag: actual_qd is {:.3f} ms (+-{:.3f}) late against its positions ({:.2f} of the {:.3g} ms period; {} joint "
-                 "samples): the drive's direction is read on the velocity carried forward by it\n",
+      fmt::print("velocity lag: actual_qd is {:.3f} ms (+-{:.3f}, as if the samples were independent) late against its positions ({:.2f} "
+                 "of the {:.3g} ms period; {} joint samples): the drive's direction is read on the velocity carried forward by it\n",
                  1000.0 * vl.seconds, 1000.0 * vl.stderr_s, vl.period > 0.0 ? vl.seconds / vl.period : 0.0, 1000.0 * vl.period, vl.samples);
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {

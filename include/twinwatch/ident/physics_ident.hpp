@@ -56,14 +56,16 @@ struct TrainingRun {
 };
 
 /// How late the streamed velocity (actual_qd) is against the instant of its sample, measured on
-/// recordings: the least-squares lag lambda of  qd_k = v(t_k - lambda) ~ c_k - lambda a_k,  with c_k
-/// the central difference of actual_q at t_k (the velocity at the positions' instant, to O(dt^2))
-/// and a_k the joint acceleration (joint_accelerations), pooled over every joint and recording:
-/// lambda = sum (c_k - qd_k) a_k / sum a_k^2. A velocity the controller differences backwards over
-/// one period lags half of it (1 ms at 500 Hz); a filtered one lags more, a predicted one less.
+/// recordings: the least squares of  qd_k = s v(t_k - lambda) ~ s c_k - s lambda a_k  over every
+/// joint and recording, with c_k the central difference of actual_q carried to t_k (the velocity at
+/// the positions' instant, to O(dt^2)), a_k the joint acceleration (joint_accelerations: target_qdd
+/// when streamed, else a zero-phase difference of qd) and s the velocity's scale against the
+/// positions' derivative (1 for a velocity in rad/s of that joint; else the lag is not measured and
+/// a note says so). A velocity the controller differences backwards over one period lags half of it
+/// (1 ms at 500 Hz); a filtered one lags more, a predicted one less.
 struct VelocityLag {
   double seconds = 0.0;   ///< lambda [s] (0 when not measurable: see note)
-  double stderr_s = 0.0;  ///< its standard error [s]
+  double stderr_s = 0.0;  ///< its standard error [s], as if the samples were independent (they are not: an indication)
   double period = 0.0;    ///< the recordings' median sample period [s]
   long samples = 0;       ///< joint samples used
   bool given = false;     ///< set by IdentOptions::velocity_lag, not measured

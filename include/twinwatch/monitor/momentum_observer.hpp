@@ -100,9 +100,9 @@ class TwinMomentumObserver {
 
 /// Measured drive torque of a sample through the twin's drive model: tau_j = g_j i_j when the
 /// joint is motoring (i_j qd_j >= 0), g_j i_j / c_gen_j when it is back-driven [N·m]. (On the
-/// streamed velocity, not TwinModel::direction_velocity: carried forward, the observer's margins
-/// on long healthy runs fell, 0.949 -> 0.977 (J4), and no false alarm went; docs/validation.md,
-/// session 26.)
+/// streamed velocity, not TwinModel::direction_velocity: carried forward, the observer's largest
+/// healthy ratio on the long held-out runs rose, 0.949 -> 0.977 (J4), and no false alarm went;
+/// docs/validation.md, session 26.)
 void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau);
 
 }  // namespace twinwatch::monitor
