@@ -462,12 +462,13 @@ ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector
     if (v.empty()) throw InvalidArgument("--column-map '': expected MAP or REC=MAP, got an empty value");
     // REC=MAP: the first '=' whose left part names one of the recordings (a recording's name may
     // hold a '=' too); a value that names an existing file is a MAP
+    const bool a_file = std::filesystem::exists(v, ec);
     size_t eq = std::string::npos;
-    if (!std::filesystem::exists(v, ec))
+    if (!a_file)
       for (size_t at = v.find('='); at != std::string::npos && eq == std::string::npos; at = v.find('=', at + 1))
         if (is_recording(v.substr(0, at))) eq = at;
     if (eq == std::string::npos) {
-      if (v.find('=') != std::string::npos && !std::filesystem::exists(v, ec))
+      if (v.find('=') != std::string::npos && !a_file)
         throw InvalidArgument(fmt::format("--column-map '{}': no map file of that name, and {} ({}); REC=MAP gives one of them its own "
                                           "map",
                                           v, v.front() == '=' ? std::string("no recording is named before '='")

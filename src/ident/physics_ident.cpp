@@ -340,12 +340,10 @@ std::vector<std::vector<VectorJ>> presliding_states(const TwinModel& twin, const
 }  // namespace
 
 // estimate_velocity_lag: a step longer than this many median periods is left out; the least samples
-// and acceleration rms [rad/s²] that measure a lag; the largest lag a controller's stream has [s]
-// (TwinModel's file bound)
+// and acceleration rms [rad/s²] that measure a lag (the largest lag: TwinModel::kVelocityLagMax)
 constexpr double kLagStepMax = 1.5;
 constexpr long kLagMinSamples = 100;
 constexpr double kLagMinAcceleration = 0.05;
-constexpr double kLagMax = 0.1;
 // ... and how far the velocity's scale against the positions' derivative may be from 1 (a deg/s
 // column read as rad/s is 57)
 constexpr double kLagScaleTolerance = 0.05;
@@ -356,8 +354,8 @@ void IdentOptions::validate() const {
   if (decimate < 1) throw InvalidArgument(fmt::format("decimate is {}, must be >= 1", decimate));
   if (!(direction_blend >= 0.0) || !std::isfinite(direction_blend))
     throw InvalidArgument(fmt::format("direction_blend is {} rad/s, must be finite and >= 0", direction_blend));
-  if (!std::isnan(velocity_lag) && !(std::abs(velocity_lag) <= kLagMax))
-    throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, kLagMax));
+  if (!std::isnan(velocity_lag) && !(std::abs(velocity_lag) <= TwinModel::kVelocityLagMax))
+    throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, TwinModel::kVelocityLagMax));
 }
 
 VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& recordings,
@@ -432,10 +430,10 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
   // the fit's residual: its standard error
   const double sse = std::max(0.0, vv - 2.0 * (sc * cv - m * av) + sc * sc * cc - 2.0 * sc * m * ca + m * m * aa);
   lag.stderr_s = std::sqrt(sse / std::max(1.0, N - 2.0) * cc / det) / std::abs(sc);
-  if (!(std::abs(l) <= kLagMax)) {
+  if (!(std::abs(l) <= TwinModel::kVelocityLagMax)) {
     lag.note = fmt::format("the streamed velocity came out {:.3g} s late against its positions, beyond +-{:g} s (no controller's): read as "
                            "at its sample's instant",
-                           l, kLagMax);
+                           l, TwinModel::kVelocityLagMax);
     return lag;
   }
   lag.seconds = l;

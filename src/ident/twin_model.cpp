@@ -35,9 +35,6 @@ const std::array<std::string, 4> kMethods{"physics", "mlp", "hybrid", "sequentia
 // file takes up to 10. Zero or less would zero or flip the back-driven current, and the learned
 // block divides by it.
 constexpr double kCGenFileMax = 10.0;
-// the velocity lag a file may hold [s]: a streamed velocity a tenth of a second late is no
-// controller's (a 500 Hz stream's backward difference lags 1 ms)
-constexpr double kVelocityLagFileMax = 0.1;
 
 // JSON has no NaN: write it as null (the reader takes finite numbers only)
 nlohmann::json numbers(const Eigen::VectorXd& v) {
@@ -539,9 +536,9 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     // optional (since session 26; a twin from before reads the streamed velocity as it is)
     if (top.has("velocity_lag")) {
       t.velocity_lag = top.number("velocity_lag");
-      if (!(std::abs(t.velocity_lag) <= kVelocityLagFileMax))
+      if (!(std::abs(t.velocity_lag) <= TwinModel::kVelocityLagMax))
         top.fail("velocity_lag", fmt::format("expected a lag in seconds within +-{:g} s (the streamed velocity against its sample's instant), got {}",
-                                             kVelocityLagFileMax, t.velocity_lag));
+                                             TwinModel::kVelocityLagMax, t.velocity_lag));
     }
     t.gains_absolute = top.boolean("gains_absolute");
     const JsonFields pl = top.object("payload");

@@ -839,8 +839,9 @@ double Monitor::load_excess(int j, double qd, double load_max) const {
 // Where a joint reverses under more load than any reversal the thresholds were learned on, the
 // drive's motoring/back-driven step the twin cannot time (reversal_load, threshold.hpp) is larger
 // than any they saw: both thresholds grow by the step the excess load can put into each residual
-// (load_excess times the joint's step, load_step_cur_ / load_step_obs_), times the joint's sensitivity like the rest of its threshold, low-passed so that the
-// widening lasts as long as the step's trace in the residual does: through the residual's IIR
+// (load_excess times the joint's step, load_step_cur_ / load_step_obs_), times the joint's
+// sensitivity like the rest of its threshold, low-passed so that the widening lasts as long as the
+// step's trace in the residual does: through the residual's IIR
 // (a first-order low-pass of a bound bounds the low-pass of what it bounds; a joint on Cao's FIR,
 // -3 dB at 42.8 Hz against the IIR's 40, gets the same IIR: close, not a strict bound) and the
 // observer's own bandwidth. Nothing changes within the learned loads. The cost is sensitivity where
@@ -941,11 +942,11 @@ void Monitor::check_program_sets() {
     const bool own_obs = set.observer_level.size() != 0;
     const auto& obs_dyn = own_obs ? set.observer_dynamic : cfg_.observer_dynamic;
     const VectorJ& obs_static = own_obs ? set.observer_level : cfg_.observer_level;
+    // the set's own widening at loaded reversals (widen_for_load), at this sample, unfiltered
+    const bool widens = set.reversal_load_max.size() == n_;
     bool over = false;
     for (int j = 0; j < n_ && !over; ++j) {
       const double sens = cfg_.sensitivity[j];
-      // the set's own widening at loaded reversals (widen_for_load), at this sample, unfiltered
-      const bool widens = set.reversal_load_max.size() == n_;
       const double excess = widens ? load_excess(j, d.qd[j], set.reversal_load_max[j]) : 0.0;
       const double cur = sens * load_step_cur_[j] * excess, obs = sens * load_step_obs_[j] * excess;
       over = std::abs(rf_dec_[j]) > level_at(cfg_.use_dynamic, set.dynamic, set.static_level, j, d.qd[j], qdd_[j], sens) + cur ||

@@ -454,7 +454,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "physics/mlp/hybrid: how late actual_qd is against its sample's instant [s]; the drive's motoring/back-driven "
                   "switch is read on actual_qd + lag x qdd (default: measured on the recordings against the central difference "
                   "of actual_q; 0: actual_qd as it is, the twin of before)")
-      ->check(CLI::Range(-0.1, 0.1));
+      ->check(CLI::Range(-ident::TwinModel::kVelocityLagMax, ident::TwinModel::kVelocityLagMax));
   sub->add_option("--efficiency-fit", o->efficiency_fit,
                   "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
                   "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "

@@ -132,6 +132,9 @@ class TwinModel {
   /// [rad/s] the smallest lead direction_velocity applies: a sixth of one encoder count of velocity
   /// on a UR at 500 Hz (2 pi / 2^20 rad / 2 ms = 3 mrad/s), i.e. 0.5 rad/s² at the 1 ms lag
   static constexpr double kDirectionLeadMin = 5e-4;
+  /// [s] the largest |velocity_lag| a twin takes (file, identify, estimate_velocity_lag): a streamed
+  /// velocity a tenth of a second late is no controller's (a 500 Hz backward difference lags 1 ms)
+  static constexpr double kVelocityLagMax = 0.1;
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
   MotionEnvelope envelope;              ///< the motion of those files (empty: not recorded, an older twin)
