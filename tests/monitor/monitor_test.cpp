@@ -422,6 +422,56 @@ TEST_F(MonitorLoop, APushIsNotFollowedAsAPayloadAndAPickAfterADropIsFollowedInTu
   EXPECT_EQ(swap[2].fault, FaultClass::Collision) << swap_listing;
 }
 
+// Session 27: a contact within the 2.5 s between a payload change's first look and its longer look
+// (where the twin follows the change) was part of the payload event and reported nowhere: 0 of 30
+// such contacts (5 N·m, links 2, 3, 5, 0.3-2 s after a 0.5 kg drop or pick) were found. Now the
+// current residual less what the first look's payload explains is watched on the moving joints;
+// what rises there ends the payload change before it and raises an alert of its own. The payload
+// is still sized within 20 %, the contact found within 20 ms on its link, and a change with nothing
+// on top is one event as before.
+TEST_F(MonitorLoop, AContactSoonAfterAPayloadChangeIsAnEventOfItsOwn) {
+  const std::string contact3 = "  - {type: collision, link: 3, onset: 9.5, magnitude: 5, duration: 0.05, "
+                               "point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
+  const auto drop = monitor(undeclared(run(scenario(911, 14, 0.5, "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n" + contact3))), 0.5);
+  const std::string drop_listing = listing(drop);
+  ASSERT_EQ(drop.size(), 2u) << drop_listing;
+  EXPECT_EQ(drop[0].fault, FaultClass::PayloadChange) << drop_listing;
+  EXPECT_NEAR(drop[0].magnitude, -0.5, 0.1) << drop_listing;
+  EXPECT_THAT(drop[0].detail, ::testing::HasSubstr("predicts with no payload")) << drop_listing;
+  EXPECT_LT(drop[0].t_end, 9.55) << "the drop's event ends where the contact begins" << drop_listing;
+  EXPECT_EQ(drop[1].fault, FaultClass::Collision) << drop_listing;
+  EXPECT_LT(drop[1].t_detected - 9.5, 0.02) << drop_listing;
+  // as the same contact is found on a run whose payload did not change (on this twin, link 4 at 65 %
+  // with link 5 also possible, for the link-3 contact: a pose where the joint torques of the two
+  // links are alike; the pick below is named right)
+  const auto same = monitor(undeclared(run(scenario(911, 14, 0.5, contact3))), 0.5);
+  ASSERT_EQ(same.size(), 1u) << listing(same);
+  EXPECT_EQ(same[0].link, drop[1].link) << listing(same) << drop_listing;
+  EXPECT_NEAR(same[0].t_detected, drop[1].t_detected, 0.0045) << listing(same) << drop_listing;
+  EXPECT_NEAR(same[0].magnitude, drop[1].magnitude, 0.1 * same[0].magnitude) << listing(same) << drop_listing;
+
+  // a part picked with none declared, a wrist contact 0.7 s later
+  const auto pick = monitor(undeclared(run(scenario(912, 14, 0.0,
+                                                    "  - {type: payload_pick, onset: 8.5, io_bit: 0, mass: 0.5, com: [0, 0, 0.04]}\n"
+                                                    "  - {type: collision, link: 5, onset: 9.2, magnitude: 5, duration: 0.05, "
+                                                    "point: [-0.05, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n"))),
+                            0.0);
+  const std::string pick_listing = listing(pick);
+  ASSERT_EQ(pick.size(), 2u) << pick_listing;
+  EXPECT_EQ(pick[0].fault, FaultClass::PayloadChange) << pick_listing;
+  EXPECT_NEAR(pick[0].magnitude, 0.5, 0.1) << pick_listing;
+  EXPECT_EQ(pick[1].fault, FaultClass::Collision) << pick_listing;
+  EXPECT_EQ(pick[1].link, 4) << pick_listing;  // link 5
+  EXPECT_LT(pick[1].t_detected - 9.2, 0.02) << pick_listing;
+
+  // the drop alone: one event, followed on its longer look, not ended early
+  const auto alone = monitor(undeclared(run(scenario(911, 14, 0.5, "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"))), 0.5);
+  const std::string alone_listing = listing(alone);
+  ASSERT_EQ(alone.size(), 1u) << alone_listing;
+  EXPECT_THAT(alone[0].detail, ::testing::Not(::testing::HasSubstr("rose above"))) << alone_listing;
+  EXPECT_THAT(alone[0].detail, ::testing::HasSubstr("from 11.0")) << alone_listing;
+}
+
 // Session 22: a part swapped (a drop, then a pick 1 s later on another gripper output, as a dual
 // gripper tending a machine does) put both changes in the longer look's window; no single signature
 // fits that, and it read as one contact on link 6 that stayed open to the end, hiding the contact

@@ -85,6 +85,11 @@ class TwinMomentumObserver {
 
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }
+  /// Adds `delta` [N·m] to the estimate: the twin's torque changed by delta in one step (a payload
+  /// it now carries) and the estimate goes on as if it had always predicted with it, where reset()
+  /// would start it from zero (blind for its start-up samples). Exact for a delta that is constant
+  /// over the lag's time constant 1/K; the payload's torque changes over the motion's time scale.
+  void shift(const VectorJ& delta) { r_ += delta; }
   /// Measured drive torque of the last sample [N·m].
   const VectorJ& drive_torque() const { return tau_m_; }
   double gain() const { return gain_; }

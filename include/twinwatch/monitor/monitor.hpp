@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -332,7 +333,35 @@ class Monitor {
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
-  void split_payload_change(double t, const char* where);  // where: why it ends there, for the event text
+  /// (until: the diagnosis window's end, when the next change began before t: watch_on_top.
+  /// on_top: split by watch_on_top. The residual filter and the observer are then shifted by what
+  /// the followed payload changes in the twin's prediction (rebase_on), instead of restarted: they
+  /// keep what is new on top of the payload, a contact's onset; and the split is tentative until
+  /// the new alert's diagnosis (unsplit_payload_change))
+  void split_payload_change(double t, const char* where, double until = std::numeric_limits<double>::quiet_NaN(),
+                            bool on_top = false);
+  /// A payload change diagnosed on the alert's first look is a payload the twin could carry
+  /// (payload_after): from then to its longer look, the current residual less what that payload
+  /// explains is watched on the moving joints (watch_on_top). What rises above the thresholds there
+  /// is something new on top of the payload change (a contact soon after a part was dropped or
+  /// picked): the change is split off before it began (split_payload_change) and the new residual
+  /// raises an alert of its own. Before, everything within the 2.5 s to the longer look was part of
+  /// the payload event (a contact there was never reported).
+  void start_on_top(const Event& e);
+  /// The alert raised after a tentative split (split_payload_change from watch_on_top) was not a
+  /// contact and merges back into the payload change `into`: the change is restored as its first
+  /// look said, and the twin to the payload it had. False (nothing done) when `into` was no split.
+  bool unsplit_payload_change(int into, double t);
+  /// The twin now predicts otherwise than `before` (another payload): the residual filter, the
+  /// observer, this sample's decisions and the observer's estimates in the ring are shifted by the
+  /// difference, as if the twin had predicted so all along.
+  void rebase_on(const ident::TwinModel& before);
+  void watch_on_top(const RobotSample& s, double t, bool settled);
+  /// The payload the twin carries after a diagnosed change of `change` kg (the mass it had plus the
+  /// change, at its centre of mass or, with none, 4 cm out along the flange axis; within the
+  /// estimate's error of zero: none; within it of the declared mass: the declared payload). Empty
+  /// when that is no payload (a clearly negative mass, above the rated payload).
+  std::optional<model::RigidBodyInertia> payload_after(double change) const;
   /// the open alert is a payload change diagnosed once and waiting for its longer look, at least
   /// kPayloadSplitAfter old: a gripper output's change or a new declaration ends it (split_payload_change)
   bool payload_change_waits(double t) const;
@@ -399,6 +428,18 @@ class Monitor {
   void check_program_sets();
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
+  // watch_on_top: the twin with the payload the first look diagnosed (built once per payload change),
+  // the alert it watches (its start), what that payload changes in the predicted current (filtered
+  // as the residual is), and per joint the run of samples above the threshold and where it began
+  std::optional<ident::TwinModel> on_top_twin_;
+  bool on_top_ = false, on_top_fresh_ = false;
+  double on_top_start_ = 0.0;
+  VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_;
+  std::vector<int> on_top_run_, on_top_run_obs_;
+  // a tentative split: the payload change's event as its first look said, and the payload the twin
+  // had before the split followed it (unsplit_payload_change)
+  std::optional<Event> split_;
+  model::RigidBodyInertia split_from_;
   // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
   // set_payload. The twin takes each new declaration (take_declared_payload); declared_at_ [s] is when
   // it last did, so that an alert raised before it is not followed on top of it
