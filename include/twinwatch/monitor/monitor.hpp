@@ -340,14 +340,16 @@ class Monitor {
   /// the new alert's diagnosis (unsplit_payload_change))
   void split_payload_change(double t, const char* where, double until = std::numeric_limits<double>::quiet_NaN(),
                             bool on_top = false);
-  /// A payload change diagnosed on the alert's first look is a payload the twin could carry
-  /// (payload_after): from then to its longer look, the current residual less what that payload
+  /// A payload change diagnosed on the alert's first look (or, with a gripper output changed, a
+  /// contact on the last link, which a small part dropped reads as in the short window, with the
+  /// first look's payload hypothesis) is a payload the twin could carry (payload_after): from then
+  /// to its longer look, the current residual less what that payload
   /// explains is watched on the moving joints (watch_on_top). What rises above the thresholds there
   /// is something new on top of the payload change (a contact soon after a part was dropped or
   /// picked): the change is split off before it began (split_payload_change) and the new residual
   /// raises an alert of its own. Before, everything within the 2.5 s to the longer look was part of
   /// the payload event (a contact there was never reported).
-  void start_on_top(const Event& e);
+  void start_on_top(const Event& e, double change);  // change: the first look's payload change [kg]
   /// The alert raised after a tentative split (split_payload_change from watch_on_top) was not a
   /// contact and merges back into the payload change `into`: the change is restored as its first
   /// look said, and the twin to the payload it had. False (nothing done) when `into` was no split.
@@ -454,6 +456,7 @@ class Monitor {
   // two is the declared pick and is withdrawn
   bool declared_pick_candidate(const Event& e, double declared_at, double change) const;
   bool declared_pick_explains(double t) const;
+  bool at_last_link(const Event& e) const;  // a contact named on the last link, or that lists it as also possible
   bool gripped_before(const Event& e, double declared_at) const;
   bool late_declared_pick(const Event& e, double t, double change) const;
   void reset_decisions();  // every joint's debouncers start over
