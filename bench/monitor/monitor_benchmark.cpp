@@ -109,6 +109,68 @@ void BM_MonitorThroughput(benchmark::State& st) {
 }
 BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->MinTime(2.0);
 
+// A replay with faults (session 27): a 0.5 kg part dropped (none declared) and a 5 N·m contact 1 s
+// later, before the payload change's longer look; the twin is identified with a known payload, so
+// its torques are absolute and the monitor follows the change (watch_on_top, the split, rebase_on).
+// Every replay runs the diagnoses, the split and the contact's alert: what the loop costs when it
+// has something to say, and the largest single sample (the split's look and its shift of the ring).
+struct FaultSetup {
+  ident::TwinModel twin;
+  monitor::MonitorConfig cfg;
+  device::Recording rec;
+  FaultSetup() {
+    auto simulate = [](const std::string& yaml) {
+      device::Recording r;
+      r.n_dof = 6;
+      r.present = sim::Simulator::fields();
+      sim::make_simulator(sim::parse_scenario(yaml, "bench"))->run([&](const RobotSample& x) { r.samples.push_back(x); });
+      return r;
+    };
+    const std::string fig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n";
+    const auto exc = simulate("robot: ur3e\nseed: 1\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
+    const auto loaded = simulate("robot: ur3e\nseed: 3\nduration: 24\n" + fig8 + "payload: {mass: 0.5, com: [0, 0, 0.04]}\n");
+    model::RigidBodyInertia part;
+    part.mass = 0.5;
+    part.com = Eigen::Vector3d(0, 0, 0.04);
+    ident::IdentReport rep;
+    twin = ident::identify_physics("ur3e", {{&exc, {}}, {&loaded, part}}, ident::IdentOptions{}, rep);
+    cfg = monitor::learn_thresholds(twin, {{&exc, {}}, {&loaded, part}});
+    twin.set_payload(part);
+    rec = simulate("robot: ur3e\nseed: 4\nduration: 12\n" + fig8 + "payload: {mass: 0.5, com: [0, 0, 0.04]}\nfaults:\n"
+                   "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
+                   "  - {type: collision, link: 3, onset: 9.5, magnitude: 5, duration: 0.05, point: [-0.1, 0.0, 0.03], "
+                   "direction: [0.3, 1.0, -0.2]}\n");
+    for (auto& x : rec.samples) x.present &= ~kFieldPayload;  // (none declared: the monitor's to find)
+  }
+};
+
+void BM_MonitorPayloadThenContact(benchmark::State& st) {
+  static const FaultSetup s;
+  monitor::Monitor mon(s.twin, s.cfg);
+  size_t k = 0, events = 0, replays = 0;
+  std::vector<double> lat;
+  lat.reserve(1 << 20);
+  for (auto _ : st) {
+    const auto t0 = std::chrono::steady_clock::now();
+    mon.push(s.rec.samples[k]);
+    lat.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    if (++k < s.rec.samples.size()) continue;
+    k = 0;
+    st.PauseTiming();
+    events += mon.events().size();
+    ++replays;
+    mon = monitor::Monitor(s.twin, s.cfg);
+    st.ResumeTiming();
+  }
+  std::sort(lat.begin(), lat.end());
+  st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+  st.counters["events_per_replay"] = replays ? static_cast<double>(events) / static_cast<double>(replays) : 0.0;
+  st.counters["p99_us"] = lat[lat.size() * 99 / 100];
+  st.counters["p999_us"] = lat[lat.size() * 999 / 1000];
+  st.counters["max_us"] = lat.back();
+}
+BENCHMARK(BM_MonitorPayloadThenContact)->MinTime(2.0);
+
 // the twin prediction alone (the regressor dominates), with its friction memory
 void BM_TwinPredict(benchmark::State& st) {
   const Setup& s = setup();

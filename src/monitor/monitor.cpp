@@ -1248,8 +1248,10 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   }
   declared_at_ = t;
   declared_change_ = change;
-  // a diagnosed change the twin followed is superseded: the program has said what it carries
+  // a diagnosed change the twin followed is superseded: the program has said what it carries (and a
+  // split on a rise stands: the twin is not put back behind the declaration, unsplit_payload_change)
   followed_ = false;
+  split_.reset();
   // the observer integrates the twin's torque, which changes in one step (as at a split,
   // split_payload_change)
   if (have_prev_) restart_estimators(false);
@@ -1267,12 +1269,17 @@ void Monitor::take_declared_payload(const RobotSample& s) {
 }
 
 void Monitor::follow_payload(Event& e, double t) {
+  // (a split on a rise, split_payload_change's on_top, that cannot follow goes back to the first
+  // look and says nothing: the longer look decides, and says why then)
+  const auto refuse = [&](const std::string& text) {
+    if (!quiet_refusal_) add_note(t, text);
+  };
   // the controller declared its payload after this alert began: the declaration is what the twin
   // carries now, and the diagnosed change (measured partly against the old payload) is not added to
   // it. (An alert that began after the declaration measures against it: a pick declared with no part
   // in the gripper reads as the declared mass lost, and is followed as one.)
   if (declared_at_ > e.t_start) {
-    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is not followed: the controller declared its payload at "
+    refuse( fmt::format("the payload change of the alert raised at {:.3f} s is not followed: the controller declared its payload at "
                             "{:.3f} s, and the twin predicts with that",
                             e.t_detected, declared_at_));
     return;
@@ -1283,7 +1290,7 @@ void Monitor::follow_payload(Event& e, double t) {
   const double change = e.magnitude;
   // kg in the twin's relative units (no known payload fixed its gains) are no mass to carry
   if (!twin_.gains_known() || !twin_.predicts_payload() || !std::isfinite(change)) {
-    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s is not followed: {}; the alert stays open while the "
+    refuse( fmt::format("the payload change of the alert raised at {:.3f} s is not followed: {}; the alert stays open while the "
                     "robot runs with it",
                     e.t_detected,
                     !twin_.gains_known() ? "the twin's torques are relative (it was identified without a known payload that fixes its gains)"
@@ -1296,7 +1303,7 @@ void Monitor::follow_payload(Event& e, double t) {
   // than the payload held is no payload change the twin could carry
   const double tolerance = std::max(kPayloadFollowFloor, kPayloadFollowShare * std::abs(change));
   if (mass < -tolerance) {
-    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
+    refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
                     "payload the twin carried; the alert stays open",
                     e.t_detected, change, had.mass));
     return;
@@ -1308,7 +1315,7 @@ void Monitor::follow_payload(Event& e, double t) {
   // the flange fits a 3.85 kg "payload", session 21 review)
   const double limit = twin_.robot().payload_limit();
   if (mass > limit) {
-    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
+    refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it would make a {:.2f} kg "
                     "payload, above {:g} kg ({}); the alert stays open",
                     e.t_detected, change, mass, limit, twin_.robot().payload_limit_text()));
     return;
@@ -1320,12 +1327,12 @@ void Monitor::follow_payload(Event& e, double t) {
   // look goes back kPayloadIoLookback before the exceedance began)
   const bool io_change = outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity());
   if (!io_change && !(e.confidence >= kPayloadFollowExplained)) {
-    add_note(t, fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
+    refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
                     "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
                     e.t_detected, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
     return;
   }
-  // (mass and limit checked above, each with its note: payload_after has one)
+  // (payload_after makes the same mass and limit checks as above, which passed: it has a payload)
   const model::RigidBodyInertia now = *payload_after(change);
   followed_from_ = had;
   carry(now, t);
@@ -1383,6 +1390,11 @@ void Monitor::start_on_top(const Event& e, double change) {
   if (on_top_twin_) *on_top_twin_ = twin_;
   else on_top_twin_.emplace(twin_);
   on_top_twin_->set_payload(*payload);
+  // (one prediction now, on a sample that diagnoses anyway: the copy builds its model with the
+  // payload here, not in the per-sample watch, which then allocates nothing)
+  const DiagnosisSample& now = ring_[(ring_head_ + ring_.size() - 1) % ring_.size()];
+  on_top_twin_->predict(now.q, now.qd, now.qdd, VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN()), on_top_tau_,
+                        on_top_i_, &memory_);
   on_top_ = true;
   on_top_fresh_ = true;
   on_top_start_ = e.t_start;
@@ -1403,6 +1415,8 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
   const bool waiting = open_ >= 0 && events_[static_cast<size_t>(open_)].t_start == on_top_start_ &&
                        payload_like(events_[static_cast<size_t>(open_)]) && diagnosed_ && !rediagnosed_ && !followed_ &&
                        background_ < 0 && merge_into_ < 0 &&
+                       // (a declaration since the first look: the twin predicts with it, not the copy)
+                       declared_at_ <= on_top_start_ &&
                        // (a pick the program declared before its grip reads as the part lost until the grip,
                        // where the residual falls back and the alert is withdrawn: declared_pick_explains.
                        // Less the "loss", the grip itself would rise here)
@@ -1463,8 +1477,9 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
   // from the split, the new alert came 2-10 ms later than the same contact on a run without the change)
   for (size_t J = 0; J < static_cast<size_t>(n_); ++J) {
     const int j = static_cast<int>(J);
-    for (int k = 0; k < std::min(on_top_run_[J], cfg_.raise_after - 1); ++k) deb_[J].update(true, on_top_from_[j]);
-    for (int k = 0; k < std::min(on_top_run_obs_[J], cfg_.observer_debounce(j) - 1); ++k) deb_obs_[J].update(true, on_top_from_obs_[j]);
+    // (this sample is in the run and the decision below counts it: the run less one)
+    for (int k = 1; k < std::min(on_top_run_[J], cfg_.raise_after); ++k) deb_[J].update(true, on_top_from_[j]);
+    for (int k = 1; k < std::min(on_top_run_obs_[J], cfg_.observer_debounce(j)); ++k) deb_obs_[J].update(true, on_top_from_obs_[j]);
   }
 }
 
@@ -1491,9 +1506,21 @@ void Monitor::split_payload_change(double t, const char* where, double until, bo
   // the window ends before the output changed: the samples after it belong to the next payload
   const double end = std::isnan(until) ? t : until;
   const Event first_look = events_[static_cast<size_t>(open_)];
+  const int index = open_;
+  quiet_refusal_ = on_top;
   run_diagnosis(t, true, end);
-  // not followed (a note says why): the alert goes on, and its longer look sees everything
-  if (open_ < 0 || !followed_) return;
+  quiet_refusal_ = false;
+  if (open_ < 0 || !followed_) {
+    // not followed (a note says why, or no payload change on the samples so far): the alert goes
+    // on, and its longer look sees everything. A split on a rise goes back to what the first look
+    // said, so that the longer look is not told otherwise by a shorter window
+    if (on_top && open_ == index) {
+      events_[static_cast<size_t>(open_)] = first_look;
+      events_[static_cast<size_t>(open_)].t_end = t;
+      if (on_event) on_event(events_[static_cast<size_t>(open_)]);
+    }
+    return;
+  }
   rediagnosed_ = true;
   Event& done = events_[static_cast<size_t>(open_)];
   done.open = false;
@@ -1512,7 +1539,8 @@ void Monitor::split_payload_change(double t, const char* where, double until, bo
     // with 1.45 kg for a 0.5 kg part), and it continues as it was (unsplit_payload_change)
     ident::TwinModel& before = *on_top_twin_;  // (the copy watch_on_top predicted with)
     before.set_payload(followed_from_);
-    rebase_on(before);
+    split_rebased_from_ = end - cfg_.diagnosis_pre - kContactReference;
+    rebase_on(before, split_rebased_from_);
     split_ = first_look;
     split_from_ = followed_from_;
     pending_close_ = open_;
@@ -1543,7 +1571,7 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   ident::TwinModel& before = *on_top_twin_;
   before.set_payload(twin_.payload());
   carry(split_from_, t);
-  rebase_on(before);
+  rebase_on(before, split_rebased_from_);
   Event restored = *split_;
   restored.t_end = old.t_end;
   restored.peak_residual = std::max(old.peak_residual, restored.peak_residual);
@@ -1551,11 +1579,11 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   split_.reset();
   add_note(t, fmt::format("what rose at {:.3f} s on top of the payload change of the alert raised at {:.3f} s was no contact: the change "
                           "goes on, and the twin predicts with {:.2f} kg again (not {:.2f} kg) until its longer look",
-                          cleared_at_, old.t_detected, twin_.payload().mass, followed));
+                          split_rebased_from_ + cfg_.diagnosis_pre + kContactReference, old.t_detected, twin_.payload().mass, followed));
   return true;
 }
 
-void Monitor::rebase_on(const ident::TwinModel& before) {
+void Monitor::rebase_on(const ident::TwinModel& before, double from) {
   // twin_ now predicts otherwise than `before` (another payload): the current residual's filter and
   // the observer's estimate, and this sample's decisions, as if twin_ had predicted all along (the
   // change is the payload's torque, slow against both lags). The newest ring sample is this one.
@@ -1569,13 +1597,13 @@ void Monitor::rebase_on(const ident::TwinModel& before) {
   if (obs_on_) {
     obs_.shift(tau_now - tau_before);
     obs_dec_ += tau_now - tau_before;
-    // the observer's estimates the ring holds, which the next diagnosis reads before and around its
-    // alert's start (the current residual it computes again from the samples). Left as they were,
-    // the payload's torque before a split read as a change on the last joints: a contact on link 2
-    // or 3 named link 4 or 5
+    // the observer's estimates the ring holds from `from` on, which the next diagnosis reads before
+    // and around its alert's start (the current residual it computes again from the samples). Left
+    // as they were, the payload's torque before a split read as a change on the last joints: a
+    // contact on link 2 or 3 named link 4 or 5. (Two predictions a sample: about 0.4 s of them.)
     for (size_t k = 0; k < ring_count_; ++k) {
       DiagnosisSample& d = ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()];
-      if (d.tau_ext.size() != n_) continue;
+      if (d.t < from || d.tau_ext.size() != n_) continue;
       before.predict_torque(d.q, d.qd, d.qdd, no_temp, tau_before);
       twin_.predict_torque(d.q, d.qd, d.qdd, no_temp, tau_now);
       d.tau_ext += (tau_now - tau_before).cwiseProduct(obs_to_nm_);

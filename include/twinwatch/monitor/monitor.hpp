@@ -333,11 +333,13 @@ class Monitor {
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
-  /// (until: the diagnosis window's end, when the next change began before t: watch_on_top.
+  /// until: the diagnosis window's end, when the next change began before t (watch_on_top).
   /// on_top: split by watch_on_top. The residual filter and the observer are then shifted by what
   /// the followed payload changes in the twin's prediction (rebase_on), instead of restarted: they
-  /// keep what is new on top of the payload, a contact's onset; and the split is tentative until
-  /// the new alert's diagnosis (unsplit_payload_change))
+  /// keep what is new on top of the payload, a contact's onset. The split is tentative until the
+  /// next alert's diagnosis (unsplit_payload_change); with no alert within the merge gap it stands
+  /// (the followed payload explains the residual). When the samples before the rise give no payload
+  /// the twin can follow, the event goes back to what its first look said, without a note.
   void split_payload_change(double t, const char* where, double until = std::numeric_limits<double>::quiet_NaN(),
                             bool on_top = false);
   /// A payload change diagnosed on the alert's first look (or, with a gripper output changed, a
@@ -357,7 +359,7 @@ class Monitor {
   /// The twin now predicts otherwise than `before` (another payload): the residual filter, the
   /// observer, this sample's decisions and the observer's estimates in the ring are shifted by the
   /// difference, as if the twin had predicted so all along.
-  void rebase_on(const ident::TwinModel& before);
+  void rebase_on(const ident::TwinModel& before, double from);  // from: the first ring sample [s] shifted
   void watch_on_top(const RobotSample& s, double t, bool settled);
   /// The payload the twin carries after a diagnosed change of `change` kg (the mass it had plus the
   /// change, at its centre of mass or, with none, 4 cm out along the flange axis; within the
@@ -442,6 +444,8 @@ class Monitor {
   // had before the split followed it (unsplit_payload_change)
   std::optional<Event> split_;
   model::RigidBodyInertia split_from_;
+  double split_rebased_from_ = 0.0;  // the ring's samples from here on were shifted (rebase_on)
+  bool quiet_refusal_ = false;       // follow_payload says nothing when it does not follow (a split on a rise)
   // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
   // set_payload. The twin takes each new declaration (take_declared_payload); declared_at_ [s] is when
   // it last did, so that an alert raised before it is not followed on top of it
