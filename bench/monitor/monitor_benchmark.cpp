@@ -16,18 +16,19 @@ namespace {
 
 using namespace twinwatch;
 
+device::Recording simulate(const std::string& yaml) {
+  device::Recording r;
+  r.n_dof = 6;
+  r.present = sim::Simulator::fields();
+  sim::make_simulator(sim::parse_scenario(yaml, "bench"))->run([&](const RobotSample& x) { r.samples.push_back(x); });
+  return r;
+}
+
 struct Setup {
   ident::TwinModel twin;
   monitor::MonitorConfig cfg;
   device::Recording rec;
   Setup() {
-    auto simulate = [](const std::string& yaml) {
-      device::Recording r;
-      r.n_dof = 6;
-      r.present = sim::Simulator::fields();
-      sim::make_simulator(sim::parse_scenario(yaml, "bench"))->run([&](const RobotSample& x) { r.samples.push_back(x); });
-      return r;
-    };
     const auto exc = simulate("robot: ur3e\nseed: 1\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
     rec = simulate("robot: ur3e\nseed: 2\nduration: 20\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n");
     ident::IdentReport rep;
@@ -119,13 +120,6 @@ struct FaultSetup {
   monitor::MonitorConfig cfg;
   device::Recording rec;
   FaultSetup() {
-    auto simulate = [](const std::string& yaml) {
-      device::Recording r;
-      r.n_dof = 6;
-      r.present = sim::Simulator::fields();
-      sim::make_simulator(sim::parse_scenario(yaml, "bench"))->run([&](const RobotSample& x) { r.samples.push_back(x); });
-      return r;
-    };
     const std::string fig8 = "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n";
     const auto exc = simulate("robot: ur3e\nseed: 1\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
     const auto loaded = simulate("robot: ur3e\nseed: 3\nduration: 24\n" + fig8 + "payload: {mass: 0.5, com: [0, 0, 0.04]}\n");
