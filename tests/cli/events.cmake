@@ -115,6 +115,16 @@ add_test(NAME cli.monitor_keep_payload COMMAND twinwatch monitor --twin ${d}/twi
          --payload-com 0 0 0.04 --db "" --keep-payload)
 set_tests_properties(cli.monitor_keep_payload PROPERTIES FIXTURES_REQUIRED "twin;payload_loss_recording"
                      PASS_REGULAR_EXPRESSION "payload_change payload -0\\.[3-6][0-9] kg; still active when monitoring stopped[^\n]*\n5000 samples, 0 gap\\(s\\), 1 event\\(s\\)")
+# a contact 1 s after a part was dropped, before the change's longer look (session 27): the change
+# ends where the contact rose and is followed there, the contact is an event of its own (before: one
+# payload event, the contact reported nowhere)
+add_test(NAME cli.simulate_payload_quick_contact COMMAND twinwatch simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/payload_loss_then_quick_contact.yaml
+         -o ${d}/payload_quick_contact.csv)
+set_tests_properties(cli.simulate_payload_quick_contact PROPERTIES FIXTURES_SETUP payload_quick_contact_recording PASS_REGULAR_EXPRESSION "samples")
+add_test(NAME cli.monitor_contact_on_top_of_payload_change COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/payload_quick_contact.csv
+         --payload-mass 0.5 --payload-com 0 0 0.04 --db "")
+set_tests_properties(cli.monitor_contact_on_top_of_payload_change PROPERTIES FIXTURES_REQUIRED "twin;payload_quick_contact_recording"
+                     PASS_REGULAR_EXPRESSION "8\\.5[0-9]+ s  payload_change payload -0\\.[4-5][0-9] kg; from 9\\.5[0-9]+ s the twin predicts with no payload and monitoring goes on with it; it ended at 9\\.5[0-9]+ s, where a residual rose above what the payload change explains[^\n]*\n[^\n]*\n +9\\.5[0-9]+ s  collision +contact on link [^\n]*\n[^\n]*\n7000 samples, 0 gap\\(s\\), 2 event\\(s\\)")
 # the payload the controller declares (session 23): the simulator streams it, as a controller from
 # 5.5.1 on does over RTDE. A declared pick is taken by the twin and raises nothing; a pick declared
 # with nothing gripped is a payload change of the declared mass, and the run ends saying the arm does
