@@ -67,6 +67,8 @@ constexpr double kPayloadSplitAfter = 0.5;
 // watch_on_top: a residual on top of a payload change's rises when it is above its threshold and
 // this share of the threshold above its mean over the last kOnTopRise [s]
 constexpr double kOnTopRise = 0.1, kOnTopRiseShare = 0.5;
+constexpr double kOnTopDoubt = 0.0;
+constexpr double kOnTopMoving = 0.1;  // [s] a joint is judged once it has moved this long
 // finish(): with the default set in use, a program whose thresholds would not have raised at least
 // this share of at least this many alerts is named in a note
 constexpr int kProgramHintRaises = 3;
@@ -915,6 +917,7 @@ double Monitor::trusted_gain(int j) const {
 }
 
 void Monitor::open_event(int joint, double start, double t) {
+  report_held();
   Event e;
   e.t_start = start;
   e.t_end = t;
@@ -1074,7 +1077,8 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
       return;
     }
   }
-  if (long_look && e.fault == FaultClass::PayloadChange && cfg_.follow_payload) follow_payload(e, t);
+  if (long_look && e.fault == FaultClass::PayloadChange && cfg_.follow_payload)
+    follow_payload(e, t, std::min(t, until) - cfg_.diagnosis_pre - kContactReference);
   if (!long_look && cfg_.follow_payload) {
     if (e.fault == FaultClass::PayloadChange) {
       start_on_top(e, e.magnitude);
@@ -1230,6 +1234,17 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // baseline took it up), waiting for its merge gap: the pick this declares, declared late
   // (the change against what the twin predicted with: an alert measures the arm against the twin)
   const double change = now.mass - had.mass;
+  if (held_ >= 0) {
+    // a followed change held for this (may_be_declared_late): the pick, measured against what the
+    // twin carried before it followed the change
+    const Event& h = events_[static_cast<size_t>(held_)];
+    if (late_declared_pick(h, t, now.mass - held_from_.mass)) {
+      add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
+                              "withdrawn, not an event",
+                              h.t_detected, h.detail));
+      drop_event(held_);
+    }
+  }
   if (pending_close_ >= 0) {
     const Event& pc = events_[static_cast<size_t>(pending_close_)];
     if (late_declared_pick(pc, t, change)) {
@@ -1268,7 +1283,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   carry(now, t);
 }
 
-void Monitor::follow_payload(Event& e, double t) {
+void Monitor::follow_payload(Event& e, double t, double rebase_from) {
   // (a split on a rise, split_payload_change's on_top, that cannot follow goes back to the first
   // look and says nothing: the longer look decides, and says why then)
   const auto refuse = [&](const std::string& text) {
@@ -1335,7 +1350,16 @@ void Monitor::follow_payload(Event& e, double t) {
   // (payload_after makes the same mass and limit checks as above, which passed: it has a payload)
   const model::RigidBodyInertia now = *payload_after(change);
   followed_from_ = had;
+  // the residual filter, the observer and the ring's estimates go on as if the twin had carried the
+  // payload all along (rebase_on; on_top_twin_ is the scratch copy of the twin as it was). Left as
+  // they were, they kept the old payload's residual, which decays with their lags: where the alert
+  // had cleared first (a pick at a rest, followed on its final look), that decay raised a 2 ms
+  // "contact" right after the follow
+  if (on_top_twin_) *on_top_twin_ = twin_;
+  else on_top_twin_.emplace(twin_);
   carry(now, t);
+  rebased_from_ = rebase_from;
+  rebase_on(*on_top_twin_, rebase_from);
   followed_ = true;
   followed_at_ = t;
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
@@ -1405,6 +1429,7 @@ void Monitor::start_on_top(const Event& e, double change) {
   on_top_df_.setZero(n_);
   on_top_dobs_.setZero(n_);
   on_top_slow_.setZero(n_);
+  on_top_moving_since_.setZero(n_);
   on_top_slow_obs_.setZero(n_);
 }
 
@@ -1458,14 +1483,21 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
     on_top_slow_obs_[j] = on_top_fresh_ ? rc_obs : on_top_slow_obs_[j] + slow * (rc_obs - on_top_slow_obs_[j]);
     // a resting joint is left out: static friction holds a payload's step there (the residual does
     // not show it, and less the payload's current it would read as the opposite step)
+    // Nor a joint that has just started moving: while it rested, its held-at-rest baseline took up
+    // the payload's step with the friction it held, and both leave the residual as it breaks away (a
+    // 1 kg pick at a rest read -0.46 A on J3 0.3 s later, against -0.2 A of payload: a false
+    // "contact" where the arm moved on)
     const size_t J = static_cast<size_t>(j);
-    const bool judged = std::abs(s.qd[j]) > RestBaseline::kMeasuredRest && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
+    if (std::abs(s.qd[j]) <= RestBaseline::kMeasuredRest || on_top_fresh_) on_top_moving_since_[j] = t;
+    const bool judged = t - on_top_moving_since_[j] >= kOnTopMoving && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
     const auto rises = [](double r, double mean, double level) {
       return std::abs(r) > level && std::abs(r - mean) > kOnTopRiseShare * level;
     };
-    count(judged && settled && rises(rc, on_top_slow_[j], level_[j]), on_top_run_[J], on_top_from_[j], cfg_.raise_after);
-    count(judged && observer_decides && rises(rc_obs, on_top_slow_obs_[j], obs_level_[j]), on_top_run_obs_[J], on_top_from_obs_[j],
-          cfg_.observer_debounce(j));
+    // (the payload's share is an estimate: its error, kOnTopDoubt of it, widens the threshold)
+    count(judged && settled && rises(rc, on_top_slow_[j], level_[j] + kOnTopDoubt * std::abs(on_top_df_[j])), on_top_run_[J],
+          on_top_from_[j], cfg_.raise_after);
+    count(judged && observer_decides && rises(rc_obs, on_top_slow_obs_[j], obs_level_[j] + kOnTopDoubt * std::abs(on_top_dobs_[j])),
+          on_top_run_obs_[J], on_top_from_obs_[j], cfg_.observer_debounce(j));
   }
   on_top_fresh_ = false;
   if (!std::isfinite(onset)) return;
@@ -1487,7 +1519,10 @@ void Monitor::undo_follow(double t) {
   // the residual did not fall back when the twin took the payload: the change was not (only) the
   // payload, and the twin goes back to what it carried
   followed_ = false;
+  if (on_top_twin_) *on_top_twin_ = twin_;
+  else on_top_twin_.emplace(twin_);
   carry(followed_from_, t);
+  rebase_on(*on_top_twin_, rebased_from_);
   Event& e = events_[static_cast<size_t>(open_)];
   const std::string what = followed_from_.mass > 0.0 ? fmt::format("its {:.2f} kg payload", followed_from_.mass) : std::string("no payload");
   e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
@@ -1537,10 +1572,7 @@ void Monitor::split_payload_change(double t, const char* where, double until, bo
     // is diagnosed first (merge_into_). A contact ends it; anything else was the change itself still
     // growing (a push on the flange that a payload fitted at its start, which had left the twin
     // with 1.45 kg for a 0.5 kg part), and it continues as it was (unsplit_payload_change)
-    ident::TwinModel& before = *on_top_twin_;  // (the copy watch_on_top predicted with)
-    before.set_payload(followed_from_);
-    split_rebased_from_ = end - cfg_.diagnosis_pre - kContactReference;
-    rebase_on(before, split_rebased_from_);
+    // (follow_payload shifted them: rebase_on)
     split_ = first_look;
     split_from_ = followed_from_;
     pending_close_ = open_;
@@ -1571,7 +1603,7 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   ident::TwinModel& before = *on_top_twin_;
   before.set_payload(twin_.payload());
   carry(split_from_, t);
-  rebase_on(before, split_rebased_from_);
+  rebase_on(before, rebased_from_);
   Event restored = *split_;
   restored.t_end = old.t_end;
   restored.peak_residual = std::max(old.peak_residual, restored.peak_residual);
@@ -1579,7 +1611,7 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   split_.reset();
   add_note(t, fmt::format("what rose at {:.3f} s on top of the payload change of the alert raised at {:.3f} s was no contact: the change "
                           "goes on, and the twin predicts with {:.2f} kg again (not {:.2f} kg) until its longer look",
-                          split_rebased_from_ + cfg_.diagnosis_pre + kContactReference, old.t_detected, twin_.payload().mass, followed));
+                          rebased_from_ + cfg_.diagnosis_pre + kContactReference, old.t_detected, twin_.payload().mass, followed));
   return true;
 }
 
@@ -1984,7 +2016,8 @@ void Monitor::push(const RobotSample& s) {
       if (done.fault == FaultClass::Collision || followed_) {
         // a contact, or a payload change the twin now carries: nothing after it continues it (a
         // pick right after a followed drop is a change of its own, to be followed in turn)
-        if (on_event) on_event(done);
+        if (followed_ && may_be_declared_late(done, t)) hold(open_);
+        else if (on_event) on_event(done);
         followed_ = false;
       } else {
         pending_close_ = open_;
@@ -1996,6 +2029,7 @@ void Monitor::push(const RobotSample& s) {
     }
   }
   if (pending_close_ >= 0 && t - cleared_at_ >= kMergeGap) report_pending_close();
+  if (held_ >= 0 && t >= held_until_) report_held();
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0 || background_ >= 0)) {
     events_.push_back(trend_.warning());
@@ -2044,7 +2078,7 @@ void Monitor::drop_open_event() { drop_event(open_); }
 void Monitor::drop_event(int index) {
   // the indices kept into events_ after it move down by one, one that pointed at it is cleared
   events_.erase(events_.begin() + index);
-  for (int* k : {&open_, &pending_close_, &merge_into_, &background_})
+  for (int* k : {&open_, &pending_close_, &merge_into_, &background_, &held_})
     if (*k == index) *k = -1;
     else if (*k > index) --*k;
   for (int& k : frozen_event_)
@@ -2061,6 +2095,27 @@ void Monitor::resume_background() {
   raise_time_ = background_raise_time_;
   last_over_ = std::max(last_over_, background_last_over_);
   events_[static_cast<size_t>(open_)].open = true;
+}
+
+bool Monitor::may_be_declared_late(const Event& e, double t) const {
+  // a stream that declares its payload, no declaration since the change began, a gripper output
+  // changed just before it (a pick or a release), and within the time a program declares its pick in
+  return have_declared_ && e.fault == FaultClass::PayloadChange && declared_at_ < e.t_start && t < e.t_start + kDeclarationLag &&
+         gripped_before(e, std::numeric_limits<double>::infinity());
+}
+
+void Monitor::hold(int index) {
+  report_held();
+  held_ = index;
+  held_until_ = events_[static_cast<size_t>(index)].t_start + kDeclarationLag;
+  held_from_ = followed_from_;
+}
+
+void Monitor::report_held() {
+  if (held_ < 0) return;
+  const Event& e = events_[static_cast<size_t>(held_)];
+  held_ = -1;
+  if (on_event) on_event(e);
 }
 
 void Monitor::report_pending_close() {
@@ -2124,6 +2179,7 @@ void Monitor::finish() {
     }
   }
   report_pending_close();
+  report_held();
   if (open_ < 0) return;
   if (!diagnosed_) run_diagnosis(t_prev_);
   for (const int k : {open_, background_}) {

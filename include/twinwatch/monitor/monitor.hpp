@@ -371,7 +371,7 @@ class Monitor {
   bool payload_change_waits(double t) const;
   /// The twin takes the payload change event e diagnosed (cfg_.follow_payload); says so in e's
   /// detail and a note. Nothing when the change cannot be a payload the twin predicts.
-  void follow_payload(Event& e, double t);
+  void follow_payload(Event& e, double t, double rebase_from);  // rebase_from: rebase_on's first ring sample [s]
   VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
   double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
@@ -438,13 +438,18 @@ class Monitor {
   std::optional<ident::TwinModel> on_top_twin_;
   bool on_top_ = false, on_top_fresh_ = false;
   double on_top_start_ = 0.0;
-  VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_;
+  VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_, on_top_moving_since_;
   std::vector<int> on_top_run_, on_top_run_obs_;
   // a tentative split: the payload change's event as its first look said, and the payload the twin
   // had before the split followed it (unsplit_payload_change)
+  // a followed payload change whose report waits for a late declaration (may_be_declared_late),
+  // until held_until_ [s]; held_from_: the payload the twin had before it followed the change
+  int held_ = -1;
+  double held_until_ = 0.0;
+  model::RigidBodyInertia held_from_;
   std::optional<Event> split_;
   model::RigidBodyInertia split_from_;
-  double split_rebased_from_ = 0.0;  // the ring's samples from here on were shifted (rebase_on)
+  double rebased_from_ = 0.0;  // the ring's samples from here on were shifted at the last follow (rebase_on)
   bool quiet_refusal_ = false;       // follow_payload says nothing when it does not follow (a split on a rise)
   // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
   // set_payload. The twin takes each new declaration (take_declared_payload); declared_at_ [s] is when
@@ -460,7 +465,16 @@ class Monitor {
   // two is the declared pick and is withdrawn
   bool declared_pick_candidate(const Event& e, double declared_at, double change) const;
   bool declared_pick_explains(double t) const;
-  bool at_last_link(const Event& e) const;  // a contact named on the last link, or that lists it as also possible
+  bool at_last_link(const Event& e) const;
+  /// A followed payload change that closed at t may be a pick the program has not declared yet (a
+  /// pick at a rest clears and is followed within 0.5-0.9 s of the grip; a program declared its part
+  /// 0.7-0.95 s after the grip, which then came after a reported event, session 24): its report is
+  /// held until kDeclarationLag after it began (hold), when a declaration of that part withdraws it
+  /// (take_declared_payload). Only on a stream that declares its payload, after a gripper output
+  /// changed, with no declaration since the change began.
+  bool may_be_declared_late(const Event& e, double t) const;
+  void hold(int index);
+  void report_held();  // the held change is an event after all (its time passed, a new alert, the run's end)  // a contact named on the last link, or that lists it as also possible
   bool gripped_before(const Event& e, double declared_at) const;
   bool late_declared_pick(const Event& e, double t, double change) const;
   void reset_decisions();  // every joint's debouncers start over
