@@ -67,8 +67,7 @@ constexpr double kPayloadSplitAfter = 0.5;
 // watch_on_top: a residual on top of a payload change's rises when it is above its threshold and
 // this share of the threshold above its mean over the last kOnTopRise [s]
 constexpr double kOnTopRise = 0.1, kOnTopRiseShare = 0.5;
-constexpr double kOnTopDoubt = 0.0;
-constexpr double kOnTopMoving = 0.1;  // [s] a joint is judged once it has moved this long
+constexpr double kOnTopMoving = 0.05;  // [s] a joint that rested is judged once it has moved on this long
 // finish(): with the default set in use, a program whose thresholds would not have raised at least
 // this share of at least this many alerts is named in a note
 constexpr int kProgramHintRaises = 3;
@@ -1429,7 +1428,8 @@ void Monitor::start_on_top(const Event& e, double change) {
   on_top_df_.setZero(n_);
   on_top_dobs_.setZero(n_);
   on_top_slow_.setZero(n_);
-  on_top_moving_since_.setZero(n_);
+  on_top_moving_since_ = VectorJ::Constant(n_, -std::numeric_limits<double>::infinity());
+  on_top_rest_.assign(static_cast<size_t>(n_), 0);
   on_top_slow_obs_.setZero(n_);
 }
 
@@ -1487,17 +1487,28 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
     // the payload's step with the friction it held, and both leave the residual as it breaks away (a
     // 1 kg pick at a rest read -0.46 A on J3 0.3 s later, against -0.2 A of payload: a false
     // "contact" where the arm moved on)
+    // (a rest as RestBaseline takes one: commanded to rest and not moving, kSettle samples; a
+    // reversal is none)
     const size_t J = static_cast<size_t>(j);
-    if (std::abs(s.qd[j]) <= RestBaseline::kMeasuredRest || on_top_fresh_) on_top_moving_since_[j] = t;
-    const bool judged = t - on_top_moving_since_[j] >= kOnTopMoving && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
+    const bool still = std::abs(s.qd[j]) <= RestBaseline::kMeasuredRest;
+    const bool resting = still && (!s.has(kFieldTargetQd) || std::abs(s.target_qd[j]) < RestBaseline::kTargetRest);
+    int& rest = on_top_rest_[J];
+    if (on_top_fresh_) rest = 0;
+    if (resting) {
+      rest = std::min(rest + 1, RestBaseline::kSettle);
+    } else if (!still && rest >= RestBaseline::kSettle) {
+      rest = 0;
+      on_top_moving_since_[j] = t;  // it rested long enough for the baseline to settle: moving on from here
+    } else if (!still) {
+      rest = 0;
+    }
+    const bool judged = !still && t - on_top_moving_since_[j] >= kOnTopMoving && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
     const auto rises = [](double r, double mean, double level) {
       return std::abs(r) > level && std::abs(r - mean) > kOnTopRiseShare * level;
     };
-    // (the payload's share is an estimate: its error, kOnTopDoubt of it, widens the threshold)
-    count(judged && settled && rises(rc, on_top_slow_[j], level_[j] + kOnTopDoubt * std::abs(on_top_df_[j])), on_top_run_[J],
-          on_top_from_[j], cfg_.raise_after);
-    count(judged && observer_decides && rises(rc_obs, on_top_slow_obs_[j], obs_level_[j] + kOnTopDoubt * std::abs(on_top_dobs_[j])),
-          on_top_run_obs_[J], on_top_from_obs_[j], cfg_.observer_debounce(j));
+    count(judged && settled && rises(rc, on_top_slow_[j], level_[j]), on_top_run_[J], on_top_from_[j], cfg_.raise_after);
+    count(judged && observer_decides && rises(rc_obs, on_top_slow_obs_[j], obs_level_[j]), on_top_run_obs_[J], on_top_from_obs_[j],
+          cfg_.observer_debounce(j));
   }
   on_top_fresh_ = false;
   if (!std::isfinite(onset)) return;

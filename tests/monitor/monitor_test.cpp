@@ -1010,6 +1010,18 @@ TEST_F(MonitorLoop, APickFollowedBeforeItsLateDeclarationIsWithdrawn) {
     m.finish();
     return std::make_pair(m.events(), m.notes());
   };
+  // a 1 kg part, never declared: followed on its longer look, and nothing else. The watch for a
+  // contact on top of it (watch_on_top) took J3's breakaway from the rest where the part was
+  // gripped for a contact (a 14 ms "contact on link 1" at 7.204 s) until it judged a joint that
+  // rested only 50 ms after it moved on (kOnTopMoving)
+  {
+    auto heavy = run("robot: ur3e\nseed: 2711\nduration: 12\n" + program +
+                     "faults:\n  - {type: payload_pick, onset: 6.4, io_bit: 0, mass: 1.0, com: [0, 0, 0.04], declare_delay: 0.8}\n");
+    for (auto& x : heavy.samples) x.payload = 0.0, x.payload_cog[2] = 0.0;
+    const auto events = watch(heavy, nullptr).first;
+    ASSERT_EQ(events.size(), 1u) << listing(events);
+    EXPECT_NEAR(events[0].magnitude, 1.0, 0.2) << listing(events);
+  }
   const auto [declared, notes] = watch(rec, nullptr);
   EXPECT_TRUE(declared.empty()) << listing(declared);
   EXPECT_THAT(notes, ::testing::Contains(::testing::HasSubstr("withdrawn, not an event")));

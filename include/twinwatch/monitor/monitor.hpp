@@ -439,7 +439,7 @@ class Monitor {
   bool on_top_ = false, on_top_fresh_ = false;
   double on_top_start_ = 0.0;
   VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_, on_top_moving_since_;
-  std::vector<int> on_top_run_, on_top_run_obs_;
+  std::vector<int> on_top_run_, on_top_run_obs_, on_top_rest_;
   // a tentative split: the payload change's event as its first look said, and the payload the twin
   // had before the split followed it (unsplit_payload_change)
   // a followed payload change whose report waits for a late declaration (may_be_declared_late),
