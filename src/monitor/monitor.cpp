@@ -1429,7 +1429,9 @@ void Monitor::start_on_top(const Event& e, double change) {
   on_top_dobs_.setZero(n_);
   on_top_slow_.setZero(n_);
   on_top_moving_since_ = VectorJ::Constant(n_, -std::numeric_limits<double>::infinity());
-  on_top_rest_.assign(static_cast<size_t>(n_), 0);
+  // (a joint resting when the watch starts: its baseline took up the step already)
+  on_top_rested_.assign(static_cast<size_t>(n_), 0);
+  for (int j = 0; j < n_; ++j) on_top_rested_[static_cast<size_t>(j)] = rest_rf_.settled(j) ? 1 : 0;
   on_top_slow_obs_.setZero(n_);
 }
 
@@ -1487,20 +1489,15 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
     // the payload's step with the friction it held, and both leave the residual as it breaks away (a
     // 1 kg pick at a rest read -0.46 A on J3 0.3 s later, against -0.2 A of payload: a false
     // "contact" where the arm moved on)
-    // (a rest as RestBaseline takes one: commanded to rest and not moving, kSettle samples; a
-    // reversal is none)
+    // (a rest is one whose held-at-rest baseline was set, RestBaseline::settled, before or during
+    // the watch; a reversal is none)
     const size_t J = static_cast<size_t>(j);
-    const bool still = std::abs(s.qd[j]) <= RestBaseline::kMeasuredRest;
-    const bool resting = still && (!s.has(kFieldTargetQd) || std::abs(s.target_qd[j]) < RestBaseline::kTargetRest);
-    int& rest = on_top_rest_[J];
-    if (on_top_fresh_) rest = 0;
-    if (resting) {
-      rest = std::min(rest + 1, RestBaseline::kSettle);
-    } else if (!still && rest >= RestBaseline::kSettle) {
-      rest = 0;
-      on_top_moving_since_[j] = t;  // it rested long enough for the baseline to settle: moving on from here
-    } else if (!still) {
-      rest = 0;
+    const bool still = std::abs(s.qd[j]) < RestBaseline::kMeasuredRest;
+    if (rest_rf_.settled(j)) {
+      on_top_rested_[J] = 1;
+    } else if (!still && on_top_rested_[J]) {
+      on_top_rested_[J] = 0;
+      on_top_moving_since_[j] = t;
     }
     const bool judged = !still && t - on_top_moving_since_[j] >= kOnTopMoving && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
     const auto rises = [](double r, double mean, double level) {
@@ -1629,7 +1626,9 @@ bool Monitor::unsplit_payload_change(int into, double t) {
 void Monitor::rebase_on(const ident::TwinModel& before, double from) {
   // twin_ now predicts otherwise than `before` (another payload): the current residual's filter and
   // the observer's estimate, and this sample's decisions, as if twin_ had predicted all along (the
-  // change is the payload's torque, slow against both lags). The newest ring sample is this one.
+  // change is the payload's torque, slow against both lags). The newest ring sample is this one (or,
+  // from a declaration, the one before: take_declared_payload runs before the ring takes the sample,
+  // and a restart of the estimators follows there)
   const DiagnosisSample& now = ring_[(ring_head_ + ring_.size() - 1) % ring_.size()];
   const VectorJ no_temp = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
   VectorJ tau_before, i_before, tau_now, i_now;

@@ -1014,13 +1014,16 @@ TEST_F(MonitorLoop, APickFollowedBeforeItsLateDeclarationIsWithdrawn) {
   // contact on top of it (watch_on_top) took J3's breakaway from the rest where the part was
   // gripped for a contact (a 14 ms "contact on link 1" at 7.204 s) until it judged a joint that
   // rested only 50 ms after it moved on (kOnTopMoving)
-  {
-    auto heavy = run("robot: ur3e\nseed: 2711\nduration: 12\n" + program +
-                     "faults:\n  - {type: payload_pick, onset: 6.4, io_bit: 0, mass: 1.0, com: [0, 0, 0.04], declare_delay: 0.8}\n");
+  // (gripped 0.45 s into the rest, 6.75 s, the watch raises nothing either; the follow on the final
+  // look then reads +0.79 kg, and the 0.2 kg it leaves raises an 18 ms "contact" 0.23 s later: the
+  // limit of a pick sized at a rest, docs/validation.md)
+  for (const double grip : {6.4}) {
+    auto heavy = run("robot: ur3e\nseed: 2711\nduration: 12\n" + program + "faults:\n  - {type: payload_pick, onset: " +
+                     fmt::format("{}", grip) + ", io_bit: 0, mass: 1.0, com: [0, 0, 0.04], declare_delay: 0.8}\n");
     for (auto& x : heavy.samples) x.payload = 0.0, x.payload_cog[2] = 0.0;
     const auto events = watch(heavy, nullptr).first;
-    ASSERT_EQ(events.size(), 1u) << listing(events);
-    EXPECT_NEAR(events[0].magnitude, 1.0, 0.2) << listing(events);
+    ASSERT_EQ(events.size(), 1u) << grip << listing(events);
+    EXPECT_NEAR(events[0].magnitude, 1.0, 0.2) << grip << listing(events);
   }
   const auto [declared, notes] = watch(rec, nullptr);
   EXPECT_TRUE(declared.empty()) << listing(declared);

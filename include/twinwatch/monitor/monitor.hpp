@@ -184,6 +184,8 @@ class RestBaseline {
   /// Returns value minus the baseline of each settled joint (value unchanged elsewhere).
   /// Joints without a streamed target velocity are never at rest here.
   void apply(const RobotSample& s, VectorJ& value);
+  /// Whether joint j's baseline is set (it has rested kSettle samples up to the last apply).
+  bool settled(int j) const { return run_[static_cast<size_t>(j)] >= kSettle; }
 
  private:
   std::vector<int> run_;
@@ -334,9 +336,9 @@ class Monitor {
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
   /// until: the diagnosis window's end, when the next change began before t (watch_on_top).
-  /// on_top: split by watch_on_top. The residual filter and the observer are then shifted by what
-  /// the followed payload changes in the twin's prediction (rebase_on), instead of restarted: they
-  /// keep what is new on top of the payload, a contact's onset. The split is tentative until the
+  /// on_top: split by watch_on_top. The residual filter and the observer are then not restarted:
+  /// follow_payload shifted them by what the followed payload changes in the twin's prediction
+  /// (rebase_on), so they keep what is new on top of the payload, a contact's onset. The split is tentative until the
   /// next alert's diagnosis (unsplit_payload_change); with no alert within the merge gap it stands
   /// (the followed payload explains the residual). When the samples before the rise give no payload
   /// the twin can follow, the event goes back to what its first look said, without a note.
@@ -420,7 +422,8 @@ class Monitor {
   void report_pending_close();
   bool diagnosed_ = false, rediagnosed_ = false;
   // the open alert's payload change is followed (follow_payload): since followed_at_ [s] the twin
-  // carries it instead of followed_from_; reported at once when it clears, undone if it does not
+  // carries it instead of followed_from_; reported when it clears (or held for a late declaration:
+  // may_be_declared_late), undone if it does not
   bool followed_ = false;
   double followed_at_ = 0.0;
   std::uint64_t outputs_prev_ = 0;  // the last sample's digital outputs (split_payload_change)
@@ -439,16 +442,17 @@ class Monitor {
   bool on_top_ = false, on_top_fresh_ = false;
   double on_top_start_ = 0.0;
   VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_, on_top_moving_since_;
-  std::vector<int> on_top_run_, on_top_run_obs_, on_top_rest_;
+  std::vector<int> on_top_run_, on_top_run_obs_;
+  std::vector<char> on_top_rested_;  // per joint: its held-at-rest baseline was set (kOnTopMoving)
   // a tentative split: the payload change's event as its first look said, and the payload the twin
   // had before the split followed it (unsplit_payload_change)
+  std::optional<Event> split_;
+  model::RigidBodyInertia split_from_;
   // a followed payload change whose report waits for a late declaration (may_be_declared_late),
   // until held_until_ [s]; held_from_: the payload the twin had before it followed the change
   int held_ = -1;
   double held_until_ = 0.0;
   model::RigidBodyInertia held_from_;
-  std::optional<Event> split_;
-  model::RigidBodyInertia split_from_;
   double rebased_from_ = 0.0;  // the ring's samples from here on were shifted at the last follow (rebase_on)
   bool quiet_refusal_ = false;       // follow_payload says nothing when it does not follow (a split on a rise)
   // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
@@ -465,7 +469,7 @@ class Monitor {
   // two is the declared pick and is withdrawn
   bool declared_pick_candidate(const Event& e, double declared_at, double change) const;
   bool declared_pick_explains(double t) const;
-  bool at_last_link(const Event& e) const;
+  bool at_last_link(const Event& e) const;  // a contact named on the last link, or that lists it as also possible
   /// A followed payload change that closed at t may be a pick the program has not declared yet (a
   /// pick at a rest clears and is followed within 0.5-0.9 s of the grip; a program declared its part
   /// 0.7-0.95 s after the grip, which then came after a reported event, session 24): its report is
@@ -474,7 +478,10 @@ class Monitor {
   /// changed, with no declaration since the change began.
   bool may_be_declared_late(const Event& e, double t) const;
   void hold(int index);
-  void report_held();  // the held change is an event after all (its time passed, a new alert, the run's end)  // a contact named on the last link, or that lists it as also possible
+  /// The held change is an event after all: its time passed, a new alert is raised (which keeps
+  /// the events in order, but a transient alert before a late declaration then leaves the pick
+  /// reported), or the run ends.
+  void report_held();
   bool gripped_before(const Event& e, double declared_at) const;
   bool late_declared_pick(const Event& e, double t, double change) const;
   void reset_decisions();  // every joint's debouncers start over
