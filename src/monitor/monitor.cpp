@@ -799,6 +799,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
     load_step_obs_[j] = std::isfinite(obs) ? obs : 0.0;
   }
   fir_ = make_fir_filters(cfg_, n_);
+  fir_band_ = make_fir_filters(cfg_, n_);
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   deb_obs_.clear();
   for (int j = 0; j < n_; ++j) deb_obs_.emplace_back(cfg_.observer_debounce(j), cfg_.clear_after);
@@ -859,11 +860,16 @@ void Monitor::widen_for_load(const VectorJ& qd) {
     double& cur = load_band_cur_[j];
     double& obs = load_band_obs_[j];
     const double excess = load_excess(j, qd[j], cfg_.reversal_load_max[j]);
-    if (excess == 0.0 && cur < 1e-12 && obs < 1e-12) {  // (most samples: no excess, the bands decayed)
+    // a joint on Cao's FIR widens through the same taps as its residual: all positive, so the
+    // filtered bound bounds the filtered step (through the IIR it was close, not strict). Its
+    // memory is the taps' length: it takes every sample (6 multiply-adds)
+    signal::FirFilter* fir = fir_band_.empty() || fir_band_[static_cast<size_t>(j)].taps().empty() ? nullptr : &fir_band_[static_cast<size_t>(j)];
+    if (fir == nullptr && excess == 0.0 && cur < 1e-12 && obs < 1e-12) {  // (most samples: no excess, the bands decayed)
       cur = obs = 0.0;
       continue;
     }
-    cur += alpha_ * (load_step_cur_[j] * excess - cur);
+    if (fir != nullptr) cur = fir->push(load_step_cur_[j] * excess);
+    else cur += alpha_ * (load_step_cur_[j] * excess - cur);
     obs += obs_band_alpha_ * (load_step_obs_[j] * excess - obs);
     level_[j] += cfg_.sensitivity[j] * cur;
     if (obs_on_) obs_level_[j] += cfg_.sensitivity[j] * obs;

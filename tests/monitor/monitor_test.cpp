@@ -15,6 +15,7 @@
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "monitor/simulated_run.hpp"
+#include "twinwatch/signal/fir.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "error_text.hpp"
 
@@ -806,6 +807,36 @@ TEST_F(MonitorLoop, ThresholdsWidenAtReversalsUnderMoreLoadThanTheyWereLearnedWi
     EXPECT_GT(wo.maxCoeff(), 0.0) << what << ": nothing widened";
   };
   widening(heavy, "figure-eight");
+  // (session 27) a joint on Cao's FIR widens through the same taps (all positive: the filtered bound
+  // bounds its filtered residual), not through the IIR: J2's widening on the FIR is the taps over the
+  // step the IIR's widening recovers, to round-off
+  {
+    ident::TwinModel t = *twin;
+    model::RigidBodyInertia p = payload;
+    p.mass = 2.0;
+    t.set_payload(p);
+    MonitorConfig fir_cfg = *config, fir_old = old;
+    fir_cfg.residual_filter = {"iir", "fir", "iir", "iir", "iir", "iir"};
+    fir_old.residual_filter = fir_cfg.residual_filter;
+    Monitor iw(t, *config), in(t, old), fw(t, fir_cfg), fn(t, fir_old);
+    const double a = 1.0 - std::exp(-2.0 * M_PI * config->filter_cutoff_hz * config->nominal_period);
+    const std::vector<double> taps = signal::cao_torque_fir_taps();
+    std::vector<double> u;
+    double w_prev = 0.0, worst = 0.0, widest = 0.0;
+    for (const auto& x : heavy.samples) {
+      for (Monitor* m : {&iw, &in, &fw, &fn}) m->push(x);
+      const double w_iir = iw.level()[1] - in.level()[1], w_fir = fw.level()[1] - fn.level()[1];
+      u.push_back(w_prev + (w_iir - w_prev) / a);  // the step times the excess, as the IIR took it
+      w_prev = w_iir;
+      if (u.size() < 10) continue;
+      double expect = 0.0;
+      for (size_t i = 0; i < taps.size(); ++i) expect += taps[i] * u[u.size() - 1 - i];
+      worst = std::max(worst, std::abs(w_fir - expect));
+      widest = std::max(widest, w_fir);
+    }
+    EXPECT_GT(widest, 0.01) << "J2 widened [A]";
+    EXPECT_LT(worst, 1e-9) << "J2's widening on the FIR against the taps over the step [A]";
+  }
   widening(undeclared(run("robot: ur3e\nseed: 2503\nduration: 8\ntrajectory: {type: point_to_point, waypoints: [[-0.6, -1.4, 1.3, "
                           "-1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [0.6, -1.4, 1.3, "
                           "-1.5, -1.85, -0.3]], durations: [1.2, 0.8, 1.2, 1.5]}\npayload: {mass: 2.0, com: [0, 0, 0.04]}\n")),

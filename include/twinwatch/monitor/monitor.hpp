@@ -542,6 +542,7 @@ class Monitor {
   // joint j's reversal load at this sample beyond load_max (0: none, or not finite)
   double load_excess(int j, double qd, double load_max) const;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
+  std::vector<signal::FirFilter> fir_band_;  // the same, for a FIR joint's widening at loaded reversals (widen_for_load)
   TrendDetector trend_;
   VectorJ tau_gain_;    // [N·m/A] torque_gain per joint
   VectorJ temp_slope_;  // [A·s/rad/°C] residual temperature compensation (cfg_.trend)
