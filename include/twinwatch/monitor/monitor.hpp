@@ -108,7 +108,9 @@ struct MonitorConfig {
   /// has seen the motion both ways) becomes the twin's payload: the mass it had plus the change, at
   /// the same centre of mass, when the twin's torques are physical and its prediction carries a
   /// payload. The alert then clears and monitoring goes on with what the robot now holds: a contact
-  /// or the next pick after a dropped part is an event of its own. Off: the twin keeps the declared
+  /// or the next pick after a dropped part is an event of its own. Before that look, what rises
+  /// above what the first look's payload explains (a contact 0.3-2 s after a drop) ends the change
+  /// there and is an alert of its own (Monitor::watch_on_top). Off: the twin keeps the declared
   /// payload and the alert stays open while the robot runs without it (before session 21, with
   /// everything after it, e.g. a contact, read as part of it). Not stored.
   /// Also: when the stream carries the payload the controller is told (kFieldPayload: the program's
