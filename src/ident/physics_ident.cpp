@@ -339,6 +339,14 @@ std::vector<std::vector<VectorJ>> presliding_states(const TwinModel& twin, const
 }
 }  // namespace
 
+namespace {
+// the (upper) median of v, which it reorders; v not empty
+double median_in_place(std::vector<double>& v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+}  // namespace
+
 // estimate_velocity_lag: a step longer than this many median periods is left out; the least samples
 // and acceleration rms [rad/s²] that measure a lag (the largest lag: TwinModel::kVelocityLagMax)
 constexpr double kLagStepMax = 1.5;
@@ -373,11 +381,13 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
     if (acc.size() != rec.samples.size())
       throw InvalidArgument(fmt::format("estimate_velocity_lag: {} has {} samples, {} accelerations", rec.path, rec.samples.size(), acc.size()));
     if (!(rec.present & kFieldActualQd) || rec.samples.size() < 3) continue;
-    // the median step (a recording built in memory may not carry median_period)
-    std::vector<double> steps;
-    for (size_t k = 1; k < rec.samples.size(); ++k) steps.push_back(rec.samples[k].timestamp - rec.samples[k - 1].timestamp);
-    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
-    const double period = steps[steps.size() / 2];
+    // the median step (the reader's, or measured here: a recording built in memory carries none)
+    double period = rec.median_period;
+    if (!(period > 0.0)) {
+      std::vector<double> steps;
+      for (size_t k = 1; k < rec.samples.size(); ++k) steps.push_back(rec.samples[k].timestamp - rec.samples[k - 1].timestamp);
+      period = median_in_place(steps);
+    }
     if (!(period > 0.0)) continue;
     periods.push_back(period);
     for (size_t k = 1; k + 1 < rec.samples.size(); ++k) {
@@ -396,10 +406,7 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
       }
     }
   }
-  if (!periods.empty()) {
-    std::nth_element(periods.begin(), periods.begin() + static_cast<long>(periods.size() / 2), periods.end());
-    lag.period = periods[periods.size() / 2];
-  }
+  if (!periods.empty()) lag.period = median_in_place(periods);
   const double N = static_cast<double>(std::max(1L, lag.samples));
   if (lag.samples >= kLagMinSamples && !(cc > 0.0)) {
     lag.note = "the streamed velocity's lag was not measured: actual_q does not change in the recordings";

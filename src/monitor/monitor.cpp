@@ -800,6 +800,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   }
   fir_ = make_fir_filters(cfg_, n_);
   fir_band_ = make_fir_filters(cfg_, n_);
+  no_temp_ = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
   deb_.assign(static_cast<size_t>(n_), Debouncer(cfg_.raise_after, cfg_.clear_after));
   deb_obs_.clear();
   for (int j = 0; j < n_; ++j) deb_obs_.emplace_back(cfg_.observer_debounce(j), cfg_.clear_after);
@@ -863,7 +864,8 @@ void Monitor::widen_for_load(const VectorJ& qd) {
     // a joint on Cao's FIR widens through the same taps as its residual: all positive, so the
     // filtered bound bounds the filtered step (through the IIR it was close, not strict). Its
     // memory is the taps' length: it takes every sample (6 multiply-adds)
-    signal::FirFilter* fir = fir_band_.empty() || fir_band_[static_cast<size_t>(j)].taps().empty() ? nullptr : &fir_band_[static_cast<size_t>(j)];
+    signal::FirFilter& band = fir_band_[static_cast<size_t>(j)];
+    signal::FirFilter* fir = band.taps().empty() ? nullptr : &band;
     if (fir == nullptr && excess == 0.0 && cur < 1e-12 && obs < 1e-12) {  // (most samples: no excess, the bands decayed)
       cur = obs = 0.0;
       continue;
@@ -985,7 +987,6 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   constexpr long kDiagHalfWidth = 3;
   const long W = static_cast<long>(window_.size());
   VectorJ tau, cur;
-  const VectorJ no_temp = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
   for (long k = 0; k < W; ++k) {
     const long a = std::max(0L, k - kDiagHalfWidth), b = std::min(W - 1, k + kDiagHalfWidth);
     const double span = window_[static_cast<size_t>(b)].t - window_[static_cast<size_t>(a)].t;
@@ -996,7 +997,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   VectorJ tau_meas;
   for (auto& d : window_) {
     at.h = d.presliding;
-    twin_.predict(d.q, d.qd, d.qdd, no_temp, tau, cur, &at);
+    twin_.predict(d.q, d.qd, d.qdd, no_temp_, tau, cur, &at);
     // r_tau: the current residual times the gain, what the hypotheses are scored on; r_drive: the
     // measured drive torque through the twin's own current model, back-driven phases included (as
     // the observer reads it), less the twin's torque, in N·m through the trusted gains, what sizes
@@ -1239,26 +1240,18 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   // baseline took it up), waiting for its merge gap: the pick this declares, declared late
   // (the change against what the twin predicted with: an alert measures the arm against the twin)
   const double change = now.mass - had.mass;
-  if (held_ >= 0) {
-    // a followed change held for this (may_be_declared_late): the pick, measured against what the
-    // twin carried before it followed the change
-    const Event& h = events_[static_cast<size_t>(held_)];
-    if (late_declared_pick(h, t, now.mass - held_from_.mass)) {
-      add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
-                              "withdrawn, not an event",
-                              h.t_detected, h.detail));
-      drop_event(held_);
-    }
-  }
-  if (pending_close_ >= 0) {
-    const Event& pc = events_[static_cast<size_t>(pending_close_)];
-    if (late_declared_pick(pc, t, change)) {
-      add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
-                              "withdrawn, not an event",
-                              pc.t_detected, pc.detail));
-      drop_event(pending_close_);
-    }
-  }
+  const auto withdraw_late_pick = [&](int index, double picked) {
+    if (index < 0 || !late_declared_pick(events_[static_cast<size_t>(index)], t, picked)) return;
+    const Event& e = events_[static_cast<size_t>(index)];
+    add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
+                            "withdrawn, not an event",
+                            e.t_detected, e.detail));
+    drop_event(index);
+  };
+  // a followed change held for this (may_be_declared_late): the pick, measured against what the
+  // twin carried before it followed the change
+  withdraw_late_pick(held_, now.mass - held_from_.mass);
+  withdraw_late_pick(pending_close_, change);
   // (an alert raised at a grip shortly before: the pick this declares, declared late, which its close
   // decides: declared_pick_explains)
   if (payload_change_waits(t) && !late_declared_pick(events_[static_cast<size_t>(open_)], t, change)) {
@@ -1317,20 +1310,14 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
                                          : "the twin's prediction does not carry a payload (method '" + twin_.method + "')"));
     return;
   }
-  double mass = had.mass + change;
-  // a loss within the estimate's error of the payload held is that payload lost, all of it (the
-  // longer look reads a 0.5 kg loss as -0.44 kg: a 0.06 kg part is not left); a loss much larger
-  // than the payload held is no payload change the twin could carry
-  const double tolerance = std::max(kPayloadFollowFloor, kPayloadFollowShare * std::abs(change));
-  if (mass < -tolerance) {
+  bool as_declared = false;
+  const double mass = followed_mass(change, as_declared);
+  if (std::isnan(mass)) {
     refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: it is more than the {:.2f} kg "
                     "payload the twin carried; the alert stays open",
                     e.t_detected, change, had.mass));
     return;
   }
-  if (mass <= tolerance) mass = 0.0;
-  const bool as_declared = have_declared_ && declared_taken_ && std::abs(mass - declared_mass_) <= tolerance;
-  if (as_declared) mass = declared_mass_;
   // a payload beyond the arm's limit is no payload: a sustained push read as one (a 20 N·m push on
   // the flange fits a 3.85 kg "payload", session 21 review)
   const double limit = twin_.robot().payload_limit();
@@ -1345,26 +1332,22 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
   // flange held for 6 s, 76 %: not followed, so the alert stays open and ends with the push)
   // (a gripper's output changes before the part moves: its valve or jaws take tens of ms, so the
   // look goes back kPayloadIoLookback before the exceedance began)
-  const bool io_change = outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity());
-  if (!io_change && !(e.confidence >= kPayloadFollowExplained)) {
+  if (!payload_evidence(e)) {
     refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
                     "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
                     e.t_detected, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
     return;
   }
-  // (payload_after makes the same mass and limit checks as above, which passed: it has a payload)
-  const model::RigidBodyInertia now = *payload_after(change);
   followed_from_ = had;
   // the residual filter, the observer and the ring's estimates go on as if the twin had carried the
-  // payload all along (rebase_on; on_top_twin_ is the scratch copy of the twin as it was). Left as
-  // they were, they kept the old payload's residual, which decays with their lags: where the alert
-  // had cleared first (a pick at a rest, followed on its final look), that decay raised a 2 ms
-  // "contact" right after the follow
-  if (on_top_twin_) *on_top_twin_ = twin_;
-  else on_top_twin_.emplace(twin_);
-  carry(now, t);
+  // payload all along (rebase_on, from a copy of the twin as it was). Left as they were, they kept
+  // the old payload's residual, which decays with their lags: where the alert had cleared first (a
+  // pick at a rest, followed on its final look), that decay raised a 2 ms "contact" right after the
+  // follow
+  const ident::TwinModel& before = scratch_twin();
+  carry(payload_of(mass, as_declared), t);
   rebased_from_ = rebase_from;
-  rebase_on(*on_top_twin_, rebase_from);
+  rebase_on(before, rebase_from);
   followed_ = true;
   followed_at_ = t;
   const std::string what = mass > 0.0 ? fmt::format("a {:.2f} kg payload", mass) : std::string("no payload");
@@ -1377,21 +1360,27 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
                   what, had.mass, e.t_detected));
 }
 
-std::optional<model::RigidBodyInertia> Monitor::payload_after(double change) const {
-  // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
-  // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
-  const model::RigidBodyInertia& had = twin_.payload();
-  double mass = had.mass + change;
-  // a loss within the estimate's error of the payload held is that payload lost, all of it
+double Monitor::followed_mass(double change, bool& as_declared) const {
+  const double had = twin_.payload().mass;
+  double mass = had + change;
+  // a loss within the estimate's error of the payload held is that payload lost, all of it (the
+  // longer look reads a 0.5 kg loss as -0.44 kg: a 0.06 kg part is not left); a loss much larger
+  // than the payload held is no payload change the twin could carry
   const double tolerance = std::max(kPayloadFollowFloor, kPayloadFollowShare * std::abs(change));
-  if (!std::isfinite(change) || mass < -tolerance) return std::nullopt;
+  as_declared = false;
+  if (!std::isfinite(change) || mass < -tolerance) return std::numeric_limits<double>::quiet_NaN();
   if (mass <= tolerance) mass = 0.0;
   // a change that lands within the estimate's error of the declared payload is the declared part
   // (the retry after a missed grip, which declares what was declared already): the twin takes the
   // declaration, not the estimate (0.98 kg for a declared 1 kg)
-  const bool as_declared = have_declared_ && declared_taken_ && std::abs(mass - declared_mass_) <= tolerance;
-  if (as_declared) mass = declared_mass_;
-  if (mass > twin_.robot().payload_limit()) return std::nullopt;
+  as_declared = have_declared_ && declared_taken_ && std::abs(mass - declared_mass_) <= tolerance;
+  return as_declared ? declared_mass_ : mass;
+}
+
+model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const {
+  // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
+  // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
+  const model::RigidBodyInertia& had = twin_.payload();
   model::RigidBodyInertia now;
   if (mass > 0.0) {
     now.mass = mass;
@@ -1406,24 +1395,34 @@ std::optional<model::RigidBodyInertia> Monitor::payload_after(double change) con
   return now;
 }
 
+bool Monitor::payload_evidence(const Event& e) const {
+  return outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity()) ||
+         e.confidence >= kPayloadFollowExplained;
+}
+
+ident::TwinModel& Monitor::scratch_twin() {
+  if (scratch_twin_) *scratch_twin_ = twin_;
+  else scratch_twin_.emplace(twin_);
+  return *scratch_twin_;
+}
+
 void Monitor::start_on_top(const Event& e, double change) {
   on_top_ = false;
   // only a change the longer look would follow (follow_payload's conditions): the split follows it
   if (!twin_.gains_known() || !twin_.predicts_payload() || declared_at_ > e.t_start || background_ >= 0 || merge_into_ >= 0 || followed_)
     return;
-  const bool io_change = outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity());
-  if (!io_change && !(e.confidence >= kPayloadFollowExplained)) return;
-  const auto payload = payload_after(change);
-  if (!payload) return;
+  if (!payload_evidence(e)) return;
+  bool as_declared = false;
+  const double mass = followed_mass(change, as_declared);
+  if (std::isnan(mass) || mass > twin_.robot().payload_limit()) return;
   // (a copy of the twin once per payload change; per sample only its prediction)
-  if (on_top_twin_) *on_top_twin_ = twin_;
-  else on_top_twin_.emplace(twin_);
-  on_top_twin_->set_payload(*payload);
+  ident::TwinModel& watched = scratch_twin();
+  watched.set_payload(payload_of(mass, as_declared));
   // (one prediction now, on a sample that diagnoses anyway: the copy builds its model with the
   // payload here, not in the per-sample watch, which then allocates nothing)
-  const DiagnosisSample& now = ring_[(ring_head_ + ring_.size() - 1) % ring_.size()];
-  on_top_twin_->predict(now.q, now.qd, now.qdd, VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN()), on_top_tau_,
-                        on_top_i_, &memory_);
+  const DiagnosisSample& now = ring_newest();
+  watched.predict(now.q, now.qd, now.qdd, no_temp_, on_top_tau_, on_top_i_, &memory_);
+  on_top_slow_alpha_ = 1.0 - std::exp(-cfg_.nominal_period / kOnTopRise);
   on_top_ = true;
   on_top_fresh_ = true;
   on_top_start_ = e.t_start;
@@ -1434,14 +1433,14 @@ void Monitor::start_on_top(const Event& e, double change) {
   on_top_df_.setZero(n_);
   on_top_dobs_.setZero(n_);
   on_top_slow_.setZero(n_);
+  on_top_slow_obs_.setZero(n_);
   on_top_moving_since_ = VectorJ::Constant(n_, -std::numeric_limits<double>::infinity());
   // (a joint resting when the watch starts: its baseline took up the step already)
   on_top_rested_.assign(static_cast<size_t>(n_), 0);
   for (int j = 0; j < n_; ++j) on_top_rested_[static_cast<size_t>(j)] = rest_rf_.settled(j) ? 1 : 0;
-  on_top_slow_obs_.setZero(n_);
 }
 
-void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
+void Monitor::watch_on_top(const RobotSample& s, double t, bool settled, bool observer_decides) {
   const auto payload_like = [&](const Event& e) {
     return e.fault == FaultClass::PayloadChange || (e.fault == FaultClass::Collision && at_last_link(e));
   };
@@ -1462,9 +1461,7 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
   // the residual is (a slow signal: started at its value)
   // and the observer's less the payload's torque, through the observer's own lag (its estimate is
   // a first-order lag of the torque the twin does not predict: TwinMomentumObserver)
-  on_top_twin_->predict(s.q, s.qd, qdd_, s.temperature, on_top_tau_, on_top_i_, &memory_);
-  const double lag = obs_on_ ? 1.0 - std::exp(-obs_.gain() * cfg_.nominal_period) : 0.0;
-  const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
+  scratch_twin_->predict(s.q, s.qd, qdd_, s.temperature, on_top_tau_, on_top_i_, &memory_);
   double onset = std::numeric_limits<double>::infinity();
   const auto count = [&](bool over, int& run, double& from, int needed) {
     if (!over) {
@@ -1479,12 +1476,16 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
   // The first look's payload is an estimate (-0.38 kg for a 0.5 kg drop, drop_then_declared_pick):
   // what it leaves grows as the pose changes, over the motion's time scale, and crossed the
   // threshold 0.5 s after the raise; a contact rises within tens of milliseconds
-  const double slow = 1.0 - std::exp(-cfg_.nominal_period / kOnTopRise);
+  const double slow = on_top_slow_alpha_;
+  const auto rises = [](double r, double mean, double level) {
+    return std::abs(r) > level && std::abs(r - mean) > kOnTopRiseShare * level;
+  };
   for (int j = 0; j < n_; ++j) {
     const double d = on_top_i_[j] - i_hat_[j];
     const double dtau = on_top_tau_[j] - tau_hat_[j];
     on_top_df_[j] = on_top_fresh_ ? d : on_top_df_[j] + alpha_ * (d - on_top_df_[j]);
-    on_top_dobs_[j] = on_top_fresh_ ? dtau : on_top_dobs_[j] + lag * (dtau - on_top_dobs_[j]);
+    // (through the observer's lag: obs_band_alpha_, its coefficient)
+    on_top_dobs_[j] = on_top_fresh_ ? dtau : on_top_dobs_[j] + obs_band_alpha_ * (dtau - on_top_dobs_[j]);
     // (the observer's estimate rises as the twin's torque does: + the payload's torque)
     const double rc = rf_dec_[j] - on_top_df_[j], rc_obs = obs_dec_[j] + on_top_dobs_[j];
     on_top_slow_[j] = on_top_fresh_ ? rc : on_top_slow_[j] + slow * (rc - on_top_slow_[j]);
@@ -1506,9 +1507,6 @@ void Monitor::watch_on_top(const RobotSample& s, double t, bool settled) {
       on_top_moving_since_[j] = t;
     }
     const bool judged = !still && t - on_top_moving_since_[j] >= kOnTopMoving && memory_unsure_[J] == 0.0 && frozen_event_[J] < 0;
-    const auto rises = [](double r, double mean, double level) {
-      return std::abs(r) > level && std::abs(r - mean) > kOnTopRiseShare * level;
-    };
     count(judged && settled && rises(rc, on_top_slow_[j], level_[j]), on_top_run_[J], on_top_from_[j], cfg_.raise_after);
     count(judged && observer_decides && rises(rc_obs, on_top_slow_obs_[j], obs_level_[j]), on_top_run_obs_[J], on_top_from_obs_[j],
           cfg_.observer_debounce(j));
@@ -1533,10 +1531,9 @@ void Monitor::undo_follow(double t) {
   // the residual did not fall back when the twin took the payload: the change was not (only) the
   // payload, and the twin goes back to what it carried
   followed_ = false;
-  if (on_top_twin_) *on_top_twin_ = twin_;
-  else on_top_twin_.emplace(twin_);
+  const ident::TwinModel& before = scratch_twin();
   carry(followed_from_, t);
-  rebase_on(*on_top_twin_, rebased_from_);
+  rebase_on(before, rebased_from_);
   Event& e = events_[static_cast<size_t>(open_)];
   const std::string what = followed_from_.mass > 0.0 ? fmt::format("its {:.2f} kg payload", followed_from_.mass) : std::string("no payload");
   e.detail += fmt::format("; at {:.3f} s the residual had not fallen back, so the twin predicts with {} again", t, what);
@@ -1614,8 +1611,7 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   // the alert after a tentative split (split_payload_change) is no contact: the change goes on as
   // its first look said, to its longer look, on the twin it had
   const double followed = twin_.payload().mass;
-  ident::TwinModel& before = *on_top_twin_;
-  before.set_payload(twin_.payload());
+  const ident::TwinModel& before = scratch_twin();
   carry(split_from_, t);
   rebase_on(before, rebased_from_);
   Event restored = *split_;
@@ -1635,11 +1631,10 @@ void Monitor::rebase_on(const ident::TwinModel& before, double from) {
   // change is the payload's torque, slow against both lags). The newest ring sample is this one (or,
   // from a declaration, the one before: take_declared_payload runs before the ring takes the sample,
   // and a restart of the estimators follows there)
-  const DiagnosisSample& now = ring_[(ring_head_ + ring_.size() - 1) % ring_.size()];
-  const VectorJ no_temp = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
+  const DiagnosisSample& now = ring_newest();
   VectorJ tau_before, i_before, tau_now, i_now;
-  before.predict(now.q, now.qd, now.qdd, no_temp, tau_before, i_before, &memory_);
-  twin_.predict(now.q, now.qd, now.qdd, no_temp, tau_now, i_now, &memory_);
+  before.predict(now.q, now.qd, now.qdd, no_temp_, tau_before, i_before, &memory_);
+  twin_.predict(now.q, now.qd, now.qdd, no_temp_, tau_now, i_now, &memory_);
   rf_ -= i_now - i_before;
   rf_dec_ -= i_now - i_before;
   if (obs_on_) {
@@ -1650,10 +1645,10 @@ void Monitor::rebase_on(const ident::TwinModel& before, double from) {
     // as they were, the payload's torque before a split read as a change on the last joints: a
     // contact on link 2 or 3 named link 4 or 5. (Two predictions a sample: about 0.4 s of them.)
     for (size_t k = 0; k < ring_count_; ++k) {
-      DiagnosisSample& d = ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()];
+      DiagnosisSample& d = ring_slot(k);
       if (d.t < from || d.tau_ext.size() != n_) continue;
-      before.predict_torque(d.q, d.qd, d.qdd, no_temp, tau_before);
-      twin_.predict_torque(d.q, d.qd, d.qdd, no_temp, tau_now);
+      before.predict_torque(d.q, d.qd, d.qdd, no_temp_, tau_before);
+      twin_.predict_torque(d.q, d.qd, d.qdd, no_temp_, tau_now);
       d.tau_ext += (tau_now - tau_before).cwiseProduct(obs_to_nm_);
     }
   }
@@ -1905,8 +1900,8 @@ void Monitor::push(const RobotSample& s) {
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
   const bool settled = n_samples_ > settle_until_;
-  if (on_top_) watch_on_top(s, t, settled);
   const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
+  if (on_top_) watch_on_top(s, t, settled, observer_decides);
   for (int j = 0; j < n_; ++j) {
     double& unsure = memory_unsure_[static_cast<size_t>(j)];
     if (unsure > 0.0 && std::abs(s.q[j] - memory_from_[j]) >= unsure) unsure = 0.0;

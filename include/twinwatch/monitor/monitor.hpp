@@ -348,7 +348,7 @@ class Monitor {
                             bool on_top = false);
   /// A payload change diagnosed on the alert's first look (or, with a gripper output changed, a
   /// contact on the last link, which a small part dropped reads as in the short window, with the
-  /// first look's payload hypothesis) is a payload the twin could carry (payload_after): from then
+  /// first look's payload hypothesis) is a payload the twin could carry (followed_mass, payload_of): from then
   /// to its longer look, the current residual less what that payload
   /// explains is watched on the moving joints (watch_on_top). What rises above the thresholds there
   /// is something new on top of the payload change (a contact soon after a part was dropped or
@@ -364,12 +364,19 @@ class Monitor {
   /// observer, this sample's decisions and the observer's estimates in the ring are shifted by the
   /// difference, as if the twin had predicted so all along.
   void rebase_on(const ident::TwinModel& before, double from);  // from: the first ring sample [s] shifted
-  void watch_on_top(const RobotSample& s, double t, bool settled);
-  /// The payload the twin carries after a diagnosed change of `change` kg (the mass it had plus the
-  /// change, at its centre of mass or, with none, 4 cm out along the flange axis; within the
-  /// estimate's error of zero: none; within it of the declared mass: the declared payload). Empty
-  /// when that is no payload (a clearly negative mass, above the rated payload).
-  std::optional<model::RigidBodyInertia> payload_after(double change) const;
+  void watch_on_top(const RobotSample& s, double t, bool settled, bool observer_decides);
+  /// The mass [kg] the twin carries after a diagnosed change of `change` kg: the mass it had plus
+  /// the change; within the estimate's error of zero, none; within it of the declared mass, the
+  /// declared one (as_declared). NaN when that is clearly negative (more than it carried).
+  double followed_mass(double change, bool& as_declared) const;
+  /// That mass as a payload: at the declaration's centre of mass (as_declared), else at the twin's
+  /// or, with none, 4 cm out along the flange axis, the twin's shape scaled to the mass.
+  model::RigidBodyInertia payload_of(double mass, bool as_declared) const;
+  /// The evidence that an alert's change is the payload: a gripper output changed from
+  /// kPayloadIoLookback before it began, or the payload signature explains kPayloadFollowExplained of it.
+  bool payload_evidence(const Event& e) const;
+  /// scratch_twin_ made a copy of the twin as it is now (kept between calls: its allocations are reused)
+  ident::TwinModel& scratch_twin();
   /// the open alert is a payload change diagnosed once and waiting for its longer look, at least
   /// kPayloadSplitAfter old: a gripper output's change or a new declaration ends it (split_payload_change)
   bool payload_change_waits(double t) const;
@@ -415,6 +422,8 @@ class Monitor {
   size_t ring_head_ = 0, ring_count_ = 0;
   /// the k-th oldest sample the ring holds (k < ring_count_)
   const DiagnosisSample& ring_at(size_t k) const { return ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()]; }
+  DiagnosisSample& ring_slot(size_t k) { return ring_[(ring_head_ + ring_.size() - ring_count_ + k) % ring_.size()]; }
+  const DiagnosisSample& ring_newest() const { return ring_at(ring_count_ - 1); }
   std::vector<Event> events_;
   std::vector<std::string> notes_;
   int open_ = -1;             // index of the open event
@@ -437,12 +446,15 @@ class Monitor {
   void check_program_sets();
   model::RigidBodyInertia followed_from_;
   void undo_follow(double t);
-  // watch_on_top: the twin with the payload the first look diagnosed (built once per payload change),
-  // the alert it watches (its start), what that payload changes in the predicted current (filtered
-  // as the residual is), and per joint the run of samples above the threshold and where it began
-  std::optional<ident::TwinModel> on_top_twin_;
+  // a copy of the twin (scratch_twin): while watch_on_top runs, with the payload the first look
+  // diagnosed; at a follow, an undo or an unsplit, the twin as it was (rebase_on)
+  std::optional<ident::TwinModel> scratch_twin_;
+  VectorJ no_temp_;  // NaN per joint: the twin's reference temperature
+  // watch_on_top: the alert it watches (its start), what that payload changes in the predicted
+  // current (filtered as the residual is), and per joint the run of samples above the threshold and
+  // where it began; on_top_slow_alpha_: the coefficient of the rise's mean (kOnTopRise)
   bool on_top_ = false, on_top_fresh_ = false;
-  double on_top_start_ = 0.0;
+  double on_top_start_ = 0.0, on_top_slow_alpha_ = 0.0;
   VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_, on_top_moving_since_;
   std::vector<int> on_top_run_, on_top_run_obs_;
   std::vector<char> on_top_rested_;  // per joint: its held-at-rest baseline was set (kOnTopMoving)
