@@ -1018,7 +1018,21 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   o.static_friction = static_friction_;
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
-  const Hypothesis& h = hyps.front();
+  // A split on a rise (watch_on_top) ends a change whose samples before the rise stayed within the
+  // thresholds less the watched payload: that payload explains them. A small part's change reads in
+  // such a window as a force where the part hangs, or on an inner link (a 0.2 kg drop: "contact on
+  // link 5, 2.8 N; link 6 is also possible"; a 0.2 kg pick: "link 1, 1.0 N"), which the longer look
+  // then calls the payload change it was, with the contact after it gone into that change. So the
+  // split takes the watched change when the window's payload hypothesis agrees with it (within the
+  // follow's tolerance); follow_payload still asks for its evidence
+  const Hypothesis* best = &hyps.front();
+  if (splitting_on_top_ && best->fault != FaultClass::PayloadChange)
+    for (const Hypothesis& x : hyps)
+      if (x.fault == FaultClass::PayloadChange) {
+        if (std::abs(x.magnitude - on_top_change_) <= std::max(kPayloadFollowFloor, kPayloadFollowShare * std::abs(on_top_change_))) best = &x;
+        break;
+      }
+  const Hypothesis& h = *best;
   e.fault = h.fault;
   if (h.joint >= 0) e.joint = h.joint;
   // a payload change belongs to no joint (the one that happened to raise first is no property of it)
@@ -1285,7 +1299,7 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
   // (a split on a rise, split_payload_change's on_top, that cannot follow goes back to the first
   // look and says nothing: the longer look decides, and says why then)
   const auto refuse = [&](const std::string& text) {
-    if (!quiet_refusal_) add_note(t, text);
+    if (!splitting_on_top_) add_note(t, text);
   };
   // the controller declared its payload after this alert began: the declaration is what the twin
   // carries now, and the diagnosed change (measured partly against the old payload) is not added to
@@ -1423,6 +1437,7 @@ void Monitor::start_on_top(const Event& e, double change) {
   const DiagnosisSample& now = ring_newest();
   watched.predict(now.q, now.qd, now.qdd, no_temp_, on_top_tau_, on_top_i_, &memory_);
   on_top_slow_alpha_ = 1.0 - std::exp(-cfg_.nominal_period / kOnTopRise);
+  on_top_change_ = change;
   on_top_ = true;
   on_top_fresh_ = true;
   on_top_start_ = e.t_start;
@@ -1553,9 +1568,9 @@ void Monitor::split_payload_change(double t, const char* where, double until, bo
   const double end = std::isnan(until) ? t : until;
   const Event first_look = events_[static_cast<size_t>(open_)];
   const int index = open_;
-  quiet_refusal_ = on_top;
+  splitting_on_top_ = on_top;
   run_diagnosis(t, true, end);
-  quiet_refusal_ = false;
+  splitting_on_top_ = false;
   if (open_ < 0 || !followed_) {
     // not followed (a note says why, or no payload change on the samples so far): the alert goes
     // on, and its longer look sees everything. A split on a rise goes back to what the first look
@@ -2003,9 +2018,16 @@ void Monitor::push(const RobotSample& s) {
       // that parked a persistent alert may merge back into it there). A payload change it finds is
       // followed there too: in a program that rests between moves, the held-at-rest baseline takes
       // up the residual and the alert clears before the longer look
-      const bool beyond_pulse = t - events_[static_cast<size_t>(open_)].t_start > kPulseMax;
+      const Event& ending = events_[static_cast<size_t>(open_)];
+      const bool beyond_pulse = t - ending.t_start > kPulseMax;
+      // A payload change with a gripper output changed is a step, not a pulse, however briefly it
+      // stood above the thresholds: a small part's step near them dips below them within a pulse's
+      // time (a 0.25 kg drop on the triangle: 0.4 s), and left unfollowed it rose again and again,
+      // as alerts that no longer saw the output change, and a contact went into one of them
+      const bool step = ending.fault == FaultClass::PayloadChange && cfg_.follow_payload &&
+                        outputs_changed_within(ending.t_start - kPayloadIoLookback, t);
       // (diagnosed by now: just above)
-      if (!rediagnosed_ && beyond_pulse) run_diagnosis(t, true);
+      if (!rediagnosed_ && (beyond_pulse || step)) run_diagnosis(t, true);
     }
     if (followed_ && any_active && t - followed_at_ >= kPayloadFollowSettle) undo_follow(t);
     if (open_ < 0) {

@@ -1429,5 +1429,120 @@ TEST(MonitorConfig, AVersion1TwinWithoutTrendOrObserverReadsTheDefaults) {
               ::testing::HasSubstr("new.json: field 'monitor.trend': missing required field"));
 }
 
+// A small part (0.2 kg) changed, then a contact 0.9 s later. The first look reads the part's step in
+// its short window as a contact where the part hangs ("link 5; link 6 is also possible"), and so did
+// the split on the contact's rise, on the samples before it (or on an inner link: "link 1, 1.0 N");
+// the change was then not followed there, the split went back, and the contact went into the payload
+// change (3 of these 12 runs, before session 28). The watch starts on the last-link contact's payload
+// hypothesis when a gripper output changed, and the split takes the watched change when the window's
+// payload hypothesis agrees with it.
+TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) {
+  int first_look_at_last_link = 0;
+  for (const bool loss : {true, false})
+    for (const double mass : {0.2, 0.3})
+      for (const unsigned seed : {921u, 922u, 923u}) {
+        std::string f = loss ? "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
+                             : fmt::format("  - {{type: payload_pick, onset: 8.5, io_bit: 0, mass: {}, com: [0, 0, 0.04]}}\n", mass);
+        f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
+        const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
+        ident::TwinModel t = *twin;
+        model::RigidBodyInertia part = payload;
+        part.mass = mass;
+        if (loss) t.set_payload(part);
+        Monitor m(t, *config);
+        bool first = true;
+        m.on_event = [&](const Event& e) {
+          // the payload change's first look (the alert raised by the part, before the contact)
+          if (first && e.fault != FaultClass::Unknown && e.t_start < 9.3) {
+            first = false;
+            if (e.fault == FaultClass::Collision && (e.link == 5 || std::count(e.other_links.begin(), e.other_links.end(), 5) > 0))
+              ++first_look_at_last_link;
+          }
+        };
+        for (const auto& s : rec.samples) m.push(s);
+        m.finish();
+        const auto& ev = m.events();
+        const std::string all = fmt::format("{} {} kg, seed {}:{}", loss ? "loss" : "pick", mass, seed, listing(ev));
+        ASSERT_EQ(ev.size(), 2u) << all;
+        EXPECT_EQ(ev[0].fault, FaultClass::PayloadChange) << all;
+        EXPECT_NEAR(ev[0].magnitude, loss ? -mass : mass, 0.05) << all;
+        EXPECT_EQ(ev[1].fault, FaultClass::Collision) << all;
+        EXPECT_GT(ev[1].t_detected, 9.4) << all;
+        EXPECT_LT(ev[1].t_detected - 9.4, 0.02) << all;
+        EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : mass, 0.05) << all;
+      }
+  // the path this is about: on this twin the first look reads two of the 0.2 kg changes as a contact
+  // at the last link (link 6 named or also possible)
+  EXPECT_GE(first_look_at_last_link, 2);
+}
+
+// A small part's step near the thresholds dips below them within a pulse's time (0.1 s for a 0.25 kg
+// drop on the triangle, with thresholds learned for the triangle). Before session 28 such an alert
+// was closed as a payload change but not followed (only an alert beyond kPulseMax got the look that
+// follows): the twin kept the part, the residual rose again as alerts that no longer saw the gripper
+// output change, and a contact 0.6 s after the drop went into one of them. With a gripper output
+// changed, a payload change is a step and is followed when its alert clears, however briefly it stood.
+TEST_F(MonitorLoop, ASmallPartsStepThatClearsWithinAPulseIsFollowed) {
+  MonitorConfig tri = *config;
+  const auto t1 = run("robot: ur3e\nseed: 941\nduration: 24\ntrajectory: {type: triangle, side: 0.15, speed: 0.2}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n");
+  const auto t2 = run("robot: ur3e\nseed: 942\nduration: 12\ntrajectory: {type: triangle, side: 0.15, speed: 0.3}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n");
+  const auto t3 = run("robot: ur3e\nseed: 943\nduration: 20\ntrajectory: {type: triangle, side: 0.15, speed: 0.12}\n");
+  learn_program_thresholds(tri, "triangle", *twin, {{&t1, payload}, {&t2, payload}, {&t3, {}}});
+  tri.select_program("triangle");
+  int within_a_pulse = 0, two_events = 0;
+  // a 0.25 kg part dropped or picked at 8.3 s, a contact `gap` later
+  const auto check = [&](const MonitorConfig& cfg, const std::string& trajectory, const std::string& contact, double gap, unsigned seed, bool loss) {
+    std::string y = "robot: ur3e\nseed: " + std::to_string(seed) + "\nduration: 13\ntrajectory: " + trajectory + "\n";
+    if (loss) y += "payload: {mass: 0.25, com: [0, 0, 0.04]}\n";
+    y += "faults:\n";
+    y += loss ? "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n" : "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.25, com: [0, 0, 0.04]}\n";
+    y += fmt::format("  - {{type: collision, onset: {}, duration: 0.05, {}}}\n", 8.3 + gap, contact);
+    const auto rec = undeclared(run(y));
+    ident::TwinModel t = *twin;
+    model::RigidBodyInertia part = payload;
+    part.mass = 0.25;
+    if (loss) t.set_payload(part);
+    Monitor m(t, cfg);
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    const auto& ev = m.events();
+    const std::string all = fmt::format("{}, {}, contact {} s after, seed {}:{}", trajectory, loss ? "loss" : "pick", gap, seed, listing(ev));
+    // the contact, once, within 20 ms; everything else the part's change, sized within 0.05 kg
+    int contacts = 0;
+    for (const Event& e : ev) {
+      if (e.fault == FaultClass::Collision) {
+        ++contacts;
+        EXPECT_GT(e.t_detected, 8.3 + gap) << all;
+        EXPECT_LT(e.t_detected - (8.3 + gap), 0.02) << all;
+      } else {
+        EXPECT_EQ(e.fault, FaultClass::PayloadChange) << all;
+        EXPECT_NEAR(e.magnitude, loss ? -0.25 : 0.25, 0.05) << all;
+        if (e.t_end - e.t_start < 0.5) ++within_a_pulse;
+      }
+    }
+    EXPECT_EQ(contacts, 1) << all;
+    if (ev.size() == 2u) ++two_events;
+    EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : 0.25, 0.05) << all;
+  };
+  for (const bool loss : {true, false})
+    for (const unsigned seed : {931u, 932u, 933u}) {
+      // the triangle with its own thresholds
+      for (const double gap : {0.6, 1.4})
+        check(tri, "{type: triangle, side: 0.15, speed: 0.25}",
+              "link: 3, magnitude: 4, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]", gap, seed, loss);
+      // a fast figure-eight (5 s) with the default set: before, the part's step rose two to four
+      // times as payload changes of their own
+      for (const double gap : {0.5, 0.8})
+        check(*config, "{type: figure_eight, size: [0.12, 0.08], period: 5, tilt: [0.3, 0.4, 0.5]}",
+              "link: 4, magnitude: 3, point: [0.0, 0.02, 0.02], direction: [0.3, 1.0, -0.2]", gap, seed + 20, loss);
+    }
+  // the path this is about: steps that cleared within a pulse's time
+  EXPECT_GE(within_a_pulse, 6);
+  // the change one event and the contact another, in all but one of the 24 runs: on the fast
+  // figure-eight's seed 953 (the pick, contact 0.8 s after) the first look parks the step as a
+  // persistent alert and a raise on another joint is a second payload event (+0.27 kg, 56 ms)
+  EXPECT_GE(two_events, 23);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

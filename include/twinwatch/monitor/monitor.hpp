@@ -452,9 +452,10 @@ class Monitor {
   VectorJ no_temp_;  // NaN per joint: the twin's reference temperature
   // watch_on_top: the alert it watches (its start), what that payload changes in the predicted
   // current (filtered as the residual is), and per joint the run of samples above the threshold and
-  // where it began; on_top_slow_alpha_: the coefficient of the rise's mean (kOnTopRise)
+  // where it began; on_top_slow_alpha_: the coefficient of the rise's mean (kOnTopRise);
+  // on_top_change_: the payload change watched [kg]
   bool on_top_ = false, on_top_fresh_ = false;
-  double on_top_start_ = 0.0, on_top_slow_alpha_ = 0.0;
+  double on_top_start_ = 0.0, on_top_slow_alpha_ = 0.0, on_top_change_ = 0.0;
   VectorJ on_top_i_, on_top_tau_, on_top_df_, on_top_dobs_, on_top_from_, on_top_from_obs_, on_top_slow_, on_top_slow_obs_, on_top_moving_since_;
   std::vector<int> on_top_run_, on_top_run_obs_;
   std::vector<char> on_top_rested_;  // per joint: its held-at-rest baseline was set (kOnTopMoving)
@@ -468,7 +469,9 @@ class Monitor {
   double held_until_ = 0.0;
   model::RigidBodyInertia held_from_;
   double rebased_from_ = 0.0;  // the ring's samples from here on were shifted at the last follow (rebase_on)
-  bool quiet_refusal_ = false;       // follow_payload says nothing when it does not follow (a split on a rise)
+  // a split on a rise (split_payload_change's on_top) is being diagnosed: follow_payload says nothing
+  // when it does not follow, and run_diagnosis takes the watched change when the window agrees
+  bool splitting_on_top_ = false;
   // the payload the controller declares (RobotSample::payload, kFieldPayload): the program's
   // set_payload. The twin takes each new declaration (take_declared_payload); declared_at_ [s] is when
   // it last did, so that an alert raised before it is not followed on top of it
