@@ -211,7 +211,7 @@ Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, doubl
 }
 
 Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<DiagnosisSample>& w, double total,
-                              const Eigen::Vector3d& com) {
+                              const Eigen::Vector3d& com, double min_speed = 0.0) {
   const int n = m.n_dof();
   const int last = n - 1;
   model::DynamicsData d(m);
@@ -235,6 +235,10 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
     A.col(0).segment(k * n, n) = J.topRows<3>().transpose() * (R * F) + J.bottomRows<3>().transpose() * (R * N);
     b.segment(k * n, n) = s.r_tau;
     b_drive.segment(k * n, n) = s.r_drive.size() == n ? s.r_drive : s.r_tau;
+    // (a joint slower than min_speed is left out: at rest its static friction holds part of the step)
+    if (min_speed > 0.0)
+      for (int j = 0; j < n; ++j)
+        if (std::abs(s.qd[j]) < min_speed) A(k * n + j, 0) = b(k * n + j) = b_drive(k * n + j) = 0.0;
   }
   Eigen::VectorXd x;
   Hypothesis h;
@@ -554,6 +558,14 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
 }
 
 }  // namespace
+
+Hypothesis fit_payload_change(const model::RobotModel& model, const std::vector<DiagnosisSample>& window,
+                              const Eigen::Vector3d& com, double min_speed) {
+  double total = 0.0;
+  for (const auto& s : window) total += s.r_tau.squaredNorm();
+  if (window.empty() || total <= 0.0) return {FaultClass::Unknown, -1, -1, 0.0, "", 0.0, "no residual energy in the window", {}, {}};
+  return payload_hypothesis(model, window, total, com, min_speed);
+}
 
 void DiagnosisOptions::validate() const {
   if (!(collision_max_duration > 0.0))

@@ -79,6 +79,14 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
                                  double alert_duration, int alert_joint, const DiagnosisOptions& options = {},
                                  const std::vector<DiagnosisSample>* reference = nullptr);
 
+/// The payload-change signature alone, fitted on `window` (a point mass at `com`, last link frame
+/// [m]): magnitude [kg], from the drive torque (r_drive), and the share of sum ||r_tau||² it
+/// explains. What `diagnose` scores as its payload hypothesis; the monitor's check after a gripper
+/// output change reads it on samples that raised no alert. A joint slower than `min_speed` [rad/s]
+/// at a sample is left out of the fit there (0: none).
+Hypothesis fit_payload_change(const model::RobotModel& model, const std::vector<DiagnosisSample>& window, const Eigen::Vector3d& com,
+                              double min_speed = 0.0);
+
 /// Posterior probability of each link (uniform prior over the links) for a contact of joint
 /// impulse `impulse` [N·m·s] whose rows have sd `sigma` [N·m·s], at configuration q: the Bayesian
 /// model choice the diagnosis names the contact link with (diagnosis.cpp, link_evidence; the

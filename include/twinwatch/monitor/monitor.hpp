@@ -333,7 +333,15 @@ class Monitor {
   /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
   /// change is followed on (follow_payload). The window holds the ring's samples from before the
   /// alert's start up to, not including, `until` [s] (default: all of them)
+  // the diagnosis window: the ring's samples from `from` up to `until` (and, with the observer, the
+  // kContactReference before them), with their residuals through the twin as it is now
+  void fill_window(double from, double until);
   void run_diagnosis(double t, bool long_look = false, double until = std::numeric_limits<double>::infinity());
+  // a gripper output changed and no alert was raised: output_check_after_ [s] later, the payload
+  // fitted on the samples since (check_payload_after_output)
+  void check_payload_after_output(double t);
+  double output_changed_at_ = 0.0, output_check_after_ = 0.0;
+  bool output_check_pending_ = false;
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
