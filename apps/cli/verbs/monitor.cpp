@@ -317,7 +317,7 @@ int run_monitor(const MonitorOptions& o) {
   else if (chatty && std::isfinite(declared) && ended != twin.payload().mass)
     fmt::print("payload: the twin took the controller's declarations; it ended with {:.2f} kg, as declared\n", ended);
   else if (chatty && ended != twin.payload().mass)
-    fmt::print("payload: the twin followed the diagnosed change; it ended with {:.2f} kg (it started with {:.2f} kg)\n", ended,
+    fmt::print("payload: the twin followed the payload changes it found; it ended with {:.2f} kg (it started with {:.2f} kg)\n", ended,
                twin.payload().mass);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
