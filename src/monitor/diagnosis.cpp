@@ -563,7 +563,7 @@ Hypothesis fit_payload_change(const model::RobotModel& model, const std::vector<
                               const Eigen::Vector3d& com, double min_speed) {
   double total = 0.0;
   for (const auto& s : window) total += s.r_tau.squaredNorm();
-  if (window.empty() || total <= 0.0) return {FaultClass::Unknown, -1, -1, 0.0, "", 0.0, "no residual energy in the window", {}, {}};
+  if (window.empty() || !(total > 0.0)) return {FaultClass::Unknown, -1, -1, 0.0, "", 0.0, "no residual energy in the window", {}, {}};
   return payload_hypothesis(model, window, total, com, min_speed);
 }
 

@@ -72,12 +72,12 @@ constexpr double kOnTopMoving = 0.05;  // [s] a joint that rested is judged once
 // program and on 0.15 kg parts (docs/validation.md, session 28):
 // - kOutputCheckAfter [s]: the window after the output change (1 s: healthy at most 0.061 kg, 0.9 %
 //   explained; parts 0.134-0.157 kg, 24-48 %); looked at again every kOutputCheckAgain while it is
-//   mostly at rest, up to kLongWindow;
+//   mostly at rest or holds less than kOutputCheckMoving [s] of moving samples, up to kLongWindow;
 // - kOutputCheckMinSpeed [rad/s]: a slower joint is left out of the fit (at rest its static friction
 //   holds part of the step: with rests in, healthy pick-and-place read up to 0.15 kg at 2.5 s);
 // - kOutputCheckMass [kg], kOutputCheckExplained: what a part needs;
 // - the span left out around a contact [s]
-constexpr double kOutputCheckAfter = 1.0, kOutputCheckAgain = 0.5, kOutputCheckMinSpeed = 0.05;
+constexpr double kOutputCheckAfter = 1.0, kOutputCheckAgain = 0.5, kOutputCheckMoving = 0.5, kOutputCheckMinSpeed = 0.05;
 constexpr double kOutputCheckMass = 0.1, kOutputCheckExplained = 0.1;
 constexpr double kOutputCheckContactBefore = 0.05, kOutputCheckContactAfter = 0.3;
 // finish(): with the default set in use, a program whose thresholds would not have raised at least
@@ -1039,21 +1039,20 @@ void Monitor::check_payload_after_output(double t) {
   };
   if (open_ >= 0 || pending_close_ >= 0 || background_ >= 0 || held_ >= 0) return again();
   const double from = output_changed_at_;
-  // an alert since the output changed: its own looks decided (a payload change is followed there),
-  // but a contact is only left out, with what it leaves in the filters after it
+  // an alert in the window: its own looks decided (a payload change is followed there), but a
+  // contact is only left out, with what it leaves in the filters after it
   for (const Event& e : events_)
-    if (e.fault != FaultClass::Wear && e.fault != FaultClass::Collision && e.t_end >= from - kPayloadIoLookback) return;
+    if (e.fault != FaultClass::Wear && e.fault != FaultClass::Collision && e.t_end >= from) return;
   fill_window(from, std::numeric_limits<double>::infinity());
   for (const Event& e : events_)
-    if (e.fault == FaultClass::Collision && e.t_end >= from)
+    if (e.fault == FaultClass::Collision && e.t_end + kOutputCheckContactAfter >= from)
       std::erase_if(window_, [&](const DiagnosisSample& d) { return d.t >= e.t_start - kOutputCheckContactBefore && d.t <= e.t_end + kOutputCheckContactAfter; });
   const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, kGrippedComZ);
+  // (the moving samples: at least half the window, and kOutputCheckMoving of them)
   const auto moving = std::count_if(window_.begin(), window_.end(), [](const DiagnosisSample& d) { return d.qd.cwiseAbs().maxCoeff() >= kOutputCheckMinSpeed; });
-  if (2 * moving < static_cast<long>(window_.size())) return again();
+  if (2 * moving < static_cast<long>(window_.size()) || static_cast<double>(moving) * cfg_.nominal_period < kOutputCheckMoving) return again();
   const Hypothesis h = fit_payload_change(twin_.robot(), window_, twin_.robot().description().flange * com_flange, kOutputCheckMinSpeed);
-  if (h.fault != FaultClass::PayloadChange || !std::isfinite(h.magnitude) || std::abs(h.magnitude) < kOutputCheckMass ||
-      h.explained < kOutputCheckExplained)
-    return;
+  if (h.fault != FaultClass::PayloadChange || !(std::abs(h.magnitude) >= kOutputCheckMass) || !(h.explained >= kOutputCheckExplained)) return;
   bool as_declared = false;
   const double mass = followed_mass(h.magnitude, as_declared);
   if (std::isnan(mass) || mass > twin_.robot().payload_limit()) return;
@@ -1106,6 +1105,8 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   e.units = h.units;
   e.confidence = h.explained;
   e.detail = h.detail;
+  if (best != &hyps.front())
+    e.detail += fmt::format(" (the change watched; the samples before the rise alone read as {}: {})", to_string(hyps.front().fault), hyps.front().detail);
   if (payload_beyond_)
     e.detail += fmt::format("; raised with a {:.2f} kg payload, heavier than the thresholds were learned with ({:.2f} kg): it may be the "
                             "twin's model error",
@@ -2082,10 +2083,11 @@ void Monitor::push(const RobotSample& s) {
       // up the residual and the alert clears before the longer look
       const Event& ending = events_[static_cast<size_t>(open_)];
       const bool beyond_pulse = t - ending.t_start > kPulseMax;
-      // A payload change with a gripper output changed is a step, not a pulse, however briefly it
-      // stood above the thresholds: a small part's step near them dips below them within a pulse's
-      // time (a 0.25 kg drop on the triangle: 0.4 s), and left unfollowed it rose again and again,
-      // as alerts that no longer saw the output change, and a contact went into one of them
+      // A payload change with a gripper output changed (from kPayloadIoLookback before it began) is a
+      // step, not a pulse, however briefly it stood above the thresholds: a small part's step near
+      // them dips below them within a pulse's time (a 0.25 kg drop on the triangle: 0.1-0.4 s), and
+      // left unfollowed it rose again and again, as alerts that no longer saw the output change, and
+      // a contact went into one of them
       const bool step = ending.fault == FaultClass::PayloadChange && cfg_.follow_payload &&
                         outputs_changed_within(ending.t_start - kPayloadIoLookback, t);
       // (diagnosed by now: just above)

@@ -1437,7 +1437,7 @@ TEST(MonitorConfig, AVersion1TwinWithoutTrendOrObserverReadsTheDefaults) {
 // hypothesis when a gripper output changed, and the split takes the watched change when the window's
 // payload hypothesis agrees with it.
 TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) {
-  int first_look_at_last_link = 0;
+  int first_look_at_last_link = 0, watched_taken = 0;
   for (const bool loss : {true, false})
     for (const double mass : {0.2, 0.3})
       for (const unsigned seed : {921u, 922u, 923u}) {
@@ -1470,10 +1470,13 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
         EXPECT_GT(ev[1].t_detected, 9.4) << all;
         EXPECT_LT(ev[1].t_detected - 9.4, 0.02) << all;
         EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : mass, 0.05) << all;
+        if (ev[0].detail.find("the samples before the rise alone read as collision") != std::string::npos) ++watched_taken;
       }
-  // the path this is about: on this twin the first look reads two of the 0.2 kg changes as a contact
-  // at the last link (link 6 named or also possible)
+  // the paths this is about: on this twin the first look reads two of the 0.2 kg changes as a contact
+  // at the last link (link 6 named or also possible), and the split takes the watched change where
+  // the samples before the rise alone read as a contact (three of the 0.2 kg runs)
   EXPECT_GE(first_look_at_last_link, 2);
+  EXPECT_GE(watched_taken, 3);
 }
 
 // A small part's step near the thresholds dips below them within a pulse's time (0.1 s for a 0.25 kg
@@ -1517,7 +1520,8 @@ TEST_F(MonitorLoop, ASmallPartsStepThatClearsWithinAPulseIsFollowed) {
       } else {
         EXPECT_EQ(e.fault, FaultClass::PayloadChange) << all;
         EXPECT_NEAR(e.magnitude, loss ? -0.25 : 0.25, 0.05) << all;
-        if (e.t_end - e.t_start < 0.5) ++within_a_pulse;
+        // (cleared before kPulseMax: the last exceedance plus the clearing debounce, 0.1 s)
+        if (e.t_end - e.t_start < 0.4) ++within_a_pulse;
       }
     }
     EXPECT_EQ(contacts, 1) << all;
@@ -1576,19 +1580,24 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
       if (m.events().empty()) ++quiet_runs;
       for (const Event& e : m.events()) EXPECT_LT(e.t_start, noted_at[0]) << "nothing after the twin took the part: " << all;
       EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : 0.15, 0.02) << all;
-      // the output toggled with no part: nothing taken
-      auto toggled = run(scenario(seed, 14, 0.15));
-      for (auto& s : toggled.samples)
-        if (s.timestamp >= 8.3 && s.timestamp < 8.5) s.digital_outputs |= 1u;
-      const auto plain = undeclared(toggled);
-      t.set_payload(part);
-      Monitor quiet(t, *config);
-      for (const auto& s : plain.samples) quiet.push(s);
-      quiet.finish();
-      EXPECT_TRUE(quiet.events().empty()) << listing(quiet.events());
-      EXPECT_EQ(quiet.twin().payload().mass, 0.15) << fmt::format("{}", fmt::join(quiet.notes(), "\n"));
     }
   EXPECT_GE(quiet_runs, 2);
+  // the output toggled with no part: nothing taken
+  for (const unsigned seed : {961u, 962u}) {
+    auto toggled = run(scenario(seed, 14, 0.15));
+    for (auto& s : toggled.samples)
+      if (s.timestamp >= 8.3 && s.timestamp < 8.5) s.digital_outputs |= 1u;
+    const auto plain = undeclared(toggled);
+    ident::TwinModel t = *twin;
+    model::RigidBodyInertia part = payload;
+    part.mass = 0.15;
+    t.set_payload(part);
+    Monitor quiet(t, *config);
+    for (const auto& s : plain.samples) quiet.push(s);
+    quiet.finish();
+    EXPECT_TRUE(quiet.events().empty()) << listing(quiet.events());
+    EXPECT_EQ(quiet.twin().payload().mass, 0.15) << fmt::format("{}", fmt::join(quiet.notes(), "\n"));
+  }
 }
 
 }  // namespace

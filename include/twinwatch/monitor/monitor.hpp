@@ -330,12 +330,12 @@ class Monitor {
   /// observer, residual filter and FIR restart; with `settle`, every decision waits the start-up
   /// samples (without: the observer's alone, as it always does after its start)
   void restart_estimators(bool settle = true);
+  /// the diagnosis window: the ring's samples from `from` up to `until` (and, with the observer, the
+  /// kContactReference before them), with their residuals through the twin as it is now
+  void fill_window(double from, double until);
   /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
   /// change is followed on (follow_payload). The window holds the ring's samples from before the
   /// alert's start up to, not including, `until` [s] (default: all of them)
-  // the diagnosis window: the ring's samples from `from` up to `until` (and, with the observer, the
-  // kContactReference before them), with their residuals through the twin as it is now
-  void fill_window(double from, double until);
   void run_diagnosis(double t, bool long_look = false, double until = std::numeric_limits<double>::infinity());
   // a gripper output changed and no alert was raised: output_check_after_ [s] later, the payload
   // fitted on the samples since (check_payload_after_output)
