@@ -67,6 +67,16 @@ struct MonitorLoop : ::testing::Test {
     m.finish();
     return m.events();
   }
+  // the twin carrying a part of `mass` kg at the test payload's centre of mass (0: none)
+  static ident::TwinModel carrying(double mass) {
+    ident::TwinModel t = *twin;
+    if (mass > 0.0) {
+      model::RigidBodyInertia part = payload;
+      part.mass = mass;
+      t.set_payload(part);
+    }
+    return t;
+  }
   // the twin with the 0.5 kg payload the test scenarios declare
   static ident::TwinModel declared_twin() {
     ident::TwinModel t = *twin;
@@ -1445,11 +1455,7 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
                              : fmt::format("  - {{type: payload_pick, onset: 8.5, io_bit: 0, mass: {}, com: [0, 0, 0.04]}}\n", mass);
         f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
         const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
-        ident::TwinModel t = *twin;
-        model::RigidBodyInertia part = payload;
-        part.mass = mass;
-        if (loss) t.set_payload(part);
-        Monitor m(t, *config);
+        Monitor m(carrying(loss ? mass : 0.0), *config);
         bool first = true;
         m.on_event = [&](const Event& e) {
           // the payload change's first look (the alert raised by the part, before the contact)
@@ -1501,11 +1507,7 @@ TEST_F(MonitorLoop, ASmallPartsStepThatClearsWithinAPulseIsFollowed) {
     y += loss ? "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n" : "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.25, com: [0, 0, 0.04]}\n";
     y += fmt::format("  - {{type: collision, onset: {}, duration: 0.05, {}}}\n", 8.3 + gap, contact);
     const auto rec = undeclared(run(y));
-    ident::TwinModel t = *twin;
-    model::RigidBodyInertia part = payload;
-    part.mass = 0.25;
-    if (loss) t.set_payload(part);
-    Monitor m(t, cfg);
+    Monitor m(carrying(loss ? 0.25 : 0.0), cfg);
     for (const auto& s : rec.samples) m.push(s);
     m.finish();
     const auto& ev = m.events();
@@ -1560,11 +1562,7 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
       const auto rec = undeclared(run(scenario(seed, 14, loss ? 0.15 : 0.0,
                                                loss ? "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n"
                                                     : "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.15, com: [0, 0, 0.04]}\n")));
-      ident::TwinModel t = *twin;
-      model::RigidBodyInertia part = payload;
-      part.mass = 0.15;
-      if (loss) t.set_payload(part);
-      Monitor m(t, *config);
+      Monitor m(carrying(loss ? 0.15 : 0.0), *config);
       std::vector<double> noted_at;
       m.on_note = [&](double at, const std::string& text) {
         if (text.find("after a gripper output changed at 8.30") != std::string::npos) noted_at.push_back(at);
@@ -1588,11 +1586,7 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
     for (auto& s : toggled.samples)
       if (s.timestamp >= 8.3 && s.timestamp < 8.5) s.digital_outputs |= 1u;
     const auto plain = undeclared(toggled);
-    ident::TwinModel t = *twin;
-    model::RigidBodyInertia part = payload;
-    part.mass = 0.15;
-    t.set_payload(part);
-    Monitor quiet(t, *config);
+    Monitor quiet(carrying(0.15), *config);
     for (const auto& s : plain.samples) quiet.push(s);
     quiet.finish();
     EXPECT_TRUE(quiet.events().empty()) << listing(quiet.events());
