@@ -1580,6 +1580,25 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
       EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : 0.15, 0.02) << all;
     }
   EXPECT_GE(quiet_runs, 2);
+  // the part's step read otherwise first (a 6 s figure-eight, seed 968): "contact on link 6" at the
+  // grip, then "extra resistance on J3"; both are left out of the fit and the part is still taken.
+  // Before (only contacts left out) the twin kept no payload and two "contacts" followed at 13.1 s
+  {
+    const auto rec = undeclared(run("robot: ur3e\nseed: 968\nduration: 14\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 6, "
+                                    "tilt: [0.3, 0.4, 0.5]}\nfaults:\n  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.15, com: [0, 0, 0.04]}\n"));
+    Monitor m(carrying(0.0), *config);
+    double noted = -1.0;
+    m.on_note = [&](double at, const std::string& text) {
+      if (text.find("after a gripper output changed at 8.30") != std::string::npos) noted = at;
+    };
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    const std::string all = listing(m.events());
+    ASSERT_GT(noted, 0.0) << all;
+    EXPECT_GE(m.events().size(), 2u) << "the part's own alerts before the check: " << all;
+    for (const Event& e : m.events()) EXPECT_LT(e.t_start, noted) << all;
+    EXPECT_NEAR(m.twin().payload().mass, 0.15, 0.02) << all;
+  }
   // the output toggled with no part: nothing taken
   for (const unsigned seed : {961u, 962u}) {
     auto toggled = run(scenario(seed, 14, 0.15));
