@@ -76,10 +76,10 @@ constexpr double kOnTopMoving = 0.05;  // [s] a joint that rested is judged once
 // - kOutputCheckMinSpeed [rad/s]: a slower joint is left out of the fit (at rest its static friction
 //   holds part of the step: with rests in, healthy pick-and-place read up to 0.15 kg at 2.5 s);
 // - kOutputCheckMass [kg], kOutputCheckExplained: what a part needs;
-// - the span left out around a contact [s]
+// - the span left out around an alert in the window [s]
 constexpr double kOutputCheckAfter = 1.0, kOutputCheckAgain = 0.5, kOutputCheckMoving = 0.5, kOutputCheckMinSpeed = 0.05;
 constexpr double kOutputCheckMass = 0.1, kOutputCheckExplained = 0.1;
-constexpr double kOutputCheckContactBefore = 0.05, kOutputCheckContactAfter = 0.3;
+constexpr double kOutputCheckAlertBefore = 0.05, kOutputCheckAlertAfter = 0.3;
 // finish(): with the default set in use, a program whose thresholds would not have raised at least
 // this share of at least this many alerts is named in a note
 constexpr int kProgramHintRaises = 3;
@@ -1047,8 +1047,8 @@ void Monitor::check_payload_after_output(double t) {
     if (e.fault == FaultClass::PayloadChange && e.t_end >= from) return;
   fill_window(from, std::numeric_limits<double>::infinity());
   for (const Event& e : events_)
-    if (e.fault != FaultClass::Wear && e.t_end + kOutputCheckContactAfter >= from)
-      std::erase_if(window_, [&](const DiagnosisSample& d) { return d.t >= e.t_start - kOutputCheckContactBefore && d.t <= e.t_end + kOutputCheckContactAfter; });
+    if (e.fault != FaultClass::Wear && e.t_end + kOutputCheckAlertAfter >= from)
+      std::erase_if(window_, [&](const DiagnosisSample& d) { return d.t >= e.t_start - kOutputCheckAlertBefore && d.t <= e.t_end + kOutputCheckAlertAfter; });
   const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, kGrippedComZ);
   // (the moving samples: at least half the window, and kOutputCheckMoving of them)
   const auto moving = std::count_if(window_.begin(), window_.end(), [](const DiagnosisSample& d) { return d.qd.cwiseAbs().maxCoeff() >= kOutputCheckMinSpeed; });
