@@ -1029,16 +1029,16 @@ void Monitor::check_payload_after_output(double t) {
   // and 0.9 % at 319 output changes with no part on healthy runs of every program (kOutputCheck*).
   // No alert is raised (no threshold was crossed): the twin takes the part, with a note. A program
   // that declares its payload is believed instead
-  output_check_pending_ = false;
+  const double from = output_changed_at_;
+  const double looked = output_check_at_;
+  output_check_at_ = std::numeric_limits<double>::infinity();
   if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_) return;
   // (an alert up, or a window mostly at rest, a part gripped at the program's stop: looked at again
   // later, up to kLongWindow after the output changed)
   const auto again = [&] {
-    output_check_after_ += kOutputCheckAgain;
-    output_check_pending_ = output_check_after_ <= kLongWindow + 1e-9;
+    if (looked + kOutputCheckAgain - from <= kLongWindow + 1e-9) output_check_at_ = looked + kOutputCheckAgain;
   };
   if (open_ >= 0 || pending_close_ >= 0 || background_ >= 0 || held_ >= 0) return again();
-  const double from = output_changed_at_;
   // a payload change in the window: its own looks decided (it is followed there). Any other alert
   // (closed: none is open here) is left out, with what it leaves in the filters after it: a contact,
   // or the part's own step read otherwise in a short window (a 0.15 kg drop: "extra resistance on
@@ -1049,11 +1049,10 @@ void Monitor::check_payload_after_output(double t) {
   for (const Event& e : events_)
     if (e.fault != FaultClass::Wear && e.t_end + kOutputCheckAlertAfter >= from)
       std::erase_if(window_, [&](const DiagnosisSample& d) { return d.t >= e.t_start - kOutputCheckAlertBefore && d.t <= e.t_end + kOutputCheckAlertAfter; });
-  const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, kGrippedComZ);
   // (the moving samples: at least half the window, and kOutputCheckMoving of them)
   const auto moving = std::count_if(window_.begin(), window_.end(), [](const DiagnosisSample& d) { return d.qd.cwiseAbs().maxCoeff() >= kOutputCheckMinSpeed; });
   if (2 * moving < static_cast<long>(window_.size()) || static_cast<double>(moving) * cfg_.nominal_period < kOutputCheckMoving) return again();
-  const Hypothesis h = fit_payload_change(twin_.robot(), window_, twin_.robot().description().flange * com_flange, kOutputCheckMinSpeed);
+  const Hypothesis h = fit_payload_change(twin_.robot(), window_, payload_com_in_link(), kOutputCheckMinSpeed);
   if (h.fault != FaultClass::PayloadChange || !(std::abs(h.magnitude) >= kOutputCheckMass) || !(h.explained >= kOutputCheckExplained)) return;
   bool as_declared = false;
   const double mass = followed_mass(h.magnitude, as_declared);
@@ -1075,9 +1074,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   fill_window(e.t_start - cfg_.diagnosis_pre, until);
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
-  // a payload change is most likely the declared payload (or one gripped at the flange)
-  const Eigen::Vector3d com_flange = twin_.payload().mass > 0 ? twin_.payload().com : Eigen::Vector3d(0, 0, kGrippedComZ);
-  o.payload_com = twin_.robot().description().flange * com_flange;
+  o.payload_com = payload_com_in_link();
   o.static_friction = static_friction_;
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
@@ -1167,7 +1164,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   if (!long_look && cfg_.follow_payload) {
     if (e.fault == FaultClass::PayloadChange) {
       start_on_top(e, e.magnitude);
-    } else if (e.fault == FaultClass::Collision && at_last_link(e) && outputs_changed_within(e.t_start - kPayloadIoLookback, t)) {
+    } else if (e.fault == FaultClass::Collision && at_last_link(e) && output_changed_for(e)) {
       // a small part dropped reads as a contact where it hung in the first look's short window (a
       // 0.3 kg loss: "contact on link 6, 4.8 N"; a 0.3 kg pick: "link 5, link 6 is also possible"),
       // which the longer look calls a payload change: with
@@ -1456,6 +1453,13 @@ double Monitor::followed_mass(double change, bool& as_declared) const {
   return as_declared ? declared_mass_ : mass;
 }
 
+Eigen::Vector3d Monitor::payload_com() const {
+  // a payload change is most likely the declared payload (or one gripped at the flange)
+  return twin_.payload().mass > 0.0 ? twin_.payload().com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
+}
+
+Eigen::Vector3d Monitor::payload_com_in_link() const { return twin_.robot().description().flange * payload_com(); }
+
 model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const {
   // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
   // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
@@ -1466,7 +1470,7 @@ model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const
     if (as_declared) {
       now.com = Eigen::Vector3d(declared_cog_[0], declared_cog_[1], declared_cog_[2]);
     } else {
-      now.com = had.mass > 0.0 ? had.com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
+      now.com = payload_com();
       // the declared payload's shape at the new mass; a part picked without one: a point mass
       if (had.mass > 0.0) now.inertia_com = had.inertia_com * (mass / had.mass);
     }
@@ -1474,10 +1478,11 @@ model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const
   return now;
 }
 
-bool Monitor::payload_evidence(const Event& e) const {
-  return outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity()) ||
-         e.confidence >= kPayloadFollowExplained;
+bool Monitor::output_changed_for(const Event& e) const {
+  return outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity());
 }
+
+bool Monitor::payload_evidence(const Event& e) const { return output_changed_for(e) || e.confidence >= kPayloadFollowExplained; }
 
 ident::TwinModel& Monitor::scratch_twin() {
   if (scratch_twin_) *scratch_twin_ = twin_;
@@ -1685,9 +1690,9 @@ void Monitor::split_payload_change(double t, const char* where, double until, bo
   reset_decisions();
 }
 
-bool Monitor::unsplit_payload_change(int into, double t) {
+void Monitor::unsplit_payload_change(int into, double t) {
   Event& old = events_[static_cast<size_t>(into)];
-  if (!split_ || old.t_start != split_->t_start) return false;
+  if (!split_ || old.t_start != split_->t_start) return;
   // the alert after a tentative split (split_payload_change) is no contact: the change goes on as
   // its first look said, to its longer look, on the twin it had
   const double followed = twin_.payload().mass;
@@ -1702,7 +1707,6 @@ bool Monitor::unsplit_payload_change(int into, double t) {
   add_note(t, fmt::format("what rose at {:.3f} s on top of the payload change of the alert raised at {:.3f} s was no contact: the change "
                           "goes on, and the twin predicts with {:.2f} kg again (not {:.2f} kg) until its longer look",
                           rebased_from_ + cfg_.diagnosis_pre + kContactReference, old.t_detected, twin_.payload().mass, followed));
-  return true;
 }
 
 void Monitor::rebase_on(const ident::TwinModel& before, double from) {
@@ -2055,7 +2059,8 @@ void Monitor::push(const RobotSample& s) {
   // drop and a pick 1 s apart, a dual gripper tending a machine). Left to the longer look, one
   // window held both changes, which no single signature fits (it read as a contact on link 6 that
   // never cleared, and hid what came after it)
-  if (have_prev_ && s.digital_outputs != outputs_prev_ && payload_change_waits(t) &&
+  const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
+  if (output_changed && payload_change_waits(t) &&
       !declared_pick_candidate(events_[static_cast<size_t>(open_)], declared_at_, declared_change_))
     split_payload_change(t, "a gripper output changed again");
   if (open_ >= 0) {
@@ -2090,8 +2095,7 @@ void Monitor::push(const RobotSample& s) {
       // them dips below them within a pulse's time (a 0.25 kg drop on the triangle: 0.1-0.4 s), and
       // left unfollowed it rose again and again, as alerts that no longer saw the output change, and
       // a contact went into one of them
-      const bool step = ending.fault == FaultClass::PayloadChange && cfg_.follow_payload &&
-                        outputs_changed_within(ending.t_start - kPayloadIoLookback, t);
+      const bool step = ending.fault == FaultClass::PayloadChange && cfg_.follow_payload && output_changed_for(ending);
       // (diagnosed by now: just above)
       if (!rediagnosed_ && (beyond_pulse || step)) run_diagnosis(t, true);
     }
@@ -2129,12 +2133,11 @@ void Monitor::push(const RobotSample& s) {
   }
   if (pending_close_ >= 0 && t - cleared_at_ >= kMergeGap) report_pending_close();
   if (held_ >= 0 && t >= held_until_) report_held();
-  if (have_prev_ && s.digital_outputs != outputs_prev_) {
+  if (output_changed) {
     output_changed_at_ = t;
-    output_check_after_ = kOutputCheckAfter;
-    output_check_pending_ = true;
+    output_check_at_ = t + kOutputCheckAfter;
   }
-  if (output_check_pending_ && t - output_changed_at_ >= output_check_after_) check_payload_after_output(t);
+  if (t >= output_check_at_) check_payload_after_output(t);
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0 || background_ >= 0)) {
     events_.push_back(trend_.warning());

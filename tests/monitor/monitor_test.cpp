@@ -91,6 +91,13 @@ ident::TwinModel* MonitorLoop::twin = nullptr;
 MonitorConfig* MonitorLoop::config = nullptr;
 model::RigidBodyInertia MonitorLoop::payload;
 
+// a part of `mass` kg lost (the run carries it from the start) or picked at `onset` [s], with gripper
+// output 0 changing there: the scenario's fault line
+std::string part_change(bool loss, double mass, double onset) {
+  return loss ? fmt::format("  - {{type: payload_loss, onset: {}, io_bit: 0}}\n", onset)
+              : fmt::format("  - {{type: payload_pick, onset: {}, io_bit: 0, mass: {}, com: [0, 0, 0.04]}}\n", onset, mass);
+}
+
 // every event on a line of its own (start-end, class, text), for a failure's message
 std::string listing(const std::vector<Event>& events) {
   std::string all;
@@ -1451,8 +1458,7 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
   for (const bool loss : {true, false})
     for (const double mass : {0.2, 0.3})
       for (const unsigned seed : {921u, 922u, 923u}) {
-        std::string f = loss ? "  - {type: payload_loss, onset: 8.5, io_bit: 0}\n"
-                             : fmt::format("  - {{type: payload_pick, onset: 8.5, io_bit: 0, mass: {}, com: [0, 0, 0.04]}}\n", mass);
+        std::string f = part_change(loss, mass, 8.5);
         f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
         const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
         Monitor m(carrying(loss ? mass : 0.0), *config);
@@ -1504,7 +1510,7 @@ TEST_F(MonitorLoop, ASmallPartsStepThatClearsWithinAPulseIsFollowed) {
     std::string y = "robot: ur3e\nseed: " + std::to_string(seed) + "\nduration: 13\ntrajectory: " + trajectory + "\n";
     if (loss) y += "payload: {mass: 0.25, com: [0, 0, 0.04]}\n";
     y += "faults:\n";
-    y += loss ? "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n" : "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.25, com: [0, 0, 0.04]}\n";
+    y += part_change(loss, 0.25, 8.3);
     y += fmt::format("  - {{type: collision, onset: {}, duration: 0.05, {}}}\n", 8.3 + gap, contact);
     const auto rec = undeclared(run(y));
     Monitor m(carrying(loss ? 0.25 : 0.0), cfg);
@@ -1559,9 +1565,7 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
   int quiet_runs = 0;
   for (const bool loss : {true, false})
     for (const unsigned seed : {961u, 962u}) {
-      const auto rec = undeclared(run(scenario(seed, 14, loss ? 0.15 : 0.0,
-                                               loss ? "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n"
-                                                    : "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.15, com: [0, 0, 0.04]}\n")));
+      const auto rec = undeclared(run(scenario(seed, 14, loss ? 0.15 : 0.0, part_change(loss, 0.15, 8.3))));
       Monitor m(carrying(loss ? 0.15 : 0.0), *config);
       std::vector<double> noted_at;
       m.on_note = [&](double at, const std::string& text) {
@@ -1585,7 +1589,7 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
   // Before (only contacts left out) the twin kept no payload and two "contacts" followed at 13.1 s
   {
     const auto rec = undeclared(run("robot: ur3e\nseed: 968\nduration: 14\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 6, "
-                                    "tilt: [0.3, 0.4, 0.5]}\nfaults:\n  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.15, com: [0, 0, 0.04]}\n"));
+                                    "tilt: [0.3, 0.4, 0.5]}\nfaults:\n" + part_change(false, 0.15, 8.3)));
     Monitor m(carrying(0.0), *config);
     double noted = -1.0;
     m.on_note = [&](double at, const std::string& text) {

@@ -337,11 +337,10 @@ class Monitor {
   /// change is followed on (follow_payload). The window holds the ring's samples from before the
   /// alert's start up to, not including, `until` [s] (default: all of them)
   void run_diagnosis(double t, bool long_look = false, double until = std::numeric_limits<double>::infinity());
-  // a gripper output changed and no alert was raised: output_check_after_ [s] later, the payload
-  // fitted on the samples since (check_payload_after_output)
+  // a gripper output changed at output_changed_at_ [s]: at output_check_at_ (infinity: none due) the
+  // payload fitted on the samples since (check_payload_after_output)
   void check_payload_after_output(double t);
-  double output_changed_at_ = 0.0, output_check_after_ = 0.0;
-  bool output_check_pending_ = false;
+  double output_changed_at_ = 0.0, output_check_at_ = std::numeric_limits<double>::infinity();
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
   /// the change so far is followed on the samples before t and its event ends there, so that what
   /// the new output brings (a part picked right after one was dropped) is an alert of its own
@@ -366,8 +365,8 @@ class Monitor {
   void start_on_top(const Event& e, double change);  // change: the first look's payload change [kg]
   /// The alert raised after a tentative split (split_payload_change from watch_on_top) was not a
   /// contact and merges back into the payload change `into`: the change is restored as its first
-  /// look said, and the twin to the payload it had. False (nothing done) when `into` was no split.
-  bool unsplit_payload_change(int into, double t);
+  /// look said, and the twin to the payload it had. Nothing when `into` was no split.
+  void unsplit_payload_change(int into, double t);
   /// The twin now predicts otherwise than `before` (another payload): the residual filter, the
   /// observer, this sample's decisions and the observer's estimates in the ring are shifted by the
   /// difference, as if the twin had predicted so all along.
@@ -383,6 +382,12 @@ class Monitor {
   /// The evidence that an alert's change is the payload: a gripper output changed from
   /// kPayloadIoLookback before it began, or the payload signature explains kPayloadFollowExplained of it.
   bool payload_evidence(const Event& e) const;
+  /// a gripper output changed from kPayloadIoLookback before e began until now
+  bool output_changed_for(const Event& e) const;
+  /// the centre of mass a payload change is fitted and followed at: the twin's payload's or, with
+  /// none, kGrippedComZ out along the flange axis [m, flange frame]; and in the last link's frame
+  Eigen::Vector3d payload_com() const;
+  Eigen::Vector3d payload_com_in_link() const;
   /// scratch_twin_ made a copy of the twin as it is now (kept between calls: its allocations are reused)
   ident::TwinModel& scratch_twin();
   /// the open alert is a payload change diagnosed once and waiting for its longer look, at least
