@@ -98,6 +98,17 @@ std::string part_change(bool loss, double mass, double onset) {
               : fmt::format("  - {{type: payload_pick, onset: {}, io_bit: 0, mass: {}, com: [0, 0, 0.04]}}\n", onset, mass);
 }
 
+// the long runs' pick-and-place between two stations (scenarios/ur3e/long/long_pick_place_*): down
+// and up `move` s, a rest of `rest` s at each station, `transfer` s between them
+std::string pick_and_place(double move, double rest, double transfer) {
+  return fmt::format(
+      "trajectory: {{type: point_to_point, waypoints: [[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "
+      "[-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3], "
+      "[0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3]], "
+      "durations: [{0}, {1}, {0}, {2}, {0}, {1}, {0}, {2}]}}\n",
+      move, rest, transfer);
+}
+
 // every event on a line of its own (start-end, class, text), for a failure's message
 std::string listing(const std::vector<Event>& events) {
   std::string all;
@@ -1033,11 +1044,7 @@ TEST_F(MonitorLoop, APickDeclaredBeforeOrAfterTheGripRaisesNothing) {
 // payload, a followed change after a gripper output's change is now held until 1 s after it began,
 // and the declaration of that part withdraws it; undeclared, it is reported when the second ends.
 TEST_F(MonitorLoop, APickFollowedBeforeItsLateDeclarationIsWithdrawn) {
-  const std::string program =
-      "trajectory: {type: point_to_point, waypoints: [[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "
-      "[-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3], "
-      "[0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3]], "
-      "durations: [0.6, 0.3, 0.6, 1.2, 0.6, 0.3, 0.6, 1.2]}\n";
+  const std::string program = pick_and_place(0.6, 0.3, 1.2);
   MonitorConfig c = *config;
   const auto healthy = run("robot: ur3e\nseed: 2710\nduration: 22\n" + program);
   learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
@@ -1586,7 +1593,9 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
   EXPECT_GE(quiet_runs, 2);
   // the part's step read otherwise first (a 6 s figure-eight, seed 968): "contact on link 6" at the
   // grip, then "extra resistance on J3"; both are left out of the fit and the part is still taken.
-  // Before (only contacts left out) the twin kept no payload and two "contacts" followed at 13.1 s
+  // Before (only contacts left out) the twin kept no payload and two "contacts" followed at 13.1 s.
+  // Since session 29 the resistance, which cleared before its first look, is held until the check
+  // and dropped as the part's step; the contact at the grip stood past its first look and stays
   {
     const auto rec = undeclared(run("robot: ur3e\nseed: 968\nduration: 14\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 6, "
                                     "tilt: [0.3, 0.4, 0.5]}\nfaults:\n" + part_change(false, 0.15, 8.3)));
@@ -1599,7 +1608,8 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
     m.finish();
     const std::string all = listing(m.events());
     ASSERT_GT(noted, 0.0) << all;
-    EXPECT_GE(m.events().size(), 2u) << "the part's own alerts before the check: " << all;
+    EXPECT_EQ(m.events().size(), 1u) << "the part's own alert at the grip before the check: " << all;
+    EXPECT_THAT(m.notes(), ::testing::Contains(::testing::HasSubstr("was the part's step"))) << all;
     for (const Event& e : m.events()) EXPECT_LT(e.t_start, noted) << all;
     EXPECT_NEAR(m.twin().payload().mass, 0.15, 0.02) << all;
   }
@@ -1615,6 +1625,79 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
     EXPECT_TRUE(quiet.events().empty()) << listing(quiet.events());
     EXPECT_EQ(quiet.twin().payload().mass, 0.15) << fmt::format("{}", fmt::join(quiet.notes(), "\n"));
   }
+}
+
+// Session 29: a part gripped or released while the arm rests at a station. Static friction holds its
+// step in part, so what the monitor read at the rest was a wrong size or a short "contact" (a 1 kg
+// pick followed as +0.44 kg at the rest, a "contact on link 1" after it and +0.55 kg more when the
+// arm moved on; a 0.6 kg drop: "contact on link 5, 12.8 N"), and a light part's alert came when the
+// arm moved on, seconds after its output changed, too late to count it as evidence (0.3 kg: not
+// followed, or an "extra resistance on J3"). Now an alert at the rest after the output changed is
+// held until the arm has moved on, the output counts from there, and the payload check looks at the
+// motion after the rest: one payload event per part (or, below the thresholds, a note), nothing else
+TEST_F(MonitorLoop, APartGrippedOrReleasedAtARestIsSizedWhenTheArmMovesOn) {
+  // pick-and-place with 1.5 s rests at the stations (a 9.4 s cycle)
+  const std::string program = pick_and_place(0.8, 1.5, 1.6);
+  MonitorConfig c = *config;
+  const auto healthy = run("robot: ur3e\nseed: 2910\nduration: 28\n" + program);
+  learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
+  c.select_program("pick_place");
+  struct Watched {
+    std::vector<Event> events;
+    std::vector<std::string> notes;
+    double carried_between = -1.0;  // the twin's payload at 14 s, between the pick and the drop
+    double carried_after = -1.0;
+  };
+  const auto watch = [&](const device::Recording& r) {
+    Watched w;
+    Monitor m(*twin, c);
+    for (const auto& x : r.samples) {
+      m.push(x);
+      if (w.carried_between < 0.0 && x.timestamp >= 14.0) w.carried_between = m.twin().payload().mass;
+    }
+    m.finish();
+    w.events = m.events();
+    w.notes = m.notes();
+    w.carried_after = m.twin().payload().mass;
+    return w;
+  };
+  // the part gripped `into` s into the pick station's rest of the second cycle (10.2-11.7 s) and
+  // released as far into the place station's (14.9-16.4 s); -0.25: just before the arm stops (a
+  // 0.3 kg part released there was never taken: the check's window was mostly the rest)
+  for (const double mass : {1.0, 0.6, 0.3})
+    for (const double into : {0.05, 0.3, -0.25}) {
+      const auto rec = undeclared(run(fmt::format("robot: ur3e\nseed: {}\nduration: 20\n", 2911 + static_cast<int>(10 * mass + 100 * into)) +
+                                      program + "faults:\n" + part_change(false, mass, 10.2 + into) +
+                                      part_change(true, mass, 14.9 + into)));
+      const Watched w = watch(rec);
+      const std::string all = fmt::format("{} kg, {} s into the rests:{}\nnotes: {}", mass, into, listing(w.events), fmt::join(w.notes, "\n"));
+      for (const Event& e : w.events) EXPECT_EQ(e.fault, FaultClass::PayloadChange) << all;
+      EXPECT_LE(w.events.size(), 2u) << "one payload event per part, at most" << all;
+      // (a change just before the arm stops is followed on the little motion before the rest, and read
+      // short, +0.46-0.72 kg for 0.6-1 kg parts: the check after the rest puts the twin right, with a note)
+      for (const Event& e : w.events)
+        if (into > 0.0) EXPECT_NEAR(std::abs(e.magnitude), mass, 0.2 * mass) << all;
+        else EXPECT_GT(std::abs(e.magnitude), 0.5 * mass) << all;
+      EXPECT_NEAR(w.carried_between, mass, 0.2 * mass) << all;
+      EXPECT_NEAR(w.carried_after, 0.0, 0.05) << all;
+    }
+  // the output flipped at every rest with no part: no alert held, nothing taken, no event
+  auto toggled = run("robot: ur3e\nseed: 2930\nduration: 24\n" + program);
+  bool bit = false, flipped = false;
+  double rest_since = -1.0;
+  int flips = 0;
+  for (auto& x : toggled.samples) {
+    const bool rests = x.target_qd.cwiseAbs().maxCoeff() < 1e-3;
+    if (!rests) rest_since = -1.0, flipped = false;
+    else if (rest_since < 0.0) rest_since = x.timestamp;
+    if (rests && !flipped && x.timestamp - rest_since >= 0.1) bit = !bit, flipped = true, ++flips;
+    x.digital_outputs = bit ? 1u : 0u;
+  }
+  ASSERT_GE(flips, 4);
+  const Watched quiet = watch(undeclared(toggled));
+  EXPECT_TRUE(quiet.events.empty()) << listing(quiet.events);
+  EXPECT_EQ(quiet.carried_after, 0.0) << fmt::format("{}", fmt::join(quiet.notes, "\n"));
+  EXPECT_THAT(quiet.notes, ::testing::Not(::testing::Contains(::testing::HasSubstr("is held"))));
 }
 
 }  // namespace
