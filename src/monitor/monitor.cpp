@@ -1024,7 +1024,7 @@ void Monitor::fill_window(double from, double until) {
 void Monitor::check_payload_after_output(double t) {
   const double taken = look_for_part(t);
   // the look is over (none is due again): an alert held as the part's step is settled by what it found
-  if (!std::isfinite(output_check_at_)) settle_part_step(t, taken);
+  if (!std::isfinite(output_check_at_)) settle_part_steps(t, taken);
 }
 
 double Monitor::look_for_part(double t) {
@@ -1172,7 +1172,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
       return;
     }
   }
-  if (!long_look && part_step_candidate(e)) return hold_part_step(t);
+  if (const PartStep kind = long_look ? PartStep::None : part_step_candidate(e); kind != PartStep::None) return hold_part_step(t, kind);
   if (long_look && e.fault == FaultClass::PayloadChange && cfg_.follow_payload)
     follow_payload(e, t, std::min(t, until) - cfg_.diagnosis_pre - kContactReference);
   if (!long_look && cfg_.follow_payload) {
@@ -1497,74 +1497,101 @@ bool Monitor::output_changed_for(const Event& e) const {
          output_shown_at_ >= e.t_start - kPayloadIoLookback || (e.t_start >= output_shown_at_ && e.t_start <= output_shown_at_ + kLongWindow);
 }
 
-bool Monitor::part_step_candidate(const Event& e) const {
+Monitor::PartStep Monitor::part_step_candidate(const Event& e) const {
   // (a stream that declares its payload is believed instead: take_declared_payload)
-  if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_ || background_ >= 0 || merge_into_ >= 0 ||
+  if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_ || background_ >= 0 ||
       e.fault == FaultClass::SensorFault)
-    return false;
+    return PartStep::None;
   // raised in the rest in which an output changed (from kPayloadIoLookback before the change)
-  if (arm_rests_ && !std::isnan(output_at_rest_) && e.t_start >= rest_since_ && e.t_start >= output_at_rest_ - kPayloadIoLookback) return true;
+  if (arm_rests_ && !std::isnan(output_at_rest_) && e.t_start >= rest_since_ && e.t_start >= output_at_rest_ - kPayloadIoLookback)
+    return PartStep::AtRest;
   // or, while the check after an output change is due, an alert that cleared before its first look
-  // and read as a pulse where the part hangs, or as a joint's resistance: a part's step near the
+  // and read as a pulse where the part hangs, or as a resistance: a part's step near the
   // thresholds (a 0.3 kg part dropped at a rest and still carried by the twin: "contact on link 6,
-  // 4.5 N" 0.7 s after the arm moved on; a 0.3 kg pick: "extra resistance on J3, 0.98 N·m", 24 ms)
-  // (cleared: a contact at the gripper soon after a part was picked stays an event when its alert
+  // 4.5 N" 0.7 s after the arm moved on; a 0.3 kg pick: "extra resistance on J3, 0.98 N·m", 24 ms).
+  // (Cleared: a contact at the gripper soon after a part was picked stays an event when its alert
   // stood past the first look; holding those too lost 3 of the 29 contacts found in
   // scenarios/ur3e/payload_at_rest_contact. A resistance held when its residual had only been below
   // the thresholds for 20 ms lost a contact after a 0.25 kg pick read first as one, MonitorLoop test
   // ASmallPartsStepThatClearsWithinAPulseIsFollowed, seed 953)
   const bool cleared = std::none_of(joint_active_.begin(), joint_active_.end(), [](char a) { return a != 0; });
   const bool part_like = (e.fault == FaultClass::Collision && at_last_link(e)) || e.fault == FaultClass::Resistance;
-  return std::isfinite(output_check_at_) && e.t_start >= output_check_from_ - kPayloadIoLookback && part_like && cleared;
+  const bool due = std::isfinite(output_check_at_) && e.t_start >= output_check_from_ - kPayloadIoLookback;
+  return due && part_like && cleared ? PartStep::InCheck : PartStep::None;
 }
 
-void Monitor::hold_part_step(double t) {
+void Monitor::hold_part_step(double t, PartStep kind) {
   const Event& e = events_[static_cast<size_t>(open_)];
-  if (!part_step_) {
-    part_step_ = e;
-    part_step_moving_ = !arm_rests_;
-    if (arm_rests_)
+  const bool at_rest = kind == PartStep::AtRest;
+  // a raise again at the same rest is the same step (on a stream without target velocities, where
+  // the rest's raises are not held back); anything else is held on its own
+  const auto same = std::find_if(held_steps_.begin(), held_steps_.end(),
+                                 [&](const HeldStep& h) { return at_rest && !h.moving && h.event.t_start >= rest_since_; });
+  if (same != held_steps_.end()) {
+    same->event.t_end = std::max(same->event.t_end, e.t_end);
+  } else {
+    held_steps_.push_back({e, !at_rest});
+    if (at_rest)
       add_note(t, fmt::format("the alert raised at {:.3f} s came {:.2f} s after a gripper output changed while the arm rests: most likely "
                               "the part's step, which static friction holds in part at a rest (read now as {}). It is held, not "
                               "reported, and the part is sized once the arm has moved on",
-                              e.t_detected, e.t_start - output_at_rest_, e.detail));
+                              e.t_detected, std::max(0.0, e.t_start - output_at_rest_), e.detail));
     else
       add_note(t, fmt::format("the alert raised at {:.3f} s ({}) is held until the payload check after the gripper output's change at "
                               "{:.3f} s: a part's step near the thresholds reads as such a pulse",
                               e.t_detected, e.detail, output_changed_at_));
-  } else {
-    part_step_->t_end = std::max(part_step_->t_end, e.t_end);
   }
   withdraw_open_alert();
 }
 
-void Monitor::settle_part_step(double t, double taken) {
-  if (!part_step_) return;
-  Event e = *part_step_;
-  part_step_.reset();
-  // what would explain it: the part the check took, a payload change raised since (open or closed),
-  // or a payload the program declared. A pulse held in motion only by a change whose weight it could
-  // be (a part's step reads as at most kDeclaredForceShare times its weight, as at a declared pick)
-  std::vector<double> changes;
-  if (std::isfinite(taken)) changes.push_back(taken);
-  if (declared_at_ >= e.t_start) changes.push_back(declared_change_);
-  for (const Event& x : events_)
-    if (x.fault == FaultClass::PayloadChange && x.t_end >= e.t_start) changes.push_back(x.magnitude);
+void Monitor::settle_part_steps(double t, double taken) {
+  if (held_steps_.empty()) return;
   const double g = twin_.robot().gravity().norm();
-  const bool explained = std::any_of(changes.begin(), changes.end(), [&](double c) {
-    return !part_step_moving_ || e.fault != FaultClass::Collision || e.units != "N" || e.magnitude <= kDeclaredForceShare * std::abs(c) * g;
-  });
-  if (explained) {
-    add_note(t, fmt::format("the alert held at {:.3f} s was the part's step: a payload change showed {}, and it is not an event of its own",
-                            e.t_detected, part_step_moving_ ? "in the check after the gripper output's change" : "once the arm moved on"));
-    return;
+  std::vector<HeldStep> held;
+  held.swap(held_steps_);
+  for (HeldStep& h : held) {
+    Event& e = h.event;
+    // what would explain it: the part the check took, a payload change raised since it began (open
+    // or closed; not one it rose on top of), or a payload the program declared and the twin took. A
+    // pulse held in motion only by a change whose weight it could be (a part's step reads as at most
+    // kDeclaredForceShare times its weight, as at a declared pick)
+    std::vector<double> changes;
+    if (std::isfinite(taken)) changes.push_back(taken);
+    if (declared_taken_ && declared_at_ >= e.t_start) changes.push_back(declared_change_);
+    for (const Event& x : events_)
+      if (x.fault == FaultClass::PayloadChange && x.t_start >= e.t_start) changes.push_back(x.magnitude);
+    const bool explained = std::any_of(changes.begin(), changes.end(), [&](double c) {
+      return !h.moving || e.fault != FaultClass::Collision || e.units != "N" || e.magnitude <= kDeclaredForceShare * std::abs(c) * g;
+    });
+    if (explained) {
+      add_note(t, fmt::format("the alert held at {:.3f} s was the part's step: a payload change showed {}, and it is not an event of "
+                              "its own",
+                              e.t_detected, h.moving ? "in the check after the gripper output's change" : "once the arm moved on"));
+      continue;
+    }
+    e.open = false;
+    e.detail += fmt::format("; {}, held, and reported at {:.3f} s: no payload change {}",
+                            h.moving ? "raised soon after a gripper output changed" : "raised while the arm rested after a gripper output changed",
+                            t, h.moving ? "of a weight it could be showed after it" : "showed once the arm moved on");
+    events_.push_back(e);
+    if (on_event) on_event(events_.back());
   }
-  e.open = false;
-  e.detail += fmt::format("; {}, held, and reported at {:.3f} s: no payload change {}",
-                          part_step_moving_ ? "raised soon after a gripper output changed" : "raised while the arm rested after a gripper output changed",
-                          t, part_step_moving_ ? "of a weight it could be showed in the check after it" : "showed once the arm moved on");
-  events_.push_back(e);
-  if (on_event) on_event(events_.back());
+}
+
+void Monitor::report_held_steps() {
+  for (HeldStep& h : held_steps_) {
+    Event& e = h.event;
+    e.open = false;
+    e.active_at_stop = true;
+    e.detail += h.moving ? "; raised soon after a gripper output changed, and held: monitoring stopped before the payload check after it"
+                : arm_rests_ && e.t_start >= rest_since_
+                    ? "; raised while the arm rested after a gripper output changed, and held: monitoring stopped before the arm moved on"
+                    : "; raised while the arm rested after a gripper output changed, and held: monitoring stopped before the payload check "
+                      "after the arm moved on";
+    events_.push_back(e);
+    if (on_event) on_event(events_.back());
+  }
+  held_steps_.clear();
 }
 
 void Monitor::track_rest(const RobotSample& s, double t) {
@@ -1578,6 +1605,7 @@ void Monitor::track_rest(const RobotSample& s, double t) {
   // rad/s, which is no move on; without it, no joint faster than kOutputCheckMinSpeed)
   const bool target = s.has(kFieldTargetQd) && s.target_qd.size() == s.qd.size();
   const bool rests = target ? s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest : s.qd.cwiseAbs().maxCoeff() < kOutputCheckMinSpeed;
+  rest_by_target_ = target;
   if (rests && !arm_rests_) {
     rest_since_ = t;
     // an output changed just before the arm came to rest, whose check is still due: its window would
@@ -1590,6 +1618,8 @@ void Monitor::track_rest(const RobotSample& s, double t) {
   }
   arm_rests_ = rests;
   if (have_prev_ && s.digital_outputs != outputs_prev_) {
+    // (the alerts held for the last change are settled first: its check is replaced by this one's)
+    settle_part_steps(t, std::numeric_limits<double>::quiet_NaN());
     output_changed_at_ = t;
     if (rests) {
       output_at_rest_ = t;
@@ -2111,8 +2141,11 @@ void Monitor::push(const RobotSample& s) {
   const bool settled = n_samples_ > settle_until_;
   const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
   track_rest(s, t);
-  // (an alert held at this rest: the part's step, looked at when the arm moves on)
-  const bool rest_held = part_step_ && !part_step_moving_ && arm_rests_;
+  // (an alert held at this rest, which the stream's targets say is one: the part's step, looked at
+  // when the arm moves on)
+  const bool rest_held = arm_rests_ && rest_by_target_ && std::any_of(held_steps_.begin(), held_steps_.end(), [&](const HeldStep& h) {
+    return !h.moving && h.event.t_start >= rest_since_;
+  });
   if (on_top_) watch_on_top(s, t, settled, observer_decides);
   for (int j = 0; j < n_; ++j) {
     double& unsure = memory_unsure_[static_cast<size_t>(j)];
@@ -2412,17 +2445,10 @@ void Monitor::finish() {
   }
   report_pending_close();
   report_held();
-  if (part_step_) {
-    Event e = *part_step_;
-    part_step_.reset();
-    e.open = false;
-    e.active_at_stop = true;
-    e.detail += "; raised while the arm rested after a gripper output changed, and held: monitoring stopped before the arm moved on";
-    events_.push_back(e);
-    if (on_event) on_event(events_.back());
-  }
+  // (the open alert's first look first: it may hold it too)
+  if (open_ >= 0 && !diagnosed_) run_diagnosis(t_prev_);
+  report_held_steps();
   if (open_ < 0) return;
-  if (!diagnosed_) run_diagnosis(t_prev_);
   for (const int k : {open_, background_}) {
     if (k < 0) continue;
     Event& e = events_[static_cast<size_t>(k)];

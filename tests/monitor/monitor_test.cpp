@@ -1700,5 +1700,53 @@ TEST_F(MonitorLoop, APartGrippedOrReleasedAtARestIsSizedWhenTheArmMovesOn) {
   EXPECT_THAT(quiet.notes, ::testing::Not(::testing::Contains(::testing::HasSubstr("is held"))));
 }
 
+// Session 29 review: an alert held at a rest is never lost. A contact at a rest right after a gripper
+// output changed with no part is held with the part's steps; no payload change shows when the arm
+// moves on, so it is reported then, as it was read, with its own start; one near the end of a run
+// whose arm never moves on again is reported when monitoring stops
+TEST_F(MonitorLoop, AContactHeldAtARestIsReportedWhenNoPartShows) {
+  const std::string program = pick_and_place(0.8, 1.5, 1.6);
+  MonitorConfig c = *config;
+  const auto healthy = run("robot: ur3e\nseed: 2910\nduration: 28\n" + program);
+  learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
+  c.select_program("pick_place");
+  // the output flipped 0.1 s into the pick station's rest (10.2-11.7 s), a 6 N·m contact on link 3
+  // 0.1 s later; the run ends at 10.9 s (still at the rest) or goes on to 16 s
+  for (const double end : {16.0, 10.9}) {
+    auto rec = run(fmt::format("robot: ur3e\nseed: 2940\nduration: {}\n", end) + program +
+                   "faults:\n  - {type: collision, link: 3, onset: 10.4, magnitude: 6, duration: 0.05, point: [-0.1, 0.0, 0.03], "
+                   "direction: [0.3, 1.0, -0.2]}\n");
+    for (auto& x : rec.samples) x.digital_outputs = x.timestamp >= 10.3 ? 1u : 0u;
+    const auto plain = undeclared(rec);
+    Monitor m(*twin, c);
+    double reported_at = -1.0;
+    double t = 0.0;
+    m.on_event = [&](const Event& e) {
+      if (!e.open && e.fault == FaultClass::Collision) reported_at = t;
+    };
+    for (const auto& x : plain.samples) {
+      t = x.timestamp;
+      m.push(x);
+    }
+    m.finish();
+    const std::string all = fmt::format("run to {} s:{}\nnotes: {}", end, listing(m.events()), fmt::join(m.notes(), "\n"));
+    ASSERT_EQ(m.events().size(), 1u) << all;
+    const Event& e = m.events()[0];
+    EXPECT_EQ(e.fault, FaultClass::Collision) << all;
+    EXPECT_NEAR(e.t_start, 10.4, 0.03) << all;
+    EXPECT_THAT(m.notes(), ::testing::Contains(::testing::HasSubstr("It is held, not reported"))) << all;
+    if (end > 12.0) {
+      // held past the move on (11.7 s) until the check a second later
+      EXPECT_THAT(e.detail, ::testing::HasSubstr("held, and reported at")) << all;
+      EXPECT_GT(reported_at, 12.6) << all;
+      EXPECT_FALSE(e.active_at_stop) << all;
+    } else {
+      EXPECT_THAT(e.detail, ::testing::HasSubstr("monitoring stopped before the arm moved on")) << all;
+      EXPECT_TRUE(e.active_at_stop) << all;
+    }
+    EXPECT_EQ(m.twin().payload().mass, 0.0) << all;
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

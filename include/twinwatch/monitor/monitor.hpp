@@ -344,9 +344,10 @@ class Monitor {
   double output_changed_at_ = 0.0, output_check_at_ = std::numeric_limits<double>::infinity(), output_check_from_ = 0.0;
   // At a rest static friction holds a part's step (the residual shows it when the arm moves on): an
   // output that changed while the arm rested (output_at_rest_, NaN: none since it last moved) counts
-  // as changed when the arm moved on again (output_shown_at_; output_changed_for). arm_rests_: no
-  // joint faster than kOutputCheckMinSpeed at the last sample, since rest_since_
-  bool arm_rests_ = false;
+  // as changed when the arm moved on again (output_shown_at_; output_changed_for). arm_rests_: every
+  // joint's target velocity below RestBaseline::kTargetRest at the last sample (rest_by_target_;
+  // without targets, no joint faster than kOutputCheckMinSpeed), since rest_since_
+  bool arm_rests_ = false, rest_by_target_ = false;
   double rest_since_ = 0.0;
   double output_at_rest_ = std::numeric_limits<double>::quiet_NaN();
   double output_shown_at_ = -std::numeric_limits<double>::infinity();
@@ -355,18 +356,26 @@ class Monitor {
   // An alert raised while the arm rests, after a gripper output changed in that rest, is most likely
   // the part's step, which static friction holds in part: read at rest it is a wrong size (+0.44 kg
   // for a 1 kg pick) or a short "contact" (a 0.6 kg drop: "contact on link 5, 12 N"). It is held
-  // (part_step_), not reported, and no alert is raised while the arm still rests; when the arm moves
-  // on, the step's own alert or the payload check after the output sizes the part, and the held
-  // alert is settled when that check is over (settle_part_step): dropped when a payload change
-  // showed, else reported as it was read. So is, in motion while that check is due, an alert that
+  // (held_steps_), not reported, and, on a stream with target velocities, no alert is raised for the
+  // rest of that rest; when the arm moves on, the step's own alert or the payload check after the
+  // output sizes the part, and the held alert is settled when that check is over, or when the next
+  // output change replaces it (settle_part_steps): dropped when a payload change showed since it
+  // began, else reported as it was read. So is, in motion while that check is due, an alert that
   // cleared before its first look and read as a pulse where the part hangs or as a resistance (a
-  // light part's step near the thresholds), dropped only for a change whose weight it could be
-  std::optional<Event> part_step_;
-  bool part_step_moving_ = false;  // held in motion (a pulse where the part hangs), not at a rest
-  bool part_step_candidate(const Event& e) const;
-  void hold_part_step(double t);
+  // light part's step near the thresholds), a pulse in newtons dropped only for a change whose weight
+  // it could be
+  struct HeldStep {
+    Event event;
+    bool moving = false;  // held in the check's window after the rest (or after a change in motion)
+  };
+  std::vector<HeldStep> held_steps_;
+  enum class PartStep { None, AtRest, InCheck };
+  PartStep part_step_candidate(const Event& e) const;
+  void hold_part_step(double t, PartStep kind);
   /// taken: the change of payload the check took [kg] (NaN: none)
-  void settle_part_step(double t, double taken);
+  void settle_part_steps(double t, double taken);
+  /// at the end of monitoring: the alerts still held, reported as read
+  void report_held_steps();
   /// check_payload_after_output's look: the change of payload it took [kg] (NaN: none)
   double look_for_part(double t);
   /// A gripper output changed at t while the open alert's payload change waits for its longer look:
