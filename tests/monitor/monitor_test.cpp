@@ -83,6 +83,15 @@ struct MonitorLoop : ::testing::Test {
     t.set_payload(payload);
     return t;
   }
+  // the test config with thresholds learned for `program` on one healthy run of it (seed, duration
+  // [s]), selected as "pick_place"
+  static MonitorConfig with_program_thresholds(const std::string& program, unsigned seed, int duration) {
+    MonitorConfig c = *config;
+    const auto healthy = run(fmt::format("robot: ur3e\nseed: {}\nduration: {}\n", seed, duration) + program);
+    learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
+    c.select_program("pick_place");
+    return c;
+  }
   static ident::TwinModel* twin;
   static MonitorConfig* config;
   static model::RigidBodyInertia payload;
@@ -1045,10 +1054,7 @@ TEST_F(MonitorLoop, APickDeclaredBeforeOrAfterTheGripRaisesNothing) {
 // and the declaration of that part withdraws it; undeclared, it is reported when the second ends.
 TEST_F(MonitorLoop, APickFollowedBeforeItsLateDeclarationIsWithdrawn) {
   const std::string program = pick_and_place(0.6, 0.3, 1.2);
-  MonitorConfig c = *config;
-  const auto healthy = run("robot: ur3e\nseed: 2710\nduration: 22\n" + program);
-  learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
-  c.select_program("pick_place");
+  const MonitorConfig c = with_program_thresholds(program, 2710, 22);
   // the part gripped at 6.4 s, during the 0.6 s rest at the pick point; declared 0.8 s later
   const auto rec = run("robot: ur3e\nseed: 2711\nduration: 12\n" + program +
                        "faults:\n  - {type: payload_pick, onset: 6.4, io_bit: 0, mass: 0.5, com: [0, 0, 0.04], declare_delay: 0.8}\n");
@@ -1638,10 +1644,7 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
 TEST_F(MonitorLoop, APartGrippedOrReleasedAtARestIsSizedWhenTheArmMovesOn) {
   // pick-and-place with 1.5 s rests at the stations (a 9.4 s cycle)
   const std::string program = pick_and_place(0.8, 1.5, 1.6);
-  MonitorConfig c = *config;
-  const auto healthy = run("robot: ur3e\nseed: 2910\nduration: 28\n" + program);
-  learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
-  c.select_program("pick_place");
+  const MonitorConfig c = with_program_thresholds(program, 2910, 28);
   struct Watched {
     std::vector<Event> events;
     std::vector<std::string> notes;
@@ -1706,10 +1709,7 @@ TEST_F(MonitorLoop, APartGrippedOrReleasedAtARestIsSizedWhenTheArmMovesOn) {
 // whose arm never moves on again is reported when monitoring stops
 TEST_F(MonitorLoop, AContactHeldAtARestIsReportedWhenNoPartShows) {
   const std::string program = pick_and_place(0.8, 1.5, 1.6);
-  MonitorConfig c = *config;
-  const auto healthy = run("robot: ur3e\nseed: 2910\nduration: 28\n" + program);
-  learn_program_thresholds(c, "pick_place", *twin, {{&healthy, {}}});
-  c.select_program("pick_place");
+  const MonitorConfig c = with_program_thresholds(program, 2910, 28);
   // the output flipped 0.1 s into the pick station's rest (10.2-11.7 s), a 6 N·m contact on link 3
   // 0.1 s later; the run ends at 10.9 s (still at the rest) or goes on to 16 s
   for (const double end : {16.0, 10.9}) {
