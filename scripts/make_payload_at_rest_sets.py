@@ -12,6 +12,10 @@ payload is declared (streams_payload: false). Two kinds:
            layouts c a, seed 29500, --dwell 1.0 2.0 --off 0.1 0.35 -0.2 --mass 0.25 0.45 0.8)
   contact  one part change 0.2 s into a 1.5 s rest, then a contact on link 5 or 6 0.2-1.4 s after
            the arm moves on (scenarios/ur3e/payload_at_rest_contact, seed 29700)
+  grip     on a figure-eight, a 0.3 or 0.6 kg part picked or dropped in motion at 8.3 s, a contact on
+           link 5 or 6 0.05-0.3 s after the output changed (scenarios/ur3e/grip_contact, seed 29950)
+  (and scenarios/ur3e/payload_at_rest_heldout2: rests, layout b, seed 29900, --dwell 1.2 2.2
+  --off -0.3 -0.1 0.15 --mass 0.35 0.5 0.7)
 
     /usr/bin/python3 scripts/make_payload_at_rest_sets.py rests OUTDIR --seed 29100 --layouts a b
 """
@@ -95,9 +99,28 @@ def contacts(a, rng):
                           a.seed + k, hit + 3.0, wp, du, change + contact(rng, link, hit), payload=mass if what == "drop" else None)
 
 
+def grips(a, rng):
+    k = 0
+    fig8 = "{type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}"
+    for what in ("pick", "drop"):
+        for mass in (0.3, 0.6):
+            for after in (0.05, 0.15, 0.3):
+                for link in (5, 6):
+                    k += 1
+                    change = (f"  - {{type: payload_pick, onset: 8.3, io_bit: 0, mass: {mass}, com: [0, 0, 0.04]}}\n"
+                              if what == "pick" else "  - {type: payload_loss, onset: 8.3, io_bit: 0}\n")
+                    name = f"g_{what}_m{mass}_a{after}_l{link}"
+                    with open(os.path.join(a.out, name + ".yaml"), "w") as f:
+                        f.write(f"# a {mass} kg part {what} at 8.3 s in motion, a contact on link {link} {after} s after the output changed\n"
+                                f"name: {name}\nrobot: ur3e\nseed: {a.seed + k}\nduration: 14\nstreams_payload: false\n")
+                        if what == "drop":
+                            f.write(f"payload: {{mass: {mass}, com: [0, 0, 0.04]}}\n")
+                        f.write(f"trajectory: {fig8}\nfaults:\n{change}{contact(rng, link, 8.3 + after)}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("kind", choices=["rests", "contact"])
+    ap.add_argument("kind", choices=["rests", "contact", "grip"])
     ap.add_argument("out")
     ap.add_argument("--seed", type=int, default=29100)
     ap.add_argument("--layouts", nargs="+", default=["a", "b"], choices=sorted(LAYOUTS))
@@ -107,7 +130,7 @@ def main() -> int:
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rng = random.Random(a.seed)
-    (rests if a.kind == "rests" else contacts)(a, rng)
+    {"rests": rests, "contact": contacts, "grip": grips}[a.kind](a, rng)
     return 0
 
 

@@ -341,7 +341,8 @@ class Monitor {
   // payload fitted on the samples since output_check_from_, the change or, for a change made while
   // the arm rested, the time it moved on (check_payload_after_output)
   void check_payload_after_output(double t);
-  double output_changed_at_ = 0.0, output_check_at_ = std::numeric_limits<double>::infinity(), output_check_from_ = 0.0;
+  double output_changed_at_ = -std::numeric_limits<double>::infinity(), output_check_at_ = std::numeric_limits<double>::infinity(),
+         output_check_from_ = 0.0;
   // At a rest static friction holds a part's step (the residual shows it when the arm moves on): an
   // output that changed while the arm rested (output_at_rest_, NaN: none since it last moved) counts
   // as changed when the arm moved on again (output_shown_at_; output_changed_for). arm_rests_: every
@@ -371,6 +372,8 @@ class Monitor {
   std::vector<HeldStep> held_steps_;
   enum class PartStep { None, AtRest, InCheck };
   PartStep part_step_candidate(const Event& e) const;
+  /// a contact where the part hangs, begun at a gripper output's change: held when its alert closes
+  bool grip_step(const Event& e) const;
   void hold_part_step(double t, PartStep kind);
   /// taken: the change of payload the check took [kg] (NaN: none)
   void settle_part_steps(double t, double taken);
