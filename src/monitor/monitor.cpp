@@ -1547,9 +1547,9 @@ void Monitor::hold_part_step(double t, PartStep kind) {
   } else {
     held_steps_.push_back({e, !at_rest});
     if (at_rest)
-      add_note(t, fmt::format("the alert raised at {:.3f} s came {:.2f} s after a gripper output changed while the arm rests: most likely "
-                              "the part's step, which static friction holds in part at a rest (read now as {}). It is held, not "
-                              "reported, and the part is sized once the arm has moved on",
+      add_note(t, fmt::format("the alert raised at {:.3f} s came {:.2f} s after a gripper output changed while the arm rests: it may be "
+                              "the part's step, which static friction holds in part at a rest (read now as {}). It is held, and "
+                              "reported only if no payload change shows once the arm has moved on",
                               e.t_detected, std::max(0.0, e.t_start - output_at_rest_), e.detail));
     else
       add_note(t, fmt::format("the alert raised at {:.3f} s ({}) is held until the payload check after the gripper output's change at "
