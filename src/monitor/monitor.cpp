@@ -1039,7 +1039,7 @@ double Monitor::look_for_part(double t) {
   const double from = output_check_from_;
   const double looked = output_check_at_;
   output_check_at_ = std::numeric_limits<double>::infinity();
-  if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_) return kNone;
+  if (!finds_parts()) return kNone;
   // (an alert up, or a window mostly at rest, a part gripped at the program's stop: looked at again
   // later, up to kLongWindow after the output changed)
   const auto again = [&] {
@@ -1493,15 +1493,24 @@ model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const
 }
 
 bool Monitor::output_changed_for(const Event& e) const {
+  // (an output changed at a rest shows when the arm moves on, output_shown_at_: it counts for an alert
+  // begun up to kLongWindow after that, as for one begun after it)
   return outputs_changed_within(e.t_start - kPayloadIoLookback, std::numeric_limits<double>::infinity()) ||
-         output_shown_at_ >= e.t_start - kPayloadIoLookback || (e.t_start >= output_shown_at_ && e.t_start <= output_shown_at_ + kLongWindow);
+         output_shown_at_ >= e.t_start - kLongWindow;
+}
+
+bool Monitor::finds_parts() const {
+  // (a stream that declares its payload is believed instead: take_declared_payload; kg in a twin's
+  // relative units are no mass to carry)
+  return cfg_.follow_payload && twin_.gains_known() && twin_.predicts_payload() && !have_declared_;
+}
+
+std::string Monitor::held_reason(const HeldStep& h) {
+  return h.moving ? "raised soon after a gripper output changed" : "raised while the arm rested after a gripper output changed";
 }
 
 Monitor::PartStep Monitor::part_step_candidate(const Event& e) const {
-  // (a stream that declares its payload is believed instead: take_declared_payload)
-  if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_ || background_ >= 0 ||
-      e.fault == FaultClass::SensorFault)
-    return PartStep::None;
+  if (!finds_parts() || background_ >= 0 || e.fault == FaultClass::SensorFault) return PartStep::None;
   // raised in the rest in which an output changed (from kPayloadIoLookback before the change)
   if (arm_rests_ && !std::isnan(output_at_rest_) && e.t_start >= rest_since_ && e.t_start >= output_at_rest_ - kPayloadIoLookback)
     return PartStep::AtRest;
@@ -1529,7 +1538,7 @@ bool Monitor::grip_step(const Event& e) const {
   // dropped only for a change whose weight it could be; a contact later than that stays an event
   // (holding every contact at the gripper while the check is due lost 3 of 29 in
   // scenarios/ur3e/payload_at_rest_contact, 0.2-1.4 s after the arm moved on)
-  if (!cfg_.follow_payload || !twin_.gains_known() || !twin_.predicts_payload() || have_declared_ || background_ >= 0) return false;
+  if (!finds_parts() || background_ >= 0) return false;
   const bool due = std::isfinite(output_check_at_) || !std::isnan(output_at_rest_);
   return due && e.fault == FaultClass::Collision && at_last_link(e) && e.t_start >= output_changed_at_ - cfg_.nominal_period &&
          e.t_start <= output_changed_at_ + kShortStep;
@@ -1588,9 +1597,8 @@ void Monitor::settle_part_steps(double t, double taken) {
       continue;
     }
     e.open = false;
-    e.detail += fmt::format("; {}, held, and reported at {:.3f} s: no payload change {}",
-                            h.moving ? "raised soon after a gripper output changed" : "raised while the arm rested after a gripper output changed",
-                            t, h.moving ? "of a weight it could be showed after it" : "showed once the arm moved on");
+    e.detail += fmt::format("; {}, held, and reported at {:.3f} s: no payload change {}", held_reason(h), t,
+                            h.moving ? "of a weight it could be showed after it" : "showed once the arm moved on");
     events_.push_back(e);
     if (on_event) on_event(events_.back());
   }
@@ -1601,22 +1609,20 @@ void Monitor::report_held_steps() {
     Event& e = h.event;
     e.open = false;
     e.active_at_stop = true;
-    e.detail += h.moving ? "; raised soon after a gripper output changed, and held: monitoring stopped before the payload check after it"
-                : arm_rests_ && e.t_start >= rest_since_
-                    ? "; raised while the arm rested after a gripper output changed, and held: monitoring stopped before the arm moved on"
-                    : "; raised while the arm rested after a gripper output changed, and held: monitoring stopped before the payload check "
-                      "after the arm moved on";
+    e.detail += fmt::format("; {}, and held: monitoring stopped before {}", held_reason(h),
+                            !h.moving && arm_rests_ && e.t_start >= rest_since_ ? "the arm moved on" : h.moving ? "the payload check after it"
+                                                                                                          : "the payload check after the arm moved on");
     events_.push_back(e);
     if (on_event) on_event(events_.back());
   }
   held_steps_.clear();
 }
 
-void Monitor::track_rest(const RobotSample& s, double t) {
+void Monitor::track_rest(const RobotSample& s, double t, bool output_changed) {
   // A part gripped or released while the arm rests: static friction holds its step in part (a 1.2
   // N·m step stays within J2's rest band, docs/validation.md session 22), and what shows, shows when
   // the arm moves on, after a rest of any length (pick-and-place dwells of 0.8-2.5 s: a 0.3 kg part's
-  // alert then came 0.8-4 s after its output changed, too late for kPayloadIoLookback). So an output
+  // alert then came 0.8-6 s after its output changed, too late for kPayloadIoLookback). So an output
   // changed during a rest counts as changed when the arm moves on, and the payload check after it
   // looks at the motion from there
   // (the program's rest, where the stream has the target: a part dropped jolts the wrist to 0.06
@@ -1635,7 +1641,7 @@ void Monitor::track_rest(const RobotSample& s, double t) {
     }
   }
   arm_rests_ = rests;
-  if (have_prev_ && s.digital_outputs != outputs_prev_) {
+  if (output_changed) {
     // (the alerts held for the last change are settled first: its check is replaced by this one's)
     settle_part_steps(t, std::numeric_limits<double>::quiet_NaN());
     output_changed_at_ = t;
@@ -2158,7 +2164,9 @@ void Monitor::push(const RobotSample& s) {
   // observer start-up), so they do not apply there
   const bool settled = n_samples_ > settle_until_;
   const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
-  track_rest(s, t);
+  // (a gripper output changed at this sample)
+  const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
+  track_rest(s, t, output_changed);
   // (an alert held at this rest, which the stream's targets say is one: the part's step, looked at
   // when the arm moves on)
   const bool rest_held = arm_rests_ && rest_by_target_ && std::any_of(held_steps_.begin(), held_steps_.end(), [&](const HeldStep& h) {
@@ -2238,7 +2246,6 @@ void Monitor::push(const RobotSample& s) {
   // drop and a pick 1 s apart, a dual gripper tending a machine). Left to the longer look, one
   // window held both changes, which no single signature fits (it read as a contact on link 6 that
   // never cleared, and hid what came after it)
-  const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
   if (output_changed && payload_change_waits(t) &&
       !declared_pick_candidate(events_[static_cast<size_t>(open_)], declared_at_, declared_change_))
     split_payload_change(t, "a gripper output changed again");

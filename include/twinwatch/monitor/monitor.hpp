@@ -352,10 +352,11 @@ class Monitor {
   double rest_since_ = 0.0;
   double output_at_rest_ = std::numeric_limits<double>::quiet_NaN();
   double output_shown_at_ = -std::numeric_limits<double>::infinity();
-  /// the arm's rest at sample time t, and an output changed during a rest shown when it moves on
-  void track_rest(const RobotSample& s, double t);
-  // An alert raised while the arm rests, after a gripper output changed in that rest, is most likely
-  // the part's step, which static friction holds in part: read at rest it is a wrong size (+0.44 kg
+  /// the arm's rest at sample time t, and an output changed (output_changed: at this sample) during a
+  /// rest shown when it moves on
+  void track_rest(const RobotSample& s, double t, bool output_changed);
+  // An alert raised while the arm rests, after a gripper output changed in that rest, may be the
+  // part's step, which static friction holds in part: read at rest it is a wrong size (+0.44 kg
   // for a 1 kg pick) or a short "contact" (a 0.6 kg drop: "contact on link 5, 12 N"). It is held
   // (held_steps_), not reported, and, on a stream with target velocities, no alert is raised for the
   // rest of that rest; when the arm moves on, the step's own alert or the payload check after the
@@ -370,6 +371,11 @@ class Monitor {
     bool moving = false;  // held in the check's window after the rest (or after a change in motion)
   };
   std::vector<HeldStep> held_steps_;
+  /// why an alert was held, for its event when it is reported
+  static std::string held_reason(const HeldStep& h);
+  /// the monitor looks for parts itself (follows payload changes, on a twin with known gains that
+  /// predicts the payload, on a stream that does not declare it)
+  bool finds_parts() const;
   enum class PartStep { None, AtRest, InCheck };
   PartStep part_step_candidate(const Event& e) const;
   /// a contact where the part hangs, begun at a gripper output's change: held when its alert closes
