@@ -376,6 +376,33 @@ void require_distinct(const std::vector<std::string>& files, const std::string& 
                                           files[a], files[b]));
 }
 
+std::vector<device::Recording> driven_only(std::vector<device::Recording> recs, bool quiet) {
+  std::vector<device::Recording> out;
+  for (const device::Recording& r : recs) {
+    std::string note;
+    std::vector<device::Recording> segs = device::driven_segments(r, kMinDrivenStretch, &note);
+    if (segs.empty())
+      throw InvalidArgument(fmt::format("{}: the controller does not drive the arm for {:g} s or more at a time in this recording "
+                                        "(robot_mode RUNNING and safety_mode NORMAL or REDUCED): nothing in it shows the driven arm a "
+                                        "twin models",
+                                        r.path, kMinDrivenStretch));
+    if (!note.empty() && !quiet) fmt::print(stderr, "note: {}\n", note);
+    for (auto& g : segs) out.push_back(std::move(g));
+  }
+  return out;
+}
+
+void require_driven(const device::Recording& rec, const std::string& user) {
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    if (s.driven()) continue;
+    throw InvalidArgument(fmt::format("{}: at t = {:.3f} s (sample {}) the controller does not drive the arm (robot_mode {}, safety_mode "
+                                      "{}; expected RUNNING 7 and NORMAL 1 or REDUCED 2): {} fits whole recordings, so cut the stop out "
+                                      "(identify, thresholds and validate leave such stretches out themselves)",
+                                      rec.path, s.timestamp - rec.samples.front().timestamp, k + 1, s.robot_mode, s.safety_mode, user));
+  }
+}
+
 void check_units(const device::Recording& rec, const model::RobotModel& robot) {
   if (rec.median_period > kUnitsMaxPeriod)
     throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "

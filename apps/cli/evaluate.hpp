@@ -38,6 +38,17 @@ inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
 
+/// The recordings a twin is fitted or its thresholds learned on, each cut to the stretches in which the
+/// controller drives the arm (device::driven_segments, stretches of kMinDrivenStretch s and more): a
+/// stop, a powered-off arm on its brakes or a brake release is no healthy driven motion. Says what was
+/// left out on stderr (unless quiet). Throws InvalidArgument for a recording with no such stretch.
+inline constexpr double kMinDrivenStretch = 1.0;  ///< [s]
+std::vector<device::Recording> driven_only(std::vector<device::Recording> recs, bool quiet = false);
+/// For the verbs whose recordings play a role as a whole (a forward/reverse pair, TRAIN VALIDATION
+/// CHIRP): throws InvalidArgument naming the first sample in which the controller does not drive the
+/// arm, so that a stop is cut out by the user rather than fitted. `user` names the verb.
+void require_driven(const device::Recording& rec, const std::string& user);
+
 /// Throws InvalidArgument when two of `files` are the same file (the same name, or another name of
 /// it: ./fig.csv and fig.csv): a recording given twice counts twice in a fit (`what` names the list,
 /// e.g. "RECORDINGS").

@@ -77,7 +77,8 @@ int joint_index(const std::string& nm, std::size_t prefix_len) {
 
 // an RTDE name a recording column may carry
 bool known_name(const std::string& nm) {
-  if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "stream_gap" || nm == "payload" ||
+  if (nm == "timestamp" || nm == "actual_digital_output_bits" || nm == "robot_mode" || nm == "safety_mode" || nm == "stream_gap" ||
+      nm == "payload" ||
       nm == "payload_cog_0" || nm == "payload_cog_1" || nm == "payload_cog_2")
     return true;
   for (const Group& g : kGroups) {
@@ -114,6 +115,7 @@ std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
       for (int j = 0; j < n; ++j) cols.push_back(fmt::format("{}{}", g.prefix, j));
   if (fields & kFieldDigitalOutputs) cols.push_back("actual_digital_output_bits");
   if (fields & kFieldRobotMode) cols.push_back("robot_mode");
+  if (fields & kFieldSafetyMode) cols.push_back("safety_mode");
   if (fields & kFieldStreamGap) cols.push_back("stream_gap");
   if (fields & kFieldPayload)
     for (const char* c : {"payload", "payload_cog_0", "payload_cog_1", "payload_cog_2"}) cols.push_back(c);
@@ -142,7 +144,8 @@ ColumnMap ColumnMap::load(const std::string& path) {
     if (cells[0].empty()) throw ParseError(path, ln, "file_column", "empty column name");
     if (!known_name(e.rtde_name))
       throw ParseError(path, ln, "rtde_name",
-                       fmt::format("unknown name '{}', expected timestamp, actual_digital_output_bits, robot_mode, stream_gap, "
+                       fmt::format("unknown name '{}', expected timestamp, actual_digital_output_bits, robot_mode, safety_mode, "
+                                   "stream_gap, "
                                    "payload, payload_cog_0..2 or one of {}<joint> (joints from 0)", e.rtde_name, group_prefixes()));
     if (m.columns.count(cells[0]))
       throw ParseError(path, ln, "file_column", fmt::format("'{}' is already mapped on line {}", cells[0], m.lines[cells[0]]));
@@ -183,7 +186,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // locate columns: each known name -> (group, joint)
   Recording rec;
   rec.path = path;
-  int ts_col = -1, do_col = -1, mode_col = -1, gap_col = -1, payload_col = -1;
+  int ts_col = -1, do_col = -1, mode_col = -1, safety_col = -1, gap_col = -1, payload_col = -1;
   int cog_col[3] = {-1, -1, -1};  // payload_cog_0..2
   int n = 0;
   for (size_t c = 0; c < names.size(); ++c) {
@@ -216,6 +219,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     if (nm == "timestamp") ts_col = static_cast<int>(c);
     else if (nm == "actual_digital_output_bits") do_col = static_cast<int>(c);
     else if (nm == "robot_mode") mode_col = static_cast<int>(c);
+    else if (nm == "safety_mode") safety_col = static_cast<int>(c);
     else if (nm == "stream_gap") gap_col = static_cast<int>(c);
     else if (nm == "payload") payload_col = static_cast<int>(c);
     else if (nm.size() == 13 && nm.rfind("payload_cog_", 0) == 0 && nm[12] >= '0' && nm[12] <= '2') cog_col[nm[12] - '0'] = static_cast<int>(c);
@@ -267,6 +271,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   }
   if (do_col >= 0) present |= kFieldDigitalOutputs;
   if (mode_col >= 0) present |= kFieldRobotMode;
+  if (safety_col >= 0) present |= kFieldSafetyMode;
   if (gap_col >= 0) present |= kFieldStreamGap;
   // the declared payload: its mass and centre of mass together (a mass without its centre, or the
   // reverse, cannot be taken by the twin and would be dropped without a word)
@@ -303,7 +308,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     for (size_t c = 0; c < cells.size(); ++c) {
       const int ci = static_cast<int>(c);
       const bool cog = ci == cog_col[0] || ci == cog_col[1] || ci == cog_col[2];
-      const bool used = ci == ts_col || ci == do_col || ci == mode_col || ci == gap_col || ci == payload_col || cog || target[c].group >= 0;
+      const bool used = ci == ts_col || ci == do_col || ci == mode_col || ci == safety_col || ci == gap_col || ci == payload_col || cog || target[c].group >= 0;
       if (!used) continue;
       double v;
       if (!parse_double(cells[c], v))
@@ -328,6 +333,10 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
         const std::optional<int> mode = whole_int(v);
         if (!mode) throw ParseError(path, ln, header[c], fmt::format("expected a whole number (an RTDE robot mode), got '{}'", cells[c]));
         s.robot_mode = *mode;
+      } else if (ci == safety_col) {
+        const std::optional<int> mode = whole_int(v);
+        if (!mode) throw ParseError(path, ln, header[c], fmt::format("expected a whole number (an RTDE safety mode), got '{}'", cells[c]));
+        s.safety_mode = *mode;
       }
       else if (static_cast<int>(c) == gap_col) {
         if (v != 0.0 && v != 1.0) throw ParseError(path, ln, header[c], fmt::format("expected 0 or 1, got '{}'", cells[c]));
@@ -380,6 +389,47 @@ double jitter_gap_factor(double spread, double period, double floor) {
   return std::max(floor, 1.0 + kJitterSigmas * spread / period);
 }
 
+std::vector<Recording> driven_segments(const Recording& rec, double min_seconds, std::string* left_out) {
+  if (left_out) left_out->clear();
+  const auto& all = rec.samples;
+  if (std::all_of(all.begin(), all.end(), [](const RobotSample& s) { return s.driven(); })) return {rec};
+  std::vector<Recording> out;
+  long not_driven = 0, short_samples = 0;
+  int short_stretches = 0;
+  for (size_t k = 0; k < all.size();) {
+    if (!all[k].driven()) {
+      ++not_driven;
+      ++k;
+      continue;
+    }
+    size_t e = k;
+    while (e < all.size() && all[e].driven()) ++e;
+    if (all[e - 1].timestamp - all[k].timestamp >= min_seconds) {
+      Recording seg = rec;  // (path, present, period, gap factor)
+      seg.samples.assign(all.begin() + static_cast<long>(k), all.begin() + static_cast<long>(e));
+      seg.samples.front().gap_before = false;  // the segment starts here
+      seg.gaps = 0;
+      for (const RobotSample& s : seg.samples) seg.gaps += s.gap_before ? 1 : 0;
+      out.push_back(std::move(seg));
+    } else {
+      short_samples += static_cast<long>(e - k);
+      ++short_stretches;
+    }
+    k = e;
+  }
+  if (left_out) {
+    const double period = rec.median_period > 0.0 ? rec.median_period : 0.0;
+    *left_out = fmt::format("{}: {} sample(s){} in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode "
+                            "not NORMAL/REDUCED: a stop, power off, brakes on) are left out{}; {} driven stretch(es) are used",
+                            rec.path, not_driven, period > 0.0 ? fmt::format(" ({:.1f} s)", not_driven * period) : "",
+                            short_stretches > 0 ? fmt::format(", and {} driven stretch(es) shorter than {:g} s ({} samples)", short_stretches,
+                                                              min_seconds, short_samples)
+                                                : "",
+                            out.size());
+  }
+  return out;
+}
+
 void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user) {
   for (const Group& g : kGroups)
     if (g.flag != 0 && (fields & g.flag) && !(rec.present & g.flag))
@@ -422,6 +472,7 @@ void RecordingWriter::write(const RobotSample& s) {
   }
   if (fields_ & kFieldDigitalOutputs) line_ += fmt::format(",{}", s.digital_outputs);
   if (fields_ & kFieldRobotMode) line_ += fmt::format(",{}", s.robot_mode);
+  if (fields_ & kFieldSafetyMode) line_ += fmt::format(",{}", s.safety_mode);
   if (fields_ & kFieldStreamGap) line_ += s.gap_before ? ",1" : ",0";
   if (fields_ & kFieldPayload) {
     line_ += ',';

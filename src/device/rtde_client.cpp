@@ -34,6 +34,7 @@ enum Target : int {
   kTemperature,
   kDigitalOutputs,
   kRobotMode,
+  kSafetyMode,
   kPayload,
   kPayloadCog,
   kNone,
@@ -57,6 +58,7 @@ constexpr TargetInfo kTargets[] = {
     {"joint_temperatures", kTemperature, kFieldTemperature},
     {"actual_digital_output_bits", kDigitalOutputs, kFieldDigitalOutputs},
     {"robot_mode", kRobotMode, kFieldRobotMode},
+    {"safety_mode", kSafetyMode, kFieldSafetyMode},
     {"payload", kPayload, 0},  // kFieldPayload once payload_cog is in the recipe too (build_mapping)
     {"payload_cog", kPayloadCog, 0},
 };
@@ -497,6 +499,7 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
       case kTemperature: s.temperature = Eigen::Map<const Eigen::VectorXd>(v, 6); break;
       case kDigitalOutputs: s.digital_outputs = static_cast<std::uint64_t>(v[0]); break;
       case kRobotMode: s.robot_mode = static_cast<std::int32_t>(v[0]); break;
+      case kSafetyMode: s.safety_mode = static_cast<std::int32_t>(v[0]); break;
       case kPayload: s.payload = v[0]; break;
       case kPayloadCog: std::copy(v, v + 3, s.payload_cog); break;
       default: break;

@@ -562,7 +562,9 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   twin.direction_blend = o.direction_blend;
   twin.created = now_iso();
   for (const TrainingRun& r : runs) {
-    twin.recordings.push_back(r.recording->path);
+    // (a recording cut into its driven stretches is one recording)
+    if (std::find(twin.recordings.begin(), twin.recordings.end(), r.recording->path) == twin.recordings.end())
+      twin.recordings.push_back(r.recording->path);
     for (const RobotSample& s : r.recording->samples) twin.envelope.include(s.q, s.qd);
   }
   const model::BaseParameters base = model::compute_base_parameters(rm);

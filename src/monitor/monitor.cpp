@@ -2055,6 +2055,13 @@ void Monitor::push(const RobotSample& s) {
     events_.push_back(g);
     if (on_event) on_event(g);
   }
+  // the controller does not drive the arm (power off, brakes on, a protective or emergency stop):
+  // the twin's prediction is a driven arm's, so nothing is judged until it drives it again
+  if (!s.driven()) {
+    pause_watch(s, t, dt);
+    return;
+  }
+  if (paused_) resume_watch(t);
   // the payload the program declares, when the stream carries it (before the prediction uses it)
   // (per sample the declaration is compared in line; only a new one costs the call)
   if (cfg_.follow_payload && s.has(kFieldPayload) && !same_declaration(s)) take_declared_payload(s);
@@ -2452,9 +2459,109 @@ void Monitor::close_frozen(int j, bool at_stop) {
   if (!at_stop) restart_estimators();
 }
 
-void Monitor::finish() {
+namespace {
+
+// RTDE robot_mode and safety_mode in words (../shared/reference/rtde-protocol.md)
+std::string robot_mode_words(std::int32_t m) {
+  static const char* const names[] = {"no controller", "disconnected", "confirm safety", "booting", "power off",
+                                      "power on",      "idle (brakes on)", "backdrive",   "running", "updating firmware"};
+  return m >= -1 && m <= 8 ? names[m + 1] : fmt::format("robot mode {}", m);
+}
+
+std::string safety_mode_words(std::int32_t m) {
+  static const char* const names[] = {"normal", "reduced", "protective stop", "recovery", "safeguard stop",
+                                      "system emergency stop", "robot emergency stop", "violation", "fault",
+                                      "validate joint id", "undefined", "automatic mode safeguard stop",
+                                      "three-position enabling stop"};
+  return m >= 1 && m <= 13 ? names[m - 1] : fmt::format("safety mode {}", m);
+}
+
+// what the controller reports when it does not drive the arm, e.g. "protective stop (safety_mode 3)"
+std::string not_driven_words(const RobotSample& s) {
+  std::string w;
+  if (s.has(kFieldSafetyMode) && s.safety_mode != kSafetyModeNormal && s.safety_mode != kSafetyModeReduced)
+    w = fmt::format("{} (safety_mode {})", safety_mode_words(s.safety_mode), s.safety_mode);
+  if (s.has(kFieldRobotMode) && s.robot_mode != kRobotModeRunning)
+    w += fmt::format("{}{} (robot_mode {})", w.empty() ? "" : ", ", robot_mode_words(s.robot_mode), s.robot_mode);
+  return w;
+}
+
+}  // namespace
+
+void Monitor::pause_watch(const RobotSample& s, double t, double dt) {
+  ++n_not_driven_;
+  if (paused_) not_driven_s_ += dt;
+  const bool changed = !paused_ || s.robot_mode != paused_robot_mode_ || s.safety_mode != paused_safety_mode_;
+  if (!paused_) {
+    // what was open is closed with what was seen up to the last driven sample, as at the end of a run
+    // (a contact that made the controller stop the arm is reported with its own start and size)
+    close_open(fmt::format("; still active when the controller stopped driving the arm at {:.3f} s ({})", t, not_driven_words(s)));
+    if (std::isfinite(output_check_at_))
+      add_note(t, fmt::format("the payload check after the gripper output changed at {:.3f} s is not made: the controller stopped "
+                              "driving the arm first",
+                              output_changed_at_));
+    output_check_at_ = std::numeric_limits<double>::infinity();
+    paused_at_ = t;
+  }
+  if (changed)
+    add_note(t, fmt::format("{} {}", paused_ ? "the controller now reports" : "monitoring paused, the controller reports",
+                            not_driven_words(s)) +
+                    (paused_ ? std::string()
+                             : "; the twin predicts a driven arm, so no residual is judged until the arm runs again under normal or "
+                               "reduced safety"));
+  paused_ = true;
+  paused_robot_mode_ = s.robot_mode;
+  paused_safety_mode_ = s.safety_mode;
+  // the twin's pre-sliding memory follows the encoders (a stop decelerates, a brake release sags);
+  // the outputs are not taken: one changed while the arm stood (a part removed by hand) shows at the
+  // first driven sample, as an output change there
+  twin_.advance(memory_, s.q);
+  t_prev_ = t;
+  have_prev_ = true;
+  restart_pending_ = true;
+}
+
+void Monitor::resume_watch(double t) {
+  paused_ = false;
+  add_note(t, fmt::format("monitoring resumed: the controller drives the arm again, {:.1f} s after it stopped at {:.3f} s; decisions wait "
+                          "for the estimators' start-up, and a joint at rest until it has moved, as after a stream gap",
+                          t - paused_at_, paused_at_));
+  // (restart_after_gap runs for this sample: restart_pending_). Nothing seen before the stop is
+  // compared with what comes after it: the diagnosis window, the debouncers, the rest baselines
+  ring_count_ = 0;
+  for (auto& d : deb_) d.reset();
+  for (auto& d : deb_obs_) d.reset();
+  std::fill(joint_active_.begin(), joint_active_.end(), 0);
+  rest_rf_ = RestBaseline(n_);
+  rest_obs_ = RestBaseline(n_);
+  on_top_ = false;
+  followed_ = false;
+  split_.reset();
+  splitting_on_top_ = false;
+  merge_into_ = -1;
+}
+
+void Monitor::close_open(const std::string& why) {
   for (int j = 0; j < n_; ++j)
     if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
+  report_pending_close();
+  report_held();
+  // (the open alert's first look first: it may hold it too)
+  if (open_ >= 0 && !diagnosed_) run_diagnosis(t_prev_);
+  report_held_steps();
+  if (open_ < 0) return;
+  for (const int k : {open_, background_}) {
+    if (k < 0) continue;
+    Event& e = events_[static_cast<size_t>(k)];
+    e.open = false;
+    e.active_at_stop = true;
+    e.detail += why;  // its end is the run's, not the fault's
+    if (on_event) on_event(e);
+  }
+  open_ = background_ = background_joint_ = -1;
+}
+
+void Monitor::finish() {
   // the default set on a run that looks like one of the twin's programs: most alerts would not have
   // been raised by that program's thresholds (a pick-and-place watched with the default set: 26
   // events, 23 of them "contacts" at its stops; docs/validation.md, session 22). Said, not acted on:
@@ -2469,21 +2576,7 @@ void Monitor::finish() {
                                       below, raises_, name, name));
     }
   }
-  report_pending_close();
-  report_held();
-  // (the open alert's first look first: it may hold it too)
-  if (open_ >= 0 && !diagnosed_) run_diagnosis(t_prev_);
-  report_held_steps();
-  if (open_ < 0) return;
-  for (const int k : {open_, background_}) {
-    if (k < 0) continue;
-    Event& e = events_[static_cast<size_t>(k)];
-    e.open = false;
-    e.active_at_stop = true;
-    e.detail += "; still active when monitoring stopped";  // its end is the run's, not the fault's
-    if (on_event) on_event(e);
-  }
-  open_ = background_ = background_joint_ = -1;
+  close_open("; still active when monitoring stopped");
 }
 
 }  // namespace twinwatch::monitor

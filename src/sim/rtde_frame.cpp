@@ -62,11 +62,11 @@ RtdeFrameBuilder::RtdeFrameBuilder(const model::RobotModel& nominal, double boot
   tspeed_ = slot_of("target_TCP_speed");
   dout_ = slot_of("actual_digital_output_bits");
   robot_mode_ = slot_of("robot_mode");
+  safety_mode_ = slot_of("safety_mode");
   payload_ = slot_of("payload");
   payload_cog_ = slot_of("payload_cog");
   payload_inertia_ = slot_of("payload_inertia");
   put_constant(frame_, "joint_mode", 253);
-  put_constant(frame_, "safety_mode", 1);
   put_constant(frame_, "safety_status", 1);
   put_constant(frame_, "runtime_state", 2);
   put_constant(frame_, "robot_status_bits", 3);
@@ -92,6 +92,7 @@ void RtdeFrameBuilder::fill(const RobotSample& s, double* f) {
   put6(s.temperature, f + temp_);
   f[dout_] = static_cast<double>(s.digital_outputs);
   f[robot_mode_] = s.robot_mode;
+  f[safety_mode_] = s.safety_mode;
 
   put_pose(model::forward_kinematics(model_, data_, s.q), f + apose_);
   model::point_jacobian(model_, data_, 5, model_.description().flange.translation(), J_);

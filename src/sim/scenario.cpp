@@ -317,7 +317,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   }
   const Y y(origin);
   y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
-                         "payload_declared", "streams_payload", "trajectory", "noise", "faults", "description", "program"});
+                         "payload_declared", "streams_payload", "trajectory", "noise", "faults", "stops", "description", "program"});
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
@@ -382,6 +382,39 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
     for (int j = 0; j < n; ++j) {
       if (!(sg[j] >= 0.0)) y.fail(nz["current_sigma"], "noise.current_sigma", fmt::format("must be >= 0, got {}", sg[j]));
       s.current_sigma.push_back(sg[j]);
+    }
+  }
+  // stops of the program (an operator's pause, a protective or an emergency stop): each at its line
+  if (const YAML::Node sl = root["stops"]) {
+    if (!sl.IsSequence()) y.fail(sl, "stops", "expected a list of stops");
+    double free_from = 0.0;
+    for (size_t k = 0; k < sl.size(); ++k) {
+      const YAML::Node st = sl[k];
+      const std::string p = fmt::format("stops[{}]", k);
+      y.only_keys(st, p, {"kind", "at", "hold", "stopping_time"});
+      StopSpec sp;
+      const std::string kind = y.text(st, p, "kind", "");
+      if (kind == "pause") sp.kind = StopKind::Pause;
+      else if (kind == "protective") sp.kind = StopKind::Protective;
+      else if (kind == "emergency") sp.kind = StopKind::Emergency;
+      else y.fail(st["kind"] ? st["kind"] : st, p + ".kind", fmt::format("expected pause, protective or emergency, got '{}'", kind));
+      sp.at = y.number(st, p, "at");
+      if (!(sp.at >= 0.0 && sp.at < s.options.duration))
+        y.fail(st["at"], p + ".at", fmt::format("expected a time from 0 s to the end of the run ({} s), got {}", s.options.duration, sp.at));
+      if (sp.at < free_from)
+        y.fail(st["at"], p + ".at", fmt::format("expected a time after the previous stop has resumed ({:g} s), got {}: stops in "
+                                                "time order, one at a time", free_from, sp.at));
+      sp.stopping_time = y.number_or(st, p, "stopping_time", sp.stopping_time);
+      if (!(sp.stopping_time > 0.0 && sp.stopping_time <= kMaxStoppingTime))
+        y.fail(st["stopping_time"], p + ".stopping_time",
+               fmt::format("expected more than 0 and at most {:g} s, got {}", kMaxStoppingTime, sp.stopping_time));
+      sp.hold = y.number_or(st, p, "hold", std::max(sp.hold, min_stop_hold(sp)));
+      if (!(sp.hold >= min_stop_hold(sp) && std::isfinite(sp.hold)))
+        y.fail(st["hold"], p + ".hold",
+               fmt::format("expected at least {:g} s for a{} {} stop with a stopping_time of {:g} s, got {}", min_stop_hold(sp),
+                           sp.kind == StopKind::Emergency ? "n" : "", kind, sp.stopping_time, sp.hold));
+      free_from = sp.at + sp.hold + sp.stopping_time;
+      s.options.stops.push_back(sp);
     }
   }
   try {

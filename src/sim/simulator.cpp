@@ -36,6 +36,24 @@ const char* to_string(FaultType t) {
   return "unknown";
 }
 
+const char* to_string(StopKind k) {
+  switch (k) {
+    case StopKind::Pause: return "pause";
+    case StopKind::Protective: return "protective";
+    case StopKind::Emergency: return "emergency";
+  }
+  return "unknown";
+}
+
+double min_stop_hold(const StopSpec& stop) {
+  switch (stop.kind) {
+    case StopKind::Pause: return stop.stopping_time;
+    case StopKind::Protective: return stop.stopping_time + kUnlockLead;
+    case StopKind::Emergency: return stop.stopping_time + kIdleBeforeRelease + kBrakeReleaseLead;
+  }
+  return stop.stopping_time;
+}
+
 double FaultSpec::level(double t) const {
   if (t < onset || t >= end) return 0.0;
   if (ramp <= 0.0) return 1.0;
@@ -104,11 +122,31 @@ void SimOptions::validate(int n) const {
   if (kp.size() != 0 && kp.size() != n) throw InvalidArgument(fmt::format("kp has size {}, expected {} (n_dof)", kp.size(), n));
   if (kd.size() != 0 && kd.size() != n) throw InvalidArgument(fmt::format("kd has size {}, expected {} (n_dof)", kd.size(), n));
   payload.validate("payload");
+  double free_from = 0.0;  // when the last stop's resume ramp ends
+  for (size_t k = 0; k < stops.size(); ++k) {
+    const StopSpec& st = stops[k];
+    const std::string name = fmt::format("stops[{}] ({})", k, to_string(st.kind));
+    if (!(st.at >= 0.0) || !std::isfinite(st.at)) throw InvalidArgument(fmt::format("{}: at is {} s, expected >= 0", name, st.at));
+    if (!(st.stopping_time > 0.0 && st.stopping_time <= kMaxStoppingTime))
+      throw InvalidArgument(
+          fmt::format("{}: stopping_time is {} s, expected more than 0 and at most {:g} s", name, st.stopping_time, kMaxStoppingTime));
+    if (!(st.hold >= min_stop_hold(st)) || !std::isfinite(st.hold))
+      throw InvalidArgument(fmt::format("{}: hold is {} s, expected at least {:g} s (the stop's deceleration{})", name, st.hold,
+                                        min_stop_hold(st),
+                                        st.kind == StopKind::Emergency  ? ", power-on and brake release"
+                                        : st.kind == StopKind::Protective ? " and the unlock before the resume"
+                                                                          : ""));
+    if (st.at < free_from)
+      throw InvalidArgument(fmt::format("{}: at is {} s, expected after the previous stop has resumed ({:g} s): stops in time order, "
+                                        "one at a time",
+                                        name, st.at, free_from));
+    free_from = st.at + st.hold + st.stopping_time;
+  }
 }
 
 std::uint32_t Simulator::fields() {
   return kFieldActualQd | kFieldTargetQ | kFieldTargetQd | kFieldTargetQdd | kFieldActualCurrent | kFieldTargetCurrent |
-         kFieldTargetMoment | kFieldTemperature | kFieldDigitalOutputs | kFieldRobotMode;
+         kFieldTargetMoment | kFieldTemperature | kFieldDigitalOutputs | kFieldRobotMode | kFieldSafetyMode;
 }
 
 std::uint32_t Simulator::sample_fields() const { return fields() | (opt_.streams_payload ? kFieldPayload : 0u); }
@@ -202,6 +240,41 @@ Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Tra
   }
 }
 
+Simulator::ProgramState Simulator::program_state(double t) const {
+  ProgramState p;
+  for (const StopSpec& st : opt_.stops) {
+    const double a = st.at, ts = st.stopping_time, resume = st.at + st.hold;
+    if (t < a) break;  // (in time order)
+    if (t >= resume + ts) {
+      p.lost += st.hold;  // a stop costs the program its hold: ts / 2 slowing down, ts / 2 speeding up
+      continue;
+    }
+    // the time lost in this stop so far, the integral of 1 - r (exact: no sum of steps drifts)
+    if (t < a + ts) {
+      p.r = 1.0 - (t - a) / ts, p.rdot = -1.0 / ts;  // decelerating along the path
+      p.lost += (t - a) * (t - a) / (2 * ts);
+    } else if (t < resume) {
+      p.r = 0.0, p.rdot = 0.0;
+      p.lost += ts / 2 + (t - a - ts);
+    } else {
+      const double u = t - resume;
+      p.r = u / ts, p.rdot = 1.0 / ts;  // the program resumes with the same ramp
+      p.lost += st.hold - ts / 2 + u - u * u / (2 * ts);
+    }
+    if (st.kind == StopKind::Protective && t < resume - kUnlockLead) p.safety_mode = 3;  // PROTECTIVE_STOP
+    if (st.kind == StopKind::Emergency) {
+      const double release = resume - kBrakeReleaseLead, power_on = release - kIdleBeforeRelease;
+      if (t < power_on) p.safety_mode = 7;  // ROBOT_EMERGENCY_STOP until reset
+      if (t >= a + ts && t < release) {
+        p.braked = true;
+        p.robot_mode = t < power_on ? 3 : 5;  // POWER_OFF, then IDLE (powered, brakes on)
+      }
+    }
+    break;
+  }
+  return p;
+}
+
 double Simulator::friction_torque(int j, double v, double h) {
   const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
   double wear = 1.0, extra = 0.0;
@@ -261,13 +334,27 @@ bool Simulator::step(RobotSample& s) {
   const double h = dt / opt_.substeps;
   apply_payload_faults(t_);
 
-  // controller: PD + nominal feed-forward (with armature) on the target, from measured state
+  // the program's time: the trajectory's clock, slowed to a halt and resumed by the stops (its rate r:
+  // targets q(tau), r q'(tau), r^2 q''(tau) + r' q'(tau))
+  const ProgramState ps = program_state(t_);
   VectorJ qt, qdt, qddt;
-  traj_->evaluate(t_, qt, qdt, qddt);
+  traj_->evaluate(t_ - ps.lost, qt, qdt, qddt);
+  if (ps.r != 1.0 || ps.rdot != 0.0) {
+    qddt = ps.r * ps.r * qddt + ps.rdot * qdt;
+    qdt *= ps.r;
+  }
+  // controller: PD + nominal feed-forward (with armature) on the target, from measured state
   const VectorJ q_meas = ((q_.array() / truth_.encoder_lsb).round() * truth_.encoder_lsb).matrix();
   const VectorJ qd_meas = tick_ == 0 ? qd_ : VectorJ((q_meas - q_meas_prev_) / dt);
+  if (ps.braked) {
+    // power off, brakes on: the drives are off, the controller's targets are where the arm stands
+    qt = q_meas;
+    qdt.setZero();
+    qddt.setZero();
+  }
   VectorJ tau_cmd = model::rnea(controller_model_, dctrl_, qt, qdt, qddt);
-  for (int j = 0; j < n_; ++j) {
+  if (ps.braked) tau_cmd.setZero();
+  for (int j = 0; j < n_ && !ps.braked; ++j) {
     tau_cmd[j] += armature(truth_.joints[static_cast<size_t>(j)]) * qddt[j];
     tau_cmd[j] += kp_[j] * (qt[j] - q_meas[j]) + kd_[j] * (qdt[j] - qd_meas[j]);
     const double lim = nominal_.joint(j).limits.torque_max;
@@ -281,8 +368,10 @@ bool Simulator::step(RobotSample& s) {
     pulses.emplace_back(&f, std::sin(M_PI * (t_ - f.onset) / f.duration));
   }
 
-  // physics substeps (semi-implicit Euler of M qdd + h = tau - tau_f + tau_ext)
-  for (int k = 0; k < opt_.substeps; ++k) {
+  // physics substeps (semi-implicit Euler of M qdd + h = tau - tau_f + tau_ext); the brakes hold
+  // the arm where it stands
+  if (ps.braked) qd_.setZero();
+  for (int k = 0; k < opt_.substeps && !ps.braked; ++k) {
     VectorJ tau = tau_cmd;
     for (int j = 0; j < n_; ++j) tau[j] -= friction_torque(j, qd_[j], h);
     if (!pulses.empty()) {
@@ -321,7 +410,7 @@ bool Simulator::step(RobotSample& s) {
     const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
     const double kN = jt.kt * jt.gear_ratio;
     const bool motoring = tau_cmd[j] * qd_[j] >= 0.0;
-    const double i_true = motoring ? tau_cmd[j] / (kN * jt.eta) : tau_cmd[j] * jt.eta_rev / kN;
+    const double i_true = ps.braked ? 0.0 : (motoring ? tau_cmd[j] / (kN * jt.eta) : tau_cmd[j] * jt.eta_rev / kN);
     temp_[j] += dt * (jt.R_heat * i_true * i_true - (temp_[j] - truth_.ambient) / jt.R_th) / jt.C_th;
     double i_meas = i_true + jt.current_offset + jt.current_sigma * normal_(rng_);
     s.target_current[j] = tau_cmd[j] / (kN * jt.eta);
@@ -336,7 +425,8 @@ bool Simulator::step(RobotSample& s) {
     s.temperature[j] = std::round(temp_[j] * 10.0) / 10.0;
   }
   s.digital_outputs = dout_;
-  s.robot_mode = 7;
+  s.robot_mode = ps.robot_mode;
+  s.safety_mode = ps.safety_mode;
   s.timestamp = t_ + dt;
   for (const FaultSpec& f : faults_)
     if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0)

@@ -260,6 +260,47 @@ TEST(Recording, RobotModeAndDigitalOutputsMustBeWholeNumbersInRange) {
   EXPECT_EQ(r.samples[0].robot_mode, -1);
 }
 
+// Session 30: safety_mode is read and written like robot_mode, and a recording is cut into the
+// stretches in which the controller drives the arm for identification and threshold learning
+TEST(Recording, SafetyModeRoundTripsAndDrivenStretchesAreCutOut) {
+  EXPECT_THAT(error_of("timestamp,actual_q_0,safety_mode\n0,0,3.5\n"),
+              HasSubstr("bad.csv:2: field 'safety_mode': expected a whole number (an RTDE safety mode), got '3.5'"));
+  const std::string p = tmp("modes.csv");
+  {
+    RecordingWriter w(p, 1, kFieldRobotMode | kFieldSafetyMode);
+    // 0-2 s driven, 2-3 s protective stop, 3-3.5 s driven (short), 3.5-4 s power off, 4-6 s driven
+    for (int k = 0; k < 3000; ++k) {
+      RobotSample s = RobotSample::empty(1);
+      s.timestamp = 0.002 * k;
+      s.q[0] = s.qd[0] = s.current[0] = 0.0;
+      s.safety_mode = s.timestamp >= 2.0 && s.timestamp < 3.0 ? 3 : 1;
+      s.robot_mode = s.timestamp >= 3.5 && s.timestamp < 4.0 ? 3 : 7;
+      w.write(s);
+    }
+    w.close();
+  }
+  const Recording r = read_recording(p);
+  ASSERT_EQ(r.present & (kFieldRobotMode | kFieldSafetyMode), kFieldRobotMode | kFieldSafetyMode);
+  EXPECT_EQ(r.samples[1100].safety_mode, 3);
+  EXPECT_EQ(r.samples[1800].robot_mode, 3);
+  EXPECT_FALSE(r.samples[1100].driven());
+  EXPECT_TRUE(r.samples[1600].driven());
+  std::string note;
+  const auto segs = driven_segments(r, 1.0, &note);
+  ASSERT_EQ(segs.size(), 2u);
+  EXPECT_EQ(segs[0].samples.size(), 1000u);
+  EXPECT_EQ(segs[1].samples.front().timestamp, 4.0);
+  EXPECT_EQ(segs[1].samples.size(), 1000u);
+  EXPECT_EQ(segs[1].path, r.path);
+  EXPECT_THAT(note, HasSubstr("750 sample(s) (1.5 s) in which the controller did not drive the arm"));
+  EXPECT_THAT(note, HasSubstr("1 driven stretch(es) shorter than 1 s (250 samples)"));
+  // a recording driven throughout comes back whole, without a note; without the columns, every sample is driven
+  auto all = r;
+  for (auto& s : all.samples) s.present &= ~(kFieldRobotMode | kFieldSafetyMode);
+  EXPECT_EQ(driven_segments(all, 1.0, &note).front().samples.size(), 3000u);
+  EXPECT_EQ(note, "");
+}
+
 // audit of session 16: one nan or inf cell used to load and then blind the monitor for the rest
 // of the recording (the filter and observer states stayed nan); now the reader names it
 TEST(Recording, NonFiniteCellsAreRefusedWithFileLineAndColumn) {

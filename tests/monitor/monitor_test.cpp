@@ -1787,5 +1787,63 @@ TEST_F(MonitorLoop, APartsStepReadAtItsGripAsAContactIsNotAnEvent) {
   EXPECT_EQ(contacts, 1) << listing(m.events()) << "\nnotes: " << fmt::format("{}", fmt::join(m.notes(), "\n"));
 }
 
+// Session 30: an arm the controller does not drive. Under a protective stop, powered off on its brakes
+// after an emergency stop, or idle before its brakes are released, the twin's prediction (a driven
+// arm) is not what the arm draws: judged, the power-off read as a payload change of -1.6 kg and the
+// brake release as a 47 N contact. The stream says it (robot_mode, safety_mode): nothing is judged
+// then, what was open is closed with what was seen, and after the stop the monitor starts again as
+// after a stream gap.
+TEST_F(MonitorLoop, AnArmTheControllerDoesNotDriveIsNotJudged) {
+  const std::string program = pick_and_place(0.8, 1.0, 1.6);
+  const MonitorConfig c = with_program_thresholds(program, 3101, 30);
+  const std::string stops = "stops:\n  - {kind: protective, at: 6.3, hold: 3}\n  - {kind: emergency, at: 15.2, hold: 6}\n";
+  const std::string contact = "  - {type: collision, link: 2, onset: 25.7, magnitude: 10, duration: 0.05, point: [-0.12, 0.0, 0.1], "
+                              "direction: [0.3, 1.0, -0.2]}\n";
+  const auto rec = run("robot: ur3e\nseed: 3102\nduration: 30\n" + program + stops + "faults:\n" + contact);
+  const auto watch = [&](const device::Recording& r, std::vector<std::string>* notes) {
+    Monitor m(*twin, c);
+    for (const auto& s : r.samples) m.push(s);
+    m.finish();
+    if (notes) *notes = m.notes();
+    return m.events();
+  };
+  std::vector<std::string> notes;
+  const auto ev = watch(rec, &notes);
+  ASSERT_EQ(ev.size(), 1u) << listing(ev);
+  EXPECT_EQ(ev[0].fault, FaultClass::Collision) << listing(ev);
+  EXPECT_LT(ev[0].t_detected - 25.7, 0.03) << "a contact after the stops is found as before";
+  std::string all;
+  for (const auto& n : notes) all += n + "\n";
+  EXPECT_THAT(all, ::testing::HasSubstr("monitoring paused, the controller reports protective stop (safety_mode 3)"));
+  EXPECT_THAT(all, ::testing::HasSubstr("robot emergency stop (safety_mode 7), power off (robot_mode 3)"));
+  EXPECT_THAT(all, ::testing::HasSubstr("idle (brakes on) (robot_mode 5)"));
+  EXPECT_THAT(all, ::testing::HasSubstr("monitoring resumed: the controller drives the arm again, 5.0 s after it stopped at 15.2"));
+  // the same stream without its modes (a recording or a foreign log without them): the stopped arm
+  // is judged and cries wolf. The modes are what keeps it quiet
+  auto blind = rec;
+  for (auto& s : blind.samples) s.present &= ~(kFieldRobotMode | kFieldSafetyMode);
+  EXPECT_GT(watch(blind, nullptr).size(), 1u);
+}
+
+// A contact that makes the controller stop the arm (its own collision detection) is reported with what
+// was seen before the stop, and says that the stop cut it short.
+TEST_F(MonitorLoop, AContactTheControllerStoppedTheArmForIsReported) {
+  const std::string program = pick_and_place(0.8, 1.0, 1.6);
+  const MonitorConfig c = with_program_thresholds(program, 3101, 30);
+  const auto rec = run("robot: ur3e\nseed: 3103\nduration: 16\n" + program +
+                       "stops:\n  - {kind: protective, at: 11.34, hold: 3}\nfaults:\n"
+                       "  - {type: collision, link: 3, onset: 11.3, magnitude: 10, duration: 0.3, point: [0.1, 0.0, 0.05], "
+                       "direction: [0.0, 0.3, 1.0]}\n");
+  Monitor m(*twin, c);
+  for (const auto& s : rec.samples) m.push(s);
+  m.finish();
+  const auto& ev = m.events();
+  ASSERT_EQ(ev.size(), 1u) << listing(ev);
+  EXPECT_EQ(ev[0].fault, FaultClass::Collision) << listing(ev);
+  EXPECT_LT(ev[0].t_detected - 11.3, 0.04);
+  EXPECT_TRUE(ev[0].active_at_stop);
+  EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("still active when the controller stopped driving the arm at 11.34"));
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

@@ -259,5 +259,77 @@ TEST(Scenario, OutOfRangeIntegersKeysAndRobotNamesAreParseErrors) {
   EXPECT_THAT(error_of("robot: " + std::string(300, 'a') + "\n" + t), HasSubstr("field 'robot': robot 'aaaa"));
 }
 
+// Session 30: stops of the program, as a real arm has them. The controller decelerates along the path,
+// holds, and resumes where it stopped: the program's time lags the clock by each stop's hold after
+// it, exactly. The stream says what happens in robot_mode and safety_mode (rtde-protocol.md); under
+// an emergency stop the drives are off and the brakes hold the arm, so the currents are noise only.
+TEST(Simulator, AStoppedProgramDeceleratesHoldsAndResumesWhereItStopped) {
+  const std::string yaml = std::string(kFigureEight) +
+                           "stops:\n  - {kind: protective, at: 2.3, hold: 2.0, stopping_time: 0.25}\n"
+                           "  - {kind: emergency, at: 6.1, hold: 3.5}\n";
+  const Scenario s = scenario(yaml);
+  const auto rec = run(s);
+  const auto at = [&](double t) -> const RobotSample& { return rec[static_cast<size_t>(std::lround(t * 500.0)) - 1]; };
+  // the modes, as the controller streams them
+  EXPECT_EQ(at(2.2).safety_mode, kSafetyModeNormal);
+  EXPECT_EQ(at(2.4).safety_mode, 3);                          // protective stop, decelerating
+  EXPECT_EQ(at(3.6).safety_mode, 3);                          // holding
+  EXPECT_EQ(at(4.0).safety_mode, kSafetyModeNormal);          // unlocked kUnlockLead before the resume at 4.3
+  EXPECT_EQ(at(3.6).robot_mode, kRobotModeRunning);           // powered throughout
+  EXPECT_EQ(at(6.2).safety_mode, 7);                          // emergency stop, decelerating with power
+  EXPECT_EQ(at(6.2).robot_mode, kRobotModeRunning);
+  EXPECT_EQ(at(6.8).robot_mode, 3);                           // power off, brakes on
+  EXPECT_EQ(at(8.0).robot_mode, 5);                           // powered on, brakes still on (idle)
+  EXPECT_EQ(at(8.0).safety_mode, kSafetyModeNormal);
+  EXPECT_EQ(at(8.8).robot_mode, kRobotModeRunning);           // brakes released, holding, before the resume at 9.6
+  EXPECT_TRUE(at(8.8).driven());
+  EXPECT_FALSE(at(3.6).driven());
+  EXPECT_FALSE(at(8.0).driven());
+  // holding: at rest on the path; braked: not a count moves, the currents are noise around 0
+  EXPECT_LT(at(3.6).qd.cwiseAbs().maxCoeff(), 0.01);
+  EXPECT_EQ(at(3.6).target_qd.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(at(6.6).q, at(7.9).q);
+  EXPECT_LT(at(7.0).current.cwiseAbs().maxCoeff(), 0.15);
+  EXPECT_GT(at(3.6).current.cwiseAbs().maxCoeff(), 0.3) << "a protective stop holds the arm against gravity with power on";
+  // after both stops the program runs 2.0 + 3.5 s behind the clock: its targets are the trajectory's there
+  VectorJ q, qd, qdd;
+  for (double t : {10.2, 11.0, 11.9}) {
+    s.trajectory->evaluate(at(t).timestamp - 0.002 - 5.5, q, qd, qdd);
+    EXPECT_LT((at(t).target_q - q).cwiseAbs().maxCoeff(), 1e-9) << "t = " << t;
+    EXPECT_LT((at(t).target_qd - qd).cwiseAbs().maxCoeff(), 1e-9) << "t = " << t;
+    EXPECT_LT((at(t).q - q).cwiseAbs().maxCoeff(), 5e-3) << "the arm follows it again, t = " << t;
+  }
+  // decelerating: the target speed falls linearly to 0 over the stopping time; the program's time
+  // lags by the integral of 1 - r (the sample stamped 2.426 s is the controller's step at 2.424 s)
+  const double t_mid = 2.424, r = 1.0 - (t_mid - 2.3) / 0.25, lost = (t_mid - 2.3) * (t_mid - 2.3) / 0.5;
+  s.trajectory->evaluate(t_mid - lost, q, qd, qdd);
+  const RobotSample& mid = at(2.426);
+  EXPECT_LT((mid.target_qd - r * qd).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((mid.target_q - q).cwiseAbs().maxCoeff(), 1e-9);
+  // a run without stops is the same as before stops existed: the program's time is the clock
+  const auto plain = run(scenario(kFigureEight));
+  for (size_t k : {0ul, 1000ul, 5999ul}) {
+    s.trajectory->evaluate(plain[k].timestamp - 0.002, q, qd, qdd);
+    EXPECT_LT((plain[k].target_q - q).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(Simulator, StopsAreCheckedAndNamedAtTheirLine) {
+  const std::string base = std::string(kFigureEight);
+  const auto err = [&](const std::string& stops) {
+    return twinwatch::test::error_text<ParseError>([&] { parse_scenario(base + "stops:\n" + stops, "test.yaml"); });
+  };
+  EXPECT_THAT(err("  - {kind: halt, at: 2}\n"), HasSubstr("test.yaml:7: field 'stops[0].kind': expected pause, protective or emergency, got 'halt'"));
+  EXPECT_THAT(err("  - {kind: pause}\n"), HasSubstr("field 'stops[0].at': missing required field"));
+  EXPECT_THAT(err("  - {kind: pause, at: 13}\n"), HasSubstr("field 'stops[0].at': expected a time from 0 s to the end of the run (12 s), got 13"));
+  EXPECT_THAT(err("  - {kind: emergency, at: 2, hold: 1}\n"),
+              HasSubstr("field 'stops[0].hold': expected at least 2.3 s for an emergency stop with a stopping_time of 0.3 s, got 1"));
+  EXPECT_THAT(err("  - {kind: pause, at: 2, stopping_time: 0}\n"), HasSubstr("field 'stops[0].stopping_time': expected more than 0 and at most 2 s, got 0"));
+  EXPECT_THAT(err("  - {kind: pause, at: 2, hold: 3}\n  - {kind: protective, at: 4}\n"),
+              HasSubstr("test.yaml:8: field 'stops[1].at': expected a time after the previous stop has resumed (5.3 s), got 4"));
+  EXPECT_THAT(err("  - {kind: pause, at: 2, speed: 3}\n"), HasSubstr("unknown key 'speed'"));
+  EXPECT_EQ(err("  - {kind: pause, at: 2}\n  - {kind: protective, at: 8, hold: 1}\n"), "no error");
+}
+
 }  // namespace
 }  // namespace twinwatch::sim

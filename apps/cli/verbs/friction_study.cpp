@@ -97,6 +97,7 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
   const cli::ColumnMaps maps(o.column_maps, o.recordings);
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, maps.of(f)));
+  for (const auto& r : recs) cli::require_driven(r, "friction-study");
   for (const auto& r : recs)
     if (r.n_dof != recs[0].n_dof)
       throw InvalidArgument(fmt::format("{} has {} joints, {} has {}", r.path, r.n_dof, recs[0].path, recs[0].n_dof));

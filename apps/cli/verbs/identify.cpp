@@ -142,6 +142,7 @@ int run_identify(const IdentifyOptions& o) {
     recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, fmt::format("identify --method {}", o.method));
   }
+  recs = cli::driven_only(std::move(recs), o.quiet);
   const model::RobotModel robot = model::load_robot(o.robot);
   for (const auto& r : recs) cli::check_units(r, robot);
   std::vector<ident::TrainingRun> runs;
@@ -189,7 +190,8 @@ int run_identify(const IdentifyOptions& o) {
   twin.monitor_json = monitor::learn_thresholds(twin, healthy).to_json();
   twin.save(o.output);
   if (!o.quiet) {
-    fmt::print("twin '{}' ({} method) from {} recording(s) -> {}\n", twin.robot_name(), twin.method, recs.size(), o.output);
+    fmt::print("twin '{}' ({} method) from {} recording(s){} -> {}\n", twin.robot_name(), twin.method, o.recordings.size(),
+               recs.size() > o.recordings.size() ? fmt::format(" ({} driven stretches)", recs.size()) : "", o.output);
     fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gen %", "gain N·m/A");
     // a gain the recordings did not fix is shown as the monitor uses it: the median of the identified
     // ones (the fitted number itself can be anything, e.g. 3240 on a joint no payload loads)
@@ -255,7 +257,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   auto read_all = [&](const std::vector<std::string>& files) {
     std::vector<device::Recording> v;
     for (const auto& f : files) v.push_back(device::read_recording(f, maps.of(f)));
-    return v;
+    return cli::driven_only(std::move(v), o.quiet);
   };
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
   const model::RobotModel robot = model::load_robot(o.robot);
@@ -342,9 +344,14 @@ int run_validate(const ValidateOptions& o) {
   std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
   VectorJ i;
   ident::FrictionMemory memory;
+  // a sample in which the controller does not drive the arm (a stop, power off, brakes on) is no
+  // driven motion to compare with the twin: left out of the metrics and the predictions file, said
+  std::vector<size_t> used;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
     twin.advance(memory, s.q);
+    if (!s.driven()) continue;
+    used.push_back(k);
     twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i, &memory);
     for (int j = 0; j < n; ++j) {
       meas[static_cast<size_t>(j)].push_back(s.current[j]);
@@ -360,20 +367,28 @@ int run_validate(const ValidateOptions& o) {
     for (int j = 0; j < n; ++j) fmt::print(f, ",actual_current_{}", j);
     for (int j = 0; j < n; ++j) fmt::print(f, ",predicted_current_{}", j);
     fmt::print(f, "\n");
-    for (size_t k = 0; k < rec.samples.size(); ++k) {
-      fmt::print(f, "{}", rec.samples[k].timestamp);
+    for (size_t k = 0; k < used.size(); ++k) {
+      fmt::print(f, "{}", rec.samples[used[k]].timestamp);
       for (int j = 0; j < n; ++j) fmt::print(f, ",{}", meas[static_cast<size_t>(j)][k]);
       for (int j = 0; j < n; ++j) fmt::print(f, ",{}", pred[static_cast<size_t>(j)][k]);
       fmt::print(f, "\n");
     }
     std::fclose(f);
   }
+  if (used.size() < kMinValidateSamples)
+    throw InvalidArgument(fmt::format("validate: {} has {} sample(s) in which the controller drives the arm, expected at least {}",
+                                      o.recording, used.size(), kMinValidateSamples));
+  if (used.size() < rec.samples.size() && !o.json)
+    fmt::print(stderr, "note: {}: {} sample(s) in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode not "
+                       "NORMAL/REDUCED) are left out\n",
+               o.recording, rec.samples.size() - used.size());
   nlohmann::json out;
   out["recording"] = o.recording;
   out["twin"] = o.twin;
+  if (used.size() < rec.samples.size()) out["samples_not_driven"] = rec.samples.size() - used.size();
   if (!o.json) {
     fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
-               rec.samples.size());
+               used.size());
     fmt::print("{:<8}", "metric");
     for (int j = 0; j < n; ++j) fmt::print(" {:>8}", fmt::format("J{}", j + 1));
     fmt::print("\n");

@@ -320,11 +320,14 @@ int run_monitor(const MonitorOptions& o) {
     fmt::print("payload: the twin followed the payload changes it found; it ended with {:.2f} kg (it started with {:.2f} kg)\n", ended,
                twin.payload().mass);
   if (!o.quiet && !o.json)
-    fmt::print("{} samples, {} gap(s), {} event(s){}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
+    fmt::print("{} samples, {} gap(s), {} event(s){}{}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
                mon.repeated() + mon.invalid() > 0
                    ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value not a number)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())
                    : "",
+               mon.not_driven() > 0 ? fmt::format("; {} sample(s) ({:.1f} s) not judged: the controller did not drive the arm (see the notes)",
+                                                  mon.not_driven(), mon.not_driven_seconds())
+                                    : "",
                o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));
   return 0;
 }
@@ -350,6 +353,7 @@ int run_thresholds(const ThresholdOptions& o) {
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
     cli::check_units(recs.back(), twin.robot());
   }
+  recs = cli::driven_only(std::move(recs));
   std::vector<monitor::HealthyRun> runs;
   const model::RigidBodyInertia p = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   for (const auto& r : recs) runs.push_back({&r, p});
@@ -408,6 +412,7 @@ int run_thresholds(const ThresholdOptions& o) {
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
     cli::check_units(vrecs.back(), twin.robot());
   }
+  vrecs = cli::driven_only(std::move(vrecs));
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});

@@ -111,6 +111,7 @@ int run_identify(const IdentOpts& o) {
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     cli::check_units(recs.back(), m);
+    cli::require_driven(recs.back(), "torque identify");
   }
   // FWD=REV pairs: REV is FWD's trajectory played backwards
   std::vector<std::pair<std::string, std::string>> pairs;
@@ -128,6 +129,7 @@ int run_identify(const IdentOpts& o) {
     if (it == segs.end()) throw InvalidArgument(fmt::format("--reverse names '{}', which is not one of the recordings", fw));
     revs.push_back(device::read_recording(rv, map ? &*map : nullptr));
     cli::check_units(revs.back(), m);
+    cli::require_driven(revs.back(), "torque identify");
     it->reverse = &revs.back();
   }
   ident::RigidBodyLsOptions io;

@@ -28,7 +28,16 @@ enum SampleField : std::uint32_t {
   kFieldJointTorque = 1u << 11,      ///< measured joint torque (joint torque sensors; not an RTDE output)
   kFieldCurrentAsTorque = 1u << 12,  ///< actual_current_as_torque (the controller's current-derived torque)
   kFieldPayload = 1u << 13,  ///< payload + payload_cog: the payload the program declares (RTDE, controller >= 5.5.1)
+  kFieldSafetyMode = 1u << 14,  ///< safety_mode (RTDE): normal, reduced, protective stop, emergency stop, ...
 };
+
+/// RTDE robot_mode 7: powered, brakes released, the controller drives the joints
+/// (../shared/reference/rtde-protocol.md; every other mode: off, booting, idle with brakes on, backdrive).
+inline constexpr std::int32_t kRobotModeRunning = 7;
+/// RTDE safety_mode 1 (NORMAL) and 2 (REDUCED): the safety system lets the program run; 3 and up are
+/// stops (protective, safeguard, emergency), recovery, violation and fault.
+inline constexpr std::int32_t kSafetyModeNormal = 1;
+inline constexpr std::int32_t kSafetyModeReduced = 2;
 
 /// One controller cycle. Units: rad, rad/s, rad/s², A, °C, N·m, s.
 struct RobotSample {
@@ -46,6 +55,7 @@ struct RobotSample {
   VectorJ current_as_torque;        ///< actual_current_as_torque [N·m] (RTDE; or a foreign log's current-derived torque)
   std::uint64_t digital_outputs = 0;  ///< actual_digital_output_bits
   std::int32_t robot_mode = 7;        ///< robot_mode (7 = RUNNING)
+  std::int32_t safety_mode = 1;       ///< safety_mode (1 = NORMAL, 3 = PROTECTIVE_STOP, 7 = ROBOT_EMERGENCY_STOP, ...)
   /// payload [kg] and payload_cog [m, in the tool flange frame]: what the program declares it
   /// carries (set_payload; RTDE outputs of controllers >= 5.5.1). NaN unless kFieldPayload.
   double payload = std::numeric_limits<double>::quiet_NaN();
@@ -65,6 +75,12 @@ struct RobotSample {
   }
   int n_dof() const { return static_cast<int>(q.size()); }
   bool has(SampleField f) const { return (present & f) != 0; }
+  /// The controller drives the arm under normal or reduced safety (robot_mode RUNNING, safety_mode
+  /// NORMAL or REDUCED), or the stream does not say otherwise: what a twin of the driven arm predicts.
+  bool driven() const {
+    return (!has(kFieldRobotMode) || robot_mode == kRobotModeRunning) &&
+           (!has(kFieldSafetyMode) || safety_mode == kSafetyModeNormal || safety_mode == kSafetyModeReduced);
+  }
 };
 
 }  // namespace twinwatch

@@ -7,7 +7,7 @@
 ///   timestamp, actual_q_0..n-1, actual_qd_*, target_q_*, target_qd_*, target_qdd_*,
 ///   actual_current_*, target_current_*, target_moment_*, joint_temperatures_*,
 ///   actual_joint_torque_* (joint torque sensors, a twinwatch name), actual_current_as_torque_*,
-///   actual_digital_output_bits, robot_mode, stream_gap (1 where the source lost samples just before
+///   actual_digital_output_bits, robot_mode, safety_mode, stream_gap (1 where the source lost samples just before
 ///   this row: RTDE gaps and reconnects)
 /// Only timestamp and actual_q_* are required; absent groups are NaN and flagged absent in
 /// RobotSample::present. Foreign logs load through a ColumnMap (their column -> RTDE name, scale).
@@ -60,6 +60,15 @@ double jitter_gap_factor(double spread, double period, double floor);
 /// or a column map entry whose file column is not in the header. A UTF-8 byte-order mark before
 /// the header is skipped. Timestamp gaps are not errors: they are marked (gap_before) and counted.
 Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
+
+/// The stretches of a recording in which the controller drives the arm (RobotSample::driven: robot_mode
+/// RUNNING, safety_mode NORMAL or REDUCED, where the file has those columns), each as a recording of
+/// its own with the same path. A twin models a driven arm: a stop's deceleration under a protective
+/// or emergency stop, a powered-off arm on its brakes (currents near 0 while gravity pulls) or a brake
+/// release would be fitted, or learned as healthy, as if it were. Stretches shorter than
+/// `min_seconds` are left out too. A recording driven throughout comes back whole. `left_out` (may be
+/// null) gets a sentence for the user when anything was left out, else "".
+std::vector<Recording> driven_segments(const Recording& rec, double min_seconds, std::string* left_out);
 
 /// Throws twinwatch::ParseError (line 1, the first missing group's column) unless every group in
 /// `fields` (SampleField flags) is present in the recording; `user` says who needs them, e.g.

@@ -289,6 +289,10 @@ class Monitor {
   long gaps() const { return n_gaps_; }
   long repeated() const { return n_repeated_; }
   long invalid() const { return n_invalid_; }
+  /// Samples in which the controller did not drive the arm (RobotSample::driven() false: power off,
+  /// brakes on, a protective or emergency stop, ...): not judged, and their total time [s].
+  long not_driven() const { return n_not_driven_; }
+  double not_driven_seconds() const { return not_driven_s_; }
   /// The slow-wear trend detector (per-window friction, residual energy, I_total history).
   const TrendDetector& trend() const { return trend_; }
   /// The twin with the monitor's payload (set it when the program changes the payload; the monitor
@@ -472,6 +476,12 @@ class Monitor {
   bool have_prev_ = false, filter_started_ = false;
   long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
   bool invalid_run_ = false;  // the last sample was skipped as non-finite (one event per run)
+  // the controller stopped driving the arm (RobotSample::driven): nothing is judged until it drives
+  // it again (pause_watch, resume_watch)
+  bool paused_ = false;
+  double paused_at_ = 0.0, not_driven_s_ = 0.0;
+  long n_not_driven_ = 0;
+  std::int32_t paused_robot_mode_ = kRobotModeRunning, paused_safety_mode_ = kSafetyModeNormal;
   bool restart_pending_ = false;  // samples were skipped: the next one restarts the estimators
   long settle_until_ = 0;     // decisions start after this many samples (kObserverSettle; again after a gap)
   std::vector<double> memory_unsure_;  // per joint: [rad] it must move after a gap before it decides again (0: decides)
@@ -581,6 +591,14 @@ class Monitor {
   double jitter_mad_ = 0.0;
   long jitter_steps_ = 0;
   double gap_factor_ = 1.5;
+  // a sample in which the controller does not drive the arm: what was open is closed as at the end
+  // of a run, the twin's memory follows the encoders, nothing is judged (pause_watch); the first
+  // driven sample after it restarts the estimators and decisions as after a gap (resume_watch)
+  void pause_watch(const RobotSample& s, double t, double dt);
+  void resume_watch(double t);
+  // closes what is open at the end of a run or when the controller stops driving the arm; `why`
+  // is added to an alert's detail
+  void close_open(const std::string& why);
   void track_jitter(double dt, double t);
   void add_note(double t, const std::string& text);  // into notes() and on_note
   double raise_time_ = 0.0;

@@ -13,7 +13,7 @@
 ///    target_q (position [m] + rotation vector [rad]); actual_TCP_speed / target_TCP_speed: the
 ///    flange Jacobian times qd (linear [m/s] + angular [rad/s]);
 ///  - payload / payload_cog / payload_inertia: the nominal model's current payload;
-///  - modes: robot_mode 7 (RUNNING), joint_mode 253 (RUNNING), safety_mode 1 and safety_status 1
+///  - modes: robot_mode and safety_mode as the sample has them (the simulator's stops), joint_mode 253 (RUNNING), safety_status 1
 ///    (NORMAL), runtime_state 2 (PLAYING), robot_status_bits 0b11 (power on, program running);
 ///  - speed_scaling = target_speed_fraction = 1, actual_main_voltage = actual_robot_voltage = 48 V,
 ///    actual_execution_time 0.3 ms;
@@ -47,7 +47,7 @@ class RtdeFrameBuilder {
   std::vector<double> frame_;
   Matrix6J J_;
   int timestamp_, q_, qd_, tq_, tqd_, tqdd_, cur_, tcur_, tmom_, cur_torque_, temp_, apose_, aspeed_, tpose_, tspeed_,
-      dout_, robot_mode_, payload_, payload_cog_, payload_inertia_;
+      dout_, robot_mode_, safety_mode_, payload_, payload_cog_, payload_inertia_;
 };
 
 }  // namespace twinwatch::sim

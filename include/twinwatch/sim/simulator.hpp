@@ -121,6 +121,41 @@ struct FaultSpec {
   double level(double t) const;
 };
 
+/// A stop of the running program, as an operator or the safety system makes one on a real arm: the
+/// controller decelerates along the path (the program's time slows to a halt, as a UR controller's
+/// speed scaling does), holds, and resumes the program where it stopped with the same ramp. Not a
+/// fault: the stream says it in robot_mode and safety_mode, as a UR controller's does
+/// (../shared/reference/rtde-protocol.md), and the labels do not list it.
+enum class StopKind {
+  Pause,       ///< the operator pauses the program: powered, safety_mode NORMAL throughout
+  Protective,  ///< a protective stop (stop category 2: powered, holding): safety_mode PROTECTIVE_STOP until unlocked
+  Emergency,   ///< an emergency stop (category 1): decelerates, then power off with the brakes on; powered on,
+               ///< brakes released and the program resumed at the end of the hold
+};
+
+/// Lower-case YAML name ("pause", "protective", "emergency").
+const char* to_string(StopKind k);
+
+struct StopSpec {
+  StopKind kind = StopKind::Pause;
+  double at = 0.0;             ///< [s] the stop is triggered
+  double hold = 5.0;           ///< [s] from the trigger until the program resumes
+  double stopping_time = 0.3;  ///< [s] the deceleration along the path (and the resume's ramp)
+};
+
+/// The stop timeline's fixed steps [s]: a protective stop is unlocked (safety_mode NORMAL again)
+/// kUnlockLead before the program resumes; after an emergency stop the arm is powered on with the
+/// brakes still on (robot_mode IDLE) for kIdleBeforeRelease, and its brakes are released
+/// (robot_mode RUNNING, holding at rest) kBrakeReleaseLead before the program resumes.
+inline constexpr double kUnlockLead = 0.5;
+inline constexpr double kIdleBeforeRelease = 1.0;
+inline constexpr double kBrakeReleaseLead = 1.0;
+/// The longest deceleration a stop may take [s] (UR stopping times are well below it).
+inline constexpr double kMaxStoppingTime = 2.0;
+/// The shortest hold a stop of `kind` needs [s]: its deceleration and, for an emergency stop, the
+/// power-on and brake-release steps before the program resumes.
+double min_stop_hold(const StopSpec& stop);
+
 /// Joint torque per newton of a collision fault's force, J_link(point)^T direction [N·m/N], at the
 /// configuration `d` holds (forward_kinematics done). The simulator scales it so that its largest
 /// entry is the fault's magnitude; evaluation reads it to score the contact isolation.
@@ -166,6 +201,8 @@ struct SimOptions {
   /// every sample carries it (kFieldPayload). False: a controller or a recording without it
   bool streams_payload = true;
   VectorJ kp, kd;               ///< PD gains [N·m/rad], [N·m·s/rad]; empty: defaults from the inertia
+  /// stops of the program (StopSpec), in time order, each resumed before the next begins
+  std::vector<StopSpec> stops;
   void validate(int n_dof) const;
 };
 
@@ -196,6 +233,15 @@ class Simulator {
   std::uint32_t sample_fields() const;
 
  private:
+  /// What the program and the controller do at wall time t (the stops): the program's time t - lost
+  /// (the trajectory's clock), its rate r and the rate's derivative, the modes the stream reports,
+  /// whether the brakes hold the arm.
+  struct ProgramState {
+    double lost = 0.0, r = 1.0, rdot = 0.0;
+    std::int32_t robot_mode = kRobotModeRunning, safety_mode = kSafetyModeNormal;
+    bool braked = false;
+  };
+  ProgramState program_state(double t) const;
   double friction_torque(int j, double qd, double dt);
   void apply_payload_faults(double t);
 
