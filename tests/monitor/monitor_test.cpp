@@ -1845,5 +1845,46 @@ TEST_F(MonitorLoop, AContactTheControllerStoppedTheArmForIsReported) {
   EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("still active when the controller stopped driving the arm at 11.34"));
 }
 
+// Session 30: the operator pauses a program that never rests (the figure-eight). Its thresholds were
+// learned on motion only, and a held arm's drives switch between motoring and back-driven current as
+// the joints creep under gravity: every pause of the stop set raised a false contact. A rest the
+// thresholds never saw (MonitorConfig::rest_seconds) is judged with the levels of the twin's program
+// sets that did rest; with none, the monitor says so once.
+TEST_F(MonitorLoop, APauseOnAProgramThatNeverRestsIsJudgedWithTheRestTestedThresholds) {
+  MonitorConfig c = *config;
+  ASSERT_TRUE(std::isfinite(c.rest_seconds));
+  EXPECT_LT(c.rest_seconds, Monitor::kMinRestSeconds) << "the figure-eight never rests";
+  const auto rests = run("robot: ur3e\nseed: 3111\nduration: 30\n" + pick_and_place(0.8, 1.0, 1.6));
+  learn_program_thresholds(c, "pick_place", *twin, {{&rests, {}}});
+  EXPECT_GT(c.programs["pick_place"].rest_seconds, 6.0) << "a pick-and-place rests 2 s a cycle";
+  // (the JSON keeps it)
+  EXPECT_EQ(MonitorConfig::from_json(c.to_json(), "t", 6).programs["pick_place"].rest_seconds, c.programs["pick_place"].rest_seconds);
+  EXPECT_EQ(MonitorConfig::from_json(c.to_json(), "t", 6).rest_seconds, c.rest_seconds);
+  const std::string pauses = "stops:\n  - {kind: pause, at: 7.3, hold: 3}\n  - {kind: pause, at: 17.9, hold: 2.5}\n";
+  const auto watch = [&](const MonitorConfig& cfg, const std::string& yaml, std::vector<std::string>* notes) {
+    Monitor m(declared_twin(), cfg);
+    for (const auto& x : run(yaml).samples) m.push(x);
+    m.finish();
+    if (notes) *notes = m.notes();
+    return m.events();
+  };
+  const std::string paused = scenario(3112, 30, 0.5) + pauses;
+  EXPECT_TRUE(watch(c, paused, nullptr).empty()) << listing(watch(c, paused, nullptr));
+  // without a set that rested, the pauses are judged with the figure-eight's thresholds, and said
+  std::vector<std::string> notes;
+  const auto alone = watch(*config, paused, &notes);
+  EXPECT_FALSE(alone.empty()) << "the figure-eight's thresholds at a pause";
+  EXPECT_THAT(fmt::format("{}", fmt::join(notes, "\n")), ::testing::HasSubstr("which the thresholds in use were never learned on"));
+  // a contact while the arm is paused is still found, as a contact
+  const auto hit = watch(c, scenario(3113, 30, 0.5,
+                                     "  - {type: collision, link: 3, onset: 8.6, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], "
+                                     "direction: [0.0, 0.3, 1.0]}\n") +
+                                pauses,
+                         nullptr);
+  ASSERT_EQ(hit.size(), 1u) << listing(hit);
+  EXPECT_EQ(hit[0].fault, FaultClass::Collision) << listing(hit);
+  EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

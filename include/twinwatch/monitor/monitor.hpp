@@ -54,6 +54,8 @@ struct ThresholdSet {
   double payload_max = std::numeric_limits<double>::quiet_NaN();
   /// per joint, the largest reversal load of the runs it was learned on (MonitorConfig::reversal_load_max; empty: not recorded)
   VectorJ reversal_load_max;
+  /// how long the whole arm rested in the runs it was learned on [s] (MonitorConfig::rest_seconds; NaN: not recorded)
+  double rest_seconds = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
@@ -148,6 +150,14 @@ struct MonitorConfig {
   /// reversals before, none with it (docs/validation.md, "Thresholds that grow with the load").
   /// Empty: not recorded (a twin from before session 25): no widening.
   VectorJ reversal_load_max;
+  /// How long the whole arm was commanded to rest (every |target qd| < RestBaseline::kTargetRest) in
+  /// the healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin from before
+  /// session 30, or runs without target velocities). Thresholds learned on a program that never rests
+  /// (the figure-eight) have not seen what the drives do when they hold the arm still: on the virtual
+  /// UR3e a paused figure-eight raised a false contact at every pause. Where they rested less than
+  /// Monitor::kMinRestSeconds, the monitor judges a rest (kSettle samples on) with each joint's
+  /// threshold no tighter than those of the twin's program sets that did rest (Monitor::rest_donors_).
+  double rest_seconds = std::numeric_limits<double>::quiet_NaN();
 
   /// Makes the set learned for `name` the active one (static_level, dynamic). Empty: keep the
   /// default. Throws InvalidArgument naming the known programs when there is no such set.
@@ -307,6 +317,9 @@ class Monitor {
   /// Whether the twin took the last declaration and its payload mass is the declared one (within
   /// 0.05 kg); false without a declaration.
   bool carries_declared() const;
+  /// Thresholds learned on less whole-arm rest than this [s] judge a rest with the rest-tested sets'
+  /// levels (MonitorConfig::rest_seconds).
+  static constexpr double kMinRestSeconds = 2.0;
   /// A payload this much heavier [kg] than MonitorConfig::payload_max is beyond what the thresholds
   /// were learned on. Measured with thresholds learned up to 0.5 kg: 1.0 kg raised no false alarm
   /// and 1.5 kg did (4 a minute, session 24).
@@ -594,6 +607,8 @@ class Monitor {
   // a sample in which the controller does not drive the arm: what was open is closed as at the end
   // of a run, the twin's memory follows the encoders, nothing is judged (pause_watch); the first
   // driven sample after it restarts the estimators and decisions as after a gap (resume_watch)
+  // widens level_ / obs_level_ at a rest the thresholds in use never saw (MonitorConfig::rest_seconds)
+  void judge_unseen_rest(const RobotSample& s, double t);
   void pause_watch(const RobotSample& s, double t, double dt);
   void resume_watch(double t);
   // closes what is open at the end of a run or when the controller stops driving the arm; `why`
@@ -629,6 +644,12 @@ class Monitor {
   VectorJ load_band_cur_, load_band_obs_;
   double reversal_width_ = 0.01, obs_band_alpha_ = 0.0;
   bool load_band_on_ = false;
+  // the program sets whose thresholds judge a rest that the thresholds in use never saw
+  // (MonitorConfig::rest_seconds), and how long the arm has been commanded to rest [samples]
+  std::vector<const ThresholdSet*> rest_donors_;
+  long target_rest_run_ = 0;
+  double rest_left_at_ = -std::numeric_limits<double>::infinity();  // when the arm last moved on from a rest of kSettle samples or more
+  bool rest_unseen_said_ = false;  // the thresholds never saw a rest and no set did: said once
   // the drive switch's step per unit of excess load, per joint (set once): in the current residual
   // [A per twin torque unit] and the observer's [1]
   VectorJ load_step_cur_, load_step_obs_;
