@@ -449,7 +449,7 @@ void MonitorConfig::select_program(const std::string& name) {
   dynamic = it->second.dynamic;
   payload_max = it->second.payload_max;
   reversal_load_max = it->second.reversal_load_max;
-  rest_seconds = it->second.rest_seconds;
+  longest_rest = it->second.longest_rest;
   if (it->second.observer_level.size() != 0) {
     observer_level = it->second.observer_level;
     observer_dynamic = it->second.observer_dynamic;
@@ -514,13 +514,13 @@ std::string MonitorConfig::to_json() const {
   j["trend"] = trend_json(trend);
   if (std::isfinite(payload_max)) j["payload_max_kg"] = payload_max;
   if (reversal_load_max.size()) j["reversal_load_max"] = vec_json(reversal_load_max);
-  if (std::isfinite(rest_seconds)) j["rest_s"] = rest_seconds;
+  if (std::isfinite(longest_rest)) j["longest_rest_s"] = longest_rest;
   for (const auto& [name, set] : programs) {
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
     if (std::isfinite(set.payload_max)) j["programs"][name]["payload_max_kg"] = set.payload_max;
     if (set.reversal_load_max.size()) j["programs"][name]["reversal_load_max"] = vec_json(set.reversal_load_max);
-    if (std::isfinite(set.rest_seconds)) j["programs"][name]["rest_s"] = set.rest_seconds;
+    if (std::isfinite(set.longest_rest)) j["programs"][name]["longest_rest_s"] = set.longest_rest;
   }
   for (const auto& [name, set] : programs)
     if (set.observer_level.size() != 0) {
@@ -544,7 +544,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     m.only({"static_level_A", "dynamic", "use_dynamic", "filter_cutoff_hz", "raise_after", "clear_after", "observer_raise_after",
             "observer_raise_after_joint", "observer_validation_ratio", "sensitivity", "nominal_period", "residual_filter", "trend", "programs",
             "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic", "payload_max_kg", "reversal_load_max",
-            "rest_s"});
+            "longest_rest_s"});
     // the joint count: the twin's, or (a block read on its own) that of the static levels
     const nlohmann::json& levels = m.need("static_level_A");
     const int n = n_dof > 0 ? n_dof : levels.is_array() ? static_cast<int>(std::min<size_t>(levels.size(), kMaxDof + 1)) : 0;
@@ -576,7 +576,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.trend = trend_from_json(m.object("trend"), n);
     if (m.has("payload_max_kg")) c.payload_max = m.nonnegative("payload_max_kg");
     if (m.has("reversal_load_max")) c.reversal_load_max = nonnegative_joint_values(m, "reversal_load_max", n);
-    if (m.has("rest_s")) c.rest_seconds = m.nonnegative("rest_s");
+    if (m.has("longest_rest_s")) c.longest_rest = m.nonnegative("longest_rest_s");
     // the sets learned per program
     if (m.has("programs")) {
       const JsonFields programs = m.object("programs");
@@ -588,7 +588,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         }
         const JsonFields p(value, origin, programs.field(name));
         p.only({"static_level_A", "dynamic", "runs", "seconds", "observer_level_Nm", "observer_dynamic", "observer_raise_after_joint",
-                "observer_validation_ratio", "payload_max_kg", "reversal_load_max", "rest_s"});
+                "observer_validation_ratio", "payload_max_kg", "reversal_load_max", "longest_rest_s"});
         ThresholdSet set;
         set.static_level = joint_values(p, "static_level_A", n, true);
         set.dynamic = dynamic_from_json(p, "dynamic", n, !c.use_dynamic);
@@ -597,7 +597,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         set.seconds = p.nonnegative("seconds");
         if (p.has("payload_max_kg")) set.payload_max = p.nonnegative("payload_max_kg");
         if (p.has("reversal_load_max")) set.reversal_load_max = nonnegative_joint_values(p, "reversal_load_max", n);
-        if (p.has("rest_s")) set.rest_seconds = p.nonnegative("rest_s");
+        if (p.has("longest_rest_s")) set.longest_rest = p.nonnegative("longest_rest_s");
         // the observer's set comes whole (written together)
         if (p.has("observer_level_Nm") || p.has("observer_dynamic")) {
           set.observer_level = joint_values(p, "observer_level_Nm", n, true);
@@ -709,16 +709,24 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   c.payload_max = 0.0;
   for (const HealthyRun& h : runs) c.payload_max = std::max(c.payload_max, h.payload.mass);
   c.reversal_load_max = load.array().isFinite().all() ? load : VectorJ();  // (a non-finite torque: not recorded)
-  // how long the whole arm was commanded to rest (not recorded when a run has no target velocities)
-  c.rest_seconds = 0.0;
+  // the longest whole-arm rest the thresholds saw (after each run's start-up; not recorded when a run
+  // has no target velocities)
+  c.longest_rest = 0.0;
   for (const HealthyRun& h : runs) {
     const auto& smp = h.recording->samples;
     if (!(h.recording->present & kFieldTargetQd)) {
-      c.rest_seconds = std::numeric_limits<double>::quiet_NaN();
+      c.longest_rest = std::numeric_limits<double>::quiet_NaN();
       break;
     }
-    for (size_t k = 1; k < smp.size(); ++k)
-      if (smp[k].target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest) c.rest_seconds += smp[k].timestamp - smp[k - 1].timestamp;
+    double began = std::numeric_limits<double>::quiet_NaN();
+    for (size_t k = std::min(smp.size(), static_cast<size_t>(kSettleSamples)); k < smp.size(); ++k) {
+      if (smp[k].target_qd.cwiseAbs().maxCoeff() >= RestBaseline::kTargetRest) {
+        began = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      if (std::isnan(began)) began = smp[k].timestamp;
+      c.longest_rest = std::max(c.longest_rest, smp[k].timestamp - began);
+    }
   }
   return c;
 }
@@ -780,7 +788,7 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.observer_dynamic = learned.observer_dynamic;
   set.payload_max = learned.payload_max;
   set.reversal_load_max = learned.reversal_load_max;
-  set.rest_seconds = learned.rest_seconds;
+  set.longest_rest = learned.longest_rest;
   // no per-joint observer debounce: a choice belongs to the thresholds it was made for (choose_observer_debounce)
   set.runs = static_cast<int>(runs.size());
   for (const auto& r : runs)
@@ -819,10 +827,11 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   reversal_width_ = reversal_width(twin_);
   obs_band_alpha_ = 1.0 - std::exp(-cfg_.observer_gain * cfg_.nominal_period);
   load_band_on_ = cfg_.reversal_load_max.size() == n_;
-  // thresholds that never saw the arm rest judge a rest with the sets that did (rest_seconds)
-  if (std::isfinite(cfg_.rest_seconds) && cfg_.rest_seconds < kMinRestSeconds)
+  // a rest longer than the thresholds in use saw is judged with the sets that saw long ones too (longest_rest)
+  if (std::isfinite(cfg_.longest_rest))
     for (const auto& [name, set] : cfg_.programs)
-      if (name != cfg_.program && std::isfinite(set.rest_seconds) && set.rest_seconds >= kMinRestSeconds &&
+      if (name != cfg_.program && std::isfinite(set.longest_rest) && set.longest_rest >= kMinDonorRest &&
+          set.longest_rest > cfg_.longest_rest &&
           set.static_level.size() == n_ && (!cfg_.use_dynamic || static_cast<int>(set.dynamic.size()) == n_))
         rest_donors_.push_back(&set);
   // the switch's step per unit of excess load. The current for a torque tau is f tau / g, f = 1
@@ -2135,14 +2144,16 @@ void Monitor::push(const RobotSample& s) {
       obs_level_[j] = level_at(cfg_.use_dynamic, cfg_.observer_dynamic, cfg_.observer_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]);
   }
   if (load_band_on_) widen_for_load(s.qd);
-  // a rest the thresholds in use never saw (MonitorConfig::rest_seconds): each joint's thresholds no
-  // tighter than the rest-tested sets' at this state, once the arm has been commanded to rest kSettle samples
-  if (std::isfinite(cfg_.rest_seconds) && cfg_.rest_seconds < kMinRestSeconds) {
+  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest): each joint's thresholds
+  // no tighter than those of the sets that saw long rests, at this state, until kUnseenRestAfter after
+  // the arm moves on
+  if (std::isfinite(cfg_.longest_rest)) {
     const bool rests = s.has(kFieldTargetQd) && s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest;
-    if (rests) ++target_rest_run_;
-    else if (target_rest_run_ >= RestBaseline::kSettle) rest_left_at_ = t, target_rest_run_ = 0;
-    else target_rest_run_ = 0;
-    if (rests || t - rest_left_at_ < kUnseenRestAfter) judge_unseen_rest(s, t);
+    if (rests && !(rest_began_at_ <= t)) rest_began_at_ = t;
+    const bool unseen = rests && t - rest_began_at_ > cfg_.longest_rest;
+    if (unseen) rest_left_at_ = t;  // (the last sample of an unseen rest so far)
+    if (!rests) rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
+    if (unseen || t - rest_left_at_ < kUnseenRestAfter) judge_unseen_rest(s, t);
   }
   // ring buffer for the diagnosis (torque-domain residual through the drive gains)
   DiagnosisSample& ds = ring_[ring_head_];
@@ -2527,10 +2538,10 @@ std::string not_driven_words(const RobotSample& s) {
 void Monitor::judge_unseen_rest(const RobotSample& s, double t) {
   if (rest_donors_.empty()) {
     if (!rest_unseen_said_)
-      add_note(t, fmt::format("the arm rests (every target velocity 0), which the thresholds in use were never learned on ({:.1f} s of rest "
-                              "in their runs) and no program set of the twin was either: an alert at a rest may be false. Learn the "
-                              "program's thresholds on runs that rest ('twinwatch thresholds --program')",
-                              cfg_.rest_seconds));
+      add_note(t, fmt::format("the arm rests (every target velocity 0) longer than in any run the thresholds in use were learned on "
+                              "(at most {:.2f} s), and no program set of the twin saw longer rests: an alert at this rest may be false. "
+                              "Learn the program's thresholds on runs that rest as it does ('twinwatch thresholds --program')",
+                              cfg_.longest_rest));
     rest_unseen_said_ = true;
     return;
   }

@@ -54,8 +54,8 @@ struct ThresholdSet {
   double payload_max = std::numeric_limits<double>::quiet_NaN();
   /// per joint, the largest reversal load of the runs it was learned on (MonitorConfig::reversal_load_max; empty: not recorded)
   VectorJ reversal_load_max;
-  /// how long the whole arm rested in the runs it was learned on [s] (MonitorConfig::rest_seconds; NaN: not recorded)
-  double rest_seconds = std::numeric_limits<double>::quiet_NaN();
+  /// the longest whole-arm rest in the runs it was learned on [s] (MonitorConfig::longest_rest; NaN: not recorded)
+  double longest_rest = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Learned thresholds and user settings; stored in the twin file under "monitor".
@@ -150,14 +150,15 @@ struct MonitorConfig {
   /// reversals before, none with it (docs/validation.md, "Thresholds that grow with the load").
   /// Empty: not recorded (a twin from before session 25): no widening.
   VectorJ reversal_load_max;
-  /// How long the whole arm was commanded to rest (every |target qd| < RestBaseline::kTargetRest) in
-  /// the healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin from before
-  /// session 30, or runs without target velocities). Thresholds learned on a program that never rests
-  /// (the figure-eight) have not seen what the drives do when they hold the arm still: on the virtual
-  /// UR3e a paused figure-eight raised a false contact at every pause. Where they rested less than
-  /// Monitor::kMinRestSeconds, the monitor judges a rest (kSettle samples on) with each joint's
-  /// threshold no tighter than those of the twin's program sets that did rest (Monitor::rest_donors_).
-  double rest_seconds = std::numeric_limits<double>::quiet_NaN();
+  /// The longest whole-arm rest (every |target qd| < RestBaseline::kTargetRest, after each run's
+  /// start-up) in the healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin
+  /// from before session 30, or runs without target velocities). Thresholds learned on a program that
+  /// never rests (the figure-eight) have not seen what the drives do when they hold the arm still: on
+  /// the virtual UR3e a paused figure-eight raised a false contact at every pause. A rest that lasts
+  /// longer than this is judged, from then until 0.5 s after the arm moves on, with each joint's
+  /// threshold no tighter than those of the twin's program sets that saw rests of kMinDonorRest or
+  /// more, and longer (Monitor::rest_donors_); with none, the monitor says so once.
+  double longest_rest = std::numeric_limits<double>::quiet_NaN();
 
   /// Makes the set learned for `name` the active one (static_level, dynamic). Empty: keep the
   /// default. Throws InvalidArgument naming the known programs when there is no such set.
@@ -317,9 +318,9 @@ class Monitor {
   /// Whether the twin took the last declaration and its payload mass is the declared one (within
   /// 0.05 kg); false without a declaration.
   bool carries_declared() const;
-  /// Thresholds learned on less whole-arm rest than this [s] judge a rest with the rest-tested sets'
-  /// levels (MonitorConfig::rest_seconds).
-  static constexpr double kMinRestSeconds = 2.0;
+  /// A program set whose runs held the arm still this long [s] judges the rests longer than the
+  /// thresholds in use saw (MonitorConfig::longest_rest).
+  static constexpr double kMinDonorRest = 0.25;
   /// A payload this much heavier [kg] than MonitorConfig::payload_max is beyond what the thresholds
   /// were learned on. Measured with thresholds learned up to 0.5 kg: 1.0 kg raised no false alarm
   /// and 1.5 kg did (4 a minute, session 24).
@@ -607,7 +608,7 @@ class Monitor {
   // a sample in which the controller does not drive the arm: what was open is closed as at the end
   // of a run, the twin's memory follows the encoders, nothing is judged (pause_watch); the first
   // driven sample after it restarts the estimators and decisions as after a gap (resume_watch)
-  // widens level_ / obs_level_ at a rest the thresholds in use never saw (MonitorConfig::rest_seconds)
+  // widens level_ / obs_level_ at a rest the thresholds in use never saw (MonitorConfig::longest_rest)
   void judge_unseen_rest(const RobotSample& s, double t);
   void pause_watch(const RobotSample& s, double t, double dt);
   void resume_watch(double t);
@@ -645,10 +646,10 @@ class Monitor {
   double reversal_width_ = 0.01, obs_band_alpha_ = 0.0;
   bool load_band_on_ = false;
   // the program sets whose thresholds judge a rest that the thresholds in use never saw
-  // (MonitorConfig::rest_seconds), and how long the arm has been commanded to rest [samples]
+  // (MonitorConfig::longest_rest), and the commanded rest's times
   std::vector<const ThresholdSet*> rest_donors_;
-  long target_rest_run_ = 0;
-  double rest_left_at_ = -std::numeric_limits<double>::infinity();  // when the arm last moved on from a rest of kSettle samples or more
+  double rest_began_at_ = std::numeric_limits<double>::quiet_NaN();  // the commanded rest's first sample (NaN: not resting)
+  double rest_left_at_ = -std::numeric_limits<double>::infinity();   // the last sample of a rest longer than the thresholds saw
   bool rest_unseen_said_ = false;  // the thresholds never saw a rest and no set did: said once
   // the drive switch's step per unit of excess load, per joint (set once): in the current residual
   // [A per twin torque unit] and the observer's [1]
