@@ -10,7 +10,8 @@ release before the program resumes), each held 1.5-8 s. Half of the runs then ha
 on link 2, 3 or 5, 1.5-5 s after the second stop's resume.
 
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops --seed 30100 --runs 36
-    /usr/bin/python3 scripts/make_stop_sets.py OUTDIR --seed 30500 --runs 36   # held-out, measured once
+    /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout --seed 30500 --runs 36
+    /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout2 --seed 30900 --runs 36 --stopping-times 0.15 0.3 0.6
 """
 import argparse
 import os
@@ -35,6 +36,8 @@ def main():
     a.add_argument("out")
     a.add_argument("--seed", type=int, required=True)
     a.add_argument("--runs", type=int, default=36)
+    a.add_argument("--stopping-times", type=float, nargs="*", default=[],
+                   help="draw each stop's stopping_time from these [s] (default: the simulator's 0.3 s)")
     o = a.parse_args()
     rng = random.Random(o.seed)
     os.makedirs(o.out, exist_ok=True)
@@ -45,8 +48,10 @@ def main():
         stops, t = [], rng.uniform(5.0, 12.0)
         for kind in kinds:
             hold = rng.uniform(*HOLD[kind])
-            stops.append(f"  - {{kind: {kind}, at: {t:.3f}, hold: {hold:.3f}}}\n")
-            end = t + hold + 0.3
+            ts = rng.choice(o.stopping_times) if o.stopping_times else 0.3
+            extra = f", stopping_time: {ts}" if o.stopping_times else ""
+            stops.append(f"  - {{kind: {kind}, at: {t:.3f}, hold: {hold:.3f}{extra}}}\n")
+            end = t + hold + ts
             t = end + rng.uniform(4.0, 8.0)
         faults = ""
         if k % 2 == 1:

@@ -116,6 +116,9 @@ constexpr long kSettleSamples = 50;
 // the unseen rest's thresholds hold this long after the arm moves on [s]: the joints break away from
 // static friction together, which a program that never rests never shows either
 constexpr double kUnseenRestAfter = 0.5;
+// an alert that began this long before a rest the thresholds never saw so long may be the rest's own [s]
+// (the debounce and the last samples of the deceleration)
+constexpr double kUnseenRestLead = 0.02;
 // Cao's static rule: a margin above the largest healthy residual
 constexpr double kStaticPeakMargin = 1.1;
 // the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
@@ -834,6 +837,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
           set.longest_rest > cfg_.longest_rest &&
           set.static_level.size() == n_ && (!cfg_.use_dynamic || static_cast<int>(set.dynamic.size()) == n_))
         rest_donors_.push_back(&set);
+  rest_level_ = VectorJ::Zero(n_);
+  rest_obs_level_ = VectorJ::Zero(n_);
   // the switch's step per unit of excess load. The current for a torque tau is f tau / g, f = 1
   // motoring and c_gen back-driven: the twin's blended f is off the drive's by at most |1 - c_gen|,
   // |1 - c_gen| tau / g in the current residual. The observer converts the measured current back to
@@ -2144,17 +2149,6 @@ void Monitor::push(const RobotSample& s) {
       obs_level_[j] = level_at(cfg_.use_dynamic, cfg_.observer_dynamic, cfg_.observer_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]);
   }
   if (load_band_on_) widen_for_load(s.qd);
-  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest): each joint's thresholds
-  // no tighter than those of the sets that saw long rests, at this state, until kUnseenRestAfter after
-  // the arm moves on
-  if (std::isfinite(cfg_.longest_rest)) {
-    const bool rests = s.has(kFieldTargetQd) && s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest;
-    if (rests && !(rest_began_at_ <= t)) rest_began_at_ = t;
-    const bool unseen = rests && t - rest_began_at_ > cfg_.longest_rest;
-    if (unseen) rest_left_at_ = t;  // (the last sample of an unseen rest so far)
-    if (!rests) rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
-    if (unseen || t - rest_left_at_ < kUnseenRestAfter) judge_unseen_rest(s, t);
-  }
   // ring buffer for the diagnosis (torque-domain residual through the drive gains)
   DiagnosisSample& ds = ring_[ring_head_];
   ds.t = t;
@@ -2213,6 +2207,8 @@ void Monitor::push(const RobotSample& s) {
   rest_rf_.apply(s, rf_dec_);
   obs_dec_ = obs_.residual();
   rest_obs_.apply(s, obs_dec_);
+  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest)
+  if (std::isfinite(cfg_.longest_rest)) watch_unseen_rest(s, t);
   bool any_active = false, background_active = false;
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
@@ -2535,23 +2531,68 @@ std::string not_driven_words(const RobotSample& s) {
 
 }  // namespace
 
-void Monitor::judge_unseen_rest(const RobotSample& s, double t) {
+void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
+  const bool rests = s.has(kFieldTargetQd) && s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest;
+  if (!rests) {
+    if (rest_unseen_) rest_left_at_ = t_prev_;
+    rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
+    rest_unseen_ = false;
+    if (t - rest_left_at_ < kUnseenRestAfter) judge_unseen_rest(s, t);
+    return;
+  }
+  if (std::isnan(rest_began_at_)) rest_began_at_ = t, rest_within_donors_ = true;
+  const bool was_unseen = rest_unseen_;
+  rest_unseen_ = t - rest_began_at_ > cfg_.longest_rest;
   if (rest_donors_.empty()) {
-    if (!rest_unseen_said_)
+    if (rest_unseen_ && !rest_unseen_said_)
       add_note(t, fmt::format("the arm rests (every target velocity 0) longer than in any run the thresholds in use were learned on "
                               "(at most {:.2f} s), and no program set of the twin saw longer rests: an alert at this rest may be false. "
                               "Learn the program's thresholds on runs that rest as it does ('twinwatch thresholds --program')",
                               cfg_.longest_rest));
-    rest_unseen_said_ = true;
+    rest_unseen_said_ |= rest_unseen_;
     return;
   }
-  for (int j = 0; j < n_; ++j)
+  donor_levels(s);
+  if (!rest_unseen_) {
+    // (still a rest the thresholds saw: are the decisions within the rest-tested levels too?)
+    for (int j = 0; j < n_; ++j)
+      if (std::abs(rf_dec_[j]) > rest_level_[j] || (obs_on_ && std::abs(obs_dec_[j]) > rest_obs_level_[j])) rest_within_donors_ = false;
+    return;
+  }
+  level_ = level_.cwiseMax(rest_level_);
+  if (obs_on_) obs_level_ = obs_level_.cwiseMax(rest_obs_level_);
+  // the rest has just outlasted every rest the thresholds saw: an alert raised as it began (the drives
+  // taking up the holding torque as the whole arm stops), whose decisions stayed within the rest-tested
+  // levels, was this rest, not a fault
+  if (!was_unseen && rest_within_donors_ && open_ >= 0 && background_ < 0 && !diagnosed_ && !followed_ &&
+      events_[static_cast<size_t>(open_)].t_start >= rest_began_at_ - kUnseenRestLead) {
+    add_note(t, fmt::format("the alert raised at {:.3f} s came as the arm came to rest, a rest longer than any the thresholds in use were "
+                            "learned on (at most {:.2f} s); the levels of the program sets that saw such rests were not exceeded: "
+                            "withdrawn, not an event",
+                            events_[static_cast<size_t>(open_)].t_detected, cfg_.longest_rest));
+    withdraw_open_alert();
+  }
+}
+
+void Monitor::judge_unseen_rest(const RobotSample& s, double /*t*/) {
+  if (rest_donors_.empty()) return;
+  donor_levels(s);
+  level_ = level_.cwiseMax(rest_level_);
+  if (obs_on_) obs_level_ = obs_level_.cwiseMax(rest_obs_level_);
+}
+
+void Monitor::donor_levels(const RobotSample& s) {
+  for (int j = 0; j < n_; ++j) {
+    rest_level_[j] = 0.0, rest_obs_level_[j] = 0.0;
     for (const ThresholdSet* d : rest_donors_) {
-      level_[j] = std::max(level_[j], level_at(cfg_.use_dynamic, d->dynamic, d->static_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]));
+      rest_level_[j] = std::max(rest_level_[j], level_at(cfg_.use_dynamic, d->dynamic, d->static_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]));
       if (obs_on_ && d->observer_level.size() == n_)
-        obs_level_[j] = std::max(obs_level_[j], level_at(cfg_.use_dynamic, d->observer_dynamic, d->observer_level, j, s.qd[j], qdd_[j],
-                                                         cfg_.sensitivity[j]));
+        rest_obs_level_[j] = std::max(rest_obs_level_[j], level_at(cfg_.use_dynamic, d->observer_dynamic, d->observer_level, j, s.qd[j],
+                                                                   qdd_[j], cfg_.sensitivity[j]));
     }
+    // (a donor without the observer's thresholds leaves the observer's own)
+    if (rest_obs_level_[j] == 0.0) rest_obs_level_[j] = obs_level_[j];
+  }
 }
 
 void Monitor::pause_watch(const RobotSample& s, double t, double dt) {

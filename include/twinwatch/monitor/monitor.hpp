@@ -608,8 +608,12 @@ class Monitor {
   // a sample in which the controller does not drive the arm: what was open is closed as at the end
   // of a run, the twin's memory follows the encoders, nothing is judged (pause_watch); the first
   // driven sample after it restarts the estimators and decisions as after a gap (resume_watch)
-  // widens level_ / obs_level_ at a rest the thresholds in use never saw (MonitorConfig::longest_rest)
+  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest): from when it outlasts
+  // them until kUnseenRestAfter after the arm moves on, level_ / obs_level_ no tighter than the donors'
+  // (judge_unseen_rest); an alert raised as it began, within the donors' levels, is withdrawn
+  void watch_unseen_rest(const RobotSample& s, double t);
   void judge_unseen_rest(const RobotSample& s, double t);
+  void donor_levels(const RobotSample& s);  // rest_level_, rest_obs_level_ at this sample
   void pause_watch(const RobotSample& s, double t, double dt);
   void resume_watch(double t);
   // closes what is open at the end of a run or when the controller stops driving the arm; `why`
@@ -651,6 +655,9 @@ class Monitor {
   double rest_began_at_ = std::numeric_limits<double>::quiet_NaN();  // the commanded rest's first sample (NaN: not resting)
   double rest_left_at_ = -std::numeric_limits<double>::infinity();   // the last sample of a rest longer than the thresholds saw
   bool rest_unseen_said_ = false;  // the thresholds never saw a rest and no set did: said once
+  bool rest_unseen_ = false;         // the commanded rest has outlasted every rest the thresholds saw
+  bool rest_within_donors_ = true;   // the decisions stayed within the donors' levels since the rest began
+  VectorJ rest_level_, rest_obs_level_;  // the donors' levels at the sample (donor_levels)
   // the drive switch's step per unit of excess load, per joint (set once): in the current residual
   // [A per twin torque unit] and the observer's [1]
   VectorJ load_step_cur_, load_step_obs_;
