@@ -7,7 +7,7 @@ and 11 s, triangle at 0.12, 0.2 and 0.3 m/s, pick-and-place at three speeds), wi
 0.5 kg payload, 45 s long, with two stops of the program (`stops:`, docs/scenarios.md): an
 operator's pause, a protective stop or an emergency stop (power off, brakes, power on and brake
 release before the program resumes), each held 1.5-8 s. Half of the runs then have a 3-5 N·m contact
-on link 2, 3 or 5, 1.5-5 s after the second stop's resume.
+on link 2, 3 or 5, 1.5-5 s after the second stop's resume ramp has ended.
 
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops --seed 30100 --runs 36
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout --seed 30500 --runs 36

@@ -378,7 +378,12 @@ void require_distinct(const std::vector<std::string>& files, const std::string& 
 
 std::vector<device::Recording> driven_only(std::vector<device::Recording> recs, bool quiet) {
   std::vector<device::Recording> out;
-  for (const device::Recording& r : recs) {
+  for (device::Recording& r : recs) {
+    // (a recording driven throughout, the usual case, is moved through: no copy of its samples)
+    if (std::all_of(r.samples.begin(), r.samples.end(), [](const RobotSample& x) { return x.driven(); })) {
+      out.push_back(std::move(r));
+      continue;
+    }
     std::string note;
     std::vector<device::Recording> segs = device::driven_segments(r, kMinDrivenStretch, &note);
     if (segs.empty())

@@ -217,3 +217,56 @@ BENCHMARK(BM_TwinPredict);
 }  // namespace
 
 BENCHMARK_MAIN();
+
+// (session 30) A figure-eight paused for 2.5 s and stopped by an emergency stop for 5 s (power off,
+// brakes, power on, brake release): the loop through samples the controller does not drive (not
+// judged), the restart after them, and a pause longer than the figure-eight's thresholds saw, judged
+// with the levels of a pick-and-place set learned on the same twin. Its own setup: the simulator of a
+// binary before session 30 has no stops.
+void BM_MonitorStops(benchmark::State& st) {
+  struct StopSetup {
+    ident::TwinModel twin;
+    monitor::MonitorConfig cfg;
+    device::Recording rec;
+    StopSetup() {
+      const FaultSetup base;
+      twin = base.twin;
+      cfg = base.cfg;
+      const auto rests = simulate("robot: ur3e\nseed: 8\nduration: 28\ntrajectory: {type: point_to_point, waypoints: "
+                                  "[[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "
+                                  "[0.6, -1.4, 1.3, -1.5, -1.85, -0.3]], durations: [0.8, 1.0, 0.8, 1.6]}\n"
+                                  "payload: {mass: 0.5, com: [0, 0, 0.04]}\n");
+      monitor::learn_program_thresholds(cfg, "pick_place", twin, {{&rests, twin.payload()}});
+      rec = simulate("robot: ur3e\nseed: 9\nduration: 20\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, "
+                     "tilt: [0.3, 0.4, 0.5]}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n"
+                     "stops:\n  - {kind: pause, at: 4.3, hold: 2.5}\n  - {kind: emergency, at: 11.1, hold: 5}\n");
+      rec.present |= kFieldSafetyMode;
+    }
+  };
+  static const StopSetup setup;
+  monitor::Monitor mon(setup.twin, setup.cfg);
+  size_t k = 0, events = 0, replays = 0;
+  long not_driven = 0;
+  std::vector<double> lat;
+  lat.reserve(1 << 20);
+  for (auto _ : st) {
+    const auto t0 = std::chrono::steady_clock::now();
+    mon.push(setup.rec.samples[k]);
+    lat.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    if (++k < setup.rec.samples.size()) continue;
+    k = 0;
+    st.PauseTiming();
+    events += mon.events().size();
+    not_driven = mon.not_driven();
+    ++replays;
+    mon = monitor::Monitor(setup.twin, setup.cfg);
+    st.ResumeTiming();
+  }
+  std::sort(lat.begin(), lat.end());
+  st.counters["samples_per_s"] = benchmark::Counter(static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+  st.counters["events_per_replay"] = replays ? static_cast<double>(events) / static_cast<double>(replays) : 0.0;
+  st.counters["not_driven_per_replay"] = static_cast<double>(not_driven);
+  st.counters["p99_us"] = lat[lat.size() * 99 / 100];
+  st.counters["max_us"] = lat.back();
+}
+BENCHMARK(BM_MonitorStops)->MinTime(2.0);

@@ -405,7 +405,9 @@ std::vector<Recording> driven_segments(const Recording& rec, double min_seconds,
     size_t e = k;
     while (e < all.size() && all[e].driven()) ++e;
     if (all[e - 1].timestamp - all[k].timestamp >= min_seconds) {
-      Recording seg = rec;  // (path, present, period, gap factor)
+      Recording seg;
+      seg.path = rec.path, seg.n_dof = rec.n_dof, seg.present = rec.present;
+      seg.median_period = rec.median_period, seg.period_jitter = rec.period_jitter, seg.gap_factor = rec.gap_factor;
       seg.samples.assign(all.begin() + static_cast<long>(k), all.begin() + static_cast<long>(e));
       seg.samples.front().gap_before = false;  // the segment starts here
       seg.gaps = 0;

@@ -206,9 +206,13 @@ TwinModel identify_sequential(const std::string& robot, const std::vector<const 
   twin.created = now_iso();
   SequentialModel seq;
   seq.library = o.library;
-  for (const auto* r : quasi_static) seq.quasi_static.push_back(r->path), twin.recordings.push_back(r->path);
-  for (const auto* r : sine) seq.sine.push_back(r->path), twin.recordings.push_back(r->path);
-  for (const auto& r : general) seq.general.push_back(r.recording->path), twin.recordings.push_back(r.recording->path);
+  // (a recording cut into its driven stretches is named once)
+  const auto once = [](std::vector<std::string>& v, const std::string& p) {
+    if (std::find(v.begin(), v.end(), p) == v.end()) v.push_back(p);
+  };
+  for (const auto* r : quasi_static) once(seq.quasi_static, r->path), once(twin.recordings, r->path);
+  for (const auto* r : sine) once(seq.sine, r->path), once(twin.recordings, r->path);
+  for (const auto& r : general) once(seq.general, r.recording->path), once(twin.recordings, r.recording->path);
   for (const auto* r : quasi_static) for (const RobotSample& s : r->samples) twin.envelope.include(s.q, s.qd);
   for (const auto* r : sine) for (const RobotSample& s : r->samples) twin.envelope.include(s.q, s.qd);
   for (const auto& r : general) for (const RobotSample& s : r.recording->samples) twin.envelope.include(s.q, s.qd);

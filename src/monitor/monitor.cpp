@@ -836,7 +836,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
       if (name != cfg_.program && std::isfinite(set.longest_rest) && set.longest_rest >= kMinDonorRest &&
           set.longest_rest > cfg_.longest_rest &&
           set.static_level.size() == n_ && (!cfg_.use_dynamic || static_cast<int>(set.dynamic.size()) == n_))
-        rest_donors_.push_back(&set);
+        rest_donors_.push_back(set);  // (a copy: a moved or copied Monitor keeps its own)
   rest_level_ = VectorJ::Zero(n_);
   rest_obs_level_ = VectorJ::Zero(n_);
   // the switch's step per unit of excess load. The current for a torque tau is f tau / g, f = 1
@@ -2102,7 +2102,8 @@ void Monitor::push(const RobotSample& s) {
     pause_watch(s, t, dt);
     return;
   }
-  if (paused_) resume_watch(t);
+  if (paused_) resume_watch(s, t);
+  driven_seen_ = true;
   // the payload the program declares, when the stream carries it (before the prediction uses it)
   // (per sample the declaration is compared in line; only a new one costs the call)
   if (cfg_.follow_payload && s.has(kFieldPayload) && !same_declaration(s)) take_declared_payload(s);
@@ -2486,7 +2487,7 @@ void Monitor::stream_silent(double seconds) {
   if (on_event) on_event(g);
 }
 
-void Monitor::close_frozen(int j, bool at_stop) {
+void Monitor::close_frozen(int j, bool at_stop, const std::string& why) {
   const size_t J = static_cast<size_t>(j);
   Event& f = events_[static_cast<size_t>(frozen_event_[J])];
   frozen_event_[J] = -1;
@@ -2495,7 +2496,7 @@ void Monitor::close_frozen(int j, bool at_stop) {
   f.t_end = t_prev_;  // the last sample that still held the value
   f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
   f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples){}", j + 1, frozen_val_[j],
-                         f.magnitude, at_stop ? "; still frozen when monitoring stopped" : "");
+                         f.magnitude, at_stop ? (why.empty() ? std::string("; still frozen when monitoring stopped") : why) : std::string());
   if (on_event) on_event(f);
   // the observer and the residual filter integrated the frozen value for the whole stretch: they
   // restart as after a gap (the release read as a contact on link 1 in stream_and_sensor_faults)
@@ -2564,7 +2565,7 @@ void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
   // the rest has just outlasted every rest the thresholds saw: an alert raised as it began (the drives
   // taking up the holding torque as the whole arm stops), whose decisions stayed within the rest-tested
   // levels, was this rest, not a fault
-  if (!was_unseen && rest_within_donors_ && open_ >= 0 && background_ < 0 && !diagnosed_ && !followed_ &&
+  if (!was_unseen && rest_within_donors_ && open_ >= 0 && background_ < 0 && merge_into_ < 0 && !split_ && !diagnosed_ && !followed_ &&
       events_[static_cast<size_t>(open_)].t_start >= rest_began_at_ - kUnseenRestLead) {
     add_note(t, fmt::format("the alert raised at {:.3f} s came as the arm came to rest, a rest longer than any the thresholds in use were "
                             "learned on (at most {:.2f} s); the levels of the program sets that saw such rests were not exceeded: "
@@ -2584,10 +2585,10 @@ void Monitor::judge_unseen_rest(const RobotSample& s, double /*t*/) {
 void Monitor::donor_levels(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     rest_level_[j] = 0.0, rest_obs_level_[j] = 0.0;
-    for (const ThresholdSet* d : rest_donors_) {
-      rest_level_[j] = std::max(rest_level_[j], level_at(cfg_.use_dynamic, d->dynamic, d->static_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]));
-      if (obs_on_ && d->observer_level.size() == n_)
-        rest_obs_level_[j] = std::max(rest_obs_level_[j], level_at(cfg_.use_dynamic, d->observer_dynamic, d->observer_level, j, s.qd[j],
+    for (const ThresholdSet& d : rest_donors_) {
+      rest_level_[j] = std::max(rest_level_[j], level_at(cfg_.use_dynamic, d.dynamic, d.static_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]));
+      if (obs_on_ && d.observer_level.size() == n_)
+        rest_obs_level_[j] = std::max(rest_obs_level_[j], level_at(cfg_.use_dynamic, d.observer_dynamic, d.observer_level, j, s.qd[j],
                                                                    qdd_[j], cfg_.sensitivity[j]));
     }
     // (a donor without the observer's thresholds leaves the observer's own)
@@ -2623,18 +2624,40 @@ void Monitor::pause_watch(const RobotSample& s, double t, double dt) {
   // the outputs are not taken: one changed while the arm stood (a part removed by hand) shows at the
   // first driven sample, as an output change there
   twin_.advance(memory_, s.q);
+  paused_unpowered_ |= s.has(kFieldRobotMode) && s.robot_mode != kRobotModeRunning;
+  // (a stream that starts stopped: its outputs are where the watch starts, not a change at the first
+  // driven sample)
+  if (!driven_seen_) outputs_prev_ = s.digital_outputs;
+  qd_prev_ = s.qd;  // (the velocity difference of a stream without target accelerations goes on)
   t_prev_ = t;
   have_prev_ = true;
-  restart_pending_ = true;
 }
 
-void Monitor::resume_watch(double t) {
+void Monitor::resume_watch(const RobotSample& s, double t) {
   paused_ = false;
   add_note(t, fmt::format("monitoring resumed: the controller drives the arm again, {:.1f} s after it stopped at {:.3f} s; decisions wait "
-                          "for the estimators' start-up, and a joint at rest until it has moved, as after a stream gap",
-                          t - paused_at_, paused_at_));
-  // (restart_after_gap runs for this sample: restart_pending_). Nothing seen before the stop is
-  // compared with what comes after it: the diagnosis window, the debouncers, the rest baselines
+                          "for the estimators' start-up{}",
+                          t - paused_at_, paused_at_,
+                          paused_unpowered_ ? ", and a joint at rest until it has moved (its friction state after the power was off is "
+                                              "unknown), as after a stream gap"
+                                            : ""));
+  // the estimators start again; after power off and brakes the twin's pre-sliding memory is unknown
+  // for a joint at rest, as after a gap (with power on it followed the encoders through the stop)
+  if (paused_unpowered_) {
+    restart_after_gap(s);
+  } else {
+    restart_estimators();
+    std::fill(frozen_run_.begin(), frozen_run_.end(), 0);
+  }
+  paused_unpowered_ = false;
+  if (!s.has(kFieldTargetQdd)) qdd_.setZero();
+  trend_.resume_at(t_prev_);  // (the stop is no window time: the trend's energy counts driven samples)
+  // nothing seen before the stop is compared with what comes after it: the diagnosis window, the
+  // debouncers, the rest baselines, the rest the thresholds never saw
+  rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
+  rest_unseen_ = false;
+  rest_within_donors_ = true;
+  rest_left_at_ = -std::numeric_limits<double>::infinity();
   ring_count_ = 0;
   for (auto& d : deb_) d.reset();
   for (auto& d : deb_obs_) d.reset();
@@ -2650,7 +2673,7 @@ void Monitor::resume_watch(double t) {
 
 void Monitor::close_open(const std::string& why) {
   for (int j = 0; j < n_; ++j)
-    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
+    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true, why);
   report_pending_close();
   report_held();
   // (the open alert's first look first: it may hold it too)
@@ -2669,6 +2692,8 @@ void Monitor::close_open(const std::string& why) {
 }
 
 void Monitor::finish() {
+  for (int j = 0; j < n_; ++j)
+    if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
   // the default set on a run that looks like one of the twin's programs: most alerts would not have
   // been raised by that program's thresholds (a pick-and-place watched with the default set: 26
   // events, 23 of them "contacts" at its stops; docs/validation.md, session 22). Said, not acted on:

@@ -358,6 +358,13 @@ int run_validate(const ValidateOptions& o) {
       pred[static_cast<size_t>(j)].push_back(i[j]);
     }
   }
+  if (used.size() < kMinValidateSamples)
+    throw InvalidArgument(fmt::format("validate: {} has {} sample(s) in which the controller drives the arm, expected at least {}",
+                                      o.recording, used.size(), kMinValidateSamples));
+  if (used.size() < rec.samples.size() && !o.json)
+    fmt::print(stderr, "note: {}: {} sample(s) in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode not "
+                       "NORMAL/REDUCED) are left out\n",
+               o.recording, rec.samples.size() - used.size());
   if (!o.predictions.empty()) {
     require_output(o.predictions, {o.recording, o.twin, o.column_map});
     // per sample: time, measured and predicted current of every joint (for plots)
@@ -375,13 +382,6 @@ int run_validate(const ValidateOptions& o) {
     }
     std::fclose(f);
   }
-  if (used.size() < kMinValidateSamples)
-    throw InvalidArgument(fmt::format("validate: {} has {} sample(s) in which the controller drives the arm, expected at least {}",
-                                      o.recording, used.size(), kMinValidateSamples));
-  if (used.size() < rec.samples.size() && !o.json)
-    fmt::print(stderr, "note: {}: {} sample(s) in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode not "
-                       "NORMAL/REDUCED) are left out\n",
-               o.recording, rec.samples.size() - used.size());
   nlohmann::json out;
   out["recording"] = o.recording;
   out["twin"] = o.twin;

@@ -485,14 +485,15 @@ class Monitor {
   std::vector<int> frozen_run_;
   std::vector<int> frozen_event_;  // per joint: index of its open frozen-channel event (-1: none)
   VectorJ frozen_since_;           // per joint: when the channel took its present value
-  void close_frozen(int j, bool at_stop = false);
+  void close_frozen(int j, bool at_stop = false, const std::string& why = "");
   double i_total_ = 0.0, t_prev_ = 0.0;
   bool have_prev_ = false, filter_started_ = false;
   long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
   bool invalid_run_ = false;  // the last sample was skipped as non-finite (one event per run)
   // the controller stopped driving the arm (RobotSample::driven): nothing is judged until it drives
   // it again (pause_watch, resume_watch)
-  bool paused_ = false;
+  bool paused_ = false, paused_unpowered_ = false;  // (unpowered: robot_mode not RUNNING at a sample of the stop)
+  bool driven_seen_ = false;  // a driven sample has been pushed
   double paused_at_ = 0.0, not_driven_s_ = 0.0;
   long n_not_driven_ = 0;
   std::int32_t paused_robot_mode_ = kRobotModeRunning, paused_safety_mode_ = kSafetyModeNormal;
@@ -615,7 +616,7 @@ class Monitor {
   void judge_unseen_rest(const RobotSample& s, double t);
   void donor_levels(const RobotSample& s);  // rest_level_, rest_obs_level_ at this sample
   void pause_watch(const RobotSample& s, double t, double dt);
-  void resume_watch(double t);
+  void resume_watch(const RobotSample& s, double t);
   // closes what is open at the end of a run or when the controller stops driving the arm; `why`
   // is added to an alert's detail
   void close_open(const std::string& why);
@@ -651,7 +652,7 @@ class Monitor {
   bool load_band_on_ = false;
   // the program sets whose thresholds judge a rest that the thresholds in use never saw
   // (MonitorConfig::longest_rest), and the commanded rest's times
-  std::vector<const ThresholdSet*> rest_donors_;
+  std::vector<ThresholdSet> rest_donors_;
   double rest_began_at_ = std::numeric_limits<double>::quiet_NaN();  // the commanded rest's first sample (NaN: not resting)
   double rest_left_at_ = -std::numeric_limits<double>::infinity();   // the last sample of a rest longer than the thresholds saw
   bool rest_unseen_said_ = false;  // the thresholds never saw a rest and no set did: said once

@@ -108,6 +108,11 @@ class TrendDetector {
   /// Whether the residuals pushed are compensated for temperature (default: when the config has a
   /// slope; an owner that compensates them itself and passes a zero slope says so here).
   void set_temperature_compensated(bool on) { compensated_ = on; }
+  /// The stream goes on from a stop the monitor did not judge (Monitor::resume_watch): the next
+  /// sample's step counts from `t` [s], not from the last sample before the stop.
+  void resume_at(double t) {
+    if (started_) t_prev_ = t;
+  }
   /// Per-window history of joint j (oldest first; bounded by config.history).
   const std::vector<TrendPoint>& history(int j) const { return hist_[static_cast<size_t>(j)]; }
   /// Mean total current of each closed window [A] (UR3e Fig. 12), oldest first.
