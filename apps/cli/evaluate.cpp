@@ -1090,6 +1090,9 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
       obs_lev(static_cast<size_t>(n));
   std::vector<double> itot;
   std::vector<VectorJ> resv, qdv;
+  // the tables count the samples the controller drives (a stop is plotted, not scored: the monitor
+  // does not judge it either)
+  std::vector<std::vector<double>> meas_driven(static_cast<size_t>(n)), pred_driven(static_cast<size_t>(n));
   for (const auto& s : rec.samples) {
     mon.push(s);
     watch.check(s);
@@ -1106,6 +1109,11 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
       qt[static_cast<size_t>(j)].push_back(s.target_q.size() ? s.target_q[j] : NAN);
     }
     itot.push_back(mon.total_current());
+    if (!s.driven()) continue;
+    for (int j = 0; j < n; ++j) {
+      meas_driven[static_cast<size_t>(j)].push_back(s.current[j]);
+      pred_driven[static_cast<size_t>(j)].push_back(mon.predicted_current()[j]);
+    }
     resv.push_back(mon.residual());
     qdv.push_back(s.qd);
   }
@@ -1147,7 +1155,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   std::vector<std::string> head{"metric"};
   for (int j = 0; j < n; ++j) {
     head.push_back(fmt::format("J{}", j + 1));
-    const auto m = signal::fit_metrics(meas[static_cast<size_t>(j)], pred[static_cast<size_t>(j)]);
+    const auto m = signal::fit_metrics(meas_driven[static_cast<size_t>(j)], pred_driven[static_cast<size_t>(j)]);
     mrows[0].push_back(fmt::format("{:.4f}", m.rmse));
     mrows[1].push_back(fmt::format("{:.4f}", m.mae));
     mrows[2].push_back(fmt::format("{:.4f}", m.r2));
