@@ -452,6 +452,7 @@ void MonitorConfig::select_program(const std::string& name) {
   dynamic = it->second.dynamic;
   payload_max = it->second.payload_max;
   reversal_load_max = it->second.reversal_load_max;
+  crawl_max = it->second.crawl_max;
   longest_rest = it->second.longest_rest;
   if (it->second.observer_level.size() != 0) {
     observer_level = it->second.observer_level;
@@ -490,6 +491,8 @@ void MonitorConfig::validate(int n) const {
   if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
   check_residual_filter(*this, n);
   check_reversal_load(reversal_load_max, n, "monitor");
+  if (crawl_max.size() && crawl_max.size() != n)
+    throw InvalidArgument(fmt::format("monitor crawl_max has size {}, expected {} (one per joint)", crawl_max.size(), n));
   for (const auto& [name, set] : programs) check_reversal_load(set.reversal_load_max, n, fmt::format("program '{}'", name));
   trend.validate(n);
   if (observer_level.size() != 0) {
@@ -517,12 +520,14 @@ std::string MonitorConfig::to_json() const {
   j["trend"] = trend_json(trend);
   if (std::isfinite(payload_max)) j["payload_max_kg"] = payload_max;
   if (reversal_load_max.size()) j["reversal_load_max"] = vec_json(reversal_load_max);
+  if (crawl_max.size()) j["crawl_max_s"] = vec_json(crawl_max);
   if (std::isfinite(longest_rest)) j["longest_rest_s"] = longest_rest;
   for (const auto& [name, set] : programs) {
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
     if (std::isfinite(set.payload_max)) j["programs"][name]["payload_max_kg"] = set.payload_max;
     if (set.reversal_load_max.size()) j["programs"][name]["reversal_load_max"] = vec_json(set.reversal_load_max);
+    if (set.crawl_max.size()) j["programs"][name]["crawl_max_s"] = vec_json(set.crawl_max);
     if (std::isfinite(set.longest_rest)) j["programs"][name]["longest_rest_s"] = set.longest_rest;
   }
   for (const auto& [name, set] : programs)
@@ -547,7 +552,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     m.only({"static_level_A", "dynamic", "use_dynamic", "filter_cutoff_hz", "raise_after", "clear_after", "observer_raise_after",
             "observer_raise_after_joint", "observer_validation_ratio", "sensitivity", "nominal_period", "residual_filter", "trend", "programs",
             "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic", "payload_max_kg", "reversal_load_max",
-            "longest_rest_s"});
+            "longest_rest_s", "crawl_max_s"});
     // the joint count: the twin's, or (a block read on its own) that of the static levels
     const nlohmann::json& levels = m.need("static_level_A");
     const int n = n_dof > 0 ? n_dof : levels.is_array() ? static_cast<int>(std::min<size_t>(levels.size(), kMaxDof + 1)) : 0;
@@ -579,6 +584,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     c.trend = trend_from_json(m.object("trend"), n);
     if (m.has("payload_max_kg")) c.payload_max = m.nonnegative("payload_max_kg");
     if (m.has("reversal_load_max")) c.reversal_load_max = nonnegative_joint_values(m, "reversal_load_max", n);
+    if (m.has("crawl_max_s")) c.crawl_max = nonnegative_joint_values(m, "crawl_max_s", n);
     if (m.has("longest_rest_s")) c.longest_rest = m.nonnegative("longest_rest_s");
     // the sets learned per program
     if (m.has("programs")) {
@@ -591,7 +597,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         }
         const JsonFields p(value, origin, programs.field(name));
         p.only({"static_level_A", "dynamic", "runs", "seconds", "observer_level_Nm", "observer_dynamic", "observer_raise_after_joint",
-                "observer_validation_ratio", "payload_max_kg", "reversal_load_max", "longest_rest_s"});
+                "observer_validation_ratio", "payload_max_kg", "reversal_load_max", "longest_rest_s", "crawl_max_s"});
         ThresholdSet set;
         set.static_level = joint_values(p, "static_level_A", n, true);
         set.dynamic = dynamic_from_json(p, "dynamic", n, !c.use_dynamic);
@@ -600,6 +606,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
         set.seconds = p.nonnegative("seconds");
         if (p.has("payload_max_kg")) set.payload_max = p.nonnegative("payload_max_kg");
         if (p.has("reversal_load_max")) set.reversal_load_max = nonnegative_joint_values(p, "reversal_load_max", n);
+        if (p.has("crawl_max_s")) set.crawl_max = nonnegative_joint_values(p, "crawl_max_s", n);
         if (p.has("longest_rest_s")) set.longest_rest = p.nonnegative("longest_rest_s");
         // the observer's set comes whole (written together)
         if (p.has("observer_level_Nm") || p.has("observer_dynamic")) {
@@ -651,7 +658,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   std::vector<std::vector<VectorJ>> res, obs_res;
   std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
       ro(static_cast<size_t>(n));
-  VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n), load = VectorJ::Zero(n);
+  VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n), load = VectorJ::Zero(n), crawl = VectorJ::Zero(n);
   const bool with_observer = c.observer_gain > 0.0;
   const double width = reversal_width(twin);
   for (const HealthyRun& h : runs) {
@@ -661,6 +668,20 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, &taus);
     // skip the filter's start-up
     const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
+    {
+      // each joint's longest crawl (its direction in doubt), after the start-up
+      const auto& smp = h.recording->samples;
+      VectorJ since = VectorJ::Constant(n, std::numeric_limits<double>::quiet_NaN());
+      for (size_t k = skip; k < smp.size(); ++k)
+        for (int j = 0; j < n; ++j) {
+          if (!(std::abs(smp[k].qd[j]) < width)) {
+            since[j] = std::numeric_limits<double>::quiet_NaN();
+            continue;
+          }
+          if (std::isnan(since[j])) since[j] = smp[k].timestamp;
+          crawl[j] = std::max(crawl[j], smp[k].timestamp - since[j]);
+        }
+    }
     for (size_t k = skip; k < rf.size(); ++k) {
       peak = peak.cwiseMax(rf[k].cwiseAbs());
       for (int j = 0; j < n; ++j) {
@@ -712,6 +733,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   c.payload_max = 0.0;
   for (const HealthyRun& h : runs) c.payload_max = std::max(c.payload_max, h.payload.mass);
   c.reversal_load_max = load.array().isFinite().all() ? load : VectorJ();  // (a non-finite torque: not recorded)
+  c.crawl_max = c.reversal_load_max.size() ? crawl : VectorJ();
   // the longest whole-arm rest the thresholds saw (after each run's start-up; not recorded when a run
   // has no target velocities)
   c.longest_rest = 0.0;
@@ -791,6 +813,7 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.observer_dynamic = learned.observer_dynamic;
   set.payload_max = learned.payload_max;
   set.reversal_load_max = learned.reversal_load_max;
+  set.crawl_max = learned.crawl_max;
   set.longest_rest = learned.longest_rest;
   // no per-joint observer debounce: a choice belongs to the thresholds it was made for (choose_observer_debounce)
   set.runs = static_cast<int>(runs.size());
@@ -830,6 +853,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   reversal_width_ = reversal_width(twin_);
   obs_band_alpha_ = 1.0 - std::exp(-cfg_.observer_gain * cfg_.nominal_period);
   load_band_on_ = cfg_.reversal_load_max.size() == n_;
+  crawl_since_ = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
   // a rest longer than the thresholds in use saw is judged with the sets that saw long ones too (longest_rest)
   if (std::isfinite(cfg_.longest_rest))
     for (const auto& [name, set] : cfg_.programs)
@@ -909,11 +933,18 @@ double Monitor::load_excess(int j, double qd, double load_max) const {
 // 3 kg stick-slips, its current hopping 0.34-0.50 A for as long as it stands; leaving stops out
 // of the widening raised 5 false alarms at triangle corners where widening them raised none), and
 // there the rest baseline (RestBaseline) does not take the hopping up.
-void Monitor::widen_for_load(const VectorJ& qd) {
+void Monitor::widen_for_load(const VectorJ& qd, double t) {
+  const bool crawls_known = cfg_.crawl_max.size() == n_;
   for (int j = 0; j < n_; ++j) {
     double& cur = load_band_cur_[j];
     double& obs = load_band_obs_[j];
-    const double excess = load_excess(j, qd[j], cfg_.reversal_load_max[j]);
+    // a joint crawling longer than any crawl the thresholds saw: the whole step, not its excess
+    // (MonitorConfig::crawl_max)
+    double& since = crawl_since_[j];
+    if (!(std::abs(qd[j]) < reversal_width_)) since = std::numeric_limits<double>::quiet_NaN();
+    else if (std::isnan(since)) since = t;
+    const bool unseen_crawl = crawls_known && t - since > cfg_.crawl_max[j];
+    const double excess = load_excess(j, qd[j], unseen_crawl ? 0.0 : cfg_.reversal_load_max[j]);
     // a joint on Cao's FIR widens through the same taps as its residual: all positive, so the
     // filtered bound bounds the filtered step (through the IIR it was close, not strict). Its
     // memory is the taps' length: it takes every sample (6 multiply-adds)
@@ -2149,7 +2180,7 @@ void Monitor::push(const RobotSample& s) {
     if (obs_on_)
       obs_level_[j] = level_at(cfg_.use_dynamic, cfg_.observer_dynamic, cfg_.observer_level, j, s.qd[j], qdd_[j], cfg_.sensitivity[j]);
   }
-  if (load_band_on_) widen_for_load(s.qd);
+  if (load_band_on_) widen_for_load(s.qd, t);
   // ring buffer for the diagnosis (torque-domain residual through the drive gains)
   DiagnosisSample& ds = ring_[ring_head_];
   ds.t = t;
@@ -2658,6 +2689,7 @@ void Monitor::resume_watch(const RobotSample& s, double t) {
   rest_unseen_ = false;
   rest_within_donors_ = true;
   rest_left_at_ = -std::numeric_limits<double>::infinity();
+  crawl_since_.setConstant(std::numeric_limits<double>::quiet_NaN());
   ring_count_ = 0;
   for (auto& d : deb_) d.reset();
   for (auto& d : deb_obs_) d.reset();

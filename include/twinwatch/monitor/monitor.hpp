@@ -54,6 +54,8 @@ struct ThresholdSet {
   double payload_max = std::numeric_limits<double>::quiet_NaN();
   /// per joint, the largest reversal load of the runs it was learned on (MonitorConfig::reversal_load_max; empty: not recorded)
   VectorJ reversal_load_max;
+  /// per joint, the longest crawl in the runs it was learned on [s] (MonitorConfig::crawl_max; empty: not recorded)
+  VectorJ crawl_max;
   /// the longest whole-arm rest in the runs it was learned on [s] (MonitorConfig::longest_rest; NaN: not recorded)
   double longest_rest = std::numeric_limits<double>::quiet_NaN();
 };
@@ -150,6 +152,14 @@ struct MonitorConfig {
   /// reversals before, none with it (docs/validation.md, "Thresholds that grow with the load").
   /// Empty: not recorded (a twin from before session 25): no widening.
   VectorJ reversal_load_max;
+  /// Per joint, the longest stretch in which the joint crawled, its direction in doubt (|qd| below the
+  /// reversal width, threshold.hpp), in the healthy runs the thresholds in use were learned on [s]
+  /// (empty: not recorded, a twin from before session 30). A joint that crawls longer than that (a
+  /// program run slower, a slow reversal under gravity) shows the drive's motoring/back-driven step for
+  /// longer than any the thresholds saw: on the virtual UR3e a figure-eight at a half to a fifth of the
+  /// speed its thresholds were learned at raised 2-3 false contacts a run at J2's slow reversals. Beyond
+  /// it the joint's thresholds widen by the whole step (Monitor::widen_for_load with no learned load).
+  VectorJ crawl_max;
   /// The longest whole-arm rest (every |target qd| < RestBaseline::kTargetRest, after each run's
   /// start-up) in the healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin
   /// from before session 30, or runs without target velocities). Thresholds learned on a program that
@@ -662,7 +672,8 @@ class Monitor {
   // the drive switch's step per unit of excess load, per joint (set once): in the current residual
   // [A per twin torque unit] and the observer's [1]
   VectorJ load_step_cur_, load_step_obs_;
-  void widen_for_load(const VectorJ& qd);
+  void widen_for_load(const VectorJ& qd, double t);
+  VectorJ crawl_since_;  // per joint: when it began to crawl (|qd| < reversal width; NaN: it moves)
   // joint j's reversal load at this sample beyond load_max (0: none, or not finite)
   double load_excess(int j, double qd, double load_max) const;
   std::vector<signal::FirFilter> fir_;   // per joint; no taps: the joint uses the IIR
