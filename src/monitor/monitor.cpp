@@ -1024,6 +1024,9 @@ void Monitor::open_event(int joint, double start, double t) {
   followed_ = false;
   raise_time_ = t;
   check_program_sets();
+  // (raised where its joint crawls through a reversal: the end-of-run hint on slower programs)
+  ++alerts_raised_;
+  if (ring_count_ > 0 && std::abs(ring_at(ring_count_ - 1).qd[joint]) < reversal_width_) ++crawl_raises_;
   if (on_event) on_event(events_.back());
 }
 
@@ -2740,6 +2743,15 @@ void Monitor::finish() {
                                       below, raises_, name, name));
     }
   }
+  // most alerts raised where their joint crawled through a reversal: the drive's motoring/back-driven
+  // step there is what a program run slower than the thresholds' runs shows (docs/validation.md, "A
+  // program run slower than its thresholds saw"). Said, not acted on: only the user knows the speed
+  if (alerts_raised_ >= kProgramHintRaises && crawl_raises_ >= kProgramHintShare * alerts_raised_)
+    add_note(t_prev_, fmt::format("{} of the {} alerts of this run were raised where their joint crawled through a reversal (|qd| below "
+                                  "{:.3f} rad/s): if the program ran slower than the healthy runs its thresholds were learned on (the "
+                                  "speed slider turned down), learn them on healthy runs at this speed ('twinwatch thresholds --program "
+                                  "NAME') and monitor with --program NAME",
+                                  crawl_raises_, alerts_raised_, reversal_width_));
   close_open("; still active when monitoring stopped");
 }
 

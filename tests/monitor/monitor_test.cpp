@@ -1935,6 +1935,13 @@ TEST_F(MonitorLoop, AJointCrawlingLongerThanTheThresholdsSawIsNotAFault) {
   MonitorConfig before = *config;
   before.crawl_max.resize(0);
   EXPECT_GE(after(watch(before)).size(), 2u) << "the learned levels alone at the slow reversals" << listing(watch(before));
+  {
+    // and then the run's end says what a slower program would show, and the remedy
+    Monitor m(declared_twin(), before);
+    for (const auto& x : rec.samples) m.push(x);
+    m.finish();
+    EXPECT_THAT(fmt::format("{}", fmt::join(m.notes(), "\n")), ::testing::HasSubstr("crawled through a reversal"));
+  }
   // (the JSON keeps it)
   EXPECT_EQ(MonitorConfig::from_json(config->to_json(), "t", 6).crawl_max, config->crawl_max);
   // a contact at the slow motion is still found

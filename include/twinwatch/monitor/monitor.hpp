@@ -504,6 +504,7 @@ class Monitor {
   // it again (pause_watch, resume_watch)
   bool paused_ = false, paused_unpowered_ = false;  // (unpowered: robot_mode not RUNNING at a sample of the stop)
   bool driven_seen_ = false;  // a driven sample has been pushed
+  int alerts_raised_ = 0, crawl_raises_ = 0;  // alerts raised, and those where their joint crawled (finish's hint)
   double paused_at_ = 0.0, not_driven_s_ = 0.0;
   long n_not_driven_ = 0;
   std::int32_t paused_robot_mode_ = kRobotModeRunning, paused_safety_mode_ = kSafetyModeNormal;
