@@ -644,6 +644,25 @@ MonitorConfig MonitorConfig::from_twin(const ident::TwinModel& twin) {
   return from_json(twin.monitor_json, origin, twin.n_dof());
 }
 
+namespace {
+
+// the longest stretch of consecutive samples from `from` on for which `holds` is true [s] (learning)
+template <class Holds>
+double longest_stretch(const std::vector<RobotSample>& smp, size_t from, Holds holds) {
+  double longest = 0.0, began = std::numeric_limits<double>::quiet_NaN();
+  for (size_t k = from; k < smp.size(); ++k) {
+    if (!holds(smp[k])) {
+      began = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
+    if (std::isnan(began)) began = smp[k].timestamp;
+    longest = std::max(longest, smp[k].timestamp - began);
+  }
+  return longest;
+}
+
+}  // namespace
+
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs, const MonitorConfig& settings,
                                const LearnOptions& options) {
   if (runs.empty()) throw InvalidArgument("learn thresholds: no healthy runs given");
@@ -659,6 +678,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
       ro(static_cast<size_t>(n));
   VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n), load = VectorJ::Zero(n), crawl = VectorJ::Zero(n);
+  double longest_rest = 0.0;
   const bool with_observer = c.observer_gain > 0.0;
   const double width = reversal_width(twin);
   for (const HealthyRun& h : runs) {
@@ -668,20 +688,15 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, &taus);
     // skip the filter's start-up
     const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
-    {
-      // each joint's longest crawl (its direction in doubt), after the start-up
-      const auto& smp = h.recording->samples;
-      VectorJ since = VectorJ::Constant(n, std::numeric_limits<double>::quiet_NaN());
-      for (size_t k = skip; k < smp.size(); ++k)
-        for (int j = 0; j < n; ++j) {
-          if (!(std::abs(smp[k].qd[j]) < width)) {
-            since[j] = std::numeric_limits<double>::quiet_NaN();
-            continue;
-          }
-          if (std::isnan(since[j])) since[j] = smp[k].timestamp;
-          crawl[j] = std::max(crawl[j], smp[k].timestamp - since[j]);
-        }
-    }
+    // each joint's longest crawl (its direction in doubt), and the arm's longest commanded rest, after
+    // the start-up (the rest is not recorded when a run has no target velocities)
+    const auto& smp = h.recording->samples;
+    for (int j = 0; j < n; ++j)
+      crawl[j] = std::max(crawl[j], longest_stretch(smp, skip, [&](const RobotSample& x) { return std::abs(x.qd[j]) < width; }));
+    longest_rest = h.recording->present & kFieldTargetQd
+                       ? std::max(longest_rest, longest_stretch(smp, std::min(smp.size(), static_cast<size_t>(kSettleSamples)),
+                                                                RestBaseline::commanded_rest))
+                       : std::numeric_limits<double>::quiet_NaN();
     for (size_t k = skip; k < rf.size(); ++k) {
       peak = peak.cwiseMax(rf[k].cwiseAbs());
       for (int j = 0; j < n; ++j) {
@@ -734,25 +749,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   for (const HealthyRun& h : runs) c.payload_max = std::max(c.payload_max, h.payload.mass);
   c.reversal_load_max = load.array().isFinite().all() ? load : VectorJ();  // (a non-finite torque: not recorded)
   c.crawl_max = c.reversal_load_max.size() ? crawl : VectorJ();
-  // the longest whole-arm rest the thresholds saw (after each run's start-up; not recorded when a run
-  // has no target velocities)
-  c.longest_rest = 0.0;
-  for (const HealthyRun& h : runs) {
-    const auto& smp = h.recording->samples;
-    if (!(h.recording->present & kFieldTargetQd)) {
-      c.longest_rest = std::numeric_limits<double>::quiet_NaN();
-      break;
-    }
-    double began = std::numeric_limits<double>::quiet_NaN();
-    for (size_t k = std::min(smp.size(), static_cast<size_t>(kSettleSamples)); k < smp.size(); ++k) {
-      if (smp[k].target_qd.cwiseAbs().maxCoeff() >= RestBaseline::kTargetRest) {
-        began = std::numeric_limits<double>::quiet_NaN();
-        continue;
-      }
-      if (std::isnan(began)) began = smp[k].timestamp;
-      c.longest_rest = std::max(c.longest_rest, smp[k].timestamp - began);
-    }
-  }
+  c.longest_rest = longest_rest;
   return c;
 }
 
@@ -1703,7 +1700,7 @@ void Monitor::track_rest(const RobotSample& s, double t, bool output_changed) {
   // (the program's rest, where the stream has the target: a part dropped jolts the wrist to 0.06
   // rad/s, which is no move on; without it, no joint faster than kOutputCheckMinSpeed)
   const bool target = s.has(kFieldTargetQd) && s.target_qd.size() == s.qd.size();
-  const bool rests = target ? s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest : s.qd.cwiseAbs().maxCoeff() < kOutputCheckMinSpeed;
+  const bool rests = target ? RestBaseline::commanded_rest(s) : s.qd.cwiseAbs().maxCoeff() < kOutputCheckMinSpeed;
   rest_by_target_ = target;
   if (rests && !arm_rests_) {
     rest_since_ = t;
@@ -2068,7 +2065,7 @@ void Monitor::restart_estimators(bool settle) {
   if (settle) settle_until_ = n_samples_ + kObserverSettle;
 }
 
-void Monitor::restart_after_gap(const RobotSample& s) {
+void Monitor::restart_after_gap(const RobotSample& s, bool memory_lost) {
   // what was estimated across the gap is stale: the observer starts again (its first difference
   // would span the gap and jump by half the drive torque's change across it), the residual filter
   // and the acceleration estimate restart, frozen-channel runs compare nothing across it, and
@@ -2080,7 +2077,7 @@ void Monitor::restart_after_gap(const RobotSample& s) {
   // shows twice its pre-sliding level as a residual. A moving joint has slid in its direction; for
   // the others the memory is unknown, and their decisions wait until they have moved far enough
   // to have set it again (kMemoryRestore pre-sliding distances)
-  if (memory_.primed) {
+  if (memory_lost && memory_.primed) {
     for (int j = 0; j < n_; ++j) {
       const double alpha = twin_.joints[static_cast<size_t>(j)].presliding_alpha;
       if (!(alpha > 0.0)) continue;  // no memory in this twin's joint
@@ -2242,8 +2239,6 @@ void Monitor::push(const RobotSample& s) {
   rest_rf_.apply(s, rf_dec_);
   obs_dec_ = obs_.residual();
   rest_obs_.apply(s, obs_dec_);
-  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest)
-  if (std::isfinite(cfg_.longest_rest)) watch_unseen_rest(s, t);
   bool any_active = false, background_active = false;
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
@@ -2252,6 +2247,8 @@ void Monitor::push(const RobotSample& s) {
   // (a gripper output changed at this sample)
   const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
   track_rest(s, t, output_changed);
+  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest)
+  if (std::isfinite(cfg_.longest_rest)) watch_unseen_rest(s, t);
   // (an alert held at this rest, which the stream's targets say is one: the part's step, looked at
   // when the arm moves on)
   const bool rest_held = arm_rests_ && rest_by_target_ && std::any_of(held_steps_.begin(), held_steps_.end(), [&](const HeldStep& h) {
@@ -2567,12 +2564,15 @@ std::string not_driven_words(const RobotSample& s) {
 }  // namespace
 
 void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
-  const bool rests = s.has(kFieldTargetQd) && s.target_qd.cwiseAbs().maxCoeff() < RestBaseline::kTargetRest;
-  if (!rests) {
+  // (the whole arm commanded to rest: track_rest ran for this sample)
+  if (!(arm_rests_ && rest_by_target_)) {
     if (rest_unseen_) rest_left_at_ = t_prev_;
     rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
     rest_unseen_ = false;
-    if (t - rest_left_at_ < kUnseenRestAfter) judge_unseen_rest(s, t);
+    if (!rest_donors_.empty() && t - rest_left_at_ < kUnseenRestAfter) {
+      donor_levels(s);
+      apply_donor_levels();
+    }
     return;
   }
   if (std::isnan(rest_began_at_)) rest_began_at_ = t, rest_within_donors_ = true;
@@ -2594,8 +2594,7 @@ void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
       if (std::abs(rf_dec_[j]) > rest_level_[j] || (obs_on_ && std::abs(obs_dec_[j]) > rest_obs_level_[j])) rest_within_donors_ = false;
     return;
   }
-  level_ = level_.cwiseMax(rest_level_);
-  if (obs_on_) obs_level_ = obs_level_.cwiseMax(rest_obs_level_);
+  apply_donor_levels();
   // the rest has just outlasted every rest the thresholds saw: an alert raised as it began (the drives
   // taking up the holding torque as the whole arm stops), whose decisions stayed within the rest-tested
   // levels, was this rest, not a fault
@@ -2609,9 +2608,7 @@ void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
   }
 }
 
-void Monitor::judge_unseen_rest(const RobotSample& s, double /*t*/) {
-  if (rest_donors_.empty()) return;
-  donor_levels(s);
+void Monitor::apply_donor_levels() {
   level_ = level_.cwiseMax(rest_level_);
   if (obs_on_) obs_level_ = obs_level_.cwiseMax(rest_obs_level_);
 }
@@ -2677,12 +2674,7 @@ void Monitor::resume_watch(const RobotSample& s, double t) {
                                             : ""));
   // the estimators start again; after power off and brakes the twin's pre-sliding memory is unknown
   // for a joint at rest, as after a gap (with power on it followed the encoders through the stop)
-  if (paused_unpowered_) {
-    restart_after_gap(s);
-  } else {
-    restart_estimators();
-    std::fill(frozen_run_.begin(), frozen_run_.end(), 0);
-  }
+  restart_after_gap(s, paused_unpowered_);
   paused_unpowered_ = false;
   if (!s.has(kFieldTargetQdd)) qdd_.setZero();
   trend_.resume_at(t_prev_);  // (the stop is no window time: the trend's energy counts driven samples)
@@ -2694,9 +2686,7 @@ void Monitor::resume_watch(const RobotSample& s, double t) {
   rest_left_at_ = -std::numeric_limits<double>::infinity();
   crawl_since_.setConstant(std::numeric_limits<double>::quiet_NaN());
   ring_count_ = 0;
-  for (auto& d : deb_) d.reset();
-  for (auto& d : deb_obs_) d.reset();
-  std::fill(joint_active_.begin(), joint_active_.end(), 0);
+  reset_decisions();
   rest_rf_ = RestBaseline(n_);
   rest_obs_ = RestBaseline(n_);
   on_top_ = false;

@@ -22,6 +22,11 @@ std::vector<RobotSample> run(const Scenario& s) {
 
 Scenario scenario(const std::string& yaml) { return parse_scenario(yaml, "test.yaml"); }
 
+// the message of parsing `yaml` as test.yaml ("no error" if it loads)
+std::string error_of(const std::string& yaml) {
+  return twinwatch::test::error_text<ParseError>([&] { parse_scenario(yaml, "test.yaml"); });
+}
+
 const char* kFigureEight =
     "robot: ur3e\nseed: 5\nduration: 12\n"
     "trajectory: {type: figure_eight, size: [0.12, 0.08], period: 8, tilt: [0.3, 0.4, 0.5]}\n"
@@ -251,9 +256,6 @@ TEST(Scenario, LibraryScenariosAllLoad) {
 // exception, or cast 1e20 to int (undefined)
 TEST(Scenario, OutOfRangeIntegersKeysAndRobotNamesAreParseErrors) {
   const std::string t = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
-  const auto error_of = [](const std::string& yaml) {
-    return twinwatch::test::error_text<ParseError>([&] { parse_scenario(yaml, "test.yaml"); });
-  };
   EXPECT_THAT(error_of("robot: ur3e\nseed: 1e20\n" + t), HasSubstr("test.yaml:2: field 'seed': expected a whole number within +-2147483647, got 1e+20"));
   EXPECT_THAT(error_of("? [a]\n: 1\n"), HasSubstr("test.yaml:1: expected text keys, got a list or mapping as a key"));
   EXPECT_THAT(error_of("robot: " + std::string(300, 'a') + "\n" + t), HasSubstr("field 'robot': robot 'aaaa"));
@@ -316,9 +318,7 @@ TEST(Simulator, AStoppedProgramDeceleratesHoldsAndResumesWhereItStopped) {
 
 TEST(Simulator, StopsAreCheckedAndNamedAtTheirLine) {
   const std::string base = std::string(kFigureEight);
-  const auto err = [&](const std::string& stops) {
-    return twinwatch::test::error_text<ParseError>([&] { parse_scenario(base + "stops:\n" + stops, "test.yaml"); });
-  };
+  const auto err = [&](const std::string& stops) { return error_of(base + "stops:\n" + stops); };
   EXPECT_THAT(err("  - {kind: halt, at: 2}\n"), HasSubstr("test.yaml:7: field 'stops[0].kind': expected pause, protective or emergency, got 'halt'"));
   EXPECT_THAT(err("  - {kind: pause}\n"), HasSubstr("field 'stops[0].at': missing required field"));
   EXPECT_THAT(err("  - {kind: pause, at: 13}\n"), HasSubstr("field 'stops[0].at': expected a time from 0 s to the end of the run (12 s), got 13"));

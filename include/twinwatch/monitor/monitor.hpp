@@ -201,6 +201,10 @@ class RestBaseline {
  public:
   static constexpr int kSettle = 50;                 ///< samples at rest before the baseline is set (0.1 s at 500 Hz)
   static constexpr double kTargetRest = 1e-3;        ///< |target qd| below this: commanded to rest [rad/s]
+  /// The whole arm is commanded to rest: the sample has target velocities, every one below kTargetRest.
+  static bool commanded_rest(const RobotSample& s) {
+    return s.has(kFieldTargetQd) && s.target_qd.size() == s.qd.size() && s.target_qd.cwiseAbs().maxCoeff() < kTargetRest;
+  }
   static constexpr double kMeasuredRest = 0.01;      ///< |qd| below this: not moving (encoder flicker 0.003 rad/s)
   static constexpr double kTrackSamples = 250.0;     ///< after settling, the baseline follows with this time constant [samples] (0.5 s at 500 Hz)
   explicit RestBaseline(int n = 0);
@@ -354,7 +358,8 @@ class Monitor {
  private:
   void open_event(int joint, double start, double t);
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
-  void restart_after_gap(const RobotSample& s);
+  // (memory_lost: the twin's pre-sliding memory did not follow the motion, as across a gap)
+  void restart_after_gap(const RobotSample& s, bool memory_lost = true);
   /// observer, residual filter and FIR restart; with `settle`, every decision waits the start-up
   /// samples (without: the observer's alone, as it always does after its start)
   void restart_estimators(bool settle = true);
@@ -622,10 +627,10 @@ class Monitor {
   // driven sample after it restarts the estimators and decisions as after a gap (resume_watch)
   // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest): from when it outlasts
   // them until kUnseenRestAfter after the arm moves on, level_ / obs_level_ no tighter than the donors'
-  // (judge_unseen_rest); an alert raised as it began, within the donors' levels, is withdrawn
+  // (apply_donor_levels); an alert raised as it began, within the donors' levels, is withdrawn
   void watch_unseen_rest(const RobotSample& s, double t);
-  void judge_unseen_rest(const RobotSample& s, double t);
   void donor_levels(const RobotSample& s);  // rest_level_, rest_obs_level_ at this sample
+  void apply_donor_levels();                // level_, obs_level_ no tighter than rest_level_, rest_obs_level_
   void pause_watch(const RobotSample& s, double t, double dt);
   void resume_watch(const RobotSample& s, double t);
   // closes what is open at the end of a run or when the controller stops driving the arm; `why`
