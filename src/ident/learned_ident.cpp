@@ -84,7 +84,7 @@ TwinModel identify_learned(const std::string& robot, const std::vector<TrainingR
     ident::FrictionMemory memory;  // advanced over every sample, used on the kept ones
     for (size_t k = 0; k < K; ++k) {
       const RobotSample& s = rec.samples[k];
-      twin.advance(memory, s.q);
+      twin.advance(memory, s, qdd[k]);
       if (k % static_cast<size_t>(o.decimate) != 0) continue;
       VectorJ qd = s.qd;
       for (int j = 0; j < n; ++j) qd[j] = qd_s[static_cast<size_t>(j)][k];

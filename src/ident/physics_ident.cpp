@@ -219,9 +219,13 @@ void choose_low_speed_shapes(TwinModel& twin, const std::vector<TrainingRun>& ru
   for (size_t ri = 0; ri < runs.size(); ++ri) {
     const device::Recording& rec = *runs[ri].recording;
     twin.set_payload(runs[ri].payload);
+    // (a memory for the drive's direction read on the target, as the prediction reads it; the plain
+    // fit has no pre-sliding memory for it to carry)
+    FrictionMemory m;
     for (size_t k = 0; k < rec.samples.size(); ++k) {
       const RobotSample& s = rec.samples[k];
-      twin.predict(s.q, s.qd, qdds[ri][k], s.temperature, tau, cur);
+      twin.advance(m, s, qdds[ri][k]);
+      twin.predict(s.q, s.qd, qdds[ri][k], s.temperature, tau, cur, &m);
       for (int j = 0; j < n; ++j) {
         Column& c = col[static_cast<size_t>(j)];
         const double g = twin.joints[static_cast<size_t>(j)].gain;
@@ -366,6 +370,30 @@ void IdentOptions::validate() const {
     throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, TwinModel::kVelocityLagMax));
 }
 
+namespace {
+// the recording's median step: the reader's, or measured here (a recording built in memory carries
+// none); 0: none
+double median_step(const device::Recording& rec) {
+  if (rec.median_period > 0.0) return rec.median_period;
+  std::vector<double> steps;
+  for (size_t k = 1; k < rec.samples.size(); ++k) steps.push_back(rec.samples[k].timestamp - rec.samples[k - 1].timestamp);
+  return steps.empty() ? 0.0 : median_in_place(steps);
+}
+// whether the central difference around sample k (0 < k < N - 1) measures a velocity: no stream gap
+// and neither step longer than kLagStepMax median periods
+bool central_step(const device::Recording& rec, size_t k, double period) {
+  const RobotSample &a = rec.samples[k - 1], &s = rec.samples[k], &b = rec.samples[k + 1];
+  return !s.gap_before && !b.gap_before && s.timestamp - a.timestamp <= kLagStepMax * period && b.timestamp - s.timestamp <= kLagStepMax * period;
+}
+// joint j's velocity at t_k from the positions: the central difference is the velocity at the
+// midpoint of the two steps, carried to t_k with the acceleration x when the steps differ (a
+// logger's jittery clock)
+double central_velocity(const device::Recording& rec, size_t k, int j, double x) {
+  const RobotSample &a = rec.samples[k - 1], &s = rec.samples[k], &b = rec.samples[k + 1];
+  return (b.q[j] - a.q[j]) / (b.timestamp - a.timestamp) + x * (s.timestamp - 0.5 * (a.timestamp + b.timestamp));
+}
+}  // namespace
+
 VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& recordings,
                                   const std::vector<std::vector<VectorJ>>& accelerations) {
   if (recordings.size() != accelerations.size())
@@ -381,25 +409,14 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
     if (acc.size() != rec.samples.size())
       throw InvalidArgument(fmt::format("estimate_velocity_lag: {} has {} samples, {} accelerations", rec.path, rec.samples.size(), acc.size()));
     if (!(rec.present & kFieldActualQd) || rec.samples.size() < 3) continue;
-    // the median step (the reader's, or measured here: a recording built in memory carries none)
-    double period = rec.median_period;
-    if (!(period > 0.0)) {
-      std::vector<double> steps;
-      for (size_t k = 1; k < rec.samples.size(); ++k) steps.push_back(rec.samples[k].timestamp - rec.samples[k - 1].timestamp);
-      period = median_in_place(steps);
-    }
+    const double period = median_step(rec);
     if (!(period > 0.0)) continue;
     periods.push_back(period);
     for (size_t k = 1; k + 1 < rec.samples.size(); ++k) {
-      const RobotSample &a = rec.samples[k - 1], &s = rec.samples[k], &b = rec.samples[k + 1];
-      const double span = b.timestamp - a.timestamp;
-      if (s.gap_before || b.gap_before || s.timestamp - a.timestamp > kLagStepMax * period || b.timestamp - s.timestamp > kLagStepMax * period)
-        continue;
+      if (!central_step(rec, k, period)) continue;
       for (int j = 0; j < rec.n_dof; ++j) {
-        // the velocity at t_k from the positions: the central difference is the velocity at the
-        // midpoint of the two steps, carried to t_k when the steps differ (a logger's jittery clock)
-        const double x = acc[k][j], v = s.qd[j];
-        const double c = (b.q[j] - a.q[j]) / span + x * (s.timestamp - 0.5 * (a.timestamp + b.timestamp));
+        const double x = acc[k][j], v = rec.samples[k].qd[j];
+        const double c = central_velocity(rec, k, j, x);
         if (!std::isfinite(c) || !std::isfinite(x) || !std::isfinite(v)) continue;
         cc += c * c, ca += c * x, aa += x * x, cv += c * v, av += x * v, vv += v * v;
         ++lag.samples;
@@ -445,6 +462,166 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
   }
   lag.seconds = l;
   return lag;
+}
+
+// estimate_target_direction: the speed below which a joint is near standstill, where its direction
+// is read on the target and its tracking error is measured [rad/s]
+constexpr double kTargetStandstill = 0.05;
+constexpr int kWidthIterations = 20;
+
+// drive_switch_offsets: the windows around a target crossing [s]: the current's level before (from
+// -80 to -30 ms) and after (30 to 80 ms), the search for its step (-60 to 60 ms); a step counts when
+// it is at least kSwitchClear times the larger spread of the two levels' samples
+constexpr double kSwitchLevelFar = 0.08, kSwitchLevelNear = 0.03, kSwitchSearch = 0.06, kSwitchClear = 4.0;
+constexpr size_t kSwitchMin = 5;          // crossings with a clear step that measure the timing
+constexpr double kSwitchQuantile = 0.9;   // the timing's share the blend's width covers
+
+// Where the drive's switch fell against the target's crossing, at every crossing of joint j's target
+// velocity whose current steps clearly (the drive's motoring/back-driven switch under load): the
+// time at which the current (a 3-sample mean) passes halfway between its levels before and after,
+// less the crossing's time (interpolated) [s]. From the recordings alone: the current itself shows
+// the switch the twin has to time.
+std::vector<double> drive_switch_offsets(const device::Recording& rec, int j) {
+  std::vector<double> out;
+  const auto& S = rec.samples;
+  const size_t N = S.size();
+  for (size_t k = 1; k + 1 < N; ++k) {
+    const double v0 = S[k - 1].target_qd[j], v1 = S[k].target_qd[j];
+    if (!(v0 * v1 < 0.0)) continue;
+    const double tc = S[k - 1].timestamp + (S[k].timestamp - S[k - 1].timestamp) * v0 / (v0 - v1);
+    // the window: driven, no gap, inside the recording
+    size_t a = k, b = k;
+    while (a > 0 && S[a].timestamp > tc - kSwitchLevelFar) --a;
+    while (b + 1 < N && S[b].timestamp < tc + kSwitchLevelFar) ++b;
+    if (S[a].timestamp > tc - kSwitchLevelFar || S[b].timestamp < tc + kSwitchLevelFar) continue;
+    bool clean = true;
+    for (size_t m = a; m <= b && clean; ++m) clean = S[m].driven() && (m == a || !S[m].gap_before) && std::isfinite(S[m].current[j]);
+    if (!clean) continue;
+    double s0 = 0.0, q0 = 0.0, n0 = 0.0, s1 = 0.0, q1 = 0.0, n1 = 0.0;
+    for (size_t m = a; m <= b; ++m) {
+      const double dt = S[m].timestamp - tc, i = S[m].current[j];
+      if (dt <= -kSwitchLevelNear) s0 += i, q0 += i * i, n0 += 1.0;
+      if (dt >= kSwitchLevelNear) s1 += i, q1 += i * i, n1 += 1.0;
+    }
+    if (n0 < 5.0 || n1 < 5.0) continue;
+    const double before = s0 / n0, after = s1 / n1, step = after - before;
+    const double spread = std::sqrt(std::max({0.0, q0 / n0 - before * before, q1 / n1 - after * after}));
+    if (!(std::abs(step) >= kSwitchClear * spread) || !(spread > 0.0)) continue;
+    const double mid = 0.5 * (before + after);
+    for (size_t m = a + 2; m <= b; ++m) {
+      if (S[m].timestamp < tc - kSwitchSearch) continue;
+      if (S[m].timestamp > tc + kSwitchSearch) break;
+      const double mean = (S[m].current[j] + S[m - 1].current[j] + S[m - 2].current[j]) / 3.0;
+      if ((mean - mid) * step >= 0.0) {
+        out.push_back(S[m - 1].timestamp - tc);  // (the 3-sample mean is centred on m - 1)
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+TargetDirectionFit estimate_target_direction(const std::vector<const device::Recording*>& recordings) {
+  TargetDirectionFit fit;
+  if (recordings.empty()) return fit;
+  const int n = recordings.front()->n_dof;
+  for (const device::Recording* rec : recordings)
+    if (!(rec->present & kFieldTargetQd)) {
+      fit.note = fmt::format("{} has no target_qd: the drive's direction is read on actual_qd alone", rec->path);
+      return fit;
+    }
+  // per joint: sums over all samples of y = c - target_qd and x = target_qdd (the lead), and the
+  // (x, y) of the samples near standstill (the width)
+  Eigen::ArrayXd xx = Eigen::ArrayXd::Zero(n), xy = xx, cnt = xx;
+  std::vector<std::vector<std::pair<double, double>>> still(static_cast<size_t>(n));
+  for (const device::Recording* rp : recordings) {
+    const device::Recording& rec = *rp;
+    if (rec.n_dof != n || rec.samples.size() < 3) continue;
+    const double period = median_step(rec);
+    if (!(period > 0.0)) continue;
+    const bool acc = (rec.present & kFieldTargetQdd) != 0;
+    for (size_t k = 1; k + 1 < rec.samples.size(); ++k) {
+      const RobotSample& s = rec.samples[k];
+      if (!central_step(rec, k, period)) continue;
+      if (!rec.samples[k - 1].driven() || !s.driven() || !rec.samples[k + 1].driven()) continue;  // (a stopped arm's targets are where it stands)
+      for (int j = 0; j < n; ++j) {
+        const double x = acc ? s.target_qdd[j] : 0.0;
+        const double y = central_velocity(rec, k, j, x) - s.target_qd[j];
+        if (!std::isfinite(y) || !std::isfinite(x)) continue;
+        xx[j] += x * x, xy[j] += x * y, cnt[j] += 1.0;
+        if (std::abs(s.target_qd[j]) < kTargetStandstill) still[static_cast<size_t>(j)].emplace_back(x, y);
+      }
+    }
+  }
+  TargetDirection d;
+  d.lead = d.width = d.width_time = VectorJ::Zero(n);
+  for (int j = 0; j < n; ++j) {
+    if (cnt[j] < kLagMinSamples) {
+      fit.note = fmt::format("the drive's direction is read on actual_qd alone: J{} has {} samples to compare with its target (expected at "
+                             "least {})", j + 1, static_cast<long>(cnt[j]), kLagMinSamples);
+      return fit;
+    }
+    // the lead only where the target accelerates enough to measure it (as the velocity's lag)
+    const double lead = xx[j] / cnt[j] >= kLagMinAcceleration * kLagMinAcceleration ? xy[j] / xx[j] : 0.0;
+    d.lead[j] = std::clamp(lead, -TwinModel::kVelocityLagMax, TwinModel::kVelocityLagMax);
+    const auto& pts = still[static_cast<size_t>(j)];
+    if (static_cast<long>(pts.size()) < kLagMinSamples) {
+      fit.note = fmt::format("the drive's direction is read on actual_qd alone: J{} is near standstill (|target_qd| < {:g} rad/s) in {} "
+                             "samples (expected at least {}), too few to measure how closely it follows its target there",
+                             j + 1, kTargetStandstill, pts.size(), kLagMinSamples);
+      return fit;
+    }
+    // e^2 = w^2 + tau^2 x^2 (e = y - lead x) by iteratively reweighted least squares: e^2 of a normal
+    // error has variance 2 sigma^4, so each sample is weighted 1 / sigma^4 of the last estimate. (The
+    // plain least squares is ruled by the fast reversals' large errors and put J2's w at 2.3 mrad/s
+    // where its slow reversals follow within 0.7.)
+    const double L = d.lead[j];
+    double w2 = 0.0, t2 = 0.0;
+    for (int it = 0; it < kWidthIterations; ++it) {
+      double sw = 0.0, swz = 0.0, swz2 = 0.0, swe = 0.0, swze = 0.0;
+      for (const auto& [x, y] : pts) {
+        const double z = x * x, e = y - L * x, e2 = e * e;
+        const double sigma2 = it == 0 ? 1.0 : w2 + t2 * z;
+        const double wt = 1.0 / (sigma2 * sigma2);
+        sw += wt, swz += wt * z, swz2 += wt * z * z, swe += wt * e2, swze += wt * z * e2;
+      }
+      const double det = sw * swz2 - swz * swz;
+      w2 = swe / sw, t2 = 0.0;
+      if (det > 1e-12 * sw * swz2) {
+        w2 = (swz2 * swe - swz * swze) / det;
+        t2 = (sw * swze - swz * swe) / det;
+        if (t2 < 0.0) t2 = 0.0, w2 = swe / sw;                            // no growth with the deceleration
+        else if (w2 < 0.0) w2 = 0.0, t2 = swz2 > 0.0 ? swze / swz2 : 0.0;  // all of it
+      }
+      w2 = std::max(w2, TwinModel::kDirectionLeadMin * TwinModel::kDirectionLeadMin);  // (the weights stay finite)
+    }
+    d.width[j] = std::max(TwinModel::kDirectionLeadMin, std::sqrt(w2));
+    d.width_time[j] = std::min(TwinModel::kVelocityLagMax, std::sqrt(t2));
+    // The tracking error near standstill times the switch only where the joint follows its target
+    // through it. At a reversal a joint also sticks and breaks away (on the virtual UR3e J2 switched
+    // up to 20 ms after its target's crossing in the training runs, and 2-8 ms before it at slow
+    // loaded reversals), which the error over all the samples near standstill hides among those
+    // away from the crossing. Where the current shows the switch, the blend is at least as wide, in
+    // time, as the switch's offset from the (lead-carried) crossing at 90 % of the crossings.
+    std::vector<double> offsets;
+    for (const device::Recording* rp : recordings)
+      if (rp->n_dof == n && (rp->present & kFieldActualCurrent))
+        for (const double o : drive_switch_offsets(*rp, j)) offsets.push_back(std::abs(o + d.lead[j]));
+    if (offsets.size() >= kSwitchMin) {
+      const auto at = offsets.begin() + static_cast<long>(std::floor(kSwitchQuantile * static_cast<double>(offsets.size() - 1)));
+      std::nth_element(offsets.begin(), at, offsets.end());
+      d.width_time[j] = std::min(TwinModel::kVelocityLagMax, std::max(d.width_time[j], *at));
+    }
+    fit.switches.push_back(static_cast<long>(offsets.size()));
+    if (!(d.width[j] <= TwinModel::kTargetDirectionWidthMax)) {
+      fit.note = fmt::format("the drive's direction is read on actual_qd alone: J{} is {:.3g} rad/s rms off its target_qd (expected at most {:g}: "
+                             "is target_qd that joint's, in rad/s?)", j + 1, d.width[j], TwinModel::kTargetDirectionWidthMax);
+      return fit;
+    }
+    fit.samples += static_cast<long>(cnt[j]);
+  }
+  fit.direction = d;
+  return fit;
 }
 
 std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
@@ -595,6 +772,17 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     lag.given = true;
   }
   twin.velocity_lag = lag.seconds;
+  // ... and near standstill on the controller's target, where the streamed velocity is 0 for as long
+  // as the joint moves less than a count a period (TwinModel::target_direction)
+  TargetDirectionFit target_dir;
+  if (o.target_direction) {
+    std::vector<const device::Recording*> recs;
+    for (const TrainingRun& r : runs) recs.push_back(r.recording);
+    target_dir = estimate_target_direction(recs);
+  } else {
+    target_dir.note = "the drive's direction is read on actual_qd alone (as asked)";
+  }
+  twin.target_direction = target_dir.direction;
   // the low-speed columns of joint j at sample k of run ri (zero while its shapes are off)
   std::vector<std::vector<VectorJ>> hs;  // pre-sliding state per run and sample (stage 1)
   auto low_speed_row = [&](size_t ri, size_t k, const VectorJ& qd, int j, Eigen::VectorXd& row) {
@@ -651,7 +839,9 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           if (!fit_temperature[static_cast<size_t>(j)]) f(kViscousTemperature) = 0.0;
           r.segment(nb + nfx * j, nf) = f;
           low_speed_row(ri, k, s.qd, j, r);
-          fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p), twin.direction_velocity(s.qd[j], qdd[j]));
+          double v = 0.0;  // (only its sign splits: a direction read with the target, or the measured velocity)
+          if (!twin.target_drive_direction(s, qdd, j, v)) v = twin.direction_velocity(s.qd[j], qdd[j]);
+          fn(ri, s, j, static_cast<const Eigen::VectorXd&>(r), static_cast<const VectorJ&>(tau_p), v);
         }
         if (progress && (++done % 20000) == 0)
           progress((stage + (pass + static_cast<double>(done) * o.decimate / static_cast<double>(total)) / (passes + 1)) / stages);
@@ -958,6 +1148,8 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   }
   report.velocity_lag = lag;
   if (!lag.note.empty()) report.notes.push_back(lag.note);
+  report.target_direction = target_dir;
+  if (!target_dir.note.empty() && o.target_direction) report.notes.push_back(target_dir.note);
   for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,

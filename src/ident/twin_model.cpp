@@ -145,15 +145,20 @@ SequentialModel sequential_from_json(const nlohmann::json& block, int n, const s
 // better than its resolution (a finite difference of encoder counts), and the drive switches on
 // the true velocity, so a hard switch on the measured one puts a jump of (1 - c_gen) tau / g into
 // the residual at every reversal of a loaded joint. blend <= 0: the hard switch.
-double direction_factor(double c_gen, double tau, double qd, double blend) {
-  if (!(blend > 0.0)) return tau * qd < 0.0 ? c_gen : 1.0;
-  const double x = (tau >= 0.0 ? qd : -qd) / blend;
+// (x: the blend's argument, qd / blend, or a direction read with the target)
+double factor_at(double c_gen, double tau, double x) {
+  if (tau < 0.0) x = -x;
   // beyond |x| = 20, tanh(x) is +-1 to the last bit (1 - tanh < 1e-17): skip the call (per sample
   // and joint in the monitor, where most samples are far from a reversal)
   if (x > 20.0) return 1.0;
   if (x < -20.0) return c_gen;
   const double w = 0.5 * (1.0 - std::tanh(x));  // 1 back-driven, 0 motoring
   return 1.0 + (c_gen - 1.0) * w;
+}
+
+double direction_factor(double c_gen, double tau, double qd, double blend) {
+  if (!(blend > 0.0)) return tau * qd < 0.0 ? c_gen : 1.0;
+  return factor_at(c_gen, tau, qd / blend);
 }
 
 }  // namespace
@@ -261,21 +266,26 @@ void TwinModel::physics_torque(const VectorJ& q, const VectorJ& qd, const Vector
   }
 }
 
-void TwinModel::drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current) const {
+double TwinModel::drive_factor(int j, double tau, double qd, double qdd, const FrictionMemory* memory) const {
+  const double c_gen = joints[static_cast<size_t>(j)].c_gen;
+  if (memory != nullptr && memory->direction.size() > j && !std::isnan(memory->direction[j])) return factor_at(c_gen, tau, memory->direction[j]);
+  return direction_factor(c_gen, tau, direction_velocity(qd, qdd), direction_blend);
+}
+
+void TwinModel::drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current,
+                              const FrictionMemory* memory) const {
   const int n = robot_->n_dof();
   current.resize(n);
-  for (int j = 0; j < n; ++j) {
-    const JointDrive& d = joints[static_cast<size_t>(j)];
-    current[j] = direction_factor(d.c_gen, torque[j], direction_velocity(qd[j], qdd[j]), direction_blend) * torque[j] / d.gain;
-  }
+  for (int j = 0; j < n; ++j)
+    current[j] = drive_factor(j, torque[j], qd[j], qdd[j], memory) * torque[j] / joints[static_cast<size_t>(j)].gain;
 }
 
 void TwinModel::predict(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                         VectorJ& current, const FrictionMemory* memory) const {
   if (sequential) return predict_sequential(q, qd, qdd, torque, current);
   physics_torque(q, qd, qdd, temperature, torque, memory);
-  drive_current(qd, qdd, torque, current);
-  if (learned) apply_learned(q, qd, qdd, temperature, torque, current);
+  drive_current(qd, qdd, torque, current, memory);
+  if (learned) apply_learned(q, qd, qdd, temperature, torque, current, memory);
 }
 
 void TwinModel::predict_pair(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& qdd2, const VectorJ& temperature,
@@ -285,11 +295,11 @@ void TwinModel::predict_pair(const VectorJ& q, const VectorJ& qd, const VectorJ&
     return predict_torque(q, qd, qdd2, temperature, torque2, memory);
   }
   physics_torque(q, qd, qdd, temperature, torque, memory, &qdd2, &torque2);
-  drive_current(qd, qdd, torque, current);
+  drive_current(qd, qdd, torque, current, memory);
 }
 
 void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                              VectorJ& current) const {
+                              VectorJ& current, const FrictionMemory* memory) const {
   // network output: the current itself (mlp) or a correction of the physics current (hybrid);
   // torque through the drive gain, with the direction factor of the resulting current
   VectorJ y;
@@ -299,9 +309,9 @@ void TwinModel::apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ
     const JointDrive& d = joints[static_cast<size_t>(j)];
     if (learned->role == LearnedRole::Current) {
       current[j] = y[j];
-      torque[j] = d.gain * y[j] / direction_factor(d.c_gen, y[j], direction_velocity(qd[j], qdd[j]), direction_blend);
+      torque[j] = d.gain * y[j] / drive_factor(j, y[j], qd[j], qdd[j], memory);
     } else {
-      const double c = direction_factor(d.c_gen, torque[j], direction_velocity(qd[j], qdd[j]), direction_blend);
+      const double c = drive_factor(j, torque[j], qd[j], qdd[j], memory);
       current[j] += y[j];
       torque[j] += d.gain * y[j] / c;
     }
@@ -336,6 +346,18 @@ void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
   }
 }
 
+void TwinModel::advance(FrictionMemory& m, const RobotSample& s, const VectorJ& qdd) const {
+  advance(m, s.q);
+  if (target_direction.empty() || !s.has(kFieldTargetQd)) {
+    m.direction.resize(0);
+    return;
+  }
+  const int n = robot_->n_dof();
+  m.direction.resize(n);
+  for (int j = 0; j < n; ++j)
+    if (!target_drive_direction(s, qdd, j, m.direction[j])) m.direction[j] = std::numeric_limits<double>::quiet_NaN();
+}
+
 void MotionEnvelope::include(const VectorJ& q, const VectorJ& qd) {
   if (empty()) {
     q_min = q_max = q;
@@ -364,6 +386,10 @@ std::string TwinModel::to_json() const {
   // (only when set: a twin without it reads the streamed velocity as it is, and older readers,
   // which refuse unknown keys, still load it)
   if (velocity_lag != 0.0) j["velocity_lag"] = velocity_lag;
+  if (!target_direction.empty())  // (the same: only when measured)
+    j["target_direction"] = {{"lead_s", numbers(Eigen::VectorXd(target_direction.lead))},
+                             {"width", numbers(Eigen::VectorXd(target_direction.width))},
+                             {"width_s", numbers(Eigen::VectorXd(target_direction.width_time))}};
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
@@ -499,8 +525,8 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
   const std::vector<std::string> filled = version == 1 ? upgrade_version_1(j) : std::vector<std::string>{};
   try {
     const JsonFields top(j, origin, "");
-    top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "velocity_lag", "payload",
-              "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
+    top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "velocity_lag", "target_direction",
+              "payload", "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
               "motion_envelope"});
     const std::string robot = top.text("robot");
     TwinModel t;
@@ -578,6 +604,31 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
     }
     if (top.has("sequential")) t.sequential = sequential_from_json(j["sequential"], n, origin);
     // optional: twins written before session 17 do not have it (then nothing is said about extrapolation)
+    // optional (since session 31; a twin from before reads the drive's direction on the measured velocity)
+    if (top.has("target_direction")) {
+      const JsonFields td = top.object("target_direction");
+      td.only({"lead_s", "width", "width_s"});
+      const std::vector<double> lead = td.numbers("lead_s", static_cast<size_t>(n)), width = td.numbers("width", static_cast<size_t>(n)),
+                                width_s = td.numbers("width_s", static_cast<size_t>(n));
+      for (int k = 0; k < n; ++k) {
+        if (!(std::abs(lead[static_cast<size_t>(k)]) <= TwinModel::kVelocityLagMax))
+          throw ParseError(origin, 0, json_element(td.field("lead_s"), static_cast<size_t>(k)),
+                           fmt::format("expected a lead in seconds within +-{:g} s (the joint's velocity against its target), got {}",
+                                       TwinModel::kVelocityLagMax, lead[static_cast<size_t>(k)]));
+        if (!(width[static_cast<size_t>(k)] > 0.0 && width[static_cast<size_t>(k)] <= TwinModel::kTargetDirectionWidthMax))
+          throw ParseError(origin, 0, json_element(td.field("width"), static_cast<size_t>(k)),
+                           fmt::format("expected a tracking error in (0, {:g}] rad/s, got {}", TwinModel::kTargetDirectionWidthMax,
+                                       width[static_cast<size_t>(k)]));
+      }
+      for (int k = 0; k < n; ++k)
+        if (!(width_s[static_cast<size_t>(k)] >= 0.0 && width_s[static_cast<size_t>(k)] <= TwinModel::kVelocityLagMax))
+          throw ParseError(origin, 0, json_element(td.field("width_s"), static_cast<size_t>(k)),
+                           fmt::format("expected a time in [0, {:g}] s (the tracking error per unit of acceleration), got {}",
+                                       TwinModel::kVelocityLagMax, width_s[static_cast<size_t>(k)]));
+      t.target_direction.width_time = VectorJ(Eigen::Map<const Eigen::VectorXd>(width_s.data(), n));
+      t.target_direction.lead = VectorJ(Eigen::Map<const Eigen::VectorXd>(lead.data(), n));
+      t.target_direction.width = VectorJ(Eigen::Map<const Eigen::VectorXd>(width.data(), n));
+    }
     if (top.has("motion_envelope")) {
       const JsonFields env = top.object("motion_envelope");
       env.only({"q_min", "q_max", "qd_max"});

@@ -51,13 +51,17 @@ const VectorJ& MomentumObserver::update(const VectorJ& q, const VectorJ& qd, con
   return r_;
 }
 
-void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau) {
+void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau,
+                           const ident::FrictionMemory* memory) {
   const int n = twin.n_dof();
+  const bool target = memory != nullptr && memory->direction.size() == n;
   for (int j = 0; j < n; ++j) {
     const ident::JointDrive& d = twin.joints[static_cast<size_t>(j)];
-    // inverse of the twin's current model: i = c tau / g with c = c_gen when back-driven
+    // inverse of the twin's current model: i = c tau / g with c = c_gen when back-driven (the
+    // torque's sign is the current's: g > 0)
     const double tau_motoring = d.gain * current[j];
-    tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
+    if (target && !std::isnan(memory->direction[j])) tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
+    else tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
   }
 }
 
@@ -74,9 +78,12 @@ void TwinMomentumObserver::reset() {
 }
 
 const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
-  twin.advance(memory_, s.q);
-  if (const VectorJ* qdd = acceleration(s, dt)) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, &memory_);
-  return update_with_torque(twin, s, dt, tau_twin_, extra_torque);
+  // (the drive's direction with the acceleration the monitor reads it with: the target's when streamed)
+  const VectorJ* qdd = acceleration(s, dt);
+  if (qdd != nullptr || s.has(kFieldTargetQdd)) twin.advance(memory_, s, s.has(kFieldTargetQdd) ? s.target_qdd : *qdd);
+  else twin.advance(memory_, s.q);
+  if (qdd != nullptr) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, &memory_);
+  return update_with_torque(twin, s, dt, tau_twin_, extra_torque, &memory_);
 }
 
 const VectorJ* TwinMomentumObserver::acceleration(const RobotSample& s, double dt) {
@@ -87,9 +94,10 @@ const VectorJ* TwinMomentumObserver::acceleration(const RobotSample& s, double d
 }
 
 const VectorJ& TwinMomentumObserver::update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt,
-                                                        const VectorJ& twin_torque, const VectorJ* extra_torque) {
+                                                        const VectorJ& twin_torque, const VectorJ* extra_torque,
+                                                        const ident::FrictionMemory* memory) {
   // measured drive torque through the identified drive model
-  measured_drive_torque(twin, s.current, s.qd, tau_m_);
+  measured_drive_torque(twin, s.current, s.qd, tau_m_, memory);
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;

@@ -259,7 +259,7 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   if (torques != nullptr) torques->clear();
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
-    twin.advance(memory, s.q);
+    twin.advance(memory, s, qdds[k]);
     if (torques != nullptr) {
       twin.predict(s.q, s.qd, qdds[k], s.temperature, tau, i, &memory);
       torques->push_back(tau);
@@ -786,7 +786,7 @@ ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, co
       row = row.cwiseMax(m.margin_observer());
     }
   }
-  const double worst = out.ratio.back().maxCoeff();
+  const double worst = std::max(out.ratio.back().maxCoeff(), kObserverRatioFloor);
   out.raise_after.assign(static_cast<size_t>(n), shared);
   for (int j = 0; j < n; ++j)
     for (int d = 1; d < shared; ++d) {
@@ -1078,12 +1078,15 @@ void Monitor::fill_window(double from, double until) {
   VectorJ tau_meas;
   for (auto& d : window_) {
     at.h = d.presliding;
+    at.direction = d.direction;
     twin_.predict(d.q, d.qd, d.qdd, no_temp_, tau, cur, &at);
     // r_tau: the current residual times the gain, what the hypotheses are scored on; r_drive: the
     // measured drive torque through the twin's own current model, back-driven phases included (as
     // the observer reads it), less the twin's torque, in N·m through the trusted gains, what sizes
     // a payload change (r_tau reads it 10-15 % small: a back-driven joint's torque c_gen low).
-    // Scoring on r_drive too turned a resistance's onset into a short "contact" (session 21)
+    // Scoring on r_drive too turned a resistance's onset into a short "contact" (session 21). Its
+    // direction stays the hard switch on actual_qd: read with the target (session 31) a 0.25 kg drop
+    // at a triangle's corner was sized -0.195 kg, outside the 20 % (MonitorLoop.ASmallPartsStep...)
     measured_drive_torque(twin_, d.current, d.qd, tau_meas);
     d.r_drive.resize(n_);
     for (int j = 0; j < n_; ++j) {
@@ -2144,7 +2147,7 @@ void Monitor::push(const RobotSample& s) {
   } else if (have_prev_ && !restart) {  // (not across a gap or skipped samples)
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }
-  twin_.advance(memory_, s.q);
+  twin_.advance(memory_, s, qdd_);
   // the observer's twin torque (at its own, unfiltered acceleration) comes with the prediction
   const VectorJ* qdd_obs = obs_on_ ? obs_.acceleration(s, dt) : nullptr;
   if (qdd_obs != nullptr)
@@ -2169,7 +2172,7 @@ void Monitor::push(const RobotSample& s) {
   // second residual: the momentum observer's external-torque estimate (no acceleration estimate)
   if (obs_on_) {
     temperature_drive_torque(twin_, temp_slope_, cfg_.trend.temperature_ref, s, obs_warm_);
-    obs_.update_with_torque(twin_, s, dt, tau_obs_, &obs_warm_);
+    obs_.update_with_torque(twin_, s, dt, tau_obs_, &obs_warm_, &memory_);
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds
@@ -2192,6 +2195,7 @@ void Monitor::push(const RobotSample& s) {
   ds.tau_ext = observer_torque();
   ds.tau_ext_level = observer_torque_threshold();
   ds.presliding = memory_.h;
+  ds.direction = memory_.direction;
   ds.digital_outputs = s.digital_outputs;
   ds.gap_before = false;  // gaps are reported as their own events
   ring_head_ = (ring_head_ + 1) % ring_.size();

@@ -330,7 +330,7 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
     ident::FrictionMemory memory;
     for (size_t k = 0; k < run.recording->samples.size(); ++k) {
       const RobotSample& s = run.recording->samples[k];
-      t.advance(memory, s.q);
+      t.advance(memory, s, qdds[k]);
       t.predict_current(s.q, s.qd, qdds[k], s.temperature, i_hat, &memory);
       for (int j = 0; j < n; ++j) {
         if (std::abs(s.qd[j]) <= c.v_min || !std::isfinite(s.temperature[j])) continue;

@@ -38,6 +38,14 @@ add_test(NAME cli.identify_velocity_lag COMMAND twinwatch identify ${d}/exc.csv 
          -o ${d}/twin_lag.json)
 set_tests_properties(cli.identify_velocity_lag PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION
   "velocity lag: actual_qd is (0\\.99[0-9]|1\\.00[0-9]) ms [^\n]*\\(0\\.50 of the 2 ms period")
+# ... and, near standstill, reads the drive's direction with the controller's target: it prints the
+# lead and widths it measured; --no-target-direction leaves them out of the twin
+add_test(NAME cli.identify_target_direction COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5,0,0,0.04
+         -o ${d}/twin_target.json)
+set_tests_properties(cli.identify_target_direction PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION
+  "drive direction near standstill: read on target_qd \\+ lead x target_qdd where it agrees with actual_qd; lead \\[ms\\] [-0-9. ]+; tracking error")
+add_test(NAME cli.identify_no_target_direction COMMAND sh -c "'$<TARGET_FILE:twinwatch>' identify '${d}/exc.csv' --no-target-direction -o '${d}/twin_notarget.json' && ! grep -q target_direction '${d}/twin_notarget.json'")
+set_tests_properties(cli.identify_no_target_direction PROPERTIES FIXTURES_REQUIRED recordings)
 file(WRITE ${d}/qd_scaled.map "actual_qd_0,actual_qd_0,1.2\nactual_qd_1,actual_qd_1,1.2\nactual_qd_2,actual_qd_2,1.2\nactual_qd_3,actual_qd_3,1.2\nactual_qd_4,actual_qd_4,1.2\nactual_qd_5,actual_qd_5,1.2\n")
 add_test(NAME cli.identify_velocity_scaled COMMAND twinwatch identify ${d}/exc.csv --column-map ${d}/qd_scaled.map
          -o ${d}/twin_scaled.json)

@@ -206,6 +206,38 @@ TEST(TwinFile, ValuesOutOfTheirRangeAreNamedWithExpectedAndActual) {
               HasSubstr("twin.json: field 'velocity_lag': expected a lag in seconds within +-0.1 s (the streamed velocity against its sample's "
                         "instant), got 1"));
   EXPECT_THAT(with([](json& j) { j["velocity_lag"] = "1 ms"; }), HasSubstr("twin.json: field 'velocity_lag': expected a number, got \"1 ms\""));
+  const auto direction = [](json& j) {
+    j["target_direction"] = {{"lead_s", {0.001, 0.001, 0.0, -0.003, 0.0, 0.0}},
+                             {"width", {0.004, 0.0007, 0.009, 0.002, 0.014, 0.013}},
+                             {"width_s", {0.0, 0.006, 0.003, 0.02, 0.0, 0.0}}};
+  };
+  EXPECT_THAT(with([&](json& j) {
+                direction(j);
+                j["target_direction"]["width"][1] = 0.0;
+              }),
+              HasSubstr("twin.json: field 'target_direction.width[1]': expected a tracking error in (0, 0.05] rad/s, got 0"));
+  EXPECT_THAT(with([&](json& j) {
+                direction(j);
+                j["target_direction"]["lead_s"][3] = -0.3;
+              }),
+              HasSubstr("field 'target_direction.lead_s[3]': expected a lead in seconds within +-0.1 s (the joint's velocity against its "
+                        "target), got -0.3"));
+  EXPECT_THAT(with([&](json& j) {
+                direction(j);
+                j["target_direction"]["width_s"][0] = -0.001;
+              }),
+              HasSubstr("field 'target_direction.width_s[0]': expected a time in [0, 0.1] s (the tracking error per unit of acceleration), "
+                        "got -0.001"));
+  EXPECT_THAT(with([&](json& j) {
+                direction(j);
+                j["target_direction"]["width_s"] = {0.0, 0.0};
+              }),
+              HasSubstr("field 'target_direction.width_s': expected 6 values, got 2"));
+  EXPECT_THAT(with([&](json& j) {
+                direction(j);
+                j["target_direction"]["lag"] = 0.0;
+              }),
+              HasSubstr("target_direction.lag"));
   EXPECT_THAT(with([](json& j) { j["temperature_ref"] = "hot"; }), HasSubstr("twin.json: field 'temperature_ref': expected a number, got \"hot\""));
   EXPECT_THAT(with([](json& j) { j["gains_absolute"] = "yes"; }), HasSubstr("twin.json: field 'gains_absolute': expected true or false, got \"yes\""));
   EXPECT_THAT(with([](json& j) {
@@ -252,6 +284,79 @@ TEST(TwinFile, TheVelocityLagRoundTripsMayBeAbsentAndTurnsTheDrivesDirection) {
     EXPECT_NEAR(cur[k], back * tau[k] / d.gain, 1e-12) << "J" << k + 1;
     EXPECT_NEAR(cur0[k], (tau[k] > 0.0 ? 1.0 : d.c_gen) * tau[k] / d.gain, 1e-12) << "J" << k + 1;
   }
+}
+
+// The drive's direction read on the controller's target (session 31) round-trips and may be absent
+// (a twin from before reads the measured velocity alone). A loaded joint crawling through a reversal
+// while its encoder reads 0: the measured velocity leaves the twin halfway between motoring and
+// back-driven; the target says which side of its crossing the joint is on. A measured count adds
+// its own evidence, and a target the joint does not follow (stopped against something) is not read.
+TEST(TwinFile, TheDrivesDirectionIsReadOnTheTargetWhereTheEncoderReadsNothing) {
+  json j = valid_twin();
+  j["direction_blend"] = 0.005;
+  for (auto& e : j["joints"]) {
+    e["c_gen"] = 0.7;
+    e["friction"][2] = 1.0;  // an offset: a torque of about 1 N·m on every joint at rest
+  }
+  j["target_direction"] = {{"lead_s", {0.001, 0.001, 0.001, 0.001, 0.001, 0.001}},
+                           {"width", {0.001, 0.001, 0.001, 0.001, 0.001, 0.001}},
+                           {"width_s", {0.005, 0.005, 0.005, 0.005, 0.005, 0.005}}};
+  const TwinModel t = TwinModel::from_json(j.dump(), "twin.json");
+  ASSERT_FALSE(t.target_direction.empty());
+  const json back = json::parse(t.to_json());
+  EXPECT_EQ(back["target_direction"]["width_s"][2], 0.005);
+  EXPECT_EQ(TwinModel::from_json(back.dump(), "twin.json").target_direction.lead[4], 0.001);
+  j.erase("target_direction");
+  const TwinModel before = TwinModel::from_json(j.dump(), "twin.json");
+  EXPECT_TRUE(before.target_direction.empty());
+  EXPECT_FALSE(json::parse(before.to_json()).contains("target_direction"));
+  EXPECT_NEAR(t.target_direction.width_at(0, 0.2), std::hypot(0.001, 0.001), 1e-15);
+
+  const int n = t.n_dof();
+  RobotSample s = RobotSample::empty(n);
+  s.present = kFieldActualQd | kFieldTargetQd | kFieldTargetQdd;
+  s.q.setZero();
+  s.qd.setZero();  // the encoder: no count this period
+  s.target_qdd.setConstant(-0.1);
+  const VectorJ qdd = s.target_qdd, temp = VectorJ::Constant(n, 35.0);
+  VectorJ tau, cur, tau0, cur0;
+  const auto currents = [&](double target_qd, double qd) {
+    s.target_qd.setConstant(target_qd);
+    s.qd.setConstant(qd);
+    FrictionMemory m, m0;
+    t.advance(m, s, qdd);
+    before.advance(m0, s, qdd);
+    t.predict(s.q, s.qd, qdd, temp, tau, cur, &m);
+    before.predict(s.q, s.qd, qdd, temp, tau0, cur0, &m0);
+    return m;
+  };
+  // 5 ms before the target crosses zero (0.5 mrad/s), and 5 ms after
+  for (const double target : {0.0006, -0.0004}) {
+    const FrictionMemory m = currents(target, 0.0);
+    for (int k = 0; k < n; ++k) {
+      const JointDrive& d = t.joints[static_cast<size_t>(k)];
+      ASSERT_FALSE(std::isnan(m.direction[k]));
+      ASSERT_GT(std::abs(tau[k]), 0.1) << "J" << k + 1;
+      EXPECT_NEAR(cur0[k] / (tau[k] / d.gain), 0.85, 1e-9) << "the measured velocity alone: halfway, J" << k + 1;
+      const double v = target - 0.0001;  // carried by the lead, 1 ms x -0.1 rad/s²
+      const double x = v / std::hypot(0.001, 0.0005);
+      const double back = 0.5 * (1.0 - std::tanh(tau[k] >= 0.0 ? x : -x));
+      EXPECT_NEAR(cur[k] / (tau[k] / d.gain), 1.0 - 0.3 * back, 1e-9) << "J" << k + 1 << " at target " << target;
+      EXPECT_EQ((cur[k] / (tau[k] / d.gain) < 0.85), (tau[k] * v < 0.0)) << "the side of the crossing, J" << k + 1;
+    }
+  }
+  // a count back (-3 mrad/s) while the target still says forward: the count's evidence is added
+  const FrictionMemory counted = currents(0.0006, -0.003);
+  EXPECT_NEAR(counted.direction[1], 0.0005 / std::hypot(0.001, 0.0005) - 0.003 / 0.005, 1e-9);
+  // a joint that does not follow its target (target 0.05 rad/s, joint at rest): the measured velocity
+  const FrictionMemory stalled = currents(0.05, 0.0);
+  EXPECT_TRUE(std::isnan(stalled.direction[1]));
+  EXPECT_NEAR(cur[1], cur0[1], 1e-12);
+  // a stream without target velocities: the twin of before
+  s.present = kFieldActualQd;
+  FrictionMemory plain;
+  t.advance(plain, s, qdd);
+  EXPECT_EQ(plain.direction.size(), 0);
 }
 
 // the values the identifier itself writes load: a hard switch, no low-speed friction, c_gen up to

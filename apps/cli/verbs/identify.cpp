@@ -65,6 +65,7 @@ struct IdentifyOptions {
   std::string output, robot = "ur3e", method = "physics";
   double reversal_screen = 0.0;
   bool no_low_speed_friction = false;
+  bool no_target_direction = false;
   double direction_blend = ident::IdentOptions{}.direction_blend;
   double velocity_lag = std::numeric_limits<double>::quiet_NaN();  // NaN: measured on the recordings
   int decimate = 1;
@@ -105,6 +106,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.direction_blend = o.direction_blend;
   lo.physics.velocity_lag = o.velocity_lag;
   lo.physics.low_speed_friction = !o.no_low_speed_friction;
+  lo.physics.target_direction = !o.no_target_direction;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -168,6 +170,7 @@ int run_identify(const IdentifyOptions& o) {
   io.direction_blend = o.direction_blend;
   io.velocity_lag = o.velocity_lag;
   io.low_speed_friction = !o.no_low_speed_friction;
+  io.target_direction = !o.no_target_direction;
   io.efficiency_passes = o.efficiency_passes;
   ident::IdentReport report;
   const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
@@ -225,6 +228,18 @@ int run_identify(const IdentifyOptions& o) {
       fmt::print("velocity lag: actual_qd is {:.3f} ms (+-{:.3f}, as if the samples were independent) late against its positions ({:.2f} "
                  "of the {:.3g} ms period; {} joint samples): the drive's direction is read on the velocity carried forward by it\n",
                  1000.0 * vl.seconds, 1000.0 * vl.stderr_s, vl.period > 0.0 ? vl.seconds / vl.period : 0.0, 1000.0 * vl.period, vl.samples);
+    if (!twin.target_direction.empty()) {
+      const ident::TargetDirection& td = twin.target_direction;
+      std::vector<std::string> lead, width, width_time;
+      for (int j = 0; j < td.lead.size(); ++j) {
+        lead.push_back(fmt::format("{:.2f}", 1000.0 * td.lead[j]));
+        width.push_back(fmt::format("{:.2f}", 1000.0 * td.width[j]));
+        width_time.push_back(fmt::format("{:.1f}", 1000.0 * td.width_time[j]));
+      }
+      fmt::print("drive direction near standstill: read on target_qd + lead x target_qdd where it agrees with actual_qd; lead [ms] {}; "
+                 "tracking error near standstill sqrt(w^2 + (t x target_qdd)^2), w [mrad/s] {}, t [ms] {} ({} joint samples)\n",
+                 fmt::join(lead, " "), fmt::join(width, " "), fmt::join(width_time, " "), report.target_direction.samples);
+    }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {
       const auto& mo = twin.learned->net;
@@ -349,7 +364,7 @@ int run_validate(const ValidateOptions& o) {
   std::vector<size_t> used;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
-    twin.advance(memory, s.q);
+    twin.advance(memory, s, qdd[k]);
     if (!s.driven()) continue;
     used.push_back(k);
     twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i, &memory);
@@ -470,6 +485,10 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "switch is read on actual_qd + lag x qdd (default: measured on the recordings against the central difference "
                   "of actual_q; 0: actual_qd as it is, the twin of before)")
       ->check(CLI::Range(-ident::TwinModel::kVelocityLagMax, ident::TwinModel::kVelocityLagMax));
+  sub->add_flag("--no-target-direction", o->no_target_direction,
+                "physics/mlp/hybrid: read the drive's motoring/back-driven switch on actual_qd alone. Default: where the recordings "
+                "stream target_qd, near standstill it is read on the target velocity (carried by its measured lead), which has no "
+                "encoder counts: actual_qd is 0 for as long as a joint moves less than a count a period, 60 ms at a slow reversal");
   sub->add_option("--efficiency-fit", o->efficiency_fit,
                   "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
                   "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "

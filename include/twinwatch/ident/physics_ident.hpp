@@ -46,6 +46,9 @@ struct IdentOptions {
   /// [s] TwinModel::velocity_lag: NaN (default) estimates it from the recordings
   /// (estimate_velocity_lag); a number sets it (0: the streamed velocity read as it is, the twin of before)
   double velocity_lag = std::numeric_limits<double>::quiet_NaN();
+  /// read the drive's direction on the controller's target velocity near standstill, measured on
+  /// the recordings (estimate_target_direction; TwinModel::target_direction); false: the twin of before
+  bool target_direction = true;
   void validate() const;
 };
 
@@ -79,8 +82,29 @@ struct VelocityLag {
 VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& recordings,
                                   const std::vector<std::vector<VectorJ>>& accelerations);
 
+/// How closely each joint follows the controller's target velocity, measured on recordings that
+/// stream target_qd (TwinModel::target_direction): per joint the least squares of
+/// c_k - target_qd_k = lead target_qdd_k, c_k the central difference of actual_q carried to t_k (as
+/// in estimate_velocity_lag), and the rms of what is left (the tracking error and the positions'
+/// resolution) over the samples near standstill (|target_qd| < 0.05 rad/s; all when fewer than 100),
+/// at least TwinModel::kDirectionLeadMin; the part that grows with the acceleration at least the
+/// timing of the drive's switch the current shows at the crossings (physics_ident.cpp,
+/// drive_switch_offsets). Empty, with a note, when a recording lacks target_qd, a
+/// joint has fewer than 100 samples, or a joint's error is above kTargetDirectionWidthMax (the
+/// target is not that joint's velocity).
+struct TargetDirectionFit {
+  TargetDirection direction;
+  long samples = 0;   ///< joint samples used
+  /// per joint, the target crossings whose current showed the drive's switch clearly; at 5 or more
+  /// the blend is at least as wide in time as the switch's offset from the crossing at 90 % of them
+  std::vector<long> switches;
+  std::string note;   ///< why it is empty, when it is
+};
+TargetDirectionFit estimate_target_direction(const std::vector<const device::Recording*>& recordings);
+
 struct IdentReport {
   VelocityLag velocity_lag;         ///< TwinModel::velocity_lag, and how it was measured
+  TargetDirectionFit target_direction;  ///< TwinModel::target_direction, and how it was measured
   std::vector<long> samples_used;   ///< per joint
   std::vector<double> rmse, r2;     ///< training fit per joint
   std::vector<double> generating_fraction;  ///< per joint: share of samples classed back-driven (tau qd < 0)

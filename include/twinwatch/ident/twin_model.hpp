@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "twinwatch/core/sample.hpp"
 #include "twinwatch/ident/sequential_model.hpp"
 #include "twinwatch/ident/learned_model.hpp"
 #include "twinwatch/model/regressor.hpp"
@@ -68,11 +69,42 @@ struct JointDrive {
 };
 
 /// Per-stream memory of a twin: the pre-sliding state h_j of each joint, driven by the measured
-/// joint displacement (twin_model.cpp). One per robot stream; a new recording starts a new one.
+/// joint displacement (twin_model.cpp), and, when the twin reads the drive's direction on the
+/// controller's target (TwinModel::target_direction) and the stream carries it, that direction at
+/// the sample it was last advanced to (advance() with a sample). One per robot stream; a new
+/// recording starts a new one.
 struct FrictionMemory {
   VectorJ h;        ///< [-] in [-1, 1]
   VectorJ q_prev;   ///< [rad] last position seen
   bool primed = false;
+  /// per joint the drive's direction where it is read with the target (TwinModel::target_drive_direction),
+  /// as the argument x of its blend (tanh x: +1 forward, -1 backward); NaN (or empty): read on the
+  /// measured velocity alone (TwinModel::direction_velocity at direction_blend)
+  VectorJ direction;
+};
+
+/// The drive's direction read on the controller's target velocity where the measured one cannot tell
+/// it. The drive's current factor switches when the joint's velocity crosses zero; the streamed
+/// velocity is a difference of encoder counts, 0 for as long as the joint moves less than a count a
+/// period (on a UR, 3 mrad/s): at a slow reversal under load (J2 of a figure-eight run at a third of
+/// its speed, 0.11 rad/s²) 60 ms in which the twin's blend sits halfway between the motoring and
+/// back-driven levels, half the drive's step (0.14 A) in the residual on each side of the crossing.
+/// The target velocity has no counts: the joint follows it within its tracking error.
+/// Measured on recordings that stream target_qd (ident::estimate_target_direction).
+struct TargetDirection {
+  VectorJ lead;   ///< [s] per joint: the joint's velocity at its sample's instant ~ target_qd + lead target_qdd
+  /// per joint, the rms of the joint's velocity about that near standstill, sqrt(width^2 +
+  /// (width_time target_qdd)^2): the blend's width. A joint reversing fast sticks and breaks away
+  /// for a few ms behind its target, an error that grows with the deceleration; at a slow reversal
+  /// it follows within the positions' resolution
+  VectorJ width;       ///< [rad/s]
+  VectorJ width_time;  ///< [s]
+  bool empty() const { return width.size() == 0; }
+  /// joint j's blend width at target acceleration qdd [rad/s]
+  double width_at(int j, double qdd) const {
+    const double a = width_time[j] * qdd;  // (sqrt, not std::hypot: a third of the cost, per joint and sample)
+    return std::sqrt(width[j] * width[j] + a * a);
+  }
 };
 
 /// Pre-sliding state after a measured displacement dq [rad]: the Dahl law in the displacement
@@ -135,6 +167,37 @@ class TwinModel {
   /// [s] the largest |velocity_lag| a twin takes (file, identify, estimate_velocity_lag): a streamed
   /// velocity a tenth of a second late is no controller's (a 500 Hz backward difference lags 1 ms)
   static constexpr double kVelocityLagMax = 0.1;
+  /// Read on the controller's target velocity where it agrees with the measured one (empty: never;
+  /// a twin from before session 31, or recordings without target_qd)
+  TargetDirection target_direction;
+  /// Where joint j's drive direction is read with the controller's target at sample s: the stream
+  /// carries target_qd, and the target's velocity at the sample's instant, v_t = target_qd + lead
+  /// target_qdd, agrees with the measured one within the measured velocity's resolution
+  /// (direction_blend) and three of the joint's static tracking errors (TargetDirection::width: a
+  /// joint that sticks at a reversal while its target moves on reads 0 counts against it). Then
+  /// true, and x the direction as the argument of the blend, the evidence of both added (their log
+  /// odds): x = v_t / w + v_m / direction_blend, w = TargetDirection::width_at(j, target_qdd),
+  /// v_m = direction_velocity(qd, qdd). The target times
+  /// the crossing where the encoder reads 0; a count the encoder does read says which way the joint
+  /// went (at a slow loaded reversal the joint turned 7 ms before its target, and its first count
+  /// back came a sample before the target's crossing). Else false: direction_velocity() alone.
+  /// (Where the two disagree the arm does not follow its target, e.g. stopped by an obstacle, and
+  /// the measured velocity is what the drive sees.)
+  bool target_drive_direction(const RobotSample& s, const VectorJ& qdd, int j, double& x) const {
+    if (target_direction.empty() || !s.has(kFieldTargetQd)) return false;
+    const double blend = std::max(direction_blend, kDirectionLeadMin);
+    // a joint moving at 20 blend widths or more: its measured velocity alone saturates the blend, and
+    // a target that agrees with it only adds to that (most samples end here, without the divisions)
+    if (!(std::abs(s.qd[j]) < 20.0 * blend)) return false;
+    const double a = s.has(kFieldTargetQdd) ? s.target_qdd[j] : 0.0;
+    const double vt = s.target_qd[j] + target_direction.lead[j] * a;
+    if (!(std::abs(vt - s.qd[j]) <= blend + 3.0 * target_direction.width[j])) return false;  // (false for NaN too)
+    x = vt / target_direction.width_at(j, a) + direction_velocity(s.qd[j], qdd[j]) / blend;
+    return std::isfinite(x);
+  }
+  /// Rms tracking error above which a joint's direction is not read on its target: 0.05 rad/s is
+  /// 15 encoder counts a period on a UR, a target the joint does not follow near standstill
+  static constexpr double kTargetDirectionWidthMax = 0.05;
   std::string method = "physics";
   std::vector<std::string> recordings;  ///< files that built it
   MotionEnvelope envelope;              ///< the motion of those files (empty: not recorded, an older twin)
@@ -189,6 +252,14 @@ class TwinModel {
   /// Advances the pre-sliding memory to the measured position q of the next sample (O(n), no
   /// allocation once primed). Call once per sample, before predict().
   void advance(FrictionMemory& memory, const VectorJ& q) const;
+  /// advance() to the sample's positions, and the drive's direction at it where it is read with the
+  /// target (target_drive_direction; qdd the acceleration the prediction uses) into the memory, read
+  /// by predict() and monitor::measured_drive_torque. Allocation-free once primed.
+  void advance(FrictionMemory& memory, const RobotSample& s, const VectorJ& qdd) const;
+  /// The current factor of joint j's drive for torque tau: 1 motoring, c_gen back-driven, blended
+  /// across the direction's uncertainty (the memory's direction read with the target where it has
+  /// one, else direction_velocity(qd, qdd) at direction_blend).
+  double drive_factor(int j, double tau, double qd, double qdd, const FrictionMemory* memory) const;
 
   /// Friction design row of joint j (kFrictionColumns values).
   void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,
@@ -230,11 +301,11 @@ class TwinModel {
   void physics_torque(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
                       const FrictionMemory* memory, const VectorJ* qdd2 = nullptr, VectorJ* torque2 = nullptr) const;
   // the drive's current of a physics torque
-  void drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current) const;
+  void drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current, const FrictionMemory* memory) const;
   void predict_sequential(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, VectorJ& torque, VectorJ& current) const;
   // adds (hybrid) or substitutes (mlp) the learned block's output
   void apply_learned(const VectorJ& q, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature, VectorJ& torque,
-                     VectorJ& current) const;
+                     VectorJ& current, const FrictionMemory* memory) const;
   mutable std::optional<model::RobotModel> fitted_;  // by value: copies of a twin never share it
   mutable std::optional<model::DynamicsData> fitted_data_;
   mutable Eigen::VectorXd fitted_beta_;

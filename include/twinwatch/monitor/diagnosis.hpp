@@ -37,6 +37,8 @@ struct DiagnosisSample {
   VectorJ tau_ext;     ///< momentum-observer estimate of the external torque [N·m] (empty: none)
   VectorJ tau_ext_level;  ///< the observer's healthy bound (its threshold) at this sample [N·m]
   VectorJ presliding;  ///< the twin's pre-sliding state h at this sample (ident::FrictionMemory::h)
+  /// the drive's direction read with the target at this sample (ident::FrictionMemory::direction)
+  VectorJ direction;
   std::uint64_t digital_outputs = 0;
   bool gap_before = false;
 };

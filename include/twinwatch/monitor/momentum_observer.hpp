@@ -80,8 +80,10 @@ class TwinMomentumObserver {
   /// sample needs no twin torque (the first one, or dt <= 0). Then update_with_torque() with the
   /// twin's torque at that acceleration (ignored when acceleration() returned null).
   const VectorJ* acceleration(const RobotSample& s, double dt);
+  /// `memory`: the owner's twin memory advanced to s (TwinModel::advance with the sample), whose
+  /// target-read drive direction the measured torque is converted with (measured_drive_torque)
   const VectorJ& update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ& twin_torque,
-                                    const VectorJ* extra_torque = nullptr);
+                                    const VectorJ* extra_torque = nullptr, const ident::FrictionMemory* memory = nullptr);
 
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }
@@ -107,7 +109,10 @@ class TwinMomentumObserver {
 /// joint is motoring (i_j qd_j >= 0), g_j i_j / c_gen_j when it is back-driven [N·m]. (On the
 /// streamed velocity, not TwinModel::direction_velocity: carried forward, the observer's largest
 /// healthy ratio on the long held-out runs rose, 0.949 -> 0.977 (J4), and no false alarm went;
-/// docs/validation.md, session 26.)
-void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau);
+/// docs/validation.md, session 26.) Where `memory` (advanced to this sample) reads a joint's
+/// direction on the controller's target (TwinModel::target_direction): through the twin's blended
+/// factor there (TwinModel::drive_factor), as its current is predicted.
+void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau,
+                           const ident::FrictionMemory* memory = nullptr);
 
 }  // namespace twinwatch::monitor

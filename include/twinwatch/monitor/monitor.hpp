@@ -237,13 +237,22 @@ struct HealthyRun {
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs,
                                const MonitorConfig& settings = {}, const LearnOptions& options = {});
 
+/// choose_observer_debounce: a validation peak at fewer samples up to this share of the threshold is
+/// never too close. (Without it a twin whose worst joint improved slowed every other one: with the
+/// drive's direction read on the target (session 31) J4's shared-count peak fell from 0.92 to 0.69,
+/// and J2, J3, J5 went from one sample to two, though at one they peaked at 0.71-0.78: a 3 N·m
+/// contact of held-out set 8 was then found in 21 ms. The long runs' largest observer peak sits about
+/// as high as the 1200 s validation runs' worst joint's.)
+inline constexpr double kObserverRatioFloor = 0.8;
+
 /// The observer's debounce per joint, chosen on healthy validation runs that the thresholds in
 /// `config` (its selected program's, or the default set) were not learned on. The monitor runs each
 /// validation run for every debounce d = 1..D (D: the shared count, MonitorConfig::observer_debounce())
 /// and keeps each joint's healthy margin: the largest ratio |observer| / threshold that a whole run
 /// of d decisions exceeded (Monitor::track_margin). Joint j gets the smallest d whose ratio is below 1
-/// and no larger than the worst joint's ratio at D: a joint debounced less never comes closer to its
-/// threshold than the shared count already lets the worst joint come. Why validation runs and not a
+/// and no larger than the worst joint's ratio at D, or than kObserverRatioFloor: a joint debounced less
+/// never comes closer to its threshold than the shared count already lets the worst joint come, and one
+/// that stays below 0.8 of it is never too close. Why validation runs and not a
 /// cross-validation of the (short) threshold runs: the largest healthy peak grows with the time
 /// watched, and blocks of a minute did not rank the joints the way hours of operation do (measured:
 /// docs/validation.md, "Observer debounce per joint"). Throws InvalidArgument without validation runs,
