@@ -125,6 +125,28 @@ std::string listing(const std::vector<Event>& events) {
   return all;
 }
 
+// Two monitors fed one recording sample by sample: joint j's filtered current residual and
+// observer residual in each, and the largest difference of the current residuals over the samples
+// where `far` holds (away from what the two differ in)
+struct SideBySide {
+  std::vector<double> ra, rb, oa, ob;
+  double far_diff = 0.0;
+};
+template <class Far>
+SideBySide side_by_side(Monitor& a, Monitor& b, const device::Recording& rec, int j, Far far) {
+  SideBySide out;
+  for (const auto& x : rec.samples) {
+    a.push(x);
+    b.push(x);
+    out.ra.push_back(a.filtered_residual()[j]);
+    out.rb.push_back(b.filtered_residual()[j]);
+    out.oa.push_back(a.observer_residual()[j]);
+    out.ob.push_back(b.observer_residual()[j]);
+    if (far(x)) out.far_diff = std::max(out.far_diff, std::abs(out.ra.back() - out.rb.back()));
+  }
+  return out;
+}
+
 TEST_F(MonitorLoop, NoFalseAlarmOnHealthyRunsWithNewSeeds) {
   EXPECT_TRUE(monitor(run(scenario(601, 40, 0.5)), 0.5).empty());
   EXPECT_TRUE(monitor(run(scenario(602, 40, 0.0)), 0.0).empty());
@@ -927,18 +949,7 @@ TEST_F(MonitorLoop, TheDrivesDirectionIsReadOnTheVelocityAtTheSamplesInstant) {
                                   "tilt: [0.5, 0.6, 0.8]}\npayload: {mass: 2.0, com: [0, 0, 0.04]}\n"));
   Monitor a(lagged, *config), b(as_is, *config);
   const size_t N = rec.samples.size();
-  std::vector<double> ra(N), rb(N), oa(N), ob(N);
-  double far_diff = 0.0;
-  for (size_t k = 0; k < N; ++k) {
-    const auto& x = rec.samples[k];
-    a.push(x);
-    b.push(x);
-    ra[k] = a.filtered_residual()[1];
-    rb[k] = b.filtered_residual()[1];
-    oa[k] = a.observer_residual()[1];
-    ob[k] = b.observer_residual()[1];
-    if (std::abs(x.qd[1]) > 0.2) far_diff = std::max(far_diff, std::abs(ra[k] - rb[k]));
-  }
+  const auto [ra, rb, oa, ob, far_diff] = side_by_side(a, b, rec, 1, [](const RobotSample& x) { return std::abs(x.qd[1]) > 0.2; });
   double peak_a = 0.0, peak_b = 0.0, obs_diff = 0.0;
   int reversals = 0;
   for (size_t k = 1; k < N; ++k) {
@@ -995,16 +1006,10 @@ TEST_F(MonitorLoop, ADrivesSwitchWhereTheEncoderReadsNothingIsTimedByTheTarget) 
                        "tilt: [0.3, 0.4, 0.5]}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n");
   Monitor a(target, *config), b(measured, *config);
   const size_t N = rec.samples.size();
-  std::vector<double> ra(N), rb(N);
-  double far_diff = 0.0;
-  for (size_t k = 0; k < N; ++k) {
-    const auto& x = rec.samples[k];
-    a.push(x);
-    b.push(x);
-    ra[k] = a.filtered_residual()[1];
-    rb[k] = b.filtered_residual()[1];
-    if (x.qd.cwiseAbs().minCoeff() > 0.05) far_diff = std::max(far_diff, std::abs(ra[k] - rb[k]));
-  }
+  const SideBySide both = side_by_side(a, b, rec, 1, [](const RobotSample& x) { return x.qd.cwiseAbs().minCoeff() > 0.05; });
+  const std::vector<double>& ra = both.ra;
+  const std::vector<double>& rb = both.rb;
+  const double far_diff = both.far_diff;
   a.finish();
   // J2's reversals: the target crosses zero; within +-60 ms, how long the encoder read 0 and the
   // mean |filtered current residual|
