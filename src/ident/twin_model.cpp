@@ -152,7 +152,9 @@ double factor_at(double c_gen, double tau, double x) {
   // and joint in the monitor, where most samples are far from a reversal)
   if (x > 20.0) return 1.0;
   if (x < -20.0) return c_gen;
-  const double w = 0.5 * (1.0 - std::tanh(x));  // 1 back-driven, 0 motoring
+  // (single-precision tanh: 1e-7 relative on a factor in [c_gen, 1], far below its meaning, and
+  // cheaper where it is evaluated every sample: a wrist joint near standstill read with the target)
+  const double w = 0.5 * (1.0 - static_cast<double>(std::tanh(static_cast<float>(x))));  // 1 back-driven, 0 motoring
   return 1.0 + (c_gen - 1.0) * w;
 }
 
