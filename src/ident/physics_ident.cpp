@@ -774,13 +774,11 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   twin.velocity_lag = lag.seconds;
   // ... and near standstill on the controller's target, where the streamed velocity is 0 for as long
   // as the joint moves less than a count a period (TwinModel::target_direction)
-  TargetDirectionFit target_dir;
+  TargetDirectionFit target_dir;  // (left empty when asked not to: actual_qd alone)
   if (o.target_direction) {
     std::vector<const device::Recording*> recs;
     for (const TrainingRun& r : runs) recs.push_back(r.recording);
     target_dir = estimate_target_direction(recs);
-  } else {
-    target_dir.note = "the drive's direction is read on actual_qd alone (as asked)";
   }
   twin.target_direction = target_dir.direction;
   // the low-speed columns of joint j at sample k of run ri (zero while its shapes are off)
@@ -1149,7 +1147,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   report.velocity_lag = lag;
   if (!lag.note.empty()) report.notes.push_back(lag.note);
   report.target_direction = target_dir;
-  if (!target_dir.note.empty() && o.target_direction) report.notes.push_back(target_dir.note);
+  if (!target_dir.note.empty()) report.notes.push_back(target_dir.note);
   for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,

@@ -78,10 +78,11 @@ void TwinMomentumObserver::reset() {
 }
 
 const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {
-  // (the drive's direction with the acceleration the monitor reads it with: the target's when streamed)
+  // (the drive's direction with the acceleration the monitor reads it with: the target's when
+  // streamed, else the last difference; every sample, so that the measured torque never reads a
+  // direction left from an earlier one)
   const VectorJ* qdd = acceleration(s, dt);
-  if (qdd != nullptr || s.has(kFieldTargetQdd)) twin.advance(memory_, s, s.has(kFieldTargetQdd) ? s.target_qdd : *qdd);
-  else twin.advance(memory_, s.q);
+  twin.advance(memory_, s, s.has(kFieldTargetQdd) ? s.target_qdd : qdd_);
   if (qdd != nullptr) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, &memory_);
   return update_with_torque(twin, s, dt, tau_twin_, extra_torque, &memory_);
 }
