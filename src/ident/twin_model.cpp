@@ -146,16 +146,29 @@ SequentialModel sequential_from_json(const nlohmann::json& block, int n, const s
 // the true velocity, so a hard switch on the measured one puts a jump of (1 - c_gen) tau / g into
 // the residual at every reversal of a loaded joint. blend <= 0: the hard switch.
 // (x: the blend's argument, qd / blend, or a direction read with the target)
-double factor_at(double c_gen, double tau, double x) {
-  if (tau < 0.0) x = -x;
-  // beyond |x| = 20, tanh(x) is +-1 to the last bit (1 - tanh < 1e-17): skip the call (per sample
-  // and joint in the monitor, where most samples are far from a reversal)
-  if (x > 20.0) return 1.0;
-  if (x < -20.0) return c_gen;
-  // (single-precision tanh: 1e-7 relative on a factor in [c_gen, 1], far below its meaning, and
-  // cheaper where it is evaluated every sample: a wrist joint near standstill read with the target)
-  const double w = 0.5 * (1.0 - static_cast<double>(std::tanh(static_cast<float>(x))));  // 1 back-driven, 0 motoring
+// beyond |x| = 20, tanh(x) is +-1 to the last bit (1 - tanh < 1e-17): the factor is 1 or c_gen
+// without the call (per sample and joint in the monitor, where most samples are far from a reversal)
+constexpr double kBlendSaturated = 20.0;
+
+// the blend's tanh in single precision: 1e-7 relative on a factor in [c_gen, 1], far below its
+// meaning, and cheaper where it is evaluated every sample (a wrist joint near standstill read with
+// the target)
+double blend_tanh(double x) { return static_cast<double>(std::tanh(static_cast<float>(x))); }
+
+// the factor for the blend's argument x and its tanh t (tanh is odd: the torque's sign flips both)
+double factor_with(double c_gen, double tau, double x, double t) {
+  if (tau < 0.0) {
+    x = -x;
+    t = -t;
+  }
+  if (x > kBlendSaturated) return 1.0;
+  if (x < -kBlendSaturated) return c_gen;
+  const double w = 0.5 * (1.0 - t);  // 1 back-driven, 0 motoring
   return 1.0 + (c_gen - 1.0) * w;
+}
+
+double factor_at(double c_gen, double tau, double x) {
+  return factor_with(c_gen, tau, x, std::abs(x) > kBlendSaturated ? 0.0 : blend_tanh(x));
 }
 
 double direction_factor(double c_gen, double tau, double qd, double blend) {
@@ -270,8 +283,25 @@ void TwinModel::physics_torque(const VectorJ& q, const VectorJ& qd, const Vector
 
 double TwinModel::drive_factor(int j, double tau, double qd, double qdd, const FrictionMemory* memory) const {
   const double c_gen = joints[static_cast<size_t>(j)].c_gen;
-  if (memory != nullptr && memory->direction.size() > j && !std::isnan(memory->direction[j])) return factor_at(c_gen, tau, memory->direction[j]);
+  if (memory != nullptr && memory->direction.size() > j && !std::isnan(memory->direction[j])) {
+    const double x = memory->direction[j];
+    if (memory->direction_tanh.size() == memory->direction.size()) return factor_with(c_gen, tau, x, memory->direction_tanh[j]);
+    return factor_at(c_gen, tau, x);
+  }
   return direction_factor(c_gen, tau, direction_velocity(qd, qdd), direction_blend);
+}
+
+bool TwinModel::drive_in_doubt(int j, double tau, double qd, double qdd, const FrictionMemory* memory, double& to_motoring,
+                               double& to_back_driven) const {
+  if (sequential || (learned && learned->role == LearnedRole::Current)) return false;
+  const JointDrive& d = joints[static_cast<size_t>(j)];
+  if (!(d.c_gen < 1.0) || !(d.gain > 0.0) || tau == 0.0) return false;
+  const double f = drive_factor(j, tau, qd, qdd, memory);
+  const double w = (1.0 - f) / (1.0 - d.c_gen);  // back-driven weight
+  if (!(w >= kDriveDoubt && w <= 1.0 - kDriveDoubt)) return false;
+  to_motoring = (1.0 - f) * tau / d.gain;
+  to_back_driven = (d.c_gen - f) * tau / d.gain;
+  return true;
 }
 
 void TwinModel::drive_current(const VectorJ& qd, const VectorJ& qdd, const VectorJ& torque, VectorJ& current,
@@ -352,12 +382,17 @@ void TwinModel::advance(FrictionMemory& m, const RobotSample& s, const VectorJ& 
   advance(m, s.q);
   if (target_direction.empty() || !s.has(kFieldTargetQd)) {
     m.direction.resize(0);
+    m.direction_tanh.resize(0);
     return;
   }
   const int n = robot_->n_dof();
   m.direction.resize(n);
-  for (int j = 0; j < n; ++j)
-    if (!target_drive_direction(s, qdd, j, m.direction[j])) m.direction[j] = std::numeric_limits<double>::quiet_NaN();
+  m.direction_tanh.resize(n);
+  for (int j = 0; j < n; ++j) {
+    double& x = m.direction[j];
+    if (!target_drive_direction(s, qdd, j, x)) x = std::numeric_limits<double>::quiet_NaN();
+    m.direction_tanh[j] = std::isnan(x) || std::abs(x) > kBlendSaturated ? 0.0 : blend_tanh(x);
+  }
 }
 
 void MotionEnvelope::include(const VectorJ& q, const VectorJ& qd) {

@@ -52,23 +52,34 @@ const VectorJ& MomentumObserver::update(const VectorJ& q, const VectorJ& qd, con
 }
 
 void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau,
-                           const ident::FrictionMemory* memory) {
+                           const ident::FrictionMemory* memory, const VectorJ* reference) {
   const int n = twin.n_dof();
   const bool target = memory != nullptr && memory->direction.size() == n;
+  double to_motoring = 0.0, to_back_driven = 0.0;
   for (int j = 0; j < n; ++j) {
     const ident::JointDrive& d = twin.joints[static_cast<size_t>(j)];
     // inverse of the twin's current model: i = c tau / g with c = c_gen when back-driven (the
     // torque's sign is the current's: g > 0)
     const double tau_motoring = d.gain * current[j];
-    if (target && !std::isnan(memory->direction[j])) tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
-    else tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
+    if (target && !std::isnan(memory->direction[j])) {
+      // the drive's direction in doubt (TwinModel::drive_in_doubt): the level nearer the twin's own
+      // torque, as the current residual takes the level nearer the current (resolve_drive_doubt)
+      if (reference != nullptr && twin.drive_in_doubt(j, tau_motoring, qd[j], 0.0, memory, to_motoring, to_back_driven)) {
+        const double back_driven = tau_motoring / d.c_gen;
+        tau[j] = std::abs(back_driven - (*reference)[j]) < std::abs(tau_motoring - (*reference)[j]) ? back_driven : tau_motoring;
+      } else {
+        tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
+      }
+    } else {
+      tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
+    }
   }
 }
 
 TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), gain_(gain) {
   if (n_dof < 1) throw InvalidArgument(fmt::format("momentum observer: n_dof is {}, must be >= 1", n_dof));
   if (!(gain > 0.0)) throw InvalidArgument(fmt::format("momentum observer gain is {}, must be > 0", gain));
-  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = VectorJ::Zero(n_dof);
+  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = tau_ref_ = VectorJ::Zero(n_dof);
 }
 
 void TwinMomentumObserver::reset() {
@@ -97,8 +108,10 @@ const VectorJ* TwinMomentumObserver::acceleration(const RobotSample& s, double d
 const VectorJ& TwinMomentumObserver::update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt,
                                                         const VectorJ& twin_torque, const VectorJ* extra_torque,
                                                         const ident::FrictionMemory* memory) {
-  // measured drive torque through the identified drive model
-  measured_drive_torque(twin, s.current, s.qd, tau_m_, memory);
+  // measured drive torque through the identified drive model (where the drive's direction is in
+  // doubt, the level nearer the twin's torque)
+  for (int j = 0; j < n_; ++j) tau_ref_[j] = twin_torque[j] + (extra_torque != nullptr ? (*extra_torque)[j] : 0.0);
+  measured_drive_torque(twin, s.current, s.qd, tau_m_, memory, &tau_ref_);
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;

@@ -246,6 +246,30 @@ std::vector<VectorJ> monitor_accelerations(const device::Recording& rec, double 
   return out;
 }
 
+}  // namespace
+
+// The drive's direction in doubt. The drive switches hard between its motoring and back-driven
+// levels when the joint's velocity crosses zero, at an instant the twin cannot place closer than
+// its blend's width (the target's crossing within the joint's tracking error, or a count of the
+// encoder); there the blended prediction sits between the two levels, and while the current is at
+// either it leaves up to half the drive's step in the residual (J2 of a slow loaded figure-eight
+// switched 7 ms before its target's crossing: 0.16 A against a 0.149 A threshold). Where the blend
+// is in doubt (TwinModel::drive_in_doubt) the residual is the current's distance to the level it is
+// nearer to: the drive's state read on the current itself. A fault pushing the current toward the
+// other level is read as the switch only up to the step, and only inside the doubt.
+void resolve_drive_doubt(const ident::TwinModel& twin, const RobotSample& s, const VectorJ& qdd, const VectorJ& tau,
+                         const ident::FrictionMemory& memory, VectorJ& r) {
+  const int n = twin.n_dof();
+  double to_motoring = 0.0, to_back_driven = 0.0;
+  for (int j = 0; j < n; ++j) {
+    if (!twin.drive_in_doubt(j, tau[j], s.qd[j], qdd[j], &memory, to_motoring, to_back_driven)) continue;
+    const double a = r[j] - to_motoring, b = r[j] - to_back_driven;
+    r[j] = std::abs(a) <= std::abs(b) ? a : b;
+  }
+}
+
+namespace {
+
 // (torques: when given, the twin's torque per sample too)
 std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const device::Recording& rec, double alpha,
                                         std::vector<VectorJ>& qdds, const MonitorConfig& c, std::vector<VectorJ>* torques = nullptr) {
@@ -260,19 +284,16 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
     twin.advance(memory, s, qdds[k]);
-    if (torques != nullptr) {
-      twin.predict(s.q, s.qd, qdds[k], s.temperature, tau, i, &memory);
-      torques->push_back(tau);
-    } else {
-      twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i, &memory);
-    }
+    twin.predict(s.q, s.qd, qdds[k], s.temperature, tau, i, &memory);
+    if (torques != nullptr) torques->push_back(tau);
     VectorJ r = s.current - i;
-    // the monitor's temperature compensation (Monitor::push), so thresholds learned on a warm-up
-    // from cold see the residual the monitor will see
+    // the monitor's temperature compensation and the drive's doubt (Monitor::push), so thresholds
+    // learned on a warm-up from cold see the residual the monitor will see
     if (c.trend.temperature_slope.size() == r.size())
       for (int j = 0; j < r.size(); ++j)
         if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
           r[j] -= c.trend.temperature_slope[j] * s.qd[j] * (s.temperature[j] - c.trend.temperature_ref);
+    resolve_drive_doubt(twin, s, qdds[k], tau, memory, r);
     if (k == 0) rf = r;
     else rf += alpha * (r - rf);
     for (size_t j = 0; j < fir.size(); ++j)
@@ -2160,6 +2181,7 @@ void Monitor::push(const RobotSample& s) {
   for (int j = 0; j < n_; ++j)
     if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
       r_[j] -= temp_slope_[j] * s.qd[j] * (s.temperature[j] - cfg_.trend.temperature_ref);
+  resolve_drive_doubt(twin_, s, qdd_, tau_hat_, memory_, r_);
   if (!filter_started_) {
     rf_ = r_;
     filter_started_ = true;

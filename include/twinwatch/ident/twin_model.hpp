@@ -81,6 +81,10 @@ struct FrictionMemory {
   /// as the argument x of its blend (tanh x: +1 forward, -1 backward); NaN (or empty): read on the
   /// measured velocity alone (TwinModel::direction_velocity at direction_blend)
   VectorJ direction;
+  /// tanh of direction per joint, evaluated once where advance() reads it, for the prediction's
+  /// current and the observer's measured torque at the same sample (one tanh per joint, not two);
+  /// read only while its size is direction's (a copy that sets direction alone leaves it empty)
+  VectorJ direction_tanh;
 };
 
 /// The drive's direction read on the controller's target velocity where the measured one cannot tell
@@ -260,6 +264,18 @@ class TwinModel {
   /// across the direction's uncertainty (the memory's direction read with the target where it has
   /// one, else direction_velocity(qd, qdd) at direction_blend).
   double drive_factor(int j, double tau, double qd, double qdd, const FrictionMemory* memory) const;
+  /// Whether joint j's drive direction is in doubt at this sample for torque tau: its blend
+  /// (drive_factor) weighs the back-driven level between kDriveDoubt and 1 - kDriveDoubt. The drive
+  /// itself switches hard when the joint's velocity crosses zero, at an instant the twin cannot place
+  /// closer than the blend's width; there the blended prediction sits between the two levels. Then
+  /// true, with the current's two levels as offsets from the blended prediction: to_motoring =
+  /// (1 - f) tau / g and to_back_driven = (c_gen - f) tau / g. False also where the twin predicts
+  /// without the factor (sequential, a network predicting the current itself) or has no step (c_gen 1).
+  bool drive_in_doubt(int j, double tau, double qd, double qdd, const FrictionMemory* memory, double& to_motoring,
+                      double& to_back_driven) const;
+  /// the back-driven weight of the blend inside which the direction is in doubt (drive_in_doubt):
+  /// |x| < 1.47 of the blend's argument, about 1.5 widths of the direction's uncertainty either side
+  static constexpr double kDriveDoubt = 0.05;
 
   /// Friction design row of joint j (kFrictionColumns values).
   void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,

@@ -100,7 +100,7 @@ class TwinMomentumObserver {
   int n_;
   double gain_;
   bool started_ = false;
-  VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_;
+  VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_, tau_ref_;
   ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream (update() only)
   double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
@@ -112,7 +112,9 @@ class TwinMomentumObserver {
 /// docs/validation.md, session 26.) Where `memory` (advanced to this sample) reads a joint's
 /// direction on the controller's target (TwinModel::target_direction): through the twin's blended
 /// factor there (TwinModel::drive_factor), as its current is predicted.
+/// With `reference` (the twin's torque at this sample), where the direction read with the target is
+/// in doubt (TwinModel::drive_in_doubt): the one of the two levels' torques nearer the reference.
 void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current, const VectorJ& qd, VectorJ& tau,
-                           const ident::FrictionMemory* memory = nullptr);
+                           const ident::FrictionMemory* memory = nullptr, const VectorJ* reference = nullptr);
 
 }  // namespace twinwatch::monitor

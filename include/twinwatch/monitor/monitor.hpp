@@ -700,4 +700,11 @@ class Monitor {
   std::vector<DiagnosisSample> reference_;  // observer history before the window (contact isolation)
 };
 
+/// The current residual r (measured - predicted, per joint) where a joint's drive direction is in
+/// doubt (ident::TwinModel::drive_in_doubt at this sample, torque tau, acceleration qdd, the stream's
+/// memory advanced to s): the current's distance to the nearer of the drive's two levels, in place.
+/// Monitor::push and the thresholds' learning both call it. Allocation-free.
+void resolve_drive_doubt(const ident::TwinModel& twin, const RobotSample& s, const VectorJ& qdd, const VectorJ& tau,
+                         const ident::FrictionMemory& memory, VectorJ& r);
+
 }  // namespace twinwatch::monitor
