@@ -291,13 +291,13 @@ double TwinModel::drive_factor(int j, double tau, double qd, double qdd, const F
   return direction_factor(c_gen, tau, direction_velocity(qd, qdd), direction_blend);
 }
 
-bool TwinModel::drive_in_doubt(int j, double tau, double qd, double qdd, const FrictionMemory* memory, double& to_motoring,
-                               double& to_back_driven) const {
+bool TwinModel::drive_in_doubt(int j, double tau, const FrictionMemory& memory, double& to_motoring, double& to_back_driven) const {
   if (sequential || (learned && learned->role == LearnedRole::Current)) return false;
+  if (memory.crossing.size() <= j || memory.crossing[j] == 0.0) return false;
   const JointDrive& d = joints[static_cast<size_t>(j)];
   if (!(d.c_gen < 1.0) || !(d.gain > 0.0) || tau == 0.0) return false;
-  const double f = drive_factor(j, tau, qd, qdd, memory);
-  const double w = (1.0 - f) / (1.0 - d.c_gen);  // back-driven weight
+  const double f = drive_factor(j, tau, 0.0, 0.0, &memory);  // (read with the target: qd, qdd unused)
+  const double w = (1.0 - f) / (1.0 - d.c_gen);                // back-driven weight
   if (!(w >= kDriveDoubt && w <= 1.0 - kDriveDoubt)) return false;
   to_motoring = (1.0 - f) * tau / d.gain;
   to_back_driven = (d.c_gen - f) * tau / d.gain;
@@ -383,15 +383,20 @@ void TwinModel::advance(FrictionMemory& m, const RobotSample& s, const VectorJ& 
   if (target_direction.empty() || !s.has(kFieldTargetQd)) {
     m.direction.resize(0);
     m.direction_tanh.resize(0);
+    m.crossing.resize(0);
     return;
   }
   const int n = robot_->n_dof();
   m.direction.resize(n);
   m.direction_tanh.resize(n);
+  m.crossing.resize(n);
+  const bool accelerating = s.has(kFieldTargetQdd);
   for (int j = 0; j < n; ++j) {
     double& x = m.direction[j];
     if (!target_drive_direction(s, qdd, j, x)) x = std::numeric_limits<double>::quiet_NaN();
     m.direction_tanh[j] = std::isnan(x) || std::abs(x) > kBlendSaturated ? 0.0 : blend_tanh(x);
+    const bool resting = std::abs(s.target_qd[j]) < kTargetRestVelocity && !(accelerating && std::abs(s.target_qdd[j]) >= kTargetRestAcceleration);
+    m.crossing[j] = !std::isnan(x) && !resting ? 1.0 : 0.0;
   }
 }
 

@@ -64,7 +64,7 @@ void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current,
     if (target && !std::isnan(memory->direction[j])) {
       // the drive's direction in doubt (TwinModel::drive_in_doubt): the level nearer the twin's own
       // torque, as the current residual takes the level nearer the current (resolve_drive_doubt)
-      if (reference != nullptr && twin.drive_in_doubt(j, tau_motoring, qd[j], 0.0, memory, to_motoring, to_back_driven)) {
+      if (reference != nullptr && twin.drive_in_doubt(j, tau_motoring, *memory, to_motoring, to_back_driven)) {
         const double back_driven = tau_motoring / d.c_gen;
         tau[j] = std::abs(back_driven - (*reference)[j]) < std::abs(tau_motoring - (*reference)[j]) ? back_driven : tau_motoring;
       } else {
@@ -95,6 +95,8 @@ const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const 
   const VectorJ* qdd = acceleration(s, dt);
   twin.advance(memory_, s, s.has(kFieldTargetQdd) ? s.target_qdd : qdd_);
   if (qdd != nullptr) twin.predict_torque(s.q, s.qd, *qdd, s.temperature, tau_twin_, &memory_);
+  // (no reference: the blended factor where the direction is in doubt, as the thresholds are
+  // learned; the monitor reads the level on the current, Monitor::push)
   return update_with_torque(twin, s, dt, tau_twin_, extra_torque, &memory_);
 }
 
@@ -107,11 +109,10 @@ const VectorJ* TwinMomentumObserver::acceleration(const RobotSample& s, double d
 
 const VectorJ& TwinMomentumObserver::update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt,
                                                         const VectorJ& twin_torque, const VectorJ* extra_torque,
-                                                        const ident::FrictionMemory* memory) {
+                                                        const ident::FrictionMemory* memory, const VectorJ* reference) {
   // measured drive torque through the identified drive model (where the drive's direction is in
-  // doubt, the level nearer the twin's torque)
-  for (int j = 0; j < n_; ++j) tau_ref_[j] = twin_torque[j] + (extra_torque != nullptr ? (*extra_torque)[j] : 0.0);
-  measured_drive_torque(twin, s.current, s.qd, tau_m_, memory, &tau_ref_);
+  // doubt, the level nearer the reference)
+  measured_drive_torque(twin, s.current, s.qd, tau_m_, memory, reference);
   if (!started_ || !(dt > 0.0)) {
     // first sample (or a non-increasing timestamp): nothing to difference yet
     qd_prev_ = s.qd;

@@ -1,6 +1,7 @@
 // The monitoring loop end to end on the virtual robot: a twin identified from healthy runs only,
 // thresholds learned on other healthy runs, then faults the twin has never seen.
 #include "twinwatch/monitor/monitor.hpp"
+#include "twinwatch/monitor/momentum_observer.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -1032,6 +1033,88 @@ TEST_F(MonitorLoop, ADrivesSwitchWhereTheEncoderReadsNothingIsTimedByTheTarget) 
                                    << " on the measured velocity";
   EXPECT_LT(far_diff, 1e-6) << "away from standstill both read the same direction";
   EXPECT_TRUE(a.events().empty()) << listing(a.events());
+}
+
+// The drive switches hard between its motoring and back-driven levels when the joint's velocity
+// crosses zero; where the twin cannot place that instant (a slow loaded reversal: the target's
+// crossing within the joint's tracking error) its blend sits between the levels, while the current
+// is at one of them. Read on the current (resolve_drive_doubt), the residual there is the current's
+// distance to the nearer level: at the noise, where the blend left up to half the step. A current
+// beyond a level keeps all of its excess (a contact is read as the switch only up to the step), and a
+// joint resting on its target is not in doubt (its held current sits anywhere between the levels).
+TEST_F(MonitorLoop, ADrivesSwitchTheTwinCannotTimeIsReadOnTheCurrent) {
+  const ident::TwinModel t = declared_twin();
+  ASSERT_FALSE(t.target_direction.empty());
+  // a figure-eight at twice the thresholds' period with the payload: J2 reverses under load at 0.14 rad/s²
+  const auto rec = run("robot: ur3e\nseed: 3102\nduration: 48\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 16, "
+                       "tilt: [0.3, 0.4, 0.5]}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n");
+  ident::FrictionMemory memory;
+  VectorJ tau, i_hat;
+  double doubt_raw = 0.0, doubt_read = 0.0, away = 0.0, step = 0.0;
+  long n_doubt = 0, n_away = 0, rest_doubt = 0, crossing_doubt = 0, observer_off = 0;
+  double beyond_err = 0.0;
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    if (s.timestamp < 1.0) {
+      t.advance(memory, s, s.target_qdd);
+      continue;
+    }
+    t.advance(memory, s, s.target_qdd);
+    t.predict(s.q, s.qd, s.target_qdd, s.temperature, tau, i_hat, &memory);
+    const VectorJ raw = s.current - i_hat;
+    VectorJ read = raw;
+    resolve_drive_doubt(t, tau, memory, read);
+    double to_m = 0.0, to_b = 0.0;
+    if (t.drive_in_doubt(1, tau[1], memory, to_m, to_b)) {
+      doubt_raw += raw[1] * raw[1];
+      doubt_read += read[1] * read[1];
+      step = std::max(step, std::abs(to_m - to_b));
+      ++n_doubt;
+      // a current 0.5 A beyond the level farther from the other one: all of it stays
+      VectorJ over = raw;
+      const double far = std::abs(to_m) > std::abs(to_b) ? to_m : to_b;
+      over[1] = far + (far > 0.0 ? 0.5 : -0.5);
+      resolve_drive_doubt(t, tau, memory, over);
+      beyond_err = std::max(beyond_err, std::abs(std::abs(over[1]) - 0.5));
+      // the observer's measured torque: one of the two levels' torques, the one nearer the twin's
+      VectorJ tau_m(6);
+      measured_drive_torque(t, s.current, s.qd, tau_m, &memory, &tau);
+      const ident::JointDrive& d = t.joints[1];
+      const double motoring = d.gain * s.current[1], back_driven = motoring / d.c_gen;
+      const double nearer = std::abs(back_driven - tau[1]) < std::abs(motoring - tau[1]) ? back_driven : motoring;
+      if (tau_m[1] != nearer) ++observer_off;
+    } else if (std::abs(s.qd[1]) > 0.05) {
+      away += raw[1] * raw[1];
+      ++n_away;
+    }
+    // the same sample with J2's target resting at zero velocity (no acceleration), and crossing it
+    RobotSample held = s;
+    held.qd[1] = held.target_qd[1] = held.target_qdd[1] = 0.0;
+    ident::FrictionMemory m = memory;
+    t.advance(m, held, held.target_qdd);
+    if (t.drive_in_doubt(1, tau[1], m, to_m, to_b)) ++rest_doubt;
+    held.target_qdd[1] = -0.1;
+    m = memory;
+    t.advance(m, held, held.target_qdd);
+    if (t.drive_in_doubt(1, tau[1], m, to_m, to_b)) ++crossing_doubt;
+  }
+  ASSERT_GE(n_doubt, 100) << "J2's reversals in doubt (3 figure-eights, 2 reversals each)";
+  const double rms_raw = std::sqrt(doubt_raw / n_doubt), rms_read = std::sqrt(doubt_read / n_doubt), rms_away = std::sqrt(away / n_away);
+  EXPECT_GT(step, 0.2) << "J2's step under load [A]";
+  EXPECT_GT(rms_raw, 2.0 * rms_away) << "the blend between the levels [A]: " << rms_raw << " vs the noise " << rms_away;
+  EXPECT_LT(rms_read, 1.3 * rms_away) << "read on the current [A]: " << rms_read << " vs the noise " << rms_away;
+  EXPECT_LT(beyond_err, 1e-12) << "a current beyond a level keeps its excess";
+  EXPECT_EQ(observer_off, 0) << "the observer's torque at the level nearer the twin's";
+  EXPECT_EQ(rest_doubt, 0) << "a joint resting on its target is not in doubt";
+  EXPECT_GT(crossing_doubt, 0);
+  // a stream without the targets: never in doubt (the blend on the measured velocity, as before)
+  RobotSample plain = rec.samples[1000];
+  plain.present &= ~(kFieldTargetQd | kFieldTargetQdd);
+  plain.qd[1] = 0.0;
+  ident::FrictionMemory pm;
+  t.advance(pm, plain, VectorJ::Zero(6));
+  double to_m = 0.0, to_b = 0.0;
+  EXPECT_FALSE(t.drive_in_doubt(1, 10.0, pm, to_m, to_b));
 }
 
 // A program declares its pick when it is done: a gripper's URCap once it has seen the grip (after

@@ -85,6 +85,10 @@ struct FrictionMemory {
   /// current and the observer's measured torque at the same sample (one tanh per joint, not two);
   /// read only while its size is direction's (a copy that sets direction alone leaves it empty)
   VectorJ direction_tanh;
+  /// per joint 1 where the direction is read with the target and the target does not rest (a
+  /// target at zero velocity without acceleration: TwinModel::kTargetRestVelocity,
+  /// kTargetRestAcceleration), else 0: where TwinModel::drive_in_doubt may hold
+  VectorJ crossing;
 };
 
 /// The drive's direction read on the controller's target velocity where the measured one cannot tell
@@ -264,18 +268,25 @@ class TwinModel {
   /// across the direction's uncertainty (the memory's direction read with the target where it has
   /// one, else direction_velocity(qd, qdd) at direction_blend).
   double drive_factor(int j, double tau, double qd, double qdd, const FrictionMemory* memory) const;
-  /// Whether joint j's drive direction is in doubt at this sample for torque tau: its blend
+  /// Whether joint j's drive direction is in doubt at this sample for torque tau: the joint's
+  /// target does not rest (memory.crossing, from advance()) and the blend read with it
   /// (drive_factor) weighs the back-driven level between kDriveDoubt and 1 - kDriveDoubt. The drive
   /// itself switches hard when the joint's velocity crosses zero, at an instant the twin cannot place
   /// closer than the blend's width; there the blended prediction sits between the two levels. Then
   /// true, with the current's two levels as offsets from the blended prediction: to_motoring =
   /// (1 - f) tau / g and to_back_driven = (c_gen - f) tau / g. False also where the twin predicts
-  /// without the factor (sequential, a network predicting the current itself) or has no step (c_gen 1).
-  bool drive_in_doubt(int j, double tau, double qd, double qdd, const FrictionMemory* memory, double& to_motoring,
-                      double& to_back_driven) const;
+  /// without the factor (sequential, a network predicting the current itself) or has no step
+  /// (c_gen 1), and at a joint resting on its target (a held joint's current sits anywhere between
+  /// the levels, where static friction leaves it).
+  bool drive_in_doubt(int j, double tau, const FrictionMemory& memory, double& to_motoring, double& to_back_driven) const;
   /// the back-driven weight of the blend inside which the direction is in doubt (drive_in_doubt):
   /// |x| < 1.47 of the blend's argument, about 1.5 widths of the direction's uncertainty either side
   static constexpr double kDriveDoubt = 0.05;
+  /// A joint's target rests below this velocity [rad/s] and acceleration [rad/s²] (a controller's
+  /// target at rest is exactly zero; a crawl the slow sets command is 1 mrad/s, their slowest
+  /// reversal 0.045 rad/s²)
+  static constexpr double kTargetRestVelocity = 1e-6;
+  static constexpr double kTargetRestAcceleration = 1e-3;
 
   /// Friction design row of joint j (kFrictionColumns values).
   void friction_row(int j, const VectorJ& qd, const VectorJ& qdd, const VectorJ& temperature,

@@ -82,8 +82,12 @@ class TwinMomentumObserver {
   const VectorJ* acceleration(const RobotSample& s, double dt);
   /// `memory`: the owner's twin memory advanced to s (TwinModel::advance with the sample), whose
   /// target-read drive direction the measured torque is converted with (measured_drive_torque)
+  /// `reference`: the twin's torque (with extra_torque) at the acceleration the prediction uses, where
+  /// a drive's direction in doubt takes the level nearer it (measured_drive_torque; the monitor);
+  /// null: the blend (update(), which the thresholds are learned with).
   const VectorJ& update_with_torque(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ& twin_torque,
-                                    const VectorJ* extra_torque = nullptr, const ident::FrictionMemory* memory = nullptr);
+                                    const VectorJ* extra_torque = nullptr, const ident::FrictionMemory* memory = nullptr,
+                                    const VectorJ* reference = nullptr);
 
   /// Estimate of the external joint torque after the last update [N·m].
   const VectorJ& residual() const { return r_; }

@@ -501,6 +501,7 @@ class Monitor {
   VectorJ obs_level_, obs_to_nm_;
   VectorJ static_friction_;  ///< [N·m] per joint, what friction holds at rest (DiagnosisOptions::static_friction)
   VectorJ obs_warm_;  // the observer's temperature compensation of the sample [N·m] (scratch)
+  VectorJ obs_ref_;   // the twin's torque at the prediction's acceleration, with obs_warm_ (scratch)
   VectorJ tau_obs_;   // the twin's torque at the observer's acceleration (scratch)
   RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
   VectorJ rf_dec_, obs_dec_;         // the residuals the decision compares with the thresholds
@@ -701,10 +702,10 @@ class Monitor {
 };
 
 /// The current residual r (measured - predicted, per joint) where a joint's drive direction is in
-/// doubt (ident::TwinModel::drive_in_doubt at this sample, torque tau, acceleration qdd, the stream's
-/// memory advanced to s): the current's distance to the nearer of the drive's two levels, in place.
-/// Monitor::push and the thresholds' learning both call it. Allocation-free.
-void resolve_drive_doubt(const ident::TwinModel& twin, const RobotSample& s, const VectorJ& qdd, const VectorJ& tau,
-                         const ident::FrictionMemory& memory, VectorJ& r);
+/// doubt (ident::TwinModel::drive_in_doubt at the twin's torque tau, the stream's memory advanced to
+/// the sample): the current's distance to the nearer of the drive's two levels, in place.
+/// Monitor::push calls it; the thresholds are learned on the blended residual (its margin kept).
+/// Allocation-free.
+void resolve_drive_doubt(const ident::TwinModel& twin, const VectorJ& tau, const ident::FrictionMemory& memory, VectorJ& r);
 
 }  // namespace twinwatch::monitor
