@@ -2075,14 +2075,11 @@ TEST_F(MonitorLoop, AJointCrawlingLongerThanTheThresholdsSawIsNotAFault) {
   EXPECT_TRUE(after(watch(*config)).empty()) << listing(watch(*config));
   MonitorConfig before = *config;
   before.crawl_max.resize(0);
-  EXPECT_GE(after(watch(before)).size(), 2u) << "the learned levels alone at the slow reversals" << listing(watch(before));
-  {
-    // and then the run's end says what a slower program would show, and the remedy
-    Monitor m(declared_twin(), before);
-    for (const auto& x : rec.samples) m.push(x);
-    m.finish();
-    EXPECT_THAT(fmt::format("{}", fmt::join(m.notes(), "\n")), ::testing::HasSubstr("crawled through a reversal"));
-  }
+  // Without the crawl widening this run raised 2 or more false contacts at its slow reversals until
+  // session 31; since session 32 the drive's direction in doubt there is read on the current
+  // (resolve_drive_doubt), and the learned levels alone keep it clean too: the two remedies overlap
+  // on a stream that carries the controller's targets (docs/validation.md, session 32)
+  EXPECT_TRUE(after(watch(before)).empty()) << "the learned levels alone at the slow reversals" << listing(watch(before));
   // (the JSON keeps it)
   EXPECT_EQ(MonitorConfig::from_json(config->to_json(), "t", 6).crawl_max, config->crawl_max);
   // a contact at the slow motion is still found
