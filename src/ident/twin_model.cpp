@@ -296,9 +296,14 @@ bool TwinModel::drive_in_doubt(int j, double tau, const FrictionMemory& memory, 
   if (memory.crossing.size() <= j || memory.crossing[j] == 0.0) return false;
   const JointDrive& d = joints[static_cast<size_t>(j)];
   if (!(d.c_gen < 1.0) || !(d.gain > 0.0) || tau == 0.0) return false;
-  const double f = drive_factor(j, tau, 0.0, 0.0, &memory);  // (read with the target: qd, qdd unused)
-  const double w = (1.0 - f) / (1.0 - d.c_gen);                // back-driven weight
+  // the blend's back-driven weight from the tanh advance() left (crossing implies it is there): the
+  // weight and factor drive_factor computes, without the factor's division back to the weight
+  const double x = memory.direction[j];
+  if (!(std::abs(x) <= kBlendSaturated)) return false;  // (saturated: sure)
+  const double t = tau < 0.0 ? -memory.direction_tanh[j] : memory.direction_tanh[j];
+  const double w = 0.5 * (1.0 - t);
   if (!(w >= kDriveDoubt && w <= 1.0 - kDriveDoubt)) return false;
+  const double f = 1.0 + (d.c_gen - 1.0) * w;
   to_motoring = (1.0 - f) * tau / d.gain;
   to_back_driven = (d.c_gen - f) * tau / d.gain;
   return true;
