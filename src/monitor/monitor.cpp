@@ -139,6 +139,47 @@ double iir_alpha(double cutoff_hz, double period) {
   return 1.0 - std::exp(-2.0 * M_PI * cutoff_hz * period);
 }
 
+// A payload the controller declares (the stream's kFieldPayload: m kg at c in the flange frame) is a
+// number the twin can read: a finite mass >= 0 at a finite centre of mass (the recording reader
+// refuses other rows; a live stream's odd value is not taken)
+bool declaration_readable(const RobotSample& s) {
+  const double* c = s.payload_cog;
+  return std::isfinite(s.payload) && s.payload >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
+}
+
+// Why the twin does not predict with a readable declaration, or "" when it does (the monitor says
+// the reason; the threshold learning keeps the run's payload)
+std::string declaration_refusal(const ident::TwinModel& twin, const RobotSample& s) {
+  const double m = s.payload;
+  const double* c = s.payload_cog;
+  const double cog_distance = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  if (!twin.gains_known()) return "its torques are relative (it was identified without a known payload that fixes its gains)";
+  if (!twin.predicts_payload()) return "its prediction does not carry a payload (method '" + twin.method + "')";
+  if (m > twin.robot().payload_limit())
+    return fmt::format("above {:g} kg ({})", twin.robot().payload_limit(), twin.robot().payload_limit_text());
+  if (m > 0.0 && cog_distance > kDeclaredCogMax)
+    return fmt::format("its centre of mass is {:.3g} m from the flange, more than {:g} m (a value in mm?)", cog_distance, kDeclaredCogMax);
+  return {};
+}
+
+// The payload the twin predicts with for a declaration it takes. The declaration has no shape
+// (payload_inertia is not read): the twin's own when it is the same part, else a point mass.
+model::RigidBodyInertia declared_inertia(const RobotSample& s, const model::RigidBodyInertia& had) {
+  model::RigidBodyInertia now;
+  if (s.payload > 0.0) {
+    now.mass = s.payload;
+    now.com = Eigen::Vector3d(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
+    if (had.mass == now.mass && had.com == now.com) now.inertia_com = had.inertia_com;
+  }
+  return now;
+}
+
+// the same part: mass and (for a part) centre of mass (the first declaration is news only where it
+// differs from what the twin was given)
+bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInertia& b) {
+  return a.mass == b.mass && (a.mass == 0.0 || a.com == b.com);
+}
+
 }  // namespace
 
 RestBaseline::RestBaseline(int n) : run_(static_cast<size_t>(n), 0), sum_(VectorJ::Zero(n)), base_(VectorJ::Zero(n)) {}
@@ -269,9 +310,71 @@ void resolve_drive_doubt(const ident::TwinModel& twin, const VectorJ& tau, const
 
 namespace {
 
-// (torques: when given, the twin's torque per sample too)
-std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const device::Recording& rec, double alpha,
-                                        std::vector<VectorJ>& qdds, const MonitorConfig& c, std::vector<VectorJ>* torques = nullptr) {
+// The payload the monitor predicts a healthy run with, sample by sample: the run's own (HealthyRun::
+// payload), then, where the stream carries what the program declares (kFieldPayload) and the monitor
+// follows declarations (MonitorConfig::follow_payload), each declaration the twin takes, from its
+// sample on (Monitor::take_declared_payload). Learned with the run's payload alone, the thresholds
+// were learned on another prediction than the monitor's: healthy runs from a controller declaring
+// 0.5 kg, learned without --payload-mass, gave J2/J3 dynamic thresholds of 0.46/0.48 A where the
+// declared payload gives 0.08/0.07 A (session 33), blind to a 5 N·m contact. Where the payload
+// changes, the residual filter and the observer start again and decisions wait, as in the monitor;
+// those samples teach no threshold.
+class PayloadTimeline {
+ public:
+  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow) : steps_{{0, h.payload}} {
+    const auto& smp = h.recording->samples;
+    judged_.assign(smp.size(), 1);
+    if (!follow || !(h.recording->present & kFieldPayload)) return;
+    const RobotSample* last = nullptr;  // the declaration read last (Monitor::same_declaration)
+    for (size_t k = 0; k < smp.size(); ++k) {
+      const RobotSample& s = smp[k];
+      if (!s.has(kFieldPayload) || (last != nullptr && s.payload == last->payload && std::equal(s.payload_cog, s.payload_cog + 3, last->payload_cog)))
+        continue;
+      last = &s;
+      if (!declaration_readable(s) || !declaration_refusal(twin, s).empty()) continue;
+      const model::RigidBodyInertia now = declared_inertia(s, steps_.back().payload);
+      if (same_payload(now, steps_.back().payload)) continue;
+      if (k == 0) {
+        steps_.back().payload = now;  // declared from the start: the run's payload
+        continue;
+      }
+      steps_.push_back({k, now});
+      std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + kSettleSamples)), 0);
+    }
+  }
+  /// Sets the run's first payload on t; advance() then follows it.
+  void start(ident::TwinModel& t) {
+    next_ = 1;
+    t.set_payload(steps_.front().payload);
+  }
+  /// Sets the payload from sample k on (k in order); true where it changes there.
+  bool advance(size_t k, ident::TwinModel& t) {
+    if (next_ >= steps_.size() || steps_[next_].from != k) return false;
+    t.set_payload(steps_[next_++].payload);
+    return true;
+  }
+  /// A sample the monitor decides on (not settling after a change).
+  bool judged(size_t k) const { return judged_[k] != 0; }
+  double heaviest() const {
+    double m = 0.0;
+    for (const auto& p : steps_) m = std::max(m, p.payload.mass);
+    return m;
+  }
+
+ private:
+  struct Step {
+    size_t from = 0;
+    model::RigidBodyInertia payload;
+  };
+  std::vector<Step> steps_;
+  std::vector<char> judged_;
+  size_t next_ = 1;
+};
+
+// (torques: when given, the twin's torque per sample too; payload: the run's payload from sample to
+// sample, which leaves the twin with the last one)
+std::vector<VectorJ> filtered_residuals(ident::TwinModel& twin, const device::Recording& rec, double alpha, std::vector<VectorJ>& qdds,
+                                        const MonitorConfig& c, PayloadTimeline& payload, std::vector<VectorJ>* torques = nullptr) {
   auto fir = make_fir_filters(c, twin.n_dof());
   qdds = monitor_accelerations(rec, alpha, c.gap_factor * (rec.median_period > 0.0 ? rec.median_period : c.nominal_period));
   std::vector<VectorJ> out;
@@ -280,8 +383,17 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
   RestBaseline rest(twin.n_dof());
   ident::FrictionMemory memory;
   if (torques != nullptr) torques->clear();
+  payload.start(twin);
+  bool restarted = false;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
+    // a payload the twin takes: the filter starts again from zero and the rest is measured again
+    // (Monitor::restart_estimators, Monitor::carry)
+    if (payload.advance(k, twin)) {
+      restarted = true;
+      rest = RestBaseline(twin.n_dof());
+      for (auto& f : fir) f.reset();
+    }
     twin.advance(memory, s, qdds[k]);
     if (torques != nullptr) {
       twin.predict(s.q, s.qd, qdds[k], s.temperature, tau, i, &memory);
@@ -300,7 +412,9 @@ std::vector<VectorJ> filtered_residuals(const ident::TwinModel& twin, const devi
         if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
           r[j] -= c.trend.temperature_slope[j] * s.qd[j] * (s.temperature[j] - c.trend.temperature_ref);
     if (k == 0) rf = r;
+    else if (restarted) rf = alpha * r;  // (from zero: rf = 0 + alpha (r - 0))
     else rf += alpha * (r - rf);
+    restarted = false;
     for (size_t j = 0; j < fir.size(); ++j)
       if (!fir[j].taps().empty()) rf[static_cast<int>(j)] = fir[j].push(r[static_cast<int>(j)]);
     VectorJ decided = rf;  // what the decision sees (Monitor::push)
@@ -707,11 +821,13 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   double longest_rest = 0.0;
   const bool with_observer = c.observer_gain > 0.0;
   const double width = reversal_width(twin);
+  c.payload_max = 0.0;  // (the heaviest payload of these runs, declared ones included)
   for (const HealthyRun& h : runs) {
     ident::TwinModel t = twin;
-    t.set_payload(h.payload);
+    PayloadTimeline payload(twin, h, c.follow_payload);
+    c.payload_max = std::max(c.payload_max, payload.heaviest());
     std::vector<VectorJ> qdds, taus;
-    auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, &taus);
+    auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, payload, &taus);
     // skip the filter's start-up
     const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
     // each joint's longest crawl (its direction in doubt), and the arm's longest commanded rest, after
@@ -723,7 +839,11 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
                        ? std::max(longest_rest, longest_stretch(smp, std::min(smp.size(), static_cast<size_t>(kSettleSamples)),
                                                                 RestBaseline::commanded_rest))
                        : std::numeric_limits<double>::quiet_NaN();
+    std::vector<VectorJ> judged_run;
+    judged_run.reserve(rf.size());
     for (size_t k = skip; k < rf.size(); ++k) {
+      if (!payload.judged(k)) continue;
+      judged_run.push_back(rf[k]);
       peak = peak.cwiseMax(rf[k].cwiseAbs());
       for (int j = 0; j < n; ++j) {
         load[j] = std::max(load[j], reversal_load(taus[k][j], h.recording->samples[k].qd[j], width));
@@ -732,7 +852,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
         qdd[static_cast<size_t>(j)].push_back(qdds[k][j]);
       }
     }
-    res.emplace_back(rf.begin() + static_cast<long>(skip), rf.end());
+    res.push_back(std::move(judged_run));
     // the momentum observer, run sample by sample exactly as the monitor runs it
     if (with_observer) {
       TwinMomentumObserver obs(n, c.observer_gain);
@@ -740,12 +860,17 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       const auto& smp = h.recording->samples;
       VectorJ warm = VectorJ::Zero(n), o(n);
       RestBaseline rest(n);
+      payload.start(t);
       for (size_t k = 0; k < smp.size(); ++k) {
         const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
+        if (payload.advance(k, t)) {  // (Monitor::restart_estimators, Monitor::carry)
+          obs.reset();
+          rest = RestBaseline(n);
+        }
         temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
         o = obs.update(t, smp[k], dt, &warm);
         rest.apply(smp[k], o);
-        if (k < skip) continue;
+        if (k < skip || !payload.judged(k)) continue;
         obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
         for (int j = 0; j < n; ++j) ro[static_cast<size_t>(j)].push_back(o[j]);
         ro_run.push_back(o);
@@ -771,8 +896,6 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     }
   }
   c.observer_choice = {};  // a per-joint debounce belongs to the thresholds it was chosen for
-  c.payload_max = 0.0;
-  for (const HealthyRun& h : runs) c.payload_max = std::max(c.payload_max, h.payload.mass);
   c.reversal_load_max = load.array().isFinite().all() ? load : VectorJ();  // (a non-finite torque: not recorded)
   c.crawl_max = c.reversal_load_max.size() ? crawl : VectorJ();
   c.longest_rest = longest_rest;
@@ -1379,8 +1502,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   const double t = s.timestamp;
   const double m = s.payload;
   const double* c = s.payload_cog;
-  const bool valid = std::isfinite(m) && m >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
-  if (!valid) return;  // (the recording reader refuses such a row; a live stream's odd value is not taken)
+  if (!declaration_readable(s)) return;
   // (push calls this only for a declaration that differs from the last: same_declaration)
   const bool first = !have_declared_;
   const double was = declared_mass_;
@@ -1388,36 +1510,20 @@ void Monitor::take_declared_payload(const RobotSample& s) {
   declared_mass_ = m;
   std::copy(c, c + 3, declared_cog_);
   const model::RigidBodyInertia had = twin_.payload();
-  model::RigidBodyInertia now;
-  if (m > 0.0) {
-    now.mass = m;
-    now.com = Eigen::Vector3d(c[0], c[1], c[2]);
-    // the declaration has no shape (payload_inertia is not read): the twin's own when it is the
-    // same part, else a point mass
-    if (had.mass == m && had.com == now.com) now.inertia_com = had.inertia_com;
-  }
+  const model::RigidBodyInertia now = declared_inertia(s, had);
   // the first declaration is news only where it differs from what the twin was given
-  if (first && had.mass == now.mass && (m == 0.0 || had.com == now.com)) {
+  if (first && same_payload(had, now)) {
     declared_taken_ = true;
     return;
   }
   const std::string what = m > 0.0 ? fmt::format("{:.2f} kg at ({:.3f}, {:.3f}, {:.3f}) m", m, c[0], c[1], c[2]) : std::string("no payload");
-  const double cog_distance = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  const bool cog_implausible = m > 0.0 && cog_distance > kDeclaredCogMax;
-  if (!twin_.gains_known() || !twin_.predicts_payload() || m > twin_.robot().payload_limit() || cog_implausible) {
+  if (const std::string refusal = declaration_refusal(twin_, s); !refusal.empty()) {
     // a twin-wide reason is said once; a declaration refused for its own values, each time
     const bool twin_wide = !twin_.gains_known() || !twin_.predicts_payload();
     if (!(twin_wide && declared_refused_))
       add_note(t, fmt::format("the controller declares {}, which the twin does not take: {}; it predicts with {:.2f} kg, and a change "
                               "of what the arm carries shows as a payload change",
-                              what,
-                              !twin_.gains_known() ? "its torques are relative (it was identified without a known payload that fixes its gains)"
-                              : !twin_.predicts_payload() ? "its prediction does not carry a payload (method '" + twin_.method + "')"
-                              : m > twin_.robot().payload_limit()
-                                  ? fmt::format("above {:g} kg ({})", twin_.robot().payload_limit(), twin_.robot().payload_limit_text())
-                                  : fmt::format("its centre of mass is {:.3g} m from the flange, more than {:g} m (a value in mm?)", cog_distance,
-                                                kDeclaredCogMax),
-                              twin_.payload().mass));
+                              what, refusal, twin_.payload().mass));
     declared_refused_ = true;
     declared_taken_ = false;
     declared_change_ = 0.0;  // (no declared pick to explain an alert by: the twin did not take it)

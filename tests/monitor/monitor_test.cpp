@@ -786,6 +786,53 @@ TEST_F(MonitorLoop, APayloadHeavierThanTheThresholdsWereLearnedWithIsSaid) {
   EXPECT_THAT(old->notes(), ::testing::Not(::testing::Contains(::testing::HasSubstr("heaviest healthy run"))));
 }
 
+// The monitor predicts with each payload the stream declares (take_declared_payload); the thresholds
+// are learned with it too. Before session 33 they were learned with the payload the learner was
+// told alone: `thresholds` on healthy runs from a controller declaring 0.5 kg, without
+// --payload-mass, gave J2/J3 thresholds six times too wide (0.46/0.48 A against 0.08/0.07 A).
+TEST_F(MonitorLoop, ThresholdsAreLearnedWithThePayloadTheStreamDeclares) {
+  // the fixture's own runs: 0.5 kg declared in h1's stream, none in h2's. Told nothing, the learner
+  // reads the declaration and learns the fixture's thresholds, which it was told the payload for
+  const auto h1 = run(scenario(503, 24, 0.5)), h2 = run(scenario(504, 16, 0.0));
+  const MonitorConfig read = learn_thresholds(*twin, {{&h1, {}}, {&h2, {}}});
+  EXPECT_EQ(read.payload_max, 0.5);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_NEAR(read.static_level[j], config->static_level[j], 1e-9) << "J" << j + 1;
+    EXPECT_NEAR(read.dynamic[static_cast<size_t>(j)].evaluate(0.0, 0.0), config->dynamic[static_cast<size_t>(j)].evaluate(0.0, 0.0), 1e-9)
+        << "J" << j + 1;
+    EXPECT_NEAR(read.observer_level[j], config->observer_level[j], 1e-9) << "J" << j + 1;
+  }
+  // without the declaration (an older controller) the learner predicts h1 without its part: J2 and
+  // J3 hold it, and their thresholds swallow its weight
+  const auto h1_undeclared = undeclared(h1);
+  const MonitorConfig blind = learn_thresholds(*twin, {{&h1_undeclared, {}}, {&h2, {}}});
+  EXPECT_EQ(blind.payload_max, 0.0);
+  for (int j : {1, 2}) EXPECT_GT(blind.static_level[j], 2.0 * config->static_level[j]) << "J" << j + 1;
+  // a declaration changes the prediction in the run: a part picked and declared at 8 s. Followed, the
+  // thresholds are those of the same program run once without and once with the part (measured: J2
+  // 0.082 and 0.082 A, J3 0.071 and 0.070 A); with the monitor told to keep its payload
+  // (follow_payload off, `--keep-payload`) the learner keeps it too, and learns the part's step
+  // (0.26 and 0.27 A)
+  const auto pick = run(scenario(505, 16, 0.0, part_change(false, 0.5, 8.0)));
+  const auto plain = run(scenario(505, 16, 0.0)), loaded = run(scenario(505, 16, 0.5));
+  const MonitorConfig followed = learn_thresholds(*twin, {{&pick, {}}});
+  const MonitorConfig apart = learn_thresholds(*twin, {{&plain, {}}, {&loaded, {}}});
+  MonitorConfig keep;
+  keep.follow_payload = false;
+  const MonitorConfig kept = learn_thresholds(*twin, {{&pick, {}}}, keep);
+  EXPECT_EQ(followed.payload_max, 0.5);
+  EXPECT_EQ(kept.payload_max, 0.0);
+  for (int j : {1, 2}) {
+    EXPECT_LT(followed.static_level[j], 1.1 * apart.static_level[j]) << "J" << j + 1;
+    EXPECT_GT(kept.static_level[j], 2.0 * apart.static_level[j]) << "J" << j + 1;
+  }
+  // and the run it was learned on raises nothing, its pick included
+  Monitor m(*twin, followed);
+  for (const auto& x : pick.samples) m.push(x);
+  m.finish();
+  EXPECT_TRUE(m.events().empty()) << listing(m.events());
+}
+
 // At a reversal the drive goes from motoring to back-driven (or back), and its current for the same
 // torque steps by (1 - c_gen); the measured velocity cannot time it (a count is 3 mrad/s), so the
 // twin's blended prediction misses part of the step. The step grows with the load: thresholds
