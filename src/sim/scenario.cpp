@@ -317,7 +317,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   }
   const Y y(origin);
   y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
-                         "payload_declared", "streams_payload", "trajectory", "noise", "faults", "stops", "description", "program"});
+                         "payload_declared", "streams_payload", "streams_targets", "trajectory", "noise", "faults", "stops", "description", "program"});
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
@@ -355,6 +355,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   s.options.cold_start = y.boolean(root, "", "cold_start", false);
   s.options.payload_declared = y.boolean(root, "", "payload_declared", true);
   s.options.streams_payload = y.boolean(root, "", "streams_payload", true);
+  s.options.streams_targets = y.boolean(root, "", "streams_targets", true);
   if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload", m);
   s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type, rate);
   // duration, given or as cycles of the trajectory (default one cycle), each checked at its own line

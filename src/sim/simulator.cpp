@@ -149,7 +149,9 @@ std::uint32_t Simulator::fields() {
          kFieldTargetMoment | kFieldTemperature | kFieldDigitalOutputs | kFieldRobotMode | kFieldSafetyMode;
 }
 
-std::uint32_t Simulator::sample_fields() const { return fields() | (opt_.streams_payload ? kFieldPayload : 0u); }
+std::uint32_t Simulator::sample_fields() const {
+  return (fields() & (opt_.streams_targets ? ~0u : ~kTargetFields)) | (opt_.streams_payload ? kFieldPayload : 0u);
+}
 
 // armature: motor rotor inertia reflected through the gear, J_m N^2 [kg m^2]; rotor inertia grows
 // with the joint size
@@ -402,10 +404,12 @@ bool Simulator::step(RobotSample& s) {
   }
   s.q = ((q_.array() / truth_.encoder_lsb).round() * truth_.encoder_lsb).matrix();
   s.qd = (s.q - q_meas) / dt;
-  s.target_q = qt;
-  s.target_qd = qdt;
-  s.target_qdd = qddt;
-  s.target_moment = tau_cmd;
+  if (opt_.streams_targets) {  // (else they stay NaN, as in a log without them)
+    s.target_q = qt;
+    s.target_qd = qdt;
+    s.target_qdd = qddt;
+    s.target_moment = tau_cmd;
+  }
   for (int j = 0; j < n_; ++j) {
     const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
     const double kN = jt.kt * jt.gear_ratio;
@@ -413,7 +417,7 @@ bool Simulator::step(RobotSample& s) {
     const double i_true = ps.braked ? 0.0 : (motoring ? tau_cmd[j] / (kN * jt.eta) : tau_cmd[j] * jt.eta_rev / kN);
     temp_[j] += dt * (jt.R_heat * i_true * i_true - (temp_[j] - truth_.ambient) / jt.R_th) / jt.C_th;
     double i_meas = i_true + jt.current_offset + jt.current_sigma * normal_(rng_);
-    s.target_current[j] = tau_cmd[j] / (kN * jt.eta);
+    if (opt_.streams_targets) s.target_current[j] = tau_cmd[j] / (kN * jt.eta);
     for (const FaultSpec& f : faults_) {
       if (f.joint != j) continue;
       if (f.type == FaultType::CurrentOffset) i_meas += f.magnitude * f.level(t_);

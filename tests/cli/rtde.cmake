@@ -37,3 +37,8 @@ add_test(NAME cli.rtde_monitor_bad_output_before_connecting
           --events ${PROJECT_BINARY_DIR}/no-such-dir/events.jsonl)
 set_tests_properties(cli.rtde_monitor_bad_output_before_connecting PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 10
   PASS_REGULAR_EXPRESSION "no-such-dir/events.jsonl: cannot write: directory [^\n]*no-such-dir does not exist")
+# a scenario whose stream has no targets (streams_targets: false) is a log, not a controller: refused, named
+add_test(NAME cli.serve_robot_refuses_a_stream_without_targets
+  COMMAND sh -c "printf 'robot: ur3e\\nduration: 1\\nstreams_targets: false\\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\\n' > ${PROJECT_BINARY_DIR}/no_targets.yaml && $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_BINARY_DIR}/no_targets.yaml --port 35931 -q; echo exit=$?")
+set_tests_properties(cli.serve_robot_refuses_a_stream_without_targets PROPERTIES
+  PASS_REGULAR_EXPRESSION "no_targets.yaml: 'streams_targets: false' is a log without the controller's targets, which an RTDE controller always serves.*exit=2" TIMEOUT 20)

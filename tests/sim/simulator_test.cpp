@@ -144,6 +144,43 @@ TEST(Simulator, RecordingRoundTripsThroughTheReader) {
   EXPECT_EQ(r.gaps, 0);
 }
 
+// A log without the controller's targets (streams_targets: false): the same arm, the same noise,
+// only the stream is poorer. The recording has no target columns, and reads back without them.
+TEST(Simulator, AStreamWithoutTargetsIsTheSameRunWithoutTheTargetColumns) {
+  const auto full = run(scenario(kFigureEight));
+  const Scenario bare_s = scenario(std::string(kFigureEight) + "streams_targets: false\n");
+  EXPECT_FALSE(bare_s.options.streams_targets);
+  const auto sim = make_simulator(bare_s);
+  const std::uint32_t fields = sim->sample_fields();
+  EXPECT_EQ(fields & Simulator::kTargetFields, 0u);
+  EXPECT_EQ(fields | Simulator::kTargetFields, make_simulator(scenario(kFigureEight))->sample_fields());
+  std::vector<RobotSample> bare;
+  sim->run([&](const RobotSample& x) { bare.push_back(x); });
+  ASSERT_EQ(bare.size(), full.size());
+  for (size_t k : {size_t{0}, size_t{777}, bare.size() - 1}) {
+    EXPECT_EQ(bare[k].q, full[k].q) << k;
+    EXPECT_EQ(bare[k].qd, full[k].qd) << k;
+    EXPECT_EQ(bare[k].current, full[k].current) << k;
+    EXPECT_EQ(bare[k].temperature, full[k].temperature) << k;
+    EXPECT_FALSE(bare[k].has(kFieldTargetQd));
+    EXPECT_TRUE(bare[k].target_qd.array().isNaN().all() && bare[k].target_current.array().isNaN().all()) << k;
+  }
+  const std::string path = ::testing::TempDir() + "sim_bare.csv";
+  {
+    device::RecordingWriter w(path, 6, fields);
+    for (const auto& x : bare) w.write(x);
+    w.close();
+  }
+  std::ifstream f(path);
+  std::string header;
+  std::getline(f, header);
+  EXPECT_THAT(header, HasSubstr("actual_qd_0"));
+  EXPECT_THAT(header, ::testing::Not(HasSubstr("target_")));
+  const device::Recording r = device::read_recording(path);
+  EXPECT_EQ(r.present & Simulator::kTargetFields, 0u);
+  EXPECT_EQ(r.samples[777].current, full[777].current);
+}
+
 TEST(Simulator, DroppedSamplesLeaveAGapTheReaderFinds) {
   Scenario s = scenario(std::string(kFigureEight) + "faults:\n  - {type: dropped_samples, onset: 3, magnitude: 4}\n");
   const auto rec = run(s);

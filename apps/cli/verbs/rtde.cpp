@@ -201,6 +201,10 @@ int run_serve(const ServeOptions& o) {
   if (o.seed_given && (o.seed < 0 || o.seed > static_cast<long>(std::numeric_limits<unsigned>::max())))
     throw InvalidArgument(fmt::format("--seed: expected 0 to {}, got {}", std::numeric_limits<unsigned>::max(), o.seed));
   sim::Scenario sc = sim::load_scenario(o.scenario);
+  if (!sc.options.streams_targets)
+    throw InvalidArgument(fmt::format("{}: 'streams_targets: false' is a log without the controller's targets, which an RTDE "
+                                      "controller always serves; simulate it to a recording instead ('twinwatch simulate {} -o rec.csv')",
+                                      o.scenario, o.scenario));
   if (o.seed_given) sc.options.seed = static_cast<unsigned>(o.seed);
   if (o.duration_given) sim::override_duration(sc, o.duration, "--duration");
   auto simulator = sim::make_simulator(sc);

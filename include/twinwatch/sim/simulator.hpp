@@ -200,6 +200,10 @@ struct SimOptions {
   /// the controller streams the payload it is told (RTDE payload / payload_cog, controllers >= 5.5.1):
   /// every sample carries it (kFieldPayload). False: a controller or a recording without it
   bool streams_payload = true;
+  /// the stream carries the controller's targets (target_q, target_qd, target_qdd, target_current,
+  /// target_moment), as RTDE does. False: a log without them (another robot's, a user's own logger
+  /// that keeps the measured signals only); the controller still tracks its targets
+  bool streams_targets = true;
   VectorJ kp, kd;               ///< PD gains [N·m/rad], [N·m·s/rad]; empty: defaults from the inertia
   /// stops of the program (StopSpec), in time order, each resumed before the next begins
   std::vector<StopSpec> stops;
@@ -229,7 +233,10 @@ class Simulator {
   const model::RobotModel& truth_model() const { return truth_model_; }
   /// Fields every sample carries, whatever the options.
   static std::uint32_t fields();
-  /// Fields this simulator's samples carry: fields() and, with options.streams_payload, kFieldPayload.
+  /// The controller's targets among fields(): what options.streams_targets = false leaves out
+  static constexpr std::uint32_t kTargetFields = kFieldTargetQ | kFieldTargetQd | kFieldTargetQdd | kFieldTargetCurrent | kFieldTargetMoment;
+  /// Fields this simulator's samples carry: fields(), with options.streams_payload kFieldPayload,
+  /// without options.streams_targets none of the target fields (kTargetFields).
   std::uint32_t sample_fields() const;
 
  private:
