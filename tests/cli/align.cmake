@@ -102,3 +102,19 @@ add_test(NAME cli.column_map_pipeline
           ${PROJECT_BINARY_DIR}/cli-pipeline/collision.csv ${da})
 set_tests_properties(cli.column_map_pipeline PROPERTIES FIXTURES_REQUIRED "twin;recordings;align_pair;collision_recording"
                      PASS_REGULAR_EXPRESSION "SAME-THROUGH-THE-COLUMN-MAP: [1-9]")
+# every threshold set shares the twin's temperature slope, and the other sets were learned with it: a
+# program's set learned on a warm-up keeps it (session 33: a 300 s pick-and-place from cold moved J2's
+# slope to twice the one the default set was learned with). Two warm-ups faked on fig.csv's columns
+# (22 -> 32 and 22 -> 42 degrees C): the default set learns a slope from the first; the program's set
+# on the second says it keeps it, and the twin's slope is the same after it
+add_test(NAME cli.thresholds_program_keeps_the_temperature_slope
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_slope.json && \
+for span in 10 20; do awk -F, -v OFS=, -v s=$span 'NR==1{for(i=1;i<=NF;i++) if($i ~ /^joint_temperatures_/) c[i]=1; print; next} {for(i in c) $i=22+s*(NR-2)/4999; print}' \
+  ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv > ${da}/warm_$span.csv; done && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_slope.json ${da}/warm_10.csv --payload-mass 0.5 && \
+grep -A6 '\"temperature_slope\"' ${da}/twin_slope.json > ${da}/slope_before.txt && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_slope.json ${da}/warm_20.csv --payload-mass 0.5 --program warm && \
+grep -A6 '\"temperature_slope\"' ${da}/twin_slope.json > ${da}/slope_after.txt && \
+test -s ${da}/slope_before.txt && cmp ${da}/slope_before.txt ${da}/slope_after.txt && echo SLOPE-KEPT")
+set_tests_properties(cli.thresholds_program_keeps_the_temperature_slope PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "learned on these recordings.*the twin's, which every threshold set shares.*SLOPE-KEPT")

@@ -363,8 +363,15 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
   // the viscous friction's temperature slope, when these runs span joint temperatures (a warm-up
   // from cold): the monitor and the wear trend compensate with it, and the thresholds below are
-  // learned on the compensated residual. Runs at one temperature keep the slope the twin has.
-  {
+  // learned on the compensated residual. Runs at one temperature keep the slope the twin has. Every
+  // threshold set shares the one slope, and the others were learned with it: a program's set keeps
+  // the twin's (measured: a 300 s pick-and-place from cold moved J2/J3's slope from -1.6e-3 to
+  // -3.3e-3 A·s/rad/°C under the default set learned with the first; session 33)
+  if (!o.program.empty() && settings.trend.temperature_slope.size() == twin.n_dof()) {
+    fmt::print("temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
+               "again, without --program, on a warm-up from cold to change it)\n",
+               fmt::join(settings.trend.temperature_slope, " "));
+  } else {
     std::vector<monitor::TrendRun> trend_runs;
     for (const auto& r : runs) trend_runs.push_back({r.recording, r.payload, 0});
     try {
