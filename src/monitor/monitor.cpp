@@ -835,10 +835,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     const auto& smp = h.recording->samples;
     for (int j = 0; j < n; ++j)
       crawl[j] = std::max(crawl[j], longest_stretch(smp, skip, [&](const RobotSample& x) { return std::abs(x.qd[j]) < width; }));
-    longest_rest = h.recording->present & kFieldTargetQd
-                       ? std::max(longest_rest, longest_stretch(smp, std::min(smp.size(), static_cast<size_t>(kSettleSamples)),
-                                                                RestBaseline::commanded_rest))
-                       : std::numeric_limits<double>::quiet_NaN();
+    longest_rest = std::max(longest_rest, longest_stretch(smp, std::min(smp.size(), static_cast<size_t>(kSettleSamples)), RestBaseline::arm_rest));
     std::vector<VectorJ> judged_run;
     judged_run.reserve(rf.size());
     for (size_t k = skip; k < rf.size(); ++k) {
@@ -2706,8 +2703,9 @@ std::string not_driven_words(const RobotSample& s) {
 }  // namespace
 
 void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
-  // (the whole arm commanded to rest: track_rest ran for this sample)
-  if (!(arm_rests_ && rest_by_target_)) {
+  // (the whole arm commanded to rest, as the thresholds' longest rest was measured: track_rest ran for
+  // this sample; on a stream without targets every joint measured still, RestBaseline::arm_rest)
+  if (!(rest_by_target_ ? arm_rests_ : RestBaseline::arm_rest(s))) {
     if (rest_unseen_) rest_left_at_ = t_prev_;
     rest_began_at_ = std::numeric_limits<double>::quiet_NaN();
     rest_unseen_ = false;
@@ -2722,10 +2720,10 @@ void Monitor::watch_unseen_rest(const RobotSample& s, double t) {
   rest_unseen_ = t - rest_began_at_ > cfg_.longest_rest;
   if (rest_donors_.empty()) {
     if (rest_unseen_ && !rest_unseen_said_)
-      add_note(t, fmt::format("the arm rests (every target velocity 0) longer than in any run the thresholds in use were learned on "
+      add_note(t, fmt::format("the arm rests ({}) longer than in any run the thresholds in use were learned on "
                               "(at most {:.2f} s), and no program set of the twin saw longer rests: an alert at this rest may be false. "
                               "Learn the program's thresholds on runs that rest as it does ('twinwatch thresholds --program')",
-                              cfg_.longest_rest));
+                              rest_by_target_ ? "every target velocity 0" : "every joint still", cfg_.longest_rest));
     rest_unseen_said_ |= rest_unseen_;
     return;
   }

@@ -2095,6 +2095,49 @@ TEST_F(MonitorLoop, APauseOnAProgramThatNeverRestsIsJudgedWithTheRestTestedThres
   EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
 }
 
+// The same on a log without the controller's targets (session 33): there the rest is the arm
+// measured still (every |qd| below RestBaseline::kMeasuredRest), learned and watched alike. Before,
+// such thresholds recorded no rest and every pause was judged with the figure-eight's levels: 35
+// false events in the 0.45 h of the stop set without targets, 1 now (docs/validation.md).
+TEST_F(MonitorLoop, APauseOnAStreamWithoutTargetsIsJudgedWithTheRestTestedThresholds) {
+  const std::string bare = "streams_targets: false\n";
+  const auto h1 = run(scenario(503, 24, 0.5) + bare), h2 = run(scenario(504, 16, 0.0) + bare);
+  ASSERT_FALSE(h1.present & kFieldTargetQd);
+  MonitorConfig c = learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}});
+  ASSERT_TRUE(std::isfinite(c.longest_rest));
+  EXPECT_LT(c.longest_rest, Monitor::kMinDonorRest) << "the figure-eight never rests";
+  const auto rests = run("robot: ur3e\nseed: 3111\nduration: 30\n" + pick_and_place(0.8, 1.0, 1.6) + bare);
+  learn_program_thresholds(c, "pick_place", *twin, {{&rests, {}}});
+  // (a pick-and-place rests 1 s at each station; measured, a little longer: the joints are below 3
+  // counts a period in the last ms of the move into it and the first of the move out: 1.064 s)
+  EXPECT_GT(c.programs["pick_place"].longest_rest, 0.95);
+  EXPECT_LT(c.programs["pick_place"].longest_rest, 1.1);
+  const std::string pauses = "stops:\n  - {kind: pause, at: 7.3, hold: 3}\n  - {kind: pause, at: 17.9, hold: 2.5}\n";
+  const auto watch = [&](const MonitorConfig& cfg, const std::string& yaml) {
+    Monitor m(declared_twin(), cfg);
+    for (const auto& x : run(yaml).samples) m.push(x);
+    m.finish();
+    return m.events();
+  };
+  const std::string paused = scenario(3112, 30, 0.5) + pauses + bare;
+  const auto events = watch(c, paused);
+  EXPECT_TRUE(events.empty()) << listing(events);
+  // without the rests recorded (thresholds learned on such logs before session 33) the pauses are
+  // judged with the figure-eight's levels
+  MonitorConfig unrecorded = c;
+  unrecorded.longest_rest = std::numeric_limits<double>::quiet_NaN();
+  for (auto& [name, set] : unrecorded.programs) set.longest_rest = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(watch(unrecorded, paused).empty()) << "the figure-eight's thresholds at a pause";
+  // a contact while the arm is paused is still found, as a contact
+  const auto hit = watch(c, scenario(3113, 30, 0.5,
+                                     "  - {type: collision, link: 3, onset: 8.6, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], "
+                                     "direction: [0.0, 0.3, 1.0]}\n") +
+                                pauses + bare);
+  ASSERT_EQ(hit.size(), 1u) << listing(hit);
+  EXPECT_EQ(hit[0].fault, FaultClass::Collision) << listing(hit);
+  EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
+}
+
 // Session 30: a program run slower than its thresholds were learned at (the speed slider at a fifth):
 // J2 crawls through its reversals under gravity for longer than any crawl the thresholds saw, and the
 // drive's motoring/back-driven step shows for as long; judged with the learned levels it read as

@@ -160,9 +160,10 @@ struct MonitorConfig {
   /// speed its thresholds were learned at raised 2-3 false contacts a run at J2's slow reversals. Beyond
   /// it the joint's thresholds widen by the whole step (Monitor::widen_for_load with no learned load).
   VectorJ crawl_max;
-  /// The longest whole-arm rest (every |target qd| < RestBaseline::kTargetRest, after each run's
-  /// start-up) in the healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin
-  /// from before session 30, or runs without target velocities). Thresholds learned on a program that
+  /// The longest whole-arm rest (RestBaseline::arm_rest: every |target qd| < RestBaseline::kTargetRest,
+  /// on runs without target velocities every |qd| < kMeasuredRest; after each run's start-up) in the
+  /// healthy runs the thresholds in use were learned on [s] (NaN: not recorded, a twin from before
+  /// session 30, or, before session 33, runs without target velocities). Thresholds learned on a program that
   /// never rests (the figure-eight) have not seen what the drives do when they hold the arm still: on
   /// the virtual UR3e a paused figure-eight raised a false contact at every pause. A rest that lasts
   /// longer than this is judged, from then until 0.5 s after the arm moves on, with each joint's
@@ -206,6 +207,12 @@ class RestBaseline {
     return s.has(kFieldTargetQd) && s.target_qd.size() == s.qd.size() && s.target_qd.cwiseAbs().maxCoeff() < kTargetRest;
   }
   static constexpr double kMeasuredRest = 0.01;      ///< |qd| below this: not moving (encoder flicker 0.003 rad/s)
+  /// The whole arm rests: commanded to (commanded_rest) where the stream has target velocities, else
+  /// every measured velocity below kMeasuredRest (a log without the controller's targets)
+  static bool arm_rest(const RobotSample& s) {
+    if (s.has(kFieldTargetQd)) return commanded_rest(s);
+    return s.qd.size() > 0 && s.qd.cwiseAbs().maxCoeff() < kMeasuredRest;
+  }
   static constexpr double kTrackSamples = 250.0;     ///< after settling, the baseline follows with this time constant [samples] (0.5 s at 500 Hz)
   explicit RestBaseline(int n = 0);
   /// Returns value minus the baseline of each settled joint (value unchanged elsewhere).
