@@ -385,13 +385,31 @@ void TwinModel::advance(FrictionMemory& m, const VectorJ& q) const {
 
 void TwinModel::advance(FrictionMemory& m, const RobotSample& s, const VectorJ& qdd) const {
   advance(m, s.q);
+  const int n = robot_->n_dof();
   if (target_direction.empty() || !s.has(kFieldTargetQd)) {
-    m.direction.resize(0);
-    m.direction_tanh.resize(0);
-    m.crossing.resize(0);
+    // no target to read the direction with: the measured velocity's own blend, kept where the
+    // direction is in doubt (drive_in_doubt) and NaN elsewhere (drive_factor's fallback there, the
+    // same factor; the observer's hard switch, monitor::measured_drive_torque)
+    m.measured = true;
+    if (!(direction_blend > 0.0)) {
+      m.direction.resize(0);
+      m.direction_tanh.resize(0);
+      m.crossing.resize(0);
+      return;
+    }
+    m.direction.resize(n);
+    m.direction_tanh.resize(n);
+    m.crossing.resize(n);
+    for (int j = 0; j < n; ++j) {
+      const double x = direction_velocity(s.qd[j], qdd[j]) / direction_blend;
+      const bool doubt = std::abs(x) <= kDoubtArgument;
+      m.direction[j] = doubt ? x : std::numeric_limits<double>::quiet_NaN();
+      m.direction_tanh[j] = doubt ? blend_tanh(x) : 0.0;
+      m.crossing[j] = doubt ? 1.0 : 0.0;
+    }
     return;
   }
-  const int n = robot_->n_dof();
+  m.measured = false;
   m.direction.resize(n);
   m.direction_tanh.resize(n);
   m.crossing.resize(n);

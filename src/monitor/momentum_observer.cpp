@@ -67,6 +67,8 @@ void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current,
       if (reference != nullptr && twin.drive_in_doubt(j, tau_motoring, *memory, to_motoring, to_back_driven)) {
         const double back_driven = tau_motoring / d.c_gen;
         tau[j] = std::abs(back_driven - (*reference)[j]) < std::abs(tau_motoring - (*reference)[j]) ? back_driven : tau_motoring;
+      } else if (memory->measured) {  // (no target: the hard switch on the velocity's sign, as below)
+        tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
       } else {
         tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
       }

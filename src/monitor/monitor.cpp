@@ -2290,7 +2290,7 @@ void Monitor::push(const RobotSample& s) {
     if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
       r_[j] -= temp_slope_[j] * s.qd[j] * (s.temperature[j] - cfg_.trend.temperature_ref);
   // the drive's direction in doubt at a reversal: the level the current says (resolve_drive_doubt)
-  resolve_drive_doubt(twin_, tau_hat_, memory_, r_);
+  if (cfg_.drive_doubt) resolve_drive_doubt(twin_, tau_hat_, memory_, r_);
   if (!filter_started_) {
     rf_ = r_;
     filter_started_ = true;
@@ -2307,7 +2307,7 @@ void Monitor::push(const RobotSample& s) {
     // acceleration, as the current residual takes the level nearer the current; the encoder
     // difference the observer's own torque uses is too noisy to choose a level on)
     obs_ref_ = tau_hat_ + obs_warm_;
-    obs_.update_with_torque(twin_, s, dt, tau_obs_, &obs_warm_, &memory_, &obs_ref_);
+    obs_.update_with_torque(twin_, s, dt, tau_obs_, &obs_warm_, &memory_, cfg_.drive_doubt ? &obs_ref_ : nullptr);
     if (obs_samples_ < kObserverSettle) ++obs_samples_;
   }
   // thresholds

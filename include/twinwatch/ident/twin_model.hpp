@@ -78,8 +78,10 @@ struct FrictionMemory {
   VectorJ q_prev;   ///< [rad] last position seen
   bool primed = false;
   /// per joint the drive's direction where it is read with the target (TwinModel::target_drive_direction),
-  /// as the argument x of its blend (tanh x: +1 forward, -1 backward); NaN (or empty): read on the
-  /// measured velocity alone (TwinModel::direction_velocity at direction_blend)
+  /// as the argument x of its blend (tanh x: +1 forward, -1 backward); on a stream without targets
+  /// the measured velocity's own argument, kept only where it is in doubt (|x| <= kDoubtArgument);
+  /// NaN (or empty): read on the measured velocity alone (TwinModel::direction_velocity at
+  /// direction_blend)
   VectorJ direction;
   /// tanh of direction per joint, evaluated once where advance() reads it, for the prediction's
   /// current and the observer's measured torque at the same sample (one tanh per joint, not two);
@@ -87,8 +89,14 @@ struct FrictionMemory {
   VectorJ direction_tanh;
   /// per joint 1 where the direction is read with the target and the target does not rest (a
   /// target at zero velocity without acceleration: TwinModel::kTargetRestVelocity,
-  /// kTargetRestAcceleration), else 0: where TwinModel::drive_in_doubt may hold
+  /// kTargetRestAcceleration), or, on a stream without targets, where the measured velocity's blend
+  /// is in doubt (a log cannot tell a rest from a crawl: its joints are in doubt at both); else 0:
+  /// where TwinModel::drive_in_doubt may hold
   VectorJ crossing;
+  /// true where direction comes from the measured velocity (a stream without targets): outside the
+  /// monitor's reading of the doubt the observer keeps its hard switch on the velocity's sign there
+  /// (monitor::measured_drive_torque), as before session 33
+  bool measured = false;
 };
 
 /// The drive's direction read on the controller's target velocity where the measured one cannot tell
@@ -277,11 +285,18 @@ class TwinModel {
   /// (1 - f) tau / g and to_back_driven = (c_gen - f) tau / g. False also where the twin predicts
   /// without the factor (sequential, a network predicting the current itself) or has no step
   /// (c_gen 1), and at a joint resting on its target (a held joint's current sits anywhere between
-  /// the levels, where static friction leaves it).
+  /// the levels, where static friction leaves it). On a stream without targets (or with a twin that
+  /// has no TargetDirection) the blend is the measured velocity's (direction_blend), in doubt within
+  /// about two encoder counts of zero, resting or not: measured on the slow, stop and payload-at-rest
+  /// sets without targets (docs/validation.md, session 33), 37 false contacts at slow reversals went,
+  /// and none came at rests.
   bool drive_in_doubt(int j, double tau, const FrictionMemory& memory, double& to_motoring, double& to_back_driven) const;
   /// the back-driven weight of the blend inside which the direction is in doubt (drive_in_doubt):
   /// |x| < 1.47 of the blend's argument, about 1.5 widths of the direction's uncertainty either side
   static constexpr double kDriveDoubt = 0.05;
+  /// the blend's argument |x| within which the weight is in [kDriveDoubt, 1 - kDriveDoubt]:
+  /// atanh(1 - 2 kDriveDoubt)
+  static constexpr double kDoubtArgument = 1.4722194895832204;
   /// A joint's target rests below this velocity [rad/s] and acceleration [rad/s²] (a controller's
   /// target at rest is exactly zero; a crawl the slow sets command is 1 mrad/s, their slowest
   /// reversal 0.045 rad/s²)

@@ -123,6 +123,11 @@ struct MonitorConfig {
   /// the arm carries is then checked against what the controller believes (a part lost, or a pick
   /// declared with no part in the gripper, is a payload change). Off: the twin keeps its payload.
   bool follow_payload = true;
+  /// Where the drive's direction is in doubt (ident::TwinModel::drive_in_doubt), read the current on
+  /// the nearer of its two levels and the observer's torque on the level nearer the twin's
+  /// (resolve_drive_doubt, measured_drive_torque). Off: the blended prediction and, without targets,
+  /// the observer's hard switch, as before session 32. For comparisons; not stored in the twin file.
+  bool drive_doubt = true;
   /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
   /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
   double observer_gain = 150.0;
