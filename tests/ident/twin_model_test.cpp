@@ -352,11 +352,31 @@ TEST(TwinFile, TheDrivesDirectionIsReadOnTheTargetWhereTheEncoderReadsNothing) {
   const FrictionMemory stalled = currents(0.05, 0.0);
   EXPECT_TRUE(std::isnan(stalled.direction[1]));
   EXPECT_NEAR(cur[1], cur0[1], 1e-12);
-  // a stream without target velocities: the twin of before
+  // a stream without target velocities: the measured velocity's blend, as the twin of before
+  // predicts it; kept where it is in doubt (|x| <= kDoubtArgument, session 33), NaN elsewhere
   s.present = kFieldActualQd;
+  s.qd << 0.0, 0.003, -0.006, 0.0075, 0.05, -1.0;
   FrictionMemory plain;
   t.advance(plain, s, qdd);
-  EXPECT_EQ(plain.direction.size(), 0);
+  ASSERT_EQ(plain.direction.size(), n);
+  EXPECT_TRUE(plain.measured);
+  for (int k = 0; k < n; ++k) {
+    const double x = t.direction_velocity(s.qd[k], qdd[k]) / t.direction_blend;
+    if (std::abs(x) <= TwinModel::kDoubtArgument) {
+      EXPECT_EQ(plain.direction[k], x) << k;
+      EXPECT_EQ(plain.crossing[k], 1.0) << k;
+    } else {
+      EXPECT_TRUE(std::isnan(plain.direction[k])) << k;
+      EXPECT_EQ(plain.crossing[k], 0.0) << k;
+    }
+  }
+  EXPECT_EQ(plain.crossing.head(2).sum(), 2.0);
+  EXPECT_EQ(plain.crossing.tail(2).sum(), 0.0);
+  t.predict(s.q, s.qd, qdd, temp, tau, cur, &plain);
+  FrictionMemory none = plain;
+  none.direction.resize(0);
+  t.predict(s.q, s.qd, qdd, temp, tau0, cur0, &none);
+  EXPECT_EQ(cur, cur0) << "the same prediction with or without the kept direction";
 }
 
 // the values the identifier itself writes load: a hard switch, no low-speed friction, c_gen up to
