@@ -521,7 +521,11 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   auto* sub = app.add_subcommand("thresholds", "Re-learn the monitor's thresholds from healthy recordings (per payload/program)");
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
-  sub->add_option("--payload-mass", o->payload_mass, "Payload carried in these recordings [kg]")->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--payload-mass", o->payload_mass,
+                  "Payload carried in these recordings [kg]. A recording that carries the payload the controller declares (RTDE "
+                  "payload / payload_cog, controllers 5.5.1 and newer; a recording's payload columns) is learned with each "
+                  "declaration from its sample on instead, as the monitor predicts with it")
+      ->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--column-map", o->column_maps,
