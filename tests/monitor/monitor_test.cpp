@@ -93,6 +93,16 @@ struct MonitorLoop : ::testing::Test {
     c.select_program("pick_place");
     return c;
   }
+  // the fixture's thresholds learned on its healthy runs as a log without the controller's targets
+  // would hold them (streams_targets: false), once for the tests that need them
+  static const MonitorConfig& config_without_targets() {
+    static const MonitorConfig c = [] {
+      const auto h1 = run(scenario(503, 24, 0.5) + kNoTargets), h2 = run(scenario(504, 16, 0.0) + kNoTargets);
+      return learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}});
+    }();
+    return c;
+  }
+  static constexpr const char* kNoTargets = "streams_targets: false\n";
   static ident::TwinModel* twin;
   static MonitorConfig* config;
   static model::RigidBodyInertia payload;
@@ -2082,6 +2092,19 @@ TEST_F(MonitorLoop, AContactTheControllerStoppedTheArmForIsReported) {
 // the joints creep under gravity: every pause of the stop set raised a false contact. A rest longer
 // than the thresholds saw (MonitorConfig::longest_rest) is judged with the levels of the twin's
 // program sets that saw long rests; with none, the monitor says so once.
+// a 5 N·m contact on link 3 at 8.6 s, during the first of `pauses`, watched by `watch(scenario text)`:
+// one event, a contact, found within 30 ms
+template <class Watch>
+void expect_contact_found_during_a_pause(Watch watch, const std::string& pauses) {
+  const auto hit = watch(scenario(3113, 30, 0.5,
+                                  "  - {type: collision, link: 3, onset: 8.6, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], "
+                                  "direction: [0.0, 0.3, 1.0]}\n") +
+                         pauses);
+  ASSERT_EQ(hit.size(), 1u) << listing(hit);
+  EXPECT_EQ(hit[0].fault, FaultClass::Collision) << listing(hit);
+  EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
+}
+
 TEST_F(MonitorLoop, APauseOnAProgramThatNeverRestsIsJudgedWithTheRestTestedThresholds) {
   MonitorConfig c = *config;
   ASSERT_TRUE(std::isfinite(c.longest_rest));
@@ -2109,14 +2132,7 @@ TEST_F(MonitorLoop, APauseOnAProgramThatNeverRestsIsJudgedWithTheRestTestedThres
   EXPECT_FALSE(alone.empty()) << "the figure-eight's thresholds at a pause";
   EXPECT_THAT(fmt::format("{}", fmt::join(notes, "\n")), ::testing::HasSubstr("longer than in any run the thresholds in use were learned on"));
   // a contact while the arm is paused is still found, as a contact
-  const auto hit = watch(c, scenario(3113, 30, 0.5,
-                                     "  - {type: collision, link: 3, onset: 8.6, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], "
-                                     "direction: [0.0, 0.3, 1.0]}\n") +
-                                pauses,
-                         nullptr);
-  ASSERT_EQ(hit.size(), 1u) << listing(hit);
-  EXPECT_EQ(hit[0].fault, FaultClass::Collision) << listing(hit);
-  EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
+  expect_contact_found_during_a_pause([&](const std::string& yaml) { return watch(c, yaml, nullptr); }, pauses);
 }
 
 // The same on a log without the controller's targets (session 33): there the rest is the arm
@@ -2124,10 +2140,9 @@ TEST_F(MonitorLoop, APauseOnAProgramThatNeverRestsIsJudgedWithTheRestTestedThres
 // such thresholds recorded no rest and every pause was judged with the figure-eight's levels: 35
 // false events in the 0.45 h of the stop set without targets, 1 now (docs/validation.md).
 TEST_F(MonitorLoop, APauseOnAStreamWithoutTargetsIsJudgedWithTheRestTestedThresholds) {
-  const std::string bare = "streams_targets: false\n";
-  const auto h1 = run(scenario(503, 24, 0.5) + bare), h2 = run(scenario(504, 16, 0.0) + bare);
-  ASSERT_FALSE(h1.present & kFieldTargetQd);
-  MonitorConfig c = learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}});
+  const std::string bare = kNoTargets;
+  ASSERT_FALSE(run(scenario(503, 1, 0.5) + bare).present & kFieldTargetQd);
+  MonitorConfig c = config_without_targets();
   ASSERT_TRUE(std::isfinite(c.longest_rest));
   EXPECT_LT(c.longest_rest, Monitor::kMinDonorRest) << "the figure-eight never rests";
   const auto rests = run("robot: ur3e\nseed: 3111\nduration: 30\n" + pick_and_place(0.8, 1.0, 1.6) + bare);
@@ -2158,13 +2173,7 @@ TEST_F(MonitorLoop, APauseOnAStreamWithoutTargetsIsJudgedWithTheRestTestedThresh
   for (auto& [name, set] : unrecorded.programs) set.longest_rest = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(watch(unrecorded, paused).empty()) << "the figure-eight's thresholds at a pause";
   // a contact while the arm is paused is still found, as a contact
-  const auto hit = watch(c, scenario(3113, 30, 0.5,
-                                     "  - {type: collision, link: 3, onset: 8.6, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], "
-                                     "direction: [0.0, 0.3, 1.0]}\n") +
-                                pauses + bare);
-  ASSERT_EQ(hit.size(), 1u) << listing(hit);
-  EXPECT_EQ(hit[0].fault, FaultClass::Collision) << listing(hit);
-  EXPECT_LT(hit[0].t_detected - 8.6, 0.03);
+  expect_contact_found_during_a_pause([&](const std::string& yaml) { return watch(c, yaml); }, pauses + bare);
 }
 
 // On a log without the controller's targets nothing times the drive's switch at a slow reversal:
@@ -2174,9 +2183,8 @@ TEST_F(MonitorLoop, APauseOnAStreamWithoutTargetsIsJudgedWithTheRestTestedThresh
 // contacts went (docs/validation.md); here the figure-eight at twice its thresholds' period with
 // 0.5 kg comes within 1 % of an alarm at the elbow's reversals with the blend, and stays below 0.6.
 TEST_F(MonitorLoop, ASlowReversalOnAStreamWithoutTargetsIsReadOnTheCurrent) {
-  const std::string bare = "streams_targets: false\n";
-  const auto h1 = run(scenario(503, 24, 0.5) + bare), h2 = run(scenario(504, 16, 0.0) + bare);
-  const MonitorConfig c = learn_thresholds(*twin, {{&h1, payload}, {&h2, {}}});
+  const std::string bare = kNoTargets;
+  const MonitorConfig& c = config_without_targets();
   const auto slow = run("robot: ur3e\nseed: 3131\nduration: 80\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 16, "
                         "tilt: [0.3, 0.4, 0.5]}\npayload: {mass: 0.5, com: [0, 0, 0.04]}\n" + bare);
   const auto watch = [&](const MonitorConfig& cfg) {
