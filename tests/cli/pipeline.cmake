@@ -174,3 +174,10 @@ add_test(NAME cli.column_map_unknown_name
   COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --column-map kinova_nope --db "")
 set_tests_properties(cli.column_map_unknown_name PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "--column-map kinova_nope: no such file, and no map of that name among those twinwatch ships \\([^\n]*: franka_panda_gaz2019, kinova_gen3_chiha, kinova_gen3_chiha_current_torque\\)")
+# a recording that carries the payload its controller declares: identify says so, and how to take it
+# (a declaration is not taken as a known payload on its own), and where --known-payload says otherwise
+add_test(NAME cli.identify_says_the_declared_payload
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> identify ${d}/fig.csv -o ${d}/twin_declared.json > /dev/null; \
+$<TARGET_FILE:twinwatch> identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5 -o ${d}/twin_declared2.json > /dev/null")
+set_tests_properties(cli.identify_says_the_declared_payload PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m throughout; it is not taken as a known payload. If the arm carried it, give --known-payload [^\n]*fig.csv=0.5,0,0,0.04.*fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m; --known-payload says 0.5 kg at \\(0, 0, 0\\) m, which is taken")

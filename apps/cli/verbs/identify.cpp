@@ -123,6 +123,46 @@ void require_one_payload_each(const std::vector<PayloadArg>& pay) {
                                           pay[b].file, pay[a].payload.mass, pay[b].payload.mass));
 }
 
+// A recording that carries the payload its controller declares (RTDE payload / payload_cog, a
+// recording's payload columns) is not taken as a known payload: a part declared and not carried (or
+// carried undeclared) would set the drive gains wrong, where a --known-payload is the user's word.
+// The declaration is said, with the option that takes it, and where the two differ.
+void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const std::vector<PayloadArg>& given, bool quiet) {
+  if (quiet) return;
+  const auto what = [](double m, const double* c) {
+    return m > 0.0 ? fmt::format("{:g} kg at ({:g}, {:g}, {:g}) m", m, c[0], c[1], c[2]) : std::string("no payload");
+  };
+  for (const auto& t : runs) {
+    const device::Recording& r = *t.recording;
+    if (!(r.present & kFieldPayload) || r.samples.empty()) continue;
+    const RobotSample& a = r.samples.front();
+    const RobotSample* other = nullptr;  // the first sample that declares something else
+    for (const auto& x : r.samples)
+      if (x.payload != a.payload || !std::equal(a.payload_cog, a.payload_cog + 3, x.payload_cog)) {
+        other = &x;
+        break;
+      }
+    bool told = false;
+    for (const auto& p : given) told |= same_file(p.file, r.path);
+    if (other != nullptr) {
+      fmt::print(stderr, "note: {}: the payload the controller declares changes within it ({} from the start, {} from {:.3f} s); "
+                         "identification takes {}\n",
+                 r.path, what(a.payload, a.payload_cog), what(other->payload, other->payload_cog), other->timestamp,
+                 told ? fmt::format("the --known-payload, {:g} kg, for all of it", t.payload.mass)
+                      : std::string("no payload from it (cut it where the declaration changes, and give each part its --known-payload)"));
+    } else if (told) {
+      const Eigen::Vector3d cog(a.payload_cog[0], a.payload_cog[1], a.payload_cog[2]);
+      if (a.payload != t.payload.mass || (a.payload > 0.0 && (cog - t.payload.com).norm() > 1e-9))
+        fmt::print(stderr, "note: {}: the controller declares {}; --known-payload says {}, which is taken\n", r.path,
+                   what(a.payload, a.payload_cog), what(t.payload.mass, t.payload.com.data()));
+    } else if (a.payload > 0.0) {
+      fmt::print(stderr, "note: {}: the controller declares {} throughout; it is not taken as a known payload. If the arm carried "
+                         "it, give --known-payload {}={:g},{:g},{:g},{:g}\n",
+                 r.path, what(a.payload, a.payload_cog), r.path, a.payload, a.payload_cog[0], a.payload_cog[1], a.payload_cog[2]);
+    }
+  }
+}
+
 int run_identify(const IdentifyOptions& o) {
   // before the fit: a bad output path found after minutes of fitting costs the fit
   cli::require_distinct(o.recordings, "RECORDINGS");
@@ -163,6 +203,7 @@ int run_identify(const IdentifyOptions& o) {
     for (const auto& r : recs) found |= same_file(r.path, p.file);
     if (!found) throw InvalidArgument(fmt::format("--known-payload names '{}', which is not one of the recordings", p.file));
   }
+  say_declared_payloads(runs, pay, o.quiet);
   ident::IdentOptions io;
   io.reversal_screen = o.reversal_screen;
   io.decimate = o.decimate;
@@ -296,6 +337,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
       if (same_file(p.file, r.path)) t.payload = p.payload;
     runs.push_back(t);
   }
+  say_declared_payloads(runs, pay, o.quiet);
   ident::SequentialOptions so;
   so.library.config_joints.clear();
   for (int j : o.lasso_joints) {
