@@ -388,8 +388,11 @@ void TwinModel::advance(FrictionMemory& m, const RobotSample& s, const VectorJ& 
   const int n = robot_->n_dof();
   if (target_direction.empty() || !s.has(kFieldTargetQd)) {
     // no target to read the direction with: the measured velocity's own blend, kept where the
-    // direction is in doubt (drive_in_doubt) and NaN elsewhere (drive_factor's fallback there, the
-    // same factor; the observer's hard switch, monitor::measured_drive_torque)
+    // direction is in doubt (drive_in_doubt) and NaN elsewhere (drive_factor's fallback there; the
+    // observer's hard switch, monitor::measured_drive_torque). The current predicted at this
+    // sample's qdd is the fallback's factor; a prediction at another acceleration (a learned twin's
+    // torque at the observer's, the diagnosis window's) reads the direction kept here, as on the
+    // target path, which differs only where velocity_lag's lead crosses kDirectionLeadMin
     m.measured = true;
     if (!(direction_blend > 0.0)) {
       m.direction.resize(0);

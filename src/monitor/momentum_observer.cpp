@@ -85,9 +85,13 @@ TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), 
 }
 
 void TwinMomentumObserver::reset() {
+  restart();
+  memory_ = ident::FrictionMemory{};
+}
+
+void TwinMomentumObserver::restart() {
   started_ = false;
   r_.setZero();
-  memory_ = ident::FrictionMemory{};
 }
 
 const VectorJ& TwinMomentumObserver::update(const ident::TwinModel& twin, const RobotSample& s, double dt, const VectorJ* extra_torque) {

@@ -317,13 +317,17 @@ namespace {
 // were learned on another prediction than the monitor's: healthy runs from a controller declaring
 // 0.5 kg, learned without --payload-mass, gave J2/J3 dynamic thresholds of 0.46/0.48 A where the
 // declared payload gives 0.08/0.07 A (session 33), blind to a 5 N·m contact. Where the payload
-// changes, the residual filter and the observer start again and decisions wait, as in the monitor;
-// those samples teach no threshold.
+// changes, the residual filter and the observer start again and decisions wait, as in the monitor
+// (the current residual's kDeclarationSettle, the observer's start-up kObserverSettle samples); those
+// samples teach no threshold. (A declaration that leaves the twin's payload as it was changes
+// nothing here; the monitor restarts its estimators there too, which costs it only the wait.)
 class PayloadTimeline {
  public:
-  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow) : steps_{{0, h.payload}} {
+  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period) : steps_{{0, h.payload}} {
     const auto& smp = h.recording->samples;
     judged_.assign(smp.size(), 1);
+    judged_observer_.assign(smp.size(), 1);
+    const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
     if (!follow || !(h.recording->present & kFieldPayload)) return;
     const RobotSample* last = nullptr;  // the declaration read last (Monitor::same_declaration)
     for (size_t k = 0; k < smp.size(); ++k) {
@@ -339,7 +343,10 @@ class PayloadTimeline {
         continue;
       }
       steps_.push_back({k, now});
-      std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + kSettleSamples)), 0);
+      std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + wait)), 0);
+      const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
+      std::fill(judged_observer_.begin() + static_cast<long>(k),
+                judged_observer_.begin() + static_cast<long>(std::min(smp.size(), k + observer_wait)), 0);
     }
   }
   /// Sets the run's first payload on t; advance() then follows it.
@@ -353,8 +360,10 @@ class PayloadTimeline {
     t.set_payload(steps_[next_++].payload);
     return true;
   }
-  /// A sample the monitor decides on (not settling after a change).
+  /// A sample the monitor decides on the current residual at (not settling after a change).
   bool judged(size_t k) const { return judged_[k] != 0; }
+  /// A sample the monitor decides on the observer at (its start-up after a change too).
+  bool judged_observer(size_t k) const { return judged_observer_[k] != 0; }
   double heaviest() const {
     double m = 0.0;
     for (const auto& p : steps_) m = std::max(m, p.payload.mass);
@@ -367,7 +376,7 @@ class PayloadTimeline {
     model::RigidBodyInertia payload;
   };
   std::vector<Step> steps_;
-  std::vector<char> judged_;
+  std::vector<char> judged_, judged_observer_;
   size_t next_ = 1;
 };
 
@@ -815,8 +824,9 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     return iir_alpha(c.filter_cutoff_hz, h.recording != nullptr && h.recording->median_period > 0.0 ? h.recording->median_period : c.nominal_period);
   };
   std::vector<std::vector<VectorJ>> res, obs_res;
+  // (the observer's samples have their own qd, qdd: it is judged from later after a payload change)
   std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
-      ro(static_cast<size_t>(n));
+      ro(static_cast<size_t>(n)), qdo(static_cast<size_t>(n)), qddo(static_cast<size_t>(n));
   VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n), load = VectorJ::Zero(n), crawl = VectorJ::Zero(n);
   double longest_rest = 0.0;
   const bool with_observer = c.observer_gain > 0.0;
@@ -824,14 +834,15 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   c.payload_max = 0.0;  // (the heaviest payload of these runs, declared ones included)
   for (const HealthyRun& h : runs) {
     ident::TwinModel t = twin;
-    PayloadTimeline payload(twin, h, c.follow_payload);
+    PayloadTimeline payload(twin, h, c.follow_payload,
+                            h.recording->median_period > 0.0 ? h.recording->median_period : c.nominal_period);
     c.payload_max = std::max(c.payload_max, payload.heaviest());
     std::vector<VectorJ> qdds, taus;
     auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, payload, &taus);
     // skip the filter's start-up
     const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
-    // each joint's longest crawl (its direction in doubt), and the arm's longest commanded rest, after
-    // the start-up (the rest is not recorded when a run has no target velocities)
+    // each joint's longest crawl (its direction in doubt), and the arm's longest rest after the
+    // start-up (commanded; on a run without target velocities, measured: RestBaseline::arm_rest)
     const auto& smp = h.recording->samples;
     for (int j = 0; j < n; ++j)
       crawl[j] = std::max(crawl[j], longest_stretch(smp, skip, [&](const RobotSample& x) { return std::abs(x.qd[j]) < width; }));
@@ -849,7 +860,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
         qdd[static_cast<size_t>(j)].push_back(qdds[k][j]);
       }
     }
-    res.push_back(std::move(judged_run));
+    if (!judged_run.empty()) res.push_back(std::move(judged_run));  // (a run of settling samples alone teaches nothing)
     // the momentum observer, run sample by sample exactly as the monitor runs it
     if (with_observer) {
       TwinMomentumObserver obs(n, c.observer_gain);
@@ -861,18 +872,22 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       for (size_t k = 0; k < smp.size(); ++k) {
         const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
         if (payload.advance(k, t)) {  // (Monitor::restart_estimators, Monitor::carry)
-          obs.reset();
+          obs.restart();
           rest = RestBaseline(n);
         }
         temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
         o = obs.update(t, smp[k], dt, &warm);
         rest.apply(smp[k], o);
-        if (k < skip || !payload.judged(k)) continue;
+        if (k < skip || !payload.judged_observer(k)) continue;
         obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
-        for (int j = 0; j < n; ++j) ro[static_cast<size_t>(j)].push_back(o[j]);
+        for (int j = 0; j < n; ++j) {
+          ro[static_cast<size_t>(j)].push_back(o[j]);
+          qdo[static_cast<size_t>(j)].push_back(smp[k].qd[j]);
+          qddo[static_cast<size_t>(j)].push_back(qdds[k][j]);
+        }
         ro_run.push_back(o);
       }
-      obs_res.push_back(std::move(ro_run));
+      if (!ro_run.empty()) obs_res.push_back(std::move(ro_run));
     }
   }
   c.static_level = StaticThreshold::learn(res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
@@ -887,7 +902,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   if (with_observer) {
     c.observer_level = StaticThreshold::learn(obs_res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * obs_peak);
     for (int j = 0; j < n; ++j) {
-      const auto fit = fit_dynamic_threshold(ro[static_cast<size_t>(j)], qd[static_cast<size_t>(j)], qdd[static_cast<size_t>(j)], options.dynamic);
+      const auto fit = fit_dynamic_threshold(ro[static_cast<size_t>(j)], qdo[static_cast<size_t>(j)], qddo[static_cast<size_t>(j)], options.dynamic);
       if (!fit.ok) throw InvalidArgument(fmt::format("observer dynamic threshold of joint {}: {}", j + 1, fit.message));
       c.observer_dynamic.push_back(fit.params);
     }

@@ -130,7 +130,7 @@ void require_one_payload_each(const std::vector<PayloadArg>& pay) {
 void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const std::vector<PayloadArg>& given, bool quiet) {
   if (quiet) return;
   const auto what = [](double m, const double* c) {
-    return m > 0.0 ? fmt::format("{:g} kg at ({:g}, {:g}, {:g}) m", m, c[0], c[1], c[2]) : std::string("no payload");
+    return m > 0.0 ? fmt::format("{} kg at ({}, {}, {}) m", m, c[0], c[1], c[2]) : std::string("no payload");
   };
   for (const auto& t : runs) {
     const device::Recording& r = *t.recording;
@@ -148,7 +148,7 @@ void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const st
       fmt::print(stderr, "note: {}: the payload the controller declares changes within it ({} from the start, {} from {:.3f} s); "
                          "identification takes {}\n",
                  r.path, what(a.payload, a.payload_cog), what(other->payload, other->payload_cog), other->timestamp,
-                 told ? fmt::format("the --known-payload, {:g} kg, for all of it", t.payload.mass)
+                 told ? fmt::format("the --known-payload, {} kg, for all of it", t.payload.mass)
                       : std::string("no payload from it (cut it where the declaration changes, and give each part its --known-payload)"));
     } else if (told) {
       const Eigen::Vector3d cog(a.payload_cog[0], a.payload_cog[1], a.payload_cog[2]);
@@ -157,7 +157,7 @@ void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const st
                    what(a.payload, a.payload_cog), what(t.payload.mass, t.payload.com.data()));
     } else if (a.payload > 0.0) {
       fmt::print(stderr, "note: {}: the controller declares {} throughout; it is not taken as a known payload. If the arm carried "
-                         "it, give --known-payload {}={:g},{:g},{:g},{:g}\n",
+                         "it, give --known-payload {}={},{},{},{}\n",
                  r.path, what(a.payload, a.payload_cog), r.path, a.payload, a.payload_cog[0], a.payload_cog[1], a.payload_cog[2]);
     }
   }

@@ -367,10 +367,17 @@ int run_thresholds(const ThresholdOptions& o) {
   // threshold set shares the one slope, and the others were learned with it: a program's set keeps
   // the twin's (measured: a 300 s pick-and-place from cold moved J2/J3's slope from -1.6e-3 to
   // -3.3e-3 A·s/rad/°C under the default set learned with the first; session 33)
-  if (!o.program.empty() && settings.trend.temperature_slope.size() == twin.n_dof()) {
-    fmt::print("temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
-               "again, without --program, on a warm-up from cold to change it)\n",
-               fmt::join(settings.trend.temperature_slope, " "));
+  // (a twin with a default set and no slope: its default set was learned without compensation, and
+  // a program's set keeps that too)
+  const bool has_default_set = settings.static_level.size() == twin.n_dof();
+  if (!o.program.empty() && (settings.trend.temperature_slope.size() == twin.n_dof() || has_default_set)) {
+    if (settings.trend.temperature_slope.size() == twin.n_dof())
+      fmt::print("temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
+                 "again, without --program, on a warm-up from cold to change it)\n",
+                 fmt::join(settings.trend.temperature_slope, " "));
+    else
+      fmt::print("no temperature slope: the twin's default set was learned without one, and every threshold set shares it (learn the "
+                 "default set again, without --program, on a warm-up from cold to learn one)\n");
   } else {
     std::vector<monitor::TrendRun> trend_runs;
     for (const auto& r : runs) trend_runs.push_back({r.recording, r.payload, 0});
@@ -524,7 +531,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--payload-mass", o->payload_mass,
                   "Payload carried in these recordings [kg]. A recording that carries the payload the controller declares (RTDE "
                   "payload / payload_cog, controllers 5.5.1 and newer; a recording's payload columns) is learned with each "
-                  "declaration from its sample on instead, as the monitor predicts with it")
+                  "declaration the twin takes, from its sample on (from the first sample: instead of this), as the monitor predicts "
+                  "with it; a twin with relative gains takes none")
       ->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);

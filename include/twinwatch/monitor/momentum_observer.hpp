@@ -65,6 +65,10 @@ class TwinMomentumObserver {
 
   /// Forgets the state; the next update restarts the observer (r = 0) and the twin's friction memory.
   void reset();
+  /// Restarts the observer (r = 0 at the next update) and keeps the twin's friction memory, which
+  /// follows the encoders whatever the observer does (a payload the twin takes: the monitor's
+  /// restart_estimators keeps its own memory too)
+  void restart();
 
   /// One sample. Allocation-free after construction.
   /// @param twin the reference model (its payload included); @param s q [rad], qd [rad/s],

@@ -231,7 +231,7 @@ class Simulator {
   const VectorJ& q() const { return q_; }
   const VectorJ& qd() const { return qd_; }
   const model::RobotModel& truth_model() const { return truth_model_; }
-  /// Fields every sample carries, whatever the options.
+  /// Fields every sample carries with the default options (sample_fields(): what the options leave).
   static std::uint32_t fields();
   /// The controller's targets among fields(): what options.streams_targets = false leaves out
   static constexpr std::uint32_t kTargetFields = kFieldTargetQ | kFieldTargetQd | kFieldTargetQdd | kFieldTargetCurrent | kFieldTargetMoment;
