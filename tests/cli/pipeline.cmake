@@ -181,3 +181,8 @@ add_test(NAME cli.identify_says_the_declared_payload
 $<TARGET_FILE:twinwatch> identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5 -o ${d}/twin_declared2.json > /dev/null")
 set_tests_properties(cli.identify_says_the_declared_payload PROPERTIES FIXTURES_REQUIRED recordings
   PASS_REGULAR_EXPRESSION "fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m throughout; it is not taken as a known payload. If the arm carried it, give --known-payload [^\n]*fig.csv=0.5,0,0,0.04.*fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m; --known-payload says 0.5 kg at \\(0, 0, 0\\) m, which is taken")
+# a log without the controller's targets, end to end (session 33)
+add_test(NAME cli.monitor_a_log_without_targets
+  COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/without_targets.sh $<TARGET_FILE:twinwatch> ${PROJECT_SOURCE_DIR}/tests/data/cli
+          ${PROJECT_BINARY_DIR}/cli-without-targets)
+set_tests_properties(cli.monitor_a_log_without_targets PROPERTIES PASS_REGULAR_EXPRESSION "WITHOUT-TARGETS-OK" TIMEOUT 120)
