@@ -13,6 +13,7 @@
 #include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/numbers.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "monitor/declaration.hpp"
 
 namespace twinwatch::monitor {
 
@@ -25,15 +26,6 @@ constexpr double kPulseMax = 0.5;
 // observer history before the diagnosis window that the contact isolation uses as its healthy
 // reference (the noise of a pulse-long impulse just before the contact) [s]
 constexpr double kContactReference = 0.5;
-// samples the observer runs before its threshold may raise an alert (its start-up transient; the
-// threshold learning skips as many)
-constexpr int kObserverSettle = 50;
-// decisions wait this long after the controller declares a new payload (take_declared_payload) [s]:
-// the tracking error a position loop carried for a payload it did not know unwinds in about 4 of
-// its time constants. On the virtual UR3e (10 Hz loop, damping 0.8: 20 ms) a 1.5 kg part dropped
-// undeclared, then a declared pick, still raised a 4 ms "contact" 34 ms after the declaration with a
-// 30 ms wait, none with 40-80 ms; a real controller's slower loop would need a longer wait
-constexpr double kDeclarationSettle = 0.05;
 // a program declares its pick up to this long after the gripper closed on it (a gripper's URCap
 // declares once it has seen the grip), or before it closes: the payload change raised in between is
 // the pick the program declared, not a fault, and is withdrawn (declared_pick_candidate,
@@ -48,10 +40,6 @@ constexpr double kDeclaredPickShare = 0.5;  // a payload change within this shar
 // share of the change, or this many kg, of zero (either side) is the whole payload lost: the longer
 // look's estimate errs by about 12 % (-0.44 kg for a 0.5 kg loss, docs/validation.md)
 constexpr double kPayloadFollowShare = 0.3, kPayloadFollowFloor = 0.05;
-// a declared centre of mass farther than this from the flange is no part a UR arm carries (its
-// reach is 0.5-1.3 m): most likely a value in mm. It is not taken (it made the monitor blind: a
-// declared centre of mass of 40 "m" hid a part lost and a 10 N·m contact, session 23 review) [m]
-constexpr double kDeclaredCogMax = 1.0;
 // a payload change is followed when the gripper's outputs changed in its window or the payload
 // signature explains this share of the residual (dropped parts 0.88-0.89; a held push 0.76)
 constexpr double kPayloadFollowExplained = 0.85;
@@ -137,47 +125,6 @@ constexpr double kMaxFilterCutoffHz = 500.0;
 double iir_alpha(double cutoff_hz, double period) {
   // y += a (x - y), a = 1 - exp(-2 pi fc T)
   return 1.0 - std::exp(-2.0 * M_PI * cutoff_hz * period);
-}
-
-// A payload the controller declares (the stream's kFieldPayload: m kg at c in the flange frame) is a
-// number the twin can read: a finite mass >= 0 at a finite centre of mass (the recording reader
-// refuses other rows; a live stream's odd value is not taken)
-bool declaration_readable(const RobotSample& s) {
-  const double* c = s.payload_cog;
-  return std::isfinite(s.payload) && s.payload >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
-}
-
-// Why the twin does not predict with a readable declaration, or "" when it does (the monitor says
-// the reason; the threshold learning keeps the run's payload)
-std::string declaration_refusal(const ident::TwinModel& twin, const RobotSample& s) {
-  const double m = s.payload;
-  const double* c = s.payload_cog;
-  const double cog_distance = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  if (!twin.gains_known()) return "its torques are relative (it was identified without a known payload that fixes its gains)";
-  if (!twin.predicts_payload()) return "its prediction does not carry a payload (method '" + twin.method + "')";
-  if (m > twin.robot().payload_limit())
-    return fmt::format("above {:g} kg ({})", twin.robot().payload_limit(), twin.robot().payload_limit_text());
-  if (m > 0.0 && cog_distance > kDeclaredCogMax)
-    return fmt::format("its centre of mass is {:.3g} m from the flange, more than {:g} m (a value in mm?)", cog_distance, kDeclaredCogMax);
-  return {};
-}
-
-// The payload the twin predicts with for a declaration it takes. The declaration has no shape
-// (payload_inertia is not read): the twin's own when it is the same part, else a point mass.
-model::RigidBodyInertia declared_inertia(const RobotSample& s, const model::RigidBodyInertia& had) {
-  model::RigidBodyInertia now;
-  if (s.payload > 0.0) {
-    now.mass = s.payload;
-    now.com = Eigen::Vector3d(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
-    if (had.mass == now.mass && had.com == now.com) now.inertia_com = had.inertia_com;
-  }
-  return now;
-}
-
-// the same part: mass and (for a part) centre of mass (the first declaration is news only where it
-// differs from what the twin was given)
-bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInertia& b) {
-  return a.mass == b.mass && (a.mass == 0.0 || a.com == b.com);
 }
 
 }  // namespace
@@ -309,76 +256,6 @@ void resolve_drive_doubt(const ident::TwinModel& twin, const VectorJ& tau, const
 }
 
 namespace {
-
-// The payload the monitor predicts a healthy run with, sample by sample: the run's own (HealthyRun::
-// payload), then, where the stream carries what the program declares (kFieldPayload) and the monitor
-// follows declarations (MonitorConfig::follow_payload), each declaration the twin takes, from its
-// sample on (Monitor::take_declared_payload). Learned with the run's payload alone, the thresholds
-// were learned on another prediction than the monitor's: healthy runs from a controller declaring
-// 0.5 kg, learned without --payload-mass, gave J2/J3 dynamic thresholds of 0.46/0.48 A where the
-// declared payload gives 0.08/0.07 A (session 33), blind to a 5 N·m contact. Where the payload
-// changes, the residual filter and the observer start again and decisions wait, as in the monitor
-// (the current residual's kDeclarationSettle, the observer's start-up kObserverSettle samples); those
-// samples teach no threshold. (A declaration that leaves the twin's payload as it was changes
-// nothing here; the monitor restarts its estimators there too, which costs it only the wait.)
-class PayloadTimeline {
- public:
-  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period) : steps_{{0, h.payload}} {
-    const auto& smp = h.recording->samples;
-    judged_.assign(smp.size(), 1);
-    judged_observer_.assign(smp.size(), 1);
-    const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
-    if (!follow || !(h.recording->present & kFieldPayload)) return;
-    const RobotSample* last = nullptr;  // the declaration read last (Monitor::same_declaration)
-    for (size_t k = 0; k < smp.size(); ++k) {
-      const RobotSample& s = smp[k];
-      if (!s.has(kFieldPayload) || (last != nullptr && s.payload == last->payload && std::equal(s.payload_cog, s.payload_cog + 3, last->payload_cog)))
-        continue;
-      last = &s;
-      if (!declaration_readable(s) || !declaration_refusal(twin, s).empty()) continue;
-      const model::RigidBodyInertia now = declared_inertia(s, steps_.back().payload);
-      if (same_payload(now, steps_.back().payload)) continue;
-      if (k == 0) {
-        steps_.back().payload = now;  // declared from the start: the run's payload
-        continue;
-      }
-      steps_.push_back({k, now});
-      std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + wait)), 0);
-      const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
-      std::fill(judged_observer_.begin() + static_cast<long>(k),
-                judged_observer_.begin() + static_cast<long>(std::min(smp.size(), k + observer_wait)), 0);
-    }
-  }
-  /// Sets the run's first payload on t; advance() then follows it.
-  void start(ident::TwinModel& t) {
-    next_ = 1;
-    t.set_payload(steps_.front().payload);
-  }
-  /// Sets the payload from sample k on (k in order); true where it changes there.
-  bool advance(size_t k, ident::TwinModel& t) {
-    if (next_ >= steps_.size() || steps_[next_].from != k) return false;
-    t.set_payload(steps_[next_++].payload);
-    return true;
-  }
-  /// A sample the monitor decides on the current residual at (not settling after a change).
-  bool judged(size_t k) const { return judged_[k] != 0; }
-  /// A sample the monitor decides on the observer at (its start-up after a change too).
-  bool judged_observer(size_t k) const { return judged_observer_[k] != 0; }
-  double heaviest() const {
-    double m = 0.0;
-    for (const auto& p : steps_) m = std::max(m, p.payload.mass);
-    return m;
-  }
-
- private:
-  struct Step {
-    size_t from = 0;
-    model::RigidBodyInertia payload;
-  };
-  std::vector<Step> steps_;
-  std::vector<char> judged_, judged_observer_;
-  size_t next_ = 1;
-};
 
 // (torques: when given, the twin's torque per sample too; payload: the run's payload from sample to
 // sample, which leaves the twin with the last one)

@@ -10,6 +10,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
+#include "monitor/declaration.hpp"
 
 namespace twinwatch::monitor {
 
@@ -299,7 +300,8 @@ bool TrendDetector::take_note(std::string& note) {
   return true;
 }
 
-TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs, const TrendConfig& settings) {
+TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs, const TrendConfig& settings,
+                                    bool follow_payload) {
   const int n = twin.n_dof();
   settings.validate(n);
   if (runs.empty()) throw InvalidArgument("learn trend temperature: no healthy runs given");
@@ -325,12 +327,17 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
     if (!(run.recording->present & kFieldTemperature))
       throw InvalidArgument(fmt::format("learn trend temperature: recording {} has no joint temperatures", run.recording->path));
     ident::TwinModel t = twin;
-    t.set_payload(run.payload);
+    // (the payload the stream declares, as the monitor predicts with it: PayloadTimeline)
+    PayloadTimeline payload(twin, HealthyRun{run.recording, run.payload}, follow_payload,
+                            run.recording->median_period > 0.0 ? run.recording->median_period : 0.002);
+    payload.start(t);
     const std::vector<VectorJ> qdds = ident::joint_accelerations(*run.recording);
     ident::FrictionMemory memory;
     for (size_t k = 0; k < run.recording->samples.size(); ++k) {
       const RobotSample& s = run.recording->samples[k];
+      payload.advance(k, t);
       t.advance(memory, s, qdds[k]);
+      if (!payload.judged(k)) continue;
       t.predict_current(s.q, s.qd, qdds[k], s.temperature, i_hat, &memory);
       for (int j = 0; j < n; ++j) {
         if (std::abs(s.qd[j]) <= c.v_min || !std::isfinite(s.temperature[j])) continue;

@@ -334,6 +334,14 @@ TEST(TrendOnVirtualRobot, ShortFrictionRampIsFlaggedBeforeAnyThresholdAndHealthy
   cfg.trend.window_s = 16;
   cfg.trend.cycle_period = 8;
   cfg.trend = learn_trend_temperature(twin, {{&cool, p}}, cfg.trend);
+  // the run declares its 0.5 kg in the stream: learned without being told, the slope is the same
+  // (the declaration is taken, as the monitor takes it; session 33), and told nothing and following
+  // nothing, the part's weight the twin leaves out bends it
+  const TrendConfig read = learn_trend_temperature(twin, {{&cool, {}}}, cfg.trend);
+  const TrendConfig blind = learn_trend_temperature(twin, {{&cool, {}}}, cfg.trend, false);
+  for (int j = 0; j < 6; ++j) EXPECT_NEAR(read.temperature_slope[j], cfg.trend.temperature_slope[j], 1e-12) << "J" << j + 1;
+  EXPECT_GT((blind.temperature_slope - cfg.trend.temperature_slope).cwiseAbs().maxCoeff(), 1e-5)
+      << blind.temperature_slope.transpose() << " vs " << cfg.trend.temperature_slope.transpose();
   twin.set_payload(p);
   auto monitor = [&](const device::Recording& rec) {
     Monitor m(twin, cfg);

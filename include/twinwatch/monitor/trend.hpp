@@ -170,7 +170,9 @@ struct TrendRun {
   model::RigidBodyInertia payload;
   int program = 0;  ///< runs of one program share its Coulomb/viscous/offset misfit (0-based)
 };
+/// (follow_payload: a run whose stream declares its payload is predicted with each declaration the
+/// twin takes, as the monitor does with MonitorConfig::follow_payload; else with TrendRun::payload alone)
 TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs,
-                                    const TrendConfig& settings = {});
+                                    const TrendConfig& settings = {}, bool follow_payload = true);
 
 }  // namespace twinwatch::monitor

@@ -1,0 +1,39 @@
+#include "monitor/declaration.hpp"
+
+#include <fmt/format.h>
+
+namespace twinwatch::monitor {
+
+bool declaration_readable(const RobotSample& s) {
+  const double* c = s.payload_cog;
+  return std::isfinite(s.payload) && s.payload >= 0.0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
+}
+
+std::string declaration_refusal(const ident::TwinModel& twin, const RobotSample& s) {
+  const double m = s.payload;
+  const double* c = s.payload_cog;
+  const double cog_distance = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  if (!twin.gains_known()) return "its torques are relative (it was identified without a known payload that fixes its gains)";
+  if (!twin.predicts_payload()) return "its prediction does not carry a payload (method '" + twin.method + "')";
+  if (m > twin.robot().payload_limit())
+    return fmt::format("above {:g} kg ({})", twin.robot().payload_limit(), twin.robot().payload_limit_text());
+  if (m > 0.0 && cog_distance > kDeclaredCogMax)
+    return fmt::format("its centre of mass is {:.3g} m from the flange, more than {:g} m (a value in mm?)", cog_distance, kDeclaredCogMax);
+  return {};
+}
+
+model::RigidBodyInertia declared_inertia(const RobotSample& s, const model::RigidBodyInertia& had) {
+  model::RigidBodyInertia now;
+  if (s.payload > 0.0) {
+    now.mass = s.payload;
+    now.com = Eigen::Vector3d(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
+    if (had.mass == now.mass && had.com == now.com) now.inertia_com = had.inertia_com;
+  }
+  return now;
+}
+
+bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInertia& b) {
+  return a.mass == b.mass && (a.mass == 0.0 || a.com == b.com);
+}
+
+}  // namespace twinwatch::monitor
