@@ -3,7 +3,7 @@
 // monitor takes it, shared by the monitor (Monitor::take_declared_payload) and the learning that must
 // predict what it predicts (learn_thresholds, learn_trend_temperature). Monitor-internal.
 #include <algorithm>
-#include <cmath>
+
 #include <string>
 #include <vector>
 
@@ -51,32 +51,8 @@ bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInerti
 // nothing here; the monitor restarts its estimators there too, which costs it only the wait.)
 class PayloadTimeline {
  public:
-  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period) : steps_{{0, h.payload}} {
-    const auto& smp = h.recording->samples;
-    judged_.assign(smp.size(), 1);
-    judged_observer_.assign(smp.size(), 1);
-    const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
-    if (!follow || !(h.recording->present & kFieldPayload)) return;
-    const RobotSample* last = nullptr;  // the declaration read last (Monitor::same_declaration)
-    for (size_t k = 0; k < smp.size(); ++k) {
-      const RobotSample& s = smp[k];
-      if (!s.has(kFieldPayload) || (last != nullptr && s.payload == last->payload && std::equal(s.payload_cog, s.payload_cog + 3, last->payload_cog)))
-        continue;
-      last = &s;
-      if (!declaration_readable(s) || !declaration_refusal(twin, s).empty()) continue;
-      const model::RigidBodyInertia now = declared_inertia(s, steps_.back().payload);
-      if (same_payload(now, steps_.back().payload)) continue;
-      if (k == 0) {
-        steps_.back().payload = now;  // declared from the start: the run's payload
-        continue;
-      }
-      steps_.push_back({k, now});
-      std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + wait)), 0);
-      const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
-      std::fill(judged_observer_.begin() + static_cast<long>(k),
-                judged_observer_.begin() + static_cast<long>(std::min(smp.size(), k + observer_wait)), 0);
-    }
-  }
+  /// `period`: the recording's sampling period where it has none of its own (the settling waits)
+  PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period);
   /// Sets the run's first payload on t; advance() then follows it.
   void start(ident::TwinModel& t) {
     next_ = 1;

@@ -61,18 +61,18 @@ void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current,
     // inverse of the twin's current model: i = c tau / g with c = c_gen when back-driven (the
     // torque's sign is the current's: g > 0)
     const double tau_motoring = d.gain * current[j];
-    if (target && !std::isnan(memory->direction[j])) {
+    const bool kept = target && !std::isnan(memory->direction[j]);
+    if (kept && reference != nullptr && twin.drive_in_doubt(j, tau_motoring, *memory, to_motoring, to_back_driven)) {
       // the drive's direction in doubt (TwinModel::drive_in_doubt): the level nearer the twin's own
       // torque, as the current residual takes the level nearer the current (resolve_drive_doubt)
-      if (reference != nullptr && twin.drive_in_doubt(j, tau_motoring, *memory, to_motoring, to_back_driven)) {
-        const double back_driven = tau_motoring / d.c_gen;
-        tau[j] = std::abs(back_driven - (*reference)[j]) < std::abs(tau_motoring - (*reference)[j]) ? back_driven : tau_motoring;
-      } else if (memory->measured) {  // (no target: the hard switch on the velocity's sign, as below)
-        tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
-      } else {
-        tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
-      }
+      const double back_driven = tau_motoring / d.c_gen;
+      tau[j] = std::abs(back_driven - (*reference)[j]) < std::abs(tau_motoring - (*reference)[j]) ? back_driven : tau_motoring;
+    } else if (kept && !memory->measured) {
+      // read with the target: through the twin's blended factor, as its current is predicted
+      tau[j] = tau_motoring / twin.drive_factor(j, tau_motoring, qd[j], 0.0, memory);
     } else {
+      // the hard switch on the measured velocity's sign (also where a stream without targets keeps
+      // the measured blend only for the doubt's reading)
       tau[j] = tau_motoring * qd[j] < 0.0 ? tau_motoring / d.c_gen : tau_motoring;
     }
   }
@@ -81,7 +81,7 @@ void measured_drive_torque(const ident::TwinModel& twin, const VectorJ& current,
 TwinMomentumObserver::TwinMomentumObserver(int n_dof, double gain) : n_(n_dof), gain_(gain) {
   if (n_dof < 1) throw InvalidArgument(fmt::format("momentum observer: n_dof is {}, must be >= 1", n_dof));
   if (!(gain > 0.0)) throw InvalidArgument(fmt::format("momentum observer gain is {}, must be > 0", gain));
-  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = tau_ref_ = VectorJ::Zero(n_dof);
+  r_ = qd_prev_ = tau_m_ = tau_m_prev_ = qdd_ = tau_twin_ = VectorJ::Zero(n_dof);
 }
 
 void TwinMomentumObserver::reset() {

@@ -711,8 +711,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   c.payload_max = 0.0;  // (the heaviest payload of these runs, declared ones included)
   for (const HealthyRun& h : runs) {
     ident::TwinModel t = twin;
-    PayloadTimeline payload(twin, h, c.follow_payload,
-                            h.recording->median_period > 0.0 ? h.recording->median_period : c.nominal_period);
+    PayloadTimeline payload(twin, h, c.follow_payload, c.nominal_period);
     c.payload_max = std::max(c.payload_max, payload.heaviest());
     std::vector<VectorJ> qdds, taus;
     auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, payload, &taus);

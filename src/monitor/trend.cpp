@@ -328,8 +328,7 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
       throw InvalidArgument(fmt::format("learn trend temperature: recording {} has no joint temperatures", run.recording->path));
     ident::TwinModel t = twin;
     // (the payload the stream declares, as the monitor predicts with it: PayloadTimeline)
-    PayloadTimeline payload(twin, HealthyRun{run.recording, run.payload}, follow_payload,
-                            run.recording->median_period > 0.0 ? run.recording->median_period : 0.002);
+    PayloadTimeline payload(twin, HealthyRun{run.recording, run.payload}, follow_payload, MonitorConfig{}.nominal_period);
     payload.start(t);
     const std::vector<VectorJ> qdds = ident::joint_accelerations(*run.recording);
     ident::FrictionMemory memory;

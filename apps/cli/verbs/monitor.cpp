@@ -370,8 +370,9 @@ int run_thresholds(const ThresholdOptions& o) {
   // (a twin with a default set and no slope: its default set was learned without compensation, and
   // a program's set keeps that too)
   const bool has_default_set = settings.static_level.size() == twin.n_dof();
-  if (!o.program.empty() && (settings.trend.temperature_slope.size() == twin.n_dof() || has_default_set)) {
-    if (settings.trend.temperature_slope.size() == twin.n_dof())
+  const bool has_slope = settings.trend.temperature_slope.size() == twin.n_dof();
+  if (!o.program.empty() && (has_slope || has_default_set)) {
+    if (has_slope)
       fmt::print("temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
                  "again, without --program, on a warm-up from cold to change it)\n",
                  fmt::join(settings.trend.temperature_slope, " "));

@@ -108,7 +108,7 @@ class TwinMomentumObserver {
   int n_;
   double gain_;
   bool started_ = false;
-  VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_, tau_ref_;
+  VectorJ r_, qd_prev_, tau_m_, tau_m_prev_, qdd_, tau_twin_;
   ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream (update() only)
   double dt_ = 0.0, a_ = 0.0;  // last period and its lag coefficient 1 - exp(-K dt)
 };
