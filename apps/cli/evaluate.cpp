@@ -44,7 +44,11 @@ device::Recording simulate_to_memory(const sim::Scenario& s, const std::string& 
   rec.median_period = 1.0 / s.options.rate;
   const auto simulator = sim::make_simulator(s);
   rec.present = simulator->sample_fields();
-  simulator->run([&](const RobotSample& x) { rec.samples.push_back(x); });
+  try {
+    simulator->run([&](const RobotSample& x) { rec.samples.push_back(x); });
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(fmt::format("{}: {}", s.path.empty() ? name : s.path, e.what()));
+  }
   rec.n_dof = rec.samples.empty() ? 0 : rec.samples.front().n_dof();
   return rec;
 }

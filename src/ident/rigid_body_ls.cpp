@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/json_fields.hpp"
+#include "json_numbers.hpp"
 #include "twinwatch/ident/nonnegative_ls.hpp"
 #include "twinwatch/model/dynamics.hpp"
 
@@ -201,60 +203,70 @@ std::string RigidBodyModel::to_json() const {
   return j.dump(2);
 }
 
-RigidBodyModel RigidBodyModel::from_json(const std::string& text, const std::string& origin) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ParseError(origin, 0, "", fmt::format("not valid JSON: {}", e.what()));
-  }
+RigidBodyModel RigidBodyModel::from_json(const std::string& text, const std::string& origin, int n_dof) {
+  const nlohmann::json j = parse_json(text, origin);
+  const JsonFields top(j, origin, "");
+  // (the kind first: a twin file or another JSON file is named as such, not by its first strange key)
+  if (!top.has("kind")) top.fail("kind", "missing: expected 'rigid_body_torque' (a model from 'twinwatch identify-torque'; a twin file is not one)");
+  if (const std::string kind = top.text("kind"); kind != "rigid_body_torque")
+    top.fail("kind", fmt::format("expected 'rigid_body_torque' (a model from 'twinwatch identify-torque'), got '{}'", kind));
+  top.only({"kind", "robot", "signal", "base_columns", "beta", "beta_std", "friction", "sigma", "rows_rigid", "rows_friction", "cond",
+            "averaged_forward_reverse", "derivative"});
   RigidBodyModel m;
-  std::string field;
+  m.robot = top.text("robot");
   try {
-    field = "kind";
-    if (j.at("kind").get<std::string>() != "rigid_body_torque")
-      throw ParseError(origin, 0, "kind", fmt::format("expected 'rigid_body_torque', got '{}'", j.at("kind").get<std::string>()));
-    field = "robot";
-    m.robot = j.at("robot").get<std::string>();
-    field = "signal";
-    m.signal = torque_signal_from_string(j.at("signal").get<std::string>());
-    field = "base_columns";
-    m.base_columns = j.at("base_columns").get<std::vector<int>>();
-    field = "beta";
-    const auto b = j.at("beta").get<std::vector<double>>();
-    if (b.size() != m.base_columns.size())
-      throw ParseError(origin, 0, "beta", fmt::format("expected {} values (as base_columns), got {}", m.base_columns.size(), b.size()));
-    m.beta = Eigen::Map<const Eigen::VectorXd>(b.data(), static_cast<Eigen::Index>(b.size()));
-    field = "beta_std";
-    const auto bs = j.value("beta_std", std::vector<double>(b.size(), 0.0));
-    m.beta_std = Eigen::Map<const Eigen::VectorXd>(bs.data(), static_cast<Eigen::Index>(bs.size()));
-    field = "friction";
-    const auto& f = j.at("friction");
-    m.friction.resize(static_cast<Eigen::Index>(f.size()), kFric);
-    m.friction_std.setZero(static_cast<Eigen::Index>(f.size()), kFric);
-    m.friction_held.setConstant(static_cast<Eigen::Index>(f.size()), 2, false);
-    for (size_t r = 0; r < f.size(); ++r) {
-      field = fmt::format("friction[{}]", r);
-      const auto R = static_cast<Eigen::Index>(r);
-      m.friction(R, 0) = f[r].at("coulomb").get<double>();
-      m.friction(R, 1) = f[r].at("viscous").get<double>();
-      m.friction(R, 2) = f[r].at("offset").get<double>();
-      m.friction_std(R, 0) = f[r].value("coulomb_std", 0.0);
-      m.friction_std(R, 1) = f[r].value("viscous_std", 0.0);
-      m.friction_std(R, 2) = f[r].value("offset_std", 0.0);
-      m.friction_held(R, 0) = f[r].value("coulomb_held", false);
-      m.friction_held(R, 1) = f[r].value("viscous_held", false);
-    }
-    field = "derivative";
-    if (j.contains("derivative")) {
-      m.derivative_half_window = j["derivative"].at("half_window").get<int>();
-      m.derivative_order = j["derivative"].at("order").get<int>();
-    }
-    m.sigma = j.value("sigma", std::vector<double>{});
-    m.averaged = j.value("averaged_forward_reverse", false);
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(origin, 0, field, fmt::format("missing or of the wrong type ({})", e.what()));
+    m.signal = torque_signal_from_string(top.text("signal"));
+  } catch (const InvalidArgument& e) {
+    top.fail("signal", e.what());
   }
+  // the friction rows fix the joint count when the caller does not (n_dof 0)
+  const nlohmann::json& f = top.need("friction");
+  if (!f.is_array() || f.empty()) top.fail("friction", fmt::format("expected an array of one object per joint, got {}", json_brief(f)));
+  const int n = n_dof > 0 ? n_dof : static_cast<int>(f.size());
+  if (static_cast<int>(f.size()) != n) top.fail("friction", fmt::format("expected {} rows (one per joint of {}), got {}", n, m.robot, f.size()));
+  // base parameters: each standard column (10 per joint) once, one value and one std per column
+  m.base_columns = json_wholes(top.need("base_columns"), origin, "base_columns");
+  std::vector<int> first(static_cast<size_t>(10 * n), -1);
+  for (size_t i = 0; i < m.base_columns.size(); ++i) {
+    const int c = m.base_columns[i];
+    if (c < 0 || c >= 10 * n)
+      throw ParseError(origin, 0, json_element("base_columns", i), fmt::format("expected a column 0..{} ({} joints), got {}", 10 * n - 1, n, c));
+    if (first[static_cast<size_t>(c)] >= 0)
+      throw ParseError(origin, 0, json_element("base_columns", i),
+                       fmt::format("expected each standard column once, got column {} again (also at base_columns[{}])", c, first[static_cast<size_t>(c)]));
+    first[static_cast<size_t>(c)] = static_cast<int>(i);
+  }
+  const std::vector<double> b = top.numbers("beta", m.base_columns.size());
+  m.beta = Eigen::Map<const Eigen::VectorXd>(b.data(), static_cast<Eigen::Index>(b.size()));
+  const std::vector<double> bs = top.has("beta_std") ? top.numbers("beta_std", b.size()) : std::vector<double>(b.size(), 0.0);
+  m.beta_std = Eigen::Map<const Eigen::VectorXd>(bs.data(), static_cast<Eigen::Index>(bs.size()));
+  m.friction.resize(n, kFric);
+  m.friction_std.setZero(n, kFric);
+  m.friction_held.setConstant(n, 2, false);
+  for (int r = 0; r < n; ++r) {
+    const JsonFields fr(f[static_cast<size_t>(r)], origin, json_element("friction", static_cast<size_t>(r)));
+    fr.only({"coulomb", "viscous", "offset", "coulomb_std", "viscous_std", "offset_std", "coulomb_held", "viscous_held"});
+    m.friction(r, 0) = fr.number("coulomb");
+    m.friction(r, 1) = fr.number("viscous");
+    m.friction(r, 2) = fr.number("offset");
+    m.friction_std(r, 0) = fr.has("coulomb_std") ? fr.nonnegative("coulomb_std") : 0.0;
+    m.friction_std(r, 1) = fr.has("viscous_std") ? fr.nonnegative("viscous_std") : 0.0;
+    m.friction_std(r, 2) = fr.has("offset_std") ? fr.nonnegative("offset_std") : 0.0;
+    m.friction_held(r, 0) = fr.has("coulomb_held") && fr.boolean("coulomb_held");
+    m.friction_held(r, 1) = fr.has("viscous_held") && fr.boolean("viscous_held");
+  }
+  if (top.has("derivative")) {
+    const JsonFields d = top.object("derivative");
+    d.only({"half_window", "order"});
+    m.derivative_half_window = d.whole("half_window");
+    m.derivative_order = d.whole("order");
+    if (m.derivative_half_window < 1 || m.derivative_half_window > 10000)
+      d.fail("half_window", fmt::format("expected 1..10000 samples, got {}", m.derivative_half_window));
+    if (m.derivative_order < 1 || m.derivative_order > 2 * m.derivative_half_window)
+      d.fail("order", fmt::format("expected 1..{} (2 half_window), got {}", 2 * m.derivative_half_window, m.derivative_order));
+  }
+  if (top.has("sigma")) m.sigma = top.numbers("sigma");
+  if (top.has("averaged_forward_reverse")) m.averaged = top.boolean("averaged_forward_reverse");
   return m;
 }
 

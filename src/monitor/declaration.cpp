@@ -1,4 +1,4 @@
-#include "monitor/declaration.hpp"
+#include "twinwatch/monitor/declaration.hpp"
 
 #include <fmt/format.h>
 

@@ -13,7 +13,7 @@
 #include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/numbers.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
-#include "monitor/declaration.hpp"
+#include "twinwatch/monitor/declaration.hpp"
 
 namespace twinwatch::monitor {
 
@@ -918,6 +918,8 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   joint_active_.assign(static_cast<size_t>(n_), 0);
   below_program_.assign(cfg_.programs.size(), 0);  // (allocated here: push allocates nothing)
   i_hat_ = tau_hat_ = r_ = rf_ = level_ = qdd_ = qd_prev_ = frozen_val_ = VectorJ::Zero(n_);
+  temperature_ok_ = VectorJ::Constant(n_, std::numeric_limits<double>::quiet_NaN());
+  temperature_run_.assign(static_cast<size_t>(n_), 0);
   frozen_run_.assign(static_cast<size_t>(n_), 0);
   frozen_event_.assign(static_cast<size_t>(n_), -1);
   frozen_since_ = VectorJ::Zero(n_);
@@ -2115,8 +2117,60 @@ void Monitor::restart_after_gap(const RobotSample& s, bool memory_lost) {
   }
 }
 
+bool Monitor::temperature_implausible(const RobotSample& s) {
+  if (!s.has(kFieldTemperature)) return false;
+  const int m = std::min<int>(n_, static_cast<int>(s.temperature.size()));
+  bool any = false;
+  for (int j = 0; j < m; ++j) {
+    const double T = s.temperature[j];
+    if (!std::isfinite(T)) continue;  // (unknown: the compensation leaves it out, as before)
+    if (T >= kTemperatureMin && T <= kTemperatureMax) {
+      temperature_ok_[j] = T;
+      temperature_run_[static_cast<size_t>(j)] = 0;
+    } else {
+      any = true;
+    }
+  }
+  return any;
+}
+
+void Monitor::hold_temperature(RobotSample& held) {
+  const int m = std::min<int>(n_, static_cast<int>(held.temperature.size()));
+  for (int j = 0; j < m; ++j) {
+    const double T = held.temperature[j];
+    if (!std::isfinite(T) || (T >= kTemperatureMin && T <= kTemperatureMax)) continue;
+    held.temperature[j] = temperature_ok_[j];
+    if (temperature_run_[static_cast<size_t>(j)]) continue;
+    temperature_run_[static_cast<size_t>(j)] = 1;
+    Event f;
+    f.t_start = f.t_end = f.t_detected = held.timestamp;
+    f.open = false;
+    f.fault = FaultClass::SensorFault;
+    f.joint = j;
+    f.magnitude = T;
+    f.units = "°C";
+    f.confidence = 1.0;
+    f.detail = fmt::format("the stream's J{} temperature reads {:g} °C, which no joint reads ({:g} to {:g} °C): the samples are judged with "
+                           "{} until it reads plausibly again",
+                           j + 1, T, kTemperatureMin, kTemperatureMax,
+                           std::isfinite(temperature_ok_[j]) ? fmt::format("its last plausible reading ({:g} °C)", temperature_ok_[j])
+                                                             : std::string("no temperature (none plausible read yet)"));
+    events_.push_back(f);
+    if (on_event) on_event(f);
+  }
+}
+
 void Monitor::push(const RobotSample& s) {
   if (skip_invalid(s)) return;
+  if (temperature_implausible(s)) {
+    RobotSample held = s;  // (a copy only for such a sample)
+    hold_temperature(held);
+    return judge(held);
+  }
+  judge(s);
+}
+
+void Monitor::judge(const RobotSample& s) {
   const double t = s.timestamp;
   ++n_samples_;
   if (n_samples_ == 1) check_payload_envelope(t);

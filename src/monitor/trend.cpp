@@ -10,7 +10,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
-#include "monitor/declaration.hpp"
+#include "twinwatch/monitor/declaration.hpp"
 
 namespace twinwatch::monitor {
 

@@ -33,6 +33,7 @@ FitMetrics fit_metrics(std::span<const double> y, std::span<const double> yhat) 
   m.mae = sae / n;
   const double sst = sum2 - sum * sum / n;
   m.r2 = sst > 0.0 ? 1.0 - sse / sst : 0.0;
+  m.range = hi - lo;
   m.nrmse_pct = hi > lo ? 100.0 * m.rmse / (hi - lo) : 0.0;
   m.rel_err_pct = sum2 > 0.0 ? 100.0 * std::sqrt(sse / sum2) : 0.0;
   return m;

@@ -456,7 +456,14 @@ void Simulator::run(const std::function<void(const RobotSample&)>& sink, const s
   RobotSample s;
   const long report_every = std::max(1L, steps / 100);
   for (long k = 0; k < steps; ++k) {
-    if (step(s)) sink(s);
+    if (!step(s)) continue;
+    // a state that is no number is no recording: the arm's integration diverged (a fault or a noise
+    // far beyond what the arm can take, e.g. a contact of 1e6 N·m); said, never written as NaN
+    if (!s.q.allFinite() || !s.qd.allFinite() || !s.current.allFinite())
+      throw InvalidArgument(fmt::format("the simulation diverged at {:.3f} s (a joint's position, velocity or current is not finite): "
+                                        "a fault magnitude or a noise level far beyond what the arm can take{}",
+                                        s.timestamp, faults_.empty() ? std::string() : " (the scenario's faults: check their magnitudes)"));
+    sink(s);
     if (progress && k % report_every == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
   }
   if (progress) progress(1.0);

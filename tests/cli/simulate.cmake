@@ -23,7 +23,18 @@ set_tests_properties(cli.simulate_beyond_joint_limits PROPERTIES PASS_REGULAR_EX
 # labels that cannot be written (their path is a directory) are an error, not a recording without labels
 add_test(NAME cli.simulate_labels_unwritable
          COMMAND sh -c "mkdir -p ${ds}/lbl.labels.json && $<TARGET_FILE:twinwatch> simulate ${fig} --duration 0.1 -o ${ds}/lbl.csv -q 2>&1; echo exit \$?")
-set_tests_properties(cli.simulate_labels_unwritable PROPERTIES PASS_REGULAR_EXPRESSION "lbl\\.labels\\.json: cannot write the labels\nexit [1-9]")
+# (checked before the run: no recording is written without its labels)
+set_tests_properties(cli.simulate_labels_unwritable PROPERTIES PASS_REGULAR_EXPRESSION "lbl\\.labels\\.json: cannot write: it is a directory\nexit 2")
+# an output named as the scenario would replace it (session 34 audit: simulate wrote the CSV over it)
+add_test(NAME cli.simulate_output_is_the_scenario
+         COMMAND sh -c "cp ${fig} ${ds}/victim.yaml && $<TARGET_FILE:twinwatch> simulate ${ds}/victim.yaml -o ${ds}/victim.yaml -q 2>&1; echo exit \$?; cmp ${fig} ${ds}/victim.yaml && echo unchanged")
+set_tests_properties(cli.simulate_output_is_the_scenario PROPERTIES PASS_REGULAR_EXPRESSION
+  "victim\\.yaml: cannot write: it is the input .*victim\\.yaml, which it would replace\nexit 2\nunchanged")
+# a fault the arm cannot take (a 1e6 N·m contact) diverges the integration: said, and no recording of NaN is left
+add_test(NAME cli.simulate_diverged_run_writes_nothing
+         COMMAND sh -c "printf 'robot: ur3e\\nduration: 3\\ntrajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\\nfaults:\\n  - {type: collision, link: 3, onset: 1, magnitude: 1e6}\\n' > ${ds}/huge.yaml && rm -f ${ds}/huge.csv && $<TARGET_FILE:twinwatch> simulate ${ds}/huge.yaml -o ${ds}/huge.csv -q 2>&1; echo exit \$?; ls ${ds}/huge.csv 2>&1")
+set_tests_properties(cli.simulate_diverged_run_writes_nothing PROPERTIES PASS_REGULAR_EXPRESSION
+  "huge\\.yaml: the simulation diverged at 1\\.[0-9]+ s .*; nothing written\nexit 2\n.*No such file")
 # a shorter run keeps the faults it cuts off in the labels, and says they do not fire
 add_test(NAME cli.simulate_shortened_fault_warns
          COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/j5_resistance.yaml --duration 2 -o ${ds}/short.csv -q 2>&1; echo exit \$?")

@@ -286,5 +286,60 @@ TEST(RigidBodyLsOptions, EachBadFieldIsNamed) {
   EXPECT_EQ(torque_signal_from_string("target_moment"), TorqueSignal::TargetMoment);
 }
 
+
+// A model file is read as strictly as a twin file (session 34 audit: a base column out of the
+// regressor's range made validate-torque read past it and crash): every column within the robot's
+// 10 parameters per joint, once; as many values as columns; a twin file named for what it is.
+TEST(RigidBodyModelFile, EachBadFieldIsNamedBeforeAPredictionCanUseIt) {
+  RigidBodyModel m;
+  m.robot = "ur3e";
+  m.base_columns = {0, 5, 59};
+  m.beta = Eigen::Vector3d(1.0, 2.0, 3.0);
+  m.beta_std = Eigen::Vector3d::Zero();
+  m.friction = Eigen::MatrixXd::Constant(6, 3, 0.1);
+  m.friction_std = Eigen::MatrixXd::Zero(6, 3);
+  m.friction_held.setConstant(6, 2, false);
+  const std::string good = m.to_json();
+  const RigidBodyModel back = RigidBodyModel::from_json(good, "m.json", 6);
+  EXPECT_EQ(back.base_columns, m.base_columns);
+  EXPECT_EQ(back.beta, m.beta);
+  const auto error_of = [&](const std::string& from, const std::string& to, int n_dof = 6) -> std::string {
+    std::string text = good;
+    const size_t at = text.find(from);
+    if (at == std::string::npos) return "the test's text '" + from + "' is not in the file";
+    text.replace(at, from.size(), to);
+    try {
+      RigidBodyModel::from_json(text, "m.json", n_dof);
+    } catch (const ParseError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string columns = good.substr(good.find("\"base_columns\""), good.find(']', good.find("\"base_columns\"")) + 1 - good.find("\"base_columns\""));
+  EXPECT_THAT(error_of(columns, "\"base_columns\": [0, 5, 9999]"),
+              HasSubstr("m.json: field 'base_columns[2]': expected a column 0..59 (6 joints), got 9999"));
+  EXPECT_THAT(error_of(columns, "\"base_columns\": [-1, 5, 59]"), HasSubstr("field 'base_columns[0]': expected a column 0..59 (6 joints), got -1"));
+  EXPECT_THAT(error_of(columns, "\"base_columns\": [5, 5, 59]"),
+              HasSubstr("field 'base_columns[1]': expected each standard column once, got column 5 again (also at base_columns[0])"));
+  EXPECT_THAT(error_of(columns, "\"base_columns\": [0, 5]"), HasSubstr("field 'beta': expected 2 values, got 3"));
+  EXPECT_THAT(error_of(columns, "\"base_columns\": [0, 5, 1.5]"), HasSubstr("field 'base_columns[2]': expected a whole number, got 1.5"));
+  // (column 59 is the 6th joint's last: a 5-joint robot has no such column)
+  EXPECT_THAT(error_of("\"kind\"", "\"other\": 1, \"kind\"", 6), HasSubstr("field 'other': unknown key"));
+  EXPECT_THAT(RigidBodyModel::from_json(good, "m.json", 0).base_columns.back(), 59);
+  try {
+    RigidBodyModel::from_json(good, "m.json", 5);
+    ADD_FAILURE() << "a 6-row model read as a 5-joint robot's";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("field 'friction': expected 5 rows (one per joint of ur3e), got 6"));
+  }
+  EXPECT_THAT(error_of("\"rigid_body_torque\"", "\"twin\""), HasSubstr("field 'kind': expected 'rigid_body_torque' (a model from 'twinwatch identify-torque'), got 'twin'"));
+  try {
+    RigidBodyModel::from_json("{\"created\": \"x\", \"joints\": []}", "twin.json");
+    ADD_FAILURE() << "a twin file read as a torque model";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("twin.json: field 'kind': missing: expected 'rigid_body_torque'"));
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -2256,5 +2256,42 @@ TEST_F(MonitorLoop, AJointCrawlingLongerThanTheThresholdsSawIsNotAFault) {
   EXPECT_LT(found[0].t_detected - 31.0, 0.03);
 }
 
+// A joint temperature no joint reads (a 0xFFFF/10 overflow, 6553.5 °C) went into the residual's
+// temperature compensation: one such sample raised "contact on link 3, ≈ 40 N, 82 %" (session 34
+// audit). It is a sensor fault of that channel now: one event however long it lasts, and the samples
+// are judged with the joint's last plausible reading, so every residual stays where the clean run's is.
+TEST_F(MonitorLoop, AnImplausibleTemperatureIsASensorFaultNotAContact) {
+  const auto clean = run(scenario(3141, 12, 0.5));
+  auto glitch = clean;
+  ASSERT_TRUE(glitch.present & kFieldTemperature);
+  for (size_t k = 3000; k < 3003; ++k) glitch.samples[k].temperature[2] = 6553.5;  // J3, three samples at 6 s
+  glitch.samples[4000].temperature[4] = -300.0;                                    // J5, once at 8 s
+  const auto watch = [&](const device::Recording& rec) {
+    auto m = std::make_unique<Monitor>(declared_twin(), *config);
+    m->track_margin();
+    for (const auto& x : rec.samples) m->push(x);
+    m->finish();
+    return m;
+  };
+  const auto a = watch(clean), b = watch(glitch);
+  std::vector<Event> faults, others;
+  for (const auto& e : b->events()) (e.fault == FaultClass::SensorFault ? faults : others).push_back(e);
+  ASSERT_EQ(faults.size(), 2u) << listing(b->events());
+  EXPECT_EQ(faults[0].joint, 2);
+  EXPECT_EQ(faults[0].magnitude, 6553.5);
+  EXPECT_EQ(faults[0].units, "°C");
+  EXPECT_EQ(faults[0].t_start, glitch.samples[3000].timestamp);
+  EXPECT_THAT(faults[0].detail, ::testing::HasSubstr("judged with its last plausible reading"));
+  EXPECT_EQ(faults[1].joint, 4);
+  EXPECT_EQ(faults[1].t_start, glitch.samples[4000].timestamp);
+  EXPECT_EQ(others.size(), a->events().size()) << listing(b->events());
+  // the held reading is the previous sample's, which the clean run's differs from by at most its
+  // 0.1 °C resolution: the residuals' margins are the clean run's to well within a percent
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_NEAR(b->margin_current()[j], a->margin_current()[j], 0.01 * a->margin_current()[j]) << "J" << j + 1;
+    EXPECT_NEAR(b->margin_observer()[j], a->margin_observer()[j], 0.01 * a->margin_observer()[j]) << "J" << j + 1;
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

@@ -42,12 +42,31 @@ int step_model_check(const std::string& robot_name) {
   return worst < 1e-9 ? 0 : 1;
 }
 
+// the scenario files of --scenarios; the J5-resistance run the report of step 4 shows must be one
 std::vector<std::string> scenario_files(const std::string& dir) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw PathError(fmt::format("--scenarios {}: {}", dir, std::filesystem::exists(dir, ec) ? "not a directory" : "no such directory"));
   std::vector<std::string> files;
   for (const auto& e : std::filesystem::directory_iterator(dir))
     if (e.path().extension() == ".yaml") files.push_back(e.path().string());
+  if (files.empty()) throw PathError(fmt::format("--scenarios {}: no scenario files (*.yaml)", dir));
+  if (!std::filesystem::is_regular_file(std::filesystem::path(dir) / "j5_resistance.yaml", ec))
+    throw PathError(fmt::format("--scenarios {}: no j5_resistance.yaml, the run step 4's report shows (the library's is in "
+                                "scenarios/ur3e)",
+                                dir));
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// the output directory, made if it does not exist
+void make_output_directory(const std::string& out) {
+  std::error_code ec;
+  if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
+    throw PathError(fmt::format("-o {}: cannot write: it exists and is not a directory", out));
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw PathError(fmt::format("-o {}: cannot make the directory: {}", out, ec.message()));
+  require_writable((std::filesystem::path(out) / "twin.json").string());
 }
 
 struct Options {
@@ -67,7 +86,7 @@ int run(const Options& o) {
       throw InvalidArgument(fmt::format("--robot {}: {} runs robot '{}'; give --scenarios DIR with scenarios of '{}' (the built-in "
                                         "library, scenarios/ur3e, is for the UR3e)",
                                         o.robot, f, sc.robot, o.robot));
-  std::filesystem::create_directories(o.out);
+  make_output_directory(o.out);
 
   fmt::print("== step 2: identify the twin from simulated healthy runs (recordings only, DESIGN.md rule 1)\n");
   ident::TwinModel twin = cli::train_reference(o.robot, false);
@@ -106,7 +125,7 @@ twinwatch::cli::VerbRegistrar reg{"demo", 1, [](CLI::App& app) {
   demo->add_option("--robot", o->robot, "Robot to use")->capture_default_str();
   demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();
   demo->add_option("--scenarios", o->scenarios, "Scenario directory")->capture_default_str();
-  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s]")->capture_default_str();
+  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s]")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
   demo->add_flag("--quick", o->quick, "Only the model check (step 1)");
   demo->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
 }};

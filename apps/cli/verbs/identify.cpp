@@ -2,6 +2,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <system_error>
 #include <limits>
 #include <unistd.h>
 
@@ -17,6 +20,7 @@
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/ident/sequential_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
+#include "twinwatch/monitor/declaration.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
 #include "evaluate.hpp"
@@ -42,17 +46,30 @@ PayloadArg parse_payload(const std::string& s, const model::RobotModel& robot) {
   std::vector<double> v;
   std::string tok;
   while (std::getline(ss, tok, ',')) {
-    try {
-      v.push_back(std::stod(tok));
-    } catch (...) {
-      throw InvalidArgument(fmt::format("--known-payload '{}': '{}' is not a number", s, tok));
-    }
+    // the whole cell is the number (std::stod took "0.5kg" as 0.5 and "4cm" as 4 m)
+    double x = 0.0;
+    const char* b = tok.data();
+    const char* e = tok.data() + tok.size();
+    while (b < e && std::isspace(static_cast<unsigned char>(*b))) ++b;
+    while (e > b && std::isspace(static_cast<unsigned char>(e[-1]))) --e;
+    const auto r = std::from_chars(b, e, x);
+    if (b == e || r.ec != std::errc() || r.ptr != e || !std::isfinite(x))
+      throw InvalidArgument(fmt::format("--known-payload '{}': '{}' is not a number (mass in kg, centre of mass in m, plain numbers "
+                                        "without units)",
+                                        s, tok));
+    v.push_back(x);
   }
   if (v.size() != 1 && v.size() != 4)
     throw InvalidArgument(fmt::format("--known-payload '{}': expected 1 or 4 numbers (mass [kg], COM [m] in the flange frame), got {}", s, v.size()));
   a.payload.mass = v[0];
   if (v.size() == 4) a.payload.com = Eigen::Vector3d(v[1], v[2], v[3]);
   a.payload.validate("--known-payload");
+  // a centre of mass farther from the flange than the monitor takes a declared one (most likely mm)
+  if (a.payload.com.norm() > monitor::kDeclaredCogMax)
+    throw InvalidArgument(fmt::format("--known-payload '{}': expected a centre of mass within {:g} m of the flange, got ({:g}, {:g}, {:g}) "
+                                      "m, {:.3g} m away (in mm? give metres)",
+                                      s, monitor::kDeclaredCogMax, a.payload.com.x(), a.payload.com.y(), a.payload.com.z(),
+                                      a.payload.com.norm()));
   // a mass beyond what the arm may carry is a typo (5 for 0.5 kg): it would set every drive gain wrong
   if (a.payload.mass > robot.payload_limit())
     throw InvalidArgument(fmt::format("--known-payload '{}': expected a mass of at most {:g} kg ({}), got {:g} kg", s,
@@ -376,11 +393,40 @@ int run_identify_sequential(const IdentifyOptions& o) {
 
 constexpr size_t kMinValidateSamples = 10;
 
+std::string payload_words(const model::RigidBodyInertia& p) {
+  return p.mass > 0.0 ? fmt::format("{:.2f} kg at ({:.3f}, {:.3f}, {:.3f}) m", p.mass, p.com.x(), p.com.y(), p.com.z()) : "no payload";
+}
+
+// what validate predicts with, where the recording declares a payload (RTDE payload / payload_cog):
+// each declaration the twin takes, as the monitor does, or, with --keep-payload, none; and the first
+// declaration the twin cannot take, with the monitor's reason
+void say_validated_payload(const device::Recording& rec, const std::string& path, const ident::TwinModel& twin,
+                           const model::RigidBodyInertia& given, const monitor::PayloadTimeline& payload, bool keep) {
+  if (!(rec.present & kFieldPayload)) return;
+  if (keep) {
+    fmt::print(stderr, "note: {} declares the payload it carries; --keep-payload: validated with {} throughout\n", path,
+               payload_words(given));
+    return;
+  }
+  std::string taken = payload_words(payload.step_payload(0)) + " from the start";
+  for (size_t i = 1; i < payload.steps(); ++i)
+    taken += fmt::format(", {} from {:.3f} s", payload_words(payload.step_payload(i)), rec.samples[payload.step_from(i)].timestamp);
+  fmt::print(stderr, "note: {}: validated with the payload it declares, as the monitor predicts ({}; --keep-payload keeps {} throughout)\n",
+             path, taken, payload_words(given));
+  for (const RobotSample& s : rec.samples) {
+    if (!s.has(kFieldPayload)) continue;
+    const std::string why = monitor::declaration_readable(s) ? monitor::declaration_refusal(twin, s) : "not a finite mass and centre of mass";
+    if (why.empty()) continue;
+    fmt::print(stderr, "note: {}: the declaration at {:.3f} s ({:g} kg) is not taken: {}\n", path, s.timestamp, s.payload, why);
+    break;
+  }
+}
+
 struct ValidateOptions {
   std::string twin, recording, column_map, predictions;
   double payload_mass = 0.0;
   std::vector<double> payload_com;
-  bool json = false;
+  bool json = false, keep_payload = false;
 };
 
 int run_validate(const ValidateOptions& o) {
@@ -395,7 +441,13 @@ int run_validate(const ValidateOptions& o) {
   if (rec.samples.size() < kMinValidateSamples)
     throw InvalidArgument(fmt::format("validate: {} has {} sample(s), expected at least {}", o.recording, rec.samples.size(),
                                       kMinValidateSamples));
-  twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
+  // the payload: the one given (else the twin's), and, as the monitor predicts (--keep-payload
+  // aside), each payload the recording declares from its sample on (monitor::PayloadTimeline)
+  const model::RigidBodyInertia given = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
+  twin.set_payload(given);
+  monitor::PayloadTimeline payload(twin, {&rec, given}, !o.keep_payload, monitor::MonitorConfig{}.nominal_period);
+  if (!o.json) say_validated_payload(rec, o.recording, twin, given, payload, o.keep_payload);
+  payload.start(twin);
   const auto qdd = ident::joint_accelerations(rec);
   const int n = twin.n_dof();
   std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
@@ -406,6 +458,7 @@ int run_validate(const ValidateOptions& o) {
   std::vector<size_t> used;
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
+    payload.advance(k, twin);
     twin.advance(memory, s, qdd[k]);
     if (!s.driven()) continue;
     used.push_back(k);
@@ -443,6 +496,13 @@ int run_validate(const ValidateOptions& o) {
   out["recording"] = o.recording;
   out["twin"] = o.twin;
   if (used.size() < rec.samples.size()) out["samples_not_driven"] = rec.samples.size() - used.size();
+  // the payload predicted with, from each time on (the declared ones taken, as in the note)
+  for (size_t i = 0; i < payload.steps(); ++i) {
+    const model::RigidBodyInertia& p = payload.step_payload(i);
+    out["payload"].push_back({{"from_s", i == 0 ? rec.samples.front().timestamp : rec.samples[payload.step_from(i)].timestamp},
+                              {"mass", p.mass},
+                              {"com", {p.com.x(), p.com.y(), p.com.z()}}});
+  }
   if (!o.json) {
     fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
                used.size());
@@ -452,23 +512,43 @@ int run_validate(const ValidateOptions& o) {
   }
   std::vector<signal::FitMetrics> ms;
   for (int j = 0; j < n; ++j) ms.push_back(signal::fit_metrics(meas[static_cast<size_t>(j)], pred[static_cast<size_t>(j)]));
-  for (const auto& m : ms)
-    out["joints"].push_back({{"rmse", m.rmse}, {"mae", m.mae}, {"r2", m.r2}, {"nrmse_pct", m.nrmse_pct}, {"d_tau_pct", m.rel_err_pct}});
+  // a measured channel that never changes (a dead or stuck sensor, a joint logged as a constant) has
+  // no R² or NRMSE, and at 0 throughout no d_tau: null in JSON, n/a in the table, and said
+  std::vector<char> constant(static_cast<size_t>(n)), zero(static_cast<size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    const auto J = static_cast<size_t>(j);
+    constant[J] = !(ms[J].range > 0.0);
+    zero[J] = constant[J] && meas[J].front() == 0.0;
+  }
+  const auto value = [](bool defined, double v) { return defined ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  for (int j = 0; j < n; ++j) {
+    const auto J = static_cast<size_t>(j);
+    const signal::FitMetrics& m = ms[J];
+    out["joints"].push_back({{"rmse", m.rmse}, {"mae", m.mae}, {"r2", value(!constant[J], m.r2)},
+                             {"nrmse_pct", value(!constant[J], m.nrmse_pct)}, {"d_tau_pct", value(!zero[J], m.rel_err_pct)}});
+    if (constant[J]) out["joints"].back()["measured_constant"] = meas[J].front();
+  }
   if (o.json) {
     fmt::print("{}\n", out.dump());
     return 0;
   }
-  auto row = [&](const char* name, auto get, const char* f) {
+  auto row = [&](const char* name, auto get, const char* f, const std::vector<char>& undefined) {
     fmt::print("{:<8}", name);
     // a space before every cell: a large number (a twin far off) must not run into its neighbour
-    for (const auto& m : ms) fmt::print(" {:>8}", fmt::format(fmt::runtime(f), get(m)));
+    for (size_t J = 0; J < ms.size(); ++J)
+      fmt::print(" {:>8}", undefined[J] ? std::string("n/a") : fmt::format(fmt::runtime(f), get(ms[J])));
     fmt::print("\n");
   };
-  row("RMSE", [](const signal::FitMetrics& m) { return m.rmse; }, "{:.4f}");
-  row("MAE", [](const signal::FitMetrics& m) { return m.mae; }, "{:.4f}");
-  row("R²", [](const signal::FitMetrics& m) { return m.r2; }, "{:.4f}");
-  row("NRMSE%", [](const signal::FitMetrics& m) { return m.nrmse_pct; }, "{:.2f}");
-  row("d_tau%", [](const signal::FitMetrics& m) { return m.rel_err_pct; }, "{:.2f}");
+  const std::vector<char> none(ms.size(), 0);
+  row("RMSE", [](const signal::FitMetrics& m) { return m.rmse; }, "{:.4f}", none);
+  row("MAE", [](const signal::FitMetrics& m) { return m.mae; }, "{:.4f}", none);
+  row("R²", [](const signal::FitMetrics& m) { return m.r2; }, "{:.4f}", constant);
+  row("NRMSE%", [](const signal::FitMetrics& m) { return m.nrmse_pct; }, "{:.2f}", constant);
+  row("d_tau%", [](const signal::FitMetrics& m) { return m.rel_err_pct; }, "{:.2f}", zero);
+  for (int j = 0; j < n; ++j)
+    if (constant[static_cast<size_t>(j)])
+      fmt::print("note: J{}'s measured current is {:g} A in every sample: R² and NRMSE are undefined (n/a); a dead or stuck channel?\n",
+                 j + 1, meas[static_cast<size_t>(j)].front());
   return 0;
 }
 
@@ -551,8 +631,12 @@ twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   auto* sub = app.add_subcommand("validate", "Compare a twin's predicted currents with a recording (UR3e Table 3 metrics)");
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
-  sub->add_option("--payload-mass", o->payload_mass, "Payload carried during the recording [kg]");
+  sub->add_option("--payload-mass", o->payload_mass,
+                  "Payload carried during the recording [kg] (default: the twin's). Where the recording declares the payload "
+                  "(RTDE payload / payload_cog columns), each declaration is taken from its sample on, as 'monitor' does");
   sub->add_option("--payload-com", o->payload_com, "Payload centre of mass in the flange frame [m] (3 numbers)")->expected(3)->allow_extra_args(false);
+  sub->add_flag("--keep-payload", o->keep_payload,
+                "Predict with the payload given (--payload-mass, else the twin's) throughout, not with the ones the recording declares");
   sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
   sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current per sample to this CSV");
   sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");

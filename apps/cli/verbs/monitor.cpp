@@ -577,6 +577,7 @@ int run_evaluate(const EvaluateOptions& o) {
     if (!o.dirs.empty())
       throw InvalidArgument(fmt::format("--sweep-collisions simulates its own contacts; it takes no scenarios (got {})", o.dirs.front()));
     o.sweep_options.validate();
+    if (!o.save_twin.empty()) require_output(o.save_twin, {o.twin});
     ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : cli::load_twin(o.twin);
     apply_alert_settings(twin, o);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
@@ -586,7 +587,6 @@ int run_evaluate(const EvaluateOptions& o) {
     return 0;
   }
   if (o.dirs.empty()) throw InvalidArgument("evaluate: give a SCENARIOS directory or file, or --sweep-collisions");
-  if (!o.trend_csv.empty()) std::filesystem::remove(o.trend_csv);
   std::vector<std::string> files;
   for (const auto& d : o.dirs) {
     std::vector<std::string> here;
@@ -603,10 +603,21 @@ int run_evaluate(const EvaluateOptions& o) {
   if (!o.filter.empty() && !o.twin.empty())
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
+  // the outputs are checked before any work, and touched only once the twin is in hand: neither may
+  // be an input (a scenario, the twin) or the other output
+  std::vector<std::string> inputs = files;
+  inputs.push_back(o.twin);
+  if (!o.save_twin.empty()) require_output(o.save_twin, inputs);
+  if (!o.trend_csv.empty()) {
+    inputs.push_back(o.save_twin);
+    require_output(o.trend_csv, inputs);
+  }
   ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
                                          : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
   if (!o.save_twin.empty()) twin.save(o.save_twin);
+  // (the wear trend's rows are appended scenario by scenario: the file starts empty)
+  if (!o.trend_csv.empty()) write_text_file(o.trend_csv, "");
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);

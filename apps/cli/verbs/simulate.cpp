@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "verb_registry.hpp"
@@ -33,6 +34,9 @@ std::string labels_path(const std::string& output) {
 
 int run(const Options& o) {
   using namespace twinwatch;
+  // neither output may be the scenario (or the other output): checked before the run writes anything
+  require_output(o.output, {o.scenario});
+  require_output(labels_path(o.output), {o.scenario, o.output});
   sim::Scenario s = sim::load_scenario(o.scenario);
   if (o.seed_given) {
     if (o.seed < 0 || o.seed > static_cast<long>(std::numeric_limits<unsigned>::max()))
@@ -45,19 +49,25 @@ int run(const Options& o) {
   device::RecordingWriter writer(o.output, n, simulator->sample_fields());
   const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   const auto t0 = std::chrono::steady_clock::now();
-  simulator->run([&](const RobotSample& smp) { writer.write(smp); },
-                 [&](double f) {
-                   if (!bar) return;
-                   const int w = 40, k = static_cast<int>(f * w);
-                   std::fprintf(stderr, "\r  simulating [%.*s%*s] %3.0f %%", k, "########################################",
-                                w - k, "", 100 * f);
-                   if (f >= 1.0) std::fprintf(stderr, "\n");
-                 });
+  try {
+    simulator->run([&](const RobotSample& smp) { writer.write(smp); },
+                   [&](double f) {
+                     if (!bar) return;
+                     const int w = 40, k = static_cast<int>(f * w);
+                     std::fprintf(stderr, "\r  simulating [%.*s%*s] %3.0f %%", k, "########################################",
+                                  w - k, "", 100 * f);
+                     if (f >= 1.0) std::fprintf(stderr, "\n");
+                   });
+  } catch (const InvalidArgument& e) {
+    // (no half recording is left behind under the name of a whole one)
+    if (bar) std::fprintf(stderr, "\n");
+    writer.close();
+    std::error_code ec;
+    std::filesystem::remove(o.output, ec);
+    throw InvalidArgument(fmt::format("{}: {}; nothing written", o.scenario, e.what()));
+  }
   writer.close();
-  std::ofstream labels(labels_path(o.output));
-  labels << sim::labels_json(s) << '\n';
-  labels.close();
-  if (!labels) throw std::runtime_error(labels_path(o.output) + ": cannot write the labels");
+  write_text_file(labels_path(o.output), sim::labels_json(s) + "\n");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.quiet)
     fmt::print("{}: {} samples, {:.1f} s of robot time at {:g} Hz in {:.2f} s ({:.0f}x real time), {} fault(s) -> {}\n",

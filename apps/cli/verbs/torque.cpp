@@ -193,6 +193,8 @@ int run_validate(const ValidateOpts& o) {
   ss << f.rdbuf();
   const ident::RigidBodyModel rb = ident::RigidBodyModel::from_json(ss.str(), o.model);
   const model::RobotModel m = model::load_robot(rb.robot);
+  if (rb.friction.rows() != m.n_dof())
+    throw ParseError(o.model, 0, "friction", fmt::format("expected {} rows (one per joint of {}), got {}", m.n_dof(), rb.robot, rb.friction.rows()));
   const auto map = cli::load_column_map(o.column_map);
   const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
   if (rec.n_dof != m.n_dof())

@@ -81,9 +81,11 @@ struct RigidBodyModel {
   /// Predicted joint torque [N·m] at one state.
   VectorJ predict(const model::RobotModel& model, model::DynamicsData& data, const VectorJ& q, const VectorJ& qd,
                   const VectorJ& qdd) const;
-  /// JSON text (save) and back (load; throws ParseError naming the file and field).
+  /// JSON text (save) and back (load). from_json checks every field's type and range, each base
+  /// column against the robot's n_dof joints (10 standard parameters each; 0: as many joints as the
+  /// friction rows), and throws ParseError naming the file and field.
   std::string to_json() const;
-  static RigidBodyModel from_json(const std::string& text, const std::string& origin);
+  static RigidBodyModel from_json(const std::string& text, const std::string& origin, int n_dof = 0);
 };
 
 /// Identifies the model from segments of recordings. Throws InvalidArgument when the data cannot

@@ -335,6 +335,8 @@ class Monitor {
   long gaps() const { return n_gaps_; }
   long repeated() const { return n_repeated_; }
   long invalid() const { return n_invalid_; }
+  /// A joint temperature outside this range [°C] is no reading (hold_implausible_temperature)
+  static constexpr double kTemperatureMin = -40.0, kTemperatureMax = 150.0;
   /// Samples in which the controller did not drive the arm (RobotSample::driven() false: power off,
   /// brakes on, a protective or emergency stop, ...): not judged, and their total time [s].
   long not_driven() const { return n_not_driven_; }
@@ -379,6 +381,12 @@ class Monitor {
  private:
   void open_event(int joint, double start, double t);
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
+  // A joint temperature no joint can have (kTemperatureMin..kTemperatureMax: a 0xFFFF/10 overflow, a
+  // sensor fault) is not taken: the sample is judged with the joint's last plausible reading, and the
+  // first of a run is a sensor-fault event
+  bool temperature_implausible(const RobotSample& s);  // (and notes the plausible readings)
+  void hold_temperature(RobotSample& held);
+  void judge(const RobotSample& s);  // push() of a checked sample
   // (memory_lost: the twin's pre-sliding memory did not follow the motion, as across a gap)
   void restart_after_gap(const RobotSample& s, bool memory_lost = true);
   /// observer, residual filter and FIR restart; with `settle`, every decision waits the start-up
@@ -527,6 +535,8 @@ class Monitor {
   bool have_prev_ = false, filter_started_ = false;
   long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
   bool invalid_run_ = false;  // the last sample was skipped as non-finite (one event per run)
+  VectorJ temperature_ok_;    // per joint: the last plausible temperature reading (NaN: none yet)
+  std::vector<char> temperature_run_;  // per joint: its reading is implausible (one event per run)
   // the controller stopped driving the arm (RobotSample::driven): nothing is judged until it drives
   // it again (pause_watch, resume_watch)
   bool paused_ = false, paused_unpowered_ = false;  // (unpowered: robot_mode not RUNNING at a sample of the stop)

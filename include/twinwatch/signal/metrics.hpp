@@ -13,6 +13,9 @@ struct FitMetrics {
   double nrmse_pct = 0.0;  ///< 100 * rmse / (max y - min y)   (range-normalised)
   double rel_err_pct = 0.0;  ///< d_tau: 100 * ||y - yhat||_2 / ||y||_2
   double max_abs = 0.0;    ///< max |y - yhat|
+  /// max y - min y: 0 for a measured signal that never changes, where r2, nrmse_pct (and rel_err_pct
+  /// when it is 0 throughout) are undefined and read 0 (a caller reporting them says so)
+  double range = 0.0;
   long n = 0;
 };
 

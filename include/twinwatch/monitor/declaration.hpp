@@ -1,7 +1,7 @@
 #pragma once
 // A payload the controller declares (the stream's kFieldPayload, RTDE payload / payload_cog) as the
 // monitor takes it, shared by the monitor (Monitor::take_declared_payload) and the learning that must
-// predict what it predicts (learn_thresholds, learn_trend_temperature). Monitor-internal.
+// predict what it predicts (learn_thresholds, learn_trend_temperature, and validate's prediction).
 #include <algorithm>
 
 #include <string>
@@ -68,6 +68,10 @@ class PayloadTimeline {
   bool judged(size_t k) const { return judged_[k] != 0; }
   /// A sample the monitor decides on the observer at (its start-up after a change too).
   bool judged_observer(size_t k) const { return judged_observer_[k] != 0; }
+  /// The payloads in order (step 0 from sample 0: the run's own, or what it declares from its start)
+  size_t steps() const { return steps_.size(); }
+  size_t step_from(size_t i) const { return steps_[i].from; }
+  const model::RigidBodyInertia& step_payload(size_t i) const { return steps_[i].payload; }
   double heaviest() const {
     double m = 0.0;
     for (const auto& p : steps_) m = std::max(m, p.payload.mass);

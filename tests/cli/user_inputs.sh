@@ -1,0 +1,46 @@
+#!/bin/sh
+# What a user hands the tools by mistake (the session-34 audit), on the pipeline's recordings and twin:
+# each is refused or said, with the file and the value, and nothing of the user's is replaced.
+# usage: user_inputs.sh TWINWATCH PIPELINE_DIR SCENARIO WORK_DIR
+set -e
+B=$1; D=$2; SC=$3; W=$4
+rm -rf "$W"; mkdir -p "$W"
+fail() { echo "FAIL: $*"; exit 1; }
+# 1. validate predicts with the payload the recording declares (0.5 kg, as the monitor does): the same
+#    figures as told --payload-mass 0.5; --keep-payload keeps the twin's (none) and says so
+declared=$("$B" validate --twin "$D/twin.json" "$D/fig.csv" --json)
+told=$("$B" validate --twin "$D/twin.json" "$D/fig.csv" --payload-mass 0.5 --payload-com 0 0 0.04 --json)
+[ "$declared" = "$told" ] || fail "validate without --payload-mass: $declared, told: $told"
+"$B" validate --twin "$D/twin.json" "$D/fig.csv" 2>&1 | grep -q "validated with the payload it declares, as the monitor predicts (0.50 kg at (0.000, 0.000, 0.040) m from the start" \
+  || fail "no note of the declared payload"
+kept=$("$B" validate --twin "$D/twin.json" "$D/fig.csv" --keep-payload --json)
+[ "$kept" != "$declared" ] || fail "--keep-payload changed nothing"
+"$B" validate --twin "$D/twin.json" "$D/fig.csv" --keep-payload 2>&1 | grep -q -- "--keep-payload: validated with no payload throughout" || fail "--keep-payload not said"
+# 2. a dead current channel (J6 logged as 0) has no R², NRMSE or d_tau: n/a, null, and said
+awk -F, -v OFS=, 'NR==1{for(i=1;i<=NF;i++) if($i=="actual_current_5") c=i} NR>1{$c=0} {print}' "$D/fig.csv" > "$W/dead.csv"
+out=$("$B" validate --twin "$D/twin.json" "$W/dead.csv" 2>&1)
+echo "$out" | grep -q "^R² .* n/a$" || fail "R² of the dead channel: $out"
+echo "$out" | grep -q "note: J6's measured current is 0 A in every sample" || fail "dead channel not said: $out"
+"$B" validate --twin "$D/twin.json" "$W/dead.csv" --json | grep -q '"measured_constant":0.0,"nrmse_pct":null,"r2":null' || fail "dead channel in JSON"
+# 3. --known-payload takes plain numbers only, and no centre of mass metres away
+for arg in "0.5kg" "0.5,0,0,4cm" "0.5,0,0,40"; do
+  if "$B" identify "$D/exc.csv" --known-payload "$D/exc.csv=$arg" -o "$W/never.json" -q > "$W/err" 2>&1; then fail "--known-payload $arg taken"; fi
+  grep -q "known-payload .*$arg" "$W/err" || fail "--known-payload $arg: $(cat "$W/err")"
+done
+[ ! -e "$W/never.json" ] || fail "a twin was written"
+# 4. evaluate's outputs are never its inputs; nothing is touched before they are checked
+cp "$SC" "$W/victim.yaml"
+for opt in --trend-csv --save-twin; do
+  if "$B" evaluate "$W/victim.yaml" --twin "$D/twin.json" $opt "$W/victim.yaml" > "$W/err" 2>&1; then fail "evaluate $opt over the scenario"; fi
+  grep -q "victim.yaml: cannot write: it is the input" "$W/err" || fail "evaluate $opt: $(cat "$W/err")"
+  cmp -s "$SC" "$W/victim.yaml" || fail "evaluate $opt changed the scenario"
+done
+# 5. a joint temperature no joint reads (0xFFFF/10) is a sensor fault on that channel, not a contact
+awk -F, -v OFS=, 'NR==1{for(i=1;i<=NF;i++) if($i=="joint_temperatures_2") c=i} NR==1001{$c=6553.5} {print}' "$D/fig.csv" > "$W/hot.csv"
+ev=$("$B" monitor --twin "$D/twin.json" "$W/hot.csv" --db '' --json)
+echo "$ev"
+[ "$(echo "$ev" | wc -l)" -eq 1 ] || fail "expected one event"
+for want in '"class":"sensor_fault"' '"joint":3,' 'temperature reads 6553.5 °C' '"units":"°C"'; do
+  echo "$ev" | grep -q "$want" || fail "not a temperature sensor fault on J3 ($want)"
+done
+echo USER-INPUTS-OK
