@@ -568,6 +568,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
   for (const sim::Scenario& s : scenarios) {
     if (max_duration > 0 && s.options.duration > max_duration) {
       if (!quiet) fmt::print("   skip {} ({:.0f} s > --max-duration {:.0f} s)\n", s.name, s.options.duration, max_duration);
+      ev.skipped.push_back(s.name);
+      if (ev.skipped.size() == scenarios.size())
+        throw InvalidArgument(fmt::format("every scenario ({}) is longer than --max-duration {:g} s: nothing evaluated", scenarios.size(),
+                                          max_duration));
       continue;
     }
     const sim::Labels labels = sim::parse_labels(sim::labels_json(s), s.path + " (its labels)");
@@ -1022,6 +1026,7 @@ void print_evaluation(const Evaluation& e) {
 std::string evaluation_json(const Evaluation& e) {
   nlohmann::json j;
   j["scenarios"] = nlohmann::json::array();
+  j["skipped"] = e.skipped;  // (longer than --max-duration: not run, not scored)
   for (const auto& s : e.scores)
     j["scenarios"].push_back({{"name", s.name},
                               {"fault", s.has_fault ? nlohmann::json(s.fault) : nlohmann::json(nullptr)},

@@ -145,6 +145,7 @@ struct ScenarioScore {
 
 struct Evaluation {
   std::vector<ScenarioScore> scores;
+  std::vector<std::string> skipped;  // scenarios longer than max_duration (not run)
   int false_alarms = 0, wear_false_alarms = 0;
   double monitored_hours = 0.0;
   /// False-alarm margin over the scenarios without faults (Monitor::track_margin): per joint, the

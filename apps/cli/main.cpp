@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 
@@ -21,19 +22,27 @@ int main(int argc, char** argv) {
   app.set_version_flag("-V,--version", std::string("twinwatch ") + twinwatch::kVersion);
   app.require_subcommand(1);
   app.fallthrough();
-  bool verbose = false;
-  app.add_flag("-v,--verbose", verbose, "Log debug messages to stderr");
 
   twinwatch::log::set_sink([](twinwatch::log::Level level, std::string_view msg) {
     static const char* names[] = {"debug", "info", "warning", "error"};
     std::fprintf(stderr, "[%s] %.*s\n", names[static_cast<int>(level)], static_cast<int>(msg.size()), msg.data());
   });
   twinwatch::cli::register_all_verbs(app);
-  // verbs run inside parse(), so the log level must be set before it
+  // an unknown verb is named (CLI11 said only "A subcommand is required"); no verb at all still
+  // gets CLI11's usage
   for (int i = 1; i < argc; ++i) {
-    const std::string_view a = argv[i];
-    if (a == "-v" || a == "--verbose") twinwatch::log::set_level(twinwatch::log::Level::Debug);
-    if (!a.empty() && a[0] != '-') break;  // the verb: its own options follow
+    const std::string a = argv[i];
+    if (a.empty() || a[0] == '-') continue;
+    std::vector<std::string> verbs;
+    for (const CLI::App* v : app.get_subcommands({})) verbs.push_back(v->get_name());
+    if (std::find(verbs.begin(), verbs.end(), a) == verbs.end()) {
+      std::string list;
+      for (const auto& v : verbs) list += (list.empty() ? "" : ", ") + v;
+      std::fprintf(stderr, "error: '%s' is not a twinwatch command; the commands are: %s ('twinwatch --help' says what each does)\n",
+                   a.c_str(), list.c_str());
+      return 2;
+    }
+    break;  // the verb: its own options follow
   }
 
   try {

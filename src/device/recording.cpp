@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <cstring>
 #include <limits>
@@ -123,6 +124,9 @@ std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
 }
 
 ColumnMap ColumnMap::load(const std::string& path) {
+  // (a directory opens as an empty stream: it would be an empty map, silently)
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw ParseError(path, 0, "", "cannot read the column map: it is a directory");
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the column map");
   ColumnMap m;

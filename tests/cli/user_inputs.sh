@@ -43,4 +43,12 @@ echo "$ev"
 for want in '"class":"sensor_fault"' '"joint":3,' 'temperature reads 6553.5 °C' '"units":"°C"'; do
   echo "$ev" | grep -q "$want" || fail "not a temperature sensor fault on J3 ($want)"
 done
+# 6. an unknown verb is named; evaluate with every scenario skipped evaluated nothing and says so; a
+#    column map that is a directory is no (empty) map
+if "$B" serve > "$W/err" 2>&1; then fail "an unknown verb ran"; fi
+grep -q "'serve' is not a twinwatch command; the commands are: .*serve-robot" "$W/err" || fail "unknown verb: $(cat "$W/err")"
+if "$B" evaluate "$SC" --twin "$D/twin.json" --max-duration 1 --json > "$W/err" 2>&1; then fail "evaluate of nothing succeeded"; fi
+grep -q "every scenario (1) is longer than --max-duration 1 s: nothing evaluated" "$W/err" || fail "evaluate of nothing: $(cat "$W/err")"
+if "$B" validate --twin "$D/twin.json" "$D/fig.csv" --column-map "$W" > "$W/err" 2>&1; then fail "a directory taken as a column map"; fi
+grep -q "cannot read the column map: it is a directory" "$W/err" || fail "column map directory: $(cat "$W/err")"
 echo USER-INPUTS-OK
