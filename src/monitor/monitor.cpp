@@ -2117,18 +2117,22 @@ void Monitor::restart_after_gap(const RobotSample& s, bool memory_lost) {
   }
 }
 
+namespace {
+// a reading a joint can have, or none (NaN: unknown, the compensation leaves it out)
+bool plausible_temperature(double T) { return !std::isfinite(T) || (T >= Monitor::kTemperatureMin && T <= Monitor::kTemperatureMax); }
+}  // namespace
+
 bool Monitor::temperature_implausible(const RobotSample& s) {
   if (!s.has(kFieldTemperature)) return false;
   const int m = std::min<int>(n_, static_cast<int>(s.temperature.size()));
   bool any = false;
   for (int j = 0; j < m; ++j) {
     const double T = s.temperature[j];
-    if (!std::isfinite(T)) continue;  // (unknown: the compensation leaves it out, as before)
-    if (T >= kTemperatureMin && T <= kTemperatureMax) {
+    if (!plausible_temperature(T)) {
+      any = true;
+    } else if (std::isfinite(T)) {
       temperature_ok_[j] = T;
       temperature_run_[static_cast<size_t>(j)] = 0;
-    } else {
-      any = true;
     }
   }
   return any;
@@ -2138,7 +2142,7 @@ void Monitor::hold_temperature(RobotSample& held) {
   const int m = std::min<int>(n_, static_cast<int>(held.temperature.size()));
   for (int j = 0; j < m; ++j) {
     const double T = held.temperature[j];
-    if (!std::isfinite(T) || (T >= kTemperatureMin && T <= kTemperatureMax)) continue;
+    if (plausible_temperature(T)) continue;
     held.temperature[j] = temperature_ok_[j];
     if (temperature_run_[static_cast<size_t>(j)]) continue;
     temperature_run_[static_cast<size_t>(j)] = 1;

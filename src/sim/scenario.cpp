@@ -141,13 +141,19 @@ class Y {
   std::string origin_;
 };
 
-// a payload's centre of mass farther from the flange is no part an arm carries (most likely mm; the
-// monitor takes no declared one farther either, monitor::kDeclaredCogMax) [m]
-constexpr double kPayloadComMax = 1.0;
-
 // the payload check's "expected" text, e.g. "expected at most 3 kg (the rated payload of ur3e), got 500 kg"
 std::string payload_above_limit(const model::RobotModel& m, double mass) {
   return fmt::format("expected at most {:g} kg ({}), got {} kg", m.payload_limit(), m.payload_limit_text(), mass);
+}
+
+// a payload's `com` under `n`: three finite numbers within model::kPayloadComMax of the flange
+Eigen::Vector3d payload_com(const Y& y, const YAML::Node& n, const std::string& path) {
+  const VectorJ c = y.finite_vec(n, path, "com", 3);
+  if (c.norm() > model::kPayloadComMax)
+    y.fail(n["com"], path + ".com",
+           fmt::format("expected a centre of mass within {:g} m of the flange, got {:.3g} m away (in mm? give metres)", model::kPayloadComMax,
+                       c.norm()));
+  return Eigen::Vector3d(c[0], c[1], c[2]);
 }
 
 model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std::string& path, const model::RobotModel& m) {
@@ -156,10 +162,7 @@ model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std:
   p.mass = y.number(n, path, "mass");
   if (!(p.mass >= 0.0)) y.fail(n["mass"], path + ".mass", fmt::format("must be >= 0, got {}", p.mass));
   if (p.mass > m.payload_limit()) y.fail(n["mass"], path + ".mass", payload_above_limit(m, p.mass));
-  if (n["com"]) p.com = y.vec(n, path, "com", 3);
-  if (p.com.norm() > kPayloadComMax)
-    y.fail(n["com"], path + ".com",
-           fmt::format("expected a centre of mass within {:g} m of the flange, got {:.3g} m away (in mm? give metres)", kPayloadComMax, p.com.norm()));
+  if (n["com"]) p.com = payload_com(y, n, path);
   if (n["inertia"]) {
     const VectorJ I = y.vec(n, path, "inertia", 6);
     p.inertia_com << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
@@ -496,11 +499,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
         fs.payload.mass = y.number(f, p, "mass");
         if (!(fs.payload.mass > 0)) y.fail(f["mass"], p + ".mass", fmt::format("must be > 0 kg, got {}", fs.payload.mass));
         if (fs.payload.mass > m.payload_limit()) y.fail(f["mass"], p + ".mass", payload_above_limit(m, fs.payload.mass));
-        if (f["com"]) fs.payload.com = y.finite_vec(f, p, "com", 3);
-        if (fs.payload.com.norm() > kPayloadComMax)
-          y.fail(f["com"], p + ".com",
-                 fmt::format("expected a centre of mass within {:g} m of the flange, got {:.3g} m away (in mm? give metres)", kPayloadComMax,
-                             fs.payload.com.norm()));
+        if (f["com"]) fs.payload.com = payload_com(y, f, p);
       }
       if (f["declare_delay"]) {
         fs.declare_delay = y.number(f, p, "declare_delay");

@@ -64,11 +64,11 @@ PayloadArg parse_payload(const std::string& s, const model::RobotModel& robot) {
   a.payload.mass = v[0];
   if (v.size() == 4) a.payload.com = Eigen::Vector3d(v[1], v[2], v[3]);
   a.payload.validate("--known-payload");
-  // a centre of mass farther from the flange than the monitor takes a declared one (most likely mm)
-  if (a.payload.com.norm() > monitor::kDeclaredCogMax)
+  // a centre of mass metres from the flange (most likely mm), as the monitor refuses a declared one
+  if (a.payload.com.norm() > model::kPayloadComMax)
     throw InvalidArgument(fmt::format("--known-payload '{}': expected a centre of mass within {:g} m of the flange, got ({:g}, {:g}, {:g}) "
                                       "m, {:.3g} m away (in mm? give metres)",
-                                      s, monitor::kDeclaredCogMax, a.payload.com.x(), a.payload.com.y(), a.payload.com.z(),
+                                      s, model::kPayloadComMax, a.payload.com.x(), a.payload.com.y(), a.payload.com.z(),
                                       a.payload.com.norm()));
   // a mass beyond what the arm may carry is a typo (5 for 0.5 kg): it would set every drive gain wrong
   if (a.payload.mass > robot.payload_limit())
@@ -499,7 +499,7 @@ int run_validate(const ValidateOptions& o) {
   // the payload predicted with, from each time on (the declared ones taken, as in the note)
   for (size_t i = 0; i < payload.steps(); ++i) {
     const model::RigidBodyInertia& p = payload.step_payload(i);
-    out["payload"].push_back({{"from_s", i == 0 ? rec.samples.front().timestamp : rec.samples[payload.step_from(i)].timestamp},
+    out["payload"].push_back({{"from_s", rec.samples[payload.step_from(i)].timestamp},
                               {"mass", p.mass},
                               {"com", {p.com.x(), p.com.y(), p.com.z()}}});
   }

@@ -33,6 +33,11 @@ namespace twinwatch::model {
 /// with the inertia about the **body-frame origin** (not the COM). Units kg, kg·m, kg·m².
 using StandardParameters = Eigen::Matrix<double, 10, 1>;
 
+/// A payload's centre of mass farther than this from the flange is no part an arm carries (a UR arm
+/// reaches 0.5-1.3 m): most likely a value in mm. Scenarios and --known-payload refuse it, the monitor
+/// does not take such a declaration (monitor::kDeclaredCogMax) [m]
+constexpr double kPayloadComMax = 1.0;
+
 /// Inertial parameters of one rigid body, expressed in that body's frame.
 struct RigidBodyInertia {
   double mass = 0.0;                                        ///< [kg]

@@ -24,7 +24,7 @@ constexpr double kDeclarationSettle = 0.05;
 // a declared centre of mass farther than this from the flange is no part a UR arm carries (its
 // reach is 0.5-1.3 m): most likely a value in mm. It is not taken (it made the monitor blind: a
 // declared centre of mass of 40 "m" hid a part lost and a 10 N·m contact, session 23 review) [m]
-constexpr double kDeclaredCogMax = 1.0;
+constexpr double kDeclaredCogMax = model::kPayloadComMax;
 
 /// A payload the controller declares is a number the twin can read: a finite mass >= 0 at a finite
 /// centre of mass (the recording reader refuses other rows; a live stream's odd value is not taken).
