@@ -1,11 +1,15 @@
 #include "verb_registry.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <vector>
+
+#include "twinwatch/core/error.hpp"
 
 namespace twinwatch::cli {
 
@@ -64,6 +68,18 @@ const CLI::Validator& positive_number() {
 const CLI::Validator& nonnegative_number() {
   static const CLI::Validator v = bound_check("NONNEGATIVE", "a number >= 0", [](double x) { return x >= 0.0; });
   return v;
+}
+
+void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {
+  if (applies) return;
+  std::string given;
+  int n = 0;
+  for (const CLI::Option* o : options) {
+    if (o->count() == 0) continue;
+    given += (given.empty() ? "" : ", ") + o->get_name();
+    ++n;
+  }
+  if (n > 0) throw InvalidArgument(fmt::format("{} appl{} only {}", given, n == 1 ? "ies" : "y", where));
 }
 
 void register_all_verbs(CLI::App& app) {

@@ -11,7 +11,9 @@
 // The `order` sorts verbs in --help (foundation 10-19, simulator 20-29, ...).
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <initializer_list>
 #include <string>
+#include <string_view>
 
 namespace twinwatch::cli {
 
@@ -35,6 +37,13 @@ bool interrupted();
 /// The message CLI11 prefixes with the option: "--cycle-period: expected a number > 0, got 0".
 const CLI::Validator& positive_number();
 const CLI::Validator& nonnegative_number();
+
+/// An option that does nothing in this run is refused, not ignored (audit, session 34: '--links 9'
+/// without --sweep-collisions, '--robot panda' with a --twin file, '--prune' with the physics method
+/// were taken without a word). When `applies` is false and any of `options` was given on the command
+/// line, throws InvalidArgument "--a, --b apply only WHERE" (an option with a default counts only
+/// when given).
+void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where);
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

@@ -51,4 +51,21 @@ if "$B" evaluate "$SC" --twin "$D/twin.json" --max-duration 1 --json > "$W/err" 
 grep -q "every scenario (1) is longer than --max-duration 1 s: nothing evaluated" "$W/err" || fail "evaluate of nothing: $(cat "$W/err")"
 if "$B" validate --twin "$D/twin.json" "$D/fig.csv" --column-map "$W" > "$W/err" 2>&1; then fail "a directory taken as a column map"; fi
 grep -q "cannot read the column map: it is a directory" "$W/err" || fail "column map directory: $(cat "$W/err")"
+# 7. an option that does nothing in this run is refused (exit 2, naming it), not ignored
+refused() { # EXPECTED-MESSAGE COMMAND...
+  want=$1; shift
+  set +e; "$B" "$@" > "$W/err" 2>&1; rc=$?; set -e
+  [ "$rc" -eq 2 ] || fail "$* exited $rc, expected 2: $(cat "$W/err")"
+  grep -q -- "$want" "$W/err" || fail "$*: $(cat "$W/err")"
+}
+refused "--robot applies only to the twin trained here" evaluate "$SC" --twin "$D/twin.json" --robot panda
+refused "--links applies only with --sweep-collisions" evaluate "$SC" --twin "$D/twin.json" --links 3
+refused "--links, --magnitudes apply only with --sweep-collisions" evaluate "$SC" --twin "$D/twin.json" --links 3 --magnitudes 5,2
+refused "--static applies only to scenario files" evaluate --sweep-collisions --static
+refused "--prune applies only to --method sequential, not physics" identify "$D/exc.csv" --prune 1e-3 -o "$W/never.json"
+refused "--hidden applies only to --method mlp or hybrid, not sequential" identify "$D/exc.csv" --method sequential --hidden 8 -o "$W/never.json"
+refused "--velocity-lag applies only to --method physics, mlp or hybrid" identify "$D/exc.csv" --method sequential --velocity-lag 0.01 -o "$W/never.json"
+refused "--wait applies only with --rtde" monitor --twin "$D/twin.json" "$D/fig.csv" --wait 0 --db ''
+refused "--friction-table applies only with --published" validate-torque "$D/exc.csv" --model "$D/twin.json" --friction-table "$W/err"
+[ ! -e "$W/never.json" ] || fail "a twin was written"
 echo USER-INPUTS-OK

@@ -124,6 +124,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.velocity_lag = o.velocity_lag;
   lo.physics.low_speed_friction = !o.no_low_speed_friction;
   lo.physics.target_direction = !o.no_target_direction;
+  lo.physics.efficiency_passes = o.efficiency_passes;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -190,11 +191,7 @@ int run_identify(const IdentifyOptions& o) {
     inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
     require_output(o.output, inputs);
   }
-  if (o.method != "physics" && o.method != "mlp" && o.method != "hybrid")
-    throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", o.method));
   const bool learned = o.method == "mlp" || o.method == "hybrid";
-  if (!learned && (!o.hidden.empty() || o.l2 || o.seed || o.max_evaluations || !o.inputs.empty()))
-    throw InvalidArgument(fmt::format("--hidden, --l2, --seed, --max-evaluations and --inputs apply to --method mlp|hybrid, not {}", o.method));
   const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
@@ -565,53 +562,54 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "predicts the currents; torque only through known gains); hybrid (physics + a network trained on its "
                   "current residual); sequential (Cao: gravity from --quasi-static, friction from --sine, Lasso over A ⊗ B on "
                   "RECORDINGS with 10-fold CV)")->capture_default_str();
-  sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
-  sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)");
-  sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
-  sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
-  sub->add_option("--inputs", o->inputs,
+  auto* hidden = sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
+  auto* l2 = sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)");
+  auto* seed = sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
+  auto* max_evaluations = sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
+  auto* inputs = sub->add_option("--inputs", o->inputs,
                   "mlp/hybrid: network features per joint joined by '+': q, qd, qdd, temperature, friction_shape "
                   "(mlp default q+qd, hybrid qd+friction_shape)");
-  sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14); repeatable")
+  auto* quasi_static = sub->add_option("--quasi-static", o->quasi_static, "sequential: recording of poses reached from below and from above and held (Cao eq. 13-14); repeatable")
       ->expected(1)
       ->allow_extra_args(false)
       ->check(CLI::ExistingFile);
-  sub->add_option("--sine", o->sine, "sequential: recording of a sine with the same frequency and phase on every joint (Cao eq. 15); repeatable")
+  auto* sine = sub->add_option("--sine", o->sine, "sequential: recording of a sine with the same frequency and phase on every joint (Cao eq. 15); repeatable")
       ->expected(1)
       ->allow_extra_args(false)
       ->check(CLI::ExistingFile);
-  sub->add_option("--lasso-joints", o->lasso_joints, "sequential: joints (1-based) whose sin/cos up to 2q form B of the library")
+  auto* lasso_joints = sub->add_option("--lasso-joints", o->lasso_joints, "sequential: joints (1-based) whose sin/cos up to 2q form B of the library")
       ->delimiter(',')
       ->capture_default_str();
-  sub->add_flag("--lasso-1se", o->lasso_1se, "sequential: choose lambda_1se (sparser) instead of lambda_min");
-  sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
+  auto* lasso_1se = sub->add_flag("--lasso-1se", o->lasso_1se, "sequential: choose lambda_1se (sparser) instead of lambda_min");
+  auto* prune = sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains; repeat the option for several recordings")
       ->allow_extra_args(false);
-  sub->add_option("--efficiency-passes", o->efficiency_passes,
-                  "physics: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
+  auto* efficiency_passes = sub->add_option("--efficiency-passes", o->efficiency_passes,
+                  "physics/mlp/hybrid: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
                   "(scenarios/ur3e/train/swing_train*.yaml)")
       ->capture_default_str();
-  sub->add_option("--reversal-screen", o->reversal_screen, "Leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
-  sub->add_flag("--no-low-speed-friction", o->no_low_speed_friction,
+  auto* reversal_screen = sub->add_option("--reversal-screen", o->reversal_screen,
+                                          "physics/mlp/hybrid: leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+  auto* no_low_speed_friction = sub->add_flag("--no-low-speed-friction", o->no_low_speed_friction,
                 "physics/mlp/hybrid: leave out the low-speed friction (pre-sliding memory and Stribeck rise; shapes chosen on the "
                 "plain fit's residual, then the whole fit again with them, which takes about twice as long); the twin then has "
                 "plain Coulomb sign(qd) friction");
-  sub->add_option("--direction-blend", o->direction_blend,
+  auto* direction_blend = sub->add_option("--direction-blend", o->direction_blend,
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
                   "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")
       ->capture_default_str();
-  sub->add_option("--velocity-lag", o->velocity_lag,
+  auto* velocity_lag = sub->add_option("--velocity-lag", o->velocity_lag,
                   "physics/mlp/hybrid: how late actual_qd is against its sample's instant [s]; the drive's motoring/back-driven "
                   "switch is read on actual_qd + lag x qdd (default: measured on the recordings against the central difference "
                   "of actual_q; 0: actual_qd as it is, the twin of before)")
       ->check(CLI::Range(-ident::TwinModel::kVelocityLagMax, ident::TwinModel::kVelocityLagMax));
-  sub->add_flag("--no-target-direction", o->no_target_direction,
+  auto* no_target_direction = sub->add_flag("--no-target-direction", o->no_target_direction,
                 "physics/mlp/hybrid: read the drive's motoring/back-driven switch on actual_qd alone. Default: where the recordings "
                 "stream target_qd, near standstill it is read on the target velocity (carried by its measured lead), which has no "
                 "encoder counts: actual_qd is 0 for as long as a joint moves less than a count a period, 60 ms at a slow reversal");
-  sub->add_option("--efficiency-fit", o->efficiency_fit,
+  auto* efficiency_fit = sub->add_option("--efficiency-fit", o->efficiency_fit,
                   "physics/mlp/hybrid: how the back-driven current factor c_gen is fitted: 'joint' (with the rigid-body, friction and gain "
                   "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "
                   "between passes; biased towards 1)")
@@ -623,7 +621,21 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "file, --quasi-static and --sine recordings included; e.g. a log from another source among the robot's own)")->type_name("[REC=]MAP");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
+  sub->callback([=] {
+    const std::string& m = o->method;
+    if (m != "physics" && m != "sequential" && m != "mlp" && m != "hybrid")
+      throw InvalidArgument(fmt::format("--method {}: expected physics, sequential, mlp or hybrid", m));
+    twinwatch::cli::refuse_unless({hidden, l2, seed, max_evaluations, inputs}, m == "mlp" || m == "hybrid",
+                                  fmt::format("to --method mlp or hybrid, not {}", m));
+    twinwatch::cli::refuse_unless({quasi_static, sine, lasso_joints, lasso_1se, prune}, m == "sequential",
+                                  fmt::format("to --method sequential, not {}", m));
+    twinwatch::cli::refuse_unless({efficiency_passes, reversal_screen, no_low_speed_friction, direction_blend, velocity_lag,
+                                   no_target_direction, efficiency_fit},
+                                  m != "sequential",
+                                  "to --method physics, mlp or hybrid: the sequential method (Cao) fits gravity, friction and the "
+                                  "rest its own way");
+    twinwatch::cli::set_exit_code(run_identify(*o));
+  });
 }};
 
 twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {

@@ -158,8 +158,6 @@ int run_monitor(const MonitorOptions& o) {
   for (const std::string* out : {&o.events_path, &o.trace, &o.record_to, &o.db_path})
     if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
   if (o.rtde.empty()) {
-    if (o.duration > 0 || o.wait > 0 || !o.record_to.empty() || o.no_reconnect)
-      throw InvalidArgument("--duration, --wait, --record and --no-reconnect apply to --rtde; a recording is watched whole");
     const auto map = cli::load_column_map(o.column_map);
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
@@ -482,13 +480,14 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
-  sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")->check(twinwatch::cli::nonnegative_number());
-  sub->add_flag("--no-reconnect", o->no_reconnect,
+  auto* duration = sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
+                       ->check(twinwatch::cli::positive_number());
+  auto* wait = sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")
+                   ->check(twinwatch::cli::nonnegative_number());
+  auto* no_reconnect = sub->add_flag("--no-reconnect", o->no_reconnect,
                 "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
                 "reconnecting with back-off");
-  sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
+  auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
@@ -521,7 +520,10 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
                   "per joint to this CSV (to see why an alert was raised or late)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_monitor(*o)); });
+  sub->callback([=] {
+    twinwatch::cli::refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
+    twinwatch::cli::set_exit_code(run_monitor(*o));
+  });
 }};
 
 twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app) {
@@ -655,11 +657,12 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                   "of nominal operation, scenarios/ur3e/wear the 2-hour wear ramps) or scenario files; several may be given")
       ->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
-  sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
+  auto* robot = sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
-  sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")->check(twinwatch::cli::nonnegative_number());
-  sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
-  sub->add_flag("--all-programs", o->all_programs,
+  auto* max_duration = sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")
+                           ->check(twinwatch::cli::nonnegative_number());
+  auto* static_threshold = sub->add_flag("--static", o->static_threshold, "Static threshold instead of the dynamic one");
+  auto* all_programs = sub->add_flag("--all-programs", o->all_programs,
                 "Learn ONE threshold set over every program of scenarios/ur3e/long (figure-eight, triangle at 3 speeds, "
                 "pick-and-place) instead of one set per program; wider thresholds (misses payload loss on the figure-eight); "
                 "for comparison");
@@ -669,12 +672,12 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
       ->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
-  sub->add_option("--filter", o->filter, kFilterHelp);
+  auto* filter = sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
-  sub->add_option("--trend-csv", o->trend_csv,
+  auto* trend_csv = sub->add_option("--trend-csv", o->trend_csv,
                   "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
                   "temperature, I_total) to this CSV");
-  sub->add_option("--link-ceiling", o->link_ceiling,
+  auto* link_ceiling = sub->add_option("--link-ceiling", o->link_ceiling,
                   "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse, exact "
                   "and with white noise at the sd the observer's estimate had on it: by the monitor's choice, by it told a "
                   "contact generator's point cube of this half extent [m] around the link's centre of mass (0.04: "
@@ -685,14 +688,26 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   sub->add_flag("--sweep-collisions", o->sweep,
                 "Instead of scenario files: collisions of decreasing magnitude on --links, each monitored with the static "
                 "and the dynamic threshold; prints the smallest contact detected on every link (Cao: 10 vs 5 N·m)");
-  sub->add_option("--links", o->sweep_options.links, "With --sweep-collisions: links to hit (1-based)")->capture_default_str();
-  sub->add_option("--magnitudes", o->sweep_options.magnitudes, "With --sweep-collisions: peak joint-equivalent torques [N·m]")
-      ->capture_default_str();
-  sub->add_option("--sweep-seed", o->sweep_options.seed, "With --sweep-collisions: first noise seed (one per run)")->capture_default_str();
-  sub->add_option("--max-delay", o->sweep_options.max_delay,
-                  "With --sweep-collisions: an alert later than this after the contact [s] does not count")
-      ->capture_default_str();
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_evaluate(*o)); });
+  auto* links = sub->add_option("--links", o->sweep_options.links, "With --sweep-collisions: links to hit (1-based)")
+                    ->delimiter(',')
+                    ->capture_default_str();
+  auto* magnitudes = sub->add_option("--magnitudes", o->sweep_options.magnitudes, "With --sweep-collisions: peak joint-equivalent torques [N·m]")
+                         ->delimiter(',')
+                         ->capture_default_str();
+  auto* sweep_seed = sub->add_option("--sweep-seed", o->sweep_options.seed, "With --sweep-collisions: first noise seed (one per run)")->capture_default_str();
+  auto* max_delay = sub->add_option("--max-delay", o->sweep_options.max_delay,
+                                    "With --sweep-collisions: an alert later than this after the contact [s] does not count")
+                        ->capture_default_str();
+  sub->callback([=] {
+    twinwatch::cli::refuse_unless({robot, all_programs}, o->twin.empty(),
+                                  "to the twin trained here; a --twin file has its own robot and thresholds (re-learn them with "
+                                  "'twinwatch thresholds')");
+    twinwatch::cli::refuse_unless({links, magnitudes, sweep_seed, max_delay}, o->sweep, "with --sweep-collisions");
+    twinwatch::cli::refuse_unless({static_threshold, max_duration, filter, trend_csv, link_ceiling}, !o->sweep,
+                                  "to scenario files, not to --sweep-collisions (it trains the default reference and monitors "
+                                  "each contact with the static and the dynamic threshold)");
+    twinwatch::cli::set_exit_code(run_evaluate(*o));
+  });
 }};
 
 twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {

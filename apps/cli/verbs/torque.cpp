@@ -286,9 +286,12 @@ twinwatch::cli::VerbRegistrar reg2{"validate-torque", 42, [](CLI::App& app) {
   sub->add_option("--column-map", o->column_map, "Column map for a foreign CSV log");
   sub->add_option("--segment", o->segment, "Part of the recording, FROM:TO as fractions of its duration")->capture_default_str();
   sub->add_option("--published", o->published, "Robot description whose own parameters are the published model");
-  sub->add_option("--friction-table", o->friction_table, "Published sigmoid friction CSV for --published");
+  auto* friction_table = sub->add_option("--friction-table", o->friction_table, "Published sigmoid friction CSV for --published");
   sub->add_flag("--json", o->json, "Print the metrics as JSON");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_validate(*o)); });
+  sub->callback([=] {
+    twinwatch::cli::refuse_unless({friction_table}, !o->published.empty(), "with --published (the published model's friction)");
+    twinwatch::cli::set_exit_code(run_validate(*o));
+  });
 }};
 
 }  // namespace
