@@ -718,6 +718,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         sc.link_in_candidates =
             ll >= 0 && (e.link == ll || std::find(e.other_links.begin(), e.other_links.end(), ll) != e.other_links.end());
         sc.magnitude = e.magnitude;
+        sc.magnitude_units = e.units;
         sc.detail = e.detail;
         if (e.fault == monitor::FaultClass::Collision && e.units == "N") sc.force = e.magnitude;
         if (link_ceiling > 0.0 && ll >= 0 && fi < true_impulse.size() && true_impulse[fi].size() > 0 &&
@@ -1054,6 +1055,7 @@ std::string evaluation_json(const Evaluation& e) {
                                  return r;
                                }()},
                               {"magnitude", s.detected ? nlohmann::json(s.magnitude) : nlohmann::json(nullptr)},
+                              {"magnitude_units", s.detected ? nlohmann::json(s.magnitude_units) : nlohmann::json(nullptr)},
                               {"force_n", std::isfinite(s.force) ? nlohmann::json(s.force) : nlohmann::json(nullptr)},
                               {"true_force_n", std::isfinite(s.true_force) ? nlohmann::json(s.true_force) : nlohmann::json(nullptr)},
                               {"false_alarms", s.false_alarms},

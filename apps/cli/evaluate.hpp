@@ -118,6 +118,7 @@ struct ScenarioScore {
   /// false alarm
   bool declared = false;
   double delay_ms = 0.0, magnitude = 0.0, true_magnitude = 0.0;
+  std::string magnitude_units;  ///< the detecting event's units (N, N·m, kg, A, ...; Event::units)
   int false_alarms = 0;
   int wear_false_alarms = 0;   ///< false alarms that were wear warnings
   double duration_s = 0.0;

@@ -140,6 +140,11 @@ ColumnMap ColumnMap::load(const std::string& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
     const auto cells = split_csv(line);
+    // the format's own names as a header line (the way docs/recordings.md writes the format): not
+    // a mapping of a column called 'file_column'
+    if (m.columns.empty() && cells.size() >= 2 && cells.size() <= 3 && cells[0] == "file_column" && cells[1] == "rtde_name" &&
+        (cells.size() == 2 || cells[2] == "scale"))
+      continue;
     if (cells.size() < 2 || cells.size() > 3)
       throw ParseError(path, ln, "", fmt::format("expected 'file_column,rtde_name[,scale]', got {} cells", cells.size()));
     Entry e{cells[1], 1.0};

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <memory>
 #include <stdexcept>
@@ -113,6 +114,9 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     sqlite3_free(err);
     fail(what, msg);
   };
+  // (SQLite says "disk I/O error" of a directory)
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw PathError(fmt::format("{}: cannot open event store: it is a directory, not a file", path));
   const int flags = mode == Mode::Read ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
   if (sqlite3_open_v2(path.c_str(), &impl_->db, flags, nullptr) != SQLITE_OK)
     fail("cannot open event store", impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory");

@@ -689,8 +689,10 @@ double longest_stretch(const std::vector<RobotSample>& smp, size_t from, Holds h
 
 }  // namespace
 
-MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& runs, const MonitorConfig& settings,
+MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& given, const MonitorConfig& settings,
                                const LearnOptions& options) {
+  std::vector<device::Recording> held;  // (a run's implausible temperatures, held as the monitor holds them)
+  const std::vector<HealthyRun> runs = with_held_temperatures(given, held);
   if (runs.empty()) throw InvalidArgument("learn thresholds: no healthy runs given");
   const int n = twin.n_dof();
   MonitorConfig c = settings;
@@ -765,6 +767,15 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       }
       if (!ro_run.empty()) obs_res.push_back(std::move(ro_run));
     }
+  }
+  if (res.empty()) {
+    // (every run was the residual filter's start-up, or a payload change's settling, alone)
+    std::vector<std::string> what;
+    for (const HealthyRun& h : runs)
+      what.push_back(fmt::format("{} ({} samples)", h.recording->path.empty() ? std::string("a run") : h.recording->path, h.recording->samples.size()));
+    throw InvalidArgument(fmt::format("learn thresholds: no sample of the healthy run(s) to learn from: {}; each needs more than the "
+                                      "residual filter's {} start-up samples ({:g} s), with samples not settling after a payload change",
+                                      fmt::join(what, ", "), kSettleSamples, static_cast<double>(kSettleSamples) * c.nominal_period));
   }
   c.static_level = StaticThreshold::learn(res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
   c.dynamic.clear();
@@ -2116,11 +2127,6 @@ void Monitor::restart_after_gap(const RobotSample& s, bool memory_lost) {
     memory_.q_prev = s.q;
   }
 }
-
-namespace {
-// a reading a joint can have, or none (NaN: unknown, the compensation leaves it out)
-bool plausible_temperature(double T) { return !std::isfinite(T) || (T >= Monitor::kTemperatureMin && T <= Monitor::kTemperatureMax); }
-}  // namespace
 
 bool Monitor::temperature_implausible(const RobotSample& s) {
   if (!s.has(kFieldTemperature)) return false;

@@ -300,8 +300,39 @@ bool TrendDetector::take_note(std::string& note) {
   return true;
 }
 
-TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs, const TrendConfig& settings,
+bool plausible_temperature(double celsius) { return std::isnan(celsius) || (celsius >= kTemperatureMin && celsius <= kTemperatureMax); }
+
+std::size_t implausible_temperatures(const device::Recording& rec) {
+  std::size_t count = 0;
+  for (const RobotSample& s : rec.samples)
+    if (s.has(kFieldTemperature))
+      for (Eigen::Index j = 0; j < s.temperature.size(); ++j) count += plausible_temperature(s.temperature[j]) ? 0 : 1;
+  return count;
+}
+
+device::Recording hold_implausible_temperatures(const device::Recording& rec) {
+  device::Recording out = rec;
+  std::vector<double> last;
+  for (RobotSample& s : out.samples) {
+    if (!s.has(kFieldTemperature)) continue;
+    const auto m = static_cast<std::size_t>(s.temperature.size());
+    if (last.size() < m) last.resize(m, std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t j = 0; j < m; ++j) {
+      double& T = s.temperature[static_cast<Eigen::Index>(j)];
+      if (plausible_temperature(T)) {
+        if (!std::isnan(T)) last[j] = T;
+        continue;
+      }
+      T = last[j];
+    }
+  }
+  return out;
+}
+
+TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& given, const TrendConfig& settings,
                                     bool follow_payload) {
+  std::vector<device::Recording> held;  // (a run's implausible temperatures, held as the monitor holds them)
+  const std::vector<TrendRun> runs = with_held_temperatures(given, held);
   const int n = twin.n_dof();
   settings.validate(n);
   if (runs.empty()) throw InvalidArgument("learn trend temperature: no healthy runs given");

@@ -13,8 +13,7 @@ namespace twinwatch::signal {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// fewest samples a signal needs: the parabola needs three correlation values around the peak
-constexpr size_t kMinSamples = 4;
+constexpr size_t kMinSamples = kAlignMinSamples;
 
 // rho(L) for L = -W..W
 std::vector<double> correlation_curve(std::span<const double> a, std::span<const double> b, int W) {

@@ -68,4 +68,35 @@ refused "--velocity-lag applies only to --method physics, mlp or hybrid" identif
 refused "--wait applies only with --rtde" monitor --twin "$D/twin.json" "$D/fig.csv" --wait 0 --db ''
 refused "--friction-table applies only with --published" validate-torque "$D/exc.csv" --model "$D/twin.json" --friction-table "$W/err"
 [ ! -e "$W/never.json" ] || fail "a twin was written"
+refused "--trials applies only to the offline study" friction-study --closed-loop --trials 3
+# 8. messages name the file: a recording too short to align or to learn from, a store that is a
+#    directory, an output the disk cannot take
+head -3 "$D/fig.csv" > "$W/two.csv"
+refused "two.csv: 2 row(s), expected at least 4 to align" align "$D/fig.csv" "$W/two.csv"
+cp "$D/twin.json" "$W/twin.json"
+refused "no sample of the healthy run(s) to learn from: $W/two.csv (2 samples)" thresholds --twin "$W/twin.json" "$W/two.csv"
+cmp -s "$D/twin.json" "$W/twin.json" || fail "the twin changed"
+refused "$W: cannot open event store: it is a directory" events --db "$W"
+if [ -w /dev/full ]; then
+  if "$B" validate --twin "$D/twin.json" "$D/fig.csv" --predictions /dev/full > "$W/err" 2>&1; then fail "a full disk took the predictions"; fi
+  grep -q "/dev/full: cannot write" "$W/err" || fail "predictions on a full disk: $(cat "$W/err")"
+fi
+# 9. a column map may start with the format's own header line (docs/recordings.md)
+printf 'file_column,rtde_name,scale\nactual_q_0,actual_q_0,1\n' > "$W/head.map"
+"$B" validate --twin "$D/twin.json" "$D/fig.csv" --column-map "$W/head.map" --json > "$W/mapped.json" || fail "the map's header refused"
+[ "$(cat "$W/mapped.json")" = "$("$B" validate --twin "$D/twin.json" "$D/fig.csv" --json)" ] || fail "an identity map changed the figures"
+# 10. an implausible temperature in a training recording is held as the monitor holds it, and said
+"$B" thresholds --twin "$W/twin.json" "$W/hot.csv" "$D/fig.csv" > "$W/out" 2>&1 || fail "thresholds on hot.csv: $(cat "$W/out")"
+grep -q "hot.csv: 1 joint temperature reading(s) outside -40 to 150 °C" "$W/out" || fail "the held temperature not said: $(cat "$W/out")"
+# 11. one 20 A current sample on J3 (an electrical spike) is a sensor fault on that channel, not a 361 N contact
+awk -F, -v OFS=, 'NR==1{for(i=1;i<=NF;i++) if($i=="actual_current_2") c=i} NR==1001{$c=20} {print}' "$D/fig.csv" > "$W/spike.csv"
+ev=$("$B" monitor --twin "$D/twin.json" "$W/spike.csv" --db '' --json)
+[ "$(echo "$ev" | wc -l)" -eq 1 ] || fail "expected one event: $ev"
+for want in '"class":"sensor_fault"' '"joint":3,' '"magnitude":20.0' '"units":"A"' 'glitch on the J3 current channel'; do
+  echo "$ev" | grep -q "$want" || fail "the spike: $want not in $ev"
+done
+# 12. simulate writes files: '-' and /dev/stdout are refused (they wrote a file named '-', and labels into /dev)
+refused "('-' is no standard output here)" simulate "$SC" -o -
+refused "not a device or pipe" simulate "$SC" -o /dev/stdout
+[ ! -e ./- ] || fail "simulate wrote a file named '-'"
 echo USER-INPUTS-OK

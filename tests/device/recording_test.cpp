@@ -126,6 +126,18 @@ TEST(Recording, ColumnMapRenamesAndScalesForeignLogs) {
   EXPECT_NEAR(r.samples[0].q[1], -M_PI / 4, 1e-15);
 }
 
+// the format's names as a header line, as docs/recordings.md writes the format, are no mapping (the
+// map was refused on them: 'rtde_name' is no RTDE name)
+TEST(Recording, ColumnMapWithTheFormatsHeaderLoads) {
+  for (const char* head : {"file_column,rtde_name,scale\n", "# mine\nfile_column,rtde_name\n"}) {
+    const std::string mp = tmp("head.map");
+    std::ofstream(mp) << head << "t_s,timestamp\nq1_deg,actual_q_0,0.017453292519943295\n";
+    const ColumnMap map = ColumnMap::load(mp);
+    EXPECT_EQ(map.columns.size(), 2u) << head;
+    EXPECT_EQ(map.columns.count("file_column"), 0u);
+  }
+}
+
 std::string map_error(const std::string& content) {
   const std::string mp = tmp("bad.map");
   std::ofstream(mp) << content;

@@ -2293,5 +2293,76 @@ TEST_F(MonitorLoop, AnImplausibleTemperatureIsASensorFaultNotAContact) {
   }
 }
 
+// The learners hold an implausible temperature in a training recording as the monitor holds it in a
+// stream: one 6553.5 °C sample went into the temperature compensation of every residual learned on,
+// and the thresholds with it. Learned on a run with such readings (and an infinite one, which the
+// monitor's check took for a reading until session 35), the levels are the clean run's.
+TEST_F(MonitorLoop, ImplausibleTemperaturesInATrainingRunAreHeldAsTheMonitorHoldsThem) {
+  const auto h1 = run(scenario(503, 24, 0.5));
+  auto glitch = h1;
+  ASSERT_TRUE(glitch.present & kFieldTemperature);
+  for (size_t k = 3000; k < 3003; ++k) glitch.samples[k].temperature[2] = 6553.5;
+  glitch.samples[5000].temperature[4] = -300.0;
+  glitch.samples[6000].temperature[1] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(implausible_temperatures(glitch), 5u);
+  EXPECT_EQ(implausible_temperatures(h1), 0u);
+  const auto held = hold_implausible_temperatures(glitch);
+  EXPECT_EQ(implausible_temperatures(held), 0u);
+  EXPECT_EQ(held.samples[3002].temperature[2], glitch.samples[2999].temperature[2]) << "the joint's last plausible reading";
+  EXPECT_EQ(held.samples[6000].temperature[1], glitch.samples[5999].temperature[1]);
+  // a trend temperature slope on a compensated twin: the compensation is what a glitch reaches
+  MonitorConfig settings = *config;
+  settings.trend.temperature_slope = Eigen::VectorXd::Constant(6, -2e-3);
+  settings.trend.temperature_ref = twin->temperature_ref;
+  const auto a = learn_thresholds(declared_twin(), {{&h1, payload}}, settings);
+  const auto b = learn_thresholds(declared_twin(), {{&glitch, payload}}, settings);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_NEAR(b.static_level[j], a.static_level[j], 0.01 * a.static_level[j]) << "J" << j + 1;
+    EXPECT_NEAR(b.observer_level[j], a.observer_level[j], 0.01 * a.observer_level[j]) << "J" << j + 1;
+  }
+  // a run whose every sample is the filter's start-up says which run and why
+  device::Recording stub = h1;
+  stub.samples.resize(3);
+  stub.path = "two_rows.csv";
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { learn_thresholds(declared_twin(), {{&stub, payload}}, settings); }),
+              ::testing::HasSubstr("two_rows.csv (3 samples)"));
+}
+
+// A current reading that jumps and is back at the next sample (an electrical spike, a corrupted
+// sample) read as "contact on link 3, ≈ 361 N, 100 %" for one 20 A sample on J3 (session-34 audit).
+// No contact shows so: the drive's current answers an external torque through the joint's motion and
+// its controller, over tens of ms. It is a sensor fault of that channel now, sized in A; a real blow
+// as short as two samples is still a contact.
+TEST_F(MonitorLoop, AOneSampleCurrentSpikeIsASensorFaultNotAContact) {
+  const auto clean = run(scenario(3151, 12, 0.5));
+  auto glitch = clean;
+  glitch.samples[1500].current[2] = 20.0;                                  // J3, once at 3 s
+  glitch.samples[3000].current[1] += 4.0;                                  // J2, +4 A at 6 s
+  glitch.samples[4500].current[4] -= 3.0;                                  // J5, two samples at 9 s
+  glitch.samples[4501].current[4] -= 3.0;
+  const auto a = monitor(clean, 0.5), b = monitor(glitch, 0.5);
+  std::vector<Event> faults, others;
+  for (const auto& e : b) (e.fault == FaultClass::SensorFault ? faults : others).push_back(e);
+  ASSERT_EQ(faults.size(), 3u) << listing(b);
+  const int joints[] = {2, 1, 4};
+  const size_t at[] = {1500, 3000, 4500};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(faults[i].joint, joints[i]) << listing(b);
+    EXPECT_EQ(faults[i].units, "A");
+    EXPECT_LE(faults[i].t_start, glitch.samples[at[i]].timestamp);
+    const double read = faults[i].magnitude;  // the reading itself (of a two-sample glitch, the one further out)
+    EXPECT_TRUE(read == glitch.samples[at[i]].current[joints[i]] || read == glitch.samples[at[i] + 1].current[joints[i]]) << read;
+    EXPECT_THAT(faults[i].detail, ::testing::HasSubstr("glitch on the J" + std::to_string(joints[i] + 1) + " current channel"));
+  }
+  EXPECT_EQ(others.size(), a.size()) << listing(b);
+  // a blow of two samples (4 ms) is a contact: the joint moves, and the controller's answer lasts
+  const auto hit = run(scenario(3151, 12, 0.5, "  - {type: collision, link: 3, onset: 6.0, magnitude: 40, duration: 0.004, "
+                                                "point: [0.1, 0.0, 0.05], direction: [0.0, 0.3, 1.0]}\n"));
+  const auto found = monitor(hit, 0.5);
+  const auto contact = std::find_if(found.begin(), found.end(), [](const Event& e) { return std::abs(e.t_start - 6.0) < 0.1; });
+  ASSERT_NE(contact, found.end()) << listing(found);
+  EXPECT_EQ(contact->fault, FaultClass::Collision) << listing(found);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

@@ -64,6 +64,9 @@ int run_align(const AlignCliOptions& o) {
   const SignalColumn& col = column_of(o.signal);
   if (!(o.max_lag_ms >= 0.0)) throw InvalidArgument(fmt::format("--max-lag-ms is {}, must be >= 0", o.max_lag_ms));
   const device::Recording ra = device::read_recording(o.a), rb = device::read_recording(o.b);
+  for (const auto* r : {&ra, &rb})
+    if (r->samples.size() < signal::kAlignMinSamples)
+      throw InvalidArgument(fmt::format("{}: {} row(s), expected at least {} to align", r->path, r->samples.size(), signal::kAlignMinSamples));
   if (ra.n_dof != rb.n_dof) throw InvalidArgument(fmt::format("{} has {} joints, {} has {}; expected equal", o.a, ra.n_dof, o.b, rb.n_dof));
   const double T = ra.median_period;
   if (!(T > 0.0)) throw InvalidArgument(fmt::format("{}: no sample period (needs at least two rows with increasing timestamps)", o.a));

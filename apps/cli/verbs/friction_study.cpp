@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <utility>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/friction/closed_loop.hpp"
 #include "twinwatch/friction/protocol.hpp"
@@ -444,6 +446,13 @@ int run(const StudyOptions& o) {
     throw InvalidArgument(fmt::format("--torque is '{}', expected 'current' or 'moment'", o.torque));
   if (!(o.split > 0.0 && o.split < 1.0)) throw InvalidArgument(fmt::format("--split is {}, must be in (0, 1)", o.split));
   if (o.decimate < 1) throw InvalidArgument(fmt::format("--decimate is {}, must be >= 1", o.decimate));
+  // (before the protocol's minutes, and never over a recording or a column map)
+  if (!o.predictions.empty()) {
+    std::vector<std::string> inputs = o.recordings;
+    inputs.insert(inputs.end(), o.column_maps.begin(), o.column_maps.end());
+    inputs.push_back(o.save_twin);
+    require_output(o.predictions, inputs);
+  }
   std::vector<ProtocolRecords> joints;
   if (o.simulated) {
     for (const SimulatedJoint& j : simulated_study_joints()) {
@@ -469,29 +478,30 @@ int run(const StudyOptions& o) {
   std::vector<ProtocolResult> res;
   for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
   if (!o.predictions.empty()) {
-    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
-    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
-    fmt::print(f, "joint,t,qd,tau,reversal");
-    for (const auto& m : res.at(0).study.models) fmt::print(f, ",{}", m.name);
-    fmt::print(f, "\n");
+    // built whole, then written checked: a full disk names the file (it was "cannot write to file")
+    fmt::memory_buffer buf;
+    auto w = std::back_inserter(buf);
+    fmt::format_to(w, "joint,t,qd,tau,reversal");
+    for (const auto& m : res.at(0).study.models) fmt::format_to(w, ",{}", m.name);
+    fmt::format_to(w, "\n");
     for (const auto& r : res) {
       // the training record (label "<joint>-train", no predictions) for re-fits outside twinwatch
       const FrictionRecord& tr = r.study.train;
       for (std::size_t k = 0; k < tr.qd.size(); ++k) {
-        fmt::print(f, "{}-train,{:.4f},{:.6g},{:.6g},0", r.study.joint, static_cast<double>(k) * tr.dt, tr.qd[k], tr.tau[k]);
-        for (std::size_t m = 0; m < r.study.models.size(); ++m) fmt::print(f, ",");
-        fmt::print(f, "\n");
+        fmt::format_to(w, "{}-train,{:.4f},{:.6g},{:.6g},0", r.study.joint, static_cast<double>(k) * tr.dt, tr.qd[k], tr.tau[k]);
+        for (std::size_t m = 0; m < r.study.models.size(); ++m) fmt::format_to(w, ",");
+        fmt::format_to(w, "\n");
       }
       const FrictionRecord& v = r.study.fourier;
       for (std::size_t k = 0; k < v.qd.size(); ++k) {
-        fmt::print(f, "{},{:.4f},{:.6g},{:.6g},{}", r.study.joint, static_cast<double>(k) * v.dt, v.qd[k], v.tau[k],
+        fmt::format_to(w, "{},{:.4f},{:.6g},{:.6g},{}", r.study.joint, static_cast<double>(k) * v.dt, v.qd[k], v.tau[k],
                    static_cast<int>(r.study.reversal_mask[k]));
         for (const auto& m : r.study.models)
-          fmt::print(f, ",{:.6g}", k < m.fourier_prediction.size() ? m.fourier_prediction[k] : 0.0);
-        fmt::print(f, "\n");
+          fmt::format_to(w, ",{:.6g}", k < m.fourier_prediction.size() ? m.fourier_prediction[k] : 0.0);
+        fmt::format_to(w, "\n");
       }
     }
-    std::fclose(f);
+    write_text_file(o.predictions, fmt::to_string(buf));
   }
   if (twin) {
     // the friction block: ParFam-H of every studied joint, re-loadable into the compiled evaluator
@@ -612,8 +622,15 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   sub->add_flag("--json", o->json, "Print the tables as one JSON object {\"joints\": [...]}");
   sub->add_flag("-q,--quiet", o->quiet, "No progress messages on stderr");
-  sub->callback([o, gain] {
+  // what the closed loop does not use: refused with it, not ignored
+  const std::vector<const CLI::Option*> offline = {sub->get_option("--torque"),     gain,
+                                                              sub->get_option("--split"),      sub->get_option("--decimate"),
+                                                              sub->get_option("--screening"),  sub->get_option("--trials"),
+                                                              sub->get_option("--predictions"), sub->get_option("--save-twin")};
+  sub->callback([o, gain, offline] {
     o->gain_given = gain->count() > 0;
+    for (const CLI::Option* opt : offline)
+      twinwatch::cli::refuse_unless({opt}, !o->closed_loop, "to the offline study (recordings or --simulated), not --closed-loop");
     twinwatch::cli::set_exit_code(run(*o));
   });
 }};

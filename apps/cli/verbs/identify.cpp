@@ -475,19 +475,20 @@ int run_validate(const ValidateOptions& o) {
   if (!o.predictions.empty()) {
     require_output(o.predictions, {o.recording, o.twin, o.column_map});
     // per sample: time, measured and predicted current of every joint (for plots)
-    std::FILE* f = std::fopen(o.predictions.c_str(), "w");
-    if (!f) throw InvalidArgument(fmt::format("--predictions {}: cannot open for writing", o.predictions));
-    fmt::print(f, "timestamp");
-    for (int j = 0; j < n; ++j) fmt::print(f, ",actual_current_{}", j);
-    for (int j = 0; j < n; ++j) fmt::print(f, ",predicted_current_{}", j);
-    fmt::print(f, "\n");
+    // built whole, then written checked: a full disk names the file (it was "cannot write to file")
+    fmt::memory_buffer buf;
+    auto w = std::back_inserter(buf);
+    fmt::format_to(w, "timestamp");
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_current_{}", j);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_current_{}", j);
+    fmt::format_to(w, "\n");
     for (size_t k = 0; k < used.size(); ++k) {
-      fmt::print(f, "{}", rec.samples[used[k]].timestamp);
-      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", meas[static_cast<size_t>(j)][k]);
-      for (int j = 0; j < n; ++j) fmt::print(f, ",{}", pred[static_cast<size_t>(j)][k]);
-      fmt::print(f, "\n");
+      fmt::format_to(w, "{}", rec.samples[used[k]].timestamp);
+      for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", meas[static_cast<size_t>(j)][k]);
+      for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", pred[static_cast<size_t>(j)][k]);
+      fmt::format_to(w, "\n");
     }
-    std::fclose(f);
+    write_text_file(o.predictions, fmt::to_string(buf));
   }
   nlohmann::json out;
   out["recording"] = o.recording;

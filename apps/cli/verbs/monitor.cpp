@@ -352,6 +352,26 @@ int run_thresholds(const ThresholdOptions& o) {
     cli::check_units(recs.back(), twin.robot());
   }
   recs = cli::driven_only(std::move(recs));
+  // (read before the learning run: a bad one fails in a second, not after minutes)
+  // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
+  std::vector<device::Recording> vrecs;
+  for (const auto& f : o.debounce_validation) {
+    for (const auto& r : o.recordings)
+      if (same_file(f, r))
+        throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
+                                          "the choice needs healthy runs they were not learned on",
+                                          f));
+    vrecs.push_back(device::read_recording(f, maps.of(f)));
+    device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
+    cli::check_units(vrecs.back(), twin.robot());
+  }
+  vrecs = cli::driven_only(std::move(vrecs));
+  // (the learners hold them as the monitor does: said here, where the recording has its name)
+  for (const auto& r : recs)
+    if (const std::size_t bad = monitor::implausible_temperatures(r); bad > 0)
+      fmt::print(stderr, "note: {}: {} joint temperature reading(s) outside {:g} to {:g} °C, which no joint reads: learned with each "
+                         "joint's last plausible reading, as the monitor judges such samples\n",
+                 r.path, bad, monitor::kTemperatureMin, monitor::kTemperatureMax);
   std::vector<monitor::HealthyRun> runs;
   const model::RigidBodyInertia p = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   for (const auto& r : recs) runs.push_back({&r, p});
@@ -413,19 +433,6 @@ int run_thresholds(const ThresholdOptions& o) {
   }
   monitor::MonitorConfig shown = cfg;  // the set just learned, for the choice and the table below
   shown.select_program(o.program);
-  // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
-  std::vector<device::Recording> vrecs;
-  for (const auto& f : o.debounce_validation) {
-    for (const auto& r : o.recordings)
-      if (same_file(f, r))
-        throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
-                                          "the choice needs healthy runs they were not learned on",
-                                          f));
-    vrecs.push_back(device::read_recording(f, maps.of(f)));
-    device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
-    cli::check_units(vrecs.back(), twin.robot());
-  }
-  vrecs = cli::driven_only(std::move(vrecs));
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vrecs) val.push_back({&r, p});

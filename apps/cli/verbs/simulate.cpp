@@ -34,6 +34,15 @@ std::string labels_path(const std::string& output) {
 
 int run(const Options& o) {
   using namespace twinwatch;
+  // a file, with its labels beside it: not '-' (which would be a file named '-', not standard
+  // output) and not a device or pipe (/dev/stdout: the labels would go to /dev/stdout.labels.json)
+  std::error_code ec;
+  const auto st = std::filesystem::status(o.output, ec);
+  const bool device = o.output.rfind("/dev/", 0) == 0 || o.output.rfind("/proc/", 0) == 0;  // (/dev/stdout into a file is one)
+  if (o.output == "-" || device || (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st)))
+    throw PathError(fmt::format("{}: cannot write: simulate writes a recording file and its labels beside it (rec.csv -> "
+                                "rec.labels.json); give a file name{}",
+                                o.output, o.output == "-" ? " ('-' is no standard output here)" : ", not a device or pipe"));
   // neither output may be the scenario (or the other output): checked before the run writes anything
   require_output(o.output, {o.scenario});
   require_output(labels_path(o.output), {o.scenario, o.output});

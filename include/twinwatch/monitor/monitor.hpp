@@ -335,8 +335,6 @@ class Monitor {
   long gaps() const { return n_gaps_; }
   long repeated() const { return n_repeated_; }
   long invalid() const { return n_invalid_; }
-  /// A joint temperature outside this range [°C] is no reading (hold_implausible_temperature)
-  static constexpr double kTemperatureMin = -40.0, kTemperatureMax = 150.0;
   /// Samples in which the controller did not drive the arm (RobotSample::driven() false: power off,
   /// brakes on, a protective or emergency stop, ...): not judged, and their total time [s].
   long not_driven() const { return n_not_driven_; }

@@ -34,6 +34,7 @@
 ///
 /// push() is allocation-free; closing a window allocates nothing either (history and scratch are
 /// reserved at construction).
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -174,5 +175,40 @@ struct TrendRun {
 /// twin takes, as the monitor does with MonitorConfig::follow_payload; else with TrendRun::payload alone)
 TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& runs,
                                     const TrendConfig& settings = {}, bool follow_payload = true);
+
+/// The joint temperatures a joint can read [°C]. Outside them a reading is none (a 0xFFFF/10
+/// overflow, a broken sensor): it went into the residual's temperature compensation, and one such
+/// sample raised a contact (session-34 audit).
+inline constexpr double kTemperatureMin = -40.0, kTemperatureMax = 150.0;
+
+/// Whether `celsius` is a reading a joint can have, or none (NaN: unknown, the compensation leaves
+/// it out). Infinite is no reading.
+bool plausible_temperature(double celsius);
+
+/// How many joint temperature readings of `rec` are not plausible_temperature.
+std::size_t implausible_temperatures(const device::Recording& rec);
+
+/// `rec` with every implausible joint temperature replaced by that joint's last plausible reading
+/// (NaN before the first), as the monitor judges such samples (Monitor::push): what the learners
+/// (learn_thresholds, learn_trend_temperature) learn from, so that a training recording's glitch
+/// does not widen the thresholds or tilt the slope.
+device::Recording hold_implausible_temperatures(const device::Recording& rec);
+
+/// `runs` (anything with a `const device::Recording* recording`), each whose recording reads an
+/// implausible temperature pointed at a held copy kept in `store`; the others as given.
+template <class Run>
+std::vector<Run> with_held_temperatures(const std::vector<Run>& runs, std::vector<device::Recording>& store) {
+  std::vector<Run> out = runs;
+  std::size_t copies = 0;
+  for (const Run& r : runs) copies += r.recording != nullptr && implausible_temperatures(*r.recording) > 0 ? 1 : 0;
+  store.clear();
+  store.reserve(copies);  // (no reallocation below: the pointers into it stay valid)
+  for (Run& r : out)
+    if (r.recording != nullptr && implausible_temperatures(*r.recording) > 0) {
+      store.push_back(hold_implausible_temperatures(*r.recording));
+      r.recording = &store.back();
+    }
+  return out;
+}
 
 }  // namespace twinwatch::monitor

@@ -12,12 +12,17 @@
 /// parabola through rho(L - 1), rho(L), rho(L + 1) (vertex offset
 ///   d = (rho(L-1) - rho(L+1)) / (2 (rho(L-1) - 2 rho(L) + rho(L+1)))).
 /// The aligned comparison pairs a[k] with b at k + lag (linear interpolation for a fractional lag).
+#include <cstddef>
 #include <span>
 #include <vector>
 
 #include "twinwatch/signal/metrics.hpp"
 
 namespace twinwatch::signal {
+
+/// The fewest samples a signal to align needs: the parabola needs three correlation values around
+/// the peak.
+inline constexpr std::size_t kAlignMinSamples = 4;
 
 struct AlignOptions {
   int max_lag = 1000;      ///< search window [samples]; clipped to half the shorter signal
