@@ -12,6 +12,13 @@ on link 2, 3 or 5, 1.5-5 s after the second stop's resume ramp has ended.
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops --seed 30100 --runs 36
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout --seed 30500 --runs 36
     /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout2 --seed 30900 --runs 36 --stopping-times 0.15 0.3 0.6
+
+Session 35 (streams without the controller's targets; the same runs, the second with each contact
+moved into the first 0.02-0.28 s after the second stop's resume, its draw otherwise unchanged):
+
+    /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/stops_heldout3 --seed 31300 --runs 36 --stopping-times 0.15 0.3 0.6 --no-targets
+    /usr/bin/python3 scripts/make_stop_sets.py scenarios/ur3e/resume_contact --seed 31300 --runs 36 --stopping-times 0.15 0.3 0.6 --no-targets \
+        --contact-after-resume 0.02 0.28 --contacts-only
 """
 import argparse
 import os
@@ -38,6 +45,10 @@ def main():
     a.add_argument("--runs", type=int, default=36)
     a.add_argument("--stopping-times", type=float, nargs="*", default=[],
                    help="draw each stop's stopping_time from these [s] (default: the simulator's 0.3 s)")
+    a.add_argument("--no-targets", action="store_true", help="streams_targets: false (a logger without the controller's targets)")
+    a.add_argument("--contact-after-resume", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="place each contact LO-HI s after the second stop's resume instead of 1.5-5 s after its ramp")
+    a.add_argument("--contacts-only", action="store_true", help="write only the runs with a contact")
     o = a.parse_args()
     rng = random.Random(o.seed)
     os.makedirs(o.out, exist_ok=True)
@@ -57,11 +68,16 @@ def main():
         if k % 2 == 1:
             link = rng.choice([2, 3, 5])
             onset = end + rng.uniform(1.5, 5.0)
+            if o.contact_after_resume:  # (the same draw, mapped into the window: the rest of the set is unchanged)
+                lo, hi = o.contact_after_resume
+                onset = end - ts + lo + (hi - lo) * (onset - end - 1.5) / 3.5
             mag = rng.choice([3.0, 4.0, 5.0])
             d = [rng.uniform(-1, 1) for _ in range(3)]
             p = [round(rng.uniform(-0.04, 0.04), 3) for _ in range(3)]
             faults = (f"faults:\n  - {{type: collision, link: {link}, onset: {onset:.3f}, magnitude: {mag}, duration: 0.05, point: {p}, "
                       f"direction: [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}]}}\n")
+        if o.contacts_only and not faults:
+            continue
         name = f"stop_{k:02d}_{prog_name}_{'_'.join(kinds)}"
         with open(os.path.join(o.out, name + ".yaml"), "w") as f:
             f.write(f"# {prog_name}, {'0.5 kg payload' if payload else 'no payload'}, stops: {', '.join(kinds)}"
@@ -70,6 +86,8 @@ def main():
             if payload:
                 f.write("payload: {mass: 0.5, com: [0, 0, 0.04]}\n")
             f.write("stops:\n" + "".join(stops) + faults)
+            if o.no_targets:
+                f.write("streams_targets: false\n")
 
 
 if __name__ == "__main__":

@@ -1159,6 +1159,10 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                     fmt::format("{:.0f} %", 100 * e.confidence),
                     e.detail + (e.fault == monitor::FaultClass::Wear ? "" : watch.alert_note(e.t_start, e.t_detected))});
   r.add_heading("Events");
+  if (mon.judged() == 0)
+    r.add_paragraph(fmt::format("Caution: no sample was judged: the recording's {} samples are all within the monitor's start-up (or not "
+                                "driven). No event here is no clean bill of health.",
+                                mon.samples()));
   r.add_table("alerts with diagnosis", {"start s", "duration s", "class", "joint", "magnitude", "confidence", "detail"}, rows);
   std::vector<std::vector<std::string>> mrows(5);
   const char* names[] = {"RMSE A", "MAE A", "R²", "NRMSE %", "d_tau %"};

@@ -506,6 +506,8 @@ void MonitorConfig::validate(int n) const {
   if (!(filter_cutoff_hz > 0.0)) throw InvalidArgument(fmt::format("filter_cutoff_hz is {}, must be > 0", filter_cutoff_hz));
   if (raise_after < 1) throw InvalidArgument(fmt::format("raise_after is {}, must be >= 1", raise_after));
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
+  if (!(resume_widen >= 1.0 && std::isfinite(resume_widen)))
+    throw InvalidArgument(fmt::format("resume_widen is {}, must be finite and >= 1", resume_widen));
   if (observer_raise_after < 0)
     throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
   check_choice(observer_choice, observer_level.size() != 0, n, "monitor");
@@ -2337,6 +2339,7 @@ void Monitor::judge(const RobotSample& s) {
   // the thresholds were learned without each run's first kObserverSettle samples (filter and
   // observer start-up), so they do not apply there
   const bool settled = n_samples_ > settle_until_;
+  if (settled) ++n_judged_;
   const bool observer_decides = settled && obs_on_ && cfg_.observer_alerts && obs_samples_ >= kObserverSettle;
   // (a gripper output changed at this sample)
   const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
@@ -2349,21 +2352,27 @@ void Monitor::judge(const RobotSample& s) {
     return !h.moving && h.event.t_start >= rest_since_;
   });
   if (on_top_) watch_on_top(s, t, settled, observer_decides);
+  // the first motion after a powered resume on a stream without targets (MonitorConfig::resume_widen)
+  if (resume_pending_ && s.qd.cwiseAbs().maxCoeff() > kMovingVelocity) {
+    resume_pending_ = false;
+    resume_until_ = t + kResumeWindow;
+  }
+  const double widen = t <= resume_until_ ? cfg_.resume_widen : 1.0;
   for (int j = 0; j < n_; ++j) {
     double& unsure = memory_unsure_[static_cast<size_t>(j)];
     if (unsure > 0.0 && std::abs(s.q[j] - memory_from_[j]) >= unsure) unsure = 0.0;
     // (nor does a frozen current channel: its residual is the channel's fault, already reported)
     const bool decides = unsure == 0.0 && frozen_event_[static_cast<size_t>(j)] < 0;
-    const bool over_current = settled && decides && !rest_held && std::abs(rf_dec_[j]) > level_[j];
-    const bool over_observer = observer_decides && decides && !rest_held && std::abs(obs_dec_[j]) > obs_level_[j];
+    const bool over_current = settled && decides && !rest_held && std::abs(rf_dec_[j]) > widen * level_[j];
+    const bool over_observer = observer_decides && decides && !rest_held && std::abs(obs_dec_[j]) > widen * obs_level_[j];
     if (over_current || over_observer) (j == background_joint_ && background_ >= 0 ? background_last_over_ : last_over_) = t;
     Debouncer& dc = deb_[static_cast<size_t>(j)];
     Debouncer& dob = deb_obs_[static_cast<size_t>(j)];
     dc.update(over_current, t);
     dob.update(over_observer, t);
     if (!margin_cur_.empty()) {
-      margin_cur_[static_cast<size_t>(j)].update(settled && level_[j] > 0.0 ? std::abs(rf_dec_[j]) / level_[j] : 0.0);
-      margin_obs_[static_cast<size_t>(j)].update(observer_decides && obs_level_[j] > 0.0 ? std::abs(obs_dec_[j]) / obs_level_[j] : 0.0);
+      margin_cur_[static_cast<size_t>(j)].update(settled && level_[j] > 0.0 ? std::abs(rf_dec_[j]) / (widen * level_[j]) : 0.0);
+      margin_obs_[static_cast<size_t>(j)].update(observer_decides && obs_level_[j] > 0.0 ? std::abs(obs_dec_[j]) / (widen * obs_level_[j]) : 0.0);
     }
     // the joint's alert is active while either channel's is; it is raised when the first one raises
     const bool active = dc.active() || dob.active();
@@ -2761,12 +2770,18 @@ void Monitor::pause_watch(const RobotSample& s, double t, double dt) {
 
 void Monitor::resume_watch(const RobotSample& s, double t) {
   paused_ = false;
+  resume_pending_ = !paused_unpowered_ && !s.has(kFieldTargetQdd) && cfg_.resume_widen > 1.0;
   add_note(t, fmt::format("monitoring resumed: the controller drives the arm again, {:.1f} s after it stopped at {:.3f} s; decisions wait "
-                          "for the estimators' start-up{}",
+                          "for the estimators' start-up{}{}",
                           t - paused_at_, paused_at_,
                           paused_unpowered_ ? ", and a joint at rest until it has moved (its friction state after the power was off is "
                                               "unknown), as after a stream gap"
-                                            : ""));
+                                            : "",
+                          resume_pending_ ? fmt::format("; the first {:g} s of motion are judged against thresholds {:g} times as wide (the "
+                                                        "resumed program's acceleration steps show in the encoders samples late, and "
+                                                        "this stream has no targets)",
+                                                        kResumeWindow, cfg_.resume_widen)
+                                          : ""));
   // the estimators start again; after power off and brakes the twin's pre-sliding memory is unknown
   // for a joint at rest, as after a gap (with power on it followed the encoders through the stop)
   restart_after_gap(s, paused_unpowered_);

@@ -46,7 +46,7 @@ set_tests_properties(cli.friction_study_loop_tuning PROPERTIES PASS_REGULAR_EXPR
 # the closed loop's own options are refused, named, on the offline study
 add_test(NAME cli.friction_study_loop_option_offline COMMAND twinwatch friction-study --simulated --loop-tuning 5 -q)
 set_tests_properties(cli.friction_study_loop_option_offline PROPERTIES PASS_REGULAR_EXPRESSION
-  "--loop-tuning applies to --closed-loop only")
+  "--loop-tuning applies only with --closed-loop")
 # --save-twin stores N·m equations: a current-domain study without --gain (the default 1 leaves it in A)
 # is refused before the work (audit, session 16)
 add_test(NAME cli.friction_study_save_twin_needs_gain COMMAND twinwatch friction-study ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv

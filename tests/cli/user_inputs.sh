@@ -99,4 +99,31 @@ done
 refused "('-' is no standard output here)" simulate "$SC" -o -
 refused "not a device or pipe" simulate "$SC" -o /dev/stdout
 [ ! -e ./- ] || fail "simulate wrote a file named '-'"
+# 13. (session-35 audit of the other verbs) outputs are no inputs and are checked before the work
+cp "$D/exc.csv" "$W/victim.csv"
+refused "victim.csv: cannot write: it is the input" identify-torque "$W/victim.csv" -o "$W/victim.csv" --signal target_moment
+cmp -s "$D/exc.csv" "$W/victim.csv" || fail "identify-torque wrote over its recording"
+refused "are the same file" identify-torque "$W/victim.csv" "$W/victim.csv" -o "$W/m.json" --signal target_moment
+refused "$W: cannot write: it is a directory" identify-torque "$W/victim.csv" -o "$W" --signal target_moment
+printf '{}' > "$W/rob.json"
+refused "rob.json: cannot write: it is the input" excite "$W/rob.json" -o "$W/rob.json"
+[ "$(cat "$W/rob.json")" = "{}" ] || fail "excite wrote over the robot description"
+refused "$W: cannot write: it is a directory" agv make-tests -o "$W"
+# friction-study: values that fell back to defaults, options that did nothing, a recording twice
+refused "--joint 7: the simulated joints are 1, 2 and 3" friction-study --simulated --joint 7
+refused "--hops is -2, expected a count >= 0" friction-study --simulated --hops -2
+refused "--l1 is nan" friction-study --simulated --l1 nan
+refused "--functions is empty" friction-study --simulated --functions ''
+refused "--gain applies only to recordings" friction-study --simulated --gain 2
+refused "--pd-scale applies only with --closed-loop" friction-study --simulated --pd-scale 1
+refused "are the same file" friction-study "$D/fig.csv" "$D/fig.csv"
+# align: a search window too large for an int searched nothing; two different motions are said to be
+head -1 "$D/fig.csv" > "$W/late.csv"; tail -n +12 "$D/fig.csv" >> "$W/late.csv"
+"$B" align "$D/fig.csv" "$W/late.csv" --max-lag-ms 1e20 | grep -q "common lag -10.00 samples = -20.0 ms" || fail "align --max-lag-ms 1e20"
+"$B" align "$D/fig.csv" "$D/exc.csv" 2> "$W/err" > /dev/null
+grep -q "correlate below 0.8 at the lag found: are .* recordings of the same motion" "$W/err" || fail "align of two motions: $(cat "$W/err")"
+# a recording within the monitor's start-up judged nothing, and says so
+head -46 "$D/collision.csv" > "$W/c45.csv"
+"$B" monitor --twin "$D/twin.json" "$W/c45.csv" --db '' 2> "$W/err" > /dev/null
+grep -q "no sample was judged: the 45 sample(s)" "$W/err" || fail "a 45-sample recording: $(cat "$W/err")"
 echo USER-INPUTS-OK

@@ -2364,5 +2364,53 @@ TEST_F(MonitorLoop, AOneSampleCurrentSpikeIsASensorFaultNotAContact) {
   EXPECT_EQ(contact->fault, FaultClass::Collision) << listing(found);
 }
 
+// A protective stop's resume on a stream without the controller's targets: the resumed program's ramp
+// steps the acceleration, which the encoders show samples late, and the residual overshoots for a few
+// samples. On the target-less stop sets this raised a false contact in 6 of 144 runs (session 35). The
+// first MonitorConfig::resume_widen window of motion after a powered resume is judged against wider
+// thresholds; a real contact in it is still found.
+TEST_F(MonitorLoop, AProtectiveStopsResumeWithoutTargetsIsNoContact) {
+  const std::string p2p = "{type: point_to_point, waypoints: [[-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], "
+                          "[-0.6, -1.2, 1.45, -1.8, -1.3, 0.3], [-0.6, -1.4, 1.3, -1.5, -1.3, 0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3], "
+                          "[0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.2, 1.45, -1.8, -1.85, -0.3], [0.6, -1.4, 1.3, -1.5, -1.85, -0.3]], "
+                          "durations: [0.8, 0.4, 0.8, 1.6, 0.8, 0.4, 0.8, 1.6]}";
+  const auto pick = [&](unsigned seed, double duration, const std::string& extra) {
+    return run("robot: ur3e\nseed: " + std::to_string(seed) + "\nduration: " + std::to_string(duration) + "\ntrajectory: " + p2p +
+               "\npayload: {mass: 0.5, com: [0, 0, 0.04]}\nstreams_targets: false\n" + extra);
+  };
+  // thresholds learned on the program's target-less healthy runs
+  const auto h1 = pick(601, 30, ""), h2 = pick(602, 20, "");
+  ASSERT_FALSE(h1.present & kFieldTargetQdd);
+  const MonitorConfig learned = learn_thresholds(*twin, {{&h1, payload}, {&h2, payload}});
+  // the case, found among 20 such runs: the program resumes at 8.62 s with a 0.15 s ramp
+  const double resume = 8.62;
+  const std::string stop = "stops:\n  - {kind: protective, at: 6.12, hold: 2.5, stopping_time: 0.15}\n";
+  const auto watch = [&](const device::Recording& rec, double widen) {
+    MonitorConfig c = learned;
+    c.resume_widen = widen;
+    auto m = std::make_unique<Monitor>(declared_twin(), c);
+    for (const auto& x : rec.samples) m->push(x);
+    m->finish();
+    return m;
+  };
+  const auto rec = pick(9104, 12, stop);
+  const auto before = watch(rec, 1.0);
+  ASSERT_EQ(before->events().size(), 1u) << "the case: a false contact on the resume ramp" << listing(before->events());
+  EXPECT_GE(before->events()[0].t_start, resume - 0.01);
+  EXPECT_LE(before->events()[0].t_start, resume + 0.25);
+  const auto now = watch(rec, MonitorConfig{}.resume_widen);
+  EXPECT_TRUE(now->events().empty()) << listing(now->events());
+  bool said = false;
+  for (const auto& n : now->notes()) said |= n.find("2 times as wide") != std::string::npos;
+  EXPECT_TRUE(said) << "the resume note says the window";
+  // a contact inside the window is still found, at once
+  const auto hit = pick(9104, 12, stop + "faults:\n  - {type: collision, link: 3, onset: 8.72, magnitude: 10, duration: 0.05, "
+                                         "point: [0.1, 0.0, 0.05], direction: [0.0, 0.3, 1.0]}\n");
+  const auto found = watch(hit, MonitorConfig{}.resume_widen);
+  ASSERT_EQ(found->events().size(), 1u) << listing(found->events());
+  EXPECT_EQ(found->events()[0].fault, FaultClass::Collision);
+  EXPECT_LT(found->events()[0].t_detected - 8.72, 0.02);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

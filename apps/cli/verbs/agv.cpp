@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/agv_link.hpp"
 #include "twinwatch/device/agv_tests.hpp"
 #include "twinwatch/ident/agv_ident.hpp"
@@ -188,6 +189,7 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
   make->add_option("-o,--output", mk->first, "Test CSV to write")->capture_default_str();
   make->add_option("--seed", mk->second, "Noise seed")->capture_default_str();
   make->callback([mk] {
+    require_writable(mk->first);  // (a directory or a missing folder: exit 2, named)
     device::write_agv_tests(mk->first, sim::simulate_agv_tests(sim::AgvParams{}, mk->second));
     fmt::print("wrote {}\n", mk->first);
   });

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/ident/excitation.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/simulator.hpp"
@@ -57,6 +58,7 @@ nlohmann::json vec(const VectorJ& v) {
 }
 
 int run(const Options& o) {
+  require_output(o.output, {o.robot});  // (before the design's minute; never over the robot description)
   const model::RobotModel m = model::load_robot(o.robot);
   ident::ExcitationOptions eo;
   eo.harmonics = o.harmonics;
@@ -162,11 +164,7 @@ int run(const Options& o) {
       m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final, low_text,
       o.min_height, tools_checked);
   const std::string comment_all = raised.empty() ? comment : comment + "\n" + raised;
-  std::ofstream f(o.output);
-  if (!f) throw InvalidArgument(fmt::format("{}: cannot open for writing", o.output));
-  f << ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment_all);
-  f.close();
-  if (!f) throw InvalidArgument(fmt::format("{}: write error", o.output));
+  write_text_file(o.output, ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment_all));
   if (o.json) {
     nlohmann::json j{{"robot", m.name()},
                      {"output", o.output},

@@ -94,6 +94,8 @@ JointRecord slice(const JointRecord& r, long a, long b) {
 }
 
 std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
+  // (TRAIN given again as VALIDATION was called an "untrained validation record")
+  cli::require_distinct(o.recordings, "RECORDINGS");
   if (o.recordings.size() > 3)
     throw InvalidArgument(fmt::format("{} recordings given, expected 1 to 3 (TRAIN [VALIDATION [CHIRP]])", o.recordings.size()));
   const cli::ColumnMaps maps(o.column_maps, o.recordings);
@@ -432,13 +434,6 @@ int run(const StudyOptions& o) {
     throw InvalidArgument(fmt::format("--save-twin {}: the study's torque is actual_current x --gain, and no --gain was given (the "
                                       "default 1 leaves it in A); give the joint's N·m/A (the twin's gains) or --torque moment",
                                       o.save_twin));
-  // the closed loop's own options mean nothing to the offline study: refuse rather than ignore them
-  const std::vector<std::pair<bool, const char*>> loop_only = {
-      {o.loop_training != 0, "--loop-training"}, {o.loop_tuning != 0, "--loop-tuning"},
-      {o.tuning_trajectories != 1, "--tuning-trajectories"}, {o.pd_scale != 1.0, "--pd-scale"},
-      {o.literal_eq19, "--literal-eq19"}, {o.truth_lag_scale != 1.0, "--truth-lag-scale"}};
-  for (const auto& [given, flag] : loop_only)
-    if (given) throw InvalidArgument(fmt::format("{} applies to --closed-loop only", flag));
   if (o.simulated == !o.recordings.empty())
     throw InvalidArgument("give either recordings (TRAIN [VALIDATION [CHIRP]]) or --simulated, not both and not neither");
   if (o.simulated && !o.column_maps.empty()) throw InvalidArgument("--column-map applies to recordings, not to --simulated");
@@ -627,10 +622,33 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                                                               sub->get_option("--split"),      sub->get_option("--decimate"),
                                                               sub->get_option("--screening"),  sub->get_option("--trials"),
                                                               sub->get_option("--predictions"), sub->get_option("--save-twin")};
-  sub->callback([o, gain, offline] {
+  // what only recordings use (the simulated joints' torque is their own, in N·m)
+  const std::vector<const CLI::Option*> recorded_only = {sub->get_option("--torque"), gain, sub->get_option("--split"),
+                                                         sub->get_option("--column-map")};
+  // the closed loop's own options mean nothing to the offline study: refused there, not ignored
+  const std::vector<const CLI::Option*> loop_only = {sub->get_option("--pd-scale"),        sub->get_option("--truth-lag-scale"),
+                                                     sub->get_option("--literal-eq19"),    sub->get_option("--loop-training"),
+                                                     sub->get_option("--loop-tuning"),     sub->get_option("--tuning-trajectories")};
+  sub->callback([o, gain, offline, recorded_only, loop_only, sub] {
     o->gain_given = gain->count() > 0;
     for (const CLI::Option* opt : offline)
       twinwatch::cli::refuse_unless({opt}, !o->closed_loop, "to the offline study (recordings or --simulated), not --closed-loop");
+    for (const CLI::Option* opt : recorded_only)
+      twinwatch::cli::refuse_unless({opt}, !o->recordings.empty(), "to recordings (the simulated joints' torque is in N·m already)");
+    for (const CLI::Option* opt : loop_only) twinwatch::cli::refuse_unless({opt}, o->closed_loop, "with --closed-loop");
+    // the library's defaults are what an option not given means; a value given must be one
+    if (sub->get_option("--hops")->count() > 0 && o->hops < 0)
+      throw twinwatch::InvalidArgument(fmt::format("--hops is {}, expected a count >= 0", o->hops));
+    if (sub->get_option("--starts")->count() > 0 && o->starts < 1)
+      throw twinwatch::InvalidArgument(fmt::format("--starts is {}, expected a count >= 1", o->starts));
+    if (sub->get_option("--l1")->count() > 0 && !(o->l1 >= 0.0 && std::isfinite(o->l1)))
+      throw twinwatch::InvalidArgument(fmt::format("--l1 is {}, expected a finite weight >= 0", o->l1));
+    if (sub->get_option("--functions")->count() > 0 && o->functions.empty())
+      throw twinwatch::InvalidArgument("--functions is empty, expected a comma list of sin, cos, exp, tanh, stribeck");
+    // the simulated joints are J1-J3 (a recording's are its own: recorded_joints checks them)
+    if (o->recordings.empty())
+      for (int j : o->joints)
+        if (j < 1 || j > 3) throw twinwatch::InvalidArgument(fmt::format("--joint {}: the simulated joints are 1, 2 and 3", j));
     twinwatch::cli::set_exit_code(run(*o));
   });
 }};

@@ -327,6 +327,13 @@ int run_monitor(const MonitorOptions& o) {
                                                   mon.not_driven(), mon.not_driven_seconds())
                                     : "",
                o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));
+  // (45 rows covering a whole contact read "0 event(s)": nothing had been judged)
+  if (mon.judged() == 0 && !o.quiet) {
+    std::fflush(stdout);  // (after the summary above)
+    fmt::print(stderr, "warning: no sample was judged: the {} sample(s) are all within the estimators' start-up{} — no event is no "
+                       "clean bill of health\n",
+               mon.samples(), mon.not_driven() > 0 ? " or not driven" : "");
+  }
   return 0;
 }
 

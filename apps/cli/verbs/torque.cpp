@@ -104,6 +104,15 @@ struct IdentOpts {
 };
 
 int run_identify(const IdentOpts& o) {
+  // (before the fit: the model file is no input, and a recording counts once)
+  cli::require_distinct(o.recordings, "RECORDINGS");
+  {
+    std::vector<std::string> inputs = o.recordings;
+    for (const auto& p : o.reverse) inputs.push_back(p.substr(p.find('=') == std::string::npos ? 0 : p.find('=') + 1));
+    inputs.push_back(o.robot);
+    inputs.push_back(o.column_map);
+    require_output(o.output, inputs);
+  }
   const model::RobotModel m = model::load_robot(o.robot);
   const auto map = cli::load_column_map(o.column_map);
   std::vector<device::Recording> recs, revs;

@@ -128,6 +128,13 @@ struct MonitorConfig {
   /// (resolve_drive_doubt, measured_drive_torque). Off: the blended prediction and, without targets,
   /// the observer's hard switch, as before session 32. For comparisons; not stored in the twin file.
   bool drive_doubt = true;
+  /// On a stream without the controller's targets, the first Monitor::kResumeWindow of motion after
+  /// the controller drives the arm again after a stop with the power on (a protective or safeguard
+  /// stop) is judged against both thresholds times this factor. The resumed program's ramp steps the
+  /// acceleration, which the encoders show samples late (no causal estimate from positions sees it
+  /// sooner: session 35), and a protective stop's resume raised a false contact on 6 of the target-less
+  /// stop sets' 144 runs. 1: off. For comparisons; not stored in the twin file.
+  double resume_widen = 2.0;
   /// second detector: generalized-momentum observer (momentum_observer.hpp) with bandwidth
   /// observer_gain [1/s]; on when observer_level is set (learned with the current thresholds)
   double observer_gain = 150.0;
@@ -335,6 +342,13 @@ class Monitor {
   long gaps() const { return n_gaps_; }
   long repeated() const { return n_repeated_; }
   long invalid() const { return n_invalid_; }
+  /// Samples on which decisions were made: driven, after the estimators' start-up (0 for a
+  /// recording shorter than it: nothing was judged, which is no clean bill of health).
+  long judged() const { return n_judged_; }
+  /// How long the first motion after a powered resume is judged wider on a stream without targets
+  /// (MonitorConfig::resume_widen) [s]: the stop sets' resume ramps (0.15-0.6 s) step the
+  /// acceleration at their start and their end
+  static constexpr double kResumeWindow = 0.3;
   /// Samples in which the controller did not drive the arm (RobotSample::driven() false: power off,
   /// brakes on, a protective or emergency stop, ...): not judged, and their total time [s].
   long not_driven() const { return n_not_driven_; }
@@ -541,7 +555,12 @@ class Monitor {
   bool driven_seen_ = false;  // a driven sample has been pushed
   int alerts_raised_ = 0, crawl_raises_ = 0;  // alerts raised, and those where their joint crawled (finish's hint)
   double paused_at_ = 0.0, not_driven_s_ = 0.0;
+  // a powered resume on a stream without targets: the first motion's window is judged wider
+  // (MonitorConfig::resume_widen) until resume_until_ [s]; pending until the arm moves
+  bool resume_pending_ = false;
+  double resume_until_ = -std::numeric_limits<double>::infinity();
   long n_not_driven_ = 0;
+  long n_judged_ = 0;  // samples decided on (after the estimators' start-up)
   std::int32_t paused_robot_mode_ = kRobotModeRunning, paused_safety_mode_ = kSafetyModeNormal;
   bool restart_pending_ = false;  // samples were skipped: the next one restarts the estimators
   long settle_until_ = 0;     // decisions start after this many samples (kObserverSettle; again after a gap)
