@@ -126,4 +126,6 @@ grep -q "correlate below 0.8 at the lag found: are .* recordings of the same mot
 head -46 "$D/collision.csv" > "$W/c45.csv"
 "$B" monitor --twin "$D/twin.json" "$W/c45.csv" --db '' 2> "$W/err" > /dev/null
 grep -q "no sample was judged: the 45 sample(s)" "$W/err" || fail "a 45-sample recording: $(cat "$W/err")"
+# record --outputs without the recording's own columns wrote them as nan (refused before connecting)
+refused "--outputs lacks actual_qd" record --rtde 127.0.0.1:1 --outputs actual_q,timestamp --duration 1 -o "$W/o_q.csv"
 echo USER-INPUTS-OK

@@ -125,7 +125,7 @@ twinwatch::cli::VerbRegistrar reg{"demo", 1, [](CLI::App& app) {
   demo->add_option("--robot", o->robot, "Robot to use")->capture_default_str();
   demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();
   demo->add_option("--scenarios", o->scenarios, "Scenario directory")->capture_default_str();
-  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s]")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
+  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all, wear_ramp's 7200 s included)")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
   demo->add_flag("--quick", o->quick, "Only the model check (step 1)");
   demo->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
 }};

@@ -2,6 +2,7 @@
 //   twinwatch record --rtde HOST[:PORT] --frequency 500 --duration 60 -o rec.csv
 //   twinwatch serve-robot SCENARIO.yaml [--port 30004] [--speed 1.0]
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -68,6 +69,16 @@ int run_record(const RecordOptions& o) {
   so.protocol = o.protocol;
   so.reconnect = !o.no_reconnect;
   so.outputs = split_list(o.outputs);
+  // the recording format always has these columns: without them its rows would be nan there, which
+  // every reader refuses (a file recorded for nothing)
+  if (!so.outputs.empty()) {
+    std::vector<std::string> missing;
+    for (const char* need : {"timestamp", "actual_q", "actual_qd"})
+      if (std::find(so.outputs.begin(), so.outputs.end(), need) == so.outputs.end()) missing.push_back(need);
+    if (!missing.empty())
+      throw InvalidArgument(fmt::format("--outputs lacks {}: a recording always has timestamp, actual_q and actual_qd (add them to the list)",
+                                        fmt::join(missing, ", ")));
+  }
   for (const auto& name : so.outputs)
     if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
       log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
@@ -290,7 +301,8 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->add_option("--outputs", o->outputs,
                   "Comma-separated RTDE output names (default: every recording column: timestamp, actual_q, actual_qd, "
                   "target_q, target_qd, target_qdd, actual_current, target_current, target_moment, joint_temperatures, "
-                  "actual_digital_output_bits, robot_mode, and from controller 5.5.1 on the declared payload and payload_cog)");
+                  "actual_digital_output_bits, robot_mode, and from controller 5.5.1 on the declared payload and payload_cog; a "
+                  "list must include timestamp, actual_q and actual_qd)");
   sub->add_option("--wait", o->wait, "Keep trying the first connection for this long [s]")->capture_default_str();
   sub->add_option("--protocol", o->protocol, "Highest RTDE protocol version to ask for (2, or 1 for old controllers)")
       ->check(CLI::IsMember({1, 2}))
