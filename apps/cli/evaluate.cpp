@@ -1092,6 +1092,10 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
   cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);  // a jittery logger clock (device::Recording)
   monitor::Monitor mon(twin, cfg);
+  // what the monitor says while it runs (the payload it predicts with, stops, held readings): the
+  // report's reader sees what `monitor` prints
+  std::vector<std::vector<std::string>> note_rows;
+  mon.on_note = [&](double t_note, const std::string& text) { note_rows.push_back({fmt::format("{:.3f}", t_note), text}); };
   monitor::EnvelopeWatch watch(twin.envelope);  // where the robot moves beyond the identified motion
   const int n = rec.n_dof;
   const bool observer = cfg.observer_level.size() == n;  // (as Monitor turns it on)
@@ -1164,6 +1168,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                                 "driven). No event here is no clean bill of health.",
                                 mon.samples()));
   r.add_table("alerts with diagnosis", {"start s", "duration s", "class", "joint", "magnitude", "confidence", "detail"}, rows);
+  if (!note_rows.empty()) r.add_table("the monitor's notes (the payload it predicts with, stops, held readings)", {"t s", "note"}, note_rows);
   std::vector<std::vector<std::string>> mrows(5);
   const char* names[] = {"RMSE A", "MAE A", "R²", "NRMSE %", "d_tau %"};
   for (int k = 0; k < 5; ++k) mrows[static_cast<size_t>(k)].push_back(names[k]);

@@ -290,8 +290,9 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     const long id = sqlite3_column_int64(s, 0);
     // SQLite keeps whatever a row was given: a number column holding text would read as 0
     const auto bad = [&](int col, const char* expected) {
-      return std::runtime_error(fmt::format("{}: events row id {}: column '{}': expected {}, got '{}'", impl_->path, id,
-                                            sqlite3_column_name(s, col), expected, text(col)));
+      // (a store the user named whose rows are not the monitor's: bad input, exit 2)
+      return PathError(fmt::format("{}: events row id {}: column '{}': expected {}, got '{}'", impl_->path, id,
+                                   sqlite3_column_name(s, col), expected, text(col)));
     };
     const auto number = [&](int col) {
       const int t = sqlite3_column_type(s, col);
@@ -326,7 +327,13 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     try {
       e.fault = fault_class_from_string(text(4));
       const std::string others = text(12);
-      if (!others.empty()) e.other_links = nlohmann::json::parse(others).get<std::vector<int>>();
+      if (!others.empty()) {
+        try {
+          e.other_links = nlohmann::json::parse(others).get<std::vector<int>>();
+        } catch (const nlohmann::json::exception&) {
+          throw std::runtime_error(fmt::format("column 'other_links': expected a list of link numbers such as [2, 3], got '{}'", others));
+        }
+      }
       for (int& l : e.other_links) {
         if (from_one ? l < 1 || l > 64 : l < 0 || l > 63)
           throw std::runtime_error(fmt::format("column 'other_links': expected link numbers {}, got '{}'",
@@ -334,7 +341,7 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
         if (from_one) l -= 1;
       }
     } catch (const std::exception& x) {
-      throw std::runtime_error(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
+      throw PathError(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
     }
     out.emplace_back(text(1), std::move(e));
   }

@@ -128,4 +128,14 @@ head -46 "$D/collision.csv" > "$W/c45.csv"
 grep -q "no sample was judged: the 45 sample(s)" "$W/err" || fail "a 45-sample recording: $(cat "$W/err")"
 # record --outputs without the recording's own columns wrote them as nan (refused before connecting)
 refused "--outputs lacks actual_qd" record --rtde 127.0.0.1:1 --outputs actual_q,timestamp --duration 1 -o "$W/o_q.csv"
+# report shows the monitor's notes (here: the declaration it predicts with over --payload-mass 2);
+# a labels path that is a directory and a corrupt event store are bad input (exit 2), named
+"$B" report --twin "$D/twin.json" "$D/fig.csv" -o "$W/r.html" --payload-mass 2 > /dev/null
+grep -q "the twin had 2.00 kg): the twin predicts with the declaration" "$W/r.html" || fail "the report hides the payload it predicted with"
+refused "$W: cannot read the labels file: it is a directory" report --twin "$D/twin.json" "$D/fig.csv" --labels "$W" -o "$W/r2.html"
+if command -v sqlite3 > /dev/null; then
+  "$B" monitor --twin "$D/twin.json" "$D/collision.csv" --db "$W/ev.db" -q
+  sqlite3 "$W/ev.db" "UPDATE events SET other_links = 'abc';"
+  refused "events row id 1: column 'other_links': expected a list of link numbers" events --db "$W/ev.db"
+fi
 echo USER-INPUTS-OK

@@ -652,6 +652,8 @@ int run_report(const ReportOptions& o) {
   const ident::TwinModel twin = cli::load_twin(o.twin);
   std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(o.labels, ec)) throw PathError(o.labels + ": cannot read the labels file: it is a directory");
     std::ifstream f(o.labels);
     if (!f) throw PathError(o.labels + ": cannot open the labels file");
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
