@@ -1,13 +1,16 @@
 // URDF loader (urdfdom). Maps a serial chain onto robot_model.hpp's conventions: every movable
 // joint's frame is rotated so that its axis is local z; fixed joints are merged.
 #include <fmt/format.h>
+#include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <sstream>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
@@ -53,6 +56,48 @@ int first_invalid_utf8_line(const std::string& text) {
   return 0;
 }
 
+// urdfdom reports what it could not read through console_bridge and goes on: a link whose
+// <mass value="abc"/> is not a number loses its whole <inertial> block and loads as a massless
+// link, with only a line on stderr. While parsing, this handler collects those reports so that the
+// loader can refuse the file instead; console_bridge's handler is process-wide, hence the mutex.
+class CollectUrdfdomErrors : public console_bridge::OutputHandler {
+ public:
+  CollectUrdfdomErrors() : lock_(mutex()), previous_(console_bridge::getOutputHandler()) { console_bridge::useOutputHandler(this); }
+  ~CollectUrdfdomErrors() override { console_bridge::useOutputHandler(previous_); }
+  CollectUrdfdomErrors(const CollectUrdfdomErrors&) = delete;
+  CollectUrdfdomErrors& operator=(const CollectUrdfdomErrors&) = delete;
+
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors_.push_back(text);
+  }
+  const std::vector<std::string>& errors() const { return errors_; }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  console_bridge::OutputHandler* previous_;
+  std::vector<std::string> errors_;
+};
+
+// urdfdom's messages quote the offending value in brackets ("mass [abc] is not a float"): the
+// 1-based line of the first attribute holding one of those values, 0 if none is found
+int line_of_quoted_value(const std::string& text, const std::vector<std::string>& messages) {
+  for (const std::string& m : messages) {
+    for (std::size_t open = m.find('['); open != std::string::npos; open = m.find('[', open + 1)) {
+      const std::size_t close = m.find(']', open);
+      if (close == std::string::npos) break;
+      const std::string needle = "\"" + m.substr(open + 1, close - open - 1) + "\"";
+      const std::size_t at = text.find(needle);
+      if (close > open + 1 && at != std::string::npos)
+        return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+    }
+  }
+  return 0;
+}
+
 // rotation taking z onto the unit axis a
 Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
   return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), a).toRotationMatrix();
@@ -69,10 +114,19 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   if (const int line = first_invalid_utf8_line(text))
     throw ParseError(path, line, "", "not valid UTF-8 text (a URDF file is XML in UTF-8)");
   urdf::ModelInterfaceSharedPtr urdf_model;
-  try {
-    urdf_model = urdf::parseURDF(text);
-  } catch (const std::exception& e) {
-    throw ParseError(path, 0, "", fmt::format("not a valid URDF: {}", e.what()));
+  {
+    CollectUrdfdomErrors collect;
+    try {
+      urdf_model = urdf::parseURDF(text);
+    } catch (const std::exception& e) {
+      throw ParseError(path, 0, "", fmt::format("not a valid URDF: {}", e.what()));
+    }
+    if (!collect.errors().empty()) {
+      std::string what;
+      for (const std::string& e : collect.errors()) what += (what.empty() ? "" : "; ") + e;
+      throw ParseError(path, line_of_quoted_value(text, collect.errors()), "",
+                       fmt::format("not a valid URDF: {} (urdfdom would load the rest and leave this part out)", what));
+    }
   }
   if (!urdf_model) throw ParseError(path, 0, "", "not a valid URDF (urdfdom could not parse it: check the XML and that every joint names existing links)");
 

@@ -238,6 +238,29 @@ TEST(DescriptionUrdf, FramesBesideTheChainDoNotHideTheArm) {
   EXPECT_EQ(d.joints[1].name, "j2");
 }
 
+// urdfdom logs a mass that is not a number and drops the link's whole <inertial> block: the arm
+// loaded with a massless link. The loader refuses the file, naming the line and the value.
+TEST(DescriptionUrdf, AMassThatIsNotANumberIsRefusedNotZero) {
+  const std::string path = ::testing::TempDir() + "description_test_mass.urdf";
+  std::ofstream(path) << R"(<robot name="m"><link name="base"/>
+    <link name="l1"><inertial><origin xyz="0 0 0.1"/>
+      <mass value="abc"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>)";
+  try {
+    load_description_urdf(path);
+    FAIL() << "a link with mass 'abc' loaded";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("description_test_mass.urdf:3: not a valid URDF"));
+    EXPECT_THAT(e.what(), HasSubstr("mass [abc] is not a float"));
+  }
+  // the same file with a number loads that mass
+  std::ofstream(path) << R"(<robot name="m"><link name="base"/>
+    <link name="l1"><inertial><origin xyz="0 0 0.1"/>
+      <mass value="1.25"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>)";
+  EXPECT_DOUBLE_EQ(load_description_urdf(path).joints.at(0).body.mass, 1.25);
+}
+
 TEST(Payload, ChangesGravityTorqueByJTransposeMg) {
   RobotModel m = load_robot("ur3e");
   DynamicsData d(m);
