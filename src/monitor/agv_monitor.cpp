@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "twinwatch/core/error.hpp"
@@ -41,9 +42,12 @@ void AgvMonitor::push(const device::AgvStateDatagram& d) {
     }
     if (d.seq < prev) {
       ++c_.reordered;  // late: its partner has moved on, it cannot be paired any more
+      first_seq_[static_cast<size_t>(r)] = std::min(first_seq_[static_cast<size_t>(r)], d.seq);  // came, not lost
       return;
     }
     c_.lost += d.seq - prev - 1;
+  } else {
+    first_seq_[static_cast<size_t>(r)] = d.seq;
   }
   have_[static_cast<size_t>(r)] = true;
   last_seq_[static_cast<size_t>(r)] = d.seq;
@@ -81,6 +85,18 @@ void AgvMonitor::pair(const device::AgvStateDatagram& real, const device::AgvSta
   };
   handle(dv_, rv_, o_.threshold_v, 'v', open_v_);
   handle(dw_, rw_, o_.threshold_w, 'w', open_w_);
+}
+
+void AgvMonitor::account_for_sent(std::uint32_t first, std::uint32_t last) {
+  if (last < first) throw InvalidArgument(fmt::format("AgvMonitor: sent sequence numbers {}..{}: the last is before the first", first, last));
+  for (size_t r = 0; r < 2; ++r) {
+    if (!have_[r]) {
+      c_.lost += static_cast<long>(last - first) + 1;
+      continue;
+    }
+    if (first_seq_[r] > first) c_.lost += first_seq_[r] - first;
+    if (last_seq_[r] < last) c_.lost += last - last_seq_[r];
+  }
 }
 
 void AgvMonitor::finish(double t) {

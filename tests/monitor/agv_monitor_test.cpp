@@ -4,6 +4,8 @@
 
 #include <random>
 
+#include "twinwatch/core/error.hpp"
+
 namespace twinwatch::monitor {
 namespace {
 
@@ -69,6 +71,18 @@ TEST(AgvMonitor, CountsLostDuplicatedAndReordered) {
   EXPECT_EQ(m.counters().lost, 2 + 3);  // real lost 2 and 3; twin lost 1, 2, 3
   EXPECT_EQ(m.counters().reordered, 1);
   EXPECT_EQ(m.counters().paired, 2);
+}
+
+// a lost tail (or a side that never answered) shows as no gap: the sender's range counts it
+TEST(AgvMonitor, ATailThatNeverCameIsCountedLostOnceTheSenderSaysWhatItSent) {
+  AgvMonitor m;
+  for (std::uint32_t k = 2; k < 8; ++k) m.push(state(AgvRole::Real, k, 0.0));  // 0, 1 and 8, 9 never came
+  m.push(state(AgvRole::Real, 1, 0.0));                                         // 1 came late after all
+  EXPECT_EQ(m.counters().lost, 0);
+  m.account_for_sent(0, 9);
+  EXPECT_EQ(m.counters().lost, 1 + 2 + 10);  // real: 0 and 8, 9; twin: all ten
+  EXPECT_EQ(m.counters().reordered, 1);
+  EXPECT_THROW(m.account_for_sent(5, 4), InvalidArgument);
 }
 
 // the two processes answer independently: a twin one period behind still pairs (its state for k

@@ -46,6 +46,10 @@ class AgvMonitor {
   void push(const device::AgvStateDatagram& d);
   /// Closes an open alert; the states still waiting for a partner count as unpaired.
   void finish(double t);
+  /// Once, when the sender is done: it sent sequence numbers first..last to each side. Those a side
+  /// never answered before its first received state or after its last (a lost tail that no later
+  /// datagram reveals as a gap, or a side that never answered at all) are counted as lost.
+  void account_for_sent(std::uint32_t first, std::uint32_t last);
   static constexpr std::uint32_t kHistory = 16;  ///< states kept per side (640 ms at 40 ms)
 
   const std::vector<AgvAlert>& alerts() const { return alerts_; }
@@ -64,7 +68,7 @@ class AgvMonitor {
   };
   std::array<std::array<Slot, kHistory>, 2> ring_{};  // per side, at seq % kHistory
   std::array<bool, 2> have_{false, false};
-  std::array<std::uint32_t, 2> last_seq_{0, 0};
+  std::array<std::uint32_t, 2> first_seq_{0, 0}, last_seq_{0, 0};
   std::uint32_t last_paired_ = 0;
   bool paired_any_ = false;
   double rv_ = 0.0, rw_ = 0.0;
