@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 
 namespace twinwatch::device {
 
@@ -26,6 +27,7 @@ void strip_cr(std::string& line) {
 }  // namespace
 
 std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
+  refuse_directory_input(path);
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the test file");
   std::string line;

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/core/numbers.hpp"
 
@@ -165,6 +166,7 @@ ColumnMap ColumnMap::load(const std::string& path) {
 }
 
 Recording read_recording(const std::string& path, const ColumnMap* map) {
+  refuse_directory_input(path);
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the recording (does it exist and is it readable?)");
   std::string line;

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/core/numbers.hpp"
@@ -790,6 +791,7 @@ void TwinModel::save(const std::string& path) const {
 }
 
 TwinModel TwinModel::load(const std::string& path) {
+  refuse_directory_input(path);
   errno = 0;
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", fmt::format("cannot open the twin file: {}", std::strerror(errno != 0 ? errno : ENOENT)));

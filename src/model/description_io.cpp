@@ -16,6 +16,7 @@
 
 #include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 
 namespace twinwatch::model {
 
@@ -24,13 +25,7 @@ namespace {
 using json = nlohmann::json;
 namespace fs = std::filesystem;
 
-std::string read_file(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw ParseError(path, 0, "", "cannot open the file (does it exist and is it readable?)");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+std::string read_file(const std::string& path) { return read_text_file(path); }
 
 // 1-based line of a byte offset
 int line_of(const std::string& text, size_t byte) {

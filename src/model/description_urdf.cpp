@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/model/description_io.hpp"
 
 namespace twinwatch::model {
@@ -106,11 +107,7 @@ Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
 }  // namespace
 
 RobotDescription load_description_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw ParseError(path, 0, "", "cannot open the file (does it exist and is it readable?)");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  const std::string text = ss.str();
+  const std::string text = read_text_file(path);
   if (const int line = first_invalid_utf8_line(text))
     throw ParseError(path, line, "", "not valid UTF-8 text (a URDF file is XML in UTF-8)");
   urdf::ModelInterfaceSharedPtr urdf_model;

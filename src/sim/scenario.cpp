@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/core/json_fields.hpp"
 #include "twinwatch/core/numbers.hpp"
@@ -570,6 +571,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
 }
 
 Scenario load_scenario(const std::string& path) {
+  refuse_directory_input(path);
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the scenario file");
   std::stringstream ss;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -259,6 +260,21 @@ TEST(DescriptionUrdf, AMassThatIsNotANumberIsRefusedNotZero) {
       <mass value="1.25"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
     <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>)";
   EXPECT_DOUBLE_EQ(load_description_urdf(path).joints.at(0).body.mass, 1.25);
+}
+
+// a directory named like a description was read as an empty document ("not valid JSON: unexpected
+// end of input"): the wrong cause
+TEST(LoadRobot, ADirectoryNamedLikeADescriptionIsSaidToBeOne) {
+  for (const std::string name : {"description_test_dir.json", "description_test_dir.urdf"}) {
+    const std::string path = ::testing::TempDir() + name;
+    std::filesystem::create_directories(path);
+    try {
+      load_robot(path);
+      FAIL() << name;
+    } catch (const ParseError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(name + ": cannot read: it is a directory, not a file"));
+    }
+  }
 }
 
 TEST(Payload, ChangesGravityTorqueByJTransposeMg) {

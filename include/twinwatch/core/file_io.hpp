@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <filesystem>
 #include <string>
@@ -64,6 +65,25 @@ inline void require_writable(const std::string& path) {
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec)) fail("directory " + dir.string() + " does not exist");
   if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
+}
+
+/// The whole content of a text file an input names. Throws ParseError "PATH: cannot read: REASON"
+/// for a directory (std::ifstream opens one and reads nothing, which a parser then reports as an
+/// empty document: the wrong cause) or a file that cannot be opened.
+inline void refuse_directory_input(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw ParseError(path, 0, "", "cannot read: it is a directory, not a file");
+}
+
+inline std::string read_text_file(const std::string& path) {
+  refuse_directory_input(path);
+  errno = 0;
+  std::ifstream f(path, std::ios::binary);
+  if (!f)
+    throw ParseError(path, 0, "", std::string("cannot open the file: ") + (errno ? std::strerror(errno) : "does it exist and is it readable?"));
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) throw ParseError(path, 0, "", "cannot read: a read failed");
+  return text;
 }
 
 /// Whether two paths name the same file (the same name, or another name of one existing file:
