@@ -26,13 +26,22 @@ constexpr double kTauCl = 0.2;     // desired closed-loop time [s] [AGV §4.2]
 constexpr double kWheelSpeed = 4;  // [rad/s] as in the paper's tests
 
 void print_fit(const char* name, const ident::AgvMotorFit& f, const model::DcMotorParams& table) {
-  fmt::print("{:<6} Ra {:6.3f} Ω ({:5.2f})  k {:6.4f} V·s/rad ({:5.3f})  Tq {:7.4f} N·m ({:5.3f})  B {:9.3e} ({:8.2e})  "
-             "J {:9.3e} ({:8.2e})  tau {:5.3f} s\n",
+  fmt::print("{:<6} Ra {:6.3f} Ω ({:5.2f})  k {:6.4f} V·s/rad ({:5.3f})  Tq {:7.4f} N·m ({:5.3f})  B {:9.3e} N·m·s/rad ({:8.2e})  "
+             "J {:9.3e} kg·m² ({:8.2e})  tau {:5.3f} s\n",
              name, f.params.Ra, table.Ra, f.params.k, table.k, f.params.Tq, table.Tq, f.params.B, table.B, f.params.J, table.J, f.tau);
 }
 
+// the fit and the IMC PI it gives (AGV Table 2), with the units a script needs to read them
 nlohmann::json fit_json(const ident::AgvMotorFit& f) {
-  return {{"Ra", f.params.Ra}, {"k", f.params.k}, {"Tq", f.params.Tq}, {"B", f.params.B}, {"J", f.params.J}, {"tau", f.tau}};
+  const auto g = sim::imc_pi(f.params.gain(), f.params.time_constant(), kTauCl);
+  return {{"Ra", f.params.Ra}, {"k", f.params.k}, {"Tq", f.params.Tq}, {"B", f.params.B}, {"J", f.params.J}, {"tau", f.tau},
+          {"pi", {{"Kc", g.Kc}, {"Ti", g.Ti}, {"tau_cl", kTauCl}}}};
+}
+
+const nlohmann::json& fit_units() {
+  static const nlohmann::json u = {{"Ra", "Ω"}, {"k", "V·s/rad"}, {"Tq", "N·m"}, {"B", "N·m·s/rad"}, {"J", "kg·m²"}, {"tau", "s"},
+                                   {"pi", {{"Kc", "V·s/rad"}, {"Ti", "s"}, {"tau_cl", "s"}}}};
+  return u;
 }
 
 // one robot process: waits for a command, steps its PI loops and plant once, answers with its state
@@ -198,7 +207,7 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
   auto idf = std::make_shared<std::pair<std::string, bool>>("", false);
   auto* ident_cmd = agv->add_subcommand("identify", "Fit Ra, k (eq. 3), B, Tq (eq. 5) and J (eq. 6) per motor from a test CSV");
   ident_cmd->add_option("TESTS", idf->first, "Test CSV: motor,test,voltage_V,current_A,speed_rad_s,time_s")->required()->check(CLI::ExistingFile);
-  ident_cmd->add_flag("--json", idf->second, "Print the parameters as JSON");
+  ident_cmd->add_flag("--json", idf->second, "Print {\"right\": {Ra, k, Tq, B, J, tau, pi: {Kc, Ti, tau_cl}}, \"left\": {...}, \"units\": {...}}");
   ident_cmd->callback([idf] {
     const auto rows = device::read_agv_tests(idf->first);
     // the fit's complaints (too few points, a non-physical result) concern this file
@@ -211,7 +220,7 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
     };
     const auto r = fit("right"), l = fit("left");
     if (idf->second) {
-      fmt::print("{}\n", nlohmann::json{{"right", fit_json(r)}, {"left", fit_json(l)}}.dump());
+      fmt::print("{}\n", nlohmann::json{{"right", fit_json(r)}, {"left", fit_json(l)}, {"units", fit_units()}}.dump());
       return;
     }
     fmt::print("identified motor parameters (AGV Table 1 in brackets)\n");
