@@ -360,6 +360,11 @@ model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::str
     for (double c : com)
       if (!std::isfinite(c)) throw InvalidArgument(fmt::format("--payload-com {} {} {}: expected three finite numbers [m]", com[0], com[1], com[2]));
     p.com = Eigen::Vector3d(com[0], com[1], com[2]);
+    // metres from the flange is most likely millimetres, as identify's --known-payload and the monitor say
+    if (p.com.norm() > model::kPayloadComMax)
+      throw InvalidArgument(fmt::format("--payload-com {:g} {:g} {:g}: expected a centre of mass within {:g} m of the flange, got one "
+                                        "{:.3g} m away (in mm? give metres)",
+                                        com[0], com[1], com[2], model::kPayloadComMax, p.com.norm()));
   }
   if (mass > 0.0 && !twin.gains_known())
     throw InvalidArgument(fmt::format(
@@ -1086,6 +1091,17 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   // 2155 % as results (audit of session 22); validate refuses the same
   if (rec.samples.size() < kMinReportSamples)
     throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", recording, rec.samples.size(), kMinReportSamples));
+  // labels shade the fault spans of the run they were written with: another scenario's would shade
+  // faults that never happened (and its scoring tables would say so as findings)
+  if (labels && rec.median_period > 0) {
+    const double span = rec.samples.back().timestamp - rec.samples.front().timestamp + rec.median_period;
+    const double rate = 1.0 / rec.median_period;
+    if (std::abs(span - labels->duration) > 2.0 * rec.median_period + 0.01 * labels->duration ||
+        std::abs(rate - labels->rate) > 0.01 * labels->rate)
+      throw InvalidArgument(fmt::format("report: the labels of scenario '{}' ({:g} s at {:g} Hz) do not go with {}, which spans {:.3f} s at "
+                                        "{:.4g} Hz: labels of another recording? (a simulated REC.csv has its own in REC.labels.json)",
+                                        labels->scenario, labels->duration, labels->rate, recording, span, rate));
+  }
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
   cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`

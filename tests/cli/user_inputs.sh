@@ -133,9 +133,16 @@ refused "--outputs lacks actual_qd" record --rtde 127.0.0.1:1 --outputs actual_q
 "$B" report --twin "$D/twin.json" "$D/fig.csv" -o "$W/r.html" --payload-mass 2 > /dev/null
 grep -q "the twin had 2.00 kg): the twin predicts with the declaration" "$W/r.html" || fail "the report hides the payload it predicted with"
 refused "$W: cannot read the labels file: it is a directory" report --twin "$D/twin.json" "$D/fig.csv" --labels "$W" -o "$W/r2.html"
-if command -v sqlite3 > /dev/null; then
-  "$B" monitor --twin "$D/twin.json" "$D/collision.csv" --db "$W/ev.db" -q
-  sqlite3 "$W/ev.db" "UPDATE events SET other_links = 'abc';"
-  refused "events row id 1: column 'other_links': expected a list of link numbers" events --db "$W/ev.db"
-fi
+# (sqlite3 is installed by scripts/setup.sh)
+"$B" monitor --twin "$D/twin.json" "$D/collision.csv" --db "$W/ev.db" -q
+sqlite3 "$W/ev.db" "UPDATE events SET other_links = 'abc';"
+refused "events row id 1: column 'other_links': expected a list of link numbers" events --db "$W/ev.db"
+# another run's labels would shade faults that never happened; a COM 100 m out is a unit slip
+refused "the labels of scenario 'short_declared_pick' (8 s at 500 Hz) do not go with $D/fig.csv" \
+  report --twin "$D/twin.json" "$D/fig.csv" --labels "$D/declared_pick.labels.json" -o "$W/r3.html"
+refused "--payload-com 100 0 0: expected a centre of mass within 1 m of the flange" \
+  report --twin "$D/twin.json" "$D/fig.csv" --payload-mass 0.5 --payload-com 100 0 0 -o "$W/r4.html"
+"$B" report --twin "$D/twin.json" "$D/fig.csv" --labels "$D/collision.labels.json" -o "$W/r5.html" 2> "$W/err" > /dev/null
+grep -q "is not $D/fig.csv's own labels file ($D/fig.labels.json): the spans shaded are those of scenario 'short_collision'" "$W/err" \
+  || fail "labels of another run of the same length: $(cat "$W/err")"
 echo USER-INPUTS-OK

@@ -657,6 +657,12 @@ int run_report(const ReportOptions& o) {
     std::ifstream f(o.labels);
     if (!f) throw PathError(o.labels + ": cannot open the labels file");
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
+    // a run of the same length and rate cannot be told apart from this one by the report (it
+    // refuses one that differs): a labels file not named after the recording is said
+    const std::filesystem::path own = std::filesystem::path(o.recording).replace_extension(".labels.json");
+    if (!same_file(own.string(), o.labels))
+      fmt::print(stderr, "note: --labels {} is not {}'s own labels file ({}): the spans shaded are those of scenario '{}'\n", o.labels,
+                 o.recording, own.string(), labels->scenario);
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
