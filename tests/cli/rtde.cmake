@@ -42,3 +42,8 @@ add_test(NAME cli.serve_robot_refuses_a_stream_without_targets
   COMMAND sh -c "printf 'robot: ur3e\\nduration: 1\\nstreams_targets: false\\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\\n' > ${PROJECT_BINARY_DIR}/no_targets.yaml && $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_BINARY_DIR}/no_targets.yaml --port 35931 -q; echo exit=$?")
 set_tests_properties(cli.serve_robot_refuses_a_stream_without_targets PROPERTIES
   PASS_REGULAR_EXPRESSION "no_targets.yaml: 'streams_targets: false' is a log without the controller's targets, which an RTDE controller always serves.*exit=2" TIMEOUT 20)
+# --wait-client that runs out says so: the robot runs with nobody watching its first cycles
+add_test(NAME cli.serve_robot_wait_client_timeout
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/chirp.yaml --port 0 --speed 5 --duration 0.2 --wait-client 0.2 2>&1; echo exit=\$?")
+set_tests_properties(cli.serve_robot_wait_client_timeout PROPERTIES
+  PASS_REGULAR_EXPRESSION "--wait-client 0.2 s: no client started streaming \\(connections so far: 0\\); the robot runs without one.*exit=0")

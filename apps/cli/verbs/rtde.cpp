@@ -240,6 +240,10 @@ int run_serve(const ServeOptions& o) {
     const auto until = Clock::now() + std::chrono::duration<double>(o.wait_client);
     while (!interrupted() && Clock::now() < until && server.stats().streaming == 0)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    // the robot starts either way: say that nobody is watching its first cycles
+    if (!interrupted() && server.stats().streaming == 0 && !o.quiet)
+      fmt::print(stderr, "--wait-client {:g} s: no client started streaming (connections so far: {}); the robot runs without one\n",
+                 o.wait_client, server.stats().connections);
   }
 
   const long steps = std::llround(sc.options.duration * sc.options.rate);
