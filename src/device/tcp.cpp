@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -123,16 +124,21 @@ bool send_all(int fd, const std::uint8_t* data, std::size_t n, int timeout_ms) {
 
 void parse_endpoint(const std::string& s, std::string& host, std::uint16_t& port, std::uint16_t default_port) {
   const auto colon = s.rfind(':');
+  // (an empty host resolved to nothing and failed as an unreachable robot, exit 1: it is bad usage)
+  const auto no_host = [&] { return InvalidArgument(fmt::format("'{}': expected HOST[:PORT], the host is missing", s)); };
   if (colon == std::string::npos || s.find(':') != colon) {  // no port (or a bare IPv6 address)
+    if (s.find_first_not_of(" \t") == std::string::npos) throw no_host();
     host = s;
     port = default_port;
     return;
   }
   host = s.substr(0, colon);
+  if (host.find_first_not_of(" \t") == std::string::npos) throw no_host();
   const std::string p = s.substr(colon + 1);
   char* end = nullptr;
   const long v = std::strtol(p.c_str(), &end, 10);
-  if (p.empty() || *end != '\0' || v < 1 || v > 65535)
+  // the whole field is the port: strtol took " 80" and "+80"
+  if (p.empty() || !std::isdigit(static_cast<unsigned char>(p[0])) || *end != '\0' || v < 1 || v > 65535)
     throw InvalidArgument(fmt::format("'{}': port '{}' is not a number in 1..65535", s, p));
   port = static_cast<std::uint16_t>(v);
 }
