@@ -145,4 +145,11 @@ refused "--payload-com 100 0 0: expected a centre of mass within 1 m of the flan
 "$B" report --twin "$D/twin.json" "$D/fig.csv" --labels "$D/collision.labels.json" -o "$W/r5.html" 2> "$W/err" > /dev/null
 grep -q "is not $D/fig.csv's own labels file ($D/fig.labels.json): the spans shaded are those of scenario 'short_collision'" "$W/err" \
   || fail "labels of another run of the same length: $(cat "$W/err")"
+# the robot description is an input too: identify -o and simulate -o must not replace it
+cp "$(dirname "$SC")/../../../data/robots/ur3e.json" "$W/myrobot.json" || fail "no data/robots/ur3e.json beside $SC"
+cp "$W/myrobot.json" "$W/myrobot.orig"
+refused "cannot write: it is the input" identify "$D/fig.csv" "$D/exc.csv" -o "$W/myrobot.json" --robot "$W/myrobot.json"
+printf 'robot: %s\nduration: 1\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\n' "$W/myrobot.json" > "$W/rs.yaml"
+refused "cannot write: it is the input" simulate "$W/rs.yaml" -o "$W/myrobot.json"
+cmp -s "$W/myrobot.json" "$W/myrobot.orig" || fail "the robot description was replaced"
 echo USER-INPUTS-OK

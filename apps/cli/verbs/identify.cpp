@@ -189,6 +189,7 @@ int run_identify(const IdentifyOptions& o) {
   {
     std::vector<std::string> inputs = o.recordings;
     inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
+    inputs.push_back(model::robot_file(o.robot));  // (a description file; empty for a built-in name)
     require_output(o.output, inputs);
   }
   const bool learned = o.method == "mlp" || o.method == "hybrid";
@@ -316,6 +317,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   {
     std::vector<std::string> inputs = all;
     inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
+    inputs.push_back(model::robot_file(o.robot));
     require_output(o.output, inputs);
   }
   if (o.quasi_static.empty())

@@ -13,6 +13,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "verb_registry.hpp"
 
@@ -47,6 +48,9 @@ int run(const Options& o) {
   require_output(o.output, {o.scenario});
   require_output(labels_path(o.output), {o.scenario, o.output});
   sim::Scenario s = sim::load_scenario(o.scenario);
+  // nor the robot description the scenario names
+  require_output(o.output, {model::robot_file(s.robot)});
+  require_output(labels_path(o.output), {model::robot_file(s.robot)});
   if (o.seed_given) {
     if (o.seed < 0 || o.seed > static_cast<long>(std::numeric_limits<unsigned>::max()))
       throw InvalidArgument(fmt::format("--seed: expected 0 to {}, got {}", std::numeric_limits<unsigned>::max(), o.seed));
