@@ -441,6 +441,52 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot) {
                                           rec.path, j + 1, s.qd[j], t, k + 1, kUnitsSpeedFactor, robot.name(), l.qd_max, j));
     }
   }
+  // currents in mA: judged on each joint's 99th percentile of |i|, which a glitch of a few samples
+  // (a sensor fault the monitor is there to report) does not move
+  if (rec.present & kFieldActualCurrent) {
+    std::vector<double> a;
+    a.reserve(rec.samples.size());
+    for (int j = 0; j < rec.n_dof; ++j) {
+      a.clear();
+      for (const RobotSample& s : rec.samples)
+        if (s.has(kFieldActualCurrent) && std::isfinite(s.current[j])) a.push_back(std::abs(s.current[j]));
+      if (a.empty()) continue;
+      const auto at = a.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(a.size() - 1));
+      std::nth_element(a.begin(), at, a.end());
+      if (*at > kUnitsCurrentMax)
+        throw InvalidArgument(fmt::format("{}: J{}'s current is above {:.4g} A in 1 % of the samples, more than the {:g} A twinwatch takes "
+                                          "for a joint current: are the currents in mA? Scale them with a column map "
+                                          "('COLUMN,actual_current_{},0.001', docs/recordings.md)",
+                                          rec.path, j + 1, *at, kUnitsCurrentMax, j));
+    }
+  }
+}
+
+void check_declared_payloads(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
+  if (!(rec.present & kFieldPayload)) return;
+  const double limit = robot.payload_limit();
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    if (!s.has(kFieldPayload)) continue;
+    const double t = s.timestamp - rec.samples.front().timestamp;
+    const Eigen::Vector3d c(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
+    if (!std::isfinite(s.payload) || !c.allFinite())
+      throw InvalidArgument(fmt::format("{}: the payload declared at t = {:.3f} s (sample {}) is not a finite mass and centre of mass; {} "
+                                        "needs the payload each healthy run carried",
+                                        rec.path, t, k + 1, what));
+    if (s.payload > limit)
+      throw InvalidArgument(fmt::format("{}: column 'payload' declares {:g} kg at t = {:.3f} s (sample {}), more than {:g} kg ({}){}; {} "
+                                        "would learn from a run whose payload the monitor cannot take",
+                                        rec.path, s.payload, t, k + 1, limit, robot.payload_limit_text(),
+                                        s.payload / 1000.0 <= limit ? ": is it in grams? Scale it with a column map ('COLUMN,payload,0.001', docs/recordings.md)" : "",
+                                        what));
+    if (s.payload > 0.0 && c.norm() > model::kPayloadComMax)
+      throw InvalidArgument(fmt::format("{}: columns 'payload_cog_0..2' declare a centre of mass ({:g}, {:g}, {:g}) {:.3g} m from the flange at "
+                                        "t = {:.3f} s (sample {}), more than {:g} m: is it in mm? Scale it with a column map "
+                                        "('COLUMN,payload_cog_0,0.001', docs/recordings.md); {} would learn from a run whose payload the "
+                                        "monitor cannot take",
+                                        rec.path, c.x(), c.y(), c.z(), c.norm(), t, k + 1, model::kPayloadComMax, what));
+  }
 }
 
 std::string magnitude_text(double value, const std::string& units) {

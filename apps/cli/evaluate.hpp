@@ -29,14 +29,23 @@ model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::str
 
 /// A recording that cannot be in the robot's units, refused before it is fitted or watched: a joint
 /// position beyond the robot's range by more than kUnitsPositionMargin (degrees read as radians), a
-/// speed above kUnitsSpeedFactor times the joint's limit, or a median sample period above
-/// kUnitsMaxPeriod (milliseconds read as seconds). The message names the file, the joint, the
+/// speed above kUnitsSpeedFactor times the joint's limit, a joint's 99th-percentile |current| above
+/// kUnitsCurrentMax (mA read as A), or a median sample period above kUnitsMaxPeriod (milliseconds
+/// read as seconds). The message names the file, the joint, the
 /// time, the value and the limit, and the column map scale that fixes it (docs/recordings.md).
 /// Throws InvalidArgument.
 inline constexpr double kUnitsPositionMargin = 0.5;  ///< [rad] beyond q_min / q_max
 inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
+inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-percentile |current| (mA read as A)
+
+/// For the learners (identify, thresholds): a payload the recording declares that the monitor would
+/// not take (more than the robot carries, e.g. grams; a centre of mass beyond kPayloadComMax, e.g.
+/// mm; not finite) is an error naming the file, the column, the time and sample, and `what` learns
+/// from it. The monitor notes such a declaration and keeps its payload; a healthy run learned with
+/// it would carry the wrong payload into every residual.
+void check_declared_payloads(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
 
 /// The recordings a twin is fitted or its thresholds learned on, each cut to the stretches in which the
 /// controller drives the arm (device::driven_segments, stretches of kMinDrivenStretch s and more): a

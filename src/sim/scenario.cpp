@@ -289,6 +289,9 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
          fmt::format("expected one of figure_eight, triangle, fourier, fourier_series, sine, chirp, point_to_point, quasi_static; got '{}'", type));
 }
 
+// [A] the largest current_offset fault: a sensor offset of tens of amperes is no longer an offset
+constexpr double kMaxCurrentOffset = 20.0;
+
 // the keys a fault of each type takes (parse_scenario)
 std::set<std::string> fault_keys(FaultType t) {
   std::set<std::string> k{"type", "onset", "ramp", "end"};
@@ -479,6 +482,10 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       if (fs.type == FaultType::FrictionGrowth && !(fs.magnitude > -1.0))
         y.fail(f["magnitude"], p + ".magnitude",
                fmt::format("expected a relative change > -1 (friction x (1 + magnitude) stays positive), got {}", fs.magnitude));
+      // (a value in mA: 300 "A" wrote a recording every reader then refuses as mA)
+      if (fs.type == FaultType::CurrentOffset && !(std::abs(fs.magnitude) <= kMaxCurrentOffset))
+        y.fail(f["magnitude"], p + ".magnitude",
+               fmt::format("expected a current offset within ±{:g} A, got {} (in mA? give amperes)", kMaxCurrentOffset, fs.magnitude));
       if (fs.type == FaultType::Collision) {
         if (!f["link"]) y.fail(f, p + ".link", "missing required field");
         const int l = y.integer(f, p, "link", 0);

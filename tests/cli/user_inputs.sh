@@ -152,4 +152,16 @@ refused "cannot write: it is the input" identify "$D/fig.csv" "$D/exc.csv" -o "$
 printf 'robot: %s\nduration: 1\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\n' "$W/myrobot.json" > "$W/rs.yaml"
 refused "cannot write: it is the input" simulate "$W/rs.yaml" -o "$W/myrobot.json"
 cmp -s "$W/myrobot.json" "$W/myrobot.orig" || fail "the robot description was replaced"
+# unit slips in a recording's currents (mA) and its payload declaration (g, mm): refused with the scale
+awk -F, 'NR>1{for(i=32;i<=37;i++)$i=$i*1000}1' OFS=, "$D/fig.csv" > "$W/mA.csv"
+refused "mA.csv: J1's current is above .* are the currents in mA" identify "$W/mA.csv" "$D/exc.csv" -o "$W/t_mA.json"
+refused "are the currents in mA" monitor --twin "$D/twin.json" "$W/mA.csv" --db ''
+head -1 "$D/declared_pick.csv" | tr , '\n' | grep -n '^payload$' | grep -q '^59:' || fail "declared_pick.csv: payload is not column 59"
+awk -F, 'NR>1{$59=$59*1000}1' OFS=, "$D/declared_pick.csv" > "$W/pay_g.csv"
+awk -F, 'NR>1{$62=$62*1000}1' OFS=, "$D/declared_pick.csv" > "$W/cog_mm.csv"
+cp "$D/twin.json" "$W/tw.json"
+refused "column 'payload' declares 500 kg at t = 3.000 s (sample 1501), more than 3 kg (the rated payload of ur3e): is it in grams" \
+  thresholds "$W/pay_g.csv" --twin "$W/tw.json"
+refused "declare a centre of mass (0, 0, 40) 40 m from the flange .* is it in mm" identify "$W/cog_mm.csv" "$D/exc.csv" -o "$W/t_mm.json"
+cmp -s "$W/tw.json" "$D/twin.json" || fail "thresholds on a refused recording changed the twin"
 echo USER-INPUTS-OK

@@ -357,6 +357,7 @@ int run_thresholds(const ThresholdOptions& o) {
     recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
     cli::check_units(recs.back(), twin.robot());
+    cli::check_declared_payloads(recs.back(), twin.robot(), "thresholds");
   }
   recs = cli::driven_only(std::move(recs));
   // (read before the learning run: a bad one fails in a second, not after minutes)
@@ -371,6 +372,7 @@ int run_thresholds(const ThresholdOptions& o) {
     vrecs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
     cli::check_units(vrecs.back(), twin.robot());
+    cli::check_declared_payloads(vrecs.back(), twin.robot(), "thresholds --debounce-validation");
   }
   vrecs = cli::driven_only(std::move(vrecs));
   // (the learners hold them as the monitor does: said here, where the recording has its name)
