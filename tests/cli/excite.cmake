@@ -29,7 +29,7 @@ endif()
 add_test(NAME cli.validate_torque_bad_table COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e
          --friction-table ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv)
 set_tests_properties(cli.validate_torque_bad_table PROPERTIES FIXTURES_REQUIRED excite_model
-                     PASS_REGULAR_EXPRESSION "bad_friction_table.csv:4: field 'phi2': expected a number, got 'abc'")
+                     PASS_REGULAR_EXPRESSION "bad_friction_table.csv:4: field 'phi2': expected a finite number, got 'abc'")
 add_test(NAME cli.validate_torque_bad_segment COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --segment 0.7:0.2)
 set_tests_properties(cli.validate_torque_bad_segment PROPERTIES FIXTURES_REQUIRED excite_model
                      PASS_REGULAR_EXPRESSION "--segment '0.7:0.2': expected 0 <= FROM < TO <= 1")
@@ -76,3 +76,16 @@ set_tests_properties(cli.excite_tool_point_two_numbers PROPERTIES PASS_REGULAR_E
 # the library's field names are told as the options the user typed (audit of session 22: "q0 has 3 values")
 add_test(NAME cli.excite_option_named COMMAND twinwatch excite ur3e -o ${d}/bad.yaml --q0 0 0 0)
 set_tests_properties(cli.excite_option_named PROPERTIES PASS_REGULAR_EXPRESSION "error: --q0 has 3 values, expected 6 \\(model.n_dof\\) or none \\(ur3e\\)")
+# a friction table with a joint twice (the later row won), a nan parameter (ended in "no valid
+# samples", naming nothing) or another table's header (read by position) is refused at its line
+foreach(case "dup;joint,phi1,phi2,phi3\n1,0.1,2,0\n2,0.1,2,0\n3,0.1,2,0\n4,0.1,2,0\n5,0.1,2,0\n6,0.1,2,0\n3,50,2,0\n;:8: field 'joint': joint 3 has a row already"
+             "nan;joint,phi1,phi2,phi3\n1,nan,2,0\n;:2: field 'phi1': expected a finite number, got 'nan'"
+             "header;a,b,c,d\n1,0.1,2,0\n;:1: expected the header 'joint,phi1,phi2,phi3'")
+  list(GET case 0 name)
+  list(GET case 1 text)
+  list(GET case 2 want)
+  add_test(NAME cli.validate_torque_friction_table_${name}
+           COMMAND sh -c "printf '${text}' > ${d}/ft_${name}.csv && $<TARGET_FILE:twinwatch> validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e --friction-table ${d}/ft_${name}.csv 2>&1; echo exit=\$?")
+  set_tests_properties(cli.validate_torque_friction_table_${name} PROPERTIES FIXTURES_REQUIRED excite_model
+                       PASS_REGULAR_EXPRESSION "ft_${name}.csv${want}.*exit=2")
+endforeach()

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -61,8 +62,18 @@ std::vector<Sigmoid> load_sigmoid_table(const std::string& path, int n) {
   while (std::getline(f, line)) {
     ++ln;
     if (line.empty() || line[0] == '#') continue;
-    if (!header) {  // first non-comment line: the column names
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (!header) {  // first non-comment line: the column names (the columns are read by position)
       header = true;
+      // names may carry units after the parameter's name (joint,phi1_Nm,phi2_s_per_rad,phi3_rad_per_s)
+      std::vector<std::string> names;
+      std::stringstream hs(line);
+      for (std::string h; std::getline(hs, h, ',');) names.push_back(h);
+      const char* want[4] = {"joint", "phi1", "phi2", "phi3"};
+      bool ok = names.size() == 4;
+      for (size_t i = 0; ok && i < 4; ++i) ok = names[i].rfind(want[i], 0) == 0 && (names[i].size() == std::strlen(want[i]) || names[i][std::strlen(want[i])] == '_');
+      if (!ok)
+        throw ParseError(path, ln, "", fmt::format("expected the header 'joint,phi1,phi2,phi3' (each name may end in _UNITS), got '{}'", line));
       continue;
     }
     std::vector<std::string> cells;
@@ -76,13 +87,15 @@ std::vector<Sigmoid> load_sigmoid_table(const std::string& path, int n) {
       try {
         size_t used = 0;
         v[i] = std::stod(cells[static_cast<size_t>(i)], &used);
-        if (used != cells[static_cast<size_t>(i)].size()) throw std::invalid_argument("junk");
+        if (used != cells[static_cast<size_t>(i)].size() || !std::isfinite(v[i])) throw std::invalid_argument("junk");
       } catch (const std::exception&) {
-        throw ParseError(path, ln, names[i], fmt::format("expected a number, got '{}'", cells[static_cast<size_t>(i)]));
+        throw ParseError(path, ln, names[i], fmt::format("expected a finite number, got '{}'", cells[static_cast<size_t>(i)]));
       }
     }
     const int j = static_cast<int>(v[0]);
     if (j < 1 || j > n || v[0] != j) throw ParseError(path, ln, "joint", fmt::format("expected 1 to {}, got {}", n, cells[0]));
+    if (seen[static_cast<size_t>(j - 1)])  // (the later row silently won)
+      throw ParseError(path, ln, "joint", fmt::format("joint {} has a row already: expected one row per joint", j));
     out[static_cast<size_t>(j - 1)] = {v[1], v[2], v[3]};
     seen[static_cast<size_t>(j - 1)] = true;
   }
