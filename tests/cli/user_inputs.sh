@@ -164,4 +164,6 @@ refused "column 'payload' declares 500 kg at t = 3.000 s (sample 1501), more tha
   thresholds "$W/pay_g.csv" --twin "$W/tw.json"
 refused "declare a centre of mass (0, 0, 40) 40 m from the flange .* is it in mm" identify "$W/cog_mm.csv" "$D/exc.csv" -o "$W/t_mm.json"
 cmp -s "$W/tw.json" "$D/twin.json" || fail "thresholds on a refused recording changed the twin"
+# --program '' (an unset variable) silently meant the default set
+refused "--program: the program name is empty" thresholds "$D/fig.csv" --twin "$W/tw.json" --program ''
 echo USER-INPUTS-OK

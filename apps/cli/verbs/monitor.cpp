@@ -28,6 +28,12 @@
 
 namespace {
 
+// --program '' (an unset $PROG) named no program and silently meant the default set
+const CLI::Validator kProgramNameGiven(
+    [](std::string& v) { return v.empty() ? std::string("the program name is empty (an unset variable?); leave --program out for the default set") : std::string(); },
+    "NAME");
+
+
 using namespace twinwatch;
 
 struct MonitorOptions {
@@ -526,7 +532,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--program", o->program,
                   "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
-                  "default set");
+                  "default set")->check(kProgramNameGiven);
   sub->add_option("--cycle-period", o->cycle_period,
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
                   "trend.window_s)")
@@ -567,7 +573,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
       ->check(CLI::ExistingFile);
   sub->add_option("--program", o->program,
                   "Store the thresholds as the set of this program (letters, digits, _ - .), selected with 'monitor --program'; "
-                  "the default set and the other programs' sets are kept. Without it: re-learn the default set");
+                  "the default set and the other programs' sets are kept. Without it: re-learn the default set")->check(kProgramNameGiven);
   sub->callback([o] { twinwatch::cli::set_exit_code(run_thresholds(*o)); });
 }};
 
@@ -740,7 +746,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
-  sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)");
+  sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)")->check(kProgramNameGiven);
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
