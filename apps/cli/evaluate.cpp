@@ -462,7 +462,18 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot) {
   }
 }
 
-void check_declared_payloads(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
+void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
+  // a corrupted word (1.7e308 A) among healthy samples: the monitor skips such a sample as a sensor
+  // fault; a learner would fit it
+  for (size_t k = 0; k < rec.samples.size(); ++k) {
+    const RobotSample& s = rec.samples[k];
+    for (int j = 0; j < rec.n_dof; ++j)
+      if (s.has(kFieldActualCurrent) && !(std::abs(s.current[j]) <= kTrainingCurrentMax))
+        throw InvalidArgument(fmt::format("{}: column 'actual_current_{}' is {:g} A at t = {:.3f} s (sample {}), no reading a joint's drive "
+                                          "gives (above {:g} A); {} learns from healthy runs: leave this stretch out of the recording",
+                                          rec.path, j, s.current[j], s.timestamp - rec.samples.front().timestamp, k + 1,
+                                          kTrainingCurrentMax, what));
+  }
   if (!(rec.present & kFieldPayload)) return;
   const double limit = robot.payload_limit();
   for (size_t k = 0; k < rec.samples.size(); ++k) {

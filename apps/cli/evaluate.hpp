@@ -40,12 +40,15 @@ inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
 inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-percentile |current| (mA read as A)
 
-/// For the learners (identify, thresholds): a payload the recording declares that the monitor would
+inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's |current| in a training run
+
+/// For the learners (identify, thresholds): a current beyond kTrainingCurrentMax in any sample (a
+/// corrupted word), or a payload the recording declares that the monitor would
 /// not take (more than the robot carries, e.g. grams; a centre of mass beyond kPayloadComMax, e.g.
 /// mm; not finite) is an error naming the file, the column, the time and sample, and `what` learns
 /// from it. The monitor notes such a declaration and keeps its payload; a healthy run learned with
 /// it would carry the wrong payload into every residual.
-void check_declared_payloads(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
+void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
 
 /// The recordings a twin is fitted or its thresholds learned on, each cut to the stretches in which the
 /// controller drives the arm (device::driven_segments, stretches of kMinDrivenStretch s and more): a

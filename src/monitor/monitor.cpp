@@ -2056,14 +2056,18 @@ bool Monitor::skip_invalid(const RobotSample& s) {
     return true;
   }
   // a position, velocity or current that is not a number: the recursive filters and the observer
-  // would carry it forever (abs(nan) > level is never true: the joint would go blind)
+  // would carry it forever (abs(nan) > level is never true: the joint would go blind). One beyond
+  // any reading a joint gives (a corrupted word: 1.7e308 A) is no reading either: its square
+  // overflowed the diagnosis's fits, and the monitor stopped with an error mid-run.
+  constexpr double kMaxReading = 1e4;  // [rad], [rad/s], [A]
+  const auto unreadable = [](double x) { return !(std::abs(x) <= kMaxReading); };
   int bad = -1;
   const char* what = "";
   double v = 0.0;
   for (int j = 0; j < n_ && bad < 0; ++j) {
-    if (!std::isfinite(s.q[j])) bad = j, what = "position", v = s.q[j];
-    else if (!std::isfinite(s.qd[j])) bad = j, what = "velocity", v = s.qd[j];
-    else if (!std::isfinite(s.current[j])) bad = j, what = "current", v = s.current[j];
+    if (unreadable(s.q[j])) bad = j, what = "position", v = s.q[j];
+    else if (unreadable(s.qd[j])) bad = j, what = "velocity", v = s.qd[j];
+    else if (unreadable(s.current[j])) bad = j, what = "current", v = s.current[j];
   }
   if (bad < 0) {
     invalid_run_ = false;
@@ -2078,7 +2082,10 @@ bool Monitor::skip_invalid(const RobotSample& s) {
     f.joint = bad;
     f.units = "";
     f.confidence = 1.0;
-    f.detail = fmt::format("the stream's J{} {} is {}: samples are skipped until every value is finite again", bad + 1, what, v);
+    f.detail = std::isfinite(v) ? fmt::format("the stream's J{} {} is {:g}, beyond {:g} (no joint reads that): samples are skipped until "
+                                              "every value is a reading again",
+                                              bad + 1, what, v, kMaxReading)
+                                : fmt::format("the stream's J{} {} is {}: samples are skipped until every value is finite again", bad + 1, what, v);
     events_.push_back(f);
     if (on_event) on_event(f);
   }

@@ -166,4 +166,15 @@ refused "declare a centre of mass (0, 0, 40) 40 m from the flange .* is it in mm
 cmp -s "$W/tw.json" "$D/twin.json" || fail "thresholds on a refused recording changed the twin"
 # --program '' (an unset variable) silently meant the default set
 refused "--program: the program name is empty" thresholds "$D/fig.csv" --twin "$W/tw.json" --program ''
+# evaluate reads every scenario before it touches an output: a bad one left --save-twin replaced
+echo precious > "$W/keep.json"
+printf 'robot: ur3e\nduration: 5\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\nfaults: [{type: resistance, joint: 7, onset: 1, magnitude: 1}]\n' > "$W/j7.yaml"
+refused "faults\[0\].joint" evaluate "$W/j7.yaml" --twin "$D/twin.json" --save-twin "$W/keep.json"
+[ "$(cat "$W/keep.json")" = precious ] || fail "evaluate replaced --save-twin before failing on a scenario"
+refused "are the same file" evaluate "$SC" "$SC" --twin "$D/twin.json"
+# two monitor outputs on one file; a corrupted current word is a sensor fault, not an error mid-run
+refused "--events and --trace name the same file" monitor --twin "$D/twin.json" "$D/collision.csv" --db '' --events "$W/same" --trace "$W/same"
+head -3001 "$D/collision.csv" | awk -F, 'NR==101{$34="1.7e308"}1' OFS=, > "$W/huge.csv"
+"$B" monitor --twin "$D/twin.json" "$W/huge.csv" --db '' | grep -q "sensor_fault .*J3 current is 1.7e+308, beyond" || fail "a 1.7e308 A current"
+refused "column 'actual_current_2' is 1.7e+308 A at t = 0.198 s (sample 100)" thresholds "$W/huge.csv" --twin "$W/tw.json"
 echo USER-INPUTS-OK

@@ -375,6 +375,8 @@ TEST_F(MonitorLoop, ANonFiniteValueIsASensorFaultAndDoesNotBlindTheMonitor) {
   for (auto& s : rec.samples) {
     if (std::abs(s.timestamp - 3.0) < 1e-4) s.current[4] = std::numeric_limits<double>::quiet_NaN(), ++spoiled;
     if (s.timestamp > 4.0 && s.timestamp < 4.01) s.qd[0] = std::numeric_limits<double>::infinity(), ++spoiled;  // a run of them
+    // a corrupted word: finite, no reading (its square overflowed the diagnosis's fit: an error mid-run)
+    if (std::abs(s.timestamp - 5.0) < 1e-4) s.current[2] = 1.7e308, ++spoiled;
   }
   ASSERT_GE(spoiled, 4);
   ident::TwinModel t = declared_twin();
@@ -385,15 +387,18 @@ TEST_F(MonitorLoop, ANonFiniteValueIsASensorFaultAndDoesNotBlindTheMonitor) {
   const auto& ev = m.events();
   std::string all;
   for (const auto& e : ev) all += fmt::format("{:.3f} s {}: {}\n", e.t_start, to_string(e.fault), e.detail);
-  ASSERT_EQ(ev.size(), 3u) << all;
+  ASSERT_EQ(ev.size(), 4u) << all;
   EXPECT_EQ(ev[0].fault, FaultClass::SensorFault);
   EXPECT_EQ(ev[0].joint, 4);
   EXPECT_THAT(ev[0].detail, ::testing::HasSubstr("J5 current is nan"));
   EXPECT_EQ(ev[1].fault, FaultClass::SensorFault);
   EXPECT_EQ(ev[1].joint, 0);
   EXPECT_THAT(ev[1].detail, ::testing::HasSubstr("J1 velocity is inf"));
-  EXPECT_EQ(ev[2].fault, FaultClass::Resistance) << ev[2].detail;
-  EXPECT_EQ(ev[2].joint, 4);
+  EXPECT_EQ(ev[2].fault, FaultClass::SensorFault);
+  EXPECT_EQ(ev[2].joint, 2);
+  EXPECT_THAT(ev[2].detail, ::testing::HasSubstr("J3 current is 1.7e+308, beyond 10000"));
+  EXPECT_EQ(ev[3].fault, FaultClass::Resistance) << ev[3].detail;
+  EXPECT_EQ(ev[3].joint, 4);
 }
 
 // UR3e §4.3: 0.5 kg payload loss detected within 100 ms, classified, mass within +-20 %

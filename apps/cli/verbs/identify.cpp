@@ -203,7 +203,7 @@ int run_identify(const IdentifyOptions& o) {
   const model::RobotModel robot = model::load_robot(o.robot);
   for (const auto& r : recs) {
     cli::check_units(r, robot);
-    cli::check_declared_payloads(r, robot, "identify");
+    cli::check_training_recording(r, robot, "identify");
   }
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
@@ -339,7 +339,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   for (const auto* v : {&qs, &sn, &gen})
     for (const auto& r : *v) {
       cli::check_units(r, robot);
-      cli::check_declared_payloads(r, robot, "identify");
+      cli::check_training_recording(r, robot, "identify");
     }
   std::vector<const device::Recording*> qsp, snp;
   for (const auto& r : qs) qsp.push_back(&r);

@@ -163,6 +163,13 @@ int run_monitor(const MonitorOptions& o) {
   // found after a long --wait or the first samples of a live run costs the run
   for (const std::string* out : {&o.events_path, &o.trace, &o.record_to, &o.db_path})
     if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
+  // nor one output another's file: events over the trace's rows, a store that is a JSON-lines file
+  const std::pair<const char*, const std::string*> outs[] = {
+      {"--events", &o.events_path}, {"--trace", &o.trace}, {"--record", &o.record_to}, {"--db", &o.db_path}};
+  for (size_t a = 0; a < std::size(outs); ++a)
+    for (size_t b = a + 1; b < std::size(outs); ++b)
+      if (!outs[a].second->empty() && !outs[b].second->empty() && same_file(*outs[a].second, *outs[b].second))
+        throw PathError(fmt::format("{} and {} name the same file {}: each writes its own", outs[a].first, outs[b].first, *outs[a].second));
   if (o.rtde.empty()) {
     const auto map = cli::load_column_map(o.column_map);
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
@@ -326,7 +333,7 @@ int run_monitor(const MonitorOptions& o) {
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s), {} event(s){}{}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
                mon.repeated() + mon.invalid() > 0
-                   ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value not a number)", mon.repeated() + mon.invalid(),
+                   ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value that is no reading: not a number or beyond 1e4)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())
                    : "",
                mon.not_driven() > 0 ? fmt::format("; {} sample(s) ({:.1f} s) not judged: the controller did not drive the arm (see the notes)",
@@ -363,7 +370,7 @@ int run_thresholds(const ThresholdOptions& o) {
     recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
     cli::check_units(recs.back(), twin.robot());
-    cli::check_declared_payloads(recs.back(), twin.robot(), "thresholds");
+    cli::check_training_recording(recs.back(), twin.robot(), "thresholds");
   }
   recs = cli::driven_only(std::move(recs));
   // (read before the learning run: a bad one fails in a second, not after minutes)
@@ -378,7 +385,7 @@ int run_thresholds(const ThresholdOptions& o) {
     vrecs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
     cli::check_units(vrecs.back(), twin.robot());
-    cli::check_declared_payloads(vrecs.back(), twin.robot(), "thresholds --debounce-validation");
+    cli::check_training_recording(vrecs.back(), twin.robot(), "thresholds --debounce-validation");
   }
   vrecs = cli::driven_only(std::move(vrecs));
   // (the learners hold them as the monitor does: said here, where the recording has its name)
@@ -627,6 +634,12 @@ int run_evaluate(const EvaluateOptions& o) {
   if (!o.filter.empty() && !o.twin.empty())
     throw InvalidArgument("--filter applies to the reference trained here; a --twin file keeps the filter its thresholds were learned "
                           "with (re-learn them with 'twinwatch thresholds --filter')");
+  // a scenario given twice would be scored twice
+  cli::require_distinct(files, "SCENARIOS");
+  // every scenario is read before any output is touched: a malformed one (or one of another robot)
+  // used to fail after --save-twin had replaced its file and --trend-csv had emptied its own
+  std::vector<std::string> robots;
+  for (const auto& f : files) robots.push_back(sim::load_scenario(f).robot);
   // the outputs are checked before any work, and touched only once the twin is in hand: neither may
   // be an input (a scenario, the twin) or the other output
   std::vector<std::string> inputs = files;
@@ -639,6 +652,10 @@ int run_evaluate(const EvaluateOptions& o) {
   ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
                                          : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
+  for (size_t i = 0; i < files.size(); ++i)
+    if (robots[i] != twin.robot_name())
+      throw InvalidArgument(fmt::format("{} runs robot '{}', the twin is of '{}': evaluate scores a twin on scenarios of its own robot",
+                                        files[i], robots[i], twin.robot_name()));
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   // (the wear trend's rows are appended scenario by scenario: the file starts empty)
   if (!o.trend_csv.empty()) write_text_file(o.trend_csv, "");
