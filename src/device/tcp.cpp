@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -123,18 +124,37 @@ bool send_all(int fd, const std::uint8_t* data, std::size_t n, int timeout_ms) {
 }
 
 void parse_endpoint(const std::string& s, std::string& host, std::uint16_t& port, std::uint16_t default_port) {
-  const auto colon = s.rfind(':');
-  // (an empty host resolved to nothing and failed as an unreachable robot, exit 1: it is bad usage)
-  const auto no_host = [&] { return InvalidArgument(fmt::format("'{}': expected HOST[:PORT], the host is missing", s)); };
-  if (colon == std::string::npos || s.find(':') != colon) {  // no port (or a bare IPv6 address)
-    if (s.find_first_not_of(" \t") == std::string::npos) throw no_host();
-    host = s;
+  // (an empty host resolved to nothing and failed as an unreachable robot, exit 1: it is bad usage,
+  // as are a URL and an address with two ports)
+  const auto bad = [&](const std::string& why) {
+    return InvalidArgument(fmt::format("'{}': expected HOST[:PORT] (an IPv6 address in brackets: [::1]:30004), {}", s, why));
+  };
+  if (s.find("://") != std::string::npos) throw bad("not a URL");
+  std::string rest;  // after the host: empty or ":PORT"
+  if (!s.empty() && s[0] == '[') {
+    const auto close = s.find(']');
+    if (close == std::string::npos) throw bad("the '[' has no ']'");
+    host = s.substr(1, close - 1);
+    in6_addr a6{};
+    if (inet_pton(AF_INET6, host.c_str(), &a6) != 1) throw bad(fmt::format("'{}' in brackets is not an IPv6 address", host));
+    rest = s.substr(close + 1);
+    if (!rest.empty() && rest[0] != ':') throw bad(fmt::format("'{}' after the ']'", rest));
+  } else if (std::count(s.begin(), s.end(), ':') > 1) {
+    in6_addr a6{};
+    if (inet_pton(AF_INET6, s.c_str(), &a6) != 1) throw bad("more than one ':'");
+    host = s;  // a bare IPv6 address, the default port
+  } else {
+    const auto colon = s.find(':');
+    host = s.substr(0, colon);
+    if (colon != std::string::npos) rest = s.substr(colon);
+  }
+  if (host.find_first_not_of(" \t") == std::string::npos) throw bad("the host is missing");
+  if (host.find_first_of(" \t") != std::string::npos) throw bad(fmt::format("the host '{}' has a space", host));
+  if (rest.empty()) {
     port = default_port;
     return;
   }
-  host = s.substr(0, colon);
-  if (host.find_first_not_of(" \t") == std::string::npos) throw no_host();
-  const std::string p = s.substr(colon + 1);
+  const std::string p = rest.substr(1);
   char* end = nullptr;
   const long v = std::strtol(p.c_str(), &end, 10);
   // the whole field is the port: strtol took " 80" and "+80"

@@ -9,12 +9,12 @@ set_tests_properties(cli.rtde_record_not_found PROPERTIES WILL_FAIL TRUE)
 add_test(NAME cli.rtde_record_bad_port COMMAND twinwatch record --rtde 127.0.0.1:99999 -o ${PROJECT_BINARY_DIR}/never.csv)
 set_tests_properties(cli.rtde_record_bad_port PROPERTIES PASS_REGULAR_EXPRESSION "port '99999' is not a number in 1..65535")
 # an address without a host (or a port with a sign) is bad usage, exit 2, not an unreachable robot
-foreach(ep "" ":30004" "127.0.0.1:+80")
+foreach(ep "" ":30004" "127.0.0.1:+80" "http://127.0.0.1:30004" "127.0.0.1:30004:5" "[::1:30004")
   string(MAKE_C_IDENTIFIER "x${ep}" epname)
   add_test(NAME cli.rtde_record_bad_address_${epname}
     COMMAND sh -c "$<TARGET_FILE:twinwatch> record --rtde '${ep}' -o ${PROJECT_BINARY_DIR}/never.csv 2>&1; echo exit=\$?")
   set_tests_properties(cli.rtde_record_bad_address_${epname} PROPERTIES
-    PASS_REGULAR_EXPRESSION "(expected HOST\\[:PORT\\], the host is missing|port '\\+80' is not a number in 1..65535).*exit=2")
+    PASS_REGULAR_EXPRESSION "(expected HOST\\[:PORT\\] \\(an IPv6 address in brackets: \\[::1\\]:30004\\), (the host is missing|not a URL|more than one ':'|the '\\[' has no '\\]')|port '\\+80' is not a number in 1..65535).*exit=2")
 endforeach()
 # live monitoring over RTDE: the J5 resistance of the scenario (onset 12 s + 42 s controller boot
 # offset) is found from the stream, as it is from the recording (the alert is printed when it
