@@ -55,3 +55,8 @@ add_test(NAME cli.serve_robot_wait_client_timeout
   COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/chirp.yaml --port 0 --speed 5 --duration 0.2 --wait-client 0.2 2>&1; echo exit=\$?")
 set_tests_properties(cli.serve_robot_wait_client_timeout PROPERTIES
   PASS_REGULAR_EXPRESSION "--wait-client 0.2 s: no client started streaming \\(connections so far: 0\\); the robot runs without one.*exit=0")
+# --controller-version parts are whole numbers within uint32 (sscanf took -1 as 4294967295)
+add_test(NAME cli.serve_robot_controller_version_negative
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/chirp.yaml --port 0 --duration 0.01 --controller-version -1.0.0.0 2>&1; echo exit=\$?")
+set_tests_properties(cli.serve_robot_controller_version_negative PROPERTIES
+  PASS_REGULAR_EXPRESSION "--controller-version '-1.0.0.0': expected MAJOR.MINOR.BUGFIX.BUILD, four whole numbers 0 to 4294967295.*exit=2")

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -190,16 +191,26 @@ struct ServeOptions {
   bool json = false, quiet = false;
 };
 
+// each part a plain whole number that fits the protocol's uint32 (sscanf's %u took "-1" as
+// 4294967295 and wrapped 99999999999)
 rtde::ControllerVersion parse_version(const std::string& s) {
+  std::uint32_t part[4] = {0, 0, 0, 0};
+  const char* p = s.data();
+  const char* end = s.data() + s.size();
+  for (int k = 0; k < 4; ++k) {
+    const auto r = std::from_chars(p, end, part[k]);
+    const bool last = k == 3;
+    if (r.ec != std::errc() || r.ptr == p || (last ? r.ptr != end : (r.ptr == end || *r.ptr != '.')))
+      throw InvalidArgument(fmt::format("--controller-version '{}': expected MAJOR.MINOR.BUGFIX.BUILD, four whole numbers 0 to {}, e.g. "
+                                        "5.23.0.0",
+                                        s, std::numeric_limits<std::uint32_t>::max()));
+    p = r.ptr + (last ? 0 : 1);
+  }
   rtde::ControllerVersion v;
-  unsigned a = 0, b = 0, c = 0, d = 0;
-  char tail = 0;
-  const int n = std::sscanf(s.c_str(), "%u.%u.%u.%u%c", &a, &b, &c, &d, &tail);
-  if (n != 4) throw InvalidArgument(fmt::format("--controller-version '{}': expected MAJOR.MINOR.BUGFIX.BUILD, e.g. 5.23.0.0", s));
-  v.major = a;
-  v.minor = b;
-  v.bugfix = c;
-  v.build = d;
+  v.major = part[0];
+  v.minor = part[1];
+  v.bugfix = part[2];
+  v.build = part[3];
   return v;
 }
 
