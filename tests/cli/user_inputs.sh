@@ -177,4 +177,9 @@ refused "--events and --trace name the same file" monitor --twin "$D/twin.json" 
 head -3001 "$D/collision.csv" | awk -F, 'NR==101{$34="1.7e308"}1' OFS=, > "$W/huge.csv"
 "$B" monitor --twin "$D/twin.json" "$W/huge.csv" --db '' | grep -q "sensor_fault .*J3 current is 1.7e+308, beyond" || fail "a 1.7e308 A current"
 refused "column 'actual_current_2' is 1.7e+308 A at t = 0.198 s (sample 100)" thresholds "$W/huge.csv" --twin "$W/tw.json"
+# friction-study: options that did nothing on recordings, and currents labelled N·m
+refused "--rich-training applies only to the simulated joints" friction-study "$D/exc.csv" --rich-training
+refused "--gain applies only with --torque current" friction-study "$D/exc.csv" --torque moment --gain 5
+refused "--joint 2 is given twice" friction-study "$D/exc.csv" --joint 2 --joint 2
+"$B" friction-study "$D/exc.csv" --joint 2 --json -q | grep -q '"torque_units":"A"' || fail "friction-study on currents without --gain: not in A"
 echo USER-INPUTS-OK

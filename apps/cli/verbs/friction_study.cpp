@@ -181,7 +181,14 @@ std::string num(double v, int prec = 4) { return std::isfinite(v) ? fmt::format(
 
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+// the unit of every torque the offline tables give: a recording's currents without --gain are
+// studied as they are (gain 1), in A, which the tables used to label N·m
+std::string torque_unit(const StudyOptions& o) {
+  return !o.recordings.empty() && o.torque == "current" && !o.gain_given ? "A" : "N·m";
+}
+
 void print_tables(const std::vector<ProtocolResult>& res, const StudyOptions& o) {
+  const std::string u = torque_unit(o);
   const std::vector<std::string> names = {"LuGre", "Stribeck", "RBFNN", "RBFNN-H", "ParFam-V", "ParFam-H"};
   const auto table = [&](const char* title, auto get, int prec) {
     fmt::print("\n{}\n{:<10}", title, "Model");
@@ -200,13 +207,13 @@ void print_tables(const std::vector<ProtocolResult>& res, const StudyOptions& o)
     fmt::print("{}: {} reversals in the validation record, {} samples in their +-0.1 s windows\n", r.study.joint,
                r.study.reversals, r.study.reversal_samples);
   }
-  table("Table VIII: offline residual-torque RMSE on the untrained validation record [N·m]",
+  table(fmt::format("Table VIII: offline residual-torque RMSE on the untrained validation record [{}]", u).c_str(),
         [](const ModelStudy& m) { return m.fourier_rmse; }, 4);
-  table("Table IX: RMSE within +-0.1 s velocity-reversal windows [N·m]",
+  table(fmt::format("Table IX: RMSE within +-0.1 s velocity-reversal windows [{}]", u).c_str(),
         [](const ModelStudy& m) { return m.reversal_rmse; }, 4);
-  table("Chirp: in-distribution RMSE (below the split frequency) [N·m]",
+  table(fmt::format("Chirp: in-distribution RMSE (below the split frequency) [{}]", u).c_str(),
         [](const ModelStudy& m) { return m.chirp_id_rmse; }, 4);
-  table("Chirp: out-of-distribution RMSE (from the split frequency on) [N·m]",
+  table(fmt::format("Chirp: out-of-distribution RMSE (from the split frequency on) [{}]", u).c_str(),
         [](const ModelStudy& m) { return m.chirp_ood_rmse; }, 4);
   table("Chirp: OOD / ID RMSE ratio", [](const ModelStudy& m) { return m.chirp_ood_rmse / m.chirp_id_rmse; }, 2);
   for (const auto& r : res) {
@@ -514,10 +521,16 @@ int run(const StudyOptions& o) {
     twin->save(o.save_twin);
     if (!o.quiet) fmt::print(stderr, "stored {} friction equation(s) in {}\n", eqs.size(), o.save_twin);
   }
-  if (o.json)
-    fmt::print("{}\n", to_json(res).dump());
-  else
+  if (o.json) {
+    nlohmann::json j = to_json(res);
+    j["torque_units"] = torque_unit(o);
+    fmt::print("{}\n", j.dump());
+  } else {
+    if (torque_unit(o) == "A" && !o.quiet)
+      fmt::print(stderr, "note: --torque current without --gain: the currents are studied as they are, and every torque below is in A "
+                         "(give --gain, the drive's N·m/A, for N·m)\n");
     print_tables(res, o);
+  }
   return 0;
 }
 
@@ -636,6 +649,16 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
     for (const CLI::Option* opt : recorded_only)
       twinwatch::cli::refuse_unless({opt}, !o->recordings.empty(), "to recordings (the simulated joints' torque is in N·m already)");
     for (const CLI::Option* opt : loop_only) twinwatch::cli::refuse_unless({opt}, o->closed_loop, "with --closed-loop");
+    // the simulated joints' training record: a recording is its own
+    for (const char* name : {"--rich-training", "--crawl-training"})
+      twinwatch::cli::refuse_unless({sub->get_option(name)}, o->recordings.empty(), "to the simulated joints (--simulated, --closed-loop)");
+    if (o->rich_training && o->crawl_training) throw twinwatch::InvalidArgument("--rich-training and --crawl-training exclude each other");
+    // a gain scales currents: with --torque moment it did nothing
+    twinwatch::cli::refuse_unless({gain}, o->torque == "current", "with --torque current (it scales currents to N·m)");
+    for (size_t a = 0; a < o->joints.size(); ++a)
+      for (size_t b = a + 1; b < o->joints.size(); ++b)
+        if (o->joints[a] == o->joints[b])
+          throw twinwatch::InvalidArgument(fmt::format("--joint {} is given twice: each joint is studied once", o->joints[a]));
     // the library's defaults are what an option not given means; a value given must be one
     if (sub->get_option("--hops")->count() > 0 && o->hops < 0)
       throw twinwatch::InvalidArgument(fmt::format("--hops is {}, expected a count >= 0", o->hops));
