@@ -17,6 +17,7 @@
 #include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
+#include "twinwatch/core/json_fields.hpp"
 
 namespace twinwatch::model {
 
@@ -24,6 +25,16 @@ namespace {
 
 using json = nlohmann::json;
 namespace fs = std::filesystem;
+
+// Bounds on a description's numbers that catch unit slips (mm for m, degrees for rad, cm/s² for
+// m/s², g for kg) and no real arm's values: DH lengths, centres of mass and a flange within 5 m,
+// angles within one turn, joint ranges within five turns, speeds up to 50 rad/s.
+constexpr double kMaxLength = 5.0;                     // [m]
+constexpr double kMaxAngle = 2.0 * 3.14159265358979323846 + 1e-6;  // [rad]
+constexpr double kMaxJointRange = 5.0 * kMaxAngle;     // [rad]
+constexpr double kMaxJointSpeed = 50.0;                // [rad/s]
+constexpr double kGravityMin = 9.7, kGravityMax = 9.9;  // [m/s²]
+constexpr double kMaxPayloadRatio = 10.0;              // rated payload / moving mass
 
 std::string read_file(const std::string& path) { return read_text_file(path); }
 
@@ -147,6 +158,7 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   } catch (const json::out_of_range& e) {  // a number beyond a double ("1e400")
     throw ParseError(origin, 0, "", fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
+  parse_json(text, origin);  // (a key given twice: the JSON reader kept one of them silently)
   const Reader r(origin);
   r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment", "rated_payload"});
   RobotDescription d;
@@ -156,7 +168,14 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   if (conv != "dh" && conv != "mdh")
     r.fail("convention", fmt::format("expected \"dh\" (standard DH) or \"mdh\" (modified DH), got \"{}\"", conv));
   const bool standard = conv == "dh";
-  if (root.contains("gravity")) d.gravity = r.vec<3>(root, "", "gravity");
+  if (root.contains("gravity")) {
+    d.gravity = r.vec<3>(root, "", "gravity");
+    // any direction (a robot on a wall or a ceiling), the Earth's size (or none: a test in free space)
+    const double g = d.gravity.norm();
+    if (g != 0.0 && !(g >= kGravityMin && g <= kGravityMax))
+      r.fail("gravity", fmt::format("expected a vector of {:g} to {:g} m/s² (or 0), got one of {:g} m/s²{}", kGravityMin, kGravityMax, g,
+                                    g > 100 * kGravityMax / 2 ? " (in cm/s²? give m/s²)" : ""));
+  }
   if (root.contains("rated_payload")) {
     d.rated_payload = r.number(root, "", "rated_payload");
     if (!(d.rated_payload > 0.0)) r.fail("rated_payload", fmt::format("expected a mass > 0 kg, got {}", d.rated_payload));
@@ -179,9 +198,18 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
     j.name = jj.contains("name") ? r.text(jj, p, "name") : fmt::format("joint{}", i + 1);
     const double a = r.number(jj, p, "a"), dd = r.number(jj, p, "d"), alpha = r.number(jj, p, "alpha");
     j.q_offset = r.number_or(jj, p, "theta_offset", 0.0);
+    // unit slips: lengths in mm, angles in degrees (the kinematics would be built from them silently)
+    for (const auto& [key, v] : {std::pair{"a", a}, std::pair{"d", dd}})
+      if (!(std::abs(v) <= kMaxLength)) r.fail(p + "." + key, fmt::format("expected a length within ±{:g} m, got {} (in mm? give metres)", kMaxLength, v));
+    for (const auto& [key, v] : {std::pair{"alpha", alpha}, std::pair{"theta_offset", j.q_offset}})
+      if (!(std::abs(v) <= kMaxAngle))
+        r.fail(p + "." + key, fmt::format("expected an angle within ±{:.4g} rad (2π), got {} (in degrees? give radians)", kMaxAngle, v));
     RigidBodyInertia body;
     body.mass = r.number(jj, p, "mass");
     body.com = r.vec<3>(jj, p, "com");
+    if (!(body.com.norm() <= kMaxLength))
+      r.fail(p + ".com", fmt::format("expected a centre of mass within {:g} m of the joint, got one {:.4g} m away (in mm? give metres)",
+                                     kMaxLength, body.com.norm()));
     body.inertia_com = inertia_from6(r.vec<6>(jj, p, "inertia"));
     try {
       body.validate("link");
@@ -209,6 +237,12 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
       if (!(j.limits.q_min < j.limits.q_max))
         r.fail(lp, fmt::format("q_min ({}) must be < q_max ({})", j.limits.q_min, j.limits.q_max));
       if (!(j.limits.qd_max > 0.0)) r.fail(lp + ".qd_max", fmt::format("must be > 0, got {}", j.limits.qd_max));
+      if (l.contains("qd_max") && !(j.limits.qd_max <= kMaxJointSpeed))
+        r.fail(lp + ".qd_max", fmt::format("expected at most {:g} rad/s, got {} (in degrees/s? give rad/s)", kMaxJointSpeed, j.limits.qd_max));
+      for (const auto& [key, v] : {std::pair{"q_min", j.limits.q_min}, std::pair{"q_max", j.limits.q_max}})
+        if (l.contains(key) && !(std::abs(v) <= kMaxJointRange))
+          r.fail(lp + "." + key, fmt::format("expected a position within ±{:.4g} rad (five turns), got {} (in degrees? give radians)",
+                                             kMaxJointRange, v));
       if (!(j.limits.qdd_max > 0.0)) r.fail(lp + ".qdd_max", fmt::format("must be > 0, got {}", j.limits.qdd_max));
       if (!(j.limits.torque_max > 0.0))
         r.fail(lp + ".torque_max", fmt::format("must be > 0, got {}", j.limits.torque_max));
@@ -231,7 +265,21 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   if (root.contains("flange")) {
     const json& f = root.at("flange");
     r.only_keys(f, "flange", {"xyz", "rpy"});
-    d.flange = d.flange * from_xyz_rpy(r.vec<3>(f, "flange", "xyz"), r.vec<3>(f, "flange", "rpy"));
+    const Eigen::Vector3d xyz = r.vec<3>(f, "flange", "xyz"), rpy = r.vec<3>(f, "flange", "rpy");
+    if (!(xyz.norm() <= kMaxLength))
+      r.fail("flange.xyz", fmt::format("expected an offset within {:g} m, got one of {:.4g} m (in mm? give metres)", kMaxLength, xyz.norm()));
+    if (!(rpy.cwiseAbs().maxCoeff() <= kMaxAngle))
+      r.fail("flange.rpy", fmt::format("expected angles within ±{:.4g} rad (2π), got [{}, {}, {}] (in degrees? give radians)", kMaxAngle,
+                                       rpy.x(), rpy.y(), rpy.z()));
+    d.flange = d.flange * from_xyz_rpy(xyz, rpy);
+  }
+  // a rated payload in grams: no arm carries ten times its own moving mass
+  if (root.contains("rated_payload")) {
+    double moving = 0.0;
+    for (const Joint& j : d.joints) moving += j.body.mass;
+    if (moving > 0.0 && d.rated_payload > kMaxPayloadRatio * moving)
+      r.fail("rated_payload", fmt::format("expected at most {:g} times the arm's moving mass ({:g} kg), got {:g} kg (in grams? give kg)",
+                                          kMaxPayloadRatio, moving, d.rated_payload));
   }
   // final whole-model checks, reported against the file
   try {

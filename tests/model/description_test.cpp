@@ -92,6 +92,33 @@ TEST(DescriptionJson, AccelerationLimitMustBePositive) {
               HasSubstr("joints[0].limits.qdd_max': must be > 0, got 0"));
 }
 
+// unit slips the kinematics and the simulator took silently (d 151.85 "m" put the flange 152 m up)
+TEST(DescriptionJson, UnitSlipsAreRefusedWithTheUnitToGive) {
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "joints": [{"a": 0.1, "d": 151.85, "alpha": 0.0, )" + kGood + "}]}"),
+              HasSubstr("joints[0].d': expected a length within ±5 m, got 151.85 (in mm? give metres)"));
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "joints": [{"a": 0.1, "d": 0.1, "alpha": 90, )" + kGood + "}]}"),
+              HasSubstr("joints[0].alpha': expected an angle within ±6.283 rad (2π), got 90 (in degrees? give radians)"));
+  EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0, -20, 0], "inertia": [0.01, 0, 0, 0.01, 0, 0.01])")),
+              HasSubstr("joints[0].com': expected a centre of mass within 5 m of the joint, got one 20 m away (in mm? give metres)"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "limits": {"qd_max": 180})")),
+              HasSubstr("joints[0].limits.qd_max': expected at most 50 rad/s, got 180 (in degrees/s? give rad/s)"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "limits": {"q_min": -360, "q_max": 360})")),
+              HasSubstr("joints[0].limits.q_min': expected a position within ±31.42 rad (five turns), got -360 (in degrees?"));
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "gravity": [0, 0, -981], "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" + kGood + "}]}"),
+              HasSubstr("field 'gravity': expected a vector of 9.7 to 9.9 m/s² (or 0), got one of 981 m/s² (in cm/s²? give m/s²)"));
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "rated_payload": 1000, "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" + kGood + "}]}"),
+              HasSubstr("field 'rated_payload': expected at most 10 times the arm's moving mass (1 kg), got 1000 kg (in grams? give kg)"));
+  // a robot on a ceiling: gravity along +z is a direction, not a slip
+  EXPECT_NO_THROW(parse_description_json(
+      R"({"name": "t", "convention": "dh", "gravity": [0, 0, 9.81], "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" + kGood + "}]}", "robot.json"));
+}
+
+// a key given twice: the JSON reader kept one of the values without a word
+TEST(DescriptionJson, AKeyGivenTwiceIsRefused) {
+  EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, "alpha": 1.5, )" + kGood + "}]}"),
+              HasSubstr("joints[0].alpha': the key appears twice in its object"));
+}
+
 TEST(DescriptionJson, AccelerationLimitIsOptionalAndLoads) {
   const RobotModel panda = load_robot("panda");
   EXPECT_DOUBLE_EQ(panda.joint(1).limits.qdd_max, 7.5);  // Franka specifications
