@@ -291,6 +291,8 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
 
 // [A] the largest current_offset fault: a sensor offset of tens of amperes is no longer an offset
 constexpr double kMaxCurrentOffset = 20.0;
+// [m] a collision's contact point from its link's frame (a value in mm is metres away)
+constexpr double kMaxContactPointDistance = 1.0;
 
 // the keys a fault of each type takes (parse_scenario)
 std::set<std::string> fault_keys(FaultType t) {
@@ -546,6 +548,28 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
       if (!(fs.onset < s.options.duration))
         y.fail(f["onset"], p + ".onset", fmt::format("expected a time before the end of the run ({} s), got {} s: the {} would never fire",
                                                      s.options.duration, fs.onset, to_string(fs.type)));
+      // and whether it happens as labelled: the label claims the full magnitude, which a ramp that
+      // ends after the run never reaches (scored "not detected" for a fault that never was)
+      if (fs.onset + fs.ramp > s.options.duration + 1e-9)
+        y.fail(f["ramp"], p + ".ramp",
+               fmt::format("the ramp from {} s over {} s ends after the run ({} s): the {} would never reach its magnitude, which its label "
+                           "claims; shorten the ramp or lengthen the run",
+                           fs.onset, fs.ramp, s.options.duration, to_string(fs.type)));
+      if (fs.type == FaultType::Collision && fs.onset + fs.duration > s.options.duration + 1e-9)
+        y.fail(f["duration"], p + ".duration",
+               fmt::format("the contact from {} s for {} s lasts past the end of the run ({} s)", fs.onset, fs.duration, s.options.duration));
+      if (fs.type == FaultType::Collision && !(fs.point.norm() <= kMaxContactPointDistance))
+        y.fail(f["point"], p + ".point",
+               fmt::format("expected a contact point within {:g} m of the link's frame, got one {:.4g} m away (in mm? give metres)",
+                           kMaxContactPointDistance, fs.point.norm()));
+      if (fs.type == FaultType::DroppedSamples) {
+        const double left = std::floor((s.options.duration - fs.onset) * rate + 1e-9);
+        if (fs.magnitude > left)
+          y.fail(f["magnitude"], p + ".magnitude",
+                 fmt::format("expected at most the {:g} samples left after the onset, got {:g}: the stream would end there, which is no "
+                             "gap the monitor can see",
+                             left, fs.magnitude));
+      }
       s.faults.push_back(fs);
     }
     // a payload fault's label is the change of the mass the flange carries: a pick replaces what it

@@ -62,6 +62,14 @@ TEST(Scenario, AFaultsValuesAreCheckedForItsType) {
       {"{type: payload_pick, onset: 1, ramp: 0.5, mass: 1}", "unknown key 'ramp'"},
       // a loss with nothing carried
       {"{type: payload_loss, onset: 1}", "test.yaml:5: field 'faults[0]': a payload_loss at 1 s, but the arm carries nothing then"},
+      // faults that would not happen as labelled, and unit slips
+      {"{type: resistance, joint: 2, onset: 1, ramp: 1000, magnitude: 1}",
+       "field 'faults[0].ramp': the ramp from 1 s over 1000 s ends after the run (10 s): the resistance would never reach its magnitude"},
+      {"{type: collision, link: 3, onset: 1, magnitude: 5, duration: 500}", "field 'faults[0].duration': the contact from 1 s for 500 s lasts past the end of the run"},
+      {"{type: collision, link: 3, onset: 1, magnitude: 5, point: [-100, 0, 30]}",
+       "field 'faults[0].point': expected a contact point within 1 m of the link's frame, got one 104.4 m away (in mm? give metres)"},
+      {"{type: dropped_samples, onset: 1, magnitude: 1e9}", "field 'faults[0].magnitude': expected at most the 4500 samples left after the onset"},
+      {"{type: current_offset, joint: 2, onset: 1, magnitude: 300}", "field 'faults[0].magnitude': expected a current offset within ±20 A, got 300 (in mA?"},
   };
   for (const auto& [fault, message] : cases) EXPECT_THAT(error_of(head + "  - " + fault + "\n"), HasSubstr(message)) << fault;
 }
