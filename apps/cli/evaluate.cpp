@@ -348,6 +348,24 @@ ident::TwinModel load_twin(const std::string& path) {
 
 model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::string& twin_path, double mass,
                                     const std::vector<double>& com) {
+  // not given: the payload the twin file holds ("payload", 0 kg as identify writes it; a user may
+  // set it), checked as --payload-mass would be
+  if (std::isnan(mass)) {
+    if (com.size() == 3) throw InvalidArgument("--payload-com is given without --payload-mass (a centre of mass needs a mass)");
+    const model::RigidBodyInertia& p = twin.payload();
+    if (p.mass > twin.robot().payload_limit())
+      throw InvalidArgument(fmt::format("{}: field 'payload.mass': expected at most {:g} kg ({}), got {:g} kg", twin_path,
+                                        twin.robot().payload_limit(), twin.robot().payload_limit_text(), p.mass));
+    if (p.mass > 0.0 && p.com.norm() > model::kPayloadComMax)
+      throw InvalidArgument(fmt::format("{}: field 'payload.com': expected a centre of mass within {:g} m of the flange, got one {:.3g} m away "
+                                        "(in mm? give metres)",
+                                        twin_path, model::kPayloadComMax, p.com.norm()));
+    if (p.mass > 0.0 && !twin.gains_known())
+      throw InvalidArgument(fmt::format("{}: field 'payload.mass' is {:g} kg, but the twin was identified without a known payload that fixes "
+                                        "its gains: a payload in kg cannot be added to it (set it to 0)",
+                                        twin_path, p.mass));
+    return p;
+  }
   if (!(mass >= 0.0 && std::isfinite(mass))) throw InvalidArgument(fmt::format("--payload-mass must be a finite mass >= 0 kg, got {}", mass));
   // beyond what the arm may carry: a typo (5 for 0.5 kg), which every residual would then carry
   if (mass > twin.robot().payload_limit())
@@ -676,6 +694,8 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     using Declaration = std::array<double, 4>;  // mass, centre of mass
     std::vector<Declaration> declared_before(s.faults.size());
     std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
+    // (the simulator's complaint, e.g. a diverged run, names the scenario it is about)
+    try {
     simulator->run([&](const RobotSample& x) {
                      mon.push(x);
                      if (x.has(kFieldPayload)) {
@@ -711,6 +731,9 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                      shown = f;
                      progress_line(quiet, fmt::format("   {} {:.0f} %", s.name, 100 * f));
                    });
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(fmt::format("{}: {}", s.path.empty() ? s.name : s.path, e.what()));
+    }
     mon.finish();
     if (!trend_csv.empty()) append_trend_csv(trend_csv, s.name, mon.trend());
     // score: each labelled fault is detected by the first event that starts inside its window (an

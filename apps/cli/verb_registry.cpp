@@ -70,6 +70,16 @@ const CLI::Validator& nonnegative_number() {
   return v;
 }
 
+CLI::Validator whole_number(long lo, long hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        double v = 0.0;
+        if (read_number(text, v) && v == std::floor(v) && v >= static_cast<double>(lo) && v <= static_cast<double>(hi)) return {};
+        return fmt::format("expected a whole number from {} to {}, got '{}'", lo, hi, text);
+      },
+      fmt::format("INT {}..{}", lo, hi));
+}
+
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {
   if (applies) return;
   std::string given;

@@ -37,6 +37,9 @@ bool interrupted();
 /// The message CLI11 prefixes with the option: "--cycle-period: expected a number > 0, got 0".
 const CLI::Validator& positive_number();
 const CLI::Validator& nonnegative_number();
+/// A whole number from lo to hi: CLI11's Range on an int option said "Value 2.5 not in range 1 to
+/// 1000" for 2.5, which is in range and not whole.
+CLI::Validator whole_number(long lo, long hi);
 
 /// An option that does nothing in this run is refused, not ignored (audit, session 34: '--links 9'
 /// without --sweep-collisions, '--robot panda' with a --twin file, '--prune' with the physics method

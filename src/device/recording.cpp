@@ -162,6 +162,9 @@ ColumnMap ColumnMap::load(const std::string& path) {
     m.columns[cells[0]] = e;
     m.lines[cells[0]] = ln;
   }
+  // (an empty file mapped nothing: the recording was then read as if no map had been given)
+  if (m.columns.empty())
+    throw ParseError(path, ln, "", "the column map maps no column: expected lines 'file_column,rtde_name[,scale]' (docs/recordings.md)");
   return m;
 }
 

@@ -142,6 +142,10 @@ TorqueData torque_data(const Segment& seg, TorqueSignal sig, int h, int order) {
     throw InvalidArgument(fmt::format("{}: no actual_qd_* columns: the torque-domain fit needs measured joint velocities", rec.path));
   const int n = rec.n_dof;
   const size_t N = rec.samples.size();
+  if (h >= 1 && N < 2 * static_cast<size_t>(h) + 1)
+    throw InvalidArgument(fmt::format("{}: {} samples, fewer than the {} of one derivative window (half window {} samples: a shorter "
+                                      "one, or a longer recording)",
+                                      rec.path, N, 2 * h + 1, h));
   std::vector<double> t(N);
   for (size_t k = 0; k < N; ++k) t[k] = rec.samples[k].timestamp;
   // smoothed qd and its derivative, joint by joint, on the whole recording (then cut)

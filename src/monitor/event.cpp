@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <memory>
@@ -67,7 +68,8 @@ std::string Event::to_json_line() const {
   j["magnitude"] = magnitude;
   j["units"] = units;
   j["confidence"] = confidence;
-  j["peak_residual"] = peak_residual;
+  j["peak_residual"] = peak_residual;  // the largest |filtered current residual| of any joint during the alert
+  j["peak_residual_units"] = "A";
   j["detail"] = detail;
   return j.dump();
 }
@@ -289,7 +291,7 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
   while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
     const long id = sqlite3_column_int64(s, 0);
     // SQLite keeps whatever a row was given: a number column holding text would read as 0
-    const auto bad = [&](int col, const char* expected) {
+    const auto bad = [&](int col, const std::string& expected) {
       // (a store the user named whose rows are not the monitor's: bad input, exit 2)
       return PathError(fmt::format("{}: events row id {}: column '{}': expected {}, got '{}'", impl_->path, id,
                                    sqlite3_column_name(s, col), expected, text(col)));
@@ -323,6 +325,14 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     e.confidence = number(9);
     e.peak_residual = number(10);
     e.detail = text(11);
+    // values the monitor never writes (a hand-edited row): printed as they were, 1e999 read "null"
+    // and a confidence of 7 or an end before the start passed as findings
+    if (!std::isfinite(e.t_start)) throw bad(2, "a finite time [s]");
+    if (!(std::isfinite(e.t_end) && e.t_end >= e.t_start)) throw bad(3, fmt::format("a finite time [s] not before t_start ({:g})", e.t_start));
+    if (!std::isfinite(e.t_detected)) throw bad(13, "a finite time [s]");
+    if (!std::isfinite(e.magnitude)) throw bad(7, "a finite number");
+    if (!(e.confidence >= 0.0 && e.confidence <= 1.0)) throw bad(9, "a confidence from 0 to 1");
+    if (!std::isfinite(e.peak_residual)) throw bad(10, "a finite number");
     e.active_at_stop = sqlite3_column_type(s, 14) == SQLITE_INTEGER && sqlite3_column_int64(s, 14) != 0;
     try {
       e.fault = fault_class_from_string(text(4));

@@ -194,10 +194,10 @@ VectorJ nonnegative_joint_values(const JsonFields& o, const char* key, int n) {
 // MonitorConfig::residual_filter: 0, 1 or n entries, each "iir" or "fir"
 void check_residual_filter(const MonitorConfig& c, int n) {
   if (c.residual_filter.size() > 1 && static_cast<int>(c.residual_filter.size()) != n)
-    throw InvalidArgument(fmt::format("residual_filter has {} entries, expected 0, 1 or {} (one per joint)", c.residual_filter.size(), n));
+    throw InvalidArgument(fmt::format("residual_filter (--filter) has {} entries, expected 0, 1 or {} (one per joint)", c.residual_filter.size(), n));
   for (size_t j = 0; j < c.residual_filter.size(); ++j)
     if (c.residual_filter[j] != "iir" && c.residual_filter[j] != "fir")
-      throw InvalidArgument(fmt::format("residual_filter[{}] is '{}', expected 'iir' or 'fir'", j, c.residual_filter[j]));
+      throw InvalidArgument(fmt::format("residual_filter (--filter) of J{} is '{}', expected 'iir' or 'fir'", j + 1, c.residual_filter[j]));
 }
 
 // the residual filter kind of joint j (MonitorConfig::residual_filter)
@@ -515,7 +515,11 @@ void MonitorConfig::validate(int n) const {
   if (sensitivity.size() != 0 && sensitivity.size() != n)
     throw InvalidArgument(fmt::format("sensitivity has size {}, expected {} (one per joint)", sensitivity.size(), n));
   for (int j = 0; j < sensitivity.size(); ++j)
-    if (!(sensitivity[j] > 0.0)) throw InvalidArgument(fmt::format("sensitivity of joint {} is {}, must be > 0", j + 1, sensitivity[j]));
+    // (1e9 was taken: the thresholds a billion times wider, the joint blind without a word)
+    if (!(sensitivity[j] > 0.0 && sensitivity[j] <= kMaxSensitivity))
+      throw InvalidArgument(fmt::format("sensitivity (--sensitivity) of joint {} is {}, expected a factor > 0 and at most {:g} (thresholds that "
+                                        "much wider than learned; more leaves the joint blind)",
+                                        j + 1, sensitivity[j], kMaxSensitivity));
   if (!(nominal_period > 0.0)) throw InvalidArgument(fmt::format("nominal_period is {}, must be > 0", nominal_period));
   check_residual_filter(*this, n);
   check_reversal_load(reversal_load_max, n, "monitor");

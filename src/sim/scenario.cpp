@@ -72,6 +72,7 @@ class Y {
     return n ? as_number(n, join(path, key)) : fallback;
   }
   double as_number(const YAML::Node& n, const std::string& field) const {
+    if (n.IsNull()) fail(n, field, "expected a number, got nothing");
     if (!n.IsScalar()) fail(n, field, "expected a number, got a list or mapping");
     double v = 0.0;
     try {

@@ -31,7 +31,7 @@ set_tests_properties(cli.monitor_fir PROPERTIES FIXTURES_REQUIRED twin
 add_test(NAME cli.monitor_bad_filter COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --filter iir,fir)
 set_tests_properties(cli.monitor_bad_filter PROPERTIES FIXTURES_REQUIRED twin
-  PASS_REGULAR_EXPRESSION "residual_filter has 2 entries, expected 0, 1 or 6")
+  PASS_REGULAR_EXPRESSION "residual_filter \\(--filter\\) has 2 entries, expected 0, 1 or 6")
 # thresholds re-learned with the FIR, then monitored with it: no mismatch note, no alarm
 add_test(NAME cli.thresholds_fir
   COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_fir.json && \

@@ -41,7 +41,7 @@ set_tests_properties(cli.evaluate_link_ceiling_negative PROPERTIES PASS_REGULAR_
 # --sensitivity (the false-alarm margin check) names a wrong number of joints
 add_test(NAME cli.monitor_observer_raise_after_zero COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --observer-raise-after 0)
 set_tests_properties(cli.monitor_observer_raise_after_zero PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
-                     PASS_REGULAR_EXPRESSION "--observer-raise-after: Value 0 not in range 1 to 1000")
+                     PASS_REGULAR_EXPRESSION "--observer-raise-after: expected a whole number from 1 to 1000, got .0.")
 add_test(NAME cli.evaluate_sensitivity_count COMMAND twinwatch evaluate ${s}/short_collision.yaml --twin ${d}/twin.json --sensitivity 1,1,1)
 set_tests_properties(cli.evaluate_sensitivity_count PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "sensitivity has size 3, expected 6 \\(one per joint\\)")

@@ -56,7 +56,7 @@ set_tests_properties(cli.identify_efficiency_bad PROPERTIES FIXTURES_REQUIRED re
                      PASS_REGULAR_EXPRESSION "--efficiency-fit sometimes: expected joint or alternating")
 # --efficiency-passes: a negative count is refused with the field and value
 add_test(NAME cli.identify_bad_efficiency_passes COMMAND twinwatch identify ${d}/exc.csv --efficiency-passes -1 -o ${d}/bad.json)
-set_tests_properties(cli.identify_bad_efficiency_passes PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "efficiency_passes is -1, must be >= 0")
+set_tests_properties(cli.identify_bad_efficiency_passes PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "--efficiency-passes: expected a whole number from 0 to 1000, got .-1.")
 # --progress shows the bar on a pipe too (ctest's is not a terminal)
 add_test(NAME cli.identify_progress COMMAND twinwatch identify ${d}/exc.csv --progress -o ${d}/twin_progress.json)
 set_tests_properties(cli.identify_progress PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION "identifying +[0-9]+ %")

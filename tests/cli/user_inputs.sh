@@ -137,6 +137,10 @@ refused "$W: cannot read the labels file: it is a directory" report --twin "$D/t
 "$B" monitor --twin "$D/twin.json" "$D/collision.csv" --db "$W/ev.db" -q
 sqlite3 "$W/ev.db" "UPDATE events SET other_links = 'abc';"
 refused "events row id 1: column 'other_links': expected a list of link numbers" events --db "$W/ev.db"
+sqlite3 "$W/ev.db" "UPDATE events SET other_links = NULL, confidence = 7;"
+refused "events row id 1: column 'confidence': expected a confidence from 0 to 1, got '7" events --db "$W/ev.db"
+sqlite3 "$W/ev.db" "UPDATE events SET confidence = 1, t_end = t_start - 1;"
+refused "events row id 1: column 't_end': expected a finite time \[s\] not before t_start" events --db "$W/ev.db"
 # another run's labels would shade faults that never happened; a COM 100 m out is a unit slip
 refused "the labels of scenario 'short_declared_pick' (8 s at 500 Hz) do not go with $D/fig.csv" \
   report --twin "$D/twin.json" "$D/fig.csv" --labels "$D/declared_pick.labels.json" -o "$W/r3.html"
@@ -182,4 +186,12 @@ refused "--rich-training applies only to the simulated joints" friction-study "$
 refused "--gain applies only with --torque current" friction-study "$D/exc.csv" --torque moment --gain 5
 refused "--joint 2 is given twice" friction-study "$D/exc.csv" --joint 2 --joint 2
 "$B" friction-study "$D/exc.csv" --joint 2 --json -q | grep -q '"torque_units":"A"' || fail "friction-study on currents without --gain: not in A"
+# --quick runs the model check alone: the whole demo's options did nothing there
+refused "--scenarios applies only to the whole demo, not --quick" demo --quick --scenarios "$W"
+# a twin file's payload is the default payload (0 kg as identify writes it); a slip in it is named
+[ "$(grep -c '"mass"' "$D/twin.json")" = 1 ] || fail "twin.json: expected one \"mass\" key (the payload's)"
+sed 's/"mass": *0\.0/"mass": 500.0/' "$D/twin.json" > "$W/tw500.json"
+grep -q '"mass": 500.0' "$W/tw500.json" || fail "could not set the twin file's payload"
+refused "tw500.json: field 'payload.mass': expected at most 3 kg" monitor --twin "$W/tw500.json" "$D/fig.csv" --db ''
+refused "sensitivity (--sensitivity) of joint 1 is 1000000000, expected a factor > 0 and at most 10" monitor --twin "$D/twin.json" "$D/fig.csv" --db '' --sensitivity 1e9
 echo USER-INPUTS-OK

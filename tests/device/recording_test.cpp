@@ -157,6 +157,13 @@ TEST(Recording, ColumnMapWrongCellCountNamesTheLine) {
   EXPECT_THAT(map_error("# c\nt\n"), HasSubstr("bad.map:2: expected 'file_column,rtde_name[,scale]', got 1 cells"));
 }
 
+// an empty map (or comments and the header only) mapped nothing and read the recording as if none
+// had been given
+TEST(Recording, ColumnMapThatMapsNothingIsRefused) {
+  EXPECT_THAT(map_error(""), HasSubstr("bad.map: the column map maps no column"));
+  EXPECT_THAT(map_error("# only a comment\nfile_column,rtde_name,scale\n"), HasSubstr("bad.map:2: the column map maps no column"));
+}
+
 TEST(Recording, ColumnMapDuplicateColumnNamesBothLines) {
   EXPECT_THAT(map_error("q1,actual_q_0\nq1,actual_q_1\n"), HasSubstr("bad.map:2: field 'file_column': 'q1' is already mapped on line 1"));
 }

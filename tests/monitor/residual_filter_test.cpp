@@ -76,14 +76,14 @@ TEST(ResidualFilter, ConfigNamesAnUnknownKindAndAWrongCount) {
     c.validate(6);
     FAIL();
   } catch (const InvalidArgument& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("residual_filter[1] is 'butter', expected 'iir' or 'fir'"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("residual_filter (--filter) of J2 is 'butter', expected 'iir' or 'fir'"));
   }
   c.residual_filter = {"fir", "fir"};
   try {
     c.validate(6);
     FAIL();
   } catch (const InvalidArgument& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("residual_filter has 2 entries, expected 0, 1 or 6"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("residual_filter (--filter) has 2 entries, expected 0, 1 or 6"));
   }
 }
 

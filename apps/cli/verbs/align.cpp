@@ -64,6 +64,8 @@ std::vector<std::vector<double>> channels(const device::Recording& r, const Sign
 
 // the normalised correlation below which a joint's lag is called into doubt
 constexpr double kWeakCorrelation = 0.8;
+// the ratio of the two recordings' spreads of a joint's signal beyond which they are called other units
+constexpr double kScaleMismatch = 5.0;
 
 int run_align(const AlignCliOptions& o) {
   const SignalColumn& col = column_of(o.signal);
@@ -89,7 +91,8 @@ int run_align(const AlignCliOptions& o) {
   opt.max_lag = static_cast<int>(std::lround(std::min(o.max_lag_ms / 1000.0 / T, longest)));
   opt.subsample = !o.no_subsample;
   opt.common_lag = !o.per_joint;
-  const auto res = signal::align_channels(channels(ra, col), channels(rb, col), opt);
+  const auto ca = channels(ra, col), cb = channels(rb, col);
+  const auto res = signal::align_channels(ca, cb, opt);
   const double ms = 1000.0 * T;
   bool edge = false;
   for (const auto& r : res) edge |= r.valid && r.at_window_edge;
@@ -103,9 +106,33 @@ int run_align(const AlignCliOptions& o) {
                        "means little there\n",
                fmt::join(weak, ", J"), weak.size() == 1 ? "s" : "", kWeakCorrelation, o.a, o.b);
 
+  // the same signal in other units (degrees for radians, mA for A): the correlation does not see a
+  // scale, and the RMSE report compared 57-fold values in "rad" without a word
+  std::vector<int> scaled;
+  std::vector<double> ratio(res.size(), 1.0);
+  const auto spread = [](const std::vector<double>& x) {
+    double m = 0.0;
+    for (double v : x) m += v;
+    m /= static_cast<double>(x.size());
+    double q = 0.0;
+    for (double v : x) q += (v - m) * (v - m);
+    return std::sqrt(q / static_cast<double>(x.size()));
+  };
+  for (size_t k = 0; k < res.size(); ++k) {
+    const double sa = spread(ca[k]), sb = spread(cb[k]);
+    if (!(sa > 0.0 && sb > 0.0)) continue;
+    ratio[k] = sb / sa;
+    if (ratio[k] > kScaleMismatch || ratio[k] < 1.0 / kScaleMismatch) scaled.push_back(static_cast<int>(k) + 1);
+  }
+  if (!scaled.empty() && !o.json)
+    fmt::print(stderr, "warning: J{}: {}'s {} varies {:.3g} times as much as {}'s: the same signal in other units (degrees? mA?)? The "
+                       "RMSE below compares them as they are\n",
+               fmt::join(scaled, ", J"), o.b, col.name, ratio[static_cast<size_t>(scaled.front() - 1)], o.a);
+
   if (o.json) {
     nlohmann::json j;
     j["a"] = o.a;
+    j["scale_mismatch_joints"] = scaled;
     j["b"] = o.b;
     j["signal"] = col.name;
     j["unit"] = col.unit;

@@ -123,11 +123,15 @@ twinwatch::cli::VerbRegistrar reg{"demo", 1, [](CLI::App& app) {
   o->scenarios = twinwatch::data_directory("scenarios") + "/ur3e";
   auto* demo = app.add_subcommand("demo", "Run the whole story on the built-in virtual UR3e (identify, monitor faults, report)");
   demo->add_option("--robot", o->robot, "Robot to use")->capture_default_str();
-  demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();
-  demo->add_option("--scenarios", o->scenarios, "Scenario directory")->capture_default_str();
-  demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all, wear_ramp's 7200 s included)")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
+  auto* out = demo->add_option("-o,--output", o->out, "Directory for the twin, recordings and report")->capture_default_str();
+  auto* scen = demo->add_option("--scenarios", o->scenarios, "Scenario directory")->capture_default_str();
+  auto* maxd = demo->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (0: run all, wear_ramp's 7200 s included)")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
   demo->add_flag("--quick", o->quick, "Only the model check (step 1)");
-  demo->callback([o] { twinwatch::cli::set_exit_code(run(*o)); });
+  demo->callback([o, out, scen, maxd] {
+    // --quick runs step 1 alone: what the later steps take did nothing there
+    twinwatch::cli::refuse_unless({out, scen, maxd}, !o->quick, "to the whole demo, not --quick (the model check alone)");
+    twinwatch::cli::set_exit_code(run(*o));
+  });
 }};
 
 }  // namespace

@@ -572,16 +572,17 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
   sub->add_option("--torque", o->torque, "Torque source: current (x --gain) or moment")->capture_default_str();
   CLI::Option* gain = sub->add_option("--gain", o->gain, "Current-to-torque gain [N·m/A]")->capture_default_str()->check(twinwatch::cli::positive_number());
   sub->add_option("--split", o->split, "Training share of a single recording")->capture_default_str();
-  sub->add_option("--decimate", o->decimate, "Use every k-th sample (e.g. 5: 1 kHz -> 200 Hz)")->capture_default_str();
-  sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str();
-  sub->add_option("--trials", o->trials, "Monte Carlo trials per uncertainty level (Table V)")->capture_default_str();
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample (e.g. 5: 1 kHz -> 200 Hz)")->capture_default_str()->check(twinwatch::cli::whole_number(1, 1000000));
+  sub->add_option("--screening", o->screening, "Reversal screening of the rigid-body fit [rad/s]")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--trials", o->trials, "Monte Carlo trials per uncertainty level (Table V)")->capture_default_str()->check(twinwatch::cli::whole_number(1, 100000));
   sub->add_option("--hops", o->hops, "ParFam basin-hopping steps per start (default: the library's)");
   sub->add_option("--input-guard", o->input_guard,
                   "ParFam input guard: inputs clamped to the training range widened by this fraction (< 0: off)")
       ->capture_default_str();
   sub->add_option("--reversal-weight", o->reversal_weight,
                   "ParFam: samples within +-0.1 s of a training reversal count this many times (1: plain mse)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(twinwatch::cli::whole_number(1, 1000));
   sub->add_flag("--rich-training", o->rich_training,
                 "--simulated, --closed-loop: train on four harmonics of 0.25 Hz (0.25-1.0 Hz) instead of HESR's 0.25 Hz sweep");
   sub->add_flag("--crawl-training", o->crawl_training,
@@ -620,8 +621,11 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
                   "ParFam odd symmetry f(-x) = -f(x) (no constant, no unit offsets), 1 or 0 (default: the study's)");
   sub->add_option("--prior-remove-viscous", o->remove_viscous,
                   "Stage 1: remove the viscous slope of tau_f before the loop descriptors, 1 or 0 (default: the study's, 1)");
-  sub->add_option("--alpha", o->fixed_alpha, "Fix the hysteresis alpha (with --beta; skips Stage 1, Stage 3 still refines)");
-  sub->add_option("--beta", o->fixed_beta, "Fix the hysteresis beta (with --alpha)");
+  auto* alpha = sub->add_option("--alpha", o->fixed_alpha, "Fix the hysteresis alpha (with --beta; skips Stage 1, Stage 3 still refines)")
+                    ->check(twinwatch::cli::positive_number());
+  auto* beta = sub->add_option("--beta", o->fixed_beta, "Fix the hysteresis beta (with --alpha)")->check(twinwatch::cli::positive_number());
+  alpha->needs(beta);
+  beta->needs(alpha);
   sub->add_option("--l1", o->l1, "ParFam L1 weight gamma of eq. 15 on unit-RMS data (default: the study's, 1e-6)");
   sub->add_option("--starts", o->starts, "ParFam basin-hopping random starts (default: the library's)");
   sub->add_option("--seed", o->seed, "Seed of the simulated records and the Monte Carlo draws")->capture_default_str();

@@ -429,7 +429,7 @@ void say_validated_payload(const device::Recording& rec, const std::string& path
 
 struct ValidateOptions {
   std::string twin, recording, column_map, predictions;
-  double payload_mass = 0.0;
+  double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
   bool json = false, keep_payload = false;
 };
@@ -572,9 +572,11 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "current residual); sequential (Cao: gravity from --quasi-static, friction from --sine, Lasso over A ⊗ B on "
                   "RECORDINGS with 10-fold CV)")->capture_default_str();
   auto* hidden = sub->add_option("--hidden", o->hidden, "mlp/hybrid: units per hidden layer, one number per layer (default 15)");
-  auto* l2 = sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)");
+  auto* l2 = sub->add_option("--l2", o->l2, "mlp/hybrid: L2 penalty on the weights, z-scored units (default mlp 1e-4, hybrid 1e-2)")
+                 ->check(twinwatch::cli::nonnegative_number());
   auto* seed = sub->add_option("--seed", o->seed, "mlp/hybrid: seed of the initial weights; the same seed gives the same twin (default 1)");
-  auto* max_evaluations = sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)");
+  auto* max_evaluations = sub->add_option("--max-evaluations", o->max_evaluations, "mlp/hybrid: cap on L-BFGS loss evaluations (default 3000)")
+                              ->check(twinwatch::cli::whole_number(1, 100000000));
   auto* inputs = sub->add_option("--inputs", o->inputs,
                   "mlp/hybrid: network features per joint joined by '+': q, qd, qdd, temperature, friction_shape "
                   "(mlp default q+qd, hybrid qd+friction_shape)");
@@ -598,9 +600,11 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   auto* efficiency_passes = sub->add_option("--efficiency-passes", o->efficiency_passes,
                   "physics/mlp/hybrid: alternations of the back-driven factor and the gains; a heavy known payload needs ~20 to settle "
                   "(scenarios/ur3e/train/swing_train*.yaml)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(twinwatch::cli::whole_number(0, 1000));
   auto* reversal_screen = sub->add_option("--reversal-screen", o->reversal_screen,
-                                          "physics/mlp/hybrid: leave |qd| below this [rad/s] out of the fit (HESR §III-E)");
+                                          "physics/mlp/hybrid: leave |qd| below this [rad/s] out of the fit (HESR §III-E)")
+                              ->check(twinwatch::cli::nonnegative_number());
   auto* no_low_speed_friction = sub->add_flag("--no-low-speed-friction", o->no_low_speed_friction,
                 "physics/mlp/hybrid: leave out the low-speed friction (pre-sliding memory and Stribeck rise; shapes chosen on the "
                 "plain fit's residual, then the whole fit again with them, which takes about twice as long); the twin then has "
@@ -608,7 +612,8 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
   auto* direction_blend = sub->add_option("--direction-blend", o->direction_blend,
                   "physics/mlp/hybrid: width [rad/s] of the smooth switch between the motoring and the back-driven current "
                   "factor around qd = 0 (about the measured velocity's resolution; 0: hard switch)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(twinwatch::cli::nonnegative_number());
   auto* velocity_lag = sub->add_option("--velocity-lag", o->velocity_lag,
                   "physics/mlp/hybrid: how late actual_qd is against its sample's instant [s]; the drive's motoring/back-driven "
                   "switch is read on actual_qd + lag x qdd (default: measured on the recordings against the central difference "
@@ -623,7 +628,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "parameters; recovers it; gains the known payload does not fix are flagged) or 'alternating' (the first version, "
                   "between passes; biased towards 1)")
       ->capture_default_str();
-  sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str();
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample (the mlp/hybrid network uses at least every 5th)")->capture_default_str()->check(twinwatch::cli::whole_number(1, 1000000));
   sub->add_option("--column-map", o->column_maps,
                   "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), or the name of one twinwatch ships. "
                   "MAP: every recording without one of its own; REC=MAP: that recording alone (repeat for each; REC is any name of the "

@@ -42,6 +42,9 @@ nlohmann::json to_json(const RobotModel& m) {
   const double rated = m.description().rated_payload;
   j["rated_payload"] = std::isfinite(rated) ? nlohmann::json(rated) : nlohmann::json(nullptr);  // null: not given
   j["payload_limit"] = m.payload_limit();
+  j["units"] = {{"mass", "kg"},          {"com", "m (the joint's own frame)"}, {"q_min", "rad"},         {"q_max", "rad"},
+                {"qd_max", "rad/s"},     {"qdd_max", "rad/s²"},                {"torque_max", "N·m"},     {"torque_constant", "N·m/A"},
+                {"moving_mass", "kg"},   {"rated_payload", "kg"},              {"payload_limit", "kg"}};
   return j;
 }
 

@@ -42,7 +42,8 @@ struct MonitorOptions {
   std::string trace;  // per-sample residuals and thresholds as CSV
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
   double duration = 0.0, wait = 0.0;
-  double payload_mass = 0.0, cycle_period = 0.0;
+  double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
+  double cycle_period = 0.0;
   std::vector<double> payload_com;
   std::vector<double> sensitivity;
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
@@ -353,7 +354,7 @@ int run_monitor(const MonitorOptions& o) {
 struct ThresholdOptions {
   std::string twin, filter, program;
   std::vector<std::string> recordings, debounce_validation, column_maps;
-  double payload_mass = 0.0;
+  double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
 };
 
@@ -518,17 +519,17 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                 "reconnecting with back-off");
   auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass,
-                  "Payload the program declares [kg]. A stream that carries the controller's declared payload (RTDE payload / "
+                  "Payload the program declares [kg] (default: the twin file's 'payload', 0 kg as identify writes it). A stream that carries the controller's declared payload (RTDE payload / "
                   "payload_cog, controllers 5.5.1 and newer; a recording's payload columns) overrides it: the twin takes the first "
                   "declaration that differs and every change of it, so a declared pick raises nothing")
       ->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Keep the payload the twin starts with (--payload-mass, else the twin file's) for the whole run. Default: 2.5 s "
@@ -561,7 +562,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass,
-                  "Payload carried in these recordings [kg]. A recording that carries the payload the controller declares (RTDE "
+                  "Payload carried in these recordings [kg] (default: the twin file's 'payload'). A recording that carries the payload the controller declares (RTDE "
                   "payload / payload_cog, controllers 5.5.1 and newer; a recording's payload columns) is learned with each "
                   "declaration the twin takes, from its sample on (from the first sample: instead of this), as the monitor predicts "
                   "with it; a twin with relative gains takes none")
@@ -668,7 +669,7 @@ int run_evaluate(const EvaluateOptions& o) {
 struct ReportOptions {
   std::string twin, recording, output = "report.html", labels, column_map, program;
   bool quiet = false, keep_payload = false;
-  double payload_mass = 0.0;
+  double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
 };
 
@@ -717,8 +718,8 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                   std::string(kSensitivityHelp) + ", over the twin's; e.g. to measure the false-alarm margin of the long runs")
       ->delimiter(',')
       ->allow_extra_args(false);
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(CLI::Range(1, 1000));
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(CLI::Range(1, 1000));
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
   auto* filter = sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   auto* trend_csv = sub->add_option("--trend-csv", o->trend_csv,
@@ -765,7 +766,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
   sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)")->check(kProgramNameGiven);
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
-  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg]")->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg] (default: the twin file's 'payload')")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_flag("--keep-payload", o->keep_payload,

@@ -41,7 +41,12 @@ std::vector<std::string> split_list(const std::string& s) {
   std::size_t b = 0;
   while (b <= s.size()) {
     const std::size_t e = std::min(s.find(',', b), s.size());
-    if (e > b) out.push_back(s.substr(b, e - b));
+    // "timestamp, actual_q" (a space after the comma): the names, not " actual_q", which no
+    // controller has and which was then reported as missing
+    std::string item = s.substr(b, e - b);
+    const auto first = item.find_first_not_of(" \t"), last = item.find_last_not_of(" \t");
+    item = first == std::string::npos ? std::string() : item.substr(first, last - first + 1);
+    if (!item.empty()) out.push_back(item);
     b = e + 1;
   }
   return out;

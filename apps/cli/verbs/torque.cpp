@@ -285,10 +285,10 @@ twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
   sub->add_option("--signal", o->signal, "Torque signal: joint_torque, current_as_torque or target_moment")->capture_default_str();
   sub->add_option("--segment", o->segment, "Part of each recording to use, FROM:TO as fractions of its duration")->capture_default_str();
   sub->add_option("--reverse", o->reverse, "FWD.csv=REV.csv: REV is FWD played backwards; average them (HESR III-C)");
-  sub->add_option("--screen", o->screen, "Reversal screen [rad/s] for the rigid-body fit (0: off)")->capture_default_str();
-  sub->add_option("--half-window", o->half_window, "Half window [samples] of the qd smoothing / qdd derivative")->capture_default_str();
-  sub->add_option("--order", o->order, "Polynomial order of that local fit")->capture_default_str();
-  sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str();
+  sub->add_option("--screen", o->screen, "Reversal screen [rad/s] for the rigid-body fit (0: off)")->capture_default_str()->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--half-window", o->half_window, "Half window [samples] of the qd smoothing / qdd derivative")->capture_default_str()->check(twinwatch::cli::whole_number(1, 100000));
+  sub->add_option("--order", o->order, "Polynomial order of that local fit")->capture_default_str()->check(twinwatch::cli::whole_number(1, 10));
+  sub->add_option("--decimate", o->decimate, "Use every k-th sample")->capture_default_str()->check(twinwatch::cli::whole_number(1, 1000000));
   sub->add_flag("--ols", o->ols, "Ordinary least squares instead of weighted");
   sub->add_flag("--no-refit", o->no_refit, "Keep the friction from the screened joint fit (no re-fit on all rows; that fit does not hold Coulomb and viscous >= 0)");
   sub->add_flag("--json", o->json, "Print the model JSON");

@@ -92,7 +92,8 @@ struct MonitorConfig {
   }
   /// The shared count (no per-joint choice): observer_raise_after, else raise_after.
   int observer_debounce() const { return observer_raise_after > 0 ? observer_raise_after : raise_after; }
-  VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1)
+  VectorJ sensitivity;                        ///< multiplies each joint's threshold (empty: 1), each in (0, kMaxSensitivity]
+  static constexpr double kMaxSensitivity = 10.0;
   double nominal_period = 0.002;              ///< [s]
   double gap_factor = 1.5;                    ///< dt > gap_factor * period is a stream gap
   double diagnosis_delay = 0.12;              ///< [s] of residual after the raise used by the diagnosis
