@@ -481,23 +481,19 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot) {
 }
 
 void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
-  // a corrupted word (1.7e308 A) among healthy samples: the monitor skips such a sample as a sensor
-  // fault; a learner would fit it
+  check_units(rec, robot);
+  const double limit = robot.payload_limit();
   for (size_t k = 0; k < rec.samples.size(); ++k) {
     const RobotSample& s = rec.samples[k];
+    const double t = s.timestamp - rec.samples.front().timestamp;
+    // a corrupted word (1.7e308 A) among healthy samples: the monitor skips such a sample as a
+    // sensor fault; a learner would fit it
     for (int j = 0; j < rec.n_dof; ++j)
       if (s.has(kFieldActualCurrent) && !(std::abs(s.current[j]) <= kTrainingCurrentMax))
         throw InvalidArgument(fmt::format("{}: column 'actual_current_{}' is {:g} A at t = {:.3f} s (sample {}), no reading a joint's drive "
                                           "gives (above {:g} A); {} learns from healthy runs: leave this stretch out of the recording",
-                                          rec.path, j, s.current[j], s.timestamp - rec.samples.front().timestamp, k + 1,
-                                          kTrainingCurrentMax, what));
-  }
-  if (!(rec.present & kFieldPayload)) return;
-  const double limit = robot.payload_limit();
-  for (size_t k = 0; k < rec.samples.size(); ++k) {
-    const RobotSample& s = rec.samples[k];
+                                          rec.path, j, s.current[j], t, k + 1, kTrainingCurrentMax, what));
     if (!s.has(kFieldPayload)) continue;
-    const double t = s.timestamp - rec.samples.front().timestamp;
     const Eigen::Vector3d c(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
     if (!std::isfinite(s.payload) || !c.allFinite())
       throw InvalidArgument(fmt::format("{}: the payload declared at t = {:.3f} s (sample {}) is not a finite mass and centre of mass; {} "

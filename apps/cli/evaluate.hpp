@@ -42,8 +42,8 @@ inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-perce
 
 inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's |current| in a training run
 
-/// For the learners (identify, thresholds): a current beyond kTrainingCurrentMax in any sample (a
-/// corrupted word), or a payload the recording declares that the monitor would
+/// For the learners (identify, thresholds): check_units, and then a current beyond
+/// kTrainingCurrentMax in any sample (a corrupted word), or a payload the recording declares that the monitor would
 /// not take (more than the robot carries, e.g. grams; a centre of mass beyond kPayloadComMax, e.g.
 /// mm; not finite) is an error naming the file, the column, the time and sample, and `what` learns
 /// from it. The monitor notes such a declaration and keeps its payload; a healthy run learned with

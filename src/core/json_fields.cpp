@@ -93,12 +93,16 @@ nlohmann::json parse_json(const std::string& text, const std::string& origin, co
     throw ParseError(origin, 0, field, fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
   // the text is valid JSON: the second pass only looks for a repeated key
+  require_unique_keys(text, origin, field);
+  return j;
+}
+
+void require_unique_keys(const std::string& text, const std::string& origin, const std::string& field) {
   DuplicateKeys keys;
   nlohmann::json::sax_parse(text, &keys);
   if (!keys.duplicate.empty())
     throw ParseError(origin, 0, field.empty() ? keys.duplicate : json_member(field, keys.duplicate),
                      "the key appears twice in its object, expected once (a JSON reader would keep only one of the values)");
-  return j;
 }
 
 std::string json_brief(const nlohmann::json& v) {

@@ -8,11 +8,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
@@ -35,8 +33,6 @@ constexpr double kMaxJointRange = 5.0 * kMaxAngle;     // [rad]
 constexpr double kMaxJointSpeed = 50.0;                // [rad/s]
 constexpr double kGravityMin = 9.7, kGravityMax = 9.9;  // [m/s²]
 constexpr double kMaxPayloadRatio = 10.0;              // rated payload / moving mass
-
-std::string read_file(const std::string& path) { return read_text_file(path); }
 
 // 1-based line of a byte offset
 int line_of(const std::string& text, size_t byte) {
@@ -158,7 +154,7 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   } catch (const json::out_of_range& e) {  // a number beyond a double ("1e400")
     throw ParseError(origin, 0, "", fmt::format("expected numbers within the range of a double: {}", e.what()));
   }
-  parse_json(text, origin);  // (a key given twice: the JSON reader kept one of them silently)
+  require_unique_keys(text, origin);  // (a key given twice: the JSON reader kept one of them silently)
   const Reader r(origin);
   r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment", "rated_payload"});
   RobotDescription d;
@@ -290,7 +286,7 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   return d;
 }
 
-RobotDescription load_description_json(const std::string& path) { return parse_description_json(read_file(path), path); }
+RobotDescription load_description_json(const std::string& path) { return parse_description_json(read_text_file(path), path); }
 
 std::string robots_directory() { return data_directory("robots"); }
 

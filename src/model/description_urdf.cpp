@@ -6,10 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <mutex>
-#include <sstream>
 #include <vector>
 
 #include "twinwatch/core/error.hpp"

@@ -201,10 +201,7 @@ int run_identify(const IdentifyOptions& o) {
   }
   recs = cli::driven_only(std::move(recs), o.quiet);
   const model::RobotModel robot = model::load_robot(o.robot);
-  for (const auto& r : recs) {
-    cli::check_units(r, robot);
-    cli::check_training_recording(r, robot, "identify");
-  }
+  for (const auto& r : recs) cli::check_training_recording(r, robot, "identify");
   std::vector<ident::TrainingRun> runs;
   std::vector<PayloadArg> pay;
   for (const auto& p : o.payloads) pay.push_back(parse_payload(p, robot));
@@ -337,10 +334,7 @@ int run_identify_sequential(const IdentifyOptions& o) {
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
   const model::RobotModel robot = model::load_robot(o.robot);
   for (const auto* v : {&qs, &sn, &gen})
-    for (const auto& r : *v) {
-      cli::check_units(r, robot);
-      cli::check_training_recording(r, robot, "identify");
-    }
+    for (const auto& r : *v) cli::check_training_recording(r, robot, "identify");
   std::vector<const device::Recording*> qsp, snp;
   for (const auto& r : qs) qsp.push_back(&r);
   for (const auto& r : sn) snp.push_back(&r);

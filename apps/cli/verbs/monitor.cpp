@@ -370,7 +370,6 @@ int run_thresholds(const ThresholdOptions& o) {
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
-    cli::check_units(recs.back(), twin.robot());
     cli::check_training_recording(recs.back(), twin.robot(), "thresholds");
   }
   recs = cli::driven_only(std::move(recs));
@@ -385,7 +384,6 @@ int run_thresholds(const ThresholdOptions& o) {
                                           f));
     vrecs.push_back(device::read_recording(f, maps.of(f)));
     device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
-    cli::check_units(vrecs.back(), twin.robot());
     cli::check_training_recording(vrecs.back(), twin.robot(), "thresholds --debounce-validation");
   }
   vrecs = cli::driven_only(std::move(vrecs));

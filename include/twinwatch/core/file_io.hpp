@@ -67,14 +67,16 @@ inline void require_writable(const std::string& path) {
   if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
 }
 
-/// The whole content of a text file an input names. Throws ParseError "PATH: cannot read: REASON"
-/// for a directory (std::ifstream opens one and reads nothing, which a parser then reports as an
-/// empty document: the wrong cause) or a file that cannot be opened.
+/// Throws ParseError "PATH: cannot read: it is a directory, not a file" for a directory an input
+/// names: std::ifstream opens one and reads nothing, which a parser then reports as an empty
+/// document (the wrong cause).
 inline void refuse_directory_input(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw ParseError(path, 0, "", "cannot read: it is a directory, not a file");
 }
 
+/// The whole content of a text file an input names. Throws ParseError naming the path for a
+/// directory (refuse_directory_input), a file that cannot be opened, or a failed read.
 inline std::string read_text_file(const std::string& path) {
   refuse_directory_input(path);
   errno = 0;

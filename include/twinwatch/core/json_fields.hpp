@@ -18,6 +18,10 @@ namespace twinwatch {
 /// them silently), naming the key's path below `field`.
 nlohmann::json parse_json(const std::string& text, const std::string& origin, const std::string& field = "");
 
+/// The duplicate-key half of parse_json, for a reader that parses the (valid JSON) text itself:
+/// throws ParseError(origin, 0, path of the repeated key below `field`, ...) for a key given twice.
+void require_unique_keys(const std::string& text, const std::string& origin, const std::string& field = "");
+
 /// A value as it reads in a message: itself when short (-1, "x", null, [1, 2]), else its type.
 std::string json_brief(const nlohmann::json& v);
 
