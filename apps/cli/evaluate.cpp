@@ -436,6 +436,9 @@ void require_driven(const device::Recording& rec, const std::string& user) {
 }
 
 void check_units(const device::Recording& rec, const model::RobotModel& robot) {
+  // (report read a 7-joint log into a 6-joint twin and said "q has size 7, expected 6 (model.n_dof)")
+  if (rec.n_dof != robot.n_dof())
+    throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}", rec.path, rec.n_dof, robot.name(), robot.n_dof()));
   if (rec.median_period > kUnitsMaxPeriod)
     throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "
                                       "column in milliseconds? Scale it to seconds with a column map ('TIME_COLUMN,timestamp,0.001', "
@@ -1101,7 +1104,12 @@ void print_evaluation(const Evaluation& e) {
                e.healthy_runs, e.healthy_hours, fmt_row(e.margin_current), fmt_row(e.margin_observer), worst,
                worst < 1.0 ? fmt::format("thresholds tightened by more than {:.1f} % from those in use ({}) raise the first alarm",
                                          100.0 * (1.0 - worst), cut)
-                           : std::string("an alarm at the thresholds in use"));
+                           : e.false_alarms == 0
+                               // (the stop set read "an alarm" beside "false alarms: 0": the alert raised
+                               // as a pause began is withdrawn; audit, session 37)
+                               ? std::string("an alert raised at the thresholds in use, and withdrawn or held by the monitor (no event: "
+                                             "e.g. a pause that began, a pick declared after its grip; see its notes)")
+                               : std::string("an alarm at the thresholds in use"));
   }
 }
 
@@ -1163,6 +1171,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   twin.set_payload(payload);
   const device::Recording rec = device::read_recording(recording, map);
   device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
+  check_units(rec, twin.robot());  // (as monitor and validate)
   // its tables' R², NRMSE and correlations need a spread of samples: on one row they printed 0 and
   // 2155 % as results (audit of session 22); validate refuses the same
   if (rec.samples.size() < kMinReportSamples)
@@ -1177,6 +1186,17 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
       throw InvalidArgument(fmt::format("report: the labels of scenario '{}' ({:g} s at {:g} Hz) do not go with {}, which spans {:.3f} s at "
                                         "{:.4g} Hz: labels of another recording? (a simulated REC.csv has its own in REC.labels.json)",
                                         labels->scenario, labels->duration, labels->rate, recording, span, rate));
+    // nor a run of the same length on another clock (a live controller's timestamps, a log cut
+    // from a longer one): its spans were drawn as slivers at the plot's edge
+    const double t0 = rec.samples.front().timestamp, t1 = rec.samples.back().timestamp;
+    for (size_t k = 0; k < labels->faults.size(); ++k) {
+      const sim::FaultLabel& f = labels->faults[k];
+      const double slack = 2.0 * rec.median_period;
+      if (f.onset < t0 - slack || f.onset > t1 + slack)
+        throw InvalidArgument(fmt::format("report: the labels of scenario '{}' put fault {} ({}) at {:.3f} s, outside {}'s timestamps "
+                                          "{:.3f}-{:.3f} s: labels of another recording, or the recording's clock shifted?",
+                                          labels->scenario, k + 1, sim::to_string(f.type), f.onset, recording, t0, t1));
+    }
   }
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
@@ -1274,7 +1294,17 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
     mrows[3].push_back(fmt::format("{:.2f}", m.nrmse_pct));
     mrows[4].push_back(fmt::format("{:.2f}", m.rel_err_pct));
   }
-  r.add_table("Twin fidelity on this recording (UR3e Table 3 layout)", head, mrows);
+  // the prediction is the monitor's: after a payload change it diagnosed, with the payload it then
+  // followed. `validate` predicts with the declared payload alone, and differs from here after such
+  // a change (the audit of session 37 found the two tables apart without a word)
+  const bool followed = !keep_payload && std::any_of(mon.events().begin(), mon.events().end(), [](const monitor::Event& e) {
+    return e.fault == monitor::FaultClass::PayloadChange;
+  });
+  r.add_table(followed ? "Twin fidelity on this recording (UR3e Table 3 layout), predicted as the monitor predicts: with the payload "
+                         "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the declared payload "
+                         "alone, as this report does with --keep-payload"
+                       : "Twin fidelity on this recording (UR3e Table 3 layout)",
+              head, mrows);
   const MatrixJ C = monitor::residual_velocity_correlation(resv, qdv);
   std::vector<std::vector<std::string>> crows;
   for (int i = 0; i < n; ++i) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
@@ -92,12 +93,55 @@ void refuse_unless(std::initializer_list<const CLI::Option*> options, bool appli
   if (n > 0) throw InvalidArgument(fmt::format("{} appl{} only {}", given, n == 1 ? "ies" : "y", where));
 }
 
+namespace {
+// CLI11 (2.1) reads an empty text as 0 for a number ("--duration ''" ran a run of 0 s, reported as
+// "got 0") and a whole number beyond 64 bits as the largest one ("--seed 99999999999999999999" was
+// reported as 9223372036854775807). Every number option of every verb gets this check, which runs
+// on the text before CLI11 converts it; the option's own checks (bounds) come before it.
+CLI::Validator number_text(bool whole) {
+  return CLI::Validator(
+      [whole](std::string& text) -> std::string {
+        if (text.empty()) return fmt::format("expected {}, got '' (an empty value)", whole ? "a whole number" : "a number");
+        if (!whole) return {};  // (CLI11 refuses what strtod does not read in full)
+        errno = 0;
+        char* end = nullptr;
+        (void)std::strtoll(text.c_str(), &end, 0);
+        if (errno == ERANGE && end == text.c_str() + text.size())
+          return fmt::format("expected a whole number, got '{}', beyond the range of a 64-bit integer", text);
+        return {};
+      },
+      "");  // (no description: --help stays as it was)
+}
+
+// A file option given an empty value (an unset shell variable: --column-map "$MAP") was taken as not
+// given: report shaded no labels and read the log unmapped without a word (audit, session 37).
+// (--db '' is meaningful, "no event store", and is not among these.)
+CLI::Validator file_name_given() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string { return text.empty() ? "expected a file name, got '' (an empty value)" : std::string(); }, "");
+}
+constexpr const char* kFileOptions[] = {"--column-map", "--labels", "--robot"};
+
+void guard_options(CLI::App& app) {
+  for (CLI::Option* opt : app.get_options({})) {
+    const std::string type = opt->get_type_name();
+    const std::string base = type.substr(0, type.find(':'));
+    if (base == "INT" || base == "UINT") opt->check(number_text(true));
+    else if (base == "FLOAT") opt->check(number_text(false));
+    for (const char* name : kFileOptions)
+      if (opt->check_lname(name + 2)) opt->check(file_name_given());
+  }
+  for (CLI::App* sub : app.get_subcommands({})) guard_options(*sub);
+}
+}  // namespace
+
 void register_all_verbs(CLI::App& app) {
   auto& r = registry();
   std::stable_sort(r.begin(), r.end(), [](const Entry& a, const Entry& b) {
     return a.order != b.order ? a.order < b.order : a.name < b.name;
   });
   for (auto& e : r) e.setup(app);
+  guard_options(app);
 }
 
 }  // namespace twinwatch::cli

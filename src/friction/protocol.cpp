@@ -217,9 +217,13 @@ ProtocolResult run_hesr_protocol(const ProtocolRecords& r, const ProtocolOptions
     UncertaintyRow row;
     row.level = level;
     row.fourier_mean = f_sum / n;
-    row.fourier_std = std::sqrt(std::max(0.0, f_sq / n - row.fourier_mean * row.fourier_mean));
+    // (a spread of NaN, not 0, when a trial had nothing to score: std::max(0.0, NaN) is 0)
+    const auto spread = [n](double mean, double sq) {
+      return std::isfinite(mean) ? std::sqrt(std::max(0.0, sq / n - mean * mean)) : std::numeric_limits<double>::quiet_NaN();
+    };
+    row.fourier_std = spread(row.fourier_mean, f_sq);
     row.reversal_mean = r_sum / n;
-    row.reversal_std = std::sqrt(std::max(0.0, r_sq / n - row.reversal_mean * row.reversal_mean));
+    row.reversal_std = spread(row.reversal_mean, r_sq);
     row.first_share = firsts / n;
     out.uncertainty.push_back(row);
   }

@@ -37,8 +37,21 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
       step.emplace_back(r.time, r.speed);
     }
   }
-  if (x3.size() < 3)
-    throw InvalidArgument(fmt::format("{} motor: {} steady-state points with the wheel turning, expected at least 3", motor, x3.size()));
+  if (x3.size() < 3) {
+    // a test run backwards (the friction torque changes sign with the speed, so the fit of eq. 5
+    // takes one direction; the forward one): said, not counted as a wheel at rest
+    const auto backwards = std::count_if(rows.begin(), rows.end(), [&](const AgvTestRow& r) {
+      return r.motor == motor && r.test == "steady" && r.speed < -kMinSpeed;
+    });
+    throw InvalidArgument(fmt::format("{} motor: {} steady-state points with the wheel turning forwards (speed > {:g} rad/s), expected at "
+                                      "least 3{}",
+                                      motor, x3.size(), kMinSpeed,
+                                      backwards > 0 ? fmt::format("; {} steady rows turn backwards (negative speed): the fit takes the "
+                                                                  "forward direction; test forwards, or negate the speed, voltage and "
+                                                                  "current of a backward test",
+                                                                  backwards)
+                                                    : std::string()));
+  }
   AgvMotorFit fit;
   fit.steady_points = static_cast<int>(x3.size());
   // eq. 3: U/w = Ra i/w + k

@@ -254,6 +254,13 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
       j.drive.efficiency_reverse = r.number_or(dr, dp, "efficiency_reverse", j.drive.efficiency);
       const double cl = r.nullable_number(dr, dp, "current_limit", j.drive.current_limit);
       j.drive.current_limit = std::isnan(cl) ? std::numeric_limits<double>::infinity() : cl;
+      // (checked here with the field's path; the model's own check below would name the joint only)
+      for (const auto& [key, v] : {std::pair{"gear_ratio", j.drive.gear_ratio}, std::pair{"torque_constant", j.drive.torque_constant}})
+        if (!std::isnan(v) && !(v > 0.0 && std::isfinite(v))) r.fail(dp + "." + key, fmt::format("must be > 0 (or null if unknown), got {}", v));
+      for (const auto& [key, v] : {std::pair{"efficiency", j.drive.efficiency}, std::pair{"efficiency_reverse", j.drive.efficiency_reverse}})
+        if (!(v > 0.0 && v <= 1.0)) r.fail(dp + "." + key, fmt::format("expected a factor in (0, 1], got {}", v));
+      if (!(j.drive.current_limit > 0.0))
+        r.fail(dp + ".current_limit", fmt::format("must be > 0 A (or null if none), got {}", j.drive.current_limit));
     }
     d.joints.push_back(j);
   }

@@ -95,7 +95,7 @@ RobotModel::RobotModel(RobotDescription description) : description_(std::move(de
   n_dof_ = n;
   for (int i = 0; i < n; ++i) {
     const Joint& j = description_.joints[static_cast<size_t>(i)];
-    const std::string who = fmt::format("joint {} ('{}')", i, j.name);
+    const std::string who = fmt::format("joint {} ('{}')", i + 1, j.name);  // (numbered from 1, as everywhere users read)
     j.body.validate("link of " + who);
     const Eigen::Matrix3d R = j.placement.linear();
     if (!j.placement.matrix().allFinite() ||

@@ -78,7 +78,7 @@ struct EventStore::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string path;
-  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false;
+  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false;
   bool from_one = true;  // joint/link/other_links numbered from 1 (user_version 1); false: a 0-based store from before
 };
 
@@ -224,6 +224,7 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   impl_->has_other_links = mode == Mode::Write || has("other_links");
   impl_->has_t_detected = mode == Mode::Write || has("t_detected");
   impl_->has_active_at_stop = mode == Mode::Write || has("active_at_stop");
+  impl_->has_recorded_at = mode == Mode::Write || has("recorded_at");
   if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
@@ -271,13 +272,13 @@ long EventStore::count() const {
   return n;
 }
 
-std::vector<std::pair<std::string, Event>> EventStore::read() const {
+std::vector<StoredEvent> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
   const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " {}, {}, {} FROM events ORDER BY id;",
+      " {}, {}, {}, {} FROM events ORDER BY id;",
       impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL",
-      impl_->has_active_at_stop ? "active_at_stop" : "NULL");
+      impl_->has_active_at_stop ? "active_at_stop" : "NULL", impl_->has_recorded_at ? "recorded_at" : "NULL");
   if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
@@ -286,7 +287,7 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s, col));
     return p ? std::string(p) : std::string();
   };
-  std::vector<std::pair<std::string, Event>> out;
+  std::vector<StoredEvent> out;
   int rc = SQLITE_ROW;
   while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
     const long id = sqlite3_column_int64(s, 0);
@@ -353,7 +354,7 @@ std::vector<std::pair<std::string, Event>> EventStore::read() const {
     } catch (const std::exception& x) {
       throw PathError(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
     }
-    out.emplace_back(text(1), std::move(e));
+    out.push_back({text(1), text(15), std::move(e)});
   }
   if (rc != SQLITE_DONE) throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errstr(rc)));
   return out;

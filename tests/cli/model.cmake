@@ -13,3 +13,8 @@ add_test(NAME cli.model_show_json_qdd_max COMMAND twinwatch model show panda --j
 set_tests_properties(cli.model_show_json_qdd_max PROPERTIES PASS_REGULAR_EXPRESSION "\"qdd_max\": 15\\.0")
 add_test(NAME cli.model_show_json_qdd_max_null COMMAND twinwatch model show ur3e --json)
 set_tests_properties(cli.model_show_json_qdd_max_null PROPERTIES PASS_REGULAR_EXPRESSION "\"qdd_max\": null")
+# model show --json carries what the text prints (gravity, the flange at q = 0) and the drive's limits
+add_test(NAME cli.model_show_json_gravity_flange COMMAND twinwatch model show ur3e --json)
+set_tests_properties(cli.model_show_json_gravity_flange PROPERTIES PASS_REGULAR_EXPRESSION "\"flange_at_zero\": \\[\n *-?0\\.[0-9]+,[^\"]*\"gravity\": \\[")
+add_test(NAME cli.model_show_json_current_limit COMMAND twinwatch model show ur3e --json)
+set_tests_properties(cli.model_show_json_current_limit PROPERTIES PASS_REGULAR_EXPRESSION "\"current_limit\": null,[^}]*\"efficiency_reverse\": 1\\.0")

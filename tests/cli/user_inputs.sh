@@ -194,4 +194,32 @@ sed 's/"mass": *0\.0/"mass": 500.0/' "$D/twin.json" > "$W/tw500.json"
 grep -q '"mass": 500.0' "$W/tw500.json" || fail "could not set the twin file's payload"
 refused "tw500.json: field 'payload.mass': expected at most 3 kg" monitor --twin "$W/tw500.json" "$D/fig.csv" --db ''
 refused "sensitivity (--sensitivity) of joint 1 is 1000000000, expected a factor > 0 and at most 10" monitor --twin "$D/twin.json" "$D/fig.csv" --db '' --sensitivity 1e9
+# a number option given an empty value ran with 0; a whole number beyond 64 bits was read as the largest one
+refused "--duration: expected a number, got '' (an empty value)" simulate "$SC" -o "$W/empty.csv" --duration ''
+refused "--seed: expected a whole number, got '99999999999999999999', beyond the range of a 64-bit integer" \
+  simulate "$SC" -o "$W/big.csv" --seed 99999999999999999999
+refused "--raise-after: .*got ''" monitor --twin "$D/twin.json" "$D/fig.csv" --db '' --raise-after ''
+[ ! -e "$W/empty.csv" ] && [ ! -e "$W/big.csv" ] || fail "a refused simulate wrote a recording"
+# --json says the units of what it prints
+"$B" validate --twin "$D/twin.json" "$D/fig.csv" --json | grep -q '"units":{.*"rmse":"A"' || fail "validate --json without units"
+# report: a log of another joint count is named as monitor names it; labels on another clock, empty
+# file options, and an events class left empty are refused, not taken as "none given"
+awk -F, 'NR==1{for(i=1;i<=NF;i++) drop[i]=($i ~ /_5$/)} {o=""; for(i=1;i<=NF;i++) if(!drop[i]) o=o (o==""?"":",") $i; print o}' \
+  "$D/collision.csv" > "$W/five.csv"
+refused "five.csv has 5 joints, the robot (ur3e) 6" report --twin "$D/twin.json" "$W/five.csv" -o "$W/five.html"
+awk -F, -v OFS=, 'NR>1{$1=$1+42}1' "$D/collision.csv" > "$W/shifted.csv"
+refused "put fault 1 (collision) at 6\.[0-9]* s, outside .*shifted.csv's timestamps 42\.[0-9]*-5[0-9]\.[0-9]* s" \
+  report --twin "$D/twin.json" "$W/shifted.csv" --labels "$D/collision.labels.json" -o "$W/shifted.html"
+refused "--labels: expected a file name, got '' (an empty value)" report --twin "$D/twin.json" "$D/collision.csv" --labels '' -o "$W/l.html"
+refused "--column-map: expected a file name, got '' (an empty value)" validate --twin "$D/twin.json" "$D/fig.csv" --column-map ''
+refused "--class is empty" events --db "$W/none.db" --class ''
+[ ! -e "$W/five.html" ] && [ ! -e "$W/shifted.html" ] && [ ! -e "$W/l.html" ] || fail "a refused report wrote its page"
+# align: nothing to align is said, not "in step"; a search window below half a sample is refused
+awk -F, -v OFS=, 'NR==1{for(i=1;i<=NF;i++) if($i ~ /^actual_current_/) c[i]=1} NR>1{for(i in c) $i=1.5}1' "$D/fig.csv" > "$W/flat.csv"
+cp "$W/flat.csv" "$W/flat2.csv"
+refused "actual_current is constant on every joint in .*flat.csv or .*flat2.csv: there is nothing to align" align "$W/flat.csv" "$W/flat2.csv" --signal actual_current
+refused "--max-lag-ms 0.5 is less than half the sample period (2 ms)" align "$W/flat.csv" "$W/flat2.csv" --max-lag-ms 0.5
+# demo: a --max-duration that leaves nothing to evaluate is refused before the minute of training
+refused "every scenario .* is longer than --max-duration 1 s: nothing would be evaluated" demo --max-duration 1 -o "$W/demo1"
+[ ! -e "$W/demo1/twin.json" ] || fail "demo trained before refusing --max-duration"
 echo USER-INPUTS-OK

@@ -119,5 +119,19 @@ TEST(AgvIdent, TooFewSteadyPoints) {
   }
 }
 
+// a test run backwards is said as such, not as a wheel at rest (audit, session 37: every speed negated
+// read "0 steady-state points with the wheel turning")
+TEST(AgvIdent, ABackwardTestIsSaid) {
+  auto rows = sim::simulate_agv_tests(sim::AgvParams{}, 1);
+  int steady = 0;
+  for (auto& r : rows)
+    if (r.motor == "left" && r.test == "steady") r.speed = -r.speed, r.voltage = -r.voltage, r.current = -r.current, ++steady;
+  EXPECT_NO_THROW(fit_agv_motor(rows, "right"));
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { fit_agv_motor(rows, "left"); }),
+              ::testing::AllOf(::testing::HasSubstr("left motor: 0 steady-state points with the wheel turning forwards"),
+                               ::testing::ContainsRegex("; 1[0-9] steady rows turn backwards \\(negative speed\\)")));
+  EXPECT_GE(steady, 13);
+}
+
 }  // namespace
 }  // namespace twinwatch::ident

@@ -92,6 +92,26 @@ TEST(DescriptionJson, AccelerationLimitMustBePositive) {
               HasSubstr("joints[0].limits.qdd_max': must be > 0, got 0"));
 }
 
+// the drive's fields are named with their path (the model's check named "joint 2 ('elbow')" counted
+// from 0, for the third joint; audit, session 37)
+TEST(DescriptionJson, DriveFieldsAreCheckedWithTheirPath) {
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "drive": {"current_limit": 0})")),
+              HasSubstr("field 'joints[0].drive.current_limit': must be > 0 A (or null if none), got 0"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "drive": {"efficiency": 1.5})")),
+              HasSubstr("field 'joints[0].drive.efficiency': expected a factor in (0, 1], got 1.5"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "drive": {"efficiency": 0.9, "efficiency_reverse": 0})")),
+              HasSubstr("field 'joints[0].drive.efficiency_reverse': expected a factor in (0, 1], got 0"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "drive": {"gear_ratio": -101})")),
+              HasSubstr("field 'joints[0].drive.gear_ratio': must be > 0 (or null if unknown), got -101"));
+  EXPECT_THAT(error_of(one_joint(kGood + R"(, "drive": {"torque_constant": 0})")),
+              HasSubstr("field 'joints[0].drive.torque_constant': must be > 0 (or null if unknown), got 0"));
+  // and a description built in code is checked with its joints numbered from 1
+  RobotDescription d = parse_description_json(one_joint(kGood), "robot.json");
+  d.joints[0].drive.current_limit = 0.0;
+  EXPECT_THAT(twinwatch::test::error_text<twinwatch::InvalidArgument>([&] { RobotModel m(d); }),
+              HasSubstr("current limit of joint 1 ('joint1') is 0"));
+}
+
 // unit slips the kinematics and the simulator took silently (d 151.85 "m" put the flange 152 m up)
 TEST(DescriptionJson, UnitSlipsAreRefusedWithTheUnitToGive) {
   EXPECT_THAT(error_of(R"({"name": "t", "convention": "dh", "joints": [{"a": 0.1, "d": 151.85, "alpha": 0.0, )" + kGood + "}]}"),

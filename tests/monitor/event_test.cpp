@@ -112,20 +112,22 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
   EXPECT_EQ(again.count(), 2);
   const auto rows = again.read();
   ASSERT_EQ(rows.size(), 2u);
-  EXPECT_EQ(rows[0].first, "rec.csv");
-  EXPECT_EQ(rows[0].second.fault, FaultClass::Collision);
-  EXPECT_DOUBLE_EQ(rows[0].second.t_start, 7.25);
-  EXPECT_DOUBLE_EQ(rows[0].second.t_end, 7.31);
-  EXPECT_EQ(rows[0].second.link, 4);
-  EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
-  EXPECT_DOUBLE_EQ(rows[0].second.magnitude, 61.5);
-  EXPECT_EQ(rows[0].second.units, "N");
-  EXPECT_EQ(rows[0].second.detail, "contact on link 5");
-  EXPECT_EQ(rows[1].first, "robot 10.0.0.2");
-  EXPECT_EQ(rows[1].second.fault, FaultClass::PayloadChange);
-  EXPECT_TRUE(rows[1].second.other_links.empty());
-  EXPECT_FALSE(rows[0].second.active_at_stop);
-  EXPECT_TRUE(rows[1].second.active_at_stop);
+  EXPECT_EQ(rows[0].source, "rec.csv");
+  EXPECT_EQ(rows[0].event.fault, FaultClass::Collision);
+  EXPECT_DOUBLE_EQ(rows[0].event.t_start, 7.25);
+  EXPECT_DOUBLE_EQ(rows[0].event.t_end, 7.31);
+  EXPECT_EQ(rows[0].event.link, 4);
+  EXPECT_EQ(rows[0].event.other_links, std::vector<int>{3});
+  EXPECT_DOUBLE_EQ(rows[0].event.magnitude, 61.5);
+  EXPECT_EQ(rows[0].event.units, "N");
+  EXPECT_EQ(rows[0].event.detail, "contact on link 5");
+  EXPECT_EQ(rows[1].source, "robot 10.0.0.2");
+  EXPECT_EQ(rows[1].event.fault, FaultClass::PayloadChange);
+  EXPECT_TRUE(rows[1].event.other_links.empty());
+  EXPECT_FALSE(rows[0].event.active_at_stop);
+  EXPECT_TRUE(rows[1].event.active_at_stop);
+  // when each was stored (two runs of the same file are told apart by it)
+  EXPECT_THAT(rows[0].recorded_at, ::testing::MatchesRegex("[0-9]{4}-[0-9]{2}-[0-9]{2} [0-9]{2}:[0-9]{2}:[0-9]{2}"));
   std::filesystem::remove(path);
 }
 
@@ -179,10 +181,10 @@ TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
     store.insert(e, "new.csv");
     const auto rows = store.read();
     ASSERT_EQ(rows.size(), 2u);
-    EXPECT_EQ(rows[0].first, "old.csv");
-    EXPECT_EQ(rows[0].second.link, 2);
-    EXPECT_TRUE(rows[0].second.other_links.empty());
-    EXPECT_EQ(rows[1].second.other_links, std::vector<int>{4});
+    EXPECT_EQ(rows[0].source, "old.csv");
+    EXPECT_EQ(rows[0].event.link, 2);
+    EXPECT_TRUE(rows[0].event.other_links.empty());
+    EXPECT_EQ(rows[1].event.other_links, std::vector<int>{4});
   }
   {
     run_sql(path, "UPDATE events SET other_links = '[4,' WHERE source = 'new.csv';");
@@ -234,8 +236,8 @@ TEST(EventStore, ReadingChangesNothingAndRefusesWhatIsNotAnEventStore) {
     const EventStore store(path.string(), EventStore::Mode::Read);
     const auto rows = store.read();
     ASSERT_EQ(rows.size(), 1u);
-    EXPECT_DOUBLE_EQ(rows[0].second.t_detected, 12.104);
-    EXPECT_DOUBLE_EQ(rows[0].second.t_start, 12.102);
+    EXPECT_DOUBLE_EQ(rows[0].event.t_detected, 12.104);
+    EXPECT_DOUBLE_EQ(rows[0].event.t_start, 12.102);
   }
   {
     run_sql(path, "UPDATE events SET t_start = 'abc';");
@@ -281,11 +283,11 @@ TEST(EventStore, NumbersJointsAndLinksFromOneAsTheJsonLines) {
   EXPECT_EQ(raw_cell(path, "SELECT typeof(joint) || ',' || typeof(link) FROM events WHERE id = 2;"), "null,null");
   const auto rows = EventStore(path.string(), EventStore::Mode::Read).read();
   ASSERT_EQ(rows.size(), 2u);
-  EXPECT_EQ(rows[0].second.joint, 2);
-  EXPECT_EQ(rows[0].second.link, 4);
-  EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
-  EXPECT_EQ(rows[1].second.joint, -1);
-  EXPECT_EQ(rows[1].second.link, -1);
+  EXPECT_EQ(rows[0].event.joint, 2);
+  EXPECT_EQ(rows[0].event.link, 4);
+  EXPECT_EQ(rows[0].event.other_links, std::vector<int>{3});
+  EXPECT_EQ(rows[1].event.joint, -1);
+  EXPECT_EQ(rows[1].event.link, -1);
   std::filesystem::remove(path);
 }
 
@@ -307,15 +309,15 @@ TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
         " ('old.csv', 3.0, 3.5, 0.5, 'resistance', 0, -1, 0.8, 'N·m', 0.9, 1.2, 'extra friction on J1', '[]', 3.1);";
     run_sql(path, old);
   }
-  const auto check = [](const std::vector<std::pair<std::string, Event>>& rows) {
+  const auto check = [](const std::vector<StoredEvent>& rows) {
     ASSERT_GE(rows.size(), 3u);
-    EXPECT_EQ(rows[0].second.joint, 2);
-    EXPECT_EQ(rows[0].second.link, 4);
-    EXPECT_EQ(rows[0].second.other_links, std::vector<int>{3});
-    EXPECT_EQ(rows[1].second.joint, -1);
-    EXPECT_EQ(rows[1].second.link, -1);
-    EXPECT_EQ(rows[2].second.joint, 0);
-    EXPECT_EQ(rows[2].second.link, -1);
+    EXPECT_EQ(rows[0].event.joint, 2);
+    EXPECT_EQ(rows[0].event.link, 4);
+    EXPECT_EQ(rows[0].event.other_links, std::vector<int>{3});
+    EXPECT_EQ(rows[1].event.joint, -1);
+    EXPECT_EQ(rows[1].event.link, -1);
+    EXPECT_EQ(rows[2].event.joint, 0);
+    EXPECT_EQ(rows[2].event.link, -1);
   };
   check(EventStore(path.string(), EventStore::Mode::Read).read());
   EXPECT_EQ(raw_cell(path, "PRAGMA user_version;"), "0");  // reading changed nothing
@@ -329,7 +331,7 @@ TEST(EventStore, AZeroBasedStoreIsReadAsSuchAndRenumberedWhenWritten) {
     const auto rows = store.read();
     ASSERT_EQ(rows.size(), 4u);
     check(rows);
-    EXPECT_EQ(rows[3].second.link, 1);
+    EXPECT_EQ(rows[3].event.link, 1);
   }
   EXPECT_EQ(raw_cell(path, "PRAGMA user_version;"), "1");
   EXPECT_EQ(raw_cell(path, "SELECT joint || ',' || link || ',' || other_links FROM events WHERE id = 1;"), "3,5,[4]");

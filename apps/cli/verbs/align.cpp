@@ -89,11 +89,20 @@ int run_align(const AlignCliOptions& o) {
   // search at all, and called a 20 ms lag "in step")
   const double longest = static_cast<double>(std::max(ra.samples.size(), rb.samples.size()));
   opt.max_lag = static_cast<int>(std::lround(std::min(o.max_lag_ms / 1000.0 / T, longest)));
+  if (o.max_lag_ms > 0.0 && opt.max_lag == 0)  // (it was cut to a search of lag 0 alone, without a word)
+    throw InvalidArgument(fmt::format("--max-lag-ms {:g} is less than half the sample period ({:g} ms): the search would cover lag 0 "
+                                      "alone; give at least {:g}",
+                                      o.max_lag_ms, 1000.0 * T, 1000.0 * T));
   opt.subsample = !o.no_subsample;
   opt.common_lag = !o.per_joint;
   const auto ca = channels(ra, col), cb = channels(rb, col);
   const auto res = signal::align_channels(ca, cb, opt);
   const double ms = 1000.0 * T;
+  // no joint whose signal changes in both: there is nothing to correlate, and a "common lag 0.00
+  // samples (in step)" was printed as a finding (audit, session 37)
+  if (std::none_of(res.begin(), res.end(), [](const signal::Alignment& r) { return r.valid; }))
+    throw InvalidArgument(fmt::format("{} is constant on every joint in {} or {}: there is nothing to align (give --signal another column)",
+                                      col.name, o.a, o.b));
   bool edge = false;
   for (const auto& r : res) edge |= r.valid && r.at_window_edge;
   // joints whose signals hardly correlate at the lag found: not the same motion, or not alignable
@@ -187,8 +196,9 @@ twinwatch::cli::VerbRegistrar reg{"align", 36, [](CLI::App& app) {
   sub->add_flag("--per-joint", o->per_joint, "Estimate a lag per joint instead of one common lag");
   sub->add_flag("--no-subsample", o->no_subsample, "Keep the lag on the integer sample grid");
   sub->add_flag("--json", o->json,
-                "Print {\"signal\", \"unit\", \"period_s\", \"joints\": [{\"joint\", \"lag_samples\", \"lag_ms\", \"correlation\", "
-                "\"raw_rmse\", \"aligned_rmse\", \"raw_mae\", \"aligned_mae\"}, ...]}");
+                "Print {\"signal\", \"unit\", \"period_s\", \"joints\": [{\"joint\", \"valid\" (false: the joint's signal is constant, "
+                "no lag of its own), \"lag_samples\", \"lag_ms\", \"correlation\", \"raw_rmse\", \"aligned_rmse\", \"raw_mae\", \"aligned_mae\"}, "
+                "...]}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_align(*o)); });
 }};
 

@@ -81,11 +81,18 @@ int run(const Options& o) {
   if (o.quick) return 0;
   // the scenarios must be of the twin's robot: checked before the minute of training, not after
   const auto files = scenario_files(o.scenarios);
-  for (const auto& f : files)
-    if (const sim::Scenario sc = sim::load_scenario(f); sc.robot != o.robot)
+  size_t too_long = 0;  // (every one skipped was said after the minute of training, not before)
+  for (const auto& f : files) {
+    const sim::Scenario sc = sim::load_scenario(f);
+    if (sc.robot != o.robot)
       throw InvalidArgument(fmt::format("--robot {}: {} runs robot '{}'; give --scenarios DIR with scenarios of '{}' (the built-in "
                                         "library, scenarios/ur3e, is for the UR3e)",
                                         o.robot, f, sc.robot, o.robot));
+    too_long += o.max_duration > 0 && sc.options.duration > o.max_duration;
+  }
+  if (!files.empty() && too_long == files.size())
+    throw InvalidArgument(fmt::format("every scenario ({}) in {} is longer than --max-duration {:g} s: nothing would be evaluated",
+                                      files.size(), o.scenarios, o.max_duration));
   make_output_directory(o.out);
 
   fmt::print("== step 2: identify the twin from simulated healthy runs (recordings only, DESIGN.md rule 1)\n");

@@ -21,6 +21,7 @@ struct EventsOptions {
   std::string source;  // only events whose source contains this text
   int last = 0;        // only the newest N (0 = all)
   bool json = false;
+  bool fault_given = false;  // --class '' (an unset variable) listed every class
 };
 
 // "3" or "3 (or 4)": the contact link and the one the joint torques cannot rule out (1-based)
@@ -32,29 +33,33 @@ std::string link_text(const monitor::Event& e) {
 }
 
 void run_events(const EventsOptions& o) {
+  if (o.fault_given && o.fault.empty())
+    throw InvalidArgument("--class is empty: give one of collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
+  if (!o.fault.empty()) monitor::fault_class_from_string(o.fault);  // names the valid classes when unknown
   if (!std::filesystem::exists(o.db))
     throw InvalidArgument(fmt::format("{}: no such event store ('twinwatch monitor --db {}' writes one)", o.db, o.db));
-  if (!o.fault.empty()) monitor::fault_class_from_string(o.fault);  // names the valid classes when unknown
   if (o.last < 0) throw InvalidArgument(fmt::format("--last is {}, must be >= 0", o.last));
   const monitor::EventStore store(o.db, monitor::EventStore::Mode::Read);
   auto rows = store.read();
-  std::erase_if(rows, [&](const auto& r) {
-    return (!o.fault.empty() && monitor::to_string(r.second.fault) != o.fault) ||
-           (!o.source.empty() && r.first.find(o.source) == std::string::npos);
+  std::erase_if(rows, [&](const monitor::StoredEvent& r) {
+    return (!o.fault.empty() && monitor::to_string(r.event.fault) != o.fault) ||
+           (!o.source.empty() && r.source.find(o.source) == std::string::npos);
   });
   if (o.last > 0 && rows.size() > static_cast<size_t>(o.last)) rows.erase(rows.begin(), rows.end() - o.last);
   if (o.json) {
-    for (const auto& [source, e] : rows) {
+    for (const auto& [source, recorded_at, e] : rows) {
       nlohmann::json j = nlohmann::json::parse(e.to_json_line());
       j["source"] = source;
+      j["recorded_at"] = recorded_at.empty() ? nlohmann::json(nullptr) : nlohmann::json(recorded_at + " UTC");
       fmt::print("{}\n", j.dump());
     }
     return;
   }
-  fmt::print("{:<24} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "source", "t [s]", "dur ms", "class", "joint", "link",
-             "magnitude", "detail");
-  for (const auto& [source, e] : rows)
-    fmt::print("{:<24} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n",
+  // (when it was stored: two runs of the same recording give the same rows otherwise)
+  fmt::print("{:<19} {:<24} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "source", "t [s]", "dur ms", "class", "joint",
+             "link", "magnitude", "detail");
+  for (const auto& [source, recorded_at, e] : rows)
+    fmt::print("{:<19} {:<24} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
                source.size() > 24 ? "…" + source.substr(source.size() - 23) : source, e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
                cli::magnitude_text(e.magnitude, e.units), e.detail);
@@ -65,7 +70,7 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   auto o = std::make_shared<EventsOptions>();
   auto* sub = app.add_subcommand("events", "List the events 'twinwatch monitor' stored (SQLite): class, joint, contact link, magnitude, detail");
   sub->add_option("--db", o->db, "Event store written by 'twinwatch monitor --db'")->capture_default_str();
-  sub->add_option("--class", o->fault,
+  auto* cls = sub->add_option("--class", o->fault,
                   "Only this class: collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
   sub->add_option("--source", o->source, "Only events whose source (recording file or robot address) contains this text");
   sub->add_option("--last", o->last, "Only the newest N events (0: all)")->capture_default_str();
@@ -75,7 +80,10 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
       "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"
       "numbered from 1 everywhere (J5 is \"joint\": 5; none is null), as in the scenario labels. A store written\n"
       "before this numbering (0-based) is read as such and renumbered the next time 'twinwatch monitor' writes to it.");
-  sub->callback([o] { run_events(*o); });
+  sub->callback([o, cls] {
+    o->fault_given = cls->count() > 0;
+    run_events(*o);
+  });
 }};
 
 }  // namespace

@@ -191,7 +191,8 @@ int run(const Options& o) {
                      {"tool_points", tool_json(eo.tool_points)},
                      {"min_height", o.min_height},
                      {"q0", vec(r.trajectory.q0)},
-                     {"centre_raised", !raised.empty()}};
+                     {"centre_raised", !raised.empty()},
+                     {"units", {{"z", "m (base frame)"}, {"t", "s"}, {"tool_points", "m (flange frame)"}, {"min_height", "m"}, {"q0", "rad"}}}};
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
@@ -251,7 +252,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
       ->type_size(-3)  // three numbers an occurrence, any number of occurrences
       ->allow_extra_args(false);
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
   sub->callback([o, duration] {
     o->duration_given = duration->count() > 0;

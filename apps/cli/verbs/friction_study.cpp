@@ -178,6 +178,11 @@ void apply_parfam_options(ParFamOptions& p, const StudyOptions& o) {
 }
 
 std::string num(double v, int prec = 4) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, prec) : "n/a"; }
+// mean ± spread over trials; "n/a" when there was nothing to score (no reversal window in the record:
+// "nan ± 0.0000" read as a measured spread of 0)
+std::string pm(double mean, double spread) {
+  return std::isfinite(mean) ? fmt::format("{:.4f} ± {:.4f}", mean, spread) : "n/a";
+}
 
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -235,8 +240,7 @@ void print_tables(const std::vector<ProtocolResult>& res, const StudyOptions& o)
     fmt::print("{:>8} {:>22} {:>22} {:>12}\n", "Level", "Offline RMSE", "Reversal RMSE", "ranked 1st");
     for (const auto& u : r.uncertainty)
       fmt::print("{:>7.0f}% {:>22} {:>22} {:>11.0f}%\n", 100 * u.level,
-                 fmt::format("{:.4f} ± {:.4f}", u.fourier_mean, u.fourier_std),
-                 fmt::format("{:.4f} ± {:.4f}", u.reversal_mean, u.reversal_std), 100 * u.first_share);
+                 pm(u.fourier_mean, u.fourier_std), pm(u.reversal_mean, u.reversal_std), 100 * u.first_share);
   }
   table("Table VI: evaluation time per sample (state update + model) [ns]",
         [](const ModelStudy& m) { return m.eval_ns; }, 1);

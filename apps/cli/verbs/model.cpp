@@ -16,6 +16,13 @@ std::string fmt_gain(double v, const char* unit) {
   return std::isnan(v) ? std::string("unknown — identify") : fmt::format("{:g} {}", v, unit);
 }
 
+// the flange's position at q = 0 (what the text prints, to check a description's kinematics)
+nlohmann::json flange_at_zero(const RobotModel& m) {
+  twinwatch::model::DynamicsData d(m);
+  const auto& T = twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof()));
+  return {T.translation().x(), T.translation().y(), T.translation().z()};
+}
+
 nlohmann::json to_json(const RobotModel& m) {
   nlohmann::json j;
   j["name"] = m.name();
@@ -36,33 +43,46 @@ nlohmann::json to_json(const RobotModel& m) {
                            {"torque_max", num(jt.limits.torque_max)},
                            {"gear_ratio", num(jt.drive.gear_ratio)},
                            {"torque_constant", num(jt.drive.torque_constant)},
-                           {"efficiency", jt.drive.efficiency}});
+                           {"efficiency", jt.drive.efficiency},
+                           {"efficiency_reverse", jt.drive.efficiency_reverse},
+                           {"current_limit", num(jt.drive.current_limit)}});  // null: none given
   }
   j["moving_mass"] = total;
+  j["gravity"] = {m.gravity().x(), m.gravity().y(), m.gravity().z()};
+  j["flange_at_zero"] = flange_at_zero(m);
   const double rated = m.description().rated_payload;
   j["rated_payload"] = std::isfinite(rated) ? nlohmann::json(rated) : nlohmann::json(nullptr);  // null: not given
   j["payload_limit"] = m.payload_limit();
   j["units"] = {{"mass", "kg"},          {"com", "m (the joint's own frame)"}, {"q_min", "rad"},         {"q_max", "rad"},
                 {"qd_max", "rad/s"},     {"qdd_max", "rad/s²"},                {"torque_max", "N·m"},     {"torque_constant", "N·m/A"},
-                {"moving_mass", "kg"},   {"rated_payload", "kg"},              {"payload_limit", "kg"}};
+                {"moving_mass", "kg"},   {"rated_payload", "kg"},              {"payload_limit", "kg"},
+                {"efficiency", "1 (motor to joint)"}, {"efficiency_reverse", "1 (joint to motor, back-driven)"},
+                {"current_limit", "A"},  {"gravity", "m/s² (base frame)"},     {"flange_at_zero", "m (base frame, at q = 0)"}};
   return j;
 }
 
 void print_summary(const RobotModel& m) {
   fmt::print("robot {} ({} joints) from {}\n", m.name(), m.n_dof(), m.description().source);
-  fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9}  {}\n", "#", "joint", "mass kg", "COM (joint frame) m",
-             "q range rad", "qd rad/s", "tau N·m", "drive N / kt");
+  fmt::print("{:<3} {:<14} {:>8} {:>26} {:>18} {:>9} {:>9} {:>11}  {}\n", "#", "joint", "mass kg", "COM (joint frame) m",
+             "q range rad", "qd rad/s", "tau N·m", "qdd rad/s²", "drive N / kt");
   double total = 0.0;
   for (int i = 0; i < m.n_dof(); ++i) {
     const auto& j = m.joint(i);
     total += j.body.mass;
     // a drive the description leaves out is identified from recordings (the twin's gain N·kt·eta)
     const bool no_drive = std::isnan(j.drive.gear_ratio) && std::isnan(j.drive.torque_constant);
-    fmt::print("{:<3} {:<14} {:>8.4f} {:>26} {:>18} {:>9.3f} {:>9.1f}  {}\n", i + 1, j.name, j.body.mass,
+    // efficiencies and a current limit only where the description gives them (defaults: 1, 1, none)
+    std::string extra;
+    if (j.drive.efficiency != 1.0 || j.drive.efficiency_reverse != j.drive.efficiency)
+      extra += fmt::format(", efficiency {:g} (back-driven {:g})", j.drive.efficiency, j.drive.efficiency_reverse);
+    if (std::isfinite(j.drive.current_limit)) extra += fmt::format(", current limit {:g} A", j.drive.current_limit);
+    fmt::print("{:<3} {:<14} {:>8.4f} {:>26} {:>18} {:>9.3f} {:>9.1f} {:>11}  {}{}\n", i + 1, j.name, j.body.mass,
                fmt::format("[{:.4f} {:.4f} {:.4f}]", j.body.com.x(), j.body.com.y(), j.body.com.z()),
                fmt::format("[{:.2f}, {:.2f}]", j.limits.q_min, j.limits.q_max), j.limits.qd_max, j.limits.torque_max,
+               std::isfinite(j.limits.qdd_max) ? fmt::format("{:.1f}", j.limits.qdd_max) : std::string("-"),
                no_drive ? std::string("not given: identified from recordings")
-                        : fmt::format("{} / {}", fmt_gain(j.drive.gear_ratio, ""), fmt_gain(j.drive.torque_constant, "N·m/A")));
+                        : fmt::format("{} / {}", fmt_gain(j.drive.gear_ratio, ""), fmt_gain(j.drive.torque_constant, "N·m/A")),
+               extra);
   }
   fmt::print("moving mass {:.4f} kg; gravity [{:g} {:g} {:g}] m/s²\n", total, m.gravity().x(), m.gravity().y(),
              m.gravity().z());
@@ -72,10 +92,8 @@ void print_summary(const RobotModel& m) {
   // it in DH frame i, a URDF in its link frame: the same point, other coordinates
   fmt::print("centres of mass in each joint's own frame (origin on its axis, z along it), which the model uses; a DH "
              "description gives them in DH frame i, a URDF in its link frame (docs/robot-description.md)\n");
-  twinwatch::model::DynamicsData d(m);
-  const auto& T = twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof()));
-  fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", T.translation().x(), T.translation().y(),
-             T.translation().z());
+  const nlohmann::json f = flange_at_zero(m);
+  fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", f[0].get<double>(), f[1].get<double>(), f[2].get<double>());
 }
 
 twinwatch::cli::VerbRegistrar reg{"model", 10, [](CLI::App& app) {

@@ -175,7 +175,6 @@ int run_monitor(const MonitorOptions& o) {
     const auto map = cli::load_column_map(o.column_map);
     rec = device::read_recording(o.recording, map ? &*map : nullptr);
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
-    if (rec.n_dof != twin.n_dof()) throw InvalidArgument(fmt::format("{} has {} joints, the twin {}", o.recording, rec.n_dof, twin.n_dof()));
     cli::check_units(rec, twin.robot());
     if (rec.median_period > 0) use_rate(rec.median_period, o.recording);
     // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
@@ -547,7 +546,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_option("--trace", o->trace,
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
                   "per joint to this CSV (to see why an alert was raised or late)");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
   sub->callback([=] {
     twinwatch::cli::refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
     twinwatch::cli::set_exit_code(run_monitor(*o));

@@ -321,7 +321,7 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->add_option("--outputs", o->outputs,
                   "Comma-separated RTDE output names (default: every recording column: timestamp, actual_q, actual_qd, "
                   "target_q, target_qd, target_qdd, actual_current, target_current, target_moment, joint_temperatures, "
-                  "actual_digital_output_bits, robot_mode, and from controller 5.5.1 on the declared payload and payload_cog; a "
+                  "actual_digital_output_bits, robot_mode, safety_mode, and from controller 5.5.1 on the declared payload and payload_cog; a "
                   "list must include timestamp, actual_q and actual_qd)");
   sub->add_option("--wait", o->wait, "Keep trying the first connection for this long [s]")->capture_default_str();
   sub->add_option("--protocol", o->protocol, "Highest RTDE protocol version to ask for (2, or 1 for old controllers)")
@@ -329,7 +329,7 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--no-reconnect", o->no_reconnect, "Stop at the first disconnection instead of reconnecting with back-off");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_record(*o)); });
 }};
 
@@ -347,7 +347,7 @@ twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
   sub->add_option("--controller-version", o->version, "Version to report to clients")->capture_default_str();
   sub->add_option("--wait-client", o->wait_client, "Hold the robot until a client starts streaming (a client that only connects does not release it), for at most this long [s]");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->callback([o, duration, seed] {
     o->duration_given = duration->count() > 0;
     o->seed_given = seed->count() > 0;

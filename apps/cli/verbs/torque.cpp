@@ -133,7 +133,7 @@ int run_identify(const IdentOpts& o) {
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     cli::check_units(recs.back(), m);
-    cli::require_driven(recs.back(), "torque identify");
+    cli::require_driven(recs.back(), "identify-torque");
   }
   // FWD=REV pairs: REV is FWD's trajectory played backwards
   std::vector<std::pair<std::string, std::string>> pairs;
@@ -151,7 +151,7 @@ int run_identify(const IdentOpts& o) {
     if (it == segs.end()) throw InvalidArgument(fmt::format("--reverse names '{}', which is not one of the recordings", fw));
     revs.push_back(device::read_recording(rv, map ? &*map : nullptr));
     cli::check_units(revs.back(), m);
-    cli::require_driven(revs.back(), "torque identify");
+    cli::require_driven(revs.back(), "identify-torque");
     it->reverse = &revs.back();
   }
   ident::RigidBodyLsOptions io;
@@ -251,6 +251,8 @@ int run_validate(const ValidateOpts& o) {
     };
     j["identified"] = put(ours);
     if (pub) j["published"] = put(*pub);
+    j["units"] = {{"seconds", "s"}, {"rmse", "N·m"}, {"max_abs", "N·m"}, {"r2", "1"},
+                  {"d_tau_pct", "% (norm of the error / norm of the measured torque)"}};
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
@@ -292,7 +294,7 @@ twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
   sub->add_flag("--ols", o->ols, "Ordinary least squares instead of weighted");
   sub->add_flag("--no-refit", o->no_refit, "Keep the friction from the screened joint fit (no re-fit on all rows; that fit does not hold Coulomb and viscous >= 0)");
   sub->add_flag("--json", o->json, "Print the model JSON");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_identify(*o)); });
 }};
 

@@ -69,6 +69,13 @@ struct Event {
   std::string to_json_line() const;
 };
 
+/// An event as the store keeps it: the run it came from and when it was stored.
+struct StoredEvent {
+  std::string source;       ///< the recording file or the robot address
+  std::string recorded_at;  ///< when the monitor stored it, "YYYY-MM-DD HH:MM:SS" UTC (SQLite's CURRENT_TIMESTAMP); "" if unknown
+  Event event;
+};
+
 /// SQLite event store (embedded; default file events.db). Thread-compatible, not for RT loops:
 /// the monitor hands events to it from the consumer side.
 class EventStore {
@@ -96,11 +103,11 @@ class EventStore {
   void insert(const Event& e, const std::string& source);
   /// Number of stored events.
   long count() const;
-  /// Every stored event with its source, oldest first (open is false; rows from before t_detected
+  /// Every stored event with its source and storage time, oldest first (open is false; rows from before t_detected
   /// was stored read it as t_start). Throws std::runtime_error naming the file, the row id and the
   /// column when a row cannot be read back (a number column holding text, an unknown class, a
   /// malformed other_links).
-  std::vector<std::pair<std::string, Event>> read() const;
+  std::vector<StoredEvent> read() const;
 
  private:
   struct Impl;
