@@ -54,7 +54,7 @@ if "$tw" identify "$a" --column-map "$map" --column-map kinova_gen3_chiha -q -o 
 grep -q "two maps for every recording" "$dir/cm_err3.txt" || { cat "$dir/cm_err3.txt"; exit 1; }
 [ ! -e "$dir/cm_never.json" ] || { echo "a twin was written after a refused map"; exit 1; }
 if "$tw" identify "$a" --column-map '' -q -o "$dir/cm_never.json" 2> "$dir/cm_err4.txt"; then echo "an empty map taken"; exit 1; fi
-grep -q "got an empty value" "$dir/cm_err4.txt" || { cat "$dir/cm_err4.txt"; exit 1; }
+grep -q -- "--column-map: expected a file name, got '' (an empty value)" "$dir/cm_err4.txt" || { cat "$dir/cm_err4.txt"; exit 1; }
 # a recording whose name holds a '=' gets its own map; a shipped map given by name is an input that
 # -o must not replace (the file it resolves to, not the name)
 cp "$dir/cm_b.csv" "$dir/run=1.csv"

@@ -45,7 +45,7 @@ set_tests_properties(cli.excite_duration_negative PROPERTIES PASS_REGULAR_EXPRES
 add_test(NAME cli.excite_min_height_default
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/high.yaml --global-evals 300 --local-evals 300 --json && grep -c 'centre was raised' ${d}/high.yaml")
 set_tests_properties(cli.excite_min_height_default PROPERTIES
-  PASS_REGULAR_EXPRESSION "\"centre_raised\": true,[^}]*\"lowest_point\": {[^}]*\"z\": 0\\.(0[5-9]|[1-9])[0-9]*[^}]*}[^}]*\"min_height\": 0\\.05[^}]*}\n1\n")
+  PASS_REGULAR_EXPRESSION "\"centre_raised\": true,[^}]*\"lowest_point\": {[^}]*\"z\": 0\\.(0[5-9]|[1-9])[0-9]*[^}]*}[^}]*\"min_height\": 0\\.05,[^@]*\"units\": {[^}]*\"min_height\": \"m\"[^@]*}\n1\n")
 add_test(NAME cli.excite_min_height_unreachable
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/never_high.yaml --global-evals 100 --local-evals 100 --min-height 0.3 2>&1; echo exit \$?; test -e ${d}/never_high.yaml && echo FILE-EXISTS")
 set_tests_properties(cli.excite_min_height_unreachable PROPERTIES
