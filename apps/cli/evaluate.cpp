@@ -645,7 +645,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
   mag_min /= kMagnitudeMargin;
   mag_max *= kMagnitudeMargin;
   for (const sim::Scenario& s : scenarios) {
-    if (max_duration > 0 && s.options.duration > max_duration) {
+    if (longer_than_max(s, max_duration)) {
       if (!quiet) fmt::print("   skip {} ({:.0f} s > --max-duration {:.0f} s)\n", s.name, s.options.duration, max_duration);
       ev.skipped.push_back(s.name);
       if (ev.skipped.size() == scenarios.size())
@@ -1188,10 +1188,9 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                                         labels->scenario, labels->duration, labels->rate, recording, span, rate));
     // nor a run of the same length on another clock (a live controller's timestamps, a log cut
     // from a longer one): its spans were drawn as slivers at the plot's edge
-    const double t0 = rec.samples.front().timestamp, t1 = rec.samples.back().timestamp;
+    const double t0 = rec.samples.front().timestamp, t1 = rec.samples.back().timestamp, slack = 2.0 * rec.median_period;
     for (size_t k = 0; k < labels->faults.size(); ++k) {
       const sim::FaultLabel& f = labels->faults[k];
-      const double slack = 2.0 * rec.median_period;
       if (f.onset < t0 - slack || f.onset > t1 + slack)
         throw InvalidArgument(fmt::format("report: the labels of scenario '{}' put fault {} ({}) at {:.3f} s, outside {}'s timestamps "
                                           "{:.3f}-{:.3f} s: labels of another recording, or the recording's clock shifted?",

@@ -173,6 +173,9 @@ struct Evaluation {
   double false_alarms_per_hour() const { return monitored_hours > 0 ? false_alarms / monitored_hours : 0.0; }
 };
 
+/// Whether `--max-duration` (0: none) skips scenario `s` in evaluate_scenarios (and so in demo).
+inline bool longer_than_max(const sim::Scenario& s, double max_duration) { return max_duration > 0 && s.options.duration > max_duration; }
+
 /// Runs every scenario file: simulate, monitor with `twin`, score against the labels.
 /// `max_duration` skips longer scenarios (0: none skipped). `report_dir` (may be empty) gets one
 /// HTML report per scenario. `trend_csv` (may be empty) gets the per-window wear-trend history

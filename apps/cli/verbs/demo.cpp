@@ -88,7 +88,7 @@ int run(const Options& o) {
       throw InvalidArgument(fmt::format("--robot {}: {} runs robot '{}'; give --scenarios DIR with scenarios of '{}' (the built-in "
                                         "library, scenarios/ur3e, is for the UR3e)",
                                         o.robot, f, sc.robot, o.robot));
-    too_long += o.max_duration > 0 && sc.options.duration > o.max_duration;
+    too_long += cli::longer_than_max(sc, o.max_duration);
   }
   if (!files.empty() && too_long == files.size())
     throw InvalidArgument(fmt::format("every scenario ({}) in {} is longer than --max-duration {:g} s: nothing would be evaluated",

@@ -17,10 +17,9 @@ std::string fmt_gain(double v, const char* unit) {
 }
 
 // the flange's position at q = 0 (what the text prints, to check a description's kinematics)
-nlohmann::json flange_at_zero(const RobotModel& m) {
+Eigen::Vector3d flange_at_zero(const RobotModel& m) {
   twinwatch::model::DynamicsData d(m);
-  const auto& T = twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof()));
-  return {T.translation().x(), T.translation().y(), T.translation().z()};
+  return twinwatch::model::forward_kinematics(m, d, twinwatch::VectorJ::Zero(m.n_dof())).translation();
 }
 
 nlohmann::json to_json(const RobotModel& m) {
@@ -49,7 +48,8 @@ nlohmann::json to_json(const RobotModel& m) {
   }
   j["moving_mass"] = total;
   j["gravity"] = {m.gravity().x(), m.gravity().y(), m.gravity().z()};
-  j["flange_at_zero"] = flange_at_zero(m);
+  const Eigen::Vector3d f = flange_at_zero(m);
+  j["flange_at_zero"] = {f.x(), f.y(), f.z()};
   const double rated = m.description().rated_payload;
   j["rated_payload"] = std::isfinite(rated) ? nlohmann::json(rated) : nlohmann::json(nullptr);  // null: not given
   j["payload_limit"] = m.payload_limit();
@@ -92,8 +92,8 @@ void print_summary(const RobotModel& m) {
   // it in DH frame i, a URDF in its link frame: the same point, other coordinates
   fmt::print("centres of mass in each joint's own frame (origin on its axis, z along it), which the model uses; a DH "
              "description gives them in DH frame i, a URDF in its link frame (docs/robot-description.md)\n");
-  const nlohmann::json f = flange_at_zero(m);
-  fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", f[0].get<double>(), f[1].get<double>(), f[2].get<double>());
+  const Eigen::Vector3d f = flange_at_zero(m);
+  fmt::print("flange at q = 0: [{:.5f} {:.5f} {:.5f}] m\n", f.x(), f.y(), f.z());
 }
 
 twinwatch::cli::VerbRegistrar reg{"model", 10, [](CLI::App& app) {
