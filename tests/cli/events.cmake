@@ -166,3 +166,10 @@ add_test(NAME cli.monitor_payload_beyond_thresholds
   COMMAND sh -c "sed 's/mass: 0.5,/mass: 2.5,/' ${s}/short_fig8.yaml > ${d}/heavy_fig8.yaml && $0 simulate ${d}/heavy_fig8.yaml -o ${d}/heavy_fig8.csv -q && $0 monitor --twin ${d}/twin.json ${d}/heavy_fig8.csv --db ''" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.monitor_payload_beyond_thresholds PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "note: the twin predicts with 2\\.50 kg, more than 1\\.5 kg above the 0\\.50 kg of the heaviest healthy run its thresholds were learned on[^\n]*twinwatch thresholds --twin TWIN --payload-mass 2\\.50 --program NAME")
+# one file given by two paths is one source (monitor stores the absolute, normalised path); the table
+# shows it relative to the working directory and as wide as it is (audit, session 37: two sources,
+# and long sources cut to their last 23 characters)
+add_test(NAME cli.events_one_file_two_paths
+  COMMAND sh -c "rm -f ${d}/events_paths.db && cd ${d} && $0 monitor --twin twin.json collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 monitor --twin twin.json ${d}/./collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 events --db events_paths.db --json | grep -o '\"source\":\"[^\"]*\"' | sort -u && $0 events --db events_paths.db" $<TARGET_FILE:twinwatch>)
+set_tests_properties(cli.events_one_file_two_paths PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+                     PASS_REGULAR_EXPRESSION "^\"source\":\"/[^\"]*/cli-pipeline/collision\\.csv\"\nstored \\(UTC\\) +source +t \\[s\\][^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ [^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ ")

@@ -1,6 +1,7 @@
 // `twinwatch events`: the event history that `twinwatch monitor` keeps in its SQLite store.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -32,6 +33,26 @@ std::string link_text(const monitor::Event& e) {
   return s;
 }
 
+// A stored source as the table shows it: a file below the working directory relative to it (monitor
+// stores absolute paths), anything else whole
+std::string shown_source(const std::string& source) {
+  if (source.rfind("rtde://", 0) == 0) return source;
+  std::error_code ec;
+  const std::filesystem::path p(source);
+  if (p.is_absolute()) {
+    const auto cwd = std::filesystem::current_path(ec);
+    if (ec || cwd == cwd.root_path()) return source;
+    const auto rel = std::filesystem::proximate(p, cwd, ec);
+    if (!ec && !rel.empty() && *rel.begin() != "..") return rel.string();
+  }
+  return source;
+}
+
+// `s` cut from the left to `width` characters, so that the file name stays
+std::string cut_left(const std::string& s, size_t width) {
+  return s.size() > width ? "…" + s.substr(s.size() - (width - 1)) : s;
+}
+
 void run_events(const EventsOptions& o) {
   if (o.fault_given && o.fault.empty())
     throw InvalidArgument("--class is empty: give one of collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
@@ -56,11 +77,15 @@ void run_events(const EventsOptions& o) {
     return;
   }
   // (when it was stored: two runs of the same recording give the same rows otherwise)
-  fmt::print("{:<19} {:<24} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "source", "t [s]", "dur ms", "class", "joint",
-             "link", "magnitude", "detail");
+  // the source column as wide as the longest source shown, up to kSourceWidth
+  constexpr size_t kSourceWidth = 48;
+  size_t width = 6;
+  for (const auto& r : rows) width = std::max(width, std::min(shown_source(r.source).size(), kSourceWidth));
+  fmt::print("{:<19} {:<{}} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "source", width, "t [s]", "dur ms", "class",
+             "joint", "link", "magnitude", "detail");
   for (const auto& [source, recorded_at, e] : rows)
-    fmt::print("{:<19} {:<24} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
-               source.size() > 24 ? "…" + source.substr(source.size() - 23) : source, e.t_start, 1000.0 * e.duration(),
+    fmt::print("{:<19} {:<{}} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
+               cut_left(shown_source(source), width), width, e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
                cli::magnitude_text(e.magnitude, e.units), e.detail);
   fmt::print("{} event(s) of {} stored in {}\n", rows.size(), store.count(), o.db);
@@ -72,7 +97,7 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   sub->add_option("--db", o->db, "Event store written by 'twinwatch monitor --db'")->capture_default_str();
   auto* cls = sub->add_option("--class", o->fault,
                   "Only this class: collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
-  sub->add_option("--source", o->source, "Only events whose source (recording file or robot address) contains this text");
+  sub->add_option("--source", o->source, "Only events whose source contains this text (monitor stores a recording by its absolute path, a robot as rtde://HOST)");
   sub->add_option("--last", o->last, "Only the newest N events (0: all)")->capture_default_str();
   sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\")");
   sub->footer(

@@ -28,6 +28,16 @@
 
 namespace {
 
+// The path a recording's events are stored under: absolute and normalised (symbolic links resolved
+// where the file exists), so that one file is one source whatever path it was given by
+std::string stored_path(const std::string& file) {
+  std::error_code ec;
+  const auto absolute = std::filesystem::absolute(file, ec);
+  if (ec) return file;
+  const auto p = std::filesystem::weakly_canonical(absolute, ec);
+  return ec ? absolute.lexically_normal().string() : p.string();
+}
+
 // --program '' (an unset $PROG) named no program and silently meant the default set
 const CLI::Validator kProgramNameGiven(
     [](std::string& v) { return v.empty() ? std::string("the program name is empty (an unset variable?); leave --program out for the default set") : std::string(); },
@@ -150,7 +160,9 @@ int run_monitor(const MonitorOptions& o) {
     throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
   device::Recording rec;
   std::unique_ptr<device::rtde::Client> client;
-  const std::string source = o.rtde.empty() ? o.recording : "rtde://" + o.rtde;
+  // a file is stored by its absolute path: `events` then tells one file given as j5.csv and as
+  // ./logs/../j5.csv for what it is, and two files of one name in two folders apart
+  const std::string source = o.rtde.empty() ? stored_path(o.recording) : "rtde://" + o.rtde;
   // the residual filter and the acceleration estimate run at the data's rate; thresholds learned
   // at another one do not fit them (a 1 kHz log against a 500 Hz set is filtered differently)
   const auto use_rate = [&](double period, const std::string& what) {
