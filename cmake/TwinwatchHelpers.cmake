@@ -15,11 +15,18 @@ function(twinwatch_add_module name)
   set_target_properties(twinwatch_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()
 
-# twinwatch_add_tests(<module> [DEPS <targets>...])
+# twinwatch_add_tests(<module> [DEPS <targets>...] [ONE_PROCESS <Suite>[:<shards>]...])
 #   One GoogleTest executable twinwatch_<module>_tests from every tests/<module>/*_test.cpp.
 #   CTest names are "<module>.<Suite>.<Test>", so `ctest -R <module>` selects one module.
+#   Each test runs in a process of its own, which rebuilds its suite's fixture (SetUpTestSuite):
+#   the suites named in ONE_PROCESS, whose fixture simulates and identifies a reference twin, run
+#   instead as one CTest test "<module>.<Suite>" (or <shards> of them, "<module>.<Suite>/<k>", gtest's
+#   own sharding), so the fixture is built once per process: MonitorLoop's 48 tests took 597 s of
+#   processes one by one and take 124 s in two shards. One test of such a suite alone:
+#   build/tests/<module>/twinwatch_<module>_tests --gtest_filter=<Suite>.<Test>
+#   They are scheduled first (COST), so that a clean build's first run does not end on them.
 function(twinwatch_add_tests module)
-  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;ONE_PROCESS" ${ARGN})
   file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${module}/*.cpp)
   add_executable(twinwatch_${module}_tests ${srcs})
   target_link_libraries(twinwatch_${module}_tests PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main twinwatch_warnings)
@@ -27,8 +34,36 @@ function(twinwatch_add_tests module)
   target_compile_definitions(twinwatch_${module}_tests PRIVATE
     TWINWATCH_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     TWINWATCH_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
-  gtest_discover_tests(twinwatch_${module}_tests DISCOVERY_MODE PRE_TEST TEST_PREFIX "${module}."
-    WORKING_DIRECTORY ${PROJECT_BINARY_DIR} PROPERTIES TIMEOUT 600)
+  set(excluded "")
+  foreach(entry IN LISTS ARG_ONE_PROCESS)
+    string(REPLACE ":" ";" parts "${entry}")
+    list(GET parts 0 suite)
+    list(LENGTH parts n)
+    set(shards 1)
+    if(n GREATER 1)
+      list(GET parts 1 shards)
+    endif()
+    string(APPEND excluded ":${suite}.*")
+    if(shards EQUAL 1)
+      add_test(NAME ${module}.${suite} COMMAND twinwatch_${module}_tests --gtest_filter=${suite}.* WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+      set_tests_properties(${module}.${suite} PROPERTIES TIMEOUT 900 COST 1000)
+    else()
+      math(EXPR last "${shards} - 1")
+      foreach(k RANGE ${last})
+        add_test(NAME ${module}.${suite}/${k} COMMAND twinwatch_${module}_tests --gtest_filter=${suite}.* WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+        set_tests_properties(${module}.${suite}/${k} PROPERTIES TIMEOUT 900 COST 1000
+                             ENVIRONMENT "GTEST_TOTAL_SHARDS=${shards};GTEST_SHARD_INDEX=${k}")
+      endforeach()
+    endif()
+  endforeach()
+  if(excluded STREQUAL "")
+    gtest_discover_tests(twinwatch_${module}_tests DISCOVERY_MODE PRE_TEST TEST_PREFIX "${module}."
+      WORKING_DIRECTORY ${PROJECT_BINARY_DIR} PROPERTIES TIMEOUT 600)
+  else()
+    string(SUBSTRING "${excluded}" 1 -1 excluded)
+    gtest_discover_tests(twinwatch_${module}_tests DISCOVERY_MODE PRE_TEST TEST_PREFIX "${module}."
+      TEST_FILTER "-${excluded}" WORKING_DIRECTORY ${PROJECT_BINARY_DIR} PROPERTIES TIMEOUT 600)
+  endif()
 endfunction()
 
 # twinwatch_add_benchmark(<file.cpp> [DEPS <targets>...])
