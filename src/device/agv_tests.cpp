@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -37,6 +38,7 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
   if (line != kHeader) throw ParseError(path, 1, "", fmt::format("expected the header '{}', got '{}'", kHeader, line));
   const char* cols[] = {"motor", "test", "voltage_V", "current_A", "speed_rad_s", "time_s"};
   std::vector<AgvTestRow> rows;
+  std::map<std::pair<std::string, double>, int> step_line;  // (motor, time) of each step row -> its line
   int ln = 1;
   while (std::getline(f, line)) {
     ++ln;
@@ -69,6 +71,16 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
         throw ParseError(path, ln, col, fmt::format("expected a number within +-{:g}, got '{}'", kMaxMagnitude, text));
     }
     if (r.time < 0.0) throw ParseError(path, ln, "time_s", fmt::format("expected a time >= 0 s, got '{}'", c[5]));
+    // a motor's step test has one speed per instant: a second row at a time is a second test, or the
+    // file's rows written twice, which the fit (sorted by time) would interleave into one response
+    if (r.test == "step") {
+      const auto [at, fresh] = step_line.try_emplace({r.motor, r.time}, ln);
+      if (!fresh)
+        throw ParseError(path, ln, "time_s",
+                         fmt::format("the {} motor's step test has a row at {} s already (line {}): expected one step test per motor, "
+                                     "one row per time (are the file's rows repeated?)",
+                                     r.motor, c[5], at->second));
+    }
     rows.push_back(r);
   }
   if (rows.empty()) throw ParseError(path, 2, "", "no data rows after the header");

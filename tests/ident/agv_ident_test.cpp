@@ -90,6 +90,27 @@ TEST(AgvIdent, NonFiniteAndAbsurdCellsAreNamed) {
               ::testing::HasSubstr("agv_nonfinite.csv:2: no data rows after the header"));
 }
 
+// a file whose rows were written twice: the step rows repeat their times, which the fit would have
+// interleaved into one response (audit, session 37: accepted); repeated steady rows are repeated
+// measurements and stay welcome
+TEST(AgvIdent, AStepTestWithARepeatedTimeIsNamed) {
+  const std::string path = ::testing::TempDir() + "agv_twice.csv";
+  auto rows = sim::simulate_agv_tests(sim::AgvParams{}, 6);
+  const size_t n = rows.size();
+  for (size_t k = 0; k < n; ++k) rows.push_back(rows[k]);
+  device::write_agv_tests(path, rows);
+  const std::string e = twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(path); });
+  EXPECT_THAT(e, ::testing::HasSubstr("agv_twice.csv:"));
+  EXPECT_THAT(e, ::testing::HasSubstr("field 'time_s': the "));
+  EXPECT_THAT(e, ::testing::HasSubstr("motor's step test has a row at "));
+  EXPECT_THAT(e, ::testing::HasSubstr("expected one step test per motor, one row per time (are the file's rows repeated?)"));
+  // the steady rows alone, twice: read, and fitted as the single set is
+  std::vector<device::AgvTestRow> steady;
+  for (const auto& r : rows) if (r.test == "steady") steady.push_back(r);
+  device::write_agv_tests(path, steady);
+  EXPECT_EQ(device::read_agv_tests(path).size(), steady.size());
+}
+
 // a write that fails (here a full device) is an error naming the path, not "wrote /dev/full"
 TEST(AgvIdent, WriteErrorNamesThePath) {
   if (!std::ifstream("/dev/full")) GTEST_SKIP() << "no /dev/full here";
