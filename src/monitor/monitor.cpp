@@ -2123,22 +2123,25 @@ void Monitor::restart_after_gap(const RobotSample& s, bool memory_lost) {
   std::fill(frozen_run_.begin(), frozen_run_.end(), 0);
   // the twin's pre-sliding memory cannot follow motion it did not see: a reversal inside the gap
   // leaves it on the wrong side, and a joint that stands still after the gap (at a turning point)
-  // shows twice its pre-sliding level as a residual. A moving joint has slid in its direction; for
-  // the others the memory is unknown, and their decisions wait until they have moved far enough
-  // to have set it again (kMemoryRestore pre-sliding distances)
-  if (memory_lost && memory_.primed) {
-    for (int j = 0; j < n_; ++j) {
-      const double alpha = twin_.joints[static_cast<size_t>(j)].presliding_alpha;
-      if (!(alpha > 0.0)) continue;  // no memory in this twin's joint
-      if (std::abs(s.qd[j]) > kMovingVelocity) {
-        memory_.h[j] = s.qd[j] > 0.0 ? 1.0 : -1.0;
-      } else {
-        memory_unsure_[static_cast<size_t>(j)] = kMemoryRestore / alpha;
-        memory_from_[j] = s.q[j];
-      }
+  // shows twice its pre-sliding level as a residual
+  if (memory_lost && memory_.primed) guess_memory(s);
+}
+
+void Monitor::guess_memory(const RobotSample& s) {
+  // A moving joint has slid in its direction; for the others the memory is unknown, and their
+  // decisions wait until they have moved far enough to have set it again (kMemoryRestore
+  // pre-sliding distances)
+  for (int j = 0; j < n_; ++j) {
+    const double alpha = twin_.joints[static_cast<size_t>(j)].presliding_alpha;
+    if (!(alpha > 0.0)) continue;  // no memory in this twin's joint
+    if (std::abs(s.qd[j]) > kMovingVelocity) {
+      memory_.h[j] = s.qd[j] > 0.0 ? 1.0 : -1.0;
+    } else {
+      memory_unsure_[static_cast<size_t>(j)] = kMemoryRestore / alpha;
+      memory_from_[j] = s.q[j];
     }
-    memory_.q_prev = s.q;
   }
+  memory_.q_prev = s.q;
 }
 
 bool Monitor::temperature_implausible(const RobotSample& s) {
@@ -2244,7 +2247,15 @@ void Monitor::judge(const RobotSample& s) {
   } else if (have_prev_ && !restart) {  // (not across a gap or skipped samples)
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }
+  const bool first_memory = !memory_.primed;
   twin_.advance(memory_, s, qdd_);
+  // a monitor that joins an arm in motion (a live robot mid-program, a recording cut from a longer
+  // one) has not seen how its joints came to where they are: a joint at a turning point or held at
+  // a station holds the friction of a direction the memory's start (h = 0) does not know, which
+  // raised false contacts on the healthy figure-eight (10 of 200 start points, audit of session 38).
+  // It starts as after a gap. An arm at rest at the first sample starts as before (from standstill:
+  // nothing held that the thresholds' own runs did not start with)
+  if (first_memory && s.qd.cwiseAbs().maxCoeff() > kMovingVelocity) guess_memory(s);
   // the observer's twin torque (at its own, unfiltered acceleration) comes with the prediction
   const VectorJ* qdd_obs = obs_on_ ? obs_.acceleration(s, dt) : nullptr;
   if (qdd_obs != nullptr)

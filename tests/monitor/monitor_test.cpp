@@ -316,6 +316,48 @@ TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
   EXPECT_THAT(ev3[0].detail, ::testing::HasSubstr("interrupted before this sample")) << ev3[0].detail;
 }
 
+// Session 38 (audit of the live path): a monitor that joins a healthy arm in motion (a live robot
+// mid-program; a recording cut from a longer one) raised false contacts and current offsets on a
+// joint it met at a turning point: the twin's pre-sliding memory started at h = 0 where the joint
+// held the friction of the direction it came from (10 of 200 start points of the figure-eight). It
+// now starts as after a gap: a moving joint's memory is its direction's, a resting joint decides
+// once it has moved. Every start where a joint turns while others move is tried, none raises
+// anything, and a contact after such a start is still found
+TEST_F(MonitorLoop, JoiningAnArmInMotionAtAJointsTurningPointRaisesNothing) {
+  const auto healthy = run(scenario(620, 20, 0.5));
+  const auto& x = healthy.samples;
+  // the starts: a sample where some joint's velocity is at most 0.01 rad/s, having moved more than
+  // 2 mrad (many pre-sliding distances) within the last 0.5 s (a turning point), while another joint moves
+  std::vector<size_t> starts;
+  for (size_t k = 250; k + 1500 < x.size(); ++k) {
+    bool turning = false;
+    for (int j = 0; j < 6 && !turning; ++j) {
+      if (std::abs(x[k].qd[j]) > 0.01) continue;
+      for (size_t b = k - 250; b < k && !turning; ++b) turning = std::abs(x[b].q[j] - x[k].q[j]) > 0.002;
+    }
+    if (turning && x[k].qd.cwiseAbs().maxCoeff() > 0.1 && (starts.empty() || k - starts.back() > 50)) starts.push_back(k);
+  }
+  ASSERT_GE(starts.size(), 4u) << "the figure-eight has turning points";
+  for (size_t k : starts) {
+    device::Recording cut = healthy;
+    cut.samples.assign(x.begin() + static_cast<long>(k), x.begin() + static_cast<long>(k + 1500));
+    const auto ev = monitor(cut, 0.5);
+    EXPECT_TRUE(ev.empty()) << "joined at " << x[k].timestamp << " s:" << listing(ev);
+  }
+  // a contact 2 s after joining at the first such start is found, as a contact
+  const double t0 = x[starts.front()].timestamp;
+  const auto hit = run(scenario(620, 20, 0.5,
+                                fmt::format("  - {{type: collision, link: 3, onset: {}, magnitude: 8, duration: 0.05, "
+                                            "point: [0.1, 0.0, 0.03], direction: [0.2, 1.0, 0.1]}}\n",
+                                            t0 + 2.0)));
+  device::Recording cut = hit;
+  cut.samples.assign(hit.samples.begin() + static_cast<long>(starts.front()), hit.samples.end());
+  const auto ev = monitor(cut, 0.5);
+  ASSERT_EQ(ev.size(), 1u) << listing(ev);
+  EXPECT_EQ(ev[0].fault, FaultClass::Collision) << ev[0].detail;
+  EXPECT_LT(ev[0].t_detected - (t0 + 2.0), 0.03);
+}
+
 // Session 21: a live stream whose stamps jitter (a logger's clock; the recording reader widens the
 // gap factor for files, the live path had no estimate): with the configured 1.5 periods the
 // simulator's 0.25 ms jitter read as dozens of "1 sample missing". The monitor now estimates the

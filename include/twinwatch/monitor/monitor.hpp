@@ -402,6 +402,10 @@ class Monitor {
   void judge(const RobotSample& s);  // push() of a checked sample
   // (memory_lost: the twin's pre-sliding memory did not follow the motion, as across a gap)
   void restart_after_gap(const RobotSample& s, bool memory_lost = true);
+  /// the twin's pre-sliding memory where the motion before `s` was not seen (a gap, or a monitor that
+  /// joins a moving arm): a moving joint's is its direction's; a resting joint's is unknown, and it
+  /// decides again once it has moved kMemoryRestore pre-sliding distances
+  void guess_memory(const RobotSample& s);
   /// observer, residual filter and FIR restart; with `settle`, every decision waits the start-up
   /// samples (without: the observer's alone, as it always does after its start)
   void restart_estimators(bool settle = true);
