@@ -34,6 +34,7 @@ void install_interrupt_handler() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);  // (a closed terminal or a dropped SSH session: the same orderly stop)
 }
 bool interrupted() { return g_interrupted.load(); }
 

@@ -286,6 +286,7 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",{:.6g},{:.6g},{:.6g},{:.6g}", mon.filtered_residual()[j], mon.level()[j], obs[j], obs_level[j]);
     trace << '\n';
   };
+  bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
   if (!client) {
     for (const auto& s : rec.samples) push(s);
   } else {
@@ -312,12 +313,17 @@ int run_monitor(const MonitorOptions& o) {
     // a connection lost and not restored before the end: that stretch was not watched, and the
     // event history must say so (a gap is otherwise only seen when data come back). With
     // --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for.
+    // An operator's stop (Ctrl-C, SIGTERM, SIGHUP) during an outage ends an unwatched stretch too:
+    // it was stored as watched (audit of session 38).
     const auto stopped = std::chrono::steady_clock::now();
     const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
     const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-    if (!cli::interrupted() && client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd)) mon.stream_silent(silent);
-    if (o.no_reconnect && client->finished() && !cli::interrupted() && !o.quiet && !o.json)
-      fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
+    lost_at_end = client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
+    if (lost_at_end) mon.stream_silent(silent);
+    if (o.no_reconnect && client->finished() && !cli::interrupted()) {
+      lost_at_end = true;
+      if (!o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
+    }
     if (copy) copy->close();
     const auto st = client->stats();
     if (!o.quiet && !o.json)
@@ -359,7 +365,8 @@ int run_monitor(const MonitorOptions& o) {
                        "clean bill of health\n",
                mon.samples(), mon.not_driven() > 0 ? " or not driven" : "");
   }
-  return 0;
+  // (what was received is analysed and stored; a script learns that the end was not watched)
+  return lost_at_end ? 1 : 0;
 }
 
 struct ThresholdOptions {

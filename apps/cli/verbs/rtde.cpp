@@ -131,10 +131,12 @@ int run_record(const RecordOptions& o) {
     last_sample = stopped;
   }
   writer.close();
-  // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for)
-  const bool cut_short = stopped + std::chrono::milliseconds(100) < end;
+  // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked
+  // for; an operator's stop ends the recording where it was asked to, and an outage before it is
+  // still said)
+  const bool cut_short = !interrupted() && stopped + std::chrono::milliseconds(100) < end;
   const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-  const bool ended_early = !interrupted() && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
+  const bool ended_early = writer.rows() > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();
@@ -166,14 +168,18 @@ int run_record(const RecordOptions& o) {
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
     fmt::print("{}: {} samples ({:.2f} s of controller time) from {}:{}; lost {} samples in {} gaps, {} reconnects, "
-               "{} dropped by a slow writer, {} protocol errors; arrival jitter p99 {:.2f} ms; client CPU {:.2f} %\n",
+               "{} dropped by a slow writer, {} protocol errors; arrival jitter p99 {:.2f} ms; client CPU {:.2f} %{}\n",
                o.output, writer.rows(), std::isnan(t_first) ? 0.0 : t_last - t_first, co.host, co.port, st.lost, st.gaps,
-               st.reconnects, st.dropped, st.protocol_errors, 1e3 * st.arrival_p99_s, cpu_pct);
+               st.reconnects, st.dropped, st.protocol_errors, 1e3 * st.arrival_p99_s, cpu_pct,
+               interrupted() ? fmt::format("; stopped by a signal after {:.1f} of the {:g} s asked for",
+                                           std::chrono::duration<double>(stopped - t0).count(), o.duration)
+                             : "");
   }
   if (ended_early && !o.quiet)
-    log::warn(fmt::format("{}: no data for the last {:.1f} s of the {:g} s asked for (the connection was lost{}): the recording "
-                          "ends at {:.3f} s of controller time",
-                          o.output, silent, o.duration, o.no_reconnect ? ", and --no-reconnect" : " and not restored", t_last));
+    log::warn(fmt::format("{}: no data for the last {:.1f} s {} (the connection was lost{}): the recording ends at {:.3f} s of "
+                          "controller time",
+                          o.output, silent, interrupted() ? "before the stop" : fmt::format("of the {:g} s asked for", o.duration),
+                          o.no_reconnect ? ", and --no-reconnect" : " and not restored", t_last));
   if (!fatal.empty()) {
     std::fprintf(stderr, "error: %s\n", fatal.c_str());
     return 1;
@@ -182,7 +188,9 @@ int run_record(const RecordOptions& o) {
     std::fprintf(stderr, "error: no samples received from %s:%u\n", co.host.c_str(), co.port);
     return 1;
   }
-  return 0;
+  // the robot stopped answering: the recording is written and readable, and shorter than it should
+  // be, which a script (record && identify) must learn from the status, as the help says
+  return ended_early ? 1 : 0;
 }
 
 // ---- serve-robot ----------------------------------------------------------------------------
