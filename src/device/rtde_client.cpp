@@ -410,6 +410,16 @@ void Client::read_loop() {
 void Client::stream(int fd) {
   std::uint8_t buf[16384];
   auto last_data = Clock::now();
+  // a link is lost after stall_timeout_ms without data, or three sample periods at a slow rate: at
+  // 0.5 Hz the 1 s watchdog fired between every two samples, each "gap" a reconnection (audit of
+  // session 38)
+  double rate;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rate = stats_.frequency;
+  }
+  const auto stall = std::max(std::chrono::duration_cast<Clock::duration>(std::chrono::milliseconds(opt_.stall_timeout_ms)),
+                              std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(rate > 0.0 ? 3.0 / rate : 0.0)));
   long packages = 0;
   for (;;) {
     // Packages the handshake already buffered come first.
@@ -451,9 +461,10 @@ void Client::stream(int fd) {
     }
     if (stop_) return;
     if (!tcp::wait_readable(fd, 50)) {
-      if (Clock::now() - last_data > std::chrono::milliseconds(opt_.stall_timeout_ms)) {
+      if (Clock::now() - last_data > stall) {
         std::lock_guard<std::mutex> lock(mutex_);
-        stats_.last_error = fmt::format("no data from {}:{} for {} ms", opt_.host, opt_.port, opt_.stall_timeout_ms);
+        stats_.last_error = fmt::format("no data from {}:{} for {} ms", opt_.host, opt_.port,
+                                        std::chrono::duration_cast<std::chrono::milliseconds>(stall).count());
         log::warn(stats_.last_error + "; reconnecting");
         return;
       }

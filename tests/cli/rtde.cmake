@@ -78,3 +78,11 @@ $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35941 --wait 10 --duration 60 -
 sleep 4; kill -INT \$rp; wait \$rp; echo exit=\$?; wait")
 set_tests_properties(cli.rtde_record_stopped_during_an_outage PROPERTIES TIMEOUT 60
   PASS_REGULAR_EXPRESSION "outage_rec.csv: 1000 samples [^\n]*; stopped by a signal after [0-9.]+ of the 60 s asked for\n.*no data for the last [0-9.]+ s before the stop \\(the connection was lost and not restored\\).*exit=1")
+# a slow output rate (here 0.5 Hz, within the allowed 0 < f <= 500): the stall watchdog and the
+# end-of-run silence scale with the period. Before (audit of session 38): the 1 s watchdog fired
+# between every two samples, each a "gap" and a reconnection
+add_test(NAME cli.rtde_record_slow_rate
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35942 --duration 12 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35942 --wait 10 --frequency 0.5 --duration 6.5 -o ${PROJECT_BINARY_DIR}/slow_rec.csv; echo exit=\$?; kill \$! 2>/dev/null; wait")
+set_tests_properties(cli.rtde_record_slow_rate PROPERTIES TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*; lost 0 samples in 0 gaps, 0 reconnects[^\n]*\nexit=0")

@@ -318,7 +318,7 @@ int run_monitor(const MonitorOptions& o) {
     const auto stopped = std::chrono::steady_clock::now();
     const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
     const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-    lost_at_end = client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
+    lost_at_end = client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::silent_at_end(client->stats().frequency));
     if (lost_at_end) mon.stream_silent(silent);
     if (o.no_reconnect && client->finished() && !cli::interrupted()) {
       lost_at_end = true;

@@ -136,7 +136,7 @@ int run_record(const RecordOptions& o) {
   // still said)
   const bool cut_short = !interrupted() && stopped + std::chrono::milliseconds(100) < end;
   const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-  const bool ended_early = writer.rows() > 0 && silent > (cut_short ? 0.1 : cli::kSilentAtEnd);
+  const bool ended_early = writer.rows() > 0 && silent > (cut_short ? 0.1 : cli::silent_at_end(client.stats().frequency));
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();

@@ -51,7 +51,7 @@ struct ClientOptions {
   std::size_t queue_capacity = 8192;  ///< samples buffered for a slow consumer (16 s at 500 Hz)
   int connect_timeout_ms = 1000;
   int reply_timeout_ms = 2000;  ///< per handshake reply
-  int stall_timeout_ms = 1000;  ///< no data for this long while streaming = connection lost
+  int stall_timeout_ms = 1000;  ///< no data for this long (or three sample periods, if longer) while streaming = connection lost
   double backoff_initial_s = 0.1;
   double backoff_max_s = 5.0;
   bool reconnect = true;  ///< false: a lost connection ends the stream
