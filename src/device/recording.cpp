@@ -499,7 +499,10 @@ void RecordingWriter::write(const RobotSample& s) {
     }
   }
   line_ += '\n';
-  std::fwrite(line_.data(), 1, line_.size(), f_);
+  // a failed write stops at once (a disk that fills during an hour of recording is said then, not
+  // at the end with the rest of the hour lost); the rows before it are in the file
+  if (std::fwrite(line_.data(), 1, line_.size(), f_) != line_.size())
+    throw std::runtime_error(fmt::format("{}: write error after {} rows (disk full?)", path_, rows_));
   ++rows_;
 }
 

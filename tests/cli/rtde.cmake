@@ -86,3 +86,13 @@ add_test(NAME cli.rtde_record_slow_rate
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35942 --wait 10 --frequency 0.5 --duration 6.5 -o ${PROJECT_BINARY_DIR}/slow_rec.csv; echo exit=\$?; kill \$! 2>/dev/null; wait")
 set_tests_properties(cli.rtde_record_slow_rate PROPERTIES TIMEOUT 60
   PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*; lost 0 samples in 0 gaps, 0 reconnects[^\n]*\nexit=0")
+# a write that fails stops the recording at once, naming the file (before: the whole --duration was
+# streamed, then "write error"; on a disk that fills during an hour, the hour was lost unsaid)
+execute_process(COMMAND test -c /dev/full RESULT_VARIABLE no_dev_full_rtde)
+if(no_dev_full_rtde EQUAL 0)
+  add_test(NAME cli.rtde_record_disk_full_stops_at_once
+    COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35943 --duration 60 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35943 --wait 10 --duration 60 -o /dev/full; echo exit=\$?; kill \$! 2>/dev/null; wait")
+  set_tests_properties(cli.rtde_record_disk_full_stops_at_once PROPERTIES TIMEOUT 20
+    PASS_REGULAR_EXPRESSION "error: /dev/full: write error after [0-9]+ rows \\(disk full\\?\\)\nexit=1")
+endif()

@@ -85,6 +85,7 @@ class RecordingWriter {
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
 
+  /// Throws std::runtime_error naming the path as soon as a write fails (disk full).
   void write(const RobotSample& s);
   /// Flushes and closes; throws std::runtime_error naming the path on an I/O error.
   void close();
