@@ -286,6 +286,16 @@ void Client::start() {
   } catch (const tcp::ConnectError& e) {
     tcp::close(fd_);
     throw tcp::ConnectError(fmt::format("RTDE handshake with {}:{} failed: {}", opt_.host, opt_.port, e.what()));
+  } catch (const RecipeError&) {
+    tcp::close(fd_);
+    throw;
+  } catch (const ProtocolError& e) {
+    // (a server that answers at once with something else, an HTTP or SSH banner, is named with its
+    // address and the step it failed at)
+    tcp::close(fd_);
+    throw ProtocolError(fmt::format("RTDE handshake with {}:{} failed: {} (is it an RTDE server? a UR controller serves RTDE on "
+                                    "port 30004)",
+                                    opt_.host, opt_.port, e.what()));
   } catch (...) {
     tcp::close(fd_);
     throw;
@@ -294,6 +304,12 @@ void Client::start() {
   log::info(fmt::format("rtde: connected to {}:{} (controller {}.{}.{}, protocol v{}, {} outputs at {} Hz)", opt_.host,
                         opt_.port, st.controller.major, st.controller.minor, st.controller.bugfix, st.protocol,
                         recipe_.names.size(), st.frequency));
+  // the rate asked for is not the one streamed: v1 sends at the controller's full rate, and a CB3
+  // controller tops out at 125 Hz
+  if (std::abs(st.frequency - opt_.frequency) > 1e-9)
+    log::warn(fmt::format("rtde: {:g} Hz was asked for and the controller streams at {:g} Hz ({})", opt_.frequency, st.frequency,
+                          st.protocol < 2 ? "protocol v1 has no rate of its own: it sends at the controller's full rate"
+                                          : "the most this controller sends"));
   reader_ = std::thread([this] { read_loop(); });
 }
 

@@ -96,3 +96,10 @@ $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35943 --wait 10 --duration 60 -
   set_tests_properties(cli.rtde_record_disk_full_stops_at_once PROPERTIES TIMEOUT 20
     PASS_REGULAR_EXPRESSION "error: /dev/full: write error after [0-9]+ rows \\(disk full\\?\\)\nexit=1")
 endif()
+# a rate the controller does not stream is said: protocol v1 sends at the controller's full rate
+# (before: --protocol 1 --frequency 125 recorded at 500 Hz with no word but the info line)
+add_test(NAME cli.rtde_record_v1_rate_is_said
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35944 --duration 10 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35944 --wait 10 --protocol 1 --frequency 125 --duration 0.5 -o ${PROJECT_BINARY_DIR}/v1_rec.csv 2>&1; kill \$! 2>/dev/null; wait")
+set_tests_properties(cli.rtde_record_v1_rate_is_said PROPERTIES TIMEOUT 30
+  PASS_REGULAR_EXPRESSION "rtde: 125 Hz was asked for and the controller streams at 500 Hz \\(protocol v1 has no rate of its own")

@@ -3,6 +3,8 @@
 // server restarts, a slow consumer never blocks the socket, and corrupt streams from a rogue
 // server are survived without losing what was already received.
 #include <arpa/inet.h>
+#include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -347,6 +349,11 @@ class RogueServer {
     if (client_ >= 0) ::close(client_);
     ::close(fd_);
   }
+  // Accepts a client and answers nothing (the test sends what it likes).
+  void accept_raw() {
+    if (client_ >= 0) ::close(client_);
+    client_ = ::accept(fd_, nullptr, nullptr);
+  }
   // Accepts and runs the handshake until START was answered.
   void accept_and_handshake() {
     if (client_ >= 0) ::close(client_);
@@ -376,6 +383,30 @@ class RogueServer {
 };
 
 }  // namespace
+
+// a server that is not RTDE and answers at once (an HTTP or SSH banner) fails the handshake with its
+// address and the hint (audit of session 38: the message named neither)
+TEST(RtdeRobustness, ANonRtdeServerIsNamedWithItsAddress) {
+  twinwatch::log::set_sink(nullptr);
+  RogueServer rogue;
+  auto o = options_for(rogue.port);
+  o.reconnect = false;
+  std::thread banner([&] {
+    rogue.accept_raw();
+    const std::string http = "HTTP/1.0 400 Bad Request\r\nServer: x\r\n\r\n";
+    rogue.send(rtde::Bytes(http.begin(), http.end()));
+  });
+  rtde::Client client(o);
+  std::string what;
+  try {
+    client.start();
+  } catch (const rtde::ProtocolError& e) {
+    what = e.what();
+  }
+  banner.join();
+  EXPECT_THAT(what, ::testing::HasSubstr(fmt::format("RTDE handshake with 127.0.0.1:{} failed: package size field is 18516 bytes", rogue.port)));
+  EXPECT_THAT(what, ::testing::HasSubstr("is it an RTDE server?"));
+}
 
 TEST(RtdeRobustness, CorruptAndMalformedPackagesNeverLoseReceivedSamples) {
   twinwatch::log::set_sink(nullptr);
