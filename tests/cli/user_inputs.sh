@@ -222,4 +222,7 @@ refused "--max-lag-ms 0.5 is less than half the sample period (2 ms)" align "$W/
 # demo: a --max-duration that leaves nothing to evaluate is refused before the minute of training
 refused "every scenario .* is longer than --max-duration 1 s: nothing would be evaluated" demo --max-duration 1 -o "$W/demo1"
 [ ! -e "$W/demo1/twin.json" ] || fail "demo trained before refusing --max-duration"
+# record --outputs: an empty list (an unset variable) or an empty item is refused before connecting
+refused "--outputs: expected a comma-separated list of RTDE output names, got '' (an empty value)" record --rtde 127.0.0.1:1 --outputs '' -o "$W/o.csv"
+refused "--outputs 'timestamp,,actual_q,actual_qd': 1 of its 4 items are empty" record --rtde 127.0.0.1:1 --outputs 'timestamp,,actual_q,actual_qd' -o "$W/o.csv"
 echo USER-INPUTS-OK

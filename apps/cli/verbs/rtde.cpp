@@ -59,6 +59,7 @@ struct RecordOptions {
   double frequency = 500.0, duration = 60.0, wait = 0.0;
   int protocol = 2;
   bool no_reconnect = false, json = false, quiet = false;
+  bool outputs_given = false;  // --outputs '' (an unset variable) recorded the default list unsaid
 };
 
 int run_record(const RecordOptions& o) {
@@ -75,6 +76,14 @@ int run_record(const RecordOptions& o) {
   so.protocol = o.protocol;
   so.reconnect = !o.no_reconnect;
   so.outputs = split_list(o.outputs);
+  if (o.outputs_given) {
+    if (so.outputs.empty())
+      throw InvalidArgument(fmt::format("--outputs: expected a comma-separated list of RTDE output names, got '{}' (an empty value)", o.outputs));
+    const auto items = static_cast<size_t>(std::count(o.outputs.begin(), o.outputs.end(), ',')) + 1;
+    if (items != so.outputs.size())
+      throw InvalidArgument(fmt::format("--outputs '{}': {} of its {} items are empty (two commas in a row, or one at an end)", o.outputs,
+                                        items - so.outputs.size(), items));
+  }
   // the recording format always has these columns: without them its rows would be nan there, which
   // every reader refuses (a file recorded for nothing)
   if (!so.outputs.empty()) {
@@ -326,7 +335,7 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "Recording CSV to write")->required();
   sub->add_option("--frequency", o->frequency, "Output rate [Hz], 0 < f <= 500 (CB3: 125)")->capture_default_str();
   sub->add_option("--duration", o->duration, "How long to record [s of wall-clock time]")->capture_default_str();
-  sub->add_option("--outputs", o->outputs,
+  auto* outputs = sub->add_option("--outputs", o->outputs,
                   "Comma-separated RTDE output names (default: every recording column: timestamp, actual_q, actual_qd, "
                   "target_q, target_qd, target_qdd, actual_current, target_current, target_moment, joint_temperatures, "
                   "actual_digital_output_bits, robot_mode, safety_mode, and from controller 5.5.1 on the declared payload and payload_cog; a "
@@ -338,7 +347,10 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->add_flag("--no-reconnect", o->no_reconnect, "Stop at the first disconnection instead of reconnecting with back-off");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
-  sub->callback([o] { twinwatch::cli::set_exit_code(run_record(*o)); });
+  sub->callback([o, outputs] {
+    o->outputs_given = outputs->count() > 0;
+    twinwatch::cli::set_exit_code(run_record(*o));
+  });
 }};
 
 twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
