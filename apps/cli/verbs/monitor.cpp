@@ -287,6 +287,7 @@ int run_monitor(const MonitorOptions& o) {
     trace << '\n';
   };
   bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
+  bool silent_counted = false;  // ... and that silence is one of the monitor's gaps
   if (!client) {
     for (const auto& s : rec.samples) push(s);
   } else {
@@ -319,7 +320,10 @@ int run_monitor(const MonitorOptions& o) {
     const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
     const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
     lost_at_end = client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::silent_at_end(client->stats().frequency));
-    if (lost_at_end) mon.stream_silent(silent);
+    if (lost_at_end) {
+      mon.stream_silent(silent);
+      silent_counted = true;
+    }
     if (o.no_reconnect && client->finished() && !cli::interrupted()) {
       lost_at_end = true;
       if (!o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
@@ -349,7 +353,8 @@ int run_monitor(const MonitorOptions& o) {
     fmt::print("payload: the twin followed the payload changes it found; it ended with {:.2f} kg (it started with {:.2f} kg)\n", ended,
                twin.payload().mass);
   if (!o.quiet && !o.json)
-    fmt::print("{} samples, {} gap(s), {} event(s){}{}{}\n", mon.samples(), mon.gaps(), mon.events().size(),
+    fmt::print("{} samples, {} gap(s){}, {} event(s){}{}{}\n", mon.samples(), mon.gaps(),
+               silent_counted ? " (the last: the silence at the end, which the stream line does not count)" : "", mon.events().size(),
                mon.repeated() + mon.invalid() > 0
                    ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value that is no reading: not a number or beyond 1e4)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())
