@@ -1,6 +1,8 @@
 #include "verb_registry.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -28,13 +30,33 @@ int g_exit_code = 0;
 std::atomic<bool> g_interrupted{false};
 }  // namespace
 
+namespace {
+// SIGHUP: the terminal went away (a closed window, a dropped SSH session). The stop is the same
+// orderly one, and what would be printed to that terminal goes to /dev/null from then on: a write
+// to a vanished terminal fails (EIO), and the summary's failure must not cost the files their last
+// events. Only the descriptors that were terminals at the start are redirected (a log file keeps
+// its summary); the handler itself only calls dup2, which is async-signal-safe.
+int g_dev_null = -1;
+bool g_stdout_tty = false, g_stderr_tty = false;
+}  // namespace
+
 void install_interrupt_handler() {
   struct sigaction sa {};
   sa.sa_handler = [](int) { g_interrupted = true; };
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
-  sigaction(SIGHUP, &sa, nullptr);  // (a closed terminal or a dropped SSH session: the same orderly stop)
+  if (g_dev_null < 0) g_dev_null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+  g_stdout_tty = ::isatty(STDOUT_FILENO) != 0;
+  g_stderr_tty = ::isatty(STDERR_FILENO) != 0;
+  struct sigaction hup {};
+  hup.sa_handler = [](int) {
+    g_interrupted = true;
+    if (g_dev_null >= 0 && g_stdout_tty) ::dup2(g_dev_null, STDOUT_FILENO);
+    if (g_dev_null >= 0 && g_stderr_tty) ::dup2(g_dev_null, STDERR_FILENO);
+  };
+  sigemptyset(&hup.sa_mask);
+  sigaction(SIGHUP, &hup, nullptr);
 }
 bool interrupted() { return g_interrupted.load(); }
 

@@ -240,18 +240,20 @@ int run_monitor(const MonitorOptions& o) {
       raise_shown = e.t_detected;
       return;
     }
-    if (!o.quiet && !o.json)
-      fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
-                 e.duration(), 100 * e.confidence);
+    // stored first, printed after: a terminal that went away (a dropped SSH session) must not cost
+    // the event its files
     if (jl.is_open()) {
       errno = 0;
       jl << e.to_json_line() << '\n';
       jl.flush();  // one line per event when it ends: 'tail -f' and a crash must see it
       check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
     }
+    if (store) store->insert(e, source);
+    if (!o.quiet && !o.json)
+      fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
+                 e.duration(), 100 * e.confidence);
     if (o.json) fmt::print("{}\n", e.to_json_line());
     std::fflush(stdout);  // the same for a pipe or a log file
-    if (store) store->insert(e, source);
   };
   mon.on_note = [&](double t, const std::string& note) {
     if (o.quiet || o.json) return;
