@@ -2253,9 +2253,11 @@ void Monitor::judge(const RobotSample& s) {
   // one) has not seen how its joints came to where they are: a joint at a turning point or held at
   // a station holds the friction of a direction the memory's start (h = 0) does not know, which
   // raised false contacts on the healthy figure-eight (10 of 200 start points, audit of session 38).
-  // It starts as after a gap. An arm at rest at the first sample starts as before (from standstill:
-  // nothing held that the thresholds' own runs did not start with)
-  if (first_memory && s.qd.cwiseAbs().maxCoeff() > kMovingVelocity) guess_memory(s);
+  // It starts as after a gap, an arm at rest too: met at a triangle's corner, its joints hold the
+  // friction of the edge before it (1 false contact in 225 start points). A run that starts from
+  // standstill loses only the decisions of a joint until it has moved three pre-sliding distances
+  // (the library's and held-out sets score identically either way)
+  if (first_memory) guess_memory(s);
   // the observer's twin torque (at its own, unfiltered acceleration) comes with the prediction
   const VectorJ* qdd_obs = obs_on_ ? obs_.acceleration(s, dt) : nullptr;
   if (qdd_obs != nullptr)
