@@ -86,11 +86,11 @@ CLI::Validator bound_check(const char* name, const char* expected, bool (*ok)(do
 }  // namespace
 
 const CLI::Validator& positive_number() {
-  static const CLI::Validator v = bound_check("POSITIVE", "a number > 0", [](double x) { return x > 0.0; });
+  static const CLI::Validator v = bound_check("POSITIVE", "a finite number > 0", [](double x) { return x > 0.0; });
   return v;
 }
 const CLI::Validator& nonnegative_number() {
-  static const CLI::Validator v = bound_check("NONNEGATIVE", "a number >= 0", [](double x) { return x >= 0.0; });
+  static const CLI::Validator v = bound_check("NONNEGATIVE", "a finite number >= 0", [](double x) { return x >= 0.0; });
   return v;
 }
 

@@ -131,7 +131,7 @@ set_tests_properties(cli.thresholds_program_name_checked_first PROPERTIES FIXTUR
   PASS_REGULAR_EXPRESSION "^error: --program: program name 'a b' has the character ' '" FAIL_REGULAR_EXPRESSION "learning")
 add_test(NAME cli.option_range_message COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --cycle-period 0)
 set_tests_properties(cli.option_range_message PROPERTIES FIXTURES_REQUIRED "recordings;twin"
-  PASS_REGULAR_EXPRESSION "--cycle-period: expected a number > 0, got '0'" FAIL_REGULAR_EXPRESSION "179769")
+  PASS_REGULAR_EXPRESSION "--cycle-period: expected a finite number > 0, got '0'" FAIL_REGULAR_EXPRESSION "179769")
 # a twin made with a robot file works from another working directory (the file is stored by its
 # absolute path; a twin naming it relatively finds it beside itself)
 add_test(NAME cli.twin_with_a_robot_file_from_another_directory
