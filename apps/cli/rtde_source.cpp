@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -32,6 +33,13 @@ std::unique_ptr<rtde::Client> open_rtde(const RtdeSourceOptions& o) {
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
   }
+}
+
+EndSilence end_silence(SteadyTime stopped, SteadyTime end, SteadyTime last_sample, bool end_asked, double frequency) {
+  const bool cut_short = !interrupted() && end_asked && stopped + std::chrono::milliseconds(100) < end;
+  const double seconds = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
+  const double limit = cut_short ? 0.1 : (frequency > 0.0 ? std::max(kSilentAtEnd, 3.0 / frequency) : kSilentAtEnd);
+  return {seconds, seconds > limit};
 }
 
 std::string describe(const rtde::Client& c) {

@@ -1,7 +1,7 @@
 #pragma once
 // Opening an RTDE stream from the command line (record --rtde, monitor --rtde): parses
 // HOST[:PORT], connects, and keeps trying the first connection for `wait_s` seconds.
-#include <algorithm>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,10 +20,23 @@ struct RtdeSourceOptions {
 };
 
 /// [s] a live stream silent this long when recording or monitoring ends was lost (the client gives up
-/// on a stalled connection after 1 s and reconnects): record and monitor report that stretch
+/// on a stalled connection after 1 s and reconnects): record and monitor report that stretch. A
+/// slow stream's limit is three sample periods if that is longer.
 inline constexpr double kSilentAtEnd = 1.5;
-/// kSilentAtEnd, or three sample periods of a slow stream (`frequency` [Hz]) if longer
-inline double silent_at_end(double frequency) { return frequency > 0.0 ? std::max(kSilentAtEnd, 3.0 / frequency) : kSilentAtEnd; }
+
+/// A steady-clock instant in seconds as double (the verbs' ends are `now + duration<double>`).
+using SteadyTime = std::chrono::time_point<std::chrono::steady_clock, std::chrono::duration<double>>;
+
+/// The silence at the end of a live run (record, monitor --rtde), stopped at `stopped`, its last
+/// sample received at `last_sample`. A run that ended before `end` without an operator's stop
+/// (--no-reconnect, the robot gone) misses everything up to `end` where `end` was asked for
+/// (`end_asked`); otherwise the silence runs to the stop. `lost`: long enough to be an outage (0.1 s
+/// when cut short, else kSilentAtEnd or three periods at `frequency` [Hz]).
+struct EndSilence {
+  double seconds = 0.0;
+  bool lost = false;
+};
+EndSilence end_silence(SteadyTime stopped, SteadyTime end, SteadyTime last_sample, bool end_asked, double frequency);
 
 /// A started client. Throws (RecipeError, connection errors) with the controller's address.
 std::unique_ptr<device::rtde::Client> open_rtde(const RtdeSourceOptions& o);

@@ -428,14 +428,9 @@ void Client::stream(int fd) {
   auto last_data = Clock::now();
   // a link is lost after stall_timeout_ms without data, or three sample periods at a slow rate: at
   // 0.5 Hz the 1 s watchdog fired between every two samples, each "gap" a reconnection (audit of
-  // session 38)
-  double rate;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    rate = stats_.frequency;
-  }
+  // session 38). (period_ is the handshake's, set before this thread streams, as handle_data reads it)
   const auto stall = std::max(std::chrono::duration_cast<Clock::duration>(std::chrono::milliseconds(opt_.stall_timeout_ms)),
-                              std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(rate > 0.0 ? 3.0 / rate : 0.0)));
+                              std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(3.0 * period_)));
   long packages = 0;
   for (;;) {
     // Packages the handshake already buffered come first.

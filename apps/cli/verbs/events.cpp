@@ -6,6 +6,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/monitor/event.hpp"
@@ -79,15 +80,22 @@ void run_events(const EventsOptions& o) {
   // (when it was stored: two runs of the same recording give the same rows otherwise)
   // the source column as wide as the longest source shown, up to kSourceWidth
   constexpr size_t kSourceWidth = 48;
+  std::vector<std::string> shown;
+  shown.reserve(rows.size());
   size_t width = 6;
-  for (const auto& r : rows) width = std::max(width, std::min(shown_source(r.source).size(), kSourceWidth));
+  for (const auto& r : rows) {
+    shown.push_back(shown_source(r.source));
+    width = std::max(width, std::min(shown.back().size(), kSourceWidth));
+  }
   fmt::print("{:<19} {:<{}} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "source", width, "t [s]", "dur ms", "class",
              "joint", "link", "magnitude", "detail");
-  for (const auto& [source, recorded_at, e] : rows)
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const auto& [source, recorded_at, e] = rows[k];
     fmt::print("{:<19} {:<{}} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
-               cut_left(shown_source(source), width), width, e.t_start, 1000.0 * e.duration(),
+               cut_left(shown[k], width), width, e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
                cli::magnitude_text(e.magnitude, e.units), e.detail);
+  }
   fmt::print("{} event(s) of {} stored in {}\n", rows.size(), store.count(), o.db);
 }
 

@@ -288,8 +288,8 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",{:.6g},{:.6g},{:.6g},{:.6g}", mon.filtered_residual()[j], mon.level()[j], obs[j], obs_level[j]);
     trace << '\n';
   };
+  bool silent_gap = false;   // the silence at the end is one of the monitor's gaps (a stream fault)
   bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
-  bool silent_counted = false;  // ... and that silence is one of the monitor's gaps
   if (!client) {
     for (const auto& s : rec.samples) push(s);
   } else {
@@ -318,18 +318,13 @@ int run_monitor(const MonitorOptions& o) {
     // --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for.
     // An operator's stop (Ctrl-C, SIGTERM, SIGHUP) during an outage ends an unwatched stretch too:
     // it was stored as watched (audit of session 38).
-    const auto stopped = std::chrono::steady_clock::now();
-    const bool cut_short = !cli::interrupted() && o.duration > 0 && stopped + std::chrono::milliseconds(100) < end;
-    const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-    lost_at_end = client->stats().received > 0 && silent > (cut_short ? 0.1 : cli::silent_at_end(client->stats().frequency));
-    if (lost_at_end) {
-      mon.stream_silent(silent);
-      silent_counted = true;
-    }
-    if (o.no_reconnect && client->finished() && !cli::interrupted()) {
-      lost_at_end = true;
-      if (!o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
-    }
+    const cli::EndSilence silence =
+        cli::end_silence(std::chrono::steady_clock::now(), end, last_sample, o.duration > 0, client->stats().frequency);
+    silent_gap = client->stats().received > 0 && silence.lost;
+    if (silent_gap) mon.stream_silent(silence.seconds);
+    const bool dropped = o.no_reconnect && client->finished() && !cli::interrupted();
+    if (dropped && !o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
+    lost_at_end = silent_gap || dropped;
     if (copy) copy->close();
     const auto st = client->stats();
     if (!o.quiet && !o.json)
@@ -356,7 +351,7 @@ int run_monitor(const MonitorOptions& o) {
                twin.payload().mass);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s){}, {} event(s){}{}{}\n", mon.samples(), mon.gaps(),
-               silent_counted ? " (the last: the silence at the end, which the stream line does not count)" : "", mon.events().size(),
+               silent_gap ? " (the last: the silence at the end, which the stream line does not count)" : "", mon.events().size(),
                mon.repeated() + mon.invalid() > 0
                    ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value that is no reading: not a number or beyond 1e4)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())

@@ -143,9 +143,8 @@ int run_record(const RecordOptions& o) {
   // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked
   // for; an operator's stop ends the recording where it was asked to, and an outage before it is
   // still said)
-  const bool cut_short = !interrupted() && stopped + std::chrono::milliseconds(100) < end;
-  const double silent = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-  const bool ended_early = writer.rows() > 0 && silent > (cut_short ? 0.1 : cli::silent_at_end(client.stats().frequency));
+  const cli::EndSilence silence = cli::end_silence(stopped, end, last_sample, true, client.stats().frequency);
+  const bool ended_early = writer.rows() > 0 && silence.lost;
   if (bar) std::fprintf(stderr, "\n");
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();
@@ -172,7 +171,7 @@ int run_record(const RecordOptions& o) {
                         {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},
                         {"client_cpu_percent", cpu_pct},
                         {"interrupted", interrupted()},
-                        {"silent_at_end_s", ended_early ? silent : 0.0},
+                        {"silent_at_end_s", ended_early ? silence.seconds : 0.0},
                         {"error", fatal.empty() ? nlohmann::json() : nlohmann::json(fatal)}};
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
@@ -187,7 +186,7 @@ int run_record(const RecordOptions& o) {
   if (ended_early && !o.quiet)
     log::warn(fmt::format("{}: no data for the last {:.1f} s {} (the connection was lost{}): the recording ends at {:.3f} s of "
                           "controller time",
-                          o.output, silent, interrupted() ? "before the stop" : fmt::format("of the {:g} s asked for", o.duration),
+                          o.output, silence.seconds, interrupted() ? "before the stop" : fmt::format("of the {:g} s asked for", o.duration),
                           o.no_reconnect ? ", and --no-reconnect" : " and not restored", t_last));
   if (!fatal.empty()) {
     std::fprintf(stderr, "error: %s\n", fatal.c_str());
