@@ -342,6 +342,7 @@ ClientStats Client::stats() const {
   s.wall_seconds = std::chrono::duration<double>(Clock::now() - started_).count();
   long total = 0;
   for (auto c : arrival_hist_) total += c;
+  if (total > 0) s.arrival_interval_s = arrival_interval_sum_ / static_cast<double>(total);
   if (total > 0) {
     const long want = static_cast<long>(std::ceil(0.99 * static_cast<double>(total)));
     long acc = 0;
@@ -573,8 +574,11 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
   } else {
     s.timestamp = std::chrono::duration<double>(arrival - started_).count();  // no timestamp in the recipe
   }
-  if (last_arrival_.time_since_epoch().count() != 0 && !gap && !reconnected_)
-    arrival_error = std::abs(std::chrono::duration<double>(arrival - last_arrival_).count() - period);
+  double arrival_interval = -1.0;
+  if (last_arrival_.time_since_epoch().count() != 0 && !gap && !reconnected_) {
+    arrival_interval = std::chrono::duration<double>(arrival - last_arrival_).count();
+    arrival_error = std::abs(arrival_interval - period);
+  }
   last_arrival_ = arrival;
   reconnected_ = false;
   if (lost > 0) gap = true;
@@ -592,6 +596,7 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
   if (arrival_error >= 0.0) {
     ++arrival_hist_[static_cast<std::size_t>(std::min<double>(kHistBins, arrival_error / kHistBin))];
     stats_.arrival_max_s = std::max(stats_.arrival_max_s, arrival_error);
+    arrival_interval_sum_ += arrival_interval;
   }
 }
 

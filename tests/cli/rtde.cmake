@@ -45,6 +45,18 @@ add_test(NAME cli.rtde_monitor_bad_output_before_connecting
           --events ${PROJECT_BINARY_DIR}/no-such-dir/events.jsonl)
 set_tests_properties(cli.rtde_monitor_bad_output_before_connecting PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 10
   PASS_REGULAR_EXPRESSION "no-such-dir/events.jsonl: cannot write: directory [^\n]*no-such-dir does not exist")
+# a path that exists in no writable sense (/proc: access(2) passes root there) is refused before connecting too
+add_test(NAME cli.rtde_record_proc_output_before_connecting
+  COMMAND twinwatch record --rtde 127.0.0.1:1 --wait 30 --duration 1 -o /proc/twinwatch-rec.csv)
+set_tests_properties(cli.rtde_record_proc_output_before_connecting PROPERTIES TIMEOUT 10
+  PASS_REGULAR_EXPRESSION "/proc/twinwatch-rec.csv: cannot write: ")
+# samples served faster than real time: |interval - period| measures the pace, not jitter, and is not
+# given as jitter (before: "arrival jitter p99 2.00 ms" at --speed 8, where every sample came 1.75 ms early)
+add_test(NAME cli.rtde_record_fast_server_is_not_jitter
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35945 --speed 8 --duration 20 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35945 --wait 10 --duration 0.5 --json -o ${PROJECT_BINARY_DIR}/fast_rec.csv 2>&1; kill \$! 2>/dev/null; wait")
+set_tests_properties(cli.rtde_record_fast_server_is_not_jitter PROPERTIES TIMEOUT 30
+  PASS_REGULAR_EXPRESSION "\"arrival_interval_ms\":0\\.2[0-9]*,\"arrival_jitter_max_ms\":null,\"arrival_jitter_p99_ms\":null")
 # a scenario whose stream has no targets (streams_targets: false) is a log, not a controller: refused, named
 add_test(NAME cli.serve_robot_refuses_a_stream_without_targets
   COMMAND sh -c "printf 'robot: ur3e\\nduration: 1\\nstreams_targets: false\\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\\n' > ${PROJECT_BINARY_DIR}/no_targets.yaml && $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_BINARY_DIR}/no_targets.yaml --port 35931 -q; echo exit=$?")
@@ -85,7 +97,7 @@ add_test(NAME cli.rtde_record_slow_rate
   COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35942 --duration 12 --wait-client 20 -q & \
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35942 --wait 10 --frequency 0.5 --duration 6.5 -o ${PROJECT_BINARY_DIR}/slow_rec.csv; echo exit=\$?; kill \$! 2>/dev/null; wait")
 set_tests_properties(cli.rtde_record_slow_rate PROPERTIES TIMEOUT 60
-  PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*; lost 0 samples in 0 gaps, 0 reconnects[^\n]*\nexit=0")
+  PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*; lost 0 samples in 0 gaps, 0 reconnects[^\n]*; arrival jitter p99 [0-9.]+ ms;[^\n]*\nexit=0")
 # a write that fails stops the recording at once, naming the file (before: the whole --duration was
 # streamed, then "write error"; on a disk that fills during an hour, the hour was lost unsaid)
 execute_process(COMMAND test -c /dev/full RESULT_VARIABLE no_dev_full_rtde)

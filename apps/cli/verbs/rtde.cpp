@@ -149,6 +149,16 @@ int run_record(const RecordOptions& o) {
   const rtde::ClientStats st = client.stats();
   const std::string fatal = client.fatal_error();
   const double cpu_pct = st.wall_seconds > 0 ? 100.0 * st.cpu_seconds / st.wall_seconds : 0.0;
+  // |arrival interval − period| is jitter only when the samples come at the controller's pace; a
+  // virtual robot served at --speed 10 delivers every 0.2 ms, which is no network's doing
+  const bool jitter = st.arrival_jitter_valid();
+  const std::string arrival =
+      jitter ? fmt::format("arrival jitter p99 {:.2f} ms", 1e3 * st.arrival_p99_s)
+      : st.arrival_interval_s > 0.0
+          ? fmt::format("arrival jitter not measured: samples arrived every {:.3f} ms, the controller's period is {:.3f} ms "
+                        "(a robot served faster or slower than real time?)",
+                        1e3 * st.arrival_interval_s, st.frequency > 0.0 ? 1e3 / st.frequency : 0.0)
+          : std::string("arrival jitter not measured (fewer than two samples in a row)");
   if (o.json) {
     nlohmann::json j = {{"output", o.output},
                         {"host", co.host},
@@ -167,8 +177,9 @@ int run_record(const RecordOptions& o) {
                         {"protocol_errors", st.protocol_errors},
                         {"resent", st.repeated},
                         {"text_messages", st.text_messages},
-                        {"arrival_jitter_p99_ms", 1e3 * st.arrival_p99_s},
-                        {"arrival_jitter_max_ms", 1e3 * st.arrival_max_s},
+                        {"arrival_interval_ms", 1e3 * st.arrival_interval_s},
+                        {"arrival_jitter_p99_ms", jitter ? nlohmann::json(1e3 * st.arrival_p99_s) : nlohmann::json()},
+                        {"arrival_jitter_max_ms", jitter ? nlohmann::json(1e3 * st.arrival_max_s) : nlohmann::json()},
                         {"client_cpu_percent", cpu_pct},
                         {"interrupted", interrupted()},
                         {"silent_at_end_s", ended_early ? silence.seconds : 0.0},
@@ -176,9 +187,9 @@ int run_record(const RecordOptions& o) {
     fmt::print("{}\n", j.dump());
   } else if (!o.quiet) {
     fmt::print("{}: {} samples ({:.2f} s of controller time) from {}:{}; lost {} samples in {} gaps, {} reconnects, "
-               "{} dropped by a slow writer, {} protocol errors; arrival jitter p99 {:.2f} ms; client CPU {:.2f} %{}\n",
+               "{} dropped by a slow writer, {} protocol errors; {}; client CPU {:.2f} %{}\n",
                o.output, writer.rows(), std::isnan(t_first) ? 0.0 : t_last - t_first, co.host, co.port, st.lost, st.gaps,
-               st.reconnects, st.dropped, st.protocol_errors, 1e3 * st.arrival_p99_s, cpu_pct,
+               st.reconnects, st.dropped, st.protocol_errors, arrival, cpu_pct,
                interrupted() ? fmt::format("; stopped by a signal after {:.1f} of the {:g} s asked for",
                                            std::chrono::duration<double>(stopped - t0).count(), o.duration)
                              : "");

@@ -2,6 +2,7 @@
 /// @file file_io.hpp
 /// Output files that fail loudly: a full disk or a vanished directory is an error naming the path,
 /// not a truncated file behind exit code 0.
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -47,9 +48,12 @@ inline void write_text_file(const std::string& path, const std::string& text) {
 }
 
 /// Throws PathError "PATH: cannot write: REASON" unless PATH could be written: an existing
-/// regular file that is writable, or a new file in an existing, writable directory. Touches
-/// nothing, so a command that connects to a robot first can refuse a bad output path before the
+/// regular file that is writable, or a new file in an existing, writable directory. Leaves nothing
+/// changed, so a command that connects to a robot first can refuse a bad output path before the
 /// connection (and an existing file is not replaced by an input that fails to load).
+/// access(2) alone passes whatever root asks for outside a read-only mount (/proc, /sys), so the
+/// path is also opened as it will be: an existing regular file for appending (not truncated, no
+/// byte written), a new one created and removed again.
 inline void require_writable(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -60,11 +64,23 @@ inline void require_writable(const std::string& path) {
   if (fs::exists(st)) {
     if (fs::is_directory(st)) fail("it is a directory");
     if (::access(path.c_str(), W_OK) != 0) fail(std::strerror(errno));
+    if (fs::is_regular_file(st)) {  // (a device or a FIFO is opened only when written: /dev/null, a pipe's reader)
+      const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOCTTY | O_CLOEXEC);
+      if (fd < 0) fail(std::strerror(errno));
+      ::close(fd);
+    }
     return;
   }
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::is_directory(dir, ec)) fail("directory " + dir.string() + " does not exist");
   if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    if (errno != EEXIST) fail(std::strerror(errno));  // (EEXIST: a dangling link, or a file made meanwhile: written as before)
+    return;
+  }
+  ::close(fd);
+  ::unlink(path.c_str());
 }
 
 /// Throws ParseError "PATH: cannot read: it is a directory, not a file" for a directory an input

@@ -23,6 +23,7 @@
 /// lost count for that gap is estimated from the same wall-clock outage).
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -82,6 +83,13 @@ struct ClientStats {
   double max_step_error_s = 0.0;   ///< largest |timestamp step − period| outside gaps
   double arrival_p99_s = 0.0;      ///< 99th percentile of |arrival interval − period|
   double arrival_max_s = 0.0;
+  double arrival_interval_s = 0.0; ///< mean wall-clock interval between consecutive samples (outside gaps); 0 before two
+  /// Whether arrival_p99_s / arrival_max_s mean jitter: false when samples arrive at another pace
+  /// than the controller's period (a virtual robot served faster or slower than real time), where
+  /// |interval − period| measures the pace, not the network.
+  bool arrival_jitter_valid() const {
+    return frequency > 0.0 && arrival_interval_s > 0.0 && std::abs(arrival_interval_s * frequency - 1.0) <= 0.1;
+  }
   double cpu_seconds = 0.0;        ///< CPU time used by the reader thread
   double wall_seconds = 0.0;       ///< since start()
   std::string last_error;
@@ -149,6 +157,7 @@ class Client {
   bool have_last_ = false, pending_gap_ = false;
   double last_raw_ts_ = 0.0, last_ts_ = 0.0, ts_offset_ = 0.0;
   std::chrono::steady_clock::time_point last_arrival_{}, lost_at_{};
+  double arrival_interval_sum_ = 0.0;  // wall seconds over the counted intervals (those in arrival_hist_)
   bool reconnected_ = false;
 
   mutable std::mutex mutex_;  // guards stats_, fatal_
