@@ -803,6 +803,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
             ll >= 0 && (e.link == ll || std::find(e.other_links.begin(), e.other_links.end(), ll) != e.other_links.end());
         sc.magnitude = e.magnitude;
         sc.magnitude_units = e.units;
+        sc.confidence = e.confidence;
         sc.detail = e.detail;
         if (e.fault == monitor::FaultClass::Collision && e.units == "N") sc.force = e.magnitude;
         if (link_ceiling > 0.0 && ll >= 0 && fi < true_impulse.size() && true_impulse[fi].size() > 0 &&
@@ -1144,6 +1145,8 @@ std::string evaluation_json(const Evaluation& e) {
                                  return r;
                                }()},
                               {"magnitude", s.detected ? nlohmann::json(s.magnitude) : nlohmann::json(nullptr)},
+                              {"confidence", s.detected ? nlohmann::json(s.confidence) : nlohmann::json(nullptr)},
+                              {"detail", s.detected ? nlohmann::json(s.detail) : nlohmann::json(nullptr)},
                               {"magnitude_units", s.detected ? nlohmann::json(s.magnitude_units) : nlohmann::json(nullptr)},
                               {"force_n", std::isfinite(s.force) ? nlohmann::json(s.force) : nlohmann::json(nullptr)},
                               {"true_force_n", std::isfinite(s.true_force) ? nlohmann::json(s.true_force) : nlohmann::json(nullptr)},

@@ -131,6 +131,7 @@ struct ScenarioScore {
   bool declared = false;
   double delay_ms = 0.0, magnitude = 0.0, true_magnitude = 0.0;
   std::string magnitude_units;  ///< the detecting event's units (N, N·m, kg, A, ...; Event::units)
+  double confidence = 0.0;      ///< the detecting event's confidence (Event::confidence)
   int false_alarms = 0;
   int wear_false_alarms = 0;   ///< false alarms that were wear warnings
   double duration_s = 0.0;

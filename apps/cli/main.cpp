@@ -16,9 +16,7 @@ int main(int argc, char** argv) {
       "twinwatch — a digital twin for sensorless condition monitoring of robots.\n"
       "It predicts what a healthy robot draws from what its controller already streams and turns\n"
       "the difference into diagnoses. Run 'twinwatch VERB --help' for each verb."};
-  app.footer("Exit status: 0 success; 2 bad usage or bad input (an option, a file's content, an output path), the\n"
-             "message naming it; 1 any other failure while running (e.g. a robot that stops answering, a recipe the\n"
-             "controller refuses).");
+  app.footer(twinwatch::cli::kExitStatusHelp);
   app.set_version_flag("-V,--version", std::string("twinwatch ") + twinwatch::kVersion);
   app.require_subcommand(1);
   app.fallthrough();

@@ -23,6 +23,13 @@ struct VerbRegistrar {
   VerbRegistrar(std::string name, int order, VerbSetup setup);
 };
 
+/// The exit statuses every verb's --help ends with (a verb that sets a footer of its own appends it:
+/// a subcommand's footer replaces the one it inherits).
+inline constexpr const char* kExitStatusHelp =
+    "Exit status: 0 success; 2 bad usage or bad input (an option, a file's content, an output path), the\n"
+    "message naming it; 1 any other failure while running (e.g. a robot that stops answering, a recipe the\n"
+    "controller refuses).";
+
 /// Exit code the process returns after the chosen verb ran (0 = success).
 void set_exit_code(int code);
 int exit_code();

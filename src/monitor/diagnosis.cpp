@@ -730,6 +730,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
                                    lower_bound ? fmt::format("; J1-J{} alone carry it, which fix only part of the force", fit.link + 1) : "");
     }
     if (fit.link >= 0) {
+      contact.link_share = fit.share;
       contact.other_links = fit.others;
       contact.contact = fit.measured;
       for (size_t i = 0; i < fit.others.size(); ++i)

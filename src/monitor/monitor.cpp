@@ -1246,7 +1246,8 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   e.contact = h.contact;
   e.magnitude = h.magnitude;
   e.units = h.units;
-  e.confidence = h.explained;
+  e.explained = h.explained;
+  e.confidence = h.explained * h.link_share;
   e.detail = h.detail;
   if (best != &hyps.front())
     e.detail += fmt::format(" (the change watched; the samples before the rise alone read as {}: {})", to_string(hyps.front().fault), hyps.front().detail);
@@ -1539,7 +1540,7 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
   if (!payload_evidence(e)) {
     refuse( fmt::format("the payload change of the alert raised at {:.3f} s ({:+.2f} kg) is not followed: no gripper output changed "
                     "and the payload explains {:.0f} % of the residual (following needs {:.0f} %); the alert stays open",
-                    e.t_detected, change, 100.0 * e.confidence, 100.0 * kPayloadFollowExplained));
+                    e.t_detected, change, 100.0 * e.explained, 100.0 * kPayloadFollowExplained));
     return;
   }
   followed_from_ = had;
@@ -1775,7 +1776,7 @@ void Monitor::track_rest(const RobotSample& s, double t, bool output_changed) {
   }
 }
 
-bool Monitor::payload_evidence(const Event& e) const { return output_changed_for(e) || e.confidence >= kPayloadFollowExplained; }
+bool Monitor::payload_evidence(const Event& e) const { return output_changed_for(e) || e.explained >= kPayloadFollowExplained; }
 
 ident::TwinModel& Monitor::scratch_twin() {
   if (scratch_twin_) *scratch_twin_ = twin_;

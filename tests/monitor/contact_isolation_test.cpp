@@ -503,11 +503,20 @@ TEST(ContactIsolation, AContactThatLeavesItsOwnJointUntouchedReportsTheLinkBefor
     ASSERT_EQ(hb.other_links.size(), 1u) << hb.detail;
     EXPECT_EQ(hb.other_links.front(), hb.link == 1 ? 2 : 1) << hb.detail;
     EXPECT_NE(hb.detail.find(fmt::format("link {} is also possible", hb.other_links.front() + 1)), std::string::npos) << hb.detail;
+    // the doubt is in the named link's probability, which the detail prints and the event's
+    // confidence carries: below 1 by at least the other link's share
+    EXPECT_NE(hb.detail.find(fmt::format("{:.0f} % likely", 100.0 * hb.link_share)), std::string::npos) << hb.detail;
+    const size_t at = hb.detail.find("also possible (");
+    ASSERT_NE(at, std::string::npos) << hb.detail;
+    const double other = std::stod(hb.detail.substr(at + 15)) / 100.0;
+    EXPECT_GT(other, 0.0) << hb.detail;
+    EXPECT_LE(hb.link_share + other, 1.0 + 0.01) << hb.detail;
 
     const SyntheticWindow l = synthetic_contact(q, qd, loaded, seed);
     const Hypothesis hl = diagnose(m, l.win, 0.06, 2, DiagnosisOptions{}, &l.ref).front();
     EXPECT_EQ(hl.link, 2) << hl.detail;
     for (int o : hl.other_links) EXPECT_GT(o, 2) << hl.detail;  // never the upper arm
+    EXPECT_NE(hl.detail.find(fmt::format("{:.0f} % likely", 100.0 * hl.link_share)), std::string::npos) << hl.detail;
   }
 }
 

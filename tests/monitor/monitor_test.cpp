@@ -1422,6 +1422,15 @@ TEST_F(MonitorLoop, CollisionIsDetectedAsAPulse) {
   EXPECT_LT(ev.front().t_detected - 9.3, 0.05);
   EXPECT_EQ(ev.front().fault, FaultClass::Collision) << ev.front().detail;
   EXPECT_LT(ev.front().duration(), 0.5);
+  // its confidence is how likely class and link are right: the share of the residual the contact
+  // explains times the named link's probability (the detail's "% likely"), not the share alone
+  // (which ran 11 points above how often the link was right: docs/validation.md)
+  const std::string& d = ev.front().detail;
+  const size_t likely = d.find(" % likely");
+  ASSERT_NE(likely, std::string::npos) << d;
+  const double share = std::stod(d.substr(d.rfind(' ', likely - 1) + 1)) / 100.0;
+  EXPECT_GT(ev.front().explained, 0.5) << d;
+  EXPECT_NEAR(ev.front().confidence, ev.front().explained * share, 0.006) << d;
 }
 
 TEST_F(MonitorLoop, StreamGapsAndFrozenChannelsAreTheirOwnEvents) {

@@ -525,6 +525,11 @@ int run_thresholds(const ThresholdOptions& o) {
 twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   auto o = std::make_shared<MonitorOptions>();
   auto* sub = app.add_subcommand("monitor", "Watch a recording with the twin: residuals, alerts, diagnosis, events");
+  sub->footer(std::string("Each event has a class, the joint (or a contact's link), a size with its units, and a confidence: how\n"
+                          "likely class and place are right, the share of the residual the diagnosis explains times, for a\n"
+                          "contact, the named link's probability (the detail's '% likely'; docs/validation.md, 'What an\n"
+                          "event's confidence means'). Joints and links are numbered from 1, as in the scenario labels.\n\n") +
+              twinwatch::cli::kExitStatusHelp);
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");

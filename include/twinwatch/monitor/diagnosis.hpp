@@ -56,6 +56,9 @@ struct Hypothesis {
   /// force through the contact link's own joint axis leaves that joint untouched; empty otherwise.
   std::vector<int> other_links;
   ContactImpulse contact;  ///< contacts isolated on the observer's estimate: what the link choice read
+  /// Contacts whose link was chosen on the observer's impulse: the named link's posterior
+  /// probability among the links (the "% likely" of the detail); 1 where no link was chosen
+  double link_share = 1.0;
 };
 
 struct DiagnosisOptions {
