@@ -582,10 +582,13 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
   last_arrival_ = arrival;
   reconnected_ = false;
   if (lost > 0) gap = true;
-  s.gap_before = gap;
+  s.gap_before = gap || pending_dropped_ > 0;
+  s.dropped_before = pending_dropped_;
 
   const bool pushed = queue_.try_push(s);
   pending_gap_ = !pushed;  // a dropped sample makes the next one a gap
+  if (pushed) pending_dropped_ = 0;
+  else if (pending_dropped_ < UINT32_MAX) ++pending_dropped_;
   std::lock_guard<std::mutex> lock(mutex_);
   ++stats_.received;
   if (pushed) ++stats_.delivered;

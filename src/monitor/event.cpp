@@ -238,6 +238,12 @@ EventStore::~EventStore() {
 }
 
 void EventStore::insert(const Event& e, const std::string& source) {
+  if (!try_insert(e, source, kBusyTimeoutMs))
+    throw std::runtime_error(fmt::format("{}: cannot insert event: {} (another connection held it for {:g} s)", impl_->path,
+                                         sqlite3_errmsg(impl_->db), kBusyTimeoutMs / 1000.0));
+}
+
+bool EventStore::try_insert(const Event& e, const std::string& source, int wait_ms) {
   if (!impl_->insert) throw std::logic_error(fmt::format("{}: the event store was opened for reading", impl_->path));
   sqlite3_stmt* s = impl_->insert;
   sqlite3_reset(s);
@@ -259,8 +265,16 @@ void EventStore::insert(const Event& e, const std::string& source) {
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 14, e.t_detected);
   sqlite3_bind_int(s, 15, e.active_at_stop ? 1 : 0);
-  if (sqlite3_step(s) != SQLITE_DONE)
-    throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  sqlite3_busy_timeout(impl_->db, std::max(0, wait_ms));
+  const int rc = sqlite3_step(s);
+  sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+  if (rc == SQLITE_DONE) return true;
+  // (a busy step leaves the statement to be reset; the event is still the caller's to store)
+  if ((rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED) {
+    sqlite3_reset(s);
+    return false;
+  }
+  throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
 }
 
 long EventStore::count() const {

@@ -2223,7 +2223,13 @@ void Monitor::judge(const RobotSample& s) {
     g.confidence = 1.0;
     // a gap the source flagged (a reconnection) whose stamps are a period apart lost no sample the
     // stamps can show: said so, not "0 sample(s) missing" (audit of session 22)
-    g.detail = g.magnitude >= 1.0
+    // samples the live source dropped (RobotSample::dropped_before: the monitor fell behind) are this
+    // computer's gap, not the controller's (soak audit, session 39)
+    g.detail = s.dropped_before > 0
+                   ? fmt::format("{:.0f} sample(s) missing ({:.1f} ms gap): {} of them dropped on this computer, where the monitor fell "
+                                 "behind the stream (the controller sent them; a slow disk or a loaded machine?)",
+                                 g.magnitude, 1000 * dt, s.dropped_before)
+               : g.magnitude >= 1.0
                    ? fmt::format("{:.0f} sample(s) missing ({:.1f} ms gap in the controller timestamp)", g.magnitude, 1000 * dt)
                    : fmt::format("the stream was interrupted before this sample (flagged by its source; the timestamps are {:.1f} ms "
                                  "apart, no sample missing by them)",

@@ -173,3 +173,14 @@ add_test(NAME cli.events_one_file_two_paths
   COMMAND sh -c "rm -f ${d}/events_paths.db && cd ${d} && $0 monitor --twin twin.json collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 monitor --twin twin.json ${d}/./collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 events --db events_paths.db --json | grep -o '\"source\":\"[^\"]*\"' | sort -u && $0 events --db events_paths.db" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.events_one_file_two_paths PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
                      PASS_REGULAR_EXPRESSION "^\"source\":\"/[^\"]*/cli-pipeline/collision\\.csv\"\nstored \\(UTC\\) +source +t \\[s\\][^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ [^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ ")
+# a store another connection holds a read transaction on (a sqlite3 shell, a dashboard): the event
+# waits and is stored when the lock is free, and monitoring goes on (before: after 10 s of stalling,
+# "database is locked" and exit 1, the event in --events but not in the store)
+add_test(NAME cli.monitor_store_locked_by_a_reader
+  COMMAND sh -c "tw=$<TARGET_FILE:twinwatch>; db=${d}/events_locked.db; rm -f $db ${d}/locked.jsonl; \
+$tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db $db -q || exit 9; \
+printf 'BEGIN;\\nSELECT count(*) FROM events;\\n.shell sleep 4\\nCOMMIT;\\n' | sqlite3 $db > /dev/null & sleep 1; \
+$tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db $db --events ${d}/locked.jsonl -q 2>&1; \
+echo exit=$?; wait; echo rows=$(sqlite3 $db 'SELECT count(*) FROM events;') lines=$(wc -l < ${d}/locked.jsonl)")
+set_tests_properties(cli.monitor_store_locked_by_a_reader PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "events_locked.db: locked by another connection: events wait to be stored [^\n]*\n[^\n]*the store is free again[^\n]*\nexit=0\nrows=2 lines=1\n")

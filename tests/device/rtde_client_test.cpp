@@ -305,6 +305,10 @@ TEST_F(RtdeLoopback, SlowConsumerNeverBlocksTheSocket) {
   got = drain(client, 1, 2000ms);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_TRUE(got[0].gap_before);
+  // and how many of the gap's samples this computer dropped (the controller sent them): the monitor
+  // says so instead of blaming the controller's timestamps
+  EXPECT_EQ(got[0].dropped_before, 1000u - 32u);
+  for (const auto& s : got) EXPECT_LE(s.dropped_before, 1000u);
 }
 
 TEST_F(RtdeLoopback, SeveralClientsAtOnceWithTheirOwnRates) {

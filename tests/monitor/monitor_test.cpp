@@ -314,6 +314,17 @@ TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
   EXPECT_EQ(ev3[0].fault, FaultClass::StreamFault);
   EXPECT_EQ(ev3[0].magnitude, 0.0);
   EXPECT_THAT(ev3[0].detail, ::testing::HasSubstr("interrupted before this sample")) << ev3[0].detail;
+  // samples the live source dropped because the monitor fell behind (its queue full): the gap is
+  // this computer's, and its event says so instead of blaming the controller's timestamps (soak
+  // audit, session 39: 14857 such events read "gap in the controller timestamp")
+  auto dropped = without(healthy, {{6.0, 0.1}});
+  for (auto& x : dropped.samples)
+    if (std::abs(x.timestamp - 6.1) < 1e-4) x.gap_before = true, x.dropped_before = 50;  // as the RTDE client marks it
+  const auto ev4 = monitor(dropped, 0.5);
+  ASSERT_EQ(ev4.size(), 1u);
+  EXPECT_EQ(ev4[0].fault, FaultClass::StreamFault);
+  EXPECT_EQ(ev4[0].magnitude, 50.0);
+  EXPECT_THAT(ev4[0].detail, ::testing::HasSubstr("50 of them dropped on this computer")) << ev4[0].detail;
 }
 
 // Session 38 (audit of the live path): a monitor that joins a healthy arm in motion (a live robot

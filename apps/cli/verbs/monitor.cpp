@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <filesystem>
 #include <cerrno>
 #include <fstream>
@@ -214,6 +215,25 @@ int run_monitor(const MonitorOptions& o) {
   }
   std::unique_ptr<monitor::EventStore> store;
   if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
+  // Events the store was locked for (another connection holding a transaction: 'sqlite3 events.db',
+  // a dashboard), oldest first. Before, a lock held over 10 s stopped a live monitor with exit 1 and
+  // stalled it for those 10 s (soak audit, session 39); now an event waits here, in memory and in
+  // --events, and is stored once the lock is free: retried at the next event, every second of
+  // samples, and at the end for up to 10 s, after which what is still unstored is an error.
+  std::deque<monitor::Event> unstored;
+  bool lock_said = false;
+  const auto store_waiting = [&](int wait_ms) {
+    while (!unstored.empty() && store->try_insert(unstored.front(), source, wait_ms)) unstored.pop_front();
+    if (unstored.empty() && lock_said) {
+      log::warn(fmt::format("{}: the store is free again; the events that waited are stored", o.db_path));
+      lock_said = false;
+    } else if (!unstored.empty() && !lock_said) {
+      log::warn(fmt::format("{}: locked by another connection: events wait to be stored (in memory{}) and monitoring goes on",
+                              o.db_path, o.events_path.empty() ? "" : ", and in " + o.events_path));
+      lock_said = true;
+    }
+  };
+  constexpr int kLiveLockWaitMs = 200;  // at an event; the stream's queue holds 16 s
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
   // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
@@ -248,7 +268,10 @@ int run_monitor(const MonitorOptions& o) {
       jl.flush();  // one line per event when it ends: 'tail -f' and a crash must see it
       check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
     }
-    if (store) store->insert(e, source);
+    if (store) {
+      unstored.push_back(e);
+      store_waiting(kLiveLockWaitMs);
+    }
     if (!o.quiet && !o.json)
       fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
                  e.duration(), 100 * e.confidence);
@@ -270,7 +293,12 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
     trace << '\n';
   }
+  long since_store_try = 0;
   const auto push = [&](const RobotSample& s) {
+    if (!unstored.empty() && ++since_store_try >= 500) {  // (about a second at 500 Hz; no wait)
+      since_store_try = 0;
+      store_waiting(0);
+    }
     const monitor::Excursion x = watch.check(s);
     if (!x.inside() && chatty) {
       auto seen = noted[static_cast<size_t>(2 * x.joint + (x.speed ? 0 : 1))];  // (a vector<bool> reference)
@@ -305,6 +333,8 @@ int run_monitor(const MonitorOptions& o) {
         if (copy) copy->write(s);
       } else if (client->finished()) {
         break;
+      } else if (!unstored.empty()) {
+        store_waiting(0);  // no samples (an outage): the store is still tried
       }
     }
     client->stop();
@@ -328,12 +358,19 @@ int run_monitor(const MonitorOptions& o) {
     if (copy) copy->close();
     const auto st = client->stats();
     if (!o.quiet && !o.json)
-      fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors, {} resent\n", st.received, st.lost,
-                 st.gaps, st.reconnects, st.protocol_errors, st.repeated);
+      fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors, {} resent, {} dropped by this monitor{}\n",
+                 st.received, st.lost, st.gaps, st.reconnects, st.protocol_errors, st.repeated, st.dropped,
+                 st.dropped > 0 ? " (the monitor fell behind the stream: a slow disk for --record, or a loaded machine)" : "");
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
   close_written(jl, o.events_path);
+  if (store && !unstored.empty()) {
+    store_waiting(10000);
+    if (!unstored.empty())
+      throw std::runtime_error(fmt::format("{}: {} event(s) not stored: another connection held the store locked to the end{}", o.db_path,
+                                           unstored.size(), o.events_path.empty() ? "" : " (they are in " + o.events_path + ")"));
+  }
   close_written(trace, o.trace);
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
   const double declared = mon.declared_payload(), ended = mon.twin().payload().mass;

@@ -63,6 +63,9 @@ struct RobotSample {
                            std::numeric_limits<double>::quiet_NaN()};
   std::uint32_t present = 0;          ///< OR of SampleField flags
   bool gap_before = false;            ///< samples were lost just before this one (stream fault marker)
+  /// of those, the samples this computer dropped (a live source's queue was full: its consumer fell
+  /// behind the stream); the controller sent them
+  std::uint32_t dropped_before = 0;
 
   /// A sample for n joints with every vector sized n and set to NaN, nothing present.
   static RobotSample empty(int n) {

@@ -155,6 +155,7 @@ class Client {
 
   // reader-thread state
   bool have_last_ = false, pending_gap_ = false;
+  std::uint32_t pending_dropped_ = 0;  // samples dropped (queue full) since the last one delivered
   double last_raw_ts_ = 0.0, last_ts_ = 0.0, ts_offset_ = 0.0;
   std::chrono::steady_clock::time_point last_arrival_{}, lost_at_{};
   double arrival_interval_sum_ = 0.0;  // wall seconds over the counted intervals (those in arrival_hist_)

@@ -108,7 +108,12 @@ class EventStore {
   EventStore& operator=(const EventStore&) = delete;
 
   /// Inserts an event (source names the run, e.g. the recording file or the robot address).
+  /// Waits up to 10 s for another connection's lock, then throws std::runtime_error naming the file.
   void insert(const Event& e, const std::string& source);
+  /// The same, waiting at most `wait_ms` for another connection's lock (a reader holding a
+  /// transaction, a second writer): false if the store stayed locked, the event not stored; throws
+  /// on any other failure. A live monitor must not stall, or stop, because someone reads its store.
+  bool try_insert(const Event& e, const std::string& source, int wait_ms);
   /// Number of stored events.
   long count() const;
   /// Every stored event with its source and storage time, oldest first (open is false; rows from before t_detected
