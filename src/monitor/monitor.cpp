@@ -1247,7 +1247,8 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   e.magnitude = h.magnitude;
   e.units = h.units;
   e.explained = h.explained;
-  e.confidence = h.explained * h.link_share;
+  // (a link posterior that is not a number says nothing about the link: no confidence in it)
+  e.confidence = std::clamp(h.explained * (std::isfinite(h.link_share) ? h.link_share : 0.0), 0.0, 1.0);
   e.detail = h.detail;
   if (best != &hyps.front())
     e.detail += fmt::format(" (the change watched; the samples before the rise alone read as {}: {})", to_string(hyps.front().fault), hyps.front().detail);

@@ -50,6 +50,13 @@ add_test(NAME cli.rtde_record_proc_output_before_connecting
   COMMAND twinwatch record --rtde 127.0.0.1:1 --wait 30 --duration 1 -o /proc/twinwatch-rec.csv)
 set_tests_properties(cli.rtde_record_proc_output_before_connecting PROPERTIES TIMEOUT 10
   PASS_REGULAR_EXPRESSION "/proc/twinwatch-rec.csv: cannot write: ")
+# a link to a file in a folder that does not exist: the link's target is what the write creates
+# (review of session 39: the probe took the link's "file exists" as writable, and streamed first)
+add_test(NAME cli.rtde_record_dangling_link_output_before_connecting
+  COMMAND sh -c "cd ${PROJECT_BINARY_DIR} && rm -f dangling_rec.csv && ln -s no-such-dir/rec.csv dangling_rec.csv && \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --wait 30 --duration 1 -o dangling_rec.csv; echo exit=\$?")
+set_tests_properties(cli.rtde_record_dangling_link_output_before_connecting PROPERTIES TIMEOUT 10
+  PASS_REGULAR_EXPRESSION "dangling_rec.csv: cannot write: directory no-such-dir does not exist \\(a link to no-such-dir/rec.csv\\)\nexit=2")
 # samples served faster than real time: |interval - period| measures the pace, not jitter, and is not
 # given as jitter (before: "arrival jitter p99 2.00 ms" at --speed 8, where every sample came 1.75 ms early)
 add_test(NAME cli.rtde_record_fast_server_is_not_jitter

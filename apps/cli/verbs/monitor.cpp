@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <deque>
+#include <exception>
+#include <functional>
 #include <filesystem>
 #include <cerrno>
 #include <fstream>
@@ -234,6 +236,33 @@ int run_monitor(const MonitorOptions& o) {
     }
   };
   constexpr int kLiveLockWaitMs = 200;  // at an event; the stream's queue holds 16 s
+  constexpr int kEndLockWaitMs = 10000;
+  // the last try, on every way out: an error that ends monitoring (a recipe refused on reconnect, a
+  // file that cannot be written) must not lose the events that waited, unsaid
+  bool end_tried = false;  // (once: the error it may end in unwinds through the guard below)
+  const auto store_the_rest = [&] {
+    if (!store || unstored.empty() || end_tried) return;
+    end_tried = true;
+    log::info(fmt::format("{}: waiting up to {:g} s for the store's lock to store {} event(s)", o.db_path, kEndLockWaitMs / 1000.0,
+                          unstored.size()));
+    store_waiting(kEndLockWaitMs);
+  };
+  struct OnUnwind {
+    std::function<void()> f;
+    ~OnUnwind() {
+      if (std::uncaught_exceptions() == 0) return;
+      try {
+        f();
+      } catch (...) {  // (a destructor does not throw; what is unstored is said below)
+      }
+    }
+  } unwind_store{[&] {
+    if (end_tried) return;
+    store_the_rest();
+    if (!unstored.empty())
+      fmt::print(stderr, "error: {}: {} event(s) not stored{}\n", o.db_path, unstored.size(),
+                 o.events_path.empty() ? "" : " (they are in " + o.events_path + ")");
+  }};
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
   // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
@@ -269,8 +298,10 @@ int run_monitor(const MonitorOptions& o) {
       check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
     }
     if (store) {
+      // (behind events already waiting no wait: a burst of events must not stall the stream)
+      const int wait_ms = unstored.empty() ? kLiveLockWaitMs : 0;
       unstored.push_back(e);
-      store_waiting(kLiveLockWaitMs);
+      store_waiting(wait_ms);
     }
     if (!o.quiet && !o.json)
       fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
@@ -366,7 +397,7 @@ int run_monitor(const MonitorOptions& o) {
   mon.finish();
   close_written(jl, o.events_path);
   if (store && !unstored.empty()) {
-    store_waiting(10000);
+    store_the_rest();
     if (!unstored.empty())
       throw std::runtime_error(fmt::format("{}: {} event(s) not stored: another connection held the store locked to the end{}", o.db_path,
                                            unstored.size(), o.events_path.empty() ? "" : " (they are in " + o.events_path + ")"));

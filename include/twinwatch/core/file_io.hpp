@@ -52,35 +52,47 @@ inline void write_text_file(const std::string& path, const std::string& text) {
 /// changed, so a command that connects to a robot first can refuse a bad output path before the
 /// connection (and an existing file is not replaced by an input that fails to load).
 /// access(2) alone passes whatever root asks for outside a read-only mount (/proc, /sys), so the
-/// path is also opened as it will be: an existing regular file for appending (not truncated, no
-/// byte written), a new one created and removed again.
+/// path is also opened as it will be: an existing regular file for writing (not truncated, no
+/// byte written), a new one (or a link's missing target) created and removed again.
 inline void require_writable(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  const fs::path p(path);
   const auto fail = [&](const std::string& why) { throw PathError(path + ": cannot write: " + why); };
   if (path.empty()) fail("empty path");
-  const fs::file_status st = fs::status(p, ec);
+  const fs::file_status st = fs::status(path, ec);
   if (fs::exists(st)) {
     if (fs::is_directory(st)) fail("it is a directory");
     if (::access(path.c_str(), W_OK) != 0) fail(std::strerror(errno));
     if (fs::is_regular_file(st)) {  // (a device or a FIFO is opened only when written: /dev/null, a pipe's reader)
-      const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOCTTY | O_CLOEXEC);
+      // O_CREAT as the writers open it (no O_TRUNC: nothing changes): a sticky directory's file of
+      // another user (fs.protected_regular) or an append-only one fails here as it would there
+      const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_NOCTTY | O_CLOEXEC, 0644);
       if (fd < 0) fail(std::strerror(errno));
       ::close(fd);
     }
     return;
   }
+  // a link to a file that does not exist yet is written through: its target is what is created
+  fs::path p(path);
+  std::string via;
+  for (int hop = 0; fs::is_symlink(fs::symlink_status(p, ec)); ++hop) {
+    if (hop == 16) fail("too many levels of symbolic links");
+    fs::path target = fs::read_symlink(p, ec);
+    if (ec) fail(ec.message());
+    if (target.is_relative() && p.has_parent_path()) target = p.parent_path() / target;
+    p = target;
+    via = " (a link to " + p.string() + ")";
+  }
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-  if (!fs::is_directory(dir, ec)) fail("directory " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno));
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0644);
+  if (!fs::is_directory(dir, ec)) fail("directory " + dir.string() + " does not exist" + via);
+  if (::access(dir.c_str(), W_OK) != 0) fail("directory " + dir.string() + ": " + std::strerror(errno) + via);
+  const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0644);
   if (fd < 0) {
-    if (errno != EEXIST) fail(std::strerror(errno));  // (EEXIST: a dangling link, or a file made meanwhile: written as before)
+    if (errno != EEXIST) fail(std::strerror(errno) + via);  // (EEXIST: a file made meanwhile: written as before)
     return;
   }
   ::close(fd);
-  ::unlink(path.c_str());
+  ::unlink(p.c_str());  // (where a file can be made but not removed, the empty file stays; the write replaces it)
 }
 
 /// Throws ParseError "PATH: cannot read: it is a directory, not a file" for a directory an input
