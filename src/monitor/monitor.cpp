@@ -2594,6 +2594,23 @@ void Monitor::drop_event(int index) {
     else if (k > index) --k;
 }
 
+long Monitor::forget_events_before(double t) {
+  long n = 0;
+  const auto referenced = [&](int index) {
+    for (int k : {open_, pending_close_, merge_into_, background_, held_})
+      if (k == index) return true;
+    return std::find(frozen_event_.begin(), frozen_event_.end(), index) != frozen_event_.end();
+  };
+  // oldest first, and only from the front: the list stays in order, the indices kept into it are
+  // shifted by drop_event
+  while (!events_.empty() && !events_.front().open && events_.front().t_end < t && !referenced(0)) {
+    drop_event(0);
+    ++n;
+  }
+  n_forgotten_ += n;
+  return n;
+}
+
 void Monitor::resume_background() {
   open_ = background_;
   background_ = -1;

@@ -327,6 +327,39 @@ TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
   EXPECT_THAT(ev4[0].detail, ::testing::HasSubstr("50 of them dropped on this computer")) << ev4[0].detail;
 }
 
+// A live monitor lets go of events it handed out long ago (soak audit, session 39: 0.6 kB an event,
+// kept for the whole run): what it reports afterwards is exactly what it reports keeping them all,
+// here with the two gap events let go a second after them, and a contact found after that.
+TEST_F(MonitorLoop, LettingGoOfOldEventsChangesNothingItReportsLater) {
+  const auto rec = without(run(scenario(611, 14, 0.5,
+                                        "  - {type: collision, link: 2, onset: 10.4, magnitude: 10, duration: 0.05, "
+                                        "point: [-0.12, 0.0, 0.1], direction: [0.3, 1.0, -0.2]}\n")),
+                           {{4.0, 0.2}, {8.0, 2.0}});
+  const auto closed_events = [&](bool forget) {
+    ident::TwinModel t = *twin;
+    t.set_payload(payload);
+    Monitor m(t, *config);
+    std::vector<std::string> seen;
+    m.on_event = [&](const Event& e) {
+      if (!e.open) seen.push_back(fmt::format("{:.4f} {} {} {:.6g} {}", e.t_start, to_string(e.fault), e.link, e.magnitude, e.detail));
+    };
+    for (const auto& s : rec.samples) {
+      m.push(s);
+      if (forget) m.forget_events_before(s.timestamp - 1.0);
+    }
+    m.finish();
+    if (forget) {
+      EXPECT_EQ(m.events_forgotten(), 3);  // the run goes on 3.5 s after the contact
+      EXPECT_TRUE(m.events().empty());
+    }
+    return seen;
+  };
+  const auto all = closed_events(false);
+  ASSERT_EQ(all.size(), 3u);
+  EXPECT_NE(all[2].find("collision"), std::string::npos) << all[2];
+  EXPECT_EQ(closed_events(true), all);
+}
+
 // Session 38 (audit of the live path): a monitor that joins a healthy arm in motion (a live robot
 // mid-program; a recording cut from a longer one) raised false contacts and current offsets on a
 // joint it met at a turning point: the twin's pre-sliding memory started at h = 0 where the joint

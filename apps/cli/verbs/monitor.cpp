@@ -324,8 +324,15 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
     trace << '\n';
   }
-  long since_store_try = 0;
+  long since_store_try = 0, since_forget = 0;
+  // live, the monitor lets go of events stored and written ten minutes of robot time ago (its own
+  // look-backs span seconds): its memory stays bounded however long it runs
+  constexpr double kKeepEventsS = 600.0;
   const auto push = [&](const RobotSample& s) {
+    if (client && ++since_forget >= 5000) {
+      since_forget = 0;
+      mon.forget_events_before(s.timestamp - kKeepEventsS);
+    }
     if (!unstored.empty() && ++since_store_try >= 500) {  // (about a second at 500 Hz; no wait)
       since_store_try = 0;
       store_waiting(0);
@@ -419,7 +426,8 @@ int run_monitor(const MonitorOptions& o) {
                twin.payload().mass);
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s){}, {} event(s){}{}{}\n", mon.samples(), mon.gaps(),
-               silent_gap ? " (the last: the silence at the end, which the stream line does not count)" : "", mon.events().size(),
+               silent_gap ? " (the last: the silence at the end, which the stream line does not count)" : "",
+               mon.events().size() + static_cast<size_t>(mon.events_forgotten()),
                mon.repeated() + mon.invalid() > 0
                    ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value that is no reading: not a number or beyond 1e4)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())

@@ -334,8 +334,15 @@ class Monitor {
   /// Those peaks per joint for the current residual and the momentum observer (zero when off).
   VectorJ margin_current() const;
   VectorJ margin_observer() const;
-  /// All events so far (closed and open).
+  /// All events so far (closed and open), less those forget_events_before() let go.
   const std::vector<Event>& events() const { return events_; }
+  /// Live monitoring, where every closed event has been handed to on_event (stored, written): lets
+  /// go of the closed events that ended before `t` and that nothing the monitor still watches refers
+  /// to, oldest first, so that a monitor running for months holds a bounded list (0.6 kB an event;
+  /// soak audit, session 39). The monitor's own look-backs span seconds; callers keep minutes.
+  /// Returns how many it let go; events_forgotten() counts them all.
+  long forget_events_before(double t);
+  long events_forgotten() const { return n_forgotten_; }
   /// Samples processed; gaps in the controller timestamp; samples skipped because their timestamp
   /// did not advance (a resend); samples skipped because a position, velocity or current was not
   /// finite (each run of them is one SensorFault event).
@@ -551,6 +558,7 @@ class Monitor {
   double i_total_ = 0.0, t_prev_ = 0.0;
   bool have_prev_ = false, filter_started_ = false;
   long n_samples_ = 0, n_gaps_ = 0, n_repeated_ = 0, n_invalid_ = 0;
+  long n_forgotten_ = 0;  // events let go by forget_events_before
   bool invalid_run_ = false;  // the last sample was skipped as non-finite (one event per run)
   VectorJ temperature_ok_;    // per joint: the last plausible temperature reading (NaN: none yet)
   std::vector<char> temperature_run_;  // per joint: its reading is implausible (one event per run)
