@@ -1303,8 +1303,9 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
     return e.fault == monitor::FaultClass::PayloadChange;
   });
   r.add_table(followed ? "Twin fidelity on this recording (UR3e Table 3 layout), predicted as the monitor predicts: with the payload "
-                         "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the declared payload "
-                         "alone, as this report does with --keep-payload"
+                         "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the payload the "
+                         "recording declares (else the given one) and follows no diagnosed change, so after one its table differs "
+                         "from this; --keep-payload here follows nothing either, and takes no declaration"
                        : "Twin fidelity on this recording (UR3e Table 3 layout)",
               head, mrows);
   const MatrixJ C = monitor::residual_velocity_correlation(resv, qdv);

@@ -410,7 +410,9 @@ void say_validated_payload(const device::Recording& rec, const std::string& path
   std::string taken = payload_words(payload.step_payload(0)) + " from the start";
   for (size_t i = 1; i < payload.steps(); ++i)
     taken += fmt::format(", {} from {:.3f} s", payload_words(payload.step_payload(i)), rec.samples[payload.step_from(i)].timestamp);
-  fmt::print(stderr, "note: {}: validated with the payload it declares, as the monitor predicts ({}; --keep-payload keeps {} throughout)\n",
+  fmt::print(stderr,
+             "note: {}: validated with the payload it declares, as the monitor predicts ({}; --keep-payload keeps {} throughout); the "
+             "monitor also follows a payload change it diagnoses, which validate does not\n",
              path, taken, payload_words(given));
   for (const RobotSample& s : rec.samples) {
     if (!s.has(kFieldPayload)) continue;
