@@ -30,6 +30,9 @@ inline constexpr const char* kExitStatusHelp =
     "message naming it; 1 any other failure while running (e.g. a robot that stops answering, a recipe the\n"
     "controller refuses).";
 
+/// A verb's own --help footer with the exit statuses after it.
+inline std::string with_exit_status(const std::string& footer) { return footer + "\n\n" + kExitStatusHelp; }
+
 /// Exit code the process returns after the chosen verb ran (0 = success).
 void set_exit_code(int code);
 int exit_code();

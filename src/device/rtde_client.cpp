@@ -531,7 +531,7 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
 
   long lost = 0;
   bool gap = pending_gap_;
-  double step_error = 0.0, arrival_error = -1.0;
+  double step_error = 0.0;
   if (std::isfinite(raw_ts)) {
     if (!have_last_) {
       ts_offset_ = 0.0;
@@ -574,15 +574,13 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
   } else {
     s.timestamp = std::chrono::duration<double>(arrival - started_).count();  // no timestamp in the recipe
   }
-  double arrival_interval = -1.0;
-  if (last_arrival_.time_since_epoch().count() != 0 && !gap && !reconnected_) {
+  double arrival_interval = -1.0;  // (none across a gap or a reconnection)
+  if (last_arrival_.time_since_epoch().count() != 0 && !gap && !reconnected_)
     arrival_interval = std::chrono::duration<double>(arrival - last_arrival_).count();
-    arrival_error = std::abs(arrival_interval - period);
-  }
   last_arrival_ = arrival;
   reconnected_ = false;
   if (lost > 0) gap = true;
-  s.gap_before = gap || pending_dropped_ > 0;
+  s.gap_before = gap;  // (a sample dropped before this one left pending_gap_ set)
   s.dropped_before = pending_dropped_;
 
   const bool pushed = queue_.try_push(s);
@@ -596,7 +594,8 @@ void Client::handle_data(const Package& p, Clock::time_point arrival) {
   stats_.lost += lost;
   if (gap && pushed) ++stats_.gaps;
   stats_.max_step_error_s = std::max(stats_.max_step_error_s, step_error);
-  if (arrival_error >= 0.0) {
+  if (arrival_interval >= 0.0) {
+    const double arrival_error = std::abs(arrival_interval - period);
     ++arrival_hist_[static_cast<std::size_t>(std::min<double>(kHistBins, arrival_error / kHistBin))];
     stats_.arrival_max_s = std::max(stats_.arrival_max_s, arrival_error);
     arrival_interval_sum_ += arrival_interval;

@@ -2586,7 +2586,7 @@ void Monitor::drop_open_event() { drop_event(open_); }
 void Monitor::drop_event(int index) {
   // the indices kept into events_ after it move down by one, one that pointed at it is cleared
   events_.erase(events_.begin() + index);
-  for (int* k : {&open_, &pending_close_, &merge_into_, &background_, &held_})
+  for (int* k : event_indices())
     if (*k == index) *k = -1;
     else if (*k > index) --*k;
   for (int& k : frozen_event_)
@@ -2596,14 +2596,15 @@ void Monitor::drop_event(int index) {
 
 long Monitor::forget_events_before(double t) {
   long n = 0;
-  const auto referenced = [&](int index) {
-    for (int k : {open_, pending_close_, merge_into_, background_, held_})
-      if (k == index) return true;
-    return std::find(frozen_event_.begin(), frozen_event_.end(), index) != frozen_event_.end();
+  // the front event is referenced: still watched (open, parked, held, merged into, frozen channel)
+  const auto front_referenced = [&] {
+    const auto indices = event_indices();
+    return std::any_of(indices.begin(), indices.end(), [](const int* k) { return *k == 0; }) ||
+           std::find(frozen_event_.begin(), frozen_event_.end(), 0) != frozen_event_.end();
   };
   // oldest first, and only from the front: the list stays in order, the indices kept into it are
   // shifted by drop_event
-  while (!events_.empty() && !events_.front().open && events_.front().t_end < t && !referenced(0)) {
+  while (!events_.empty() && !events_.front().open && events_.front().t_end < t && !front_referenced()) {
     drop_event(0);
     ++n;
   }

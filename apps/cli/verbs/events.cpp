@@ -108,13 +108,13 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   sub->add_option("--source", o->source, "Only events whose source contains this text (monitor stores a recording by its absolute path, a robot as rtde://HOST)");
   sub->add_option("--last", o->last, "Only the newest N events (0: all)")->capture_default_str();
   sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\")");
-  sub->footer(std::string(
+  sub->footer(twinwatch::cli::with_exit_status(
       "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"
       "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"
       "numbered from 1 everywhere (J5 is \"joint\": 5; none is null), as in the scenario labels. A store written\n"
       "before this numbering (0-based) is read as such and renumbered the next time 'twinwatch monitor' writes to it.\n"
       "An event's confidence is how likely its class and place are right: the share of the residual its diagnosis\n"
-      "explains, times, for a contact, the named link's probability (the detail's '% likely').") + std::string("\n\n") + twinwatch::cli::kExitStatusHelp);
+      "explains, times, for a contact, the named link's probability (the detail's '% likely')."));
   sub->callback([o, cls] {
     o->fault_given = cls->count() > 0;
     run_events(*o);

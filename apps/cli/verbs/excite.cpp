@@ -219,13 +219,13 @@ int run(const Options& o) {
 twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
   auto o = std::make_shared<Options>();
   auto* sub = app.add_subcommand("excite", "Design an optimised excitation trajectory (finite Fourier, min cond(W)) as a scenario");
-  sub->footer(std::string(
+  sub->footer(twinwatch::cli::with_exit_status(
       "A finite Fourier series per joint (Cao eq. 21) that starts and ends at rest (zero velocity and\n"
       "acceleration, position back at q0), stays inside the joint position, velocity and acceleration limits,\n"
       "and whose coefficients NLopt chooses (global CRS2 then local Subplex) to minimise the condition number of\n"
       "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction), keeping the arm above\n"
       "--min-height over the table it stands on (the tool too, with --tool-point). Writes a scenario\n"
-      "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too.") + std::string("\n\n") + twinwatch::cli::kExitStatusHelp);
+      "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too."));
   sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, panda) or a .json/.urdf description")->required();
   sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
   sub->add_option("--harmonics", o->harmonics, "Harmonics L per joint (>= 3)")->capture_default_str();

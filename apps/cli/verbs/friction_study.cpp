@@ -544,7 +544,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       "friction-study",
       "HESR friction study: fit LuGre, Stribeck, RBFNN, RBFNN-H, ParFam-V and ParFam-H to one joint's residual torque "
       "and print HESR Tables III-IX and the chirp split");
-  sub->footer(std::string(
+  sub->footer(twinwatch::cli::with_exit_status(
       "Input: 1 to 3 recordings TRAIN [VALIDATION [CHIRP]] (RTDE column names, or any CSV through --column-map) with\n"
       "actual_q_*, actual_qd_* and the torque source: actual_current_* times --gain (N·m/A; 1 when the column is\n"
       "already a current-based torque in N·m) or target_moment_* (--torque moment). With one recording its first\n"
@@ -552,7 +552,7 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       "is estimated from its velocity reversals). Each joint is decoupled from its rigid body by least squares on\n"
       "[qdd, sin q, cos q, 1] (single-joint gravity; exact when the other joints stand still) with |qd| < --screening\n"
       "left out of that fit only, and [sign(qd), qd] as nuisance columns. --simulated runs the built-in Maxwell-slip\n"
-      "joints J1-J3 instead (20 s sweep, Fourier and chirp records at 200 Hz).") + std::string("\n\n") + twinwatch::cli::kExitStatusHelp);
+      "joints J1-J3 instead (20 s sweep, Fourier and chirp records at 200 Hz)."));
   sub->add_option("RECORDINGS", o->recordings, "TRAIN [VALIDATION [CHIRP]] recordings")->check(CLI::ExistingFile);
   sub->add_flag("--simulated", o->simulated, "Run on the built-in simulated joints J1-J3");
   sub->add_flag("--closed-loop", o->closed_loop,

@@ -324,18 +324,14 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
     trace << '\n';
   }
-  long since_store_try = 0, since_forget = 0;
+  long pushed = 0;
   // live, the monitor lets go of events stored and written ten minutes of robot time ago (its own
   // look-backs span seconds): its memory stays bounded however long it runs
   constexpr double kKeepEventsS = 600.0;
   const auto push = [&](const RobotSample& s) {
-    if (client && ++since_forget >= 5000) {
-      since_forget = 0;
-      mon.forget_events_before(s.timestamp - kKeepEventsS);
-    }
-    if (!unstored.empty() && ++since_store_try >= 500) {  // (about a second at 500 Hz; no wait)
-      since_store_try = 0;
-      store_waiting(0);
+    if (++pushed % 500 == 0) {  // (about a second at 500 Hz)
+      if (!unstored.empty()) store_waiting(0);  // (no wait)
+      if (client && pushed % 5000 == 0) mon.forget_events_before(s.timestamp - kKeepEventsS);
     }
     const monitor::Excursion x = watch.check(s);
     if (!x.inside() && chatty) {
@@ -601,11 +597,11 @@ int run_thresholds(const ThresholdOptions& o) {
 twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   auto o = std::make_shared<MonitorOptions>();
   auto* sub = app.add_subcommand("monitor", "Watch a recording with the twin: residuals, alerts, diagnosis, events");
-  sub->footer(std::string("Each event has a class, the joint (or a contact's link), a size with its units, and a confidence: how\n"
-                          "likely class and place are right, the share of the residual the diagnosis explains times, for a\n"
-                          "contact, the named link's probability (the detail's '% likely'; docs/validation.md, 'What an\n"
-                          "event's confidence means'). Joints and links are numbered from 1, as in the scenario labels.\n\n") +
-              twinwatch::cli::kExitStatusHelp);
+  sub->footer(twinwatch::cli::with_exit_status(
+      "Each event has a class, the joint (or a contact's link), a size with its units, and a confidence: how\n"
+      "likely class and place are right, the share of the residual the diagnosis explains times, for a\n"
+      "contact, the named link's probability (the detail's '% likely'; docs/validation.md, 'What an\n"
+      "event's confidence means'). Joints and links are numbered from 1, as in the scenario labels."));
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");

@@ -272,12 +272,12 @@ int run_validate(const ValidateOpts& o) {
 twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
   auto o = std::make_shared<IdentOpts>();
   auto* sub = app.add_subcommand("identify-torque", "Identify a rigid-body + friction model in the torque domain (least squares)");
-  sub->footer(std::string(
+  sub->footer(twinwatch::cli::with_exit_status(
       "tau_j = Y_b,j(q, qd, qdd) beta + Fc_j sign(qd_j) + Fv_j qd_j + offset_j on the base parameters, for robots\n"
       "with joint torque sensors (Panda, Kinova) or a current-derived torque. qdd is the zero-phase local-polynomial\n"
       "derivative of qd on the recorded time axis; rows with |qd_j| below --screen are left out of the rigid-body\n"
       "fit only (HESR III-E); weighted LS with per-joint residual variances (or --ols); parameter standard\n"
-      "deviations. Foreign logs load through --column-map (docs/recordings.md).") + std::string("\n\n") + twinwatch::cli::kExitStatusHelp);
+      "deviations. Foreign logs load through --column-map (docs/recordings.md)."));
   sub->add_option("RECORDINGS", o->recordings, "Recording CSV file(s)")->required()->check(CLI::ExistingFile);
   sub->add_option("--robot", o->robot, "Robot description (built-in name or .json/.urdf file; a file is stored in the model by its absolute path)")
       ->capture_default_str()
@@ -301,10 +301,10 @@ twinwatch::cli::VerbRegistrar reg{"identify-torque", 41, [](CLI::App& app) {
 twinwatch::cli::VerbRegistrar reg2{"validate-torque", 42, [](CLI::App& app) {
   auto o = std::make_shared<ValidateOpts>();
   auto* sub = app.add_subcommand("validate-torque", "Torque RMSE and d_tau % of an identify-torque model, next to a published model");
-  sub->footer(std::string(
+  sub->footer(twinwatch::cli::with_exit_status(
       "Per-joint torque RMSE and d_tau % (100 |tau - tau_hat| / |tau|) on a recording (segment), optionally next\n"
       "to a published model: RNEA with a robot description's own parameters plus a published sigmoid friction\n"
-      "table (CSV joint,phi1,phi2,phi3; Gaz 2019 Table I form).") + std::string("\n\n") + twinwatch::cli::kExitStatusHelp);
+      "table (CSV joint,phi1,phi2,phi3; Gaz 2019 Table I form)."));
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("--model", o->model, "Model JSON from identify-torque")->required()->check(CLI::ExistingFile);
   sub->add_option("--column-map", o->column_map, "Column map for a foreign CSV log");

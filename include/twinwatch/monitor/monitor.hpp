@@ -8,6 +8,7 @@
 /// alert is raised, the residual window around it is handed to the signature diagnosis
 /// (diagnosis.hpp) once `diagnosis_delay` seconds of it are available; the event is reported when
 /// raised (class pending), when diagnosed, and when cleared.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -667,6 +668,8 @@ class Monitor {
   bool outputs_changed_within(double from, double to) const;
   void withdraw_open_alert();
   void drop_event(int index);  // erases events_[index], keeping the indices into events_ right
+  // the indices kept into events_ (-1: none), frozen_event_'s aside
+  std::array<int*, 5> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_}; }
   // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
   // at the first sample and whenever the payload changes, said in a note each time it goes beyond
   bool payload_beyond_ = false;
