@@ -173,6 +173,34 @@ TEST_F(MonitorLoop, J5ResistanceIsDetectedAndAttributedToJ5) {
   EXPECT_NEAR(ev.front().magnitude, 0.8, 0.3) << ev.front().detail;
 }
 
+// session 40: a resistance near its joint's threshold raises on noise peaks, and its looks fit the
+// window's residual. A contact's force is free at every sample, so its fit absorbed the other
+// joints' noise as well: a 1 N·m J2 resistance that ended after 3 s was a "contact on link 1" and a
+// "contact on link 4" on its last looks (explained 0.93 against the resistance's 0.62), and a
+// 0.35 N·m one on J5 explained 15-25 % of a window that is mostly J1-J3's noise, "no signature
+// explains the residual well". The contact is scored on what it explains beyond the noise it
+// absorbs, and the Unknown test is on the energy the noise leaves to explain.
+TEST_F(MonitorLoop, AResistanceNearItsThresholdIsNeitherAContactNorUnknown) {
+  struct Case {
+    int joint;
+    double magnitude, end;
+    unsigned seed;
+  };
+  for (const Case c : {Case{2, 1.0, 15.0, 5}, Case{3, 0.8, 15.0, 5}, Case{5, 0.35, 0.0, 5}}) {
+    const std::string fault = fmt::format("  - {{type: resistance, joint: {}, onset: 12, ramp: 0.2, magnitude: {}{}}}\n", c.joint,
+                                          c.magnitude, c.end > 0.0 ? fmt::format(", end: {}", c.end) : "");
+    const auto ev = monitor(run(scenario(c.seed, 20, 0.5, fault)), 0.5);
+    SCOPED_TRACE(fault + listing(ev));
+    ASSERT_FALSE(ev.empty());
+    for (const Event& e : ev) {
+      EXPECT_GE(e.t_start, 12.0);
+      EXPECT_EQ(e.fault, FaultClass::Resistance);
+      EXPECT_EQ(e.joint, c.joint - 1);
+      EXPECT_NEAR(e.magnitude, c.magnitude, 0.4 * c.magnitude);
+    }
+  }
+}
+
 // audit of session 16: a persistent fault dips below its threshold at reversals; each raise within
 // the merge gap continues the same event, and that event used to be reported closed at every dip
 // (five records of one J5 resistance in the events file and the store). Its first, short-window
@@ -1827,10 +1855,10 @@ TEST(MonitorConfig, AVersion1TwinWithoutTrendOrObserverReadsTheDefaults) {
 // hypothesis when a gripper output changed, and the split takes the watched change when the window's
 // payload hypothesis agrees with it.
 TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) {
-  int first_look_at_last_link = 0, watched_taken = 0;
+  int first_look_at_last_link = 0;
   for (const bool loss : {true, false})
     for (const double mass : {0.2, 0.3})
-      for (const unsigned seed : {921u, 922u, 923u}) {
+      for (unsigned seed = 921; seed <= 926; ++seed) {
         std::string f = part_change(loss, mass, 8.5);
         f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
         const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
@@ -1855,13 +1883,13 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
         EXPECT_GT(ev[1].t_detected, 9.4) << all;
         EXPECT_LT(ev[1].t_detected - 9.4, 0.02) << all;
         EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : mass, 0.05) << all;
-        if (ev[0].detail.find("the samples before the rise alone read as collision") != std::string::npos) ++watched_taken;
       }
-  // the paths this is about: on this twin the first look reads two of the 0.2 kg changes as a contact
-  // at the last link (link 6 named or also possible), and the split takes the watched change where
-  // the samples before the rise alone read as a contact (three of the 0.2 kg runs)
+  // the path this is about: on this twin the first look reads some of the changes as a contact at
+  // the last link (link 6 named or also possible). (Until session 39 the split also took the watched
+  // change where the samples before the rise alone read as a contact, in three of these runs; since
+  // the contact is scored on what it explains beyond the noise it absorbs, they read as the payload
+  // change themselves: none of 80 runs, seeds 921-940, needed it)
   EXPECT_GE(first_look_at_last_link, 2);
-  EXPECT_GE(watched_taken, 3);
 }
 
 // A small part's step near the thresholds dips below them within a pulse's time (0.1 s for a 0.25 kg
@@ -1947,38 +1975,42 @@ TEST_F(MonitorLoop, APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChang
       for (const auto& s : rec.samples) m.push(s);
       m.finish();
       const std::string all = fmt::format("{}, seed {}:{}\nnotes: {}", loss ? "loss" : "pick", seed, listing(m.events()), fmt::join(m.notes(), "\n"));
+      EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : 0.15, 0.02) << all;
+      // where the part's step raised an alert of its own at the motion's peak (pick, seed 961: 0.75 s
+      // after the grip), that alert is the part: a payload change of its size, followed, and nothing
+      // else (since session 40; before, read as "contact on link 6", it was held and the check took it)
+      if (m.events().size() == 1 && m.events().front().fault == FaultClass::PayloadChange) {
+        EXPECT_TRUE(noted_at.empty()) << all;
+        EXPECT_NEAR(m.events().front().magnitude, loss ? -0.15 : 0.15, 0.03) << all;
+        EXPECT_GE(m.events().front().t_start, 8.3) << all;
+        EXPECT_LE(m.events().front().t_start, 8.3 + 2.5) << all;
+        continue;
+      }
       ASSERT_EQ(noted_at.size(), 1u) << all;
-      // a second after the output change, or, past an alert the part raised itself (a "contact on
-      // link 6" 0.75 s after a pick), half a second later
+      // a second after the output change, or, past an alert the part raised itself, half a second later
       EXPECT_GE(noted_at[0], 9.3) << all;
       EXPECT_LE(noted_at[0], 10.81) << all;
       if (m.events().empty()) ++quiet_runs;
       for (const Event& e : m.events()) EXPECT_LT(e.t_start, noted_at[0]) << "nothing after the twin took the part: " << all;
-      EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : 0.15, 0.02) << all;
     }
   EXPECT_GE(quiet_runs, 2);
   // the part's step read otherwise first (a 6 s figure-eight, seed 968): "contact on link 6" at the
-  // grip, then "extra resistance on J3"; both are left out of the fit and the part is still taken.
-  // Before (only contacts left out) the twin kept no payload and two "contacts" followed at 13.1 s.
-  // Since session 29 both are held until the check and dropped as the part's step: the resistance
-  // cleared before its first look, and the contact (3.5 N, 62 ms after the grip) began within
-  // kShortStep of it and is no more than 2.5 times the part's weight (Monitor::grip_step)
+  // grip, then "extra resistance on J3"; before session 29 the twin kept no payload and two
+  // "contacts" followed at 13.1 s; sessions 29-39 held both until the check and dropped them as the
+  // part's step. Since session 40 the grip's own alert reads as the payload change it is (+0.16 kg:
+  // the contact's per-sample force no longer scores the noise it absorbs) and is followed: one
+  // event, the part's, and nothing after it
   {
     const auto rec = undeclared(run("robot: ur3e\nseed: 968\nduration: 14\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 6, "
                                     "tilt: [0.3, 0.4, 0.5]}\nfaults:\n" + part_change(false, 0.15, 8.3)));
     Monitor m(carrying(0.0), *config);
-    double noted = -1.0;
-    m.on_note = [&](double at, const std::string& text) {
-      if (text.find("after a gripper output changed at 8.30") != std::string::npos) noted = at;
-    };
     for (const auto& s : rec.samples) m.push(s);
     m.finish();
     const std::string all = listing(m.events());
-    ASSERT_GT(noted, 0.0) << all;
-    EXPECT_TRUE(m.events().empty()) << "the part's own alerts before the check: " << all;
-    EXPECT_EQ(std::count_if(m.notes().begin(), m.notes().end(), [](const std::string& n) { return n.find("was the part's step") != std::string::npos; }), 2)
-        << all;
-    for (const Event& e : m.events()) EXPECT_LT(e.t_start, noted) << all;
+    ASSERT_EQ(m.events().size(), 1u) << all;
+    EXPECT_EQ(m.events().front().fault, FaultClass::PayloadChange) << all;
+    EXPECT_NEAR(m.events().front().magnitude, 0.15, 0.03) << all;
+    EXPECT_GE(m.events().front().t_start, 8.3) << all;
     EXPECT_NEAR(m.twin().payload().mass, 0.15, 0.02) << all;
   }
   // the output toggled with no part: nothing taken

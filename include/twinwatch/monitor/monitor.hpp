@@ -420,6 +420,9 @@ class Monitor {
   /// the diagnosis window: the ring's samples from `from` up to `until` (and, with the observer, the
   /// kContactReference before them), with their residuals through the twin as it is now
   void fill_window(double from, double until);
+  /// each sample's residual torque (r_tau, r_drive) through the twin as it is now, with the
+  /// acceleration read on the stretch itself (fill_window)
+  void recompute_residual(std::vector<DiagnosisSample>& samples);
   /// long_look: the alert's second, longer look (kLongWindow after the raise), the one a payload
   /// change is followed on (follow_payload). The window holds the ring's samples from before the
   /// alert's start up to, not including, `until` [s] (default: all of them)
