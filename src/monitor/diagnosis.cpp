@@ -77,6 +77,8 @@ constexpr size_t kNoiseReferenceMin = 50;
 // the share of a window's energy taken as explainable however much noise the reference reads (the
 // reference is 0.5 s: its variance is itself uncertain, and a window of noise alone stays Unknown)
 constexpr double kMinExplainable = 0.25;
+// floor on a joint's reference noise variance [(N·m)^2] (a perfectly quiet reference)
+constexpr double kMinNoiseVar = 1e-8;
 
 double sq(double x) { return x * x; }
 
@@ -715,18 +717,6 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
 
   // score every signature; parameters count as a small penalty
   std::vector<std::pair<double, Hypothesis>> scored;
-  // shape: a collision is a pulse that has decayed by the end of the window; a payload change or
-  // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint.
-  int dom = 0;
-  double peak_abs = 0.0;
-  for (const auto& s : window)
-    for (int j = 0; j < n; ++j)
-      if (std::abs(s.r_tau[j]) > peak_abs) peak_abs = std::abs(s.r_tau[j]), dom = j;
-  double tail = 0.0;
-  const size_t q0 = window.size() - std::max<size_t>(1, window.size() / 4);
-  for (size_t k = q0; k < window.size(); ++k) tail += window[k].r_tau[dom];
-  tail = std::abs(tail) / static_cast<double>(window.size() - q0);
-  const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
   // the healthy residual's variance per joint, read like the window's on the reference before it
   // (the contact's per-sample fit absorbs that much of the window's noise, contact_hypothesis)
   std::optional<VectorJ> noise_var;
@@ -740,6 +730,24 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     mean /= count;
     noise_var = (sq_sum / count - mean.cwiseAbs2()).cwiseMax(0.0);
   }
+  // shape: a collision is a pulse that has decayed by the end of the window; a payload change or
+  // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint:
+  // the one that stands out most from its own noise where the reference gives it (in N·m, J2's
+  // noise peaks outweighed a 0.7 N·m step on J4, whose window then read as J2's noise: a pulse)
+  VectorJ scale = VectorJ::Ones(n);
+  if (noise_var)
+    for (int j = 0; j < n; ++j) scale[j] = 1.0 / std::sqrt(std::max((*noise_var)[j], kMinNoiseVar));
+  int dom = 0;
+  double peak_abs = 0.0, peak_scaled = 0.0;
+  for (const auto& s : window)
+    for (int j = 0; j < n; ++j)
+      if (std::abs(s.r_tau[j]) * scale[j] > peak_scaled) peak_scaled = std::abs(s.r_tau[j]) * scale[j], dom = j;
+  for (const auto& s : window) peak_abs = std::max(peak_abs, std::abs(s.r_tau[dom]));
+  double tail = 0.0;
+  const size_t q0 = window.size() - std::max<size_t>(1, window.size() / 4);
+  for (size_t k = q0; k < window.size(); ++k) tail += window[k].r_tau[dom];
+  tail = std::abs(tail) / static_cast<double>(window.size() - q0);
+  const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
   double contact_noise = 0.0;
   Hypothesis contact = contact_hypothesis(model, window, total, noise_var ? &*noise_var : nullptr, &contact_noise);
   if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {

@@ -1858,7 +1858,7 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
   int first_look_at_last_link = 0;
   for (const bool loss : {true, false})
     for (const double mass : {0.2, 0.3})
-      for (unsigned seed = 921; seed <= 926; ++seed) {
+      for (unsigned seed = 921; seed <= 940; ++seed) {
         std::string f = part_change(loss, mass, 8.5);
         f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
         const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
@@ -1885,11 +1885,13 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
         EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : mass, 0.05) << all;
       }
   // the path this is about: on this twin the first look reads some of the changes as a contact at
-  // the last link (link 6 named or also possible). (Until session 39 the split also took the watched
-  // change where the samples before the rise alone read as a contact, in three of these runs; since
-  // the contact is scored on what it explains beyond the noise it absorbs, they read as the payload
-  // change themselves: none of 80 runs, seeds 921-940, needed it)
-  EXPECT_GE(first_look_at_last_link, 2);
+  // the last link (link 6 named or also possible): 7 of these 80 runs. (Until session 39 the split
+  // also took the watched change where the samples before the rise alone read as a contact; since
+  // the contact is scored on what it explains beyond the noise it absorbs, and a window's shape is
+  // read on the joint that stands out from its own noise, they read as the payload change
+  // themselves, and the first look reads fewer parts as contacts: 13 of these 80 runs with the
+  // noise-aware score alone, 7 now)
+  EXPECT_GE(first_look_at_last_link, 3);
 }
 
 // A small part's step near the thresholds dips below them within a pulse's time (0.1 s for a 0.25 kg
