@@ -803,20 +803,27 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     scored.emplace_back(o.explained - kComplexityPenalty - ambiguity - (pulse ? 0.3 : 0.0), o);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (auto& [score, h] : scored) out.push_back(h);
+  // the energy a signature could explain: the window's less the noise expected in it (the
+  // reference's variance per joint, as the contact's share above)
+  double explainable = total;
+  if (noise_var) explainable = std::max(total - static_cast<double>(window.size()) * noise_var->sum(), kMinExplainable * total);
+  for (auto& [score, h] : scored) {
+    if (noise_var) {
+      const double net = h.explained - (h.fault == FaultClass::Collision ? contact_noise : 0.0);
+      h.beyond_noise = std::clamp(net * total / explainable, 0.0, 1.0);
+    }
+    out.push_back(h);
+  }
   // a persistent offset's noise peak is the resistance it is, whatever the shape of the crossing
   if (reference && window.front().tau_ext.size() == n)
     if (auto steady = offset_raise(window, *reference, alert_joint)) {
       out.insert(out.begin(), *steady);
       return out;
     }
-  // the test is on the energy a signature could explain: the window's less the noise expected in
-  // it (the reference's variance per joint, as the contact's share above). Against the whole
-  // energy, a resistance on a wrist joint near its threshold (0.3 N·m on J5) explained 15-25 % of a
-  // window whose noise is mostly the big joints' and was "no signature explains the residual
-  // well" (docs/validation.md, "A resistance read as a contact")
-  double explainable = total;
-  if (noise_var) explainable = std::max(total - static_cast<double>(window.size()) * noise_var->sum(), kMinExplainable * total);
+  // "no signature explains the residual well" is judged on the explainable energy, not the whole:
+  // a resistance on a wrist joint near its threshold (0.3 N·m on J5) explained 15-25 % of a window
+  // whose noise is mostly the big joints' and was Unknown (docs/validation.md, "A resistance read
+  // as a contact")
   if (out.front().explained * total / explainable < options.min_explained) {
     Hypothesis u;
     u.fault = FaultClass::Unknown;

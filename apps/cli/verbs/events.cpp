@@ -113,8 +113,9 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
       "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"
       "numbered from 1 everywhere (J5 is \"joint\": 5; none is null), as in the scenario labels. A store written\n"
       "before this numbering (0-based) is read as such and renumbered the next time 'twinwatch monitor' writes to it.\n"
-      "An event's confidence is how likely its class and place are right: the share of the residual its diagnosis\n"
-      "explains, times, for a contact, the named link's probability (the detail's '% likely')."));
+      "An event's confidence is how likely its class and place are right: for a contact, the share of the residual\n"
+      "its fit explains times the named link's probability (the detail's '% likely'); for the other classes, the\n"
+      "share of the residual beyond the healthy noise before the alert that the diagnosis explains."));
   sub->callback([o, cls] {
     o->fault_given = cls->count() > 0;
     run_events(*o);

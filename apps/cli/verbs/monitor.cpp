@@ -599,8 +599,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   auto* sub = app.add_subcommand("monitor", "Watch a recording with the twin: residuals, alerts, diagnosis, events");
   sub->footer(twinwatch::cli::with_exit_status(
       "Each event has a class, the joint (or a contact's link), a size with its units, and a confidence: how\n"
-      "likely class and place are right, the share of the residual the diagnosis explains times, for a\n"
-      "contact, the named link's probability (the detail's '% likely'; docs/validation.md, 'What an\n"
+      "likely class and place are right. For a contact, the share of the residual its fit explains times the\n"
+      "named link's probability (the detail's '% likely'); for the other classes, the share of the residual\n"
+      "beyond the healthy noise before the alert that the diagnosis explains (docs/validation.md, 'What an\n"
       "event's confidence means'). Joints and links are numbered from 1, as in the scenario labels."));
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);

@@ -14,6 +14,7 @@
 ///   inertia box, the force under a scale-free Gaussian prior (diagnosis.cpp, link_evidence);
 /// - Sensor fault on joint j: one channel frozen (identical values) or offset while the others agree.
 /// The explained fraction of ||r||² decides; ties go to the simpler hypothesis.
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,10 @@ struct Hypothesis {
   /// Contacts whose link was chosen on the observer's impulse: the named link's posterior
   /// probability among the links (the "% likely" of the detail); 1 where no link was chosen
   double link_share = 1.0;
+  /// the share of the window's residual energy beyond the noise expected in it (the reference's
+  /// variance per joint) that the signature explains, net of the noise its own fit absorbs (a
+  /// contact's per-sample force), [0, 1]; NaN where no reference gives the noise
+  double beyond_noise = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct DiagnosisOptions {
