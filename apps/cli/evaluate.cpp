@@ -435,52 +435,69 @@ void require_driven(const device::Recording& rec, const std::string& user) {
   }
 }
 
-void check_units(const device::Recording& rec, const model::RobotModel& robot) {
+UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot)
+    : path_(path), robot_(robot), present_(present), n_(std::min(n_dof, robot.n_dof())) {
   // (report read a 7-joint log into a 6-joint twin and said "q has size 7, expected 6 (model.n_dof)")
-  if (rec.n_dof != robot.n_dof())
-    throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}", rec.path, rec.n_dof, robot.name(), robot.n_dof()));
-  if (rec.median_period > kUnitsMaxPeriod)
+  if (n_dof != robot.n_dof())
+    throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}", path, n_dof, robot.name(), robot.n_dof()));
+  currents_.resize(static_cast<size_t>(n_dof));
+}
+
+void UnitsCheck::check_period(double median_period) const {
+  if (median_period > kUnitsMaxPeriod)
     throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "
                                       "column in milliseconds? Scale it to seconds with a column map ('TIME_COLUMN,timestamp,0.001', "
                                       "docs/recordings.md)",
-                                      rec.path, rec.median_period));
-  const int n = std::min(rec.n_dof, robot.n_dof());
-  for (size_t k = 0; k < rec.samples.size(); ++k) {
-    const RobotSample& s = rec.samples[k];
-    for (int j = 0; j < n; ++j) {
-      const model::JointLimits& l = robot.joint(j).limits;
-      const double t = s.timestamp - rec.samples.front().timestamp;
-      if (s.q[j] < l.q_min - kUnitsPositionMargin || s.q[j] > l.q_max + kUnitsPositionMargin)
-        throw InvalidArgument(fmt::format("{}: J{} is at {:.4g} rad at t = {:.3f} s (sample {}), beyond the {}'s range {:.3g} to {:.3g} "
-                                          "rad: are the positions in degrees? Scale them with a column map "
-                                          "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
-                                          rec.path, j + 1, s.q[j], t, k + 1, robot.name(), l.q_min, l.q_max, j));
-      if (std::abs(s.qd[j]) > kUnitsSpeedFactor * l.qd_max)
-        throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), more than {:g} times the {}'s limit "
-                                          "{:.3g} rad/s: are the speeds in degrees/s? Scale them with a column map "
-                                          "('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
-                                          rec.path, j + 1, s.qd[j], t, k + 1, kUnitsSpeedFactor, robot.name(), l.qd_max, j));
-    }
+                                      path_, median_period));
+}
+
+void UnitsCheck::add(const RobotSample& s) {
+  if (samples_ == 0) t0_ = s.timestamp;
+  ++samples_;
+  for (int j = 0; j < n_; ++j) {
+    const model::JointLimits& l = robot_.joint(j).limits;
+    const double t = s.timestamp - t0_;
+    if (s.q[j] < l.q_min - kUnitsPositionMargin || s.q[j] > l.q_max + kUnitsPositionMargin)
+      throw InvalidArgument(fmt::format("{}: J{} is at {:.4g} rad at t = {:.3f} s (sample {}), beyond the {}'s range {:.3g} to {:.3g} "
+                                        "rad: are the positions in degrees? Scale them with a column map "
+                                        "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
+                                        path_, j + 1, s.q[j], t, samples_, robot_.name(), l.q_min, l.q_max, j));
+    if (std::abs(s.qd[j]) > kUnitsSpeedFactor * l.qd_max)
+      throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), more than {:g} times the {}'s limit "
+                                        "{:.3g} rad/s: are the speeds in degrees/s? Scale them with a column map "
+                                        "('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
+                                        path_, j + 1, s.qd[j], t, samples_, kUnitsSpeedFactor, robot_.name(), l.qd_max, j));
   }
+  // (single precision: the percentile below only tells A from mA, and a day of 500 Hz samples then
+  // holds 24 bytes each)
+  if ((present_ & kFieldActualCurrent) && s.has(kFieldActualCurrent))
+    for (size_t j = 0; j < currents_.size(); ++j)
+      if (std::isfinite(s.current[static_cast<Eigen::Index>(j)]))
+        currents_[j].push_back(static_cast<float>(std::abs(s.current[static_cast<Eigen::Index>(j)])));
+}
+
+void UnitsCheck::finish() {
   // currents in mA: judged on each joint's 99th percentile of |i|, which a glitch of a few samples
   // (a sensor fault the monitor is there to report) does not move
-  if (rec.present & kFieldActualCurrent) {
-    std::vector<double> a;
-    a.reserve(rec.samples.size());
-    for (int j = 0; j < rec.n_dof; ++j) {
-      a.clear();
-      for (const RobotSample& s : rec.samples)
-        if (s.has(kFieldActualCurrent) && std::isfinite(s.current[j])) a.push_back(std::abs(s.current[j]));
-      if (a.empty()) continue;
-      const auto at = a.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(a.size() - 1));
-      std::nth_element(a.begin(), at, a.end());
-      if (*at > kUnitsCurrentMax)
-        throw InvalidArgument(fmt::format("{}: J{}'s current is above {:.4g} A in 1 % of the samples, more than the {:g} A twinwatch takes "
-                                          "for a joint current: are the currents in mA? Scale them with a column map "
-                                          "('COLUMN,actual_current_{},0.001', docs/recordings.md)",
-                                          rec.path, j + 1, *at, kUnitsCurrentMax, j));
-    }
+  for (size_t j = 0; j < currents_.size(); ++j) {
+    std::vector<float>& a = currents_[j];
+    if (a.empty()) continue;
+    const auto at = a.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(a.size() - 1));
+    std::nth_element(a.begin(), at, a.end());
+    if (*at > kUnitsCurrentMax)
+      throw InvalidArgument(fmt::format("{}: J{}'s current is above {:.4g} A in 1 % of the samples, more than the {:g} A twinwatch takes "
+                                        "for a joint current: are the currents in mA? Scale them with a column map "
+                                        "('COLUMN,actual_current_{},0.001', docs/recordings.md)",
+                                        path_, j + 1, *at, kUnitsCurrentMax, j));
   }
+  currents_.clear();
+}
+
+void check_units(const device::Recording& rec, const model::RobotModel& robot) {
+  UnitsCheck check(rec.path, rec.n_dof, rec.present, robot);
+  check.check_period(rec.median_period);
+  for (const RobotSample& s : rec.samples) check.add(s);
+  check.finish();
 }
 
 void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {

@@ -38,6 +38,26 @@ inline constexpr double kUnitsPositionMargin = 0.5;  ///< [rad] beyond q_min / q
 inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
+/// check_units a sample at a time, for a recording read row by row (monitor): the joint count at
+/// construction, check_period once the median period is known, add() per sample (positions and
+/// speeds at once; the currents kept in single precision, 24 bytes a sample for six joints), finish()
+/// for the currents' percentile. Throws InvalidArgument as check_units does.
+class UnitsCheck {
+ public:
+  UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot);
+  void check_period(double median_period) const;
+  void add(const RobotSample& s);
+  void finish();
+
+ private:
+  std::string path_;
+  const model::RobotModel& robot_;
+  std::uint32_t present_;
+  int n_;
+  long samples_ = 0;
+  double t0_ = 0.0;
+  std::vector<std::vector<float>> currents_;
+};
 inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-percentile |current| (mA read as A)
 
 inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's |current| in a training run

@@ -67,6 +67,24 @@ std::vector<std::string> split_csv(const std::string& line) {
   return out;
 }
 
+// a data row's cells, as views into `line` (no copies: a day's recording is tens of millions of
+// rows), each trimmed of spaces, tabs and a line end's '\r'
+void split_row(const std::string& line, std::vector<std::string_view>& out) {
+  out.clear();
+  const std::string_view all(line);
+  const auto trimmed = [](std::string_view c) {
+    const auto b = c.find_first_not_of(" \t\r");
+    if (b == std::string_view::npos) return std::string_view();
+    return c.substr(b, c.find_last_not_of(" \t\r") - b + 1);
+  };
+  size_t from = 0;
+  for (size_t at = all.find(','); at != std::string_view::npos; at = all.find(',', from)) {
+    out.push_back(trimmed(all.substr(from, at - from)));
+    from = at + 1;
+  }
+  out.push_back(trimmed(all.substr(from)));
+}
+
 // the joint a column name carries after its group prefix ("actual_q_12" -> 12): -1 unless the
 // rest is all digits; any index beyond the largest robot comes back as kMaxDof, however many digits
 // it has (an int conversion of "actual_q_4000641156" would overflow)
@@ -98,7 +116,7 @@ std::string group_prefixes() {
   return s;
 }
 
-bool parse_double(const std::string& s, double& v) {
+bool parse_double(std::string_view s, double& v) {
   if (s.empty()) return false;
   const char* b = s.data();
   const char* e = b + s.size();
@@ -168,25 +186,25 @@ ColumnMap ColumnMap::load(const std::string& path) {
   return m;
 }
 
-Recording read_recording(const std::string& path, const ColumnMap* map) {
+RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* map) : path(path_in) {
   refuse_directory_input(path);
-  std::ifstream f(path);
+  f.open(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the recording (does it exist and is it readable?)");
   std::string line;
   if (!std::getline(f, line)) throw ParseError(path, 1, "", "empty file, expected a header of RTDE names");
   // a UTF-8 byte-order mark (spreadsheet programs write one) is not part of the first name
   if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
-  std::vector<std::string> header = split_csv(line);
-  std::vector<double> scale(header.size(), 1.0);
+  header = split_csv(line);
+  scale.assign(header.size(), 1.0);
   std::vector<std::string> names = header;
   if (map) {
     // every mapped column must exist: a typo in the map would otherwise drop a signal silently
     for (const auto& [col, entry] : map->columns)
       if (std::find(header.begin(), header.end(), col) == header.end()) {
-        const auto ln = map->lines.find(col);
+        const auto at = map->lines.find(col);
         throw ParseError(path, 1, col,
                          fmt::format("column map{} maps column '{}' to {}, but the header has no such column",
-                                     map->path.empty() ? "" : fmt::format(" ({} line {})", map->path, ln == map->lines.end() ? 0 : ln->second),
+                                     map->path.empty() ? "" : fmt::format(" ({} line {})", map->path, at == map->lines.end() ? 0 : at->second),
                                      col, entry.rtde_name));
       }
     for (size_t c = 0; c < header.size(); ++c) {
@@ -198,11 +216,6 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
     }
   }
   // locate columns: each known name -> (group, joint)
-  Recording rec;
-  rec.path = path;
-  int ts_col = -1, do_col = -1, mode_col = -1, safety_col = -1, gap_col = -1, payload_col = -1;
-  int cog_col[3] = {-1, -1, -1};  // payload_cog_0..2
-  int n = 0;
   for (size_t c = 0; c < names.size(); ++c) {
     if (names[c].rfind("actual_q_", 0) != 0) continue;
     const int j = joint_index(names[c], 9);
@@ -221,12 +234,7 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
       hint = ": the header's names are quoted; twinwatch reads them unquoted";
     throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)" + hint);
   }
-  rec.n_dof = n;
-  struct Target {
-    int group;
-    int joint;
-  };
-  std::vector<Target> target(names.size(), Target{-1, -1});
+  target.assign(names.size(), Target{-1, -1});
   std::vector<std::vector<bool>> seen(std::size(kGroups), std::vector<bool>(static_cast<size_t>(n), false));
   for (size_t c = 0; c < names.size(); ++c) {
     const std::string& nm = names[c];
@@ -274,19 +282,18 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   for (int j = 0; j < n; ++j)
     if (!seen[0][static_cast<size_t>(j)]) throw ParseError(path, 1, fmt::format("actual_q_{}", j), "missing required column");
   // a group is present only when all its joints are
-  std::uint32_t present = 0;
   for (size_t g = 1; g < std::size(kGroups); ++g) {
     const bool all = std::all_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
     const bool any = std::any_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
     if (any && !all)
       throw ParseError(path, 1, std::string(kGroups[g].prefix) + "*",
                        fmt::format("some joints' columns are missing (expected {}0..{}{})", kGroups[g].prefix, kGroups[g].prefix, n - 1));
-    if (all) present |= kGroups[g].flag;
+    if (all) present_ |= kGroups[g].flag;
   }
-  if (do_col >= 0) present |= kFieldDigitalOutputs;
-  if (mode_col >= 0) present |= kFieldRobotMode;
-  if (safety_col >= 0) present |= kFieldSafetyMode;
-  if (gap_col >= 0) present |= kFieldStreamGap;
+  if (do_col >= 0) present_ |= kFieldDigitalOutputs;
+  if (mode_col >= 0) present_ |= kFieldRobotMode;
+  if (safety_col >= 0) present_ |= kFieldSafetyMode;
+  if (gap_col >= 0) present_ |= kFieldStreamGap;
   // the declared payload: its mass and centre of mass together (a mass without its centre, or the
   // reverse, cannot be taken by the twin and would be dropped without a word)
   {
@@ -296,29 +303,35 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
                        fmt::format("the declared payload needs its mass and centre of mass together: expected the columns payload, "
                                    "payload_cog_0, payload_cog_1 and payload_cog_2, the header has {}{} of the three payload_cog_*",
                                    payload_col >= 0 ? "payload and " : "no payload and ", cogs));
-    if (payload_col >= 0) present |= kFieldPayload;
+    if (payload_col >= 0) present_ |= kFieldPayload;
   }
-  rec.present = present;
 
-  // rows
-  int ln = 1;
-  std::vector<double> dts;
+}
+
+int RecordingReader::n_dof() const { return n; }
+
+std::uint32_t RecordingReader::present() const { return present_; }
+
+bool RecordingReader::next(RobotSample& s) {
+  std::string& line = line_;
+  std::vector<std::string_view>& cells = cells_;
   while (std::getline(f, line)) {
     ++ln;
     if (line.empty() || line == "\r") continue;
-    const auto cells = split_csv(line);
+    split_row(line, cells);
     // the last row of a recording cut off mid-write (a killed recorder, a power loss): fewer cells
     // and no line end. It is dropped, and said; anywhere else a short row is an error
     if (cells.size() < header.size() && f.eof()) {
-      log::warn(fmt::format("{}:{}: the last row is cut off ({} of {} cells, no line end): dropped, as a recording interrupted "
+      if (say_cut_)
+        log::warn(fmt::format("{}:{}: the last row is cut off ({} of {} cells, no line end): dropped, as a recording interrupted "
                             "mid-write leaves it",
                             path, ln, cells.size(), header.size()));
-      break;
+      return false;
     }
     if (cells.size() != header.size())
       throw ParseError(path, ln, "", fmt::format("expected {} cells (as in the header), got {}", header.size(), cells.size()));
-    RobotSample s = RobotSample::empty(n);
-    s.present = present;
+    s = RobotSample::empty(n);
+    s.present = present_;
     for (size_t c = 0; c < cells.size(); ++c) {
       const int ci = static_cast<int>(c);
       const bool cog = ci == cog_col[0] || ci == cog_col[1] || ci == cog_col[2];
@@ -362,41 +375,63 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
         s.payload_cog[ci == cog_col[0] ? 0 : (ci == cog_col[1] ? 1 : 2)] = v;
       } else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
     }
-    if (!rec.samples.empty()) {
-      const double dt = s.timestamp - rec.samples.back().timestamp;
-      if (!(dt > 0.0))
-        throw ParseError(path, ln, header[static_cast<size_t>(ts_col)],
-                         fmt::format("timestamp {} does not increase (previous {})", s.timestamp, rec.samples.back().timestamp));
-      dts.push_back(dt);
-    }
+    if (rows > 0 && !(s.timestamp > last_timestamp))
+      throw ParseError(path, ln, header[static_cast<size_t>(ts_col)],
+                       fmt::format("timestamp {} does not increase (previous {})", s.timestamp, last_timestamp));
+    last_timestamp = s.timestamp;
+    ++rows;
+    return true;
+  }
+  return false;
+}
+
+Recording read_recording(const std::string& path, const ColumnMap* map) {
+  RecordingReader reader(path, map);
+  Recording rec;
+  rec.path = path;
+  rec.n_dof = reader.n_dof();
+  rec.present = reader.present();
+  std::vector<double> dts;
+  RobotSample s;
+  while (reader.next(s)) {
+    if (!rec.samples.empty()) dts.push_back(s.timestamp - rec.samples.back().timestamp);
     rec.samples.push_back(s);
   }
   if (rec.samples.empty()) throw ParseError(path, 2, "", "no data rows after the header");
-  // gaps: steps longer than kGapFactor median periods
-  if (!dts.empty()) {
-    std::vector<double> sorted = dts;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-    rec.median_period = sorted[sorted.size() / 2];
-    // a logger's own clock (a PC stamping what it receives) jitters: its steps spread around the
-    // period, and a lost sample (a step of two periods) cannot be told from a late stamp. The
-    // spread (1.4826 x the median absolute deviation of the steps) then raises the gap factor to
-    // kJitterSigmas spreads above the period, and the file says so once
-    std::vector<double> dev(dts.size());
-    for (size_t k = 0; k < dts.size(); ++k) dev[k] = std::abs(dts[k] - rec.median_period);
-    std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-    rec.period_jitter = 1.4826 * dev[dev.size() / 2];
-    if (rec.median_period > 0.0 && rec.period_jitter > kJitterFraction * rec.median_period) {
-      rec.gap_factor = jitter_gap_factor(rec.period_jitter, rec.median_period, kGapFactor);
-      log::warn(fmt::format("{}: the timestamps jitter (spread {:.2f} ms around the {:.2f} ms period; a logger's own clock?): a step "
-                            "counts as lost samples only above {:.1f} ms, shorter losses cannot be told from the jitter",
-                            path, 1000.0 * rec.period_jitter, 1000.0 * rec.median_period, 1000.0 * rec.gap_factor * rec.median_period));
-    }
-    for (size_t k = 0; k < dts.size(); ++k)
-      if (dts[k] > rec.gap_factor * rec.median_period) rec.samples[k + 1].gap_before = true;
-  }
+  // gaps: steps longer than the gap factor times the median period
+  const RecordingTiming timing = recording_timing(path, dts);
+  rec.median_period = timing.median_period;
+  rec.period_jitter = timing.period_jitter;
+  rec.gap_factor = timing.gap_factor;
+  for (size_t k = 0; k < dts.size(); ++k)
+    if (timing.is_gap(dts[k])) rec.samples[k + 1].gap_before = true;
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
-  for (const RobotSample& s : rec.samples) rec.gaps += s.gap_before ? 1 : 0;
+  for (const RobotSample& x : rec.samples) rec.gaps += x.gap_before ? 1 : 0;
   return rec;
+}
+
+RecordingTiming recording_timing(const std::string& path, std::vector<double> dts) {
+  RecordingTiming t;
+  t.gap_factor = kGapFactor;
+  if (dts.empty()) return t;
+  std::vector<double> sorted = dts;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+  t.median_period = sorted[sorted.size() / 2];
+  // a logger's own clock (a PC stamping what it receives) jitters: its steps spread around the
+  // period, and a lost sample (a step of two periods) cannot be told from a late stamp. The
+  // spread (1.4826 x the median absolute deviation of the steps) then raises the gap factor to
+  // kJitterSigmas spreads above the period, and the file says so once
+  std::vector<double>& dev = sorted;
+  for (size_t k = 0; k < dts.size(); ++k) dev[k] = std::abs(dts[k] - t.median_period);
+  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
+  t.period_jitter = 1.4826 * dev[dev.size() / 2];
+  if (t.median_period > 0.0 && t.period_jitter > kJitterFraction * t.median_period) {
+    t.gap_factor = jitter_gap_factor(t.period_jitter, t.median_period, kGapFactor);
+    log::warn(fmt::format("{}: the timestamps jitter (spread {:.2f} ms around the {:.2f} ms period; a logger's own clock?): a step "
+                          "counts as lost samples only above {:.1f} ms, shorter losses cannot be told from the jitter",
+                          path, 1000.0 * t.period_jitter, 1000.0 * t.median_period, 1000.0 * t.gap_factor * t.median_period));
+  }
+  return t;
 }
 
 double jitter_gap_factor(double spread, double period, double floor) {

@@ -1,5 +1,6 @@
 #include "twinwatch/device/recording.hpp"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -74,6 +75,66 @@ TEST(Recording, MarksTimestampGapsWithoutHidingThem) {
   EXPECT_EQ(r.gaps, 1);
   EXPECT_TRUE(r.samples[10].gap_before);
   EXPECT_NEAR(r.median_period, 0.002, 1e-12);
+}
+
+// the offline monitor reads a recording twice, row by row, without holding it (session 40): the
+// reader gives read_recording's rows one at a time, with the same values and the same errors, and
+// recording_timing marks the gaps read_recording marks; a second pass says a cut-off row no more
+TEST(Recording, TheRowReaderGivesWhatReadRecordingHolds) {
+  std::string csv = "timestamp,actual_q_0,actual_qd_0,actual_current_0,stream_gap\n";
+  for (int k = 0; k < 40; ++k)
+    if (k != 10 && k != 11 && k != 25)
+      csv += fmt::format("{},{},{},{},{}\n", 0.002 * k, 0.1 + 0.01 * k, 0.5, 0.25 * k, k == 30 ? 1 : 0);
+  csv += "0.090,0.1";  // cut off mid-write
+  const std::string p = tmp("rows.csv");
+  std::ofstream(p) << csv;
+  std::string warned;
+  log::set_sink([&](log::Level, std::string_view m) { warned += std::string(m) + "\n"; });
+  const Recording whole = read_recording(p);
+  RecordingReader reader(p);
+  EXPECT_EQ(reader.n_dof(), whole.n_dof);
+  EXPECT_EQ(reader.present(), whole.present);
+  std::vector<RobotSample> rows;
+  std::vector<double> dts;
+  for (RobotSample s; reader.next(s);) {
+    if (!rows.empty()) dts.push_back(s.timestamp - rows.back().timestamp);
+    rows.push_back(s);
+  }
+  RecordingReader again(p);
+  again.quiet();
+  for (RobotSample s; again.next(s);) {
+  }
+  log::set_sink(nullptr);
+  ASSERT_EQ(rows.size(), whole.samples.size());
+  const RecordingTiming timing = recording_timing(p, dts);
+  EXPECT_EQ(timing.median_period, whole.median_period);
+  EXPECT_EQ(timing.gap_factor, whole.gap_factor);
+  int gaps = 0;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k].timestamp, whole.samples[k].timestamp);
+    EXPECT_EQ(rows[k].q, whole.samples[k].q);
+    EXPECT_EQ(rows[k].current, whole.samples[k].current);
+    const bool gap = rows[k].gap_before || (k > 0 && timing.is_gap(dts[k - 1]));
+    EXPECT_EQ(gap, whole.samples[k].gap_before) << k;
+    gaps += gap ? 1 : 0;
+  }
+  EXPECT_EQ(gaps, whole.gaps);
+  EXPECT_EQ(gaps, 3);  // two timestamp jumps and the stream_gap marker
+  // said twice: by read_recording and the first reader, not by the quiet second one
+  size_t said = 0;
+  for (size_t at = warned.find("the last row is cut off"); at != std::string::npos; at = warned.find("the last row is cut off", at + 1)) ++said;
+  EXPECT_EQ(said, 2u);
+  // a bad row is the reader's error, with file, line and column, when it reaches it
+  std::ofstream(tmp("rows_bad.csv")) << "timestamp,actual_q_0\n0.0,0.1\n0.002,abc\n";
+  RecordingReader bad(tmp("rows_bad.csv"));
+  RobotSample s;
+  EXPECT_TRUE(bad.next(s));
+  try {
+    bad.next(s);
+    ADD_FAILURE() << "a non-numeric cell was read";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("rows_bad.csv:3: field 'actual_q_0': expected a number, got 'abc'"));
+  }
 }
 
 // a recorder killed mid-write leaves its last row cut off, without a line end: that row is dropped

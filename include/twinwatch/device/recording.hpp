@@ -12,8 +12,10 @@
 /// Only timestamp and actual_q_* are required; absent groups are NaN and flagged absent in
 /// RobotSample::present. Foreign logs load through a ColumnMap (their column -> RTDE name, scale).
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "twinwatch/core/sample.hpp"
@@ -60,6 +62,56 @@ double jitter_gap_factor(double spread, double period, double floor);
 /// or a column map entry whose file column is not in the header. A UTF-8 byte-order mark before
 /// the header is skipped. Timestamp gaps are not errors: they are marked (gap_before) and counted.
 Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
+
+/// Reads a recording row by row, without holding its rows: what read_recording reads, with the same
+/// checks and messages (the header's when constructed, each row's in next()). An offline monitor
+/// of a day's recording holds one row at a time instead of the ~0.9 kB per sample of a Recording.
+/// Timestamp gaps are not marked here (they need the median step of the whole file:
+/// recording_timing); gap_before is the file's stream_gap column.
+class RecordingReader {
+ public:
+  /// Opens the file and reads its header; throws ParseError as read_recording does.
+  explicit RecordingReader(const std::string& path, const ColumnMap* map = nullptr);
+  int n_dof() const;
+  std::uint32_t present() const;  ///< fields present in the file (SampleField flags)
+  /// The next row into `s`; false at the end of the file (a last row cut off mid-write is dropped,
+  /// and said). Throws ParseError naming the file, line and column for a bad row.
+  bool next(RobotSample& s);
+  /// Reads on without saying a cut-off last row again (a second pass over a file already read)
+  void quiet() { say_cut_ = false; }
+
+ private:
+  struct Target {
+    int group;
+    int joint;
+  };
+  std::string path;
+  std::ifstream f;
+  std::vector<std::string> header;
+  std::vector<double> scale;
+  std::vector<Target> target;
+  int ts_col = -1, do_col = -1, mode_col = -1, safety_col = -1, gap_col = -1, payload_col = -1;
+  int cog_col[3] = {-1, -1, -1};  // payload_cog_0..2
+  int n = 0;
+  std::uint32_t present_ = 0;
+  int ln = 1;
+  long rows = 0;
+  double last_timestamp = 0.0;
+  bool say_cut_ = true;
+  std::string line_;
+  std::vector<std::string_view> cells_;
+};
+
+/// The timing of a recording's timestamp steps `dts` [s]: the median period, its jitter and the gap
+/// factor a step must exceed to count as lost samples (Recording's fields of the same names). A
+/// jittery clock is said once, naming `path`.
+struct RecordingTiming {
+  double median_period = 0.0;
+  double period_jitter = 0.0;
+  double gap_factor = 1.5;
+  bool is_gap(double dt) const { return dt > gap_factor * median_period; }
+};
+RecordingTiming recording_timing(const std::string& path, std::vector<double> dts);
 
 /// The stretches of a recording in which the controller drives the arm (RobotSample::driven: robot_mode
 /// RUNNING, safety_mode NORMAL or REDUCED, where the file has those columns), each as a recording of
