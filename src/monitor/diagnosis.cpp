@@ -79,6 +79,8 @@ constexpr size_t kNoiseReferenceMin = 50;
 constexpr double kMinExplainable = 0.25;
 // floor on a joint's reference noise variance [(N·m)^2] (a perfectly quiet reference)
 constexpr double kMinNoiseVar = 1e-8;
+// a joint's reference noise is taken as at least this share of its observer threshold (diagnose)
+constexpr double kNoiseFloorOfLevel = 0.1;
 
 double sq(double x) { return x * x; }
 
@@ -729,6 +731,16 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     const double count = static_cast<double>(reference->size());
     mean /= count;
     noise_var = (sq_sum / count - mean.cwiseAbs2()).cwiseMax(0.0);
+    // a joint at rest in the reference reads almost no noise, and its first motion in the window
+    // would stand out by hundreds of its "sigmas": its noise is taken as at least a tenth of its
+    // observer threshold (what a moving joint's healthy estimate stays within)
+    const DiagnosisSample& last = reference->back();
+    for (int j = 0; j < n; ++j) {
+      const double level = last.tau_ext_level.size() == n && std::isfinite(last.tau_ext_level[j]) ? last.tau_ext_level[j] : 0.0;
+      (*noise_var)[j] = std::max((*noise_var)[j], std::max(sq(kNoiseFloorOfLevel * level), kMinNoiseVar));
+    }
+    // (a reference that is not all numbers tells nothing about the noise)
+    if (!noise_var->allFinite()) noise_var.reset();
   }
   // shape: a collision is a pulse that has decayed by the end of the window; a payload change or
   // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint:
@@ -736,7 +748,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   // noise peaks outweighed a 0.7 N·m step on J4, whose window then read as J2's noise: a pulse)
   VectorJ scale = VectorJ::Ones(n);
   if (noise_var)
-    for (int j = 0; j < n; ++j) scale[j] = 1.0 / std::sqrt(std::max((*noise_var)[j], kMinNoiseVar));
+    for (int j = 0; j < n; ++j) scale[j] = 1.0 / std::sqrt((*noise_var)[j]);
   int dom = 0;
   double peak_abs = 0.0, peak_scaled = 0.0;
   for (const auto& s : window)
@@ -824,7 +836,9 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   // a resistance on a wrist joint near its threshold (0.3 N·m on J5) explained 15-25 % of a window
   // whose noise is mostly the big joints' and was Unknown (docs/validation.md, "A resistance read
   // as a contact")
-  if (out.front().explained * total / explainable < options.min_explained) {
+  // (a contact's share net of the noise its per-sample force absorbs: beyond_noise)
+  const Hypothesis& best = out.front();
+  if ((std::isfinite(best.beyond_noise) ? best.beyond_noise : best.explained) < options.min_explained) {
     Hypothesis u;
     u.fault = FaultClass::Unknown;
     u.joint = alert_joint;

@@ -105,8 +105,17 @@ TEST(Recording, TheRowReaderGivesWhatReadRecordingHolds) {
   for (RobotSample s; again.next(s);) {
   }
   log::set_sink(nullptr);
+  // what the file holds: rows 0-39 less 10, 11 and 25, the cut-off row dropped
+  ASSERT_EQ(rows.size(), 37u);
+  EXPECT_DOUBLE_EQ(rows[10].timestamp, 0.024);
+  EXPECT_DOUBLE_EQ(rows[10].q[0], 0.22);
+  EXPECT_DOUBLE_EQ(rows[36].current[0], 9.75);
+  EXPECT_TRUE(rows[27].gap_before);  // the stream_gap column (k = 30)
   ASSERT_EQ(rows.size(), whole.samples.size());
   const RecordingTiming timing = recording_timing(p, dts);
+  EXPECT_NEAR(timing.median_period, 0.002, 1e-12);
+  EXPECT_TRUE(timing.is_gap(0.006));    // two rows lost
+  EXPECT_FALSE(timing.is_gap(0.0025));  // a late stamp on a steady clock is still one step
   EXPECT_EQ(timing.median_period, whole.median_period);
   EXPECT_EQ(timing.gap_factor, whole.gap_factor);
   int gaps = 0;
@@ -120,6 +129,7 @@ TEST(Recording, TheRowReaderGivesWhatReadRecordingHolds) {
   }
   EXPECT_EQ(gaps, whole.gaps);
   EXPECT_EQ(gaps, 3);  // two timestamp jumps and the stream_gap marker
+  EXPECT_TRUE(whole.samples[10].gap_before && whole.samples[23].gap_before && whole.samples[27].gap_before);
   // said twice: by read_recording and the first reader, not by the quiet second one
   size_t said = 0;
   for (size_t at = warned.find("the last row is cut off"); at != std::string::npos; at = warned.find("the last row is cut off", at + 1)) ++said;

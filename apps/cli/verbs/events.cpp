@@ -115,7 +115,8 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
       "before this numbering (0-based) is read as such and renumbered the next time 'twinwatch monitor' writes to it.\n"
       "An event's confidence is how likely its class and place are right: for a contact, the share of the residual\n"
       "its fit explains times the named link's probability (the detail's '% likely'); for the other classes, the\n"
-      "share of the residual beyond the healthy noise before the alert that the diagnosis explains."));
+      "share of the residual beyond the healthy noise before the alert that the diagnosis explains (of the whole\n"
+      "residual where the twin has no momentum observer)."));
   sub->callback([o, cls] {
     o->fault_given = cls->count() > 0;
     run_events(*o);

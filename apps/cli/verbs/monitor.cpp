@@ -379,13 +379,27 @@ int run_monitor(const MonitorOptions& o) {
     // the rows the first pass read and checked (a file still being written has more by now)
     device::RecordingReader again(o.recording, map ? &*map : nullptr);
     again.quiet();
+    if (again.n_dof() != rec.n_dof || again.present() != rec.present)
+      throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): monitor a copy",
+                                           o.recording));
     RobotSample s;
     double previous = 0.0;
-    for (long k = 0; k < rows && again.next(s); ++k) {
-      if (k > 0 && timing.is_gap(s.timestamp - previous)) s.gap_before = true;
-      previous = s.timestamp;
-      push(s);
+    long k = 0;
+    try {
+      for (; k < rows && again.next(s); ++k) {
+        if (k > 0 && timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+        previous = s.timestamp;
+        push(s);
+      }
+    } catch (...) {
+      // (the file changed under the second pass: what was watched up to there is still reported)
+      mon.finish();
+      throw;
     }
+    if (k < rows)
+      log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
+                            "monitoring ends at t = {:.3f} s",
+                            o.recording, k, rows, previous));
   } else {
     std::unique_ptr<device::RecordingWriter> copy;
     if (!o.record_to.empty()) copy = std::make_unique<device::RecordingWriter>(o.record_to, 6, client->sample_fields());
@@ -633,8 +647,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "Each event has a class, the joint (or a contact's link), a size with its units, and a confidence: how\n"
       "likely class and place are right. For a contact, the share of the residual its fit explains times the\n"
       "named link's probability (the detail's '% likely'); for the other classes, the share of the residual\n"
-      "beyond the healthy noise before the alert that the diagnosis explains (docs/validation.md, 'What an\n"
-      "event's confidence means'). Joints and links are numbered from 1, as in the scenario labels."));
+      "beyond the healthy noise before the alert that the diagnosis explains (of the whole residual where the\n"
+      "twin has no momentum observer; docs/validation.md, 'What an event's confidence means'). Joints and\n"
+      "links are numbered from 1, as in the scenario labels."));
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
