@@ -122,3 +122,14 @@ add_test(NAME cli.rtde_record_v1_rate_is_said
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35944 --wait 10 --protocol 1 --frequency 125 --duration 0.5 -o ${PROJECT_BINARY_DIR}/v1_rec.csv 2>&1; kill \$! 2>/dev/null; wait")
 set_tests_properties(cli.rtde_record_v1_rate_is_said PROPERTIES TIMEOUT 30
   PASS_REGULAR_EXPRESSION "rtde: 125 Hz was asked for and the controller streams at 500 Hz \\(protocol v1 has no rate of its own")
+# --split-every: a new file each N s of controller time, each with the header, contiguous, none lost
+# (session 40: a recording left running wrote one file of 1.74 GB per robot hour)
+add_test(NAME cli.rtde_record_split_every
+  COMMAND sh -c "rm -rf ${PROJECT_BINARY_DIR}/split_rec && mkdir ${PROJECT_BINARY_DIR}/split_rec && $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35946 --speed 8 --duration 20 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35946 --wait 10 --duration 0.6 --split-every 1 --json -o ${PROJECT_BINARY_DIR}/split_rec/rec.csv > ${PROJECT_BINARY_DIR}/split_rec.json 2>/dev/null; kill \$! 2>/dev/null; wait; \
+cd ${PROJECT_BINARY_DIR}/split_rec && cat ../split_rec.json && echo files=\$(ls | wc -l) headers=\$(head -qn1 rec.*.csv | sort -u | wc -l) && \
+r=\$(cat rec.*.csv | grep -vc '^timestamp') && n=\$(grep -o '\"samples\":[0-9]*' ../split_rec.json | cut -d: -f2) && [ \"\$r\" = \"\$n\" ] && echo rows=samples=\$r && \
+awk -v a=\$(tail -n1 rec.000.csv | cut -d, -f1) -v b=\$(sed -n 2p rec.001.csv | cut -d, -f1) 'BEGIN { print (b - a > 0.0019 && b - a < 0.0021) ? \"contiguous\" : \"apart \" b - a }'; \
+$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --split-every 0.5 -o x.csv 2>&1; echo exit=\$?")
+set_tests_properties(cli.rtde_record_split_every PROPERTIES TIMEOUT 40
+  PASS_REGULAR_EXPRESSION "\"files\":\\[\"[^\"]*split_rec/rec\\.000\\.csv\",\"[^\"]*split_rec/rec\\.001\\.csv\",[^\n]*\nfiles=[3-9] headers=1\nrows=samples=[0-9]+\ncontiguous\n.*--split-every must be a finite time >= 1 s of controller time, got 0.5\nexit=2")
