@@ -47,26 +47,6 @@ constexpr double kGapFactor = 1.5;
 constexpr double kJitterFraction = 0.05;
 constexpr double kJitterSigmas = 5.0;
 
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  for (char c : line) {
-    if (c == ',') {
-      out.push_back(cell);
-      cell.clear();
-    } else if (c != '\r') {
-      cell += c;
-    }
-  }
-  out.push_back(cell);
-  for (auto& s : out) {
-    const auto b = s.find_first_not_of(" \t");
-    const auto e = s.find_last_not_of(" \t");
-    s = b == std::string::npos ? "" : s.substr(b, e - b + 1);
-  }
-  return out;
-}
-
 // a data row's cells, as views into `line` (no copies: a day's recording is tens of millions of
 // rows), each trimmed of spaces, tabs and a line end's '\r'
 void split_row(const std::string& line, std::vector<std::string_view>& out) {
@@ -83,6 +63,16 @@ void split_row(const std::string& line, std::vector<std::string_view>& out) {
     from = at + 1;
   }
   out.push_back(trimmed(all.substr(from)));
+}
+
+// a header's or a column map's cells, as strings: split_row's, with every '\r' dropped (one
+// inside a name too, as these lines always were read)
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string_view> views;
+  split_row(line, views);
+  std::vector<std::string> out(views.begin(), views.end());
+  for (std::string& cell : out) std::erase(cell, '\r');
+  return out;
 }
 
 // the joint a column name carries after its group prefix ("actual_q_12" -> 12): -1 unless the
@@ -305,7 +295,6 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
                                    payload_col >= 0 ? "payload and " : "no payload and ", cogs));
     if (payload_col >= 0) present_ |= kFieldPayload;
   }
-
 }
 
 int RecordingReader::n_dof() const { return n; }
@@ -385,26 +374,34 @@ bool RecordingReader::next(RobotSample& s) {
   return false;
 }
 
+RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const RobotSample&)>& each) {
+  RecordingScan scan;
+  std::vector<double> dts;
+  RobotSample s;
+  double previous = 0.0;
+  while (reader.next(s)) {
+    if (scan.rows++ > 0) dts.push_back(s.timestamp - previous);
+    previous = s.timestamp;
+    each(s);
+  }
+  if (scan.rows == 0) throw ParseError(reader.file(), 2, "", "no data rows after the header");
+  scan.timing = recording_timing(reader.file(), std::move(dts));
+  return scan;
+}
+
 Recording read_recording(const std::string& path, const ColumnMap* map) {
   RecordingReader reader(path, map);
   Recording rec;
   rec.path = path;
   rec.n_dof = reader.n_dof();
   rec.present = reader.present();
-  std::vector<double> dts;
-  RobotSample s;
-  while (reader.next(s)) {
-    if (!rec.samples.empty()) dts.push_back(s.timestamp - rec.samples.back().timestamp);
-    rec.samples.push_back(s);
-  }
-  if (rec.samples.empty()) throw ParseError(path, 2, "", "no data rows after the header");
-  // gaps: steps longer than the gap factor times the median period
-  const RecordingTiming timing = recording_timing(path, dts);
+  const RecordingTiming timing = scan_rows(reader, [&](const RobotSample& s) { rec.samples.push_back(s); }).timing;
   rec.median_period = timing.median_period;
   rec.period_jitter = timing.period_jitter;
   rec.gap_factor = timing.gap_factor;
-  for (size_t k = 0; k < dts.size(); ++k)
-    if (timing.is_gap(dts[k])) rec.samples[k + 1].gap_before = true;
+  // gaps: steps longer than the gap factor times the median period
+  for (size_t k = 1; k < rec.samples.size(); ++k)
+    if (timing.is_gap(rec.samples[k].timestamp - rec.samples[k - 1].timestamp)) rec.samples[k].gap_before = true;
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
   for (const RobotSample& x : rec.samples) rec.gaps += x.gap_before ? 1 : 0;
   return rec;
@@ -414,17 +411,16 @@ RecordingTiming recording_timing(const std::string& path, std::vector<double> dt
   RecordingTiming t;
   t.gap_factor = kGapFactor;
   if (dts.empty()) return t;
-  std::vector<double> sorted = dts;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-  t.median_period = sorted[sorted.size() / 2];
+  // (the steps are this function's own copy: ordered in place)
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  t.median_period = dts[dts.size() / 2];
   // a logger's own clock (a PC stamping what it receives) jitters: its steps spread around the
   // period, and a lost sample (a step of two periods) cannot be told from a late stamp. The
   // spread (1.4826 x the median absolute deviation of the steps) then raises the gap factor to
   // kJitterSigmas spreads above the period, and the file says so once
-  std::vector<double>& dev = sorted;
-  for (size_t k = 0; k < dts.size(); ++k) dev[k] = std::abs(dts[k] - t.median_period);
-  std::nth_element(dev.begin(), dev.begin() + static_cast<long>(dev.size() / 2), dev.end());
-  t.period_jitter = 1.4826 * dev[dev.size() / 2];
+  for (double& d : dts) d = std::abs(d - t.median_period);  // (the deviations, in the steps' place)
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  t.period_jitter = 1.4826 * dts[dts.size() / 2];
   if (t.median_period > 0.0 && t.period_jitter > kJitterFraction * t.median_period) {
     t.gap_factor = jitter_gap_factor(t.period_jitter, t.median_period, kGapFactor);
     log::warn(fmt::format("{}: the timestamps jitter (spread {:.2f} ms around the {:.2f} ms period; a logger's own clock?): a step "

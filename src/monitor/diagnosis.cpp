@@ -261,6 +261,31 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
   return h;
 }
 
+// The healthy residual's variance per joint, read on the reference before a window (its residual
+// computed like the window's: Monitor::fill_window); none from fewer than kNoiseReferenceMin samples
+// or a reference that is not all numbers. A joint at rest in the reference reads almost no noise,
+// and its first motion in the window would stand out by hundreds of its "sigmas": its noise is
+// taken as at least a tenth of its observer threshold (what a moving joint's healthy estimate
+// stays within)
+std::optional<VectorJ> reference_noise(const std::vector<DiagnosisSample>& reference, int n) {
+  if (reference.size() < kNoiseReferenceMin) return std::nullopt;
+  VectorJ mean = VectorJ::Zero(n), sq_sum = VectorJ::Zero(n);
+  for (const auto& s : reference) {
+    mean += s.r_tau;
+    sq_sum += s.r_tau.cwiseAbs2();
+  }
+  const double count = static_cast<double>(reference.size());
+  mean /= count;
+  VectorJ var = (sq_sum / count - mean.cwiseAbs2()).cwiseMax(0.0);
+  const DiagnosisSample& last = reference.back();
+  for (int j = 0; j < n; ++j) {
+    const double level = last.tau_ext_level.size() == n && std::isfinite(last.tau_ext_level[j]) ? last.tau_ext_level[j] : 0.0;
+    var[j] = std::max(var[j], std::max(sq(kNoiseFloorOfLevel * level), kMinNoiseVar));
+  }
+  if (!var.allFinite()) return std::nullopt;
+  return var;
+}
+
 // A contact's force is free at every sample (3 unknowns each), so the fit below explains part of
 // the noise too: the share of each sample's noise in the column space of J^T, trace(P_k N) with
 // P_k that projection and N the per-joint noise variance. `noise_share` returns that expected
@@ -719,36 +744,14 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
 
   // score every signature; parameters count as a small penalty
   std::vector<std::pair<double, Hypothesis>> scored;
-  // the healthy residual's variance per joint, read like the window's on the reference before it
-  // (the contact's per-sample fit absorbs that much of the window's noise, contact_hypothesis)
-  std::optional<VectorJ> noise_var;
-  if (reference && reference->size() >= kNoiseReferenceMin) {
-    VectorJ mean = VectorJ::Zero(n), sq_sum = VectorJ::Zero(n);
-    for (const auto& s : *reference) {
-      mean += s.r_tau;
-      sq_sum += s.r_tau.cwiseAbs2();
-    }
-    const double count = static_cast<double>(reference->size());
-    mean /= count;
-    noise_var = (sq_sum / count - mean.cwiseAbs2()).cwiseMax(0.0);
-    // a joint at rest in the reference reads almost no noise, and its first motion in the window
-    // would stand out by hundreds of its "sigmas": its noise is taken as at least a tenth of its
-    // observer threshold (what a moving joint's healthy estimate stays within)
-    const DiagnosisSample& last = reference->back();
-    for (int j = 0; j < n; ++j) {
-      const double level = last.tau_ext_level.size() == n && std::isfinite(last.tau_ext_level[j]) ? last.tau_ext_level[j] : 0.0;
-      (*noise_var)[j] = std::max((*noise_var)[j], std::max(sq(kNoiseFloorOfLevel * level), kMinNoiseVar));
-    }
-    // (a reference that is not all numbers tells nothing about the noise)
-    if (!noise_var->allFinite()) noise_var.reset();
-  }
+  // the healthy residual's variance per joint (the contact's per-sample fit absorbs that much of the
+  // window's noise, contact_hypothesis)
+  const std::optional<VectorJ> noise_var = reference ? reference_noise(*reference, n) : std::nullopt;
   // shape: a collision is a pulse that has decayed by the end of the window; a payload change or
   // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint:
   // the one that stands out most from its own noise where the reference gives it (in N·m, J2's
   // noise peaks outweighed a 0.7 N·m step on J4, whose window then read as J2's noise: a pulse)
-  VectorJ scale = VectorJ::Ones(n);
-  if (noise_var)
-    for (int j = 0; j < n; ++j) scale[j] = 1.0 / std::sqrt((*noise_var)[j]);
+  const VectorJ scale = noise_var ? VectorJ(noise_var->cwiseSqrt().cwiseInverse()) : VectorJ(VectorJ::Ones(n));
   int dom = 0;
   double peak_abs = 0.0, peak_scaled = 0.0;
   for (const auto& s : window)

@@ -1254,13 +1254,13 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   e.magnitude = h.magnitude;
   e.units = h.units;
   e.explained = h.explained;
-  // (a link posterior that is not a number says nothing about the link: no confidence in it)
   // the confidence: for a contact the explained share times the named link's posterior (session 39:
   // ECE 0.114 -> 0.046 on 587 contacts); for the other classes the share of the energy beyond the
   // window's noise the signature explains (session 40: a right J5 resistance near its threshold read
   // 16 % on the whole energy; over the collision, payload, wear, stop and resistance sets ECE
   // 0.41 -> 0.06 on 31 resistances, 0.16 -> 0.05 on 292 payload changes; on contacts the same
   // reading was overconfident, 0.083 -> 0.140: docs/validation.md, "A resistance read as a contact")
+  // (a link posterior that is not a number says nothing about the link: no confidence in it)
   const double fit = h.fault != FaultClass::Collision && std::isfinite(h.beyond_noise) ? h.beyond_noise : h.explained;
   e.confidence = std::clamp(fit * (std::isfinite(h.link_share) ? h.link_share : 0.0), 0.0, 1.0);
   e.detail = h.detail;
@@ -1797,8 +1797,9 @@ bool Monitor::payload_evidence(const Event& e) const {
   // 0.15 kg pick, MonitorLoop.APartTooLightToRaiseAnAlertIsTakenAfterItsGripperOutputChanged: read
   // as "contact on link 6" it was held as the part's step, read as the "+0.15 kg" it was it was
   // left open, unfollowed, and the part's check then skipped it as decided by its own looks)
-  const bool in_part_check = finds_parts() && std::isfinite(output_changed_at_) && e.t_start >= output_changed_at_ - kPayloadIoLookback &&
-                             e.t_start <= output_changed_at_ + kLongWindow;
+  // (no change yet: output_changed_at_ is -inf, which no alert begins within kLongWindow after)
+  const bool in_part_check =
+      finds_parts() && e.t_start >= output_changed_at_ - kPayloadIoLookback && e.t_start <= output_changed_at_ + kLongWindow;
   return output_changed_for(e) || in_part_check || e.explained >= kPayloadFollowExplained;
 }
 

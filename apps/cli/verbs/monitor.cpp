@@ -202,16 +202,9 @@ int run_monitor(const MonitorOptions& o) {
     rec.present = first.present();
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     cli::UnitsCheck units(o.recording, rec.n_dof, rec.present, twin.robot());
-    std::vector<double> dts;
-    RobotSample s;
-    double previous = 0.0;
-    while (first.next(s)) {
-      if (rows++ > 0) dts.push_back(s.timestamp - previous);
-      previous = s.timestamp;
-      units.add(s);
-    }
-    if (rows == 0) throw ParseError(o.recording, 2, "", "no data rows after the header");
-    timing = device::recording_timing(o.recording, std::move(dts));
+    const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) { units.add(s); });
+    rows = scan.rows;
+    timing = scan.timing;
     units.check_period(timing.median_period);
     units.finish();
     if (timing.median_period > 0) use_rate(timing.median_period, o.recording);

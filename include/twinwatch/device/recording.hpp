@@ -13,6 +13,7 @@
 /// RobotSample::present. Foreign logs load through a ColumnMap (their column -> RTDE name, scale).
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -74,6 +75,7 @@ class RecordingReader {
   explicit RecordingReader(const std::string& path, const ColumnMap* map = nullptr);
   int n_dof() const;
   std::uint32_t present() const;  ///< fields present in the file (SampleField flags)
+  const std::string& file() const { return path; }
   /// The next row into `s`; false at the end of the file (a last row cut off mid-write is dropped,
   /// and said). Throws ParseError naming the file, line and column for a bad row.
   bool next(RobotSample& s);
@@ -112,6 +114,15 @@ struct RecordingTiming {
   bool is_gap(double dt) const { return dt > gap_factor * median_period; }
 };
 RecordingTiming recording_timing(const std::string& path, std::vector<double> dts);
+
+/// Reads every row left in `reader`, handing each to `each`: how many there were, and the timing of
+/// their steps (recording_timing). Throws ParseError for a file without data rows, and what next()
+/// throws. read_recording holds the rows; the offline monitor's first pass only checks them.
+struct RecordingScan {
+  RecordingTiming timing;
+  long rows = 0;
+};
+RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const RobotSample&)>& each);
 
 /// The stretches of a recording in which the controller drives the arm (RobotSample::driven: robot_mode
 /// RUNNING, safety_mode NORMAL or REDUCED, where the file has those columns), each as a recording of
