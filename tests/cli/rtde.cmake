@@ -125,7 +125,7 @@ set_tests_properties(cli.rtde_record_v1_rate_is_said PROPERTIES TIMEOUT 30
 # --split-every: a new file each N s of controller time, each with the header, contiguous, none lost
 # (session 40: a recording left running wrote one file of 1.74 GB per robot hour)
 add_test(NAME cli.rtde_record_split_every
-  COMMAND sh -c "rm -rf ${PROJECT_BINARY_DIR}/split_rec && mkdir ${PROJECT_BINARY_DIR}/split_rec && $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35946 --speed 8 --duration 20 --wait-client 20 -q & \
+  COMMAND sh -c "rm -rf ${PROJECT_BINARY_DIR}/split_rec; mkdir ${PROJECT_BINARY_DIR}/split_rec; $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35946 --speed 8 --duration 20 --wait-client 20 -q & \
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35946 --wait 10 --duration 0.6 --split-every 1 --json -o ${PROJECT_BINARY_DIR}/split_rec/rec.csv > ${PROJECT_BINARY_DIR}/split_rec.json 2>/dev/null; kill \$! 2>/dev/null; wait; \
 cd ${PROJECT_BINARY_DIR}/split_rec && cat ../split_rec.json && echo files=\$(ls | wc -l) headers=\$(head -qn1 rec.*.csv | sort -u | wc -l) && \
 r=\$(cat rec.*.csv | grep -vc '^timestamp') && n=\$(grep -o '\"samples\":[0-9]*' ../split_rec.json | cut -d: -f2) && [ \"\$r\" = \"\$n\" ] && echo rows=samples=\$r && \
