@@ -72,6 +72,8 @@ constexpr double kPersistentFraction = 0.35;
 constexpr double kComplexityPenalty = 0.02;
 // velocity below which a joint is taken as at rest for the frozen-channel check [rad/s]
 constexpr double kMovingVelocity = 0.01;
+// a joint at rest for at least this share of a window is held by static friction through it
+constexpr double kRestThrough = 0.9;
 // reference samples needed to read the healthy residual's noise from (diagnose; 0.1 s at 500 Hz)
 constexpr size_t kNoiseReferenceMin = 50;
 // the share of a window's energy taken as explainable however much noise the reference reads (the
@@ -105,17 +107,16 @@ Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, d
     A(k, 1) = qd;
     b(k) = w[static_cast<size_t>(k)].r_tau[j];
   }
-  Eigen::VectorXd x;
   Hypothesis h;
   h.fault = FaultClass::Resistance;
   h.joint = j;
-  h.explained = ls_explained(A, b, total, x);
-  // resistance opposes motion: the extra drive torque has the sign of qd (c > 0)
-  if (x(0) < 0.0) h.explained *= 0.5;
-  // the size and split reported are those of friction that opposes motion, Coulomb and viscous
-  // both >= 0: over a short window at nearly constant speed the two columns are almost collinear,
-  // and the free fit can split 0.6 N·m into +4.8 N·m Coulomb and -16 N·m·s/rad viscous
+  // friction that opposes motion, Coulomb and viscous both >= 0, is what is scored and reported:
+  // over a short window at nearly constant speed the two columns are almost collinear, and the free
+  // fit can split 0.6 N·m into +4.8 N·m Coulomb and -16 N·m·s/rad viscous; and a torque that aids the
+  // motion is no resistance (a contact pushing J3 the way it starts to move, cut short by a
+  // protective stop, was "extra friction on J3 ≈ 0.00 N·m" that explained 42 % of the window)
   const Eigen::VectorXd xs = ident::nonnegative_ls(A, b);
+  h.explained = total > 0.0 ? std::clamp((b.squaredNorm() - (A * xs - b).squaredNorm()) / total, 0.0, 1.0) : 0.0;
   h.magnitude = (A * xs).cwiseAbs().mean();  // mean extra friction torque along the motion
   h.units = "N·m";
   h.detail = fmt::format("extra friction on J{} ≈ {:.2f} N·m (Coulomb {:.2f} N·m, viscous {:.2f} N·m·s/rad)", j + 1,
@@ -155,6 +156,14 @@ std::optional<Hypothesis> offset_raise(const std::vector<DiagnosisSample>& w, co
   size_t from = ref.size();
   while (from > 0 && dir * ref[from - 1].qd[j] > kMovingVelocity) --from;
   if (ref.size() - from < kOffsetMinReference) return std::nullopt;
+  // a gripper output changed over the reference or the window: the level is a part's step, which
+  // has a cause, not one that crept up (a 0.2 kg drop 0.14 s before its raise read as "extra
+  // resistance on J3 that stood before the raise", a persistent alert, and the drop was reported
+  // again as a payload change of its own when it rose after a contact)
+  for (size_t k = 1; k < ref.size(); ++k)
+    if (ref[k].digital_outputs != ref[k - 1].digital_outputs) return std::nullopt;
+  for (size_t k = 0; k < w.size(); ++k)
+    if (w[k].digital_outputs != (k > 0 ? w[k - 1] : ref.back()).digital_outputs) return std::nullopt;
   bool crossed = false;
   size_t k_cross = 0;
   for (size_t k = 0; k < w.size(); ++k)
@@ -219,8 +228,9 @@ Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, doubl
   return h;
 }
 
+// (weight: each joint's row weight in the score, diagnose's weight_j; the size is read unweighted)
 Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<DiagnosisSample>& w, double total,
-                              const Eigen::Vector3d& com, double min_speed = 0.0) {
+                              const Eigen::Vector3d& com, double min_speed = 0.0, const VectorJ* weight = nullptr) {
   const int n = m.n_dof();
   const int last = n - 1;
   model::DynamicsData d(m);
@@ -253,7 +263,12 @@ Hypothesis payload_hypothesis(const model::RobotModel& m, const std::vector<Diag
   Hypothesis h;
   h.fault = FaultClass::PayloadChange;
   // scored on r_tau like every hypothesis, sized on the drive torque (DiagnosisSample::r_drive)
-  h.explained = ls_explained(A, b, total, x);
+  if (weight) {
+    const Eigen::VectorXd row = weight->replicate(K, 1);
+    h.explained = ls_explained(row.asDiagonal() * A, row.cwiseProduct(b), total, x);
+  } else {
+    h.explained = ls_explained(A, b, total, x);
+  }
   ls_explained(A, b_drive, b_drive.squaredNorm(), x);
   h.magnitude = x(0);
   h.units = "kg";
@@ -294,15 +309,19 @@ std::optional<VectorJ> reference_noise(const std::vector<DiagnosisSample>& refer
 // just under its threshold, was a "contact" on its alert's last look: the per-sample force fitted
 // the other joints' noise (explained 0.93 against the resistance's 0.62; docs/validation.md,
 // "A resistance read as a contact").
+// (weight: each joint's row weight, diagnose's weight_j, for the fit and the score; noise_var is
+// then the weighted residual's)
 Hypothesis contact_hypothesis(const model::RobotModel& m, const std::vector<DiagnosisSample>& w, double total,
-                              const VectorJ* noise_var = nullptr, double* noise_share = nullptr) {
+                              const VectorJ* noise_var = nullptr, double* noise_share = nullptr, const VectorJ* weight = nullptr) {
   const int n = m.n_dof();
+  const VectorJ wgt = weight ? *weight : VectorJ(VectorJ::Ones(n));
   // contact link: the most distal joint that carries a real share of the residual
   VectorJ rms = VectorJ::Zero(n);
   double peak = 0.0;
   for (const auto& s : w) {
-    rms += s.r_tau.cwiseAbs2();
-    peak = std::max(peak, s.r_tau.norm());
+    const VectorJ r = s.r_tau.cwiseProduct(wgt);
+    rms += r.cwiseAbs2();
+    peak = std::max(peak, r.norm());
   }
   rms = (rms / static_cast<double>(w.size())).cwiseSqrt();
   int link = 0;
@@ -312,7 +331,8 @@ Hypothesis contact_hypothesis(const model::RobotModel& m, const std::vector<Diag
   Matrix6J J;
   double explained = 0.0, fmax = 0.0, absorbed = 0.0;
   for (const auto& s : w) {
-    if (s.r_tau.norm() < kPulseFraction * peak) continue;
+    const VectorJ r = s.r_tau.cwiseProduct(wgt);
+    if (r.norm() < kPulseFraction * peak) continue;
     model::forward_kinematics(m, d, s.q);
     // middle of the link: halfway to the next joint's origin (or the flange)
     const Eigen::Isometry3d& oMl = d.oMi[static_cast<size_t>(link)];
@@ -325,11 +345,11 @@ Hypothesis contact_hypothesis(const model::RobotModel& m, const std::vector<Diag
       p_local.x() += kContactOffset;
       model::point_jacobian(m, d, link, p_local, J);
     }
-    const Eigen::MatrixXd JT = J.topRows<3>().transpose();  // n x 3
+    const Eigen::MatrixXd JT = wgt.asDiagonal() * J.topRows<3>().transpose();  // n x 3
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(JT);
-    const Eigen::Vector3d F = qr.solve(Eigen::VectorXd(s.r_tau));
+    const Eigen::Vector3d F = qr.solve(Eigen::VectorXd(r));
     if (!F.allFinite()) continue;  // no lever arm on any joint: no information
-    explained += (s.r_tau.squaredNorm() - (JT * F - s.r_tau).squaredNorm());
+    explained += (r.squaredNorm() - (JT * F - r).squaredNorm());
     if (noise_var) {
       // diagonal of the projection onto J^T's columns: the first rank() columns of Q
       const Eigen::MatrixXd Q = qr.householderQ();
@@ -751,7 +771,19 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   // a resistance persists. Persistence = |mean of the last quarter| / peak on the dominant joint:
   // the one that stands out most from its own noise where the reference gives it (in N·m, J2's
   // noise peaks outweighed a 0.7 N·m step on J4, whose window then read as J2's noise: a pulse)
-  const VectorJ scale = noise_var ? VectorJ(noise_var->cwiseSqrt().cwiseInverse()) : VectorJ(VectorJ::Ones(n));
+  // among the joints that crossed their threshold in the window, where the observer's levels say
+  // (a J6 resistance's onset on the triangle read as a pulse on J4, at rest and under its threshold,
+  // whose floor noise made a 0.07 N·m blip stand out more than J6's 0.3 N·m step)
+  VectorJ scale = noise_var ? VectorJ(noise_var->cwiseSqrt().cwiseInverse()) : VectorJ(VectorJ::Ones(n));
+  if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {
+    std::vector<bool> crossed(static_cast<size_t>(n), false);
+    if (alert_joint >= 0 && alert_joint < n) crossed[static_cast<size_t>(alert_joint)] = true;
+    for (const auto& s : window)
+      for (int j = 0; j < n; ++j) crossed[static_cast<size_t>(j)] = crossed[static_cast<size_t>(j)] || std::abs(s.tau_ext[j]) > s.tau_ext_level[j];
+    if (std::find(crossed.begin(), crossed.end(), true) != crossed.end())
+      for (int j = 0; j < n; ++j)
+        if (!crossed[static_cast<size_t>(j)]) scale[j] = 0.0;
+  }
   int dom = 0;
   double peak_abs = 0.0, peak_scaled = 0.0;
   for (const auto& s : window)
@@ -763,8 +795,52 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   for (size_t k = q0; k < window.size(); ++k) tail += window[k].r_tau[dom];
   tail = std::abs(tail) / static_cast<double>(window.size() - q0);
   const bool pulse = alert_duration < options.collision_max_duration && tail < kPersistentFraction * peak_abs;
+  // A joint at rest through the window holds whatever torque its friction holds there, anywhere in
+  // [-F, F] (F the breakaway friction; uniform: sd F / sqrt 3), as isolate_contact weighs a resting
+  // joint's impulse. Its residual is scored (every signature, and the window's energy) shrunk to what
+  // it would be in units of that uncertainty times its noise at rest (a tenth of its observer level,
+  // as reference_noise's floor): weight sd / hypot(sd, F / sqrt 3); a moving joint keeps N·m. In N·m,
+  // the torque a pick-and-place's shoulder and elbow hold at each stop (0.4-0.7 N·m, under their
+  // thresholds) was most of a window's energy: a contact's per-sample force fitted it, and a wrist
+  // resistance that raised the alert explained a tenth of the window ("payload -0.03 kg" with five
+  // false alarms; docs/validation.md, session 41). Why not every joint in units of its noise: that
+  // scores a contact's pulse against the rest of its window (a followed part's misfit on J1-J3
+  // outweighed a 3.6 N·m contact on link 5, which was lost; a contact cut by a protective stop read as
+  // a payload change), where N·m reads the contact's torque
+  VectorJ weight_j = VectorJ::Ones(n);
+  bool weighted = false;
+  if (options.static_friction.size() == n && window.front().tau_ext_level.size() == n)
+    for (int j = 0; j < n; ++j) {
+      size_t rest = 0;
+      double level = 0.0;
+      for (const auto& smp : window) {
+        rest += std::abs(smp.qd[j]) <= kMovingVelocity ? 1 : 0;
+        level += smp.tau_ext_level[j];
+      }
+      const double held = options.static_friction[j] / std::sqrt(3.0);
+      const double sd = kNoiseFloorOfLevel * level / static_cast<double>(window.size());
+      if (static_cast<double>(rest) < kRestThrough * static_cast<double>(window.size()) || !(held > 0.0) || !(sd > 0.0)) continue;
+      weight_j[j] = sd / std::hypot(sd, held);
+      weighted = true;
+    }
+  const VectorJ w2 = weight_j.cwiseAbs2();
+  const double total_raw = total;
+  if (weighted) {
+    double tw = 0.0;
+    for (const auto& smp : window) tw += smp.r_tau.cwiseProduct(weight_j).squaredNorm();
+    if (tw > 0.0) total = tw;
+    else weighted = false;
+  }
+  // (the weighted residual's noise: 1 on a moving joint)
+  const std::optional<VectorJ> noise_w = noise_var ? std::optional<VectorJ>(noise_var->cwiseProduct(weighted ? w2 : VectorJ(VectorJ::Ones(n))))
+                                                   : std::nullopt;
+  const VectorJ* weight = weighted ? &weight_j : nullptr;
+  // a hypothesis on one joint, fitted unweighted (its size is the joint's), scored weighted
+  const auto reweigh = [&](Hypothesis& h, int j) {
+    if (weighted) h.explained = std::clamp(h.explained * total_raw * w2[j] / total, 0.0, 1.0);
+  };
   double contact_noise = 0.0;
-  Hypothesis contact = contact_hypothesis(model, window, total, noise_var ? &*noise_var : nullptr, &contact_noise);
+  Hypothesis contact = contact_hypothesis(model, window, total, noise_w ? &*noise_w : nullptr, &contact_noise, weight);
   if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {
     const ContactFit fit = reference ? isolate_contact(model, window, *reference, options.static_friction) : ContactFit{};
     if (fit.link == 0) {
@@ -797,31 +873,36 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     }
   }
   scored.emplace_back(std::max(0.0, contact.explained - contact_noise) - (pulse ? 0.0 : 0.3), contact);
-  Hypothesis payload = payload_hypothesis(model, window, total, options.payload_com);
+  Hypothesis payload = payload_hypothesis(model, window, total, options.payload_com, 0.0, weight);
   scored.emplace_back(payload.explained - kComplexityPenalty + (io_change ? 0.2 : 0.0) - (pulse ? 0.3 : 0.0), payload);
   for (int j = 0; j < n; ++j) {
-    Hypothesis r = resistance_hypothesis(window, j, total);
+    Hypothesis r = resistance_hypothesis(window, j, total_raw);
+    reweigh(r, j);
     scored.emplace_back(r.explained - 2 * kComplexityPenalty - (pulse ? 0.3 : 0.0), r);
-    Hypothesis o = offset_hypothesis(window, j, total);
+    Hypothesis o = offset_hypothesis(window, j, total_raw);
+    reweigh(o, j);
     // without a velocity reversal a constant offset and a Coulomb resistance look alike; extra
     // torque that works against the motion is the common case (UR3e §2.3), so the offset only
-    // wins when the joint reverses (or rests) inside the window
+    // wins when the joint reverses inside the window. A stop between moves one way does not tell
+    // them apart: the friction that stops the joint holds the controller's position error, and the
+    // residual stays (J4 resistances on the figure-eight and pick-and-place: 62-64 % of its level
+    // while moving, docs/validation.md). Nor does a joint at rest through the window: what it holds
+    // changes with its load (a part picked at a rest read as an offset on J4's channel)
     // (each must hold for at least a tenth of the window to count)
-    double pos = 0, neg = 0, rest = 0;
+    double pos = 0, neg = 0;
     for (const auto& smp : window) {
       if (smp.qd[j] > kMovingVelocity) ++pos;
       else if (smp.qd[j] < -kMovingVelocity) ++neg;
-      else ++rest;
     }
     const double tenth = 0.1 * static_cast<double>(window.size());
-    const double ambiguity = (pos > tenth && neg > tenth) || rest > tenth ? 0.0 : 0.25;
+    const double ambiguity = pos > tenth && neg > tenth ? 0.0 : 0.25;
     scored.emplace_back(o.explained - kComplexityPenalty - ambiguity - (pulse ? 0.3 : 0.0), o);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   // the energy a signature could explain: the window's less the noise expected in it (the
   // reference's variance per joint, as the contact's share above)
   double explainable = total;
-  if (noise_var) explainable = std::max(total - static_cast<double>(window.size()) * noise_var->sum(), kMinExplainable * total);
+  if (noise_w) explainable = std::max(total - static_cast<double>(window.size()) * noise_w->sum(), kMinExplainable * total);
   for (auto& [score, h] : scored) {
     if (noise_var) {
       const double net = h.explained - (h.fault == FaultClass::Collision ? contact_noise : 0.0);

@@ -792,5 +792,95 @@ TEST(ContactIsolation, ANoisePeakOnAWornJointsSteadyOffsetIsItsResistanceNotACon
   }
 }
 
+// The shape of an alert is read on a joint that crossed its threshold. A wrist resistance's onset on
+// the triangle (J6, 0.29 N·m over a 0.25 N·m threshold) was read as a pulse on J4: at rest, far
+// under its own threshold, with so little noise that a 0.1 N·m blip stood out more than J6's step;
+// the window was then a "contact on link 1", whose per-sample force fits the twin's misfit on J1 as
+// well (held-out set resistance_heldout, docs/validation.md). Without the rule 4 of these 6 windows
+// are Unknown (a contact at 55-59 %).
+TEST(ContactIsolation, AnAlertsShapeIsReadOnAJointThatCrossedItsThreshold) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  VectorJ q(6), qd(6);
+  q << 0.3, -1.2, 1.4, -1.6, 0.9, 0.2;
+  qd << 0.07, 0.08, -0.08, 0.0, 0.0, 0.07;
+  for (unsigned seed : {41u, 42u, 43u, 44u, 45u, 46u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    SyntheticWindow w;
+    const double dt = 0.002;
+    const VectorJ sd = (VectorJ(6) << 0.2, 0.2, 0.2, 0.004, 0.004, 0.1).finished();
+    for (int k = 0; k < 250 + 81; ++k) {
+      const double t = k * dt;
+      DiagnosisSample s;
+      s.t = t;
+      s.q = q + qd * t;
+      s.qd = qd;
+      s.qdd = VectorJ::Zero(6);
+      s.tau_ext = VectorJ::Zero(6);
+      for (int j = 0; j < 6; ++j) s.tau_ext[j] = sd[j] * std::max(-2.0, std::min(2.0, noise(rng)));
+      const int i = k - 250;  // window sample
+      s.tau_ext[0] += 0.15;  // the twin's misfit on a moving J1, under its threshold
+      if (i >= 0) s.tau_ext[5] += 0.3;  // J6's extra friction, there since just before the raise
+      if (i >= 5 && i < 15) s.tau_ext[3] -= 0.12 * std::sin(M_PI * (i - 5) / 10.0);  // J4's blip, under its threshold
+      s.r_tau = s.tau_ext;
+      s.current = VectorJ::Constant(6, t);
+      s.tau_ext_level = (VectorJ(6) << 1.0, 1.5, 1.0, 0.2, 0.2, 0.25).finished();
+      (i < 0 ? w.ref : w.win).push_back(s);
+    }
+    const Hypothesis h = diagnose(m, w.win, 0.12, 5, DiagnosisOptions{}, &w.ref).front();
+    EXPECT_EQ(h.fault, FaultClass::Resistance) << "seed " << seed << ": " << h.detail;
+    EXPECT_EQ(h.joint, 5) << h.detail;
+    EXPECT_NEAR(h.magnitude, 0.3, 0.06) << h.detail;
+  }
+}
+
+// A joint at rest through the window holds what its static friction holds. At each stop of a
+// pick-and-place the shoulder and elbow hold 0.4-0.7 N·m, under their thresholds; scored in N·m
+// that was most of the window, a contact's per-sample force fitted it, and a wrist resistance that
+// raised the alert explained a tenth of the window: "contact on link 1", or "payload -0.03 kg" with
+// five false alarms (held-out set resistance_heldout, docs/validation.md). With a resting joint's
+// residual shrunk to what it is in units of the friction it may hold (times its noise at rest) the
+// resistance is what the window shows. Unshrunk, each of these windows reads "payload +0.18 kg".
+TEST(ContactIsolation, WhatRestingJointsHoldDoesNotHideAWristResistance) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  VectorJ q(6), qd(6);
+  q << -0.6, -1.4, 1.3, -1.5, -1.3, 0.3;
+  qd << 0.9, 0.0, 0.0, 0.0, 0.45, -0.5;  // a transfer: J1 and the wrist move, the arm rests
+  DiagnosisOptions options;
+  options.static_friction = (VectorJ(6) << 0.9, 0.9, 0.7, 0.5, 0.5, 0.4).finished();
+  for (unsigned seed : {51u, 52u, 53u, 54u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    SyntheticWindow w;
+    const double dt = 0.002;
+    // the reference: the arm moving (its noise is the moving joints'), the window: at rest
+    const VectorJ sd = (VectorJ(6) << 0.15, 0.25, 0.2, 0.05, 0.05, 0.05).finished();
+    for (int k = 0; k < 250 + 83; ++k) {
+      const int i = k - 250;  // window sample
+      const double t = k * dt;
+      DiagnosisSample s;
+      s.t = t;
+      s.qd = qd;
+      if (i < 0) s.qd[1] = 0.3, s.qd[2] = -0.3;
+      s.q = q + s.qd * t;
+      s.qdd = VectorJ::Zero(6);
+      s.tau_ext = VectorJ::Zero(6);
+      for (int j = 0; j < 6; ++j) s.tau_ext[j] = (i >= 0 && (j == 1 || j == 2) ? 0.02 : sd[j]) * std::max(-2.5, std::min(2.5, noise(rng)));
+      if (i >= 0) {
+        s.tau_ext[1] -= 0.65, s.tau_ext[2] -= 0.5;  // held since the arm stopped
+        s.tau_ext[4] += 0.6;                         // J5's extra friction (it moves +)
+      }
+      s.r_tau = s.tau_ext;
+      s.current = VectorJ::Constant(6, t);
+      s.tau_ext_level = (VectorJ(6) << 1.2, 1.4, 1.2, 0.5, 0.45, 0.45).finished();
+      (i < 0 ? w.ref : w.win).push_back(s);
+    }
+    const Hypothesis h = diagnose(m, w.win, 0.12, 4, options, &w.ref).front();
+    EXPECT_EQ(h.fault, FaultClass::Resistance) << "seed " << seed << ": " << h.detail;
+    EXPECT_EQ(h.joint, 4) << h.detail;
+    EXPECT_NEAR(h.magnitude, 0.6, 0.1) << h.detail;
+  }
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

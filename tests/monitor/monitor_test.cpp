@@ -210,6 +210,32 @@ TEST_F(MonitorLoop, AResistanceNearItsThresholdIsNeitherAContactNorUnknown) {
   }
 }
 
+// A resistance on a joint that moves one way, stops, and moves on is no current offset: the stop
+// does not tell them apart (the friction that stops the joint holds the controller's position
+// error, and the residual stays at about 60 % of its level), only a reversal does. Read with the
+// rest as the tie-break, a J4 resistance on the figure-eight was "constant offset on the J4 current
+// channel" (held-out set resistance_heldout, docs/validation.md). A true offset is still one: the
+// library's stream_and_sensor_faults, cli tests.
+TEST_F(MonitorLoop, AResistanceOnAJointThatStopsBetweenMovesIsNoCurrentOffset) {
+  struct Case {
+    double onset, magnitude, end;
+    unsigned seed;
+  };
+  for (const Case c : {Case{10.54, 0.73, 13.11, 40127}, Case{10.6, 0.6, 14.0, 7}}) {
+    const std::string fault = fmt::format("  - {{type: resistance, joint: 4, onset: {}, ramp: 0.2, magnitude: {}, end: {}}}\n", c.onset,
+                                          c.magnitude, c.end);
+    const auto ev = monitor(run(scenario(c.seed, 18, 0.5, fault)), 0.5);
+    SCOPED_TRACE(fault + listing(ev));
+    ASSERT_FALSE(ev.empty());
+    for (const Event& e : ev) {
+      EXPECT_GE(e.t_start, c.onset);
+      EXPECT_EQ(e.fault, FaultClass::Resistance);
+      EXPECT_EQ(e.joint, 3);
+      EXPECT_NEAR(e.magnitude, c.magnitude, 0.5 * c.magnitude);
+    }
+  }
+}
+
 // audit of session 16: a persistent fault dips below its threshold at reversals; each raise within
 // the merge gap continues the same event, and that event used to be reported closed at every dip
 // (five records of one J5 resistance in the events file and the store). Its first, short-window
@@ -1867,7 +1893,7 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
   int first_look_at_last_link = 0;
   for (const bool loss : {true, false})
     for (const double mass : {0.2, 0.3})
-      for (unsigned seed = 921; seed <= 940; ++seed) {
+      for (unsigned seed = 921; seed <= 960; ++seed) {
         std::string f = part_change(loss, mass, 8.5);
         f += "  - {type: collision, link: 3, onset: 9.4, magnitude: 4, duration: 0.05, point: [-0.1, 0.0, 0.03], direction: [0.3, 1.0, -0.2]}\n";
         const auto rec = undeclared(run(scenario(seed, 13, loss ? mass : 0.0, f)));
@@ -1894,13 +1920,46 @@ TEST_F(MonitorLoop, AContactSoonAfterASmallPartReadAsAContactIsAnEventOfItsOwn) 
         EXPECT_NEAR(m.twin().payload().mass, loss ? 0.0 : mass, 0.05) << all;
       }
   // the path this is about: on this twin the first look reads some of the changes as a contact at
-  // the last link (link 6 named or also possible): 7 of these 80 runs. (Until session 39 the split
-  // also took the watched change where the samples before the rise alone read as a contact; since
-  // the contact is scored on what it explains beyond the noise it absorbs, and a window's shape is
-  // read on the joint that stands out from its own noise, they read as the payload change
-  // themselves, and the first look reads fewer parts as contacts: 13 of these 80 runs with the
-  // noise-aware score alone, 7 now)
-  EXPECT_GE(first_look_at_last_link, 3);
+  // the last link (link 6 named or also possible): 2 of these 160 runs (0.2 kg picks, seeds 931 and
+  // 948). (Until session 39 the split also took the watched change where the samples before the
+  // rise alone read as a contact; since the contact is scored on what it explains beyond the noise
+  // it absorbs, and a window's shape is read on the joint that stands out from its own noise, they
+  // read as the payload change themselves, and the first look reads fewer parts as contacts: 13 of
+  // the first 80 runs with the noise-aware score alone, 7 in session 40, 1 since the shape is read
+  // on a joint that crossed its threshold (session 41), hence 160 runs.)
+  // Seed 957 (a 0.2 kg drop) is the case of session 41: its first look read the drop's step, 0.14 s
+  // old at the raise, as "extra resistance on J3 that stood before the raise" (offset_raise), a
+  // persistent alert; the drop was then reported twice, the second time as a 4 ms payload change
+  // after the contact. A gripper output changed there, so that rule no longer applies.
+  EXPECT_GE(first_look_at_last_link, 1);
+}
+
+// A contact on the wrist 0.15 s after an undeclared 0.6 kg pick (the set grip_contact). Its window
+// holds the followed part's misfit on J1-J3 (0.3-0.5 N·m) around a 3.6 N·m pulse on J5: scored with
+// every joint in units of its noise (tried in session 41 against what resting joints hold), the
+// contact explained a fifth of it, the alert went back into the pick, and the contact was lost.
+// Scored in N·m (resting joints shrunk to what friction leaves of them), it is an event of its own,
+// on link 5.
+TEST_F(MonitorLoop, AContactRightAfterAPickIsNotLostInThePicksMisfit) {
+  for (unsigned seed : {29959u, 29960u, 29961u}) {
+    const std::string f =
+        "  - {type: payload_pick, onset: 8.3, io_bit: 0, mass: 0.6, com: [0, 0, 0.04]}\n"
+        "  - {type: collision, link: 5, onset: 8.450, magnitude: 4.0, duration: 0.05, point: [0.021, -0.005, 0.018], "
+        "direction: [0.953, 0.729, -0.318]}\n";
+    const auto rec = undeclared(run(scenario(seed, 12, 0.0, f)));
+    Monitor m(carrying(0.0), *config);
+    for (const auto& s : rec.samples) m.push(s);
+    m.finish();
+    const auto& ev = m.events();
+    const std::string all = fmt::format("seed {}:{}", seed, listing(ev));
+    const auto contact = std::find_if(ev.begin(), ev.end(), [](const Event& e) { return e.fault == FaultClass::Collision && e.t_start > 8.44; });
+    ASSERT_NE(contact, ev.end()) << all;
+    EXPECT_LT(contact->t_detected - 8.45, 0.02) << all;
+    EXPECT_EQ(contact->link, 4) << all;
+    const auto pick = std::find_if(ev.begin(), ev.end(), [](const Event& e) { return e.fault == FaultClass::PayloadChange; });
+    ASSERT_NE(pick, ev.end()) << all;
+    EXPECT_NEAR(pick->magnitude, 0.6, 0.15) << all;
+  }
 }
 
 // A small part's step near the thresholds dips below them within a pulse's time (0.1 s for a 0.25 kg
