@@ -546,3 +546,37 @@ void RecordingWriter::close() {
 }
 
 }  // namespace twinwatch::device
+
+namespace twinwatch::device {
+
+std::string split_recording_name(const std::string& path, long k) {
+  const std::filesystem::path p(path);
+  return (p.parent_path() / fmt::format("{}.{:03d}{}", p.stem().string(), k, p.extension().string())).string();
+}
+
+SplitRecordingWriter::SplitRecordingWriter(const std::string& path, int n_dof, std::uint32_t fields, double every_s)
+    : path_(path), n_(n_dof), fields_(fields), every_(every_s), file_start_(std::numeric_limits<double>::quiet_NaN()) {
+  if (every_s != 0.0 && !(every_s >= 1.0 && std::isfinite(every_s)))
+    throw InvalidArgument(fmt::format("a recording's split interval must be 0 (one file) or a finite time >= 1 s of controller time, got {}",
+                                      every_s));
+  files_.push_back(every_ > 0.0 ? split_recording_name(path_, 0) : path_);
+  writer_ = std::make_unique<RecordingWriter>(files_.back(), n_, fields_);
+}
+
+void SplitRecordingWriter::write(const RobotSample& s) {
+  if (every_ > 0.0) {
+    if (std::isnan(file_start_)) file_start_ = s.timestamp;
+    if (s.timestamp - file_start_ >= every_) {
+      writer_->close();
+      files_.push_back(split_recording_name(path_, static_cast<long>(files_.size())));
+      writer_ = std::make_unique<RecordingWriter>(files_.back(), n_, fields_);
+      file_start_ = s.timestamp;
+    }
+  }
+  writer_->write(s);
+  ++rows_;
+}
+
+void SplitRecordingWriter::close() { writer_->close(); }
+
+}  // namespace twinwatch::device

@@ -133,3 +133,14 @@ awk -v a=\$(tail -n1 rec.000.csv | cut -d, -f1) -v b=\$(sed -n 2p rec.001.csv | 
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --split-every 0.5 -o x.csv 2>&1; echo exit=\$?")
 set_tests_properties(cli.rtde_record_split_every PROPERTIES TIMEOUT 40
   PASS_REGULAR_EXPRESSION "\"files\":\\[\"[^\"]*split_rec/rec\\.000\\.csv\",\"[^\"]*split_rec/rec\\.001\\.csv\",[^\n]*\nfiles=[3-9] headers=1\nrows=samples=[0-9]+\ncontiguous\n.*--split-every must be a finite time >= 1 s of controller time, got 0.5\nexit=2")
+# monitor --record --split-every: the live monitor's copy of the stream split as record's is, every
+# sample once (session 41; before, --record wrote one file whatever the run's length)
+add_test(NAME cli.rtde_monitor_record_split_every
+  COMMAND sh -c "rm -rf ${PROJECT_BINARY_DIR}/msplit; mkdir ${PROJECT_BINARY_DIR}/msplit; $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35947 --speed 8 --duration 20 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35947 --wait 10 --duration 0.6 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --record ${PROJECT_BINARY_DIR}/msplit/rec.csv --split-every 1 > ${PROJECT_BINARY_DIR}/msplit.out 2>/dev/null; kill \$! 2>/dev/null; wait; \
+cd ${PROJECT_BINARY_DIR}/msplit && grep -E '^(recorded|stream:)' ../msplit.out && echo files=\$(ls | wc -l) headers=\$(head -qn1 rec.*.csv | sort -u | wc -l) && \
+r=\$(cat rec.*.csv | grep -vc '^timestamp') && n=\$(grep -o '^recorded [0-9]*' ../msplit.out | cut -d' ' -f2) && [ \"\$r\" = \"\$n\" ] && echo rows=recorded=\$r; \
+$<TARGET_FILE:twinwatch> monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --rtde 127.0.0.1:1 --split-every 5 --db '' 2>&1; echo exit=\$?; \
+$<TARGET_FILE:twinwatch> monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --rtde 127.0.0.1:1 --record x.csv --split-every 0.5 --db '' 2>&1; echo exit=\$?")
+set_tests_properties(cli.rtde_monitor_record_split_every PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "recorded [0-9]+ samples to [0-9]+ files, [^\n]*msplit/rec\\.000\\.csv \\.\\.\\. [^\n]*msplit/rec\\.00[2-9]\\.csv \\(a new one every 1 s\\)\nstream: [0-9]+ received, 0 lost[^\n]*\nfiles=[3-9] headers=1\nrows=recorded=[0-9]+\n[^\n]*--split-every applies only with --record\nexit=2\n[^\n]*--split-every must be a finite time >= 1 s of controller time, got 0.5\nexit=2")

@@ -54,6 +54,7 @@ struct MonitorOptions {
   std::string column_map;  // foreign logs: CSV column -> RTDE name, scale
   std::string trace;  // per-sample residuals and thresholds as CSV
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
+  double split_every = 0.0;      // [s of controller time] --record: a new file this often (0: one file)
   double duration = 0.0, wait = 0.0;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   double cycle_period = 0.0;
@@ -177,11 +178,15 @@ int run_monitor(const MonitorOptions& o) {
   };
   // every output path is checked before the robot is connected (or the recording read): a typo
   // found after a long --wait or the first samples of a live run costs the run
-  for (const std::string* out : {&o.events_path, &o.trace, &o.record_to, &o.db_path})
+  if (o.split_every != 0.0 && !(o.split_every >= 1.0 && std::isfinite(o.split_every)))
+    throw InvalidArgument(fmt::format("--split-every must be a finite time >= 1 s of controller time, got {}", o.split_every));
+  // (with --split-every, --record's first file is rec.000.csv)
+  const std::string record_first = o.record_to.empty() || o.split_every == 0.0 ? o.record_to : device::split_recording_name(o.record_to, 0);
+  for (const std::string* out : {&o.events_path, &o.trace, &record_first, &o.db_path})
     if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
   // nor one output another's file: events over the trace's rows, a store that is a JSON-lines file
   const std::pair<const char*, const std::string*> outs[] = {
-      {"--events", &o.events_path}, {"--trace", &o.trace}, {"--record", &o.record_to}, {"--db", &o.db_path}};
+      {"--events", &o.events_path}, {"--trace", &o.trace}, {"--record", &record_first}, {"--db", &o.db_path}};
   for (size_t a = 0; a < std::size(outs); ++a)
     for (size_t b = a + 1; b < std::size(outs); ++b)
       if (!outs[a].second->empty() && !outs[b].second->empty() && same_file(*outs[a].second, *outs[b].second))
@@ -394,8 +399,8 @@ int run_monitor(const MonitorOptions& o) {
                             "monitoring ends at t = {:.3f} s",
                             o.recording, k, rows, previous));
   } else {
-    std::unique_ptr<device::RecordingWriter> copy;
-    if (!o.record_to.empty()) copy = std::make_unique<device::RecordingWriter>(o.record_to, 6, client->sample_fields());
+    std::unique_ptr<device::SplitRecordingWriter> copy;
+    if (!o.record_to.empty()) copy = std::make_unique<device::SplitRecordingWriter>(o.record_to, 6, client->sample_fields(), o.split_every);
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.duration > 0 ? o.duration : 1e9);
     RobotSample s;
     auto last_sample = std::chrono::steady_clock::now();
@@ -428,7 +433,14 @@ int run_monitor(const MonitorOptions& o) {
     const bool dropped = o.no_reconnect && client->finished() && !cli::interrupted();
     if (dropped && !o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
     lost_at_end = silent_gap || dropped;
-    if (copy) copy->close();
+    if (copy) {
+      copy->close();
+      const auto& files = copy->files();
+      if (!o.quiet && !o.json)
+        fmt::print("recorded {} samples to {}\n", copy->rows(),
+                   files.size() == 1 ? files.front()
+                                     : fmt::format("{} files, {} ... {} (a new one every {:g} s)", files.size(), files.front(), files.back(), o.split_every));
+    }
     const auto st = client->stats();
     if (!o.quiet && !o.json)
       fmt::print("stream: {} received, {} lost in {} gaps, {} reconnects, {} protocol errors, {} resent, {} dropped by this monitor{}\n",
@@ -654,6 +666,9 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
                 "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
                 "reconnecting with back-off");
   auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
+  auto* split_every = sub->add_option("--split-every", o->split_every,
+                                      "With --record: start a new file each SECONDS of controller time (>= 1): rec.csv -> rec.000.csv, "
+                                      "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
@@ -688,6 +703,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
   sub->callback([=] {
     twinwatch::cli::refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
+    twinwatch::cli::refuse_unless({split_every}, !o->record_to.empty(), "with --record");
     twinwatch::cli::set_exit_code(run_monitor(*o));
   });
 }};

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -65,12 +64,6 @@ struct RecordOptions {
   bool outputs_given = false;  // --outputs '' (an unset variable) recorded the default list unsaid
 };
 
-// the k-th file of a recording split with --split-every: rec.csv -> rec.000.csv, rec.001.csv, ...
-std::string split_name(const std::string& output, long k) {
-  const std::filesystem::path p(output);
-  return (p.parent_path() / fmt::format("{}.{:03d}{}", p.stem().string(), k, p.extension().string())).string();
-}
-
 int run_record(const RecordOptions& o) {
   if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing on success": no info lines either
   // (an infinite time would overflow the clock arithmetic below)
@@ -110,7 +103,7 @@ int run_record(const RecordOptions& o) {
     if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
       log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
   // before connecting: a bad path must not cost a --wait or a connection
-  require_writable(split ? split_name(o.output, 0) : o.output);
+  require_writable(split ? device::split_recording_name(o.output, 0) : o.output);
   install_interrupt_handler();
   const auto client_ptr = cli::open_rtde(so);
   rtde::Client& client = *client_ptr;
@@ -118,24 +111,9 @@ int run_record(const RecordOptions& o) {
   if (!o.quiet && !o.json)
     fmt::print(stderr, "recording {}:{} ({}) for {:g} s -> {}\n", co.host, co.port, cli::describe(client), o.duration, o.output);
 
-  // one file, or with --split-every a new one each time that much controller time has gone by: a
-  // recording left running writes 1.74 GB per robot hour at 500 Hz, which one file makes hard to
-  // copy, open or monitor in part. Each file has the header and reads on its own.
-  std::vector<std::string> files{split ? split_name(o.output, 0) : o.output};
-  auto writer = std::make_unique<device::RecordingWriter>(files.back(), 6, client.sample_fields());
-  long rows = 0;
-  double file_start = std::numeric_limits<double>::quiet_NaN();
-  const auto write = [&](const RobotSample& x) {
-    if (split && std::isnan(file_start)) file_start = x.timestamp;
-    if (split && x.timestamp - file_start >= o.split_every) {
-      writer->close();
-      files.push_back(split_name(o.output, static_cast<long>(files.size())));
-      writer = std::make_unique<device::RecordingWriter>(files.back(), 6, client.sample_fields());
-      file_start = x.timestamp;
-    }
-    writer->write(x);
-    ++rows;
-  };
+  // one file, or with --split-every a new one each time that much controller time has gone by
+  device::SplitRecordingWriter writer(o.output, 6, client.sample_fields(), o.split_every);
+  const auto write = [&](const RobotSample& x) { writer.write(x); };
   const bool bar = !o.quiet && !o.json && isatty(STDERR_FILENO);
   const auto t0 = Clock::now();
   const auto end = t0 + std::chrono::duration<double>(o.duration);
@@ -156,7 +134,7 @@ int run_record(const RecordOptions& o) {
       const rtde::ClientStats st = client.stats();
       const double el = std::chrono::duration<double>(Clock::now() - t0).count();
       std::fprintf(stderr, "\r  %5.1f / %g s  %ld samples  lost %ld in %ld gaps  reconnects %ld%s   ", el, o.duration,
-                   rows, st.lost, st.gaps, st.reconnects, st.connected ? "" : "  (disconnected)");
+                   writer.rows(), st.lost, st.gaps, st.reconnects, st.connected ? "" : "  (disconnected)");
       next_status += std::chrono::milliseconds(250);
     }
   }
@@ -169,7 +147,9 @@ int run_record(const RecordOptions& o) {
     t_last = s.timestamp;
     last_sample = stopped;
   }
-  writer->close();
+  writer.close();
+  const long rows = writer.rows();
+  const std::vector<std::string>& files = writer.files();
   // (with --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked
   // for; an operator's stop ends the recording where it was asked to, and an outage before it is
   // still said)
