@@ -559,24 +559,39 @@ SplitRecordingWriter::SplitRecordingWriter(const std::string& path, int n_dof, s
   if (every_s != 0.0 && !(every_s >= 1.0 && std::isfinite(every_s)))
     throw InvalidArgument(fmt::format("a recording's split interval must be 0 (one file) or a finite time >= 1 s of controller time, got {}",
                                       every_s));
-  files_.push_back(every_ > 0.0 ? split_recording_name(path_, 0) : path_);
-  writer_ = std::make_unique<RecordingWriter>(files_.back(), n_, fields_);
+  const std::string first = every_ > 0.0 ? split_recording_name(path_, 0) : path_;
+  writer_ = std::make_unique<RecordingWriter>(first, n_, fields_);
+  files_.push_back(first);
+  // parts of an earlier, longer run are overwritten only as far as this run reaches
+  if (every_ > 0.0 && std::filesystem::exists(split_recording_name(path_, 1)))
+    log::warn(fmt::format("{} exists (an earlier run?): this run's parts replace it and the ones after it only as far as it goes; "
+                          "what is left belongs to the earlier run",
+                          split_recording_name(path_, 1)));
 }
 
 void SplitRecordingWriter::write(const RobotSample& s) {
+  if (!writer_) throw std::logic_error(fmt::format("{}: written after it was closed", files_.back()));
   if (every_ > 0.0) {
     if (std::isnan(file_start_)) file_start_ = s.timestamp;
-    if (s.timestamp - file_start_ >= every_) {
+    // (a controller clock that went back, a restart during a reconnection, starts a file too: a
+    // file's timestamps only increase)
+    if (s.timestamp - file_start_ >= every_ || s.timestamp <= last_t_) {
       writer_->close();
-      files_.push_back(split_recording_name(path_, static_cast<long>(files_.size())));
-      writer_ = std::make_unique<RecordingWriter>(files_.back(), n_, fields_);
+      const std::string next = split_recording_name(path_, static_cast<long>(files_.size()));
+      writer_ = std::make_unique<RecordingWriter>(next, n_, fields_);
+      files_.push_back(next);
       file_start_ = s.timestamp;
     }
+    last_t_ = s.timestamp;
   }
   writer_->write(s);
   ++rows_;
 }
 
-void SplitRecordingWriter::close() { writer_->close(); }
+void SplitRecordingWriter::close() {
+  if (!writer_) return;
+  std::unique_ptr<RecordingWriter> w = std::move(writer_);
+  w->close();
+}
 
 }  // namespace twinwatch::device

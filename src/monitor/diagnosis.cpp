@@ -775,7 +775,8 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   // (a J6 resistance's onset on the triangle read as a pulse on J4, at rest and under its threshold,
   // whose floor noise made a 0.07 N·m blip stand out more than J6's 0.3 N·m step)
   VectorJ scale = noise_var ? VectorJ(noise_var->cwiseSqrt().cwiseInverse()) : VectorJ(VectorJ::Ones(n));
-  if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {
+  // (levels all zero: no observer, the rule does not apply)
+  if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n && window.front().tau_ext_level.maxCoeff() > 0.0) {
     std::vector<bool> crossed(static_cast<size_t>(n), false);
     if (alert_joint >= 0 && alert_joint < n) crossed[static_cast<size_t>(alert_joint)] = true;
     for (const auto& s : window)
@@ -817,9 +818,16 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
         rest += std::abs(smp.qd[j]) <= kMovingVelocity ? 1 : 0;
         level += smp.tau_ext_level[j];
       }
+      if (static_cast<double>(rest) < kRestThrough * static_cast<double>(window.size())) continue;
       const double held = options.static_friction[j] / std::sqrt(3.0);
       const double sd = kNoiseFloorOfLevel * level / static_cast<double>(window.size());
-      if (static_cast<double>(rest) < kRestThrough * static_cast<double>(window.size()) || !(held > 0.0) || !(sd > 0.0)) continue;
+      // a resting joint whose friction or level is unknown (0: a sequential twin, no observer)
+      // cannot be weighed against the others: the window is scored in N·m, as before
+      if (!(held > 0.0 && sd > 0.0 && std::isfinite(held) && std::isfinite(sd))) {
+        weight_j = VectorJ::Ones(n);
+        weighted = false;
+        break;
+      }
       weight_j[j] = sd / std::hypot(sd, held);
       weighted = true;
     }
@@ -831,7 +839,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     if (tw > 0.0) total = tw;
     else weighted = false;
   }
-  // (the weighted residual's noise: 1 on a moving joint)
+  // (the weighted residual's noise variance: the reference's on a moving joint, whose weight is 1)
   const std::optional<VectorJ> noise_w = noise_var ? std::optional<VectorJ>(noise_var->cwiseProduct(weighted ? w2 : VectorJ(VectorJ::Ones(n))))
                                                    : std::nullopt;
   const VectorJ* weight = weighted ? &weight_j : nullptr;

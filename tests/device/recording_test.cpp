@@ -80,6 +80,43 @@ TEST(Recording, MarksTimestampGapsWithoutHidingThem) {
 // the offline monitor reads a recording twice, row by row, without holding it (session 40): the
 // reader gives read_recording's rows one at a time, with the same values and the same errors, and
 // recording_timing marks the gaps read_recording marks; a second pass says a cut-off row no more
+// A split recording holds every sample once, in order, each part readable on its own: a new part
+// each `every` s of controller time, and one where the controller's clock went back (a restart
+// during a reconnection: one file's timestamps would no longer increase and no reader takes it)
+TEST(Recording, ASplitRecordingHoldsEverySampleOnceInPartsThatReadOnTheirOwn) {
+  const std::string p = tmp("split.csv");
+  for (long k = 0; k < 6; ++k) std::remove(split_recording_name(p, k).c_str());
+  SplitRecordingWriter w(p, 1, 0, 1.0);
+  std::vector<double> written;
+  auto put = [&](double t) {
+    RobotSample s;
+    s.timestamp = t;
+    s.q = VectorJ::Constant(1, t);
+    s.qd = VectorJ::Zero(1);
+    w.write(s);
+    written.push_back(t);
+  };
+  for (int k = 0; k < 1250; ++k) put(0.002 * k);  // 2.5 s: parts 000, 001, 002
+  for (int k = 0; k < 100; ++k) put(0.5 + 0.002 * k);  // the clock restarted: part 003
+  w.close();
+  w.close();  // again: nothing
+  ASSERT_EQ(w.files().size(), 4u);
+  EXPECT_EQ(w.files()[0], split_recording_name(p, 0));
+  EXPECT_EQ(w.rows(), 1350);
+  std::vector<double> read;
+  for (const auto& f : w.files()) {
+    const Recording r = read_recording(f);
+    for (const auto& s : r.samples) read.push_back(s.timestamp);
+  }
+  EXPECT_EQ(read, written);
+  RobotSample s;
+  s.timestamp = 9.0;
+  s.q = s.qd = VectorJ::Zero(1);
+  EXPECT_THROW(w.write(s), std::logic_error);
+  EXPECT_THROW(SplitRecordingWriter(p, 1, 0, 0.5), InvalidArgument);
+  EXPECT_EQ(split_recording_name("a/rec.csv", 12), "a/rec.012.csv");
+}
+
 TEST(Recording, TheRowReaderGivesWhatReadRecordingHolds) {
   std::string csv = "timestamp,actual_q_0,actual_qd_0,actual_current_0,stream_gap\n";
   for (int k = 0; k < 40; ++k)

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -174,9 +175,12 @@ class SplitRecordingWriter {
   /// every_s: 0 (one file at `path`) or a finite time >= 1 s (InvalidArgument otherwise). The first
   /// file is created here (PathError if it cannot be).
   SplitRecordingWriter(const std::string& path, int n_dof, std::uint32_t fields, double every_s = 0.0);
-  /// Throws std::runtime_error naming the file as soon as a write fails (disk full).
+  /// Throws std::runtime_error naming the file as soon as a write fails (disk full), and
+  /// std::logic_error after close(). A sample whose timestamp is not after the previous one (the
+  /// controller restarted) starts a new file when splitting.
   void write(const RobotSample& s);
-  /// Flushes and closes the current file; throws std::runtime_error naming it on an I/O error.
+  /// Flushes and closes the current file (once; again is a no-op); throws std::runtime_error naming
+  /// it on an I/O error.
   void close();
   /// The files written so far, in order (the one being written last).
   const std::vector<std::string>& files() const { return files_; }
@@ -189,6 +193,7 @@ class SplitRecordingWriter {
   std::uint32_t fields_;
   double every_;
   double file_start_;
+  double last_t_ = -std::numeric_limits<double>::infinity();
   std::vector<std::string> files_;
   std::unique_ptr<RecordingWriter> writer_;
   long rows_ = 0;
