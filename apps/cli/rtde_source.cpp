@@ -6,6 +6,8 @@
 #include <chrono>
 #include <thread>
 
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/device/recording.hpp"
 #include "verb_registry.hpp"
 
 namespace twinwatch::cli {
@@ -46,6 +48,11 @@ std::string describe(const rtde::Client& c) {
   const rtde::ClientStats st = c.stats();
   return fmt::format("controller {}.{}.{}.{}, RTDE v{}, {} outputs at {:g} Hz", st.controller.major, st.controller.minor,
                      st.controller.bugfix, st.controller.build, st.protocol, c.recipe().names.size(), st.frequency);
+}
+
+void check_split_every(double seconds) {
+  if (!device::SplitRecordingWriter::valid_interval(seconds))
+    throw InvalidArgument(fmt::format("--split-every must be a finite time >= 1 s of controller time, got {}", seconds));
 }
 
 }  // namespace twinwatch::cli

@@ -41,6 +41,10 @@ EndSilence end_silence(SteadyTime stopped, SteadyTime end, SteadyTime last_sampl
 /// A started client. Throws (RecipeError, connection errors) with the controller's address.
 std::unique_ptr<device::rtde::Client> open_rtde(const RtdeSourceOptions& o);
 
+/// --split-every (record, monitor --record): 0 or a finite time >= 1 s of controller time, else
+/// InvalidArgument naming the option (checked before connecting)
+void check_split_every(double seconds);
+
 /// "controller 5.23.0.0, RTDE v2, 12 outputs at 500 Hz"
 std::string describe(const device::rtde::Client& c);
 

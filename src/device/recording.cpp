@@ -554,12 +554,16 @@ std::string split_recording_name(const std::string& path, long k) {
   return (p.parent_path() / fmt::format("{}.{:03d}{}", p.stem().string(), k, p.extension().string())).string();
 }
 
+std::string SplitRecordingWriter::first_file(const std::string& path, double every_s) {
+  return every_s > 0.0 ? split_recording_name(path, 0) : path;
+}
+
 SplitRecordingWriter::SplitRecordingWriter(const std::string& path, int n_dof, std::uint32_t fields, double every_s)
     : path_(path), n_(n_dof), fields_(fields), every_(every_s), file_start_(std::numeric_limits<double>::quiet_NaN()) {
-  if (every_s != 0.0 && !(every_s >= 1.0 && std::isfinite(every_s)))
+  if (!valid_interval(every_s))
     throw InvalidArgument(fmt::format("a recording's split interval must be 0 (one file) or a finite time >= 1 s of controller time, got {}",
                                       every_s));
-  const std::string first = every_ > 0.0 ? split_recording_name(path_, 0) : path_;
+  const std::string first = first_file(path_, every_);
   writer_ = std::make_unique<RecordingWriter>(first, n_, fields_);
   files_.push_back(first);
   // parts of an earlier, longer run are overwritten only as far as this run reaches

@@ -86,6 +86,13 @@ constexpr double kNoiseFloorOfLevel = 0.1;
 
 double sq(double x) { return x * x; }
 
+// fraction of sum ||r||^2 (`total`) that A x explains of b
+double explained_by(const Eigen::MatrixXd& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b, double total) {
+  if (!(total > 0.0)) return 0.0;
+  const double sse = (A * x - b).squaredNorm();
+  return std::clamp((b.squaredNorm() - sse) / total, 0.0, 1.0);
+}
+
 // fraction of sum ||r||^2 explained by the least-squares fit A x = b; returns x too
 double ls_explained(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double total, Eigen::VectorXd& x) {
   if (A.rows() == 0 || total <= 0.0) {
@@ -93,8 +100,7 @@ double ls_explained(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double t
     return 0.0;
   }
   x = A.colPivHouseholderQr().solve(b);
-  const double sse = (A * x - b).squaredNorm();
-  return std::clamp((b.squaredNorm() - sse) / total, 0.0, 1.0);
+  return explained_by(A, x, b, total);
 }
 
 Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, double total) {
@@ -116,7 +122,7 @@ Hypothesis resistance_hypothesis(const std::vector<DiagnosisSample>& w, int j, d
   // motion is no resistance (a contact pushing J3 the way it starts to move, cut short by a
   // protective stop, was "extra friction on J3 ≈ 0.00 N·m" that explained 42 % of the window)
   const Eigen::VectorXd xs = ident::nonnegative_ls(A, b);
-  h.explained = total > 0.0 ? std::clamp((b.squaredNorm() - (A * xs - b).squaredNorm()) / total, 0.0, 1.0) : 0.0;
+  h.explained = explained_by(A, xs, b, total);
   h.magnitude = (A * xs).cwiseAbs().mean();  // mean extra friction torque along the motion
   h.units = "N·m";
   h.detail = fmt::format("extra friction on J{} ≈ {:.2f} N·m (Coulomb {:.2f} N·m, viscous {:.2f} N·m·s/rad)", j + 1,
@@ -777,13 +783,11 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   VectorJ scale = noise_var ? VectorJ(noise_var->cwiseSqrt().cwiseInverse()) : VectorJ(VectorJ::Ones(n));
   // (levels all zero: no observer, the rule does not apply)
   if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n && window.front().tau_ext_level.maxCoeff() > 0.0) {
-    std::vector<bool> crossed(static_cast<size_t>(n), false);
-    if (alert_joint >= 0 && alert_joint < n) crossed[static_cast<size_t>(alert_joint)] = true;
-    for (const auto& s : window)
-      for (int j = 0; j < n; ++j) crossed[static_cast<size_t>(j)] = crossed[static_cast<size_t>(j)] || std::abs(s.tau_ext[j]) > s.tau_ext_level[j];
-    if (std::find(crossed.begin(), crossed.end(), true) != crossed.end())
-      for (int j = 0; j < n; ++j)
-        if (!crossed[static_cast<size_t>(j)]) scale[j] = 0.0;
+    using Flags = Eigen::Array<bool, Eigen::Dynamic, 1, Eigen::ColMajor, VectorJ::MaxRowsAtCompileTime, 1>;  // (no heap, as VectorJ)
+    Flags crossed = Flags::Constant(n, false);
+    if (alert_joint >= 0 && alert_joint < n) crossed[alert_joint] = true;
+    for (const auto& s : window) crossed = crossed || (s.tau_ext.cwiseAbs().array() > s.tau_ext_level.array());
+    if (crossed.any()) scale = crossed.select(scale, 0.0);
   }
   int dom = 0;
   double peak_abs = 0.0, peak_scaled = 0.0;
@@ -808,19 +812,23 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   // scores a contact's pulse against the rest of its window (a followed part's misfit on J1-J3
   // outweighed a 3.6 N·m contact on link 5, which was lost; a contact cut by a protective stop read as
   // a payload change), where N·m reads the contact's torque
+  // each joint's samples moving either way and at rest (the weights below, the offset's ambiguity)
+  VectorJ pos = VectorJ::Zero(n), neg = VectorJ::Zero(n), rest = VectorJ::Zero(n);
+  for (const auto& smp : window) {
+    pos.array() += (smp.qd.array() > kMovingVelocity).cast<double>();
+    neg.array() += (smp.qd.array() < -kMovingVelocity).cast<double>();
+    rest.array() += (smp.qd.array().abs() <= kMovingVelocity).cast<double>();
+  }
+  const double samples = static_cast<double>(window.size());
   VectorJ weight_j = VectorJ::Ones(n);
   bool weighted = false;
   if (options.static_friction.size() == n && window.front().tau_ext_level.size() == n)
     for (int j = 0; j < n; ++j) {
-      size_t rest = 0;
+      if (rest[j] < kRestThrough * samples) continue;
       double level = 0.0;
-      for (const auto& smp : window) {
-        rest += std::abs(smp.qd[j]) <= kMovingVelocity ? 1 : 0;
-        level += smp.tau_ext_level[j];
-      }
-      if (static_cast<double>(rest) < kRestThrough * static_cast<double>(window.size())) continue;
+      for (const auto& smp : window) level += smp.tau_ext_level[j];
       const double held = options.static_friction[j] / std::sqrt(3.0);
-      const double sd = kNoiseFloorOfLevel * level / static_cast<double>(window.size());
+      const double sd = kNoiseFloorOfLevel * level / samples;
       // a resting joint whose friction or level is unknown (0: a sequential twin, no observer)
       // cannot be weighed against the others: the window is scored in N·m, as before
       if (!(held > 0.0 && sd > 0.0 && std::isfinite(held) && std::isfinite(sd))) {
@@ -831,17 +839,20 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
       weight_j[j] = sd / std::hypot(sd, held);
       weighted = true;
     }
-  const VectorJ w2 = weight_j.cwiseAbs2();
   const double total_raw = total;
   if (weighted) {
     double tw = 0.0;
     for (const auto& smp : window) tw += smp.r_tau.cwiseProduct(weight_j).squaredNorm();
-    if (tw > 0.0) total = tw;
-    else weighted = false;
+    if (tw > 0.0) {
+      total = tw;
+    } else {
+      weight_j = VectorJ::Ones(n);
+      weighted = false;
+    }
   }
+  const VectorJ w2 = weight_j.cwiseAbs2();
   // (the weighted residual's noise variance: the reference's on a moving joint, whose weight is 1)
-  const std::optional<VectorJ> noise_w = noise_var ? std::optional<VectorJ>(noise_var->cwiseProduct(weighted ? w2 : VectorJ(VectorJ::Ones(n))))
-                                                   : std::nullopt;
+  const std::optional<VectorJ> noise_w = noise_var ? std::optional<VectorJ>(noise_var->cwiseProduct(w2)) : std::nullopt;
   const VectorJ* weight = weighted ? &weight_j : nullptr;
   // a hypothesis on one joint, fitted unweighted (its size is the joint's), scored weighted
   const auto reweigh = [&](Hypothesis& h, int j) {
@@ -897,13 +908,8 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     // while moving, docs/validation.md). Nor does a joint at rest through the window: what it holds
     // changes with its load (a part picked at a rest read as an offset on J4's channel)
     // (each must hold for at least a tenth of the window to count)
-    double pos = 0, neg = 0;
-    for (const auto& smp : window) {
-      if (smp.qd[j] > kMovingVelocity) ++pos;
-      else if (smp.qd[j] < -kMovingVelocity) ++neg;
-    }
-    const double tenth = 0.1 * static_cast<double>(window.size());
-    const double ambiguity = pos > tenth && neg > tenth ? 0.0 : 0.25;
+    const double tenth = 0.1 * samples;
+    const double ambiguity = pos[j] > tenth && neg[j] > tenth ? 0.0 : 0.25;
     scored.emplace_back(o.explained - kComplexityPenalty - ambiguity - (pulse ? 0.3 : 0.0), o);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });

@@ -178,10 +178,9 @@ int run_monitor(const MonitorOptions& o) {
   };
   // every output path is checked before the robot is connected (or the recording read): a typo
   // found after a long --wait or the first samples of a live run costs the run
-  if (o.split_every != 0.0 && !(o.split_every >= 1.0 && std::isfinite(o.split_every)))
-    throw InvalidArgument(fmt::format("--split-every must be a finite time >= 1 s of controller time, got {}", o.split_every));
+  cli::check_split_every(o.split_every);
   // (with --split-every, --record's first file is rec.000.csv)
-  const std::string record_first = o.record_to.empty() || o.split_every == 0.0 ? o.record_to : device::split_recording_name(o.record_to, 0);
+  const std::string record_first = o.record_to.empty() ? o.record_to : device::SplitRecordingWriter::first_file(o.record_to, o.split_every);
   for (const std::string* out : {&o.events_path, &o.trace, &record_first, &o.db_path})
     if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
   // nor one output another's file: events over the trace's rows, a store that is a JSON-lines file

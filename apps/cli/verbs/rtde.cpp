@@ -71,9 +71,7 @@ int run_record(const RecordOptions& o) {
     throw InvalidArgument(fmt::format("--duration must be a finite time > 0 s, got {}", o.duration));
   if (!(o.wait >= 0.0 && std::isfinite(o.wait)))
     throw InvalidArgument(fmt::format("--wait must be a finite time >= 0 s, got {}", o.wait));
-  const bool split = o.split_every != 0.0;
-  if (split && !(o.split_every >= 1.0 && std::isfinite(o.split_every)))
-    throw InvalidArgument(fmt::format("--split-every must be a finite time >= 1 s of controller time, got {}", o.split_every));
+  cli::check_split_every(o.split_every);
   cli::RtdeSourceOptions so;
   so.endpoint = o.endpoint;
   so.frequency = o.frequency;
@@ -103,7 +101,7 @@ int run_record(const RecordOptions& o) {
     if (std::find(rtde::default_outputs().begin(), rtde::default_outputs().end(), name) == rtde::default_outputs().end())
       log::warn(fmt::format("'{}' has no column in the recording format; it is requested but not written", name));
   // before connecting: a bad path must not cost a --wait or a connection
-  require_writable(split ? device::split_recording_name(o.output, 0) : o.output);
+  require_writable(device::SplitRecordingWriter::first_file(o.output, o.split_every));
   install_interrupt_handler();
   const auto client_ptr = cli::open_rtde(so);
   rtde::Client& client = *client_ptr;
@@ -199,7 +197,7 @@ int run_record(const RecordOptions& o) {
   } else if (!o.quiet) {
     fmt::print("{}: {} samples ({:.2f} s of controller time) from {}:{}; lost {} samples in {} gaps, {} reconnects, "
                "{} dropped by a slow writer, {} protocol errors; {}; client CPU {:.2f} %{}\n",
-               split ? fmt::format("{} files, {} ... {} (a new one every {:g} s)", files.size(), files.front(), files.back(), o.split_every)
+               o.split_every != 0.0 ? fmt::format("{} files, {} ... {} (a new one every {:g} s)", files.size(), files.front(), files.back(), o.split_every)
                      : o.output,
                rows, std::isnan(t_first) ? 0.0 : t_last - t_first, co.host, co.port, st.lost, st.gaps,
                st.reconnects, st.dropped, st.protocol_errors, arrival, cpu_pct,

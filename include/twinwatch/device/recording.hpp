@@ -182,6 +182,11 @@ class SplitRecordingWriter {
   /// Flushes and closes the current file (once; again is a no-op); throws std::runtime_error naming
   /// it on an I/O error.
   void close();
+  /// 0 (one file) or a finite time >= 1 s: the intervals the constructor takes
+  static bool valid_interval(double every_s) { return every_s == 0.0 || (every_s >= 1.0 && every_s <= std::numeric_limits<double>::max()); }
+  /// The first file written for `path` (rec.csv, or rec.000.csv when splitting): the one to check
+  /// before a run starts
+  static std::string first_file(const std::string& path, double every_s);
   /// The files written so far, in order (the one being written last).
   const std::vector<std::string>& files() const { return files_; }
   /// Rows written over all files.
