@@ -1189,84 +1189,111 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                   const std::string& program, bool keep_payload) {
   ident::TwinModel twin = twin_in;
   twin.set_payload(payload);
-  const device::Recording rec = device::read_recording(recording, map);
-  device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the report");
-  check_units(rec, twin.robot());  // (as monitor and validate)
+  // The recording is read twice, row by row, and never held, as `monitor` reads one: first to check
+  // every row, its units and the timing of its steps, then to monitor it, each plotted line reduced as
+  // it streams to what the page draws (ui::SeriesEnvelope: at most two points per pixel column) and
+  // the tables' figures summed as they come. Held whole, an hour at 500 Hz took 2.8 GB (a shift's
+  // recording did not fit this 24 GB machine; docs/validation.md, "A report of a long recording").
+  device::RecordingReader first(recording, map);
+  {
+    device::Recording head;  // (the header's facts: require_fields reads them from a Recording)
+    head.path = recording;
+    head.n_dof = first.n_dof();
+    head.present = first.present();
+    device::require_fields(head, kFieldActualQd | kFieldActualCurrent, "the report");
+  }
+  UnitsCheck units(recording, first.n_dof(), first.present(), twin.robot());  // (as monitor and validate)
+  double t_first = NAN, t_last = NAN;
+  const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) {
+    units.add(s);
+    if (std::isnan(t_first)) t_first = s.timestamp;
+    t_last = s.timestamp;
+  });
+  units.check_period(scan.timing.median_period);
+  units.finish();
+  const double period = scan.timing.median_period;
   // its tables' R², NRMSE and correlations need a spread of samples: on one row they printed 0 and
   // 2155 % as results (audit of session 22); validate refuses the same
-  if (rec.samples.size() < kMinReportSamples)
-    throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", recording, rec.samples.size(), kMinReportSamples));
+  if (scan.rows < static_cast<long>(kMinReportSamples))
+    throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", recording, scan.rows, kMinReportSamples));
   // labels shade the fault spans of the run they were written with: another scenario's would shade
   // faults that never happened (and its scoring tables would say so as findings)
-  if (labels && rec.median_period > 0) {
-    const double span = rec.samples.back().timestamp - rec.samples.front().timestamp + rec.median_period;
-    const double rate = 1.0 / rec.median_period;
-    if (std::abs(span - labels->duration) > 2.0 * rec.median_period + 0.01 * labels->duration ||
+  if (labels && period > 0) {
+    const double span = t_last - t_first + period;
+    const double rate = 1.0 / period;
+    if (std::abs(span - labels->duration) > 2.0 * period + 0.01 * labels->duration ||
         std::abs(rate - labels->rate) > 0.01 * labels->rate)
       throw InvalidArgument(fmt::format("report: the labels of scenario '{}' ({:g} s at {:g} Hz) do not go with {}, which spans {:.3f} s at "
                                         "{:.4g} Hz: labels of another recording? (a simulated REC.csv has its own in REC.labels.json)",
                                         labels->scenario, labels->duration, labels->rate, recording, span, rate));
     // nor a run of the same length on another clock (a live controller's timestamps, a log cut
     // from a longer one): its spans were drawn as slivers at the plot's edge
-    const double t0 = rec.samples.front().timestamp, t1 = rec.samples.back().timestamp, slack = 2.0 * rec.median_period;
+    const double slack = 2.0 * period;
     for (size_t k = 0; k < labels->faults.size(); ++k) {
       const sim::FaultLabel& f = labels->faults[k];
-      if (f.onset < t0 - slack || f.onset > t1 + slack)
+      if (f.onset < t_first - slack || f.onset > t_last + slack)
         throw InvalidArgument(fmt::format("report: the labels of scenario '{}' put fault {} ({}) at {:.3f} s, outside {}'s timestamps "
                                           "{:.3f}-{:.3f} s: labels of another recording, or the recording's clock shifted?",
-                                          labels->scenario, k + 1, sim::to_string(f.type), f.onset, recording, t0, t1));
+                                          labels->scenario, k + 1, sim::to_string(f.type), f.onset, recording, t_first, t_last));
     }
   }
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
   cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`
-  if (rec.median_period > 0) cfg.nominal_period = rec.median_period;
-  cfg.gap_factor = std::max(cfg.gap_factor, rec.gap_factor);  // a jittery logger clock (device::Recording)
+  if (period > 0) cfg.nominal_period = period;
+  cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);  // a jittery logger clock (device::RecordingTiming)
   monitor::Monitor mon(twin, cfg);
   // what the monitor says while it runs (the payload it predicts with, stops, held readings): the
   // report's reader sees what `monitor` prints
   std::vector<std::vector<std::string>> note_rows;
   mon.on_note = [&](double t_note, const std::string& text) { note_rows.push_back({fmt::format("{:.3f}", t_note), text}); };
   monitor::EnvelopeWatch watch(twin.envelope);  // where the robot moves beyond the identified motion
-  const int n = rec.n_dof;
+  const int n = scan.n_dof;
   const bool observer = cfg.observer_level.size() == n;  // (as Monitor turns it on)
-  std::vector<double> t;
-  std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n)), res(static_cast<size_t>(n)),
-      lev(static_cast<size_t>(n)), q(static_cast<size_t>(n)), qt(static_cast<size_t>(n)), obs(static_cast<size_t>(n)),
-      obs_lev(static_cast<size_t>(n));
-  std::vector<double> itot;
-  std::vector<VectorJ> resv, qdv;
+  // every plot spans the recording's timestamps (one time axis for all) at the default width
+  ui::Plot frame;
+  frame.x_range = std::make_pair(t_first, t_last);
+  const ui::SeriesEnvelope empty(t_first, t_last, frame.columns());
+  const auto envelopes = [&] { return std::vector<ui::SeriesEnvelope>(static_cast<size_t>(n), empty); };
+  std::vector<ui::SeriesEnvelope> meas = envelopes(), pred = envelopes(), res = envelopes(), lev = envelopes(), neg_lev = envelopes(),
+                                  obs = envelopes(), obs_lev = envelopes(), neg_obs_lev = envelopes(), q = envelopes(), qt = envelopes();
+  ui::SeriesEnvelope itot = empty;
   // the tables count the samples the controller drives (a stop is plotted, not scored: the monitor
   // does not judge it either)
-  std::vector<std::vector<double>> meas_driven(static_cast<size_t>(n)), pred_driven(static_cast<size_t>(n));
-  for (const auto& s : rec.samples) {
+  std::vector<signal::FitAccumulator> fit(static_cast<size_t>(n));
+  monitor::ResidualVelocityCorrelation correlation(n);
+  device::RecordingReader again(recording, map);
+  const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) {
     mon.push(s);
     watch.check(s);
-    t.push_back(s.timestamp);
+    const double t = s.timestamp;
     const VectorJ tau_ext = mon.observer_torque(), tau_lev = mon.observer_torque_threshold();
     for (int j = 0; j < n; ++j) {
-      meas[static_cast<size_t>(j)].push_back(s.current[j]);
-      pred[static_cast<size_t>(j)].push_back(mon.predicted_current()[j]);
-      res[static_cast<size_t>(j)].push_back(mon.filtered_residual()[j]);
-      lev[static_cast<size_t>(j)].push_back(mon.level()[j]);
-      obs[static_cast<size_t>(j)].push_back(tau_ext[j]);
-      obs_lev[static_cast<size_t>(j)].push_back(tau_lev[j]);
-      q[static_cast<size_t>(j)].push_back(s.q[j]);
-      qt[static_cast<size_t>(j)].push_back(s.target_q.size() ? s.target_q[j] : NAN);
+      const size_t J = static_cast<size_t>(j);
+      meas[J].add(t, s.current[j]);
+      pred[J].add(t, mon.predicted_current()[j]);
+      res[J].add(t, mon.filtered_residual()[j]);
+      lev[J].add(t, mon.level()[j]);
+      neg_lev[J].add(t, -mon.level()[j]);
+      obs[J].add(t, tau_ext[j]);
+      obs_lev[J].add(t, tau_lev[j]);
+      neg_obs_lev[J].add(t, -tau_lev[j]);
+      q[J].add(t, s.q[j]);
+      qt[J].add(t, s.target_q.size() ? s.target_q[j] : NAN);
     }
-    itot.push_back(mon.total_current());
-    if (!s.driven()) continue;
-    for (int j = 0; j < n; ++j) {
-      meas_driven[static_cast<size_t>(j)].push_back(s.current[j]);
-      pred_driven[static_cast<size_t>(j)].push_back(mon.predicted_current()[j]);
-    }
-    resv.push_back(mon.residual());
-    qdv.push_back(s.qd);
-  }
+    itot.add(t, mon.total_current());
+    if (!s.driven()) return;
+    for (int j = 0; j < n; ++j) fit[static_cast<size_t>(j)].add(s.current[j], mon.predicted_current()[j]);
+    correlation.add(mon.residual(), s.qd);
+  });
+  if (replayed < scan.rows)
+    throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to report on (the file was cut or replaced while it "
+                                         "was read): report on a copy",
+                                         recording, replayed, scan.rows));
   mon.finish();
   ui::HtmlReport r("twinwatch report — " + std::filesystem::path(recording).filename().string());
   r.add_paragraph(fmt::format("Recording {} ({} samples, {:.1f} s), twin {} identified from: {}. Thresholds: {}.", recording,
-                              rec.samples.size(), t.empty() ? 0.0 : t.back() - t.front(), twin.robot_name(), fmt::join(twin.recordings, ", "),
+                              scan.rows, t_last - t_first, twin.robot_name(), fmt::join(twin.recordings, ", "),
                               program.empty() ? std::string("the default set") : fmt::format("the set of program '{}'", program)));
   // the twin is only known where it was identified: beyond that motion a residual may be its model error
   if (!watch.known())
@@ -1282,7 +1309,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   if (labels) {
     for (const sim::FaultLabel& f : labels->faults) {
       const double on = f.onset;
-      const double en = std::isfinite(f.end) ? f.end : (t.empty() ? on : t.back());
+      const double en = std::isfinite(f.end) ? f.end : t_last;
       spans.push_back({on, std::max(en, on + 0.05), std::string("truth: ") + sim::to_string(f.type), "rgba(38,139,210,0.12)"});
     }
   }
@@ -1300,69 +1327,91 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                                 mon.samples()));
   r.add_table("alerts with diagnosis", {"start s", "duration s", "class", "joint", "magnitude", "confidence", "detail"}, rows);
   if (!note_rows.empty()) r.add_table("the monitor's notes (the payload it predicts with, stops, held readings)", {"t s", "note"}, note_rows);
-  std::vector<std::vector<std::string>> mrows(5);
-  const char* names[] = {"RMSE A", "MAE A", "R²", "NRMSE %", "d_tau %"};
-  for (int k = 0; k < 5; ++k) mrows[static_cast<size_t>(k)].push_back(names[k]);
-  std::vector<std::string> head{"metric"};
-  for (int j = 0; j < n; ++j) {
-    head.push_back(fmt::format("J{}", j + 1));
-    const auto m = signal::fit_metrics(meas_driven[static_cast<size_t>(j)], pred_driven[static_cast<size_t>(j)]);
-    mrows[0].push_back(fmt::format("{:.4f}", m.rmse));
-    mrows[1].push_back(fmt::format("{:.4f}", m.mae));
-    mrows[2].push_back(fmt::format("{:.4f}", m.r2));
-    mrows[3].push_back(fmt::format("{:.2f}", m.nrmse_pct));
-    mrows[4].push_back(fmt::format("{:.2f}", m.rel_err_pct));
+  if (correlation.count() == 0) {
+    // (a recording of a stopped arm: nothing to compare the twin with; the tables threw "no valid samples")
+    r.add_paragraph("No sample of this recording is one in which the controller drives the arm (robot_mode RUNNING, safety_mode "
+                    "NORMAL or REDUCED): there is no twin fidelity or residual/velocity correlation to tabulate.");
+  } else {
+    std::vector<std::vector<std::string>> mrows(5);
+    const char* names[] = {"RMSE A", "MAE A", "R²", "NRMSE %", "d_tau %"};
+    for (int k = 0; k < 5; ++k) mrows[static_cast<size_t>(k)].push_back(names[k]);
+    std::vector<std::string> head{"metric"};
+    for (int j = 0; j < n; ++j) {
+      head.push_back(fmt::format("J{}", j + 1));
+      if (fit[static_cast<size_t>(j)].count() == 0) {  // (no driven sample with a prediction)
+        for (auto& row : mrows) row.push_back("n/a");
+        continue;
+      }
+      const auto m = fit[static_cast<size_t>(j)].metrics();
+      mrows[0].push_back(fmt::format("{:.4f}", m.rmse));
+      mrows[1].push_back(fmt::format("{:.4f}", m.mae));
+      mrows[2].push_back(fmt::format("{:.4f}", m.r2));
+      mrows[3].push_back(fmt::format("{:.2f}", m.nrmse_pct));
+      mrows[4].push_back(fmt::format("{:.2f}", m.rel_err_pct));
+    }
+    // the prediction is the monitor's: after a payload change it diagnosed, with the payload it then
+    // followed. `validate` predicts with the declared payload alone, and differs from here after such
+    // a change (the audit of session 37 found the two tables apart without a word)
+    const bool followed = !keep_payload && std::any_of(mon.events().begin(), mon.events().end(), [](const monitor::Event& e) {
+      return e.fault == monitor::FaultClass::PayloadChange;
+    });
+    r.add_table(followed ? "Twin fidelity on this recording (UR3e Table 3 layout), predicted as the monitor predicts: with the payload "
+                           "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the payload the "
+                           "recording declares (else the given one) and follows no diagnosed change, so after one its table differs "
+                           "from this; --keep-payload here follows nothing either, and takes no declaration"
+                         : "Twin fidelity on this recording (UR3e Table 3 layout)",
+                head, mrows);
+    const MatrixJ C = correlation.matrix();
+    std::vector<std::vector<std::string>> crows;
+    for (int i = 0; i < n; ++i) {
+      std::vector<std::string> row{fmt::format("residual J{}", i + 1)};
+      for (int j = 0; j < n; ++j) row.push_back(fmt::format("{:+.2f}", C(i, j)));
+      crows.push_back(row);
+    }
+    std::vector<std::string> chead{"vs velocity"};
+    for (int j = 0; j < n; ++j) chead.push_back(fmt::format("J{}", j + 1));
+    r.add_table("Residual / joint-velocity cross-correlation (UR3e Table 5 layout)", chead, crows);
   }
-  // the prediction is the monitor's: after a payload change it diagnosed, with the payload it then
-  // followed. `validate` predicts with the declared payload alone, and differs from here after such
-  // a change (the audit of session 37 found the two tables apart without a word)
-  const bool followed = !keep_payload && std::any_of(mon.events().begin(), mon.events().end(), [](const monitor::Event& e) {
-    return e.fault == monitor::FaultClass::PayloadChange;
-  });
-  r.add_table(followed ? "Twin fidelity on this recording (UR3e Table 3 layout), predicted as the monitor predicts: with the payload "
-                         "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the payload the "
-                         "recording declares (else the given one) and follows no diagnosed change, so after one its table differs "
-                         "from this; --keep-payload here follows nothing either, and takes no declaration"
-                       : "Twin fidelity on this recording (UR3e Table 3 layout)",
-              head, mrows);
-  const MatrixJ C = monitor::residual_velocity_correlation(resv, qdv);
-  std::vector<std::vector<std::string>> crows;
-  for (int i = 0; i < n; ++i) {
-    std::vector<std::string> row{fmt::format("residual J{}", i + 1)};
-    for (int j = 0; j < n; ++j) row.push_back(fmt::format("{:+.2f}", C(i, j)));
-    crows.push_back(row);
-  }
-  std::vector<std::string> chead{"vs velocity"};
-  for (int j = 0; j < n; ++j) chead.push_back(fmt::format("J{}", j + 1));
-  r.add_table("Residual / joint-velocity cross-correlation (UR3e Table 5 layout)", chead, crows);
-  // plots (UR3e Fig. 8-13)
+  // plots (UR3e Fig. 8-13), each drawn from its lines' envelopes
+  const auto line = [](const char* name, const ui::SeriesEnvelope& e, const std::string& color, bool dashed) {
+    ui::PlotSeries l{name, {}, {}, color, dashed};
+    l.reduced = e;
+    return l;
+  };
+  const auto plot = [&](std::string title, const char* units, std::vector<ui::PlotSeries> lines, std::vector<ui::PlotSpan> shaded,
+                        int height = 220) {
+    ui::Plot p = frame;
+    p.title = std::move(title);
+    p.x_label = "time [s]";
+    p.y_label = units;
+    p.series = std::move(lines);
+    p.spans = std::move(shaded);
+    p.height = height;
+    r.add_plot(p);
+  };
+  const std::string green = "#859900";
   r.add_heading("Total current (UR3e Fig. 12)");
-  r.add_plot({"I_total = sum |i_j|", "time [s]", "A", {{"I_total", t, itot, "", false}}, spans});
+  plot("I_total = sum |i_j|", "A", {line("I_total", itot, "", false)}, spans);
   r.add_heading("Measured vs predicted current, residual with threshold (UR3e Fig. 8, 10, 11)");
   for (int j = 0; j < n; ++j) {
     const size_t J = static_cast<size_t>(j);
-    r.add_plot({fmt::format("J{} current", j + 1), "time [s]", "A", {{"measured", t, meas[J], "", false}, {"twin", t, pred[J], "", true}}, spans});
-    std::vector<double> neg(lev[J].size());
-    for (size_t k = 0; k < neg.size(); ++k) neg[k] = -lev[J][k];
-    r.add_plot({fmt::format("J{} filtered residual and threshold", j + 1), "time [s]", "A",
-                {{"residual", t, res[J], "", false}, {"+threshold", t, lev[J], "#859900", true}, {"-threshold", t, neg, "#859900", true}},
-                spans});
+    plot(fmt::format("J{} current", j + 1), "A", {line("measured", meas[J], "", false), line("twin", pred[J], "", true)}, spans);
+    plot(fmt::format("J{} filtered residual and threshold", j + 1), "A",
+         {line("residual", res[J], "", false), line("+threshold", lev[J], green, true), line("-threshold", neg_lev[J], green, true)}, spans);
   }
   if (observer) {
     r.add_heading("Momentum-observer estimate of the external joint torque, with its threshold (the second residual)");
     for (int j = 0; j < n; ++j) {
       const size_t J = static_cast<size_t>(j);
-      std::vector<double> neg(obs_lev[J].size());
-      for (size_t k = 0; k < neg.size(); ++k) neg[k] = -obs_lev[J][k];
-      r.add_plot({fmt::format("J{} observer estimate and threshold", j + 1), "time [s]", "N·m",
-                  {{"estimate", t, obs[J], "", false}, {"+threshold", t, obs_lev[J], "#859900", true}, {"-threshold", t, neg, "#859900", true}},
-                  spans});
+      plot(fmt::format("J{} observer estimate and threshold", j + 1), "N·m",
+           {line("estimate", obs[J], "", false), line("+threshold", obs_lev[J], green, true), line("-threshold", neg_obs_lev[J], green, true)},
+           spans);
     }
   }
   r.add_heading("Joint positions, target vs actual (UR3e Fig. 9)");
   for (int j = 0; j < n; ++j)
-    r.add_plot({fmt::format("J{} position", j + 1), "time [s]", "rad",
-                {{"actual", t, q[static_cast<size_t>(j)], "", false}, {"target", t, qt[static_cast<size_t>(j)], "", true}}, {}, 900, 160});
+    plot(fmt::format("J{} position", j + 1), "rad", {line("actual", q[static_cast<size_t>(j)], "", false), line("target", qt[static_cast<size_t>(j)], "", true)},
+         {}, 160);
   r.write(out);
 }
 

@@ -386,7 +386,24 @@ RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const 
   }
   if (scan.rows == 0) throw ParseError(reader.file(), 2, "", "no data rows after the header");
   scan.timing = recording_timing(reader.file(), std::move(dts));
+  scan.n_dof = reader.n_dof();
+  scan.present = reader.present();
   return scan;
+}
+
+long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each) {
+  again.quiet();  // (a cut-off last row was said by the scan)
+  if (again.n_dof() != scan.n_dof || again.present() != scan.present)
+    throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): read a copy", again.file()));
+  RobotSample s;
+  double previous = 0.0;
+  long k = 0;
+  for (; k < scan.rows && again.next(s); ++k) {
+    if (k > 0 && scan.timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+    previous = s.timestamp;
+    each(s);
+  }
+  return k;
 }
 
 Recording read_recording(const std::string& path, const ColumnMap* map) {

@@ -962,33 +962,36 @@ std::vector<double> contact_link_posterior(const model::RobotModel& model, const
   return link_evidence(model, d, wgt, impulse.cwiseProduct(wgt), cube_half);
 }
 
-MatrixJ residual_velocity_correlation(const std::vector<VectorJ>& residual, const std::vector<VectorJ>& qd) {
-  if (residual.size() != qd.size() || residual.empty())
-    throw InvalidArgument(fmt::format("correlation: {} residual samples and {} velocity samples, expected equal and > 0",
-                                      residual.size(), qd.size()));
-  const auto n = residual.front().size();
-  const double K = static_cast<double>(residual.size());
-  VectorJ mr = VectorJ::Zero(n), mv = VectorJ::Zero(n);
-  for (size_t k = 0; k < residual.size(); ++k) {
-    mr += residual[k];
-    mv += qd[k];
-  }
-  mr /= K;
-  mv /= K;
-  MatrixJ cov = MatrixJ::Zero(n, n);
-  VectorJ vr = VectorJ::Zero(n), vv = VectorJ::Zero(n);
-  for (size_t k = 0; k < residual.size(); ++k) {
-    const VectorJ a = residual[k] - mr, b = qd[k] - mv;
-    cov += a * b.transpose();
-    vr += a.cwiseAbs2();
-    vv += b.cwiseAbs2();
-  }
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double den = std::sqrt(vr[i] * vv[j]);
-      cov(i, j) = den > 0.0 ? cov(i, j) / den : 0.0;
+ResidualVelocityCorrelation::ResidualVelocityCorrelation(int n_dof)
+    : mr_(VectorJ::Zero(n_dof)), mv_(VectorJ::Zero(n_dof)), vr_(VectorJ::Zero(n_dof)), vv_(VectorJ::Zero(n_dof)),
+      cov_(MatrixJ::Zero(n_dof, n_dof)) {}
+
+void ResidualVelocityCorrelation::add(const VectorJ& residual, const VectorJ& qd) {
+  if (residual.size() != mr_.size() || qd.size() != mr_.size())
+    throw InvalidArgument(fmt::format("correlation: a residual of {} joints and a velocity of {}, expected {}", residual.size(), qd.size(),
+                                      mr_.size()));
+  ++k_;
+  const double w = 1.0 / static_cast<double>(k_);
+  // the deviations from the means before the update (a) and after it (b): their products are the
+  // co-moments' increments (Welford)
+  const VectorJ ar = residual - mr_, av = qd - mv_;
+  mr_ += w * ar;
+  mv_ += w * av;
+  const VectorJ br = residual - mr_, bv = qd - mv_;
+  cov_.noalias() += ar * bv.transpose();
+  vr_ += ar.cwiseProduct(br);
+  vv_ += av.cwiseProduct(bv);
+}
+
+MatrixJ ResidualVelocityCorrelation::matrix() const {
+  if (k_ == 0) throw InvalidArgument("correlation: no samples");
+  MatrixJ c = cov_;
+  for (Eigen::Index i = 0; i < c.rows(); ++i)
+    for (Eigen::Index j = 0; j < c.cols(); ++j) {
+      const double den = std::sqrt(vr_[i] * vv_[j]);
+      c(i, j) = den > 0.0 ? c(i, j) / den : 0.0;
     }
-  return cov;
+  return c;
 }
 
 }  // namespace twinwatch::monitor

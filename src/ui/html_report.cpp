@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 
 #include "twinwatch/core/error.hpp"
 
@@ -51,10 +52,75 @@ std::string HtmlReport::escape(const std::string& s) {
   return o;
 }
 
+// the x range a plot draws: [x0, x1], one unit wide where the two are equal
+std::pair<double, double> drawn_range(double x0, double x1) {
+  if (!(x1 >= x0)) return {0.0, 1.0};
+  return {x0, x1 == x0 ? x0 + 1.0 : x1};
+}
+
+SeriesEnvelope::SeriesEnvelope(double x0, double x1, int columns) : columns_(std::max(1, columns)) {
+  if (!std::isfinite(x0) || !std::isfinite(x1) || x1 < x0)
+    throw InvalidArgument(fmt::format("series envelope: x range [{}, {}], expected finite with x1 >= x0", x0, x1));
+  std::tie(x0_, x1_) = drawn_range(x0, x1);
+}
+
+void SeriesEnvelope::add_to_columns(double x, double y) {
+  const int c = std::clamp(static_cast<int>((x - x0_) / (x1_ - x0_) * (columns_ - 1)), 0, columns_ - 1);
+  if (cols_.empty() || cols_.back().index != c) {
+    cols_.push_back({c, y, y});
+  } else {
+    cols_.back().lo = std::min(cols_.back().lo, y);
+    cols_.back().hi = std::max(cols_.back().hi, y);
+  }
+}
+
+void SeriesEnvelope::to_columns() {
+  for (const auto& [x, y] : raw_) add_to_columns(x, y);
+  raw_ = {};
+}
+
+void SeriesEnvelope::add(double x, double y) {
+  ++added_;
+  const bool finite = std::isfinite(x) && std::isfinite(y);
+  if (added_ <= static_cast<size_t>(2 * columns_)) {
+    if (finite) raw_.emplace_back(x, y);
+    return;
+  }
+  if (added_ == static_cast<size_t>(2 * columns_) + 1) to_columns();
+  if (finite) add_to_columns(x, y);
+}
+
+std::pair<double, double> SeriesEnvelope::y_extent() const {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& [x, y] : raw_) lo = std::min(lo, y), hi = std::max(hi, y);
+  for (const Column& c : cols_) lo = std::min(lo, c.lo), hi = std::max(hi, c.hi);
+  if (!(hi >= lo)) return {NAN, NAN};
+  return {lo, hi};
+}
+
+std::string SeriesEnvelope::points(const std::function<double(double)>& X, const std::function<double(double)>& Y, double left) const {
+  std::string pts;
+  for (const auto& [x, y] : raw_) pts += fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
+  for (const Column& c : cols_) {
+    const double px = left + c.index + 0.5;
+    pts += fmt::format("{:.1f},{:.1f} {:.1f},{:.1f} ", px, Y(c.hi), px, Y(c.lo));
+  }
+  return pts;
+}
+
+int Plot::columns() const { return std::max(1, static_cast<int>(width - kMarginLeft - kMarginRight)); }
+
 std::string render_svg(const Plot& p) {
-  // data ranges over all finite points
+  // data ranges over all finite points (the x range given, if it is)
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const PlotSeries& s : p.series) {
+    if (s.reduced) {
+      if (!s.x.empty() || !s.y.empty())
+        throw InvalidArgument(fmt::format("plot '{}': series '{}' is given both reduced and as {} points, expected one", p.title, s.name, s.x.size()));
+      const auto [lo, hi] = s.reduced->y_extent();
+      if (std::isfinite(lo)) y0 = std::min(y0, lo), y1 = std::max(y1, hi);
+      continue;
+    }
     if (s.x.size() != s.y.size())
       throw InvalidArgument(fmt::format("plot '{}': series '{}' has {} x values and {} y values, expected equal",
                                         p.title, s.name, s.x.size(), s.y.size()));
@@ -66,9 +132,9 @@ std::string render_svg(const Plot& p) {
       y1 = std::max(y1, s.y[i]);
     }
   }
-  if (!(x1 >= x0)) x0 = 0.0, x1 = 1.0;
+  if (p.x_range) std::tie(x0, x1) = *p.x_range;
+  std::tie(x0, x1) = drawn_range(x0, x1);
   if (!(y1 >= y0)) y0 = 0.0, y1 = 1.0;
-  if (x1 == x0) x1 = x0 + 1.0;
   if (y1 == y0) y0 -= 0.5, y1 += 0.5;
   const double ypad = 0.05 * (y1 - y0);
   y0 -= ypad;
@@ -108,36 +174,22 @@ std::string render_svg(const Plot& p) {
   svg += fmt::format("<text x=\"12\" y=\"{:.1f}\" text-anchor=\"middle\" transform=\"rotate(-90 12 {:.1f})\">{}</text>\n",
                      kMarginTop + ph / 2, kMarginTop + ph / 2, HtmlReport::escape(p.y_label));
 
-  // series: min/max envelope per pixel column keeps every peak of long signals
-  const int columns = std::max(1, static_cast<int>(pw));
+  // series: min/max envelope per pixel column keeps every peak of long signals (SeriesEnvelope)
+  const int columns = p.columns();
   for (size_t si = 0; si < p.series.size(); ++si) {
     const PlotSeries& s = p.series[si];
     const std::string color = s.color.empty() ? kPalette[si % std::size(kPalette)] : s.color;
     std::string pts;
-    if (s.x.size() <= static_cast<size_t>(2 * columns)) {
-      for (size_t i = 0; i < s.x.size(); ++i)
-        if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) pts += fmt::format("{:.1f},{:.1f} ", X(s.x[i]), Y(s.y[i]));
+    if (s.reduced) {
+      const SeriesEnvelope& e = *s.reduced;
+      if (e.x0() != x0 || e.x1() != x1 || e.columns() != columns)
+        throw InvalidArgument(fmt::format("plot '{}': series '{}' was reduced over x [{}, {}] in {} columns, the plot draws [{}, {}] in {}",
+                                          p.title, s.name, e.x0(), e.x1(), e.columns(), x0, x1, columns));
+      pts = e.points(X, Y, kMarginLeft);
     } else {
-      int col = -1;
-      double lo = 0.0, hi = 0.0;
-      auto flush = [&] {
-        if (col < 0) return;
-        const double px = kMarginLeft + col + 0.5;
-        pts += fmt::format("{:.1f},{:.1f} {:.1f},{:.1f} ", px, Y(hi), px, Y(lo));
-      };
-      for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-        const int c = std::clamp(static_cast<int>((s.x[i] - x0) / (x1 - x0) * (columns - 1)), 0, columns - 1);
-        if (c != col) {
-          flush();
-          col = c;
-          lo = hi = s.y[i];
-        } else {
-          lo = std::min(lo, s.y[i]);
-          hi = std::max(hi, s.y[i]);
-        }
-      }
-      flush();
+      SeriesEnvelope e(x0, x1, columns);
+      for (size_t i = 0; i < s.x.size(); ++i) e.add(s.x[i], s.y[i]);
+      pts = e.points(X, Y, kMarginLeft);
     }
     svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.2\"{} points=\"{}\"/>\n", color,
                        s.dashed ? " stroke-dasharray=\"5,3\"" : "", pts);

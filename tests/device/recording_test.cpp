@@ -184,6 +184,45 @@ TEST(Recording, TheRowReaderGivesWhatReadRecordingHolds) {
   }
 }
 
+// the offline monitor and the report read a recording twice and never hold it: the second pass must
+// hand over exactly the rows the first checked, with the gaps read_recording marks
+TEST(Recording, ASecondPassGivesTheRowsTheScanCheckedWithTheirGaps) {
+  std::string csv = "timestamp,actual_q_0,actual_qd_0,actual_current_0,stream_gap\n";
+  for (int k = 0; k < 40; ++k)
+    if (k != 10 && k != 11 && k != 25) csv += fmt::format("{},{},{},{},{}\n", 0.002 * k, 0.1, 0.5, 0.25 * k, k == 30 ? 1 : 0);
+  const std::string p = tmp("twice.csv");
+  std::ofstream(p) << csv;
+  const Recording whole = read_recording(p);
+  RecordingReader first(p);
+  const RecordingScan scan = scan_rows(first, [](const RobotSample&) {});
+  EXPECT_EQ(scan.rows, 37);
+  std::vector<RobotSample> rows;
+  RecordingReader again(p);
+  EXPECT_EQ(replay_rows(again, scan, [&](RobotSample& s) { rows.push_back(s); }), 37);
+  ASSERT_EQ(rows.size(), whole.samples.size());
+  for (size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k].timestamp, whole.samples[k].timestamp);
+    EXPECT_EQ(rows[k].gap_before, whole.samples[k].gap_before) << k;
+  }
+  // a file still being written has more rows by the second pass: those are left for next time
+  std::ofstream(p, std::ios::app) << "0.080,0.1,0.5,1,0\n0.082,0.1,0.5,1,0\n";
+  RecordingReader grown(p);
+  EXPECT_EQ(replay_rows(grown, scan, [](RobotSample&) {}), 37);
+  // one cut (or replaced by a shorter one) gives fewer, for the caller to say
+  std::ofstream(p) << csv.substr(0, csv.find("0.04,"));
+  RecordingReader cut(p);
+  EXPECT_EQ(replay_rows(cut, scan, [](RobotSample&) {}), 18);  // rows 0-19 less 10 and 11
+  // one with another header was replaced by another recording
+  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1\n0,0.1,0.2\n";
+  RecordingReader other(p);
+  try {
+    replay_rows(other, scan, [](RobotSample&) {});
+    ADD_FAILURE() << "a recording whose header changed was read on";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("twice.csv: its header changed while it was read"));
+  }
+}
+
 // a recorder killed mid-write leaves its last row cut off, without a line end: that row is dropped
 // and said; a short row anywhere else (or ended by a newline) is still an error
 TEST(Recording, ALastRowCutOffMidWriteIsDroppedAndSaid) {

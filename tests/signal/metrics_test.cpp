@@ -29,6 +29,23 @@ TEST(FitMetrics, PerfectPredictionAndNanSkipping) {
   EXPECT_EQ(m.r2, 1.0);
 }
 
+// a report streams a day's recording through one accumulator per joint: the same figures, pair by pair
+TEST(FitMetrics, AccumulatedPairByPairTheyAreTheHandComputedOnes) {
+  FitAccumulator acc;
+  EXPECT_THROW(acc.metrics(), InvalidArgument);
+  acc.add(NAN, 1.0);
+  EXPECT_THROW(acc.metrics(), InvalidArgument) << "a NaN pair is no sample";
+  const double y[] = {1, 2, 3, 4}, yhat[] = {1.5, 2, 2.5, 4};
+  for (int k = 0; k < 4; ++k) acc.add(y[k], yhat[k]);
+  const FitMetrics m = acc.metrics();
+  EXPECT_EQ(acc.count(), 4);
+  EXPECT_EQ(m.n, 4);
+  EXPECT_DOUBLE_EQ(m.rmse, std::sqrt(0.5 / 4));
+  EXPECT_DOUBLE_EQ(m.r2, 1.0 - 0.5 / 5.0);
+  EXPECT_DOUBLE_EQ(m.range, 3.0);
+  EXPECT_DOUBLE_EQ(m.rel_err_pct, 100 * std::sqrt(0.5 / 30));
+}
+
 TEST(FitMetrics, MismatchedLengthsAreRejected) {
   const std::vector<double> a{1, 2}, b{1};
   EXPECT_THROW(fit_metrics(a, b), InvalidArgument);

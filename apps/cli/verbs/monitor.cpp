@@ -196,8 +196,7 @@ int run_monitor(const MonitorOptions& o) {
   // did not fit this 24 GB machine); the first pass keeps 32 bytes a sample (the steps, and the
   // currents for the units check), the second one row (docs/validation.md, "A soak audit").
   std::optional<device::ColumnMap> map;
-  device::RecordingTiming timing;
-  long rows = 0;
+  device::RecordingScan scan;
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
     device::RecordingReader first(o.recording, map ? &*map : nullptr);
@@ -206,14 +205,12 @@ int run_monitor(const MonitorOptions& o) {
     rec.present = first.present();
     device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
     cli::UnitsCheck units(o.recording, rec.n_dof, rec.present, twin.robot());
-    const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) { units.add(s); });
-    rows = scan.rows;
-    timing = scan.timing;
-    units.check_period(timing.median_period);
+    scan = device::scan_rows(first, [&](const RobotSample& s) { units.add(s); });
+    units.check_period(scan.timing.median_period);
     units.finish();
-    if (timing.median_period > 0) use_rate(timing.median_period, o.recording);
+    if (scan.timing.median_period > 0) use_rate(scan.timing.median_period, o.recording);
     // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
-    cfg.gap_factor = std::max(cfg.gap_factor, timing.gap_factor);
+    cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
@@ -375,28 +372,22 @@ int run_monitor(const MonitorOptions& o) {
   if (!client) {
     // the rows the first pass read and checked (a file still being written has more by now)
     device::RecordingReader again(o.recording, map ? &*map : nullptr);
-    again.quiet();
-    if (again.n_dof() != rec.n_dof || again.present() != rec.present)
-      throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): monitor a copy",
-                                           o.recording));
-    RobotSample s;
     double previous = 0.0;
     long k = 0;
     try {
-      for (; k < rows && again.next(s); ++k) {
-        if (k > 0 && timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+      k = device::replay_rows(again, scan, [&](RobotSample& s) {
         previous = s.timestamp;
         push(s);
-      }
+      });
     } catch (...) {
       // (the file changed under the second pass: what was watched up to there is still reported)
       mon.finish();
       throw;
     }
-    if (k < rows)
+    if (k < scan.rows)
       log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
                             "monitoring ends at t = {:.3f} s",
-                            o.recording, k, rows, previous));
+                            o.recording, k, scan.rows, previous));
   } else {
     std::unique_ptr<device::SplitRecordingWriter> copy;
     if (!o.record_to.empty()) copy = std::make_unique<device::SplitRecordingWriter>(o.record_to, 6, client->sample_fields(), o.split_every);

@@ -123,8 +123,18 @@ RecordingTiming recording_timing(const std::string& path, std::vector<double> dt
 struct RecordingScan {
   RecordingTiming timing;
   long rows = 0;
+  int n_dof = 0;              ///< the reader's, to check the second pass against
+  std::uint32_t present = 0;  ///< the reader's
 };
 RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const RobotSample&)>& each);
+
+/// The second pass over a recording read twice and never held (offline monitor, report): the rows the
+/// scan checked, from a reader opened again, each with gap_before marked from the scan's timing (as
+/// read_recording marks it), handed to `each`. Returns how many there were: fewer than scan.rows when
+/// the file was cut or replaced in between (the caller says so; a file still being written has more,
+/// left unread). Throws std::runtime_error naming the file when its header changed since the scan
+/// (another program writing it), and what next() throws.
+long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each);
 
 /// The stretches of a recording in which the controller drives the arm (RobotSample::driven: robot_mode
 /// RUNNING, safety_mode NORMAL or REDUCED, where the file has those columns), each as a recording of

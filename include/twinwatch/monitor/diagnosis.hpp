@@ -108,7 +108,24 @@ std::vector<double> contact_link_posterior(const model::RobotModel& model, const
                                            const VectorJ& sigma, double cube_half = 0.0);
 
 /// Cross-correlation matrix between residuals (rows) and joint velocities (columns) over a
-/// window, as printed in [UR3e] Table 5 (Pearson coefficients at lag 0).
-MatrixJ residual_velocity_correlation(const std::vector<VectorJ>& residual, const std::vector<VectorJ>& qd);
+/// window, as printed in [UR3e] Table 5 (Pearson coefficients at lag 0), a sample at a time: a report
+/// streams a day's recording through it instead of holding the samples. Welford's running means and
+/// co-moments (one pass, no loss of digits where a mean stands far above the spread, as a current
+/// offset does). Allocation-free after construction.
+class ResidualVelocityCorrelation {
+ public:
+  explicit ResidualVelocityCorrelation(int n_dof);
+  /// throws InvalidArgument for a vector of another size than n_dof
+  void add(const VectorJ& residual, const VectorJ& qd);
+  long count() const { return k_; }
+  /// C(i, j): residual i against velocity j; 0 where either does not vary. Throws InvalidArgument
+  /// before any sample
+  MatrixJ matrix() const;
+
+ private:
+  long k_ = 0;
+  VectorJ mr_, mv_, vr_, vv_;
+  MatrixJ cov_;
+};
 
 }  // namespace twinwatch::monitor
