@@ -625,32 +625,66 @@ TargetDirectionFit estimate_target_direction(const std::vector<const device::Rec
 }
 
 std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
-  const size_t N = rec.samples.size();
-  std::vector<VectorJ> out(N);
-  if (rec.present & kFieldTargetQdd) {
-    for (size_t k = 0; k < N; ++k) out[k] = rec.samples[k].target_qdd;
-    return out;
-  }
-  // zero-phase: centred moving average of qd, then central differences on the time axis
-  const int n = rec.n_dof;
-  std::vector<VectorJ> qs(N);
-  for (size_t k = 0; k < N; ++k) {
-    VectorJ acc = VectorJ::Zero(n);
+  std::vector<VectorJ> out;
+  out.reserve(rec.samples.size());
+  JointAccelerationStream stream(rec.n_dof, rec.present);
+  const JointAccelerationStream::Ready keep = [&](const RobotSample&, const VectorJ& qdd) { out.push_back(qdd); };
+  for (const RobotSample& s : rec.samples) stream.push(s, keep);
+  stream.finish(keep);
+  return out;
+}
+
+JointAccelerationStream::JointAccelerationStream(int n_dof, std::uint32_t present)
+    : n_(n_dof), target_(present & kFieldTargetQdd), has_qd_(present & kFieldActualQd) {}
+
+// zero-phase: a centred moving average of qd (kSmoothHalfWidth each side, cut at the recording's
+// ends), then central differences on the time axis (one-sided at the ends)
+void JointAccelerationStream::smooth_up_to(size_t end) {
+  for (; qs_end_ < end; ++qs_end_) {
+    const long k = static_cast<long>(qs_end_);
+    VectorJ acc = VectorJ::Zero(n_);
     int cnt = 0;
-    for (long m = static_cast<long>(k) - kSmoothHalfWidth; m <= static_cast<long>(k) + kSmoothHalfWidth; ++m) {
-      if (m < 0 || m >= static_cast<long>(N)) continue;
-      const RobotSample& s = rec.samples[static_cast<size_t>(m)];
-      acc += (rec.present & kFieldActualQd) ? s.qd : VectorJ::Zero(n);
+    for (long m = k - kSmoothHalfWidth; m <= k + kSmoothHalfWidth; ++m) {
+      if (m < 0 || m >= static_cast<long>(total_)) continue;
+      acc += has_qd_ ? buf_[static_cast<size_t>(m) - base_].qd : VectorJ::Zero(n_);
       ++cnt;
     }
-    qs[k] = acc / cnt;
+    qs_.push_back(acc / cnt);
   }
-  for (size_t k = 0; k < N; ++k) {
-    const size_t a = k == 0 ? 0 : k - 1, b = std::min(N - 1, k + 1);
-    const double dt = rec.samples[b].timestamp - rec.samples[a].timestamp;
-    out[k] = dt > 0 ? VectorJ((qs[b] - qs[a]) / dt) : VectorJ(VectorJ::Zero(n));
+}
+
+void JointAccelerationStream::emit(size_t end, const Ready& ready) {
+  for (; next_ < end; ++next_) {
+    const size_t k = next_, a = k == 0 ? 0 : k - 1, b = std::min(total_ - 1, k + 1);
+    const double dt = buf_[b - base_].timestamp - buf_[a - base_].timestamp;
+    ready(buf_[k - base_], dt > 0 ? VectorJ((qs_[b - base_] - qs_[a - base_]) / dt) : VectorJ(VectorJ::Zero(n_)));
   }
-  return out;
+  // what a later sample still needs: its own sample and the one before (the difference), and the
+  // samples a later smoothing window reaches back to
+  const size_t keep_from = std::min(next_ == 0 ? 0 : next_ - 1, qs_end_ < static_cast<size_t>(kSmoothHalfWidth) ? 0 : qs_end_ - kSmoothHalfWidth);
+  while (base_ < keep_from) {
+    buf_.pop_front();
+    qs_.pop_front();
+    ++base_;
+  }
+}
+
+void JointAccelerationStream::push(const RobotSample& s, const Ready& ready) {
+  if (target_) {
+    ready(s, s.target_qdd);
+    return;
+  }
+  buf_.push_back(s);
+  ++total_;
+  // a sample's smoothed velocity once its window is in; its acceleration once the next one's is
+  if (total_ > static_cast<size_t>(kSmoothHalfWidth)) smooth_up_to(total_ - kSmoothHalfWidth);
+  if (qs_end_ >= 2) emit(qs_end_ - 1, ready);
+}
+
+void JointAccelerationStream::finish(const Ready& ready) {
+  if (target_ || total_ == 0) return;
+  smooth_up_to(total_);
+  emit(total_, ready);
 }
 
 TwinModel identify_physics(const std::string& robot, const std::vector<TrainingRun>& given, const IdentOptions& o,

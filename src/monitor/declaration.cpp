@@ -38,31 +38,42 @@ bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInerti
   return a.mass == b.mass && (a.mass == 0.0 || a.com == b.com);
 }
 
-PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period) : steps_{{0, h.payload}} {
-  if (h.recording->median_period > 0.0) period = h.recording->median_period;
+PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period)
+    : PayloadTimeline(twin, h.payload, follow, h.recording->present) {
   const auto& smp = h.recording->samples;
-  judged_.assign(smp.size(), 1);
-  judged_observer_.assign(smp.size(), 1);
+  for (size_t k = 0; k < smp.size(); ++k) see(k, smp[k]);
+  finish(smp.size(), h.recording->median_period > 0.0 ? h.recording->median_period : period);
+}
+
+PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow, std::uint32_t present)
+    : twin_(&twin), follow_(follow && (present & kFieldPayload)), steps_{{0, payload, 0.0}} {}
+
+void PayloadTimeline::see(size_t k, const RobotSample& s) {
+  if (k == 0) steps_.front().t = s.timestamp;
+  if (!follow_ || !s.has(kFieldPayload)) return;
+  if (seen_any_ && s.payload == last_mass_ && std::equal(s.payload_cog, s.payload_cog + 3, last_cog_)) return;
+  seen_any_ = true;
+  last_mass_ = s.payload;
+  std::copy(s.payload_cog, s.payload_cog + 3, last_cog_);
+  if (!declaration_readable(s) || !declaration_refusal(*twin_, s).empty()) return;
+  const model::RigidBodyInertia now = declared_inertia(s, steps_.back().payload);
+  if (same_payload(now, steps_.back().payload)) return;
+  if (k == 0) {
+    steps_.back().payload = now;  // declared from the start: the run's payload
+    return;
+  }
+  steps_.push_back({k, now, s.timestamp});
+}
+
+void PayloadTimeline::finish(size_t samples, double period) {
+  judged_.assign(samples, 1);
+  judged_observer_.assign(samples, 1);
   const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
-  if (!follow || !(h.recording->present & kFieldPayload)) return;
-  const RobotSample* last = nullptr;  // the declaration read last (Monitor::same_declaration)
-  for (size_t k = 0; k < smp.size(); ++k) {
-    const RobotSample& s = smp[k];
-    if (!s.has(kFieldPayload) || (last != nullptr && s.payload == last->payload && std::equal(s.payload_cog, s.payload_cog + 3, last->payload_cog)))
-      continue;
-    last = &s;
-    if (!declaration_readable(s) || !declaration_refusal(twin, s).empty()) continue;
-    const model::RigidBodyInertia now = declared_inertia(s, steps_.back().payload);
-    if (same_payload(now, steps_.back().payload)) continue;
-    if (k == 0) {
-      steps_.back().payload = now;  // declared from the start: the run's payload
-      continue;
-    }
-    steps_.push_back({k, now});
-    std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(smp.size(), k + wait)), 0);
-    const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
-    std::fill(judged_observer_.begin() + static_cast<long>(k),
-              judged_observer_.begin() + static_cast<long>(std::min(smp.size(), k + observer_wait)), 0);
+  const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
+  for (size_t i = 1; i < steps_.size(); ++i) {
+    const size_t k = steps_[i].from;
+    std::fill(judged_.begin() + static_cast<long>(k), judged_.begin() + static_cast<long>(std::min(samples, k + wait)), 0);
+    std::fill(judged_observer_.begin() + static_cast<long>(k), judged_observer_.begin() + static_cast<long>(std::min(samples, k + observer_wait)), 0);
   }
 }
 

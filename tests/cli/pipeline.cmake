@@ -20,6 +20,13 @@ add_test(NAME cli.report_observer_and_envelope
   COMMAND sh -c "grep -c 'observer estimate and threshold' ${d}/report.html; grep -o 'The whole recording stays within the motion the twin was identified on' ${d}/report.html")
 set_tests_properties(cli.report_observer_and_envelope PROPERTIES FIXTURES_REQUIRED report
   PASS_REGULAR_EXPRESSION "^[1-9][0-9]*\nThe whole recording stays within the motion the twin was identified on\n$")
+# a recording of an arm the controller never drives (robot_mode 3, powered off, on every row) has no
+# fidelity or correlation to tabulate: the report says so (it failed with "fit metrics: no valid samples")
+add_test(NAME cli.report_nothing_driven
+  COMMAND sh -c "awk -F, -v OFS=, 'NR==1{for(i=1;i<=NF;i++) if($i==\"robot_mode\") c=i; print; next} {$c=3; print}' ${d}/fig.csv > ${d}/fig_off.csv && \
+$<TARGET_FILE:twinwatch> report --twin ${d}/twin.json ${d}/fig_off.csv -o ${d}/report_off.html && grep -o 'No sample of this recording is one in which the controller drives the arm' ${d}/report_off.html")
+set_tests_properties(cli.report_nothing_driven PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "report written to [^\n]*\nNo sample of this recording is one in which the controller drives the arm")
 add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.yaml -o ${d}/bad.csv)
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)

@@ -412,6 +412,72 @@ TEST_F(Fixture, TooFewSamplesLeftAfterDecimationOrScreeningAreRefused) {
   EXPECT_THROW(identify_physics("ur3e", {{excitation, {}}}, o, rep), InvalidArgument);
 }
 
+// validate reads a recording row by row: its accelerations come a few samples late from a stream,
+// which must give what the zero-phase smoothing over the whole recording gives (written out here as
+// it was before the stream: a centred mean of qd over +-3 samples cut at the ends, then central
+// differences on the timestamps), every sample once and in order, whatever the recording's length
+TEST(JointAccelerations, StreamedTheyAreTheWholeRecordingsZeroPhaseDifferences) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (const size_t N : {size_t{1}, size_t{2}, size_t{3}, size_t{4}, size_t{7}, size_t{8}, size_t{9}, size_t{500}}) {
+    device::Recording rec;
+    rec.n_dof = 2;
+    rec.present = kFieldActualQd;
+    double t = 0.0;
+    for (size_t k = 0; k < N; ++k) {
+      RobotSample s = RobotSample::empty(2);
+      t += k == N / 2 ? 0.006 : 0.002;  // one gap: the differences take the timestamps
+      s.timestamp = t;
+      s.qd << std::sin(3.0 * t) + 0.01 * g(rng), g(rng);
+      rec.samples.push_back(s);
+    }
+    std::vector<VectorJ> expected(N);
+    std::vector<VectorJ> qs(N);
+    for (size_t k = 0; k < N; ++k) {
+      VectorJ sum = VectorJ::Zero(2);
+      int cnt = 0;
+      for (long m = static_cast<long>(k) - 3; m <= static_cast<long>(k) + 3; ++m)
+        if (m >= 0 && m < static_cast<long>(N)) sum += rec.samples[static_cast<size_t>(m)].qd, ++cnt;
+      qs[k] = sum / cnt;
+    }
+    for (size_t k = 0; k < N; ++k) {
+      const size_t a = k == 0 ? 0 : k - 1, b = std::min(N - 1, k + 1);
+      const double dt = rec.samples[b].timestamp - rec.samples[a].timestamp;
+      expected[k] = dt > 0 ? VectorJ((qs[b] - qs[a]) / dt) : VectorJ(VectorJ::Zero(2));
+    }
+    JointAccelerationStream stream(2, rec.present);
+    std::vector<double> order;
+    std::vector<VectorJ> got;
+    size_t most_waiting = 0, pushed = 0;
+    const JointAccelerationStream::Ready take = [&](const RobotSample& s, const VectorJ& qdd) {
+      order.push_back(s.timestamp);
+      got.push_back(qdd);
+    };
+    for (const RobotSample& s : rec.samples) {
+      stream.push(s, take);
+      most_waiting = std::max(most_waiting, ++pushed - got.size());
+    }
+    stream.finish(take);
+    ASSERT_EQ(got.size(), N);
+    EXPECT_LE(most_waiting, 5u) << "the smoothing looks 4 samples ahead, no more";
+    for (size_t k = 0; k < N; ++k) {
+      EXPECT_EQ(order[k], rec.samples[k].timestamp) << "sample " << k << " of " << N;
+      EXPECT_EQ(got[k], expected[k]) << "sample " << k << " of " << N;
+    }
+    EXPECT_EQ(joint_accelerations(rec), expected);
+  }
+  // with the controller's target_qdd, that, at once
+  device::Recording rec;
+  rec.n_dof = 1;
+  rec.present = kFieldActualQd | kFieldTargetQdd;
+  JointAccelerationStream stream(1, rec.present);
+  RobotSample s = RobotSample::empty(1);
+  s.target_qdd << 0.7;
+  int handed = 0;
+  stream.push(s, [&](const RobotSample&, const VectorJ& qdd) { handed += qdd[0] == 0.7 ? 1 : 100; });
+  EXPECT_EQ(handed, 1);
+}
+
 TEST(Identify, RejectsRecordingsWithoutCurrent) {
   device::Recording r;
   r.path = "nocurrent.csv";

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -398,10 +399,10 @@ std::string payload_words(const model::RigidBodyInertia& p) {
 
 // what validate predicts with, where the recording declares a payload (RTDE payload / payload_cog):
 // each declaration the twin takes, as the monitor does, or, with --keep-payload, none; and the first
-// declaration the twin cannot take, with the monitor's reason
-void say_validated_payload(const device::Recording& rec, const std::string& path, const ident::TwinModel& twin,
-                           const model::RigidBodyInertia& given, const monitor::PayloadTimeline& payload, bool keep) {
-  if (!(rec.present & kFieldPayload)) return;
+// declaration the twin cannot take (`refused`, "" if none), with the monitor's reason
+void say_validated_payload(std::uint32_t present, const std::string& path, const model::RigidBodyInertia& given,
+                           const monitor::PayloadTimeline& payload, bool keep, const std::string& refused) {
+  if (!(present & kFieldPayload)) return;
   if (keep) {
     fmt::print(stderr, "note: {} declares the payload it carries; --keep-payload: validated with {} throughout\n", path,
                payload_words(given));
@@ -409,18 +410,12 @@ void say_validated_payload(const device::Recording& rec, const std::string& path
   }
   std::string taken = payload_words(payload.step_payload(0)) + " from the start";
   for (size_t i = 1; i < payload.steps(); ++i)
-    taken += fmt::format(", {} from {:.3f} s", payload_words(payload.step_payload(i)), rec.samples[payload.step_from(i)].timestamp);
+    taken += fmt::format(", {} from {:.3f} s", payload_words(payload.step_payload(i)), payload.step_time(i));
   fmt::print(stderr,
              "note: {}: validated with the payload it declares, as the monitor predicts ({}; --keep-payload keeps {} throughout); the "
              "monitor also follows a payload change it diagnoses, which validate does not\n",
              path, taken, payload_words(given));
-  for (const RobotSample& s : rec.samples) {
-    if (!s.has(kFieldPayload)) continue;
-    const std::string why = monitor::declaration_readable(s) ? monitor::declaration_refusal(twin, s) : "not a finite mass and centre of mass";
-    if (why.empty()) continue;
-    fmt::print(stderr, "note: {}: the declaration at {:.3f} s ({:g} kg) is not taken: {}\n", path, s.timestamp, s.payload, why);
-    break;
-  }
+  if (!refused.empty()) fmt::print(stderr, "note: {}: {}\n", path, refused);
 }
 
 struct ValidateOptions {
@@ -433,92 +428,133 @@ struct ValidateOptions {
 int run_validate(const ValidateOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
   const auto map = cli::load_column_map(o.column_map);
-  const device::Recording rec = device::read_recording(o.recording, map ? &*map : nullptr);
-  device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "validate");
-  cli::check_units(rec, twin.robot());
-  // R² and NRMSE need a spread of measured currents: on fewer samples they would print 0 as numbers
-  if (rec.samples.size() < kMinValidateSamples)
-    throw InvalidArgument(fmt::format("validate: {} has {} sample(s), expected at least {}", o.recording, rec.samples.size(),
-                                      kMinValidateSamples));
+  if (!o.predictions.empty()) require_output(o.predictions, {o.recording, o.twin, o.column_map});
+  // The recording is read twice, row by row, and never held, as `monitor` and `report` read one:
+  // first to check every row, its units, the timing of its steps and the payloads it declares, then
+  // to predict it (the accelerations' smoothing looks a few samples ahead: ident::JointAccelerationStream),
+  // the metrics summed as they come and the predictions written as they come. Held whole, an hour at
+  // 500 Hz took 1.7 GB (docs/validation.md, "A report of a long recording").
+  device::RecordingReader first(o.recording, map ? &*map : nullptr);
+  {
+    device::Recording head;  // (the header's facts: require_fields reads them from a Recording)
+    head.path = o.recording;
+    head.n_dof = first.n_dof();
+    head.present = first.present();
+    device::require_fields(head, kFieldActualQd | kFieldActualCurrent, "validate");
+  }
+  cli::UnitsCheck units(o.recording, first.n_dof(), first.present(), twin.robot());
   // the payload: the one given (else the twin's), and, as the monitor predicts (--keep-payload
   // aside), each payload the recording declares from its sample on (monitor::PayloadTimeline)
   const model::RigidBodyInertia given = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   twin.set_payload(given);
-  monitor::PayloadTimeline payload(twin, {&rec, given}, !o.keep_payload, monitor::MonitorConfig{}.nominal_period);
-  if (!o.json) say_validated_payload(rec, o.recording, twin, given, payload, o.keep_payload);
-  payload.start(twin);
-  const auto qdd = ident::joint_accelerations(rec);
-  const int n = twin.n_dof();
-  std::vector<std::vector<double>> meas(static_cast<size_t>(n)), pred(static_cast<size_t>(n));
-  VectorJ i;
-  ident::FrictionMemory memory;
+  monitor::PayloadTimeline payload(twin, given, !o.keep_payload, first.present());
+  size_t rows = 0, driven = 0;
+  std::string refused;  // the first declaration the twin cannot take, and why
+  const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) {
+    units.add(s);
+    payload.see(rows++, s);
+    driven += s.driven() ? 1 : 0;
+    if (!refused.empty() || !s.has(kFieldPayload)) return;
+    const std::string why = monitor::declaration_readable(s) ? monitor::declaration_refusal(twin, s) : "not a finite mass and centre of mass";
+    if (!why.empty()) refused = fmt::format("the declaration at {:.3f} s ({:g} kg) is not taken: {}", s.timestamp, s.payload, why);
+  });
+  units.check_period(scan.timing.median_period);
+  units.finish();
+  payload.finish(rows, scan.timing.median_period > 0 ? scan.timing.median_period : monitor::MonitorConfig{}.nominal_period);
+  // R² and NRMSE need a spread of measured currents: on fewer samples they would print 0 as numbers
+  if (rows < kMinValidateSamples)
+    throw InvalidArgument(fmt::format("validate: {} has {} sample(s), expected at least {}", o.recording, rows, kMinValidateSamples));
   // a sample in which the controller does not drive the arm (a stop, power off, brakes on) is no
   // driven motion to compare with the twin: left out of the metrics and the predictions file, said
-  std::vector<size_t> used;
-  for (size_t k = 0; k < rec.samples.size(); ++k) {
-    const RobotSample& s = rec.samples[k];
-    payload.advance(k, twin);
-    twin.advance(memory, s, qdd[k]);
-    if (!s.driven()) continue;
-    used.push_back(k);
-    twin.predict_current(s.q, s.qd, qdd[k], s.temperature, i, &memory);
-    for (int j = 0; j < n; ++j) {
-      meas[static_cast<size_t>(j)].push_back(s.current[j]);
-      pred[static_cast<size_t>(j)].push_back(i[j]);
-    }
-  }
-  if (used.size() < kMinValidateSamples)
+  if (driven < kMinValidateSamples)
     throw InvalidArgument(fmt::format("validate: {} has {} sample(s) in which the controller drives the arm, expected at least {}",
-                                      o.recording, used.size(), kMinValidateSamples));
-  if (used.size() < rec.samples.size() && !o.json)
+                                      o.recording, driven, kMinValidateSamples));
+  if (!o.json) say_validated_payload(scan.present, o.recording, given, payload, o.keep_payload, refused);
+  if (driven < rows && !o.json)
     fmt::print(stderr, "note: {}: {} sample(s) in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode not "
                        "NORMAL/REDUCED) are left out\n",
-               o.recording, rec.samples.size() - used.size());
+               o.recording, rows - driven);
+  payload.start(twin);
+  const int n = twin.n_dof();
+  std::vector<signal::FitAccumulator> fit(static_cast<size_t>(n));
+  std::vector<double> first_measured(static_cast<size_t>(n), NAN);  // (a channel that never changes is said with its value)
+  // per sample: time, measured and predicted current of every joint (for plots), written checked: a
+  // full disk names the file
+  std::ofstream predictions;
+  fmt::memory_buffer line;
   if (!o.predictions.empty()) {
-    require_output(o.predictions, {o.recording, o.twin, o.column_map});
-    // per sample: time, measured and predicted current of every joint (for plots)
-    // built whole, then written checked: a full disk names the file (it was "cannot write to file")
-    fmt::memory_buffer buf;
-    auto w = std::back_inserter(buf);
+    predictions.open(o.predictions, std::ios::binary);
+    if (!predictions) throw PathError(o.predictions + ": cannot open for writing");
+    auto w = std::back_inserter(line);
     fmt::format_to(w, "timestamp");
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_current_{}", j);
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_current_{}", j);
     fmt::format_to(w, "\n");
-    for (size_t k = 0; k < used.size(); ++k) {
-      fmt::format_to(w, "{}", rec.samples[used[k]].timestamp);
-      for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", meas[static_cast<size_t>(j)][k]);
-      for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", pred[static_cast<size_t>(j)][k]);
-      fmt::format_to(w, "\n");
-    }
-    write_text_file(o.predictions, fmt::to_string(buf));
+    predictions.write(line.data(), static_cast<std::streamsize>(line.size()));
   }
+  VectorJ i;
+  ident::FrictionMemory memory;
+  size_t k = 0;
+  const ident::JointAccelerationStream::Ready predict = [&](const RobotSample& s, const VectorJ& qdd) {
+    payload.advance(k++, twin);
+    twin.advance(memory, s, qdd);
+    if (!s.driven()) return;
+    twin.predict_current(s.q, s.qd, qdd, s.temperature, i, &memory);
+    for (int j = 0; j < n; ++j) {
+      const size_t J = static_cast<size_t>(j);
+      fit[J].add(s.current[j], i[j]);
+      if (std::isnan(first_measured[J])) first_measured[J] = s.current[j];
+    }
+    if (!predictions.is_open()) return;
+    line.clear();
+    auto w = std::back_inserter(line);
+    fmt::format_to(w, "{}", s.timestamp);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", s.current[j]);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", i[j]);
+    fmt::format_to(w, "\n");
+    predictions.write(line.data(), static_cast<std::streamsize>(line.size()));
+  };
+  ident::JointAccelerationStream accelerations(n, scan.present);
+  device::RecordingReader again(o.recording, map ? &*map : nullptr);
+  const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) { accelerations.push(s, predict); });
+  accelerations.finish(predict);
+  if (replayed < scan.rows) {
+    if (predictions.is_open()) {  // (a part of the predictions is none: not left behind)
+      predictions.close();
+      std::remove(o.predictions.c_str());
+    }
+    throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to validate on (the file was cut or replaced while it "
+                                         "was read): validate a copy",
+                                         o.recording, replayed, scan.rows));
+  }
+  if (predictions.is_open()) close_written(predictions, o.predictions);
   nlohmann::json out;
   out["recording"] = o.recording;
   out["twin"] = o.twin;
-  if (used.size() < rec.samples.size()) out["samples_not_driven"] = rec.samples.size() - used.size();
+  if (driven < rows) out["samples_not_driven"] = rows - driven;
   // the payload predicted with, from each time on (the declared ones taken, as in the note)
   for (size_t i = 0; i < payload.steps(); ++i) {
     const model::RigidBodyInertia& p = payload.step_payload(i);
-    out["payload"].push_back({{"from_s", rec.samples[payload.step_from(i)].timestamp},
+    out["payload"].push_back({{"from_s", payload.step_time(i)},
                               {"mass", p.mass},
                               {"com", {p.com.x(), p.com.y(), p.com.z()}}});
   }
   if (!o.json) {
     fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
-               used.size());
+               driven);
     fmt::print("{:<8}", "metric");
     for (int j = 0; j < n; ++j) fmt::print(" {:>8}", fmt::format("J{}", j + 1));
     fmt::print("\n");
   }
   std::vector<signal::FitMetrics> ms;
-  for (int j = 0; j < n; ++j) ms.push_back(signal::fit_metrics(meas[static_cast<size_t>(j)], pred[static_cast<size_t>(j)]));
+  for (int j = 0; j < n; ++j) ms.push_back(fit[static_cast<size_t>(j)].metrics());
   // a measured channel that never changes (a dead or stuck sensor, a joint logged as a constant) has
   // no R² or NRMSE, and at 0 throughout no d_tau: null in JSON, n/a in the table, and said
   std::vector<char> constant(static_cast<size_t>(n)), zero(static_cast<size_t>(n));
   for (int j = 0; j < n; ++j) {
     const auto J = static_cast<size_t>(j);
     constant[J] = !(ms[J].range > 0.0);
-    zero[J] = constant[J] && meas[J].front() == 0.0;
+    zero[J] = constant[J] && first_measured[J] == 0.0;
   }
   const auto value = [](bool defined, double v) { return defined ? nlohmann::json(v) : nlohmann::json(nullptr); };
   for (int j = 0; j < n; ++j) {
@@ -526,7 +562,7 @@ int run_validate(const ValidateOptions& o) {
     const signal::FitMetrics& m = ms[J];
     out["joints"].push_back({{"rmse", m.rmse}, {"mae", m.mae}, {"r2", value(!constant[J], m.r2)},
                              {"nrmse_pct", value(!constant[J], m.nrmse_pct)}, {"d_tau_pct", value(!zero[J], m.rel_err_pct)}});
-    if (constant[J]) out["joints"].back()["measured_constant"] = meas[J].front();
+    if (constant[J]) out["joints"].back()["measured_constant"] = first_measured[J];
   }
   out["units"] = {{"rmse", "A"}, {"mae", "A"}, {"r2", "1"}, {"nrmse_pct", "% of the measured range"},
                   {"d_tau_pct", "% (norm of the error / norm of the measured current)"}, {"measured_constant", "A"},
@@ -551,7 +587,7 @@ int run_validate(const ValidateOptions& o) {
   for (int j = 0; j < n; ++j)
     if (constant[static_cast<size_t>(j)])
       fmt::print("note: J{}'s measured current is {:g} A in every sample: R² and NRMSE are undefined (n/a); a dead or stuck channel?\n",
-                 j + 1, meas[static_cast<size_t>(j)].front());
+                 j + 1, first_measured[static_cast<size_t>(j)]);
   return 0;
 }
 

@@ -8,6 +8,8 @@
 /// each sample comes from the previous pass's torque, so every pass re-splits the samples. Velocity reversals (|qd_j| < reversal_screen) can be left out of the fit
 /// [HESR §III-E]. The drive gain g_j comes out as 1 / (payload coefficient) when some recordings
 /// were made with a known payload.
+#include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <string>
@@ -116,6 +118,32 @@ struct IdentReport {
 /// Joint accelerations of a recording: target_qdd when recorded, else a zero-phase smoothed
 /// central difference of actual_qd. Returns one vector per sample.
 std::vector<VectorJ> joint_accelerations(const device::Recording& rec);
+
+/// joint_accelerations a sample at a time, for a recording read row by row (validate): the same
+/// values, each handed over with its sample, in order, once known: at once with target_qdd, else when
+/// the samples the zero-phase smoothing looks ahead to have come (4 at the smoothing's half width of
+/// 3), the last ones at finish(). Holds a dozen samples.
+class JointAccelerationStream {
+ public:
+  using Ready = std::function<void(const RobotSample&, const VectorJ&)>;
+  /// `present`: the recording's fields (SampleField flags)
+  JointAccelerationStream(int n_dof, std::uint32_t present);
+  void push(const RobotSample& s, const Ready& ready);
+  /// the end of the recording: the samples still waiting for what came after them
+  void finish(const Ready& ready);
+
+ private:
+  void smooth_up_to(size_t end);  // the smoothed velocity of samples [qs_end_, end), their windows cut at total_
+  void emit(size_t end, const Ready& ready);  // accelerations of samples [next_, end)
+  int n_;
+  bool target_, has_qd_;
+  size_t total_ = 0;        // samples pushed
+  size_t base_ = 0;         // global index of buf_.front() and qs_.front()
+  size_t qs_end_ = 0;       // smoothed velocities known for [0, qs_end_)
+  size_t next_ = 0;         // the next sample to hand over
+  std::deque<RobotSample> buf_;
+  std::deque<VectorJ> qs_;
+};
 
 /// Identifies the physics twin. Throws InvalidArgument when the data cannot support it (no
 /// current column, too few samples, robot/recording joint counts differ).

@@ -3,6 +3,7 @@
 // monitor takes it, shared by the monitor (Monitor::take_declared_payload) and the learning that must
 // predict what it predicts (learn_thresholds, learn_trend_temperature, and validate's prediction).
 #include <algorithm>
+#include <cstdint>
 
 #include <string>
 #include <vector>
@@ -53,6 +54,12 @@ class PayloadTimeline {
  public:
   /// `period`: the recording's sampling period where it has none of its own (the settling waits)
   PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period);
+  /// The same for a run read row by row and not held (validate): see() each sample in order, then
+  /// finish(). `present`: the run's fields (SampleField flags); `twin` must outlive see()
+  PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow, std::uint32_t present);
+  void see(size_t k, const RobotSample& s);
+  /// after the last see(): `samples` seen, `period` their sampling period (the settling waits)
+  void finish(size_t samples, double period);
   /// Sets the run's first payload on t; advance() then follows it.
   void start(ident::TwinModel& t) {
     next_ = 1;
@@ -71,6 +78,7 @@ class PayloadTimeline {
   /// The payloads in order (step 0 from sample 0: the run's own, or what it declares from its start)
   size_t steps() const { return steps_.size(); }
   size_t step_from(size_t i) const { return steps_[i].from; }
+  double step_time(size_t i) const { return steps_[i].t; }  ///< the timestamp of step_from's sample [s]
   const model::RigidBodyInertia& step_payload(size_t i) const { return steps_[i].payload; }
   double heaviest() const {
     double m = 0.0;
@@ -82,7 +90,13 @@ class PayloadTimeline {
   struct Step {
     size_t from = 0;
     model::RigidBodyInertia payload;
+    double t = 0.0;
   };
+  const ident::TwinModel* twin_;
+  bool follow_;
+  bool seen_any_ = false;       // a declaration read yet
+  double last_mass_ = 0.0;      // the declaration read last (Monitor::same_declaration)
+  double last_cog_[3] = {0.0, 0.0, 0.0};
   std::vector<Step> steps_;
   std::vector<char> judged_, judged_observer_;
   size_t next_ = 1;
