@@ -1194,6 +1194,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   // it streams to what the page draws (ui::SeriesEnvelope: at most two points per pixel column) and
   // the tables' figures summed as they come. Held whole, an hour at 500 Hz took 2.8 GB (a shift's
   // recording did not fit this 24 GB machine; docs/validation.md, "A report of a long recording").
+  device::require_rereadable(recording, "report");
   device::RecordingReader first(recording, map);
   {
     device::Recording head;  // (the header's facts: require_fields reads them from a Recording)

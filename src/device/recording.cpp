@@ -319,6 +319,7 @@ bool RecordingReader::next(RobotSample& s) {
     }
     if (cells.size() != header.size())
       throw ParseError(path, ln, "", fmt::format("expected {} cells (as in the header), got {}", header.size(), cells.size()));
+    hash_ = (hash_ ^ std::hash<std::string_view>{}(line)) * 1099511628211ull;  // (FNV-style mixing of each row's hash)
     s = RobotSample::empty(n);
     s.present = present_;
     for (size_t c = 0; c < cells.size(); ++c) {
@@ -388,7 +389,18 @@ RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const 
   scan.timing = recording_timing(reader.file(), std::move(dts));
   scan.n_dof = reader.n_dof();
   scan.present = reader.present();
+  scan.rows_hash = reader.rows_hash();
   return scan;
+}
+
+void require_rereadable(const std::string& path, const std::string& user) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st))
+    throw InvalidArgument(fmt::format("{}: {} reads a recording twice (a check of every row, then the work) and never holds it; this is "
+                                      "not a file that can be read twice (a pipe, a process substitution, /dev/stdin?): save it to a "
+                                      "file first",
+                                      path, user));
 }
 
 long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each) {
@@ -403,6 +415,9 @@ long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::f
     previous = s.timestamp;
     each(s);
   }
+  if (k == scan.rows && again.rows_hash() != scan.rows_hash)
+    throw std::runtime_error(fmt::format("{}: its rows changed while it was read (replaced or rewritten by another program?): read a copy",
+                                         again.file()));
   return k;
 }
 

@@ -28,6 +28,12 @@ double nice_step(double range, int target) {
   return m * mag;
 }
 
+// the x range a plot draws: [x0, x1], one unit wide where the two are equal
+std::pair<double, double> drawn_range(double x0, double x1) {
+  if (!(x1 >= x0)) return {0.0, 1.0};
+  return {x0, x1 == x0 ? x0 + 1.0 : x1};
+}
+
 std::string fmt_tick(double v) {
   if (v == 0.0) return "0";
   const double a = std::abs(v);
@@ -52,11 +58,6 @@ std::string HtmlReport::escape(const std::string& s) {
   return o;
 }
 
-// the x range a plot draws: [x0, x1], one unit wide where the two are equal
-std::pair<double, double> drawn_range(double x0, double x1) {
-  if (!(x1 >= x0)) return {0.0, 1.0};
-  return {x0, x1 == x0 ? x0 + 1.0 : x1};
-}
 
 SeriesEnvelope::SeriesEnvelope(double x0, double x1, int columns) : columns_(std::max(1, columns)) {
   if (!std::isfinite(x0) || !std::isfinite(x1) || x1 < x0)

@@ -8,6 +8,9 @@
 #include <fstream>
 #include <random>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/log.hpp"
 #include "error_text.hpp"
@@ -212,6 +215,25 @@ TEST(Recording, ASecondPassGivesTheRowsTheScanCheckedWithTheirGaps) {
   std::ofstream(p) << csv.substr(0, csv.find("0.04,"));
   RecordingReader cut(p);
   EXPECT_EQ(replay_rows(cut, scan, [](RobotSample&) {}), 18);  // rows 0-19 less 10 and 11
+  // one rewritten with as many rows under the same header (another run on the same clock): what the
+  // second pass handed over is not what the first checked
+  std::string other_run = csv;
+  other_run.replace(other_run.find(",0.1,0.5,"), 9, ",0.2,0.5,");
+  std::ofstream(p) << other_run;
+  RecordingReader rewritten(p);
+  try {
+    replay_rows(rewritten, scan, [](RobotSample&) {});
+    ADD_FAILURE() << "a recording rewritten between the passes was read on";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("twice.csv: its rows changed while it was read"));
+  }
+  // a pipe cannot be read twice: refused by name before any pass
+  const std::string fifo = tmp("pipe.csv");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { require_rereadable(fifo, "report"); }),
+              HasSubstr("pipe.csv: report reads a recording twice"));
+  ::unlink(fifo.c_str());
+  EXPECT_NO_THROW(require_rereadable(p, "report"));
   // one with another header was replaced by another recording
   std::ofstream(p) << "timestamp,actual_q_0,actual_q_1\n0,0.1,0.2\n";
   RecordingReader other(p);

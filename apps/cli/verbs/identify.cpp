@@ -9,7 +9,6 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdio>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -434,6 +433,7 @@ int run_validate(const ValidateOptions& o) {
   // to predict it (the accelerations' smoothing looks a few samples ahead: ident::JointAccelerationStream),
   // the metrics summed as they come and the predictions written as they come. Held whole, an hour at
   // 500 Hz took 1.7 GB (docs/validation.md, "A report of a long recording").
+  device::require_rereadable(o.recording, "validate");
   device::RecordingReader first(o.recording, map ? &*map : nullptr);
   {
     device::Recording head;  // (the header's facts: require_fields reads them from a Recording)
@@ -480,17 +480,18 @@ int run_validate(const ValidateOptions& o) {
   std::vector<double> first_measured(static_cast<size_t>(n), NAN);  // (a channel that never changes is said with its value)
   // per sample: time, measured and predicted current of every joint (for plots), written checked: a
   // full disk names the file
-  std::ofstream predictions;
+  // (beside its target until complete: a recording found changed while it was read leaves no part)
+  std::optional<ReplacingFile> predictions_file;
+  std::ofstream* predictions = nullptr;
   fmt::memory_buffer line;
   if (!o.predictions.empty()) {
-    predictions.open(o.predictions, std::ios::binary);
-    if (!predictions) throw PathError(o.predictions + ": cannot open for writing");
+    predictions = &predictions_file.emplace(o.predictions).stream();
     auto w = std::back_inserter(line);
     fmt::format_to(w, "timestamp");
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_current_{}", j);
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_current_{}", j);
     fmt::format_to(w, "\n");
-    predictions.write(line.data(), static_cast<std::streamsize>(line.size()));
+    predictions->write(line.data(), static_cast<std::streamsize>(line.size()));
   }
   VectorJ i;
   ident::FrictionMemory memory;
@@ -505,29 +506,24 @@ int run_validate(const ValidateOptions& o) {
       fit[J].add(s.current[j], i[j]);
       if (std::isnan(first_measured[J])) first_measured[J] = s.current[j];
     }
-    if (!predictions.is_open()) return;
+    if (predictions == nullptr) return;
     line.clear();
     auto w = std::back_inserter(line);
     fmt::format_to(w, "{}", s.timestamp);
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", s.current[j]);
     for (int j = 0; j < n; ++j) fmt::format_to(w, ",{}", i[j]);
     fmt::format_to(w, "\n");
-    predictions.write(line.data(), static_cast<std::streamsize>(line.size()));
+    predictions->write(line.data(), static_cast<std::streamsize>(line.size()));
   };
   ident::JointAccelerationStream accelerations(n, scan.present);
   device::RecordingReader again(o.recording, map ? &*map : nullptr);
   const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) { accelerations.push(s, predict); });
   accelerations.finish(predict);
-  if (replayed < scan.rows) {
-    if (predictions.is_open()) {  // (a part of the predictions is none: not left behind)
-      predictions.close();
-      std::remove(o.predictions.c_str());
-    }
+  if (replayed < scan.rows)
     throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to validate on (the file was cut or replaced while it "
                                          "was read): validate a copy",
                                          o.recording, replayed, scan.rows));
-  }
-  if (predictions.is_open()) close_written(predictions, o.predictions);
+  if (predictions_file) predictions_file->commit();
   nlohmann::json out;
   out["recording"] = o.recording;
   out["twin"] = o.twin;

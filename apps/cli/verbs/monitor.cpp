@@ -199,6 +199,7 @@ int run_monitor(const MonitorOptions& o) {
   device::RecordingScan scan;
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
+    device::require_rereadable(o.recording, "monitor");
     device::RecordingReader first(o.recording, map ? &*map : nullptr);
     rec.path = o.recording;
     rec.n_dof = first.n_dof();

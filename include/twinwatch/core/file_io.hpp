@@ -132,4 +132,63 @@ inline void require_output(const std::string& out, const std::vector<std::string
       throw PathError(out + ": cannot write: it is the input " + in + ", which it would replace");
 }
 
+/// An output file written as it comes and put in place only once complete (commit()): a regular
+/// file, or a new one, is written beside its target under a temporary name (TARGET.tmpPID) and renamed
+/// over it, so a failure part-way (a full disk, an input found cut or changed while it was read) leaves
+/// what the target held and no part of the output; a device or a pipe (/dev/stdout) is written in
+/// place (and never removed), as is a file beside which nothing can be created. Destroyed without
+/// commit(), the temporary is removed. Writes are checked as close_written checks them, naming the path.
+class ReplacingFile {
+ public:
+  explicit ReplacingFile(const std::string& path) : path_(path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);  // (through a symbolic link)
+    if (!fs::exists(st) || fs::is_regular_file(st)) {
+      existed_ = fs::exists(st);
+      perms_ = st.permissions();
+      target_ = existed_ ? fs::canonical(path, ec) : fs::path(path);
+      tmp_ = target_;
+      tmp_ += ".tmp" + std::to_string(static_cast<long>(::getpid()));
+      errno = 0;
+      f_.open(tmp_, std::ios::binary | std::ios::trunc);
+      if (!f_) tmp_.clear();  // no file can be made beside it: in place
+    }
+    if (tmp_.empty()) {
+      errno = 0;
+      f_.open(path, std::ios::binary | std::ios::trunc);
+      if (!f_) throw PathError(path + ": cannot open for writing: " + (errno ? std::strerror(errno) : "unknown reason"));
+    }
+  }
+  ReplacingFile(const ReplacingFile&) = delete;
+  ReplacingFile& operator=(const ReplacingFile&) = delete;
+  ~ReplacingFile() {
+    if (committed_ || tmp_.empty()) return;
+    f_.close();
+    std::error_code ec;
+    std::filesystem::remove(tmp_, ec);
+  }
+  std::ofstream& stream() { return f_; }
+  /// Closes the file (throws as close_written) and puts it in place.
+  void commit() {
+    close_written(f_, path_);
+    committed_ = true;
+    if (tmp_.empty()) return;
+    std::error_code ec;
+    if (existed_) std::filesystem::permissions(tmp_, perms_, ec);
+    std::filesystem::rename(tmp_, target_, ec);
+    if (ec) {
+      std::filesystem::remove(tmp_, ec);
+      throw std::runtime_error(path_ + ": cannot write: " + ec.message());
+    }
+  }
+
+ private:
+  std::string path_;
+  std::filesystem::path target_, tmp_;  // tmp_ empty: written in place
+  std::filesystem::perms perms_ = std::filesystem::perms::unknown;
+  bool existed_ = false, committed_ = false;
+  std::ofstream f_;
+};
+
 }  // namespace twinwatch

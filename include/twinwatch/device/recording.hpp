@@ -83,6 +83,8 @@ class RecordingReader {
   bool next(RobotSample& s);
   /// Reads on without saying a cut-off last row again (a second pass over a file already read)
   void quiet() { say_cut_ = false; }
+  /// A hash of the rows read so far, as written (a second pass checks it read the rows the first did)
+  std::uint64_t rows_hash() const { return hash_; }
 
  private:
   struct Target {
@@ -102,6 +104,7 @@ class RecordingReader {
   long rows = 0;
   double last_timestamp = 0.0;
   bool say_cut_ = true;
+  std::uint64_t hash_ = 14695981039346656037ull;
   std::string line_;
   std::vector<std::string_view> cells_;
 };
@@ -125,16 +128,24 @@ struct RecordingScan {
   long rows = 0;
   int n_dof = 0;              ///< the reader's, to check the second pass against
   std::uint32_t present = 0;  ///< the reader's
+  std::uint64_t rows_hash = 0;  ///< the reader's RecordingReader::rows_hash after the last row
 };
 RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const RobotSample&)>& each);
 
-/// The second pass over a recording read twice and never held (offline monitor, report): the rows the
-/// scan checked, from a reader opened again, each with gap_before marked from the scan's timing (as
-/// read_recording marks it), handed to `each`. Returns how many there were: fewer than scan.rows when
-/// the file was cut or replaced in between (the caller says so; a file still being written has more,
-/// left unread). Throws std::runtime_error naming the file when its header changed since the scan
-/// (another program writing it), and what next() throws.
+/// The second pass over a recording read twice and never held (offline monitor, report, validate):
+/// the rows the scan checked, from a reader opened again, each with gap_before marked from the scan's
+/// timing (as read_recording marks it), handed to `each`. Returns how many there were: fewer than
+/// scan.rows when the file was cut in between (the caller says so; a file still being written has
+/// more, left unread). Throws std::runtime_error naming the file when its header changed since the
+/// scan, or, once all rows are read, when they are not the rows the scan read (the file replaced or
+/// rewritten by another program: what `each` was handed is not what was checked), and what next()
+/// throws.
 long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each);
+
+/// Throws InvalidArgument naming `path` unless it is a file that can be read twice (a regular file,
+/// or a link to one): `user` (e.g. "report") reads a recording twice and never holds it, which a pipe,
+/// a process substitution or /dev/stdin cannot give.
+void require_rereadable(const std::string& path, const std::string& user);
 
 /// The stretches of a recording in which the controller drives the arm (RobotSample::driven: robot_mode
 /// RUNNING, safety_mode NORMAL or REDUCED, where the file has those columns), each as a recording of
