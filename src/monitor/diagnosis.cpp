@@ -821,6 +821,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   }
   const double samples = static_cast<double>(window.size());
   VectorJ weight_j = VectorJ::Ones(n);
+  VectorJ held2 = VectorJ::Zero(n);  // (F / sqrt 3)^2 of a weighted resting joint
   bool weighted = false;
   if (options.static_friction.size() == n && window.front().tau_ext_level.size() == n)
     for (int j = 0; j < n; ++j) {
@@ -833,10 +834,12 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
       // cannot be weighed against the others: the window is scored in N·m, as before
       if (!(held > 0.0 && sd > 0.0 && std::isfinite(held) && std::isfinite(sd))) {
         weight_j = VectorJ::Ones(n);
+        held2 = VectorJ::Zero(n);
         weighted = false;
         break;
       }
       weight_j[j] = sd / std::hypot(sd, held);
+      held2[j] = held * held;
       weighted = true;
     }
   const double total_raw = total;
@@ -847,12 +850,19 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
       total = tw;
     } else {
       weight_j = VectorJ::Ones(n);
+      held2 = VectorJ::Zero(n);
       weighted = false;
     }
   }
   const VectorJ w2 = weight_j.cwiseAbs2();
-  // (the weighted residual's noise variance: the reference's on a moving joint, whose weight is 1)
-  const std::optional<VectorJ> noise_w = noise_var ? std::optional<VectorJ>(noise_var->cwiseProduct(w2)) : std::nullopt;
+  // the weighted residual's noise variance: the reference's on a moving joint (weight 1); on a
+  // resting one, what its residual is uncertain by, its noise and the torque its friction may hold
+  // (variance F^2 / 3), both shrunk by its weight, as the weight shrinks its residual. With the noise
+  // alone, a resting joint's held torque counted as signal that a contact's per-sample force could
+  // claim: a 0.5 N·m J6 resistance on the pick-and-place, with J2 holding -0.68 N·m at a stop, read
+  // as "contact on link 1, 23 %" with a false alarm (session 41's leftover, docs/validation.md)
+  const std::optional<VectorJ> noise_w =
+      noise_var ? std::optional<VectorJ>((*noise_var + held2).cwiseProduct(w2)) : std::nullopt;
   const VectorJ* weight = weighted ? &weight_j : nullptr;
   // a hypothesis on one joint, fitted unweighted (its size is the joint's), scored weighted
   const auto reweigh = [&](Hypothesis& h, int j) {

@@ -236,6 +236,20 @@ TEST_F(MonitorLoop, AResistanceOnAJointThatStopsBetweenMovesIsNoCurrentOffset) {
   }
 }
 
+// A constant offset on one current channel (a drifting sensor) is no resistance: an offset aids the
+// motion half of the time, and friction that opposes motion explains none of it. Scored on the free
+// fit of a Coulomb and a viscous term, the same window read "extra friction on J4 ≈ 0.00 N·m" (the
+// library's stream_and_sensor_faults): a resistance is scored on the non-negative fit it reports
+TEST_F(MonitorLoop, AConstantOffsetOnACurrentChannelIsASensorFaultNotAResistance) {
+  const auto ev = monitor(run(scenario(19, 30, 0.5, "  - {type: current_offset, joint: 4, onset: 22, magnitude: 0.3}\n")), 0.5);
+  SCOPED_TRACE(listing(ev));
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].fault, FaultClass::SensorFault);
+  EXPECT_EQ(ev[0].joint, 3);
+  EXPECT_GE(ev[0].t_start, 22.0);
+  EXPECT_LT(ev[0].t_detected - 22.0, 0.1);
+}
+
 // audit of session 16: a persistent fault dips below its threshold at reversals; each raise within
 // the merge gap continues the same event, and that event used to be reported closed at every dip
 // (five records of one J5 resistance in the events file and the store). Its first, short-window
