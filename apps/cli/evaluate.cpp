@@ -493,6 +493,22 @@ void UnitsCheck::finish() {
   currents_.clear();
 }
 
+device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
+                                     const std::string& verb, const std::string& user,
+                                     const std::function<void(const RobotSample&)>& each) {
+  device::require_rereadable(path, verb);
+  device::RecordingReader reader(path, map);
+  device::require_fields(reader, kFieldActualQd | kFieldActualCurrent, user);
+  UnitsCheck units(path, reader.n_dof(), reader.present(), robot);
+  const device::RecordingScan scan = device::scan_rows(reader, [&](const RobotSample& s) {
+    units.add(s);
+    if (each) each(s);
+  });
+  units.check_period(scan.timing.median_period);
+  units.finish();
+  return scan;
+}
+
 void check_units(const device::Recording& rec, const model::RobotModel& robot) {
   UnitsCheck check(rec.path, rec.n_dof, rec.present, robot);
   check.check_period(rec.median_period);
@@ -1194,24 +1210,11 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   // it streams to what the page draws (ui::SeriesEnvelope: at most two points per pixel column) and
   // the tables' figures summed as they come. Held whole, an hour at 500 Hz took 2.8 GB (a shift's
   // recording did not fit this 24 GB machine; docs/validation.md, "A report of a long recording").
-  device::require_rereadable(recording, "report");
-  device::RecordingReader first(recording, map);
-  {
-    device::Recording head;  // (the header's facts: require_fields reads them from a Recording)
-    head.path = recording;
-    head.n_dof = first.n_dof();
-    head.present = first.present();
-    device::require_fields(head, kFieldActualQd | kFieldActualCurrent, "the report");
-  }
-  UnitsCheck units(recording, first.n_dof(), first.present(), twin.robot());  // (as monitor and validate)
   double t_first = NAN, t_last = NAN;
-  const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) {
-    units.add(s);
+  const device::RecordingScan scan = scan_recording(recording, map, twin.robot(), "report", "the report", [&](const RobotSample& s) {
     if (std::isnan(t_first)) t_first = s.timestamp;
     t_last = s.timestamp;
   });
-  units.check_period(scan.timing.median_period);
-  units.finish();
   const double period = scan.timing.median_period;
   // its tables' R², NRMSE and correlations need a spread of samples: on one row they printed 0 and
   // 2155 % as results (audit of session 22); validate refuses the same

@@ -3,6 +3,7 @@
 // runs, then monitor scenarios and score the events against their labels (evaluation code: the
 // only place that reads labels, DESIGN.md rule 1).
 #include <array>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -59,6 +60,15 @@ class UnitsCheck {
   std::vector<std::vector<float>> currents_;
 };
 inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-percentile |current| (mA read as A)
+
+/// The first pass over a recording that monitor, report and validate read twice and never hold: one
+/// that cannot be read twice is refused for `verb` (device::require_rereadable), one without
+/// actual_qd / actual_current for `user` (device::require_fields); then every row is checked, its
+/// units too (UnitsCheck, with the median period of the steps), and handed to `each` (may be empty).
+/// Returns what the second pass needs (device::replay_rows).
+device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
+                                     const std::string& verb, const std::string& user,
+                                     const std::function<void(const RobotSample&)>& each = {});
 
 inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's |current| in a training run
 

@@ -509,12 +509,22 @@ std::vector<Recording> driven_segments(const Recording& rec, double min_seconds,
   return out;
 }
 
-void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user) {
+namespace {
+void require_fields(const std::string& path, int n_dof, std::uint32_t present, std::uint32_t fields, const std::string& user) {
   for (const Group& g : kGroups)
-    if (g.flag != 0 && (fields & g.flag) && !(rec.present & g.flag))
-      throw ParseError(rec.path, 1, fmt::format("{}0", g.prefix),
+    if (g.flag != 0 && (fields & g.flag) && !(present & g.flag))
+      throw ParseError(path, 1, fmt::format("{}0", g.prefix),
                        fmt::format("missing required column: {} needs {}0..{}{}, the header has none of them", user, g.prefix,
-                                   g.prefix, rec.n_dof - 1));
+                                   g.prefix, n_dof - 1));
+}
+}  // namespace
+
+void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user) {
+  require_fields(rec.path, rec.n_dof, rec.present, fields, user);
+}
+
+void require_fields(const RecordingReader& reader, std::uint32_t fields, const std::string& user) {
+  require_fields(reader.file(), reader.n_dof(), reader.present(), fields, user);
 }
 
 RecordingWriter::RecordingWriter(const std::string& path, int n_dof, std::uint32_t fields)

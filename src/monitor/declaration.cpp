@@ -39,14 +39,14 @@ bool same_payload(const model::RigidBodyInertia& a, const model::RigidBodyInerti
 }
 
 PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period)
-    : PayloadTimeline(twin, h.payload, follow, h.recording->present) {
+    : PayloadTimeline(twin, h.payload, follow && (h.recording->present & kFieldPayload)) {
   const auto& smp = h.recording->samples;
   for (size_t k = 0; k < smp.size(); ++k) see(k, smp[k]);
   finish(smp.size(), h.recording->median_period > 0.0 ? h.recording->median_period : period);
 }
 
-PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow, std::uint32_t present)
-    : twin_(&twin), follow_(follow && (present & kFieldPayload)), steps_{{0, payload, 0.0}} {}
+PayloadTimeline::PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow)
+    : twin_(&twin), follow_(follow), steps_{{0, payload, 0.0}} {}
 
 void PayloadTimeline::see(size_t k, const RobotSample& s) {
   if (k == 0) steps_.front().t = s.timestamp;

@@ -823,6 +823,11 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   VectorJ weight_j = VectorJ::Ones(n);
   VectorJ held2 = VectorJ::Zero(n);  // (F / sqrt 3)^2 of a weighted resting joint
   bool weighted = false;
+  const auto unweighted = [&] {
+    weight_j = VectorJ::Ones(n);
+    held2 = VectorJ::Zero(n);
+    weighted = false;
+  };
   if (options.static_friction.size() == n && window.front().tau_ext_level.size() == n)
     for (int j = 0; j < n; ++j) {
       if (rest[j] < kRestThrough * samples) continue;
@@ -833,9 +838,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
       // a resting joint whose friction or level is unknown (0: a sequential twin, no observer)
       // cannot be weighed against the others: the window is scored in N·m, as before
       if (!(held > 0.0 && sd > 0.0 && std::isfinite(held) && std::isfinite(sd))) {
-        weight_j = VectorJ::Ones(n);
-        held2 = VectorJ::Zero(n);
-        weighted = false;
+        unweighted();
         break;
       }
       weight_j[j] = sd / std::hypot(sd, held);
@@ -846,13 +849,8 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   if (weighted) {
     double tw = 0.0;
     for (const auto& smp : window) tw += smp.r_tau.cwiseProduct(weight_j).squaredNorm();
-    if (tw > 0.0) {
-      total = tw;
-    } else {
-      weight_j = VectorJ::Ones(n);
-      held2 = VectorJ::Zero(n);
-      weighted = false;
-    }
+    if (tw > 0.0) total = tw;
+    else unweighted();
   }
   const VectorJ w2 = weight_j.cwiseAbs2();
   // the weighted residual's noise variance: the reference's on a moving joint (weight 1); on a

@@ -794,6 +794,26 @@ TEST(ContactIsolation, ANoisePeakOnAWornJointsSteadyOffsetIsItsResistanceNotACon
   }
 }
 
+// A reference of 250 samples and a window of `samples` after it, at 500 Hz: `fill(i, s)` sets each
+// sample's q, qd and tau_ext (i < 0: the reference; qdd and tau_ext start at zero); r_tau is tau_ext,
+// the current changes (no frozen channel) and the observer's levels are `level`
+SyntheticWindow synthetic_window(int samples, const VectorJ& level, const std::function<void(int, DiagnosisSample&)>& fill) {
+  SyntheticWindow w;
+  for (int k = 0; k < 250 + samples; ++k) {
+    const int i = k - 250;  // window sample
+    DiagnosisSample s;
+    s.t = k * 0.002;
+    s.qdd = VectorJ::Zero(6);
+    s.tau_ext = VectorJ::Zero(6);
+    fill(i, s);
+    s.r_tau = s.tau_ext;
+    s.current = VectorJ::Constant(6, s.t);
+    s.tau_ext_level = level;
+    (i < 0 ? w.ref : w.win).push_back(s);
+  }
+  return w;
+}
+
 // The shape of an alert is read on a joint that crossed its threshold. A wrist resistance's onset on
 // the triangle (J6, 0.29 N·m over a 0.25 N·m threshold) was read as a pulse on J4: at rest, far
 // under its own threshold, with so little noise that a 0.1 N·m blip stood out more than J6's step;
@@ -808,27 +828,15 @@ TEST(ContactIsolation, AnAlertsShapeIsReadOnAJointThatCrossedItsThreshold) {
   for (unsigned seed : {41u, 42u, 43u, 44u, 45u, 46u}) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> noise(0.0, 1.0);
-    SyntheticWindow w;
-    const double dt = 0.002;
     const VectorJ sd = (VectorJ(6) << 0.2, 0.2, 0.2, 0.004, 0.004, 0.1).finished();
-    for (int k = 0; k < 250 + 81; ++k) {
-      const double t = k * dt;
-      DiagnosisSample s;
-      s.t = t;
-      s.q = q + qd * t;
+    const SyntheticWindow w = synthetic_window(81, (VectorJ(6) << 1.0, 1.5, 1.0, 0.2, 0.2, 0.25).finished(), [&](int i, DiagnosisSample& s) {
+      s.q = q + qd * s.t;
       s.qd = qd;
-      s.qdd = VectorJ::Zero(6);
-      s.tau_ext = VectorJ::Zero(6);
       for (int j = 0; j < 6; ++j) s.tau_ext[j] = sd[j] * std::max(-2.0, std::min(2.0, noise(rng)));
-      const int i = k - 250;  // window sample
       s.tau_ext[0] += 0.15;  // the twin's misfit on a moving J1, under its threshold
       if (i >= 0) s.tau_ext[5] += 0.3;  // J6's extra friction, there since just before the raise
       if (i >= 5 && i < 15) s.tau_ext[3] -= 0.12 * std::sin(M_PI * (i - 5) / 10.0);  // J4's blip, under its threshold
-      s.r_tau = s.tau_ext;
-      s.current = VectorJ::Constant(6, t);
-      s.tau_ext_level = (VectorJ(6) << 1.0, 1.5, 1.0, 0.2, 0.2, 0.25).finished();
-      (i < 0 ? w.ref : w.win).push_back(s);
-    }
+    });
     const Hypothesis h = diagnose(m, w.win, 0.12, 5, DiagnosisOptions{}, &w.ref).front();
     EXPECT_EQ(h.fault, FaultClass::Resistance) << "seed " << seed << ": " << h.detail;
     EXPECT_EQ(h.joint, 5) << h.detail;
@@ -853,30 +861,18 @@ TEST(ContactIsolation, WhatRestingJointsHoldDoesNotHideAWristResistance) {
   for (unsigned seed : {51u, 52u, 53u, 54u}) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> noise(0.0, 1.0);
-    SyntheticWindow w;
-    const double dt = 0.002;
     // the reference: the arm moving (its noise is the moving joints'), the window: at rest
     const VectorJ sd = (VectorJ(6) << 0.15, 0.25, 0.2, 0.05, 0.05, 0.05).finished();
-    for (int k = 0; k < 250 + 83; ++k) {
-      const int i = k - 250;  // window sample
-      const double t = k * dt;
-      DiagnosisSample s;
-      s.t = t;
+    const SyntheticWindow w = synthetic_window(83, (VectorJ(6) << 1.2, 1.4, 1.2, 0.5, 0.45, 0.45).finished(), [&](int i, DiagnosisSample& s) {
       s.qd = qd;
       if (i < 0) s.qd[1] = 0.3, s.qd[2] = -0.3;
-      s.q = q + s.qd * t;
-      s.qdd = VectorJ::Zero(6);
-      s.tau_ext = VectorJ::Zero(6);
+      s.q = q + s.qd * s.t;
       for (int j = 0; j < 6; ++j) s.tau_ext[j] = (i >= 0 && (j == 1 || j == 2) ? 0.02 : sd[j]) * std::max(-2.5, std::min(2.5, noise(rng)));
       if (i >= 0) {
         s.tau_ext[1] -= 0.65, s.tau_ext[2] -= 0.5;  // held since the arm stopped
         s.tau_ext[4] += 0.6;                         // J5's extra friction (it moves +)
       }
-      s.r_tau = s.tau_ext;
-      s.current = VectorJ::Constant(6, t);
-      s.tau_ext_level = (VectorJ(6) << 1.2, 1.4, 1.2, 0.5, 0.45, 0.45).finished();
-      (i < 0 ? w.ref : w.win).push_back(s);
-    }
+    });
     const Hypothesis h = diagnose(m, w.win, 0.12, 4, options, &w.ref).front();
     EXPECT_EQ(h.fault, FaultClass::Resistance) << "seed " << seed << ": " << h.detail;
     EXPECT_EQ(h.joint, 4) << h.detail;

@@ -433,33 +433,21 @@ int run_validate(const ValidateOptions& o) {
   // to predict it (the accelerations' smoothing looks a few samples ahead: ident::JointAccelerationStream),
   // the metrics summed as they come and the predictions written as they come. Held whole, an hour at
   // 500 Hz took 1.7 GB (docs/validation.md, "A report of a long recording").
-  device::require_rereadable(o.recording, "validate");
-  device::RecordingReader first(o.recording, map ? &*map : nullptr);
-  {
-    device::Recording head;  // (the header's facts: require_fields reads them from a Recording)
-    head.path = o.recording;
-    head.n_dof = first.n_dof();
-    head.present = first.present();
-    device::require_fields(head, kFieldActualQd | kFieldActualCurrent, "validate");
-  }
-  cli::UnitsCheck units(o.recording, first.n_dof(), first.present(), twin.robot());
   // the payload: the one given (else the twin's), and, as the monitor predicts (--keep-payload
   // aside), each payload the recording declares from its sample on (monitor::PayloadTimeline)
   const model::RigidBodyInertia given = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   twin.set_payload(given);
-  monitor::PayloadTimeline payload(twin, given, !o.keep_payload, first.present());
+  monitor::PayloadTimeline payload(twin, given, !o.keep_payload);
   size_t rows = 0, driven = 0;
   std::string refused;  // the first declaration the twin cannot take, and why
-  const device::RecordingScan scan = device::scan_rows(first, [&](const RobotSample& s) {
-    units.add(s);
+  const device::RecordingScan scan =
+      cli::scan_recording(o.recording, map ? &*map : nullptr, twin.robot(), "validate", "validate", [&](const RobotSample& s) {
     payload.see(rows++, s);
     driven += s.driven() ? 1 : 0;
     if (!refused.empty() || !s.has(kFieldPayload)) return;
     const std::string why = monitor::declaration_readable(s) ? monitor::declaration_refusal(twin, s) : "not a finite mass and centre of mass";
     if (!why.empty()) refused = fmt::format("the declaration at {:.3f} s ({:g} kg) is not taken: {}", s.timestamp, s.payload, why);
   });
-  units.check_period(scan.timing.median_period);
-  units.finish();
   payload.finish(rows, scan.timing.median_period > 0 ? scan.timing.median_period : monitor::MonitorConfig{}.nominal_period);
   // R² and NRMSE need a spread of measured currents: on fewer samples they would print 0 as numbers
   if (rows < kMinValidateSamples)

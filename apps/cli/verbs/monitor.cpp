@@ -162,7 +162,6 @@ int run_monitor(const MonitorOptions& o) {
                fmt::join(cfg.observer_choice.raise_after, " "));
   if (o.recording.empty() == o.rtde.empty())
     throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
-  device::Recording rec;
   std::unique_ptr<device::rtde::Client> client;
   // a file is stored by its absolute path: `events` then tells one file given as j5.csv and as
   // ./logs/../j5.csv for what it is, and two files of one name in two folders apart
@@ -199,16 +198,7 @@ int run_monitor(const MonitorOptions& o) {
   device::RecordingScan scan;
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
-    device::require_rereadable(o.recording, "monitor");
-    device::RecordingReader first(o.recording, map ? &*map : nullptr);
-    rec.path = o.recording;
-    rec.n_dof = first.n_dof();
-    rec.present = first.present();
-    device::require_fields(rec, kFieldActualQd | kFieldActualCurrent, "the monitor");
-    cli::UnitsCheck units(o.recording, rec.n_dof, rec.present, twin.robot());
-    scan = device::scan_rows(first, [&](const RobotSample& s) { units.add(s); });
-    units.check_period(scan.timing.median_period);
-    units.finish();
+    scan = cli::scan_recording(o.recording, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor");
     if (scan.timing.median_period > 0) use_rate(scan.timing.median_period, o.recording);
     // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
     cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);

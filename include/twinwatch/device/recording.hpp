@@ -160,6 +160,8 @@ std::vector<Recording> driven_segments(const Recording& rec, double min_seconds,
 /// `fields` (SampleField flags) is present in the recording; `user` says who needs them, e.g.
 /// "the monitor", so that a recording without currents is refused instead of watched blind.
 void require_fields(const Recording& rec, std::uint32_t fields, const std::string& user);
+/// The same on the header a reader read (a recording read row by row)
+void require_fields(const RecordingReader& reader, std::uint32_t fields, const std::string& user);
 
 /// Streaming writer. Each write() appends one row with full double precision (round-trips).
 class RecordingWriter {

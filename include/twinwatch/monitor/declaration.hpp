@@ -3,7 +3,6 @@
 // monitor takes it, shared by the monitor (Monitor::take_declared_payload) and the learning that must
 // predict what it predicts (learn_thresholds, learn_trend_temperature, and validate's prediction).
 #include <algorithm>
-#include <cstdint>
 
 #include <string>
 #include <vector>
@@ -54,9 +53,9 @@ class PayloadTimeline {
  public:
   /// `period`: the recording's sampling period where it has none of its own (the settling waits)
   PayloadTimeline(const ident::TwinModel& twin, const HealthyRun& h, bool follow, double period);
-  /// The same for a run read row by row and not held (validate): see() each sample in order, then
-  /// finish(). `present`: the run's fields (SampleField flags); `twin` must outlive see()
-  PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow, std::uint32_t present);
+  /// The same for a run read row by row and not held (validate): see() each sample in order (a
+  /// sample without kFieldPayload declares nothing), then finish(). `twin` must outlive see()
+  PayloadTimeline(const ident::TwinModel& twin, const model::RigidBodyInertia& payload, bool follow);
   void see(size_t k, const RobotSample& s);
   /// after the last see(): `samples` seen, `period` their sampling period (the settling waits)
   void finish(size_t samples, double period);
