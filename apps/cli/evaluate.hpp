@@ -5,6 +5,7 @@
 #include <array>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -79,6 +80,20 @@ inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's
 /// from it. The monitor notes such a declaration and keeps its payload; a healthy run learned with
 /// it would carry the wrong payload into every residual.
 void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
+/// check_training_recording's checks of each sample (not its units: UnitsCheck) a sample at a time,
+/// for a recording read row by row: add() each in order
+class TrainingCheck {
+ public:
+  TrainingCheck(std::string path, int n_dof, const model::RobotModel& robot, std::string what);
+  void add(const RobotSample& s);
+
+ private:
+  std::string path_, what_;
+  int n_;
+  const model::RobotModel* robot_;
+  size_t k_ = 0;
+  double first_ = 0.0;
+};
 
 /// The recordings a twin is fitted or its thresholds learned on, each cut to the stretches in which the
 /// controller drives the arm (device::driven_segments, stretches of kMinDrivenStretch s and more): a
@@ -86,6 +101,16 @@ void check_training_recording(const device::Recording& rec, const model::RobotMo
 /// left out on stderr (unless quiet). Throws InvalidArgument for a recording with no such stretch.
 inline constexpr double kMinDrivenStretch = 1.0;  ///< [s]
 std::vector<device::Recording> driven_only(std::vector<device::Recording> recs, bool quiet = false);
+
+/// A learner's recording read row by row and never held (`twinwatch thresholds`: a shift of healthy
+/// recordings): scanned as scan_recording does, with check_training_recording's checks of each sample,
+/// and given as one device::FileSamples per driven stretch (driven_only's, its note said unless
+/// `quiet`). `implausible` (may be null) gets how many joint temperature readings in those stretches
+/// are no reading a joint can have (monitor::plausible_temperature), which the learners hold.
+std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::string& path, const device::ColumnMap* map,
+                                                                     const model::RobotModel& robot, const std::string& verb,
+                                                                     const std::string& user, const std::string& what,
+                                                                     std::size_t* implausible, bool quiet = false);
 /// For the verbs whose recordings play a role as a whole (a forward/reverse pair, TRAIN VALIDATION
 /// CHIRP): throws InvalidArgument naming the first sample in which the controller does not drive the
 /// arm, so that a stop is cut out by the user rather than fitted. `user` names the verb.

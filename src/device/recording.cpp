@@ -397,9 +397,9 @@ void require_rereadable(const std::string& path, const std::string& user) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
   if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st))
-    throw InvalidArgument(fmt::format("{}: {} reads a recording twice (a check of every row, then the work) and never holds it; this is "
-                                      "not a file that can be read twice (a pipe, a process substitution, /dev/stdin?): save it to a "
-                                      "file first",
+    throw InvalidArgument(fmt::format("{}: {} reads a recording twice or more (a check of every row, then the work) and never holds it; "
+                                      "this is not a file that can be read again (a pipe, a process substitution, /dev/stdin?): save it "
+                                      "to a file first",
                                       path, user));
 }
 
@@ -466,47 +466,116 @@ double jitter_gap_factor(double spread, double period, double floor) {
   return std::max(floor, 1.0 + kJitterSigmas * spread / period);
 }
 
+void DrivenStretches::see(const RobotSample& s) {
+  if (k_ == 0) first_sample_ = s.timestamp;
+  last_sample_ = s.timestamp;
+  if (s.driven()) {
+    if (!in_) {
+      in_ = true;
+      begin_ = k_;
+      began_ = s.timestamp;
+    }
+    last_ = s.timestamp;
+  } else {
+    close();
+    ++not_driven_;
+  }
+  ++k_;
+}
+
+void DrivenStretches::close() {
+  if (!in_) return;
+  in_ = false;
+  if (last_ - began_ >= min_seconds_) {
+    stretches_.push_back({begin_, k_, began_, last_});
+  } else {
+    short_samples_ += static_cast<long>(k_ - begin_);
+    ++short_stretches_;
+  }
+}
+
+void DrivenStretches::finish() { close(); }
+
+std::vector<DrivenStretches::Stretch> DrivenStretches::used() const {
+  if (!whole()) return stretches_;
+  if (k_ == 0) return {};
+  return {{0, k_, first_sample_, last_sample_}};
+}
+
+std::string DrivenStretches::note(const std::string& path, double period) const {
+  if (whole()) return {};
+  period = period > 0.0 ? period : 0.0;
+  return fmt::format("{}: {} sample(s){} in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode "
+                     "not NORMAL/REDUCED: a stop, power off, brakes on) are left out{}; {} driven stretch(es) are used",
+                     path, not_driven_, period > 0.0 ? fmt::format(" ({:.1f} s)", static_cast<double>(not_driven_) * period) : "",
+                     short_stretches_ > 0 ? fmt::format(", and {} driven stretch(es) shorter than {:g} s ({} samples)", short_stretches_,
+                                                        min_seconds_, short_samples_)
+                                          : "",
+                     stretches_.size());
+}
+
 std::vector<Recording> driven_segments(const Recording& rec, double min_seconds, std::string* left_out) {
   if (left_out) left_out->clear();
-  const auto& all = rec.samples;
-  if (std::all_of(all.begin(), all.end(), [](const RobotSample& s) { return s.driven(); })) return {rec};
+  DrivenStretches driven(min_seconds);
+  for (const RobotSample& s : rec.samples) driven.see(s);
+  driven.finish();
+  if (driven.whole()) return {rec};
   std::vector<Recording> out;
-  long not_driven = 0, short_samples = 0;
-  int short_stretches = 0;
-  for (size_t k = 0; k < all.size();) {
-    if (!all[k].driven()) {
-      ++not_driven;
-      ++k;
-      continue;
-    }
-    size_t e = k;
-    while (e < all.size() && all[e].driven()) ++e;
-    if (all[e - 1].timestamp - all[k].timestamp >= min_seconds) {
-      Recording seg;
-      seg.path = rec.path, seg.n_dof = rec.n_dof, seg.present = rec.present;
-      seg.median_period = rec.median_period, seg.period_jitter = rec.period_jitter, seg.gap_factor = rec.gap_factor;
-      seg.samples.assign(all.begin() + static_cast<long>(k), all.begin() + static_cast<long>(e));
-      seg.samples.front().gap_before = false;  // the segment starts here
-      seg.gaps = 0;
-      for (const RobotSample& s : seg.samples) seg.gaps += s.gap_before ? 1 : 0;
-      out.push_back(std::move(seg));
-    } else {
-      short_samples += static_cast<long>(e - k);
-      ++short_stretches;
-    }
-    k = e;
+  for (const auto& [k, e, first, last] : driven.stretches()) {
+    Recording seg;
+    seg.path = rec.path, seg.n_dof = rec.n_dof, seg.present = rec.present;
+    seg.median_period = rec.median_period, seg.period_jitter = rec.period_jitter, seg.gap_factor = rec.gap_factor;
+    seg.samples.assign(rec.samples.begin() + static_cast<long>(k), rec.samples.begin() + static_cast<long>(e));
+    seg.samples.front().gap_before = false;  // the segment starts here
+    seg.gaps = 0;
+    for (const RobotSample& s : seg.samples) seg.gaps += s.gap_before ? 1 : 0;
+    out.push_back(std::move(seg));
   }
-  if (left_out) {
-    const double period = rec.median_period > 0.0 ? rec.median_period : 0.0;
-    *left_out = fmt::format("{}: {} sample(s){} in which the controller did not drive the arm (robot_mode not RUNNING or safety_mode "
-                            "not NORMAL/REDUCED: a stop, power off, brakes on) are left out{}; {} driven stretch(es) are used",
-                            rec.path, not_driven, period > 0.0 ? fmt::format(" ({:.1f} s)", not_driven * period) : "",
-                            short_stretches > 0 ? fmt::format(", and {} driven stretch(es) shorter than {:g} s ({} samples)", short_stretches,
-                                                              min_seconds, short_samples)
-                                                : "",
-                            out.size());
-  }
+  if (left_out) *left_out = driven.note(rec.path, rec.median_period);
   return out;
+}
+
+HeldSamples::HeldSamples(const Recording& rec) : rec_(&rec) {
+  path_ = rec.path;
+  n_dof_ = rec.n_dof;
+  present_ = rec.present;
+  median_period_ = rec.median_period;
+  size_ = rec.samples.size();
+  seconds_ = size_ > 1 ? rec.samples.back().timestamp - rec.samples.front().timestamp : 0.0;
+}
+
+void HeldSamples::replay(const std::function<void(size_t k, const RobotSample& s)>& each) const {
+  for (size_t k = 0; k < rec_->samples.size(); ++k) each(k, rec_->samples[k]);
+}
+
+FileSamples::FileSamples(const std::string& path, const ColumnMap* map, const RecordingScan& scan, DrivenStretches::Stretch stretch,
+                         bool whole)
+    : map_(map), scan_(scan), stretch_(stretch), whole_(whole) {
+  if (stretch.begin > stretch.end || stretch.end > static_cast<size_t>(scan.rows))
+    throw std::invalid_argument(fmt::format("{}: samples [{}, {}) of {} rows: not a stretch of the recording", path, stretch.begin,
+                                            stretch.end, scan.rows));
+  path_ = path;
+  n_dof_ = scan.n_dof;
+  present_ = scan.present;
+  median_period_ = scan.timing.median_period;
+  size_ = stretch.end - stretch.begin;
+  seconds_ = size_ > 1 ? stretch.last - stretch.first : 0.0;
+}
+
+void FileSamples::replay(const std::function<void(size_t k, const RobotSample& s)>& each) const {
+  RecordingReader again(path_, map_);
+  size_t k = 0;
+  const long rows = replay_rows(again, scan_, [&](RobotSample& s) {
+    if (k >= stretch_.begin && k < stretch_.end) {
+      if (k == stretch_.begin && !whole_) s.gap_before = false;  // (a driven stretch starts here: driven_segments)
+      each(k - stretch_.begin, s);
+    }
+    ++k;
+  });
+  if (rows < scan_.rows)
+    throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to learn from (the file was cut or replaced while it was "
+                                         "read): read a copy",
+                                         path_, rows, scan_.rows));
 }
 
 namespace {

@@ -220,19 +220,36 @@ std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
 // The acceleration the monitor uses at each sample (Monitor::push): the controller's target when
 // streamed, else the causal filtered difference of qd (a threshold learned on a zero-phase
 // derivative would not be the one the monitor's residual meets)
-std::vector<VectorJ> monitor_accelerations(const device::Recording& rec, double alpha, double gap_period) {
-  if (rec.present & kFieldTargetQdd) return ident::joint_accelerations(rec);
-  std::vector<VectorJ> out(rec.samples.size());
-  VectorJ qdd = VectorJ::Zero(rec.n_dof);
-  for (size_t k = 0; k < rec.samples.size(); ++k) {
-    if (k > 0) {
-      const double dt = rec.samples[k].timestamp - rec.samples[k - 1].timestamp;
-      if (dt > 0.0 && dt <= gap_period && !rec.samples[k].gap_before) qdd += alpha * ((rec.samples[k].qd - rec.samples[k - 1].qd) / dt - qdd);
+// The monitor's joint acceleration a sample at a time (Monitor::push): the target's where the
+// recording has one, else the IIR-smoothed difference of the measured velocity (a gap holds it)
+class MonitorAcceleration {
+ public:
+  MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period)
+      : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)), stream_(n, present) {}
+  const VectorJ& push(const RobotSample& s) {
+    if (target_) {
+      // (ident::joint_accelerations: at once, with target_qdd)
+      stream_.push(s, [this](const RobotSample&, const VectorJ& qdd) { qdd_ = qdd; });
+      return qdd_;
     }
-    out[k] = qdd;
+    if (started_) {
+      const double dt = s.timestamp - previous_t_;
+      if (dt > 0.0 && dt <= gap_period_ && !s.gap_before) qdd_ += alpha_ * ((s.qd - previous_qd_) / dt - qdd_);
+    }
+    started_ = true;
+    previous_t_ = s.timestamp;
+    previous_qd_ = s.qd;
+    return qdd_;
   }
-  return out;
-}
+
+ private:
+  bool target_;
+  double alpha_, gap_period_;
+  VectorJ qdd_, previous_qd_;
+  double previous_t_ = 0.0;
+  bool started_ = false;
+  ident::JointAccelerationStream stream_;
+};
 
 }  // namespace
 
@@ -257,58 +274,57 @@ void resolve_drive_doubt(const ident::TwinModel& twin, const VectorJ& tau, const
 
 namespace {
 
-// (torques: when given, the twin's torque per sample too; payload: the run's payload from sample to
-// sample, which leaves the twin with the last one)
-std::vector<VectorJ> filtered_residuals(ident::TwinModel& twin, const device::Recording& rec, double alpha, std::vector<VectorJ>& qdds,
-                                        const MonitorConfig& c, PayloadTimeline& payload, std::vector<VectorJ>* torques = nullptr) {
-  auto fir = make_fir_filters(c, twin.n_dof());
-  qdds = monitor_accelerations(rec, alpha, c.gap_factor * (rec.median_period > 0.0 ? rec.median_period : c.nominal_period));
-  std::vector<VectorJ> out;
-  out.reserve(rec.samples.size());
-  VectorJ i, rf, tau;
-  RestBaseline rest(twin.n_dof());
-  ident::FrictionMemory memory;
-  if (torques != nullptr) torques->clear();
-  payload.start(twin);
-  bool restarted = false;
-  for (size_t k = 0; k < rec.samples.size(); ++k) {
-    const RobotSample& s = rec.samples[k];
+// The residual the monitor decides on, a sample at a time, as learn_thresholds learns it: the
+// twin's current residual, temperature-compensated, IIR- or FIR-filtered, its rest baseline taken
+// off. push() hands the twin's torque too; the run's payload (PayloadTimeline) is set on the twin
+// by the caller, which says when it changed.
+class LearnedResidual {
+ public:
+  LearnedResidual(const ident::TwinModel& twin, const MonitorConfig& c, double alpha)
+      : c_(c), alpha_(alpha), fir_(make_fir_filters(c, twin.n_dof())), rest_(twin.n_dof()) {}
+  /// `restarted`: the twin took another payload at this sample
+  const VectorJ& push(ident::TwinModel& twin, const RobotSample& s, const VectorJ& qdd, bool restarted) {
     // a payload the twin takes: the filter starts again from zero and the rest is measured again
     // (Monitor::restart_estimators, Monitor::carry)
-    if (payload.advance(k, twin)) {
-      restarted = true;
-      rest = RestBaseline(twin.n_dof());
-      for (auto& f : fir) f.reset();
+    if (restarted) {
+      restarted_ = true;
+      rest_ = RestBaseline(twin.n_dof());
+      for (auto& f : fir_) f.reset();
     }
-    twin.advance(memory, s, qdds[k]);
-    if (torques != nullptr) {
-      twin.predict(s.q, s.qd, qdds[k], s.temperature, tau, i, &memory);
-      torques->push_back(tau);
-    } else {
-      twin.predict_current(s.q, s.qd, qdds[k], s.temperature, i, &memory);
-    }
-    VectorJ r = s.current - i;
+    twin.advance(memory_, s, qdd);
+    twin.predict(s.q, s.qd, qdd, s.temperature, tau_, i_, &memory_);
+    r_ = s.current - i_;
     // the monitor's temperature compensation (Monitor::push), so thresholds learned on a warm-up
     // from cold see the residual the monitor will see. (Not the drive's doubt, resolve_drive_doubt:
     // the thresholds keep the margin of the blended residual. Learned on the resolved one, the
     // observer's J2/J3 levels fell by a third and a contact 0.3 s after an undeclared pick read as a
     // second payload step, six false alarms after it; docs/validation.md, session 32)
-    if (c.trend.temperature_slope.size() == r.size())
-      for (int j = 0; j < r.size(); ++j)
+    if (c_.trend.temperature_slope.size() == r_.size())
+      for (int j = 0; j < r_.size(); ++j)
         if (s.temperature.size() > j && std::isfinite(s.temperature[j]))
-          r[j] -= c.trend.temperature_slope[j] * s.qd[j] * (s.temperature[j] - c.trend.temperature_ref);
-    if (k == 0) rf = r;
-    else if (restarted) rf = alpha * r;  // (from zero: rf = 0 + alpha (r - 0))
-    else rf += alpha * (r - rf);
-    restarted = false;
-    for (size_t j = 0; j < fir.size(); ++j)
-      if (!fir[j].taps().empty()) rf[static_cast<int>(j)] = fir[j].push(r[static_cast<int>(j)]);
-    VectorJ decided = rf;  // what the decision sees (Monitor::push)
-    rest.apply(s, decided);
-    out.push_back(decided);
+          r_[j] -= c_.trend.temperature_slope[j] * s.qd[j] * (s.temperature[j] - c_.trend.temperature_ref);
+    if (first_) rf_ = r_;
+    else if (restarted_) rf_ = alpha_ * r_;  // (from zero: rf = 0 + alpha (r - 0))
+    else rf_ += alpha_ * (r_ - rf_);
+    first_ = false;
+    restarted_ = false;
+    for (size_t j = 0; j < fir_.size(); ++j)
+      if (!fir_[j].taps().empty()) rf_[static_cast<int>(j)] = fir_[j].push(r_[static_cast<int>(j)]);
+    decided_ = rf_;  // what the decision sees (Monitor::push)
+    rest_.apply(s, decided_);
+    return decided_;
   }
-  return out;
-}
+  const VectorJ& torque() const { return tau_; }  ///< the twin's, at the last push
+
+ private:
+  const MonitorConfig& c_;
+  double alpha_;
+  std::vector<signal::FirFilter> fir_;
+  RestBaseline rest_;
+  ident::FrictionMemory memory_;
+  VectorJ i_, tau_, r_, rf_, decided_;
+  bool first_ = true, restarted_ = false;
+};
 
 // The drive torque of the viscous friction's temperature dependence that the twin leaves out:
 // g_j s_j qd_j (T_j - T_ref), with s the slope learned on a healthy warm-up [A·s/rad/°C] (trend.hpp)
@@ -678,124 +694,151 @@ MonitorConfig MonitorConfig::from_twin(const ident::TwinModel& twin) {
 
 namespace {
 
-// the longest stretch of consecutive samples from `from` on for which `holds` is true [s] (learning)
-template <class Holds>
-double longest_stretch(const std::vector<RobotSample>& smp, size_t from, Holds holds) {
-  double longest = 0.0, began = std::numeric_limits<double>::quiet_NaN();
-  for (size_t k = from; k < smp.size(); ++k) {
-    if (!holds(smp[k])) {
-      began = std::numeric_limits<double>::quiet_NaN();
-      continue;
+// the longest stretch of consecutive samples for which a condition holds [s] (learning): see()
+// each sample's timestamp and whether it holds, in order
+class LongestStretch {
+ public:
+  void see(double t, bool holds) {
+    if (!holds) {
+      began_ = std::numeric_limits<double>::quiet_NaN();
+      return;
     }
-    if (std::isnan(began)) began = smp[k].timestamp;
-    longest = std::max(longest, smp[k].timestamp - began);
+    if (std::isnan(began_)) began_ = t;
+    longest_ = std::max(longest_, t - began_);
   }
-  return longest;
-}
+  double longest() const { return longest_; }
+
+ private:
+  double longest_ = 0.0, began_ = std::numeric_limits<double>::quiet_NaN();
+};
 
 }  // namespace
 
 MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<HealthyRun>& given, const MonitorConfig& settings,
                                const LearnOptions& options) {
-  std::vector<device::Recording> held;  // (a run's implausible temperatures, held as the monitor holds them)
-  const std::vector<HealthyRun> runs = with_held_temperatures(given, held);
+  std::vector<std::unique_ptr<device::HeldSamples>> store;
+  const std::vector<const device::SampleSource*> runs = samples_of(given, store, "learn thresholds");
   if (runs.empty()) throw InvalidArgument("learn thresholds: no healthy runs given");
   const int n = twin.n_dof();
   MonitorConfig c = settings;
   // the residual filter at each run's own rate, as the monitor runs it (a 1 kHz log filtered with a
   // 500 Hz coefficient is smoothed half as much, and its thresholds come out too low)
-  if (runs.front().recording != nullptr && runs.front().recording->median_period > 0.0) c.nominal_period = runs.front().recording->median_period;
-  const auto alpha_of = [&](const HealthyRun& h) {
-    return iir_alpha(c.filter_cutoff_hz, h.recording != nullptr && h.recording->median_period > 0.0 ? h.recording->median_period : c.nominal_period);
-  };
-  std::vector<std::vector<VectorJ>> res, obs_res;
-  // (the observer's samples have their own qd, qdd: it is judged from later after a payload change)
-  std::vector<std::vector<double>> r(static_cast<size_t>(n)), qd(static_cast<size_t>(n)), qdd(static_cast<size_t>(n)),
-      ro(static_cast<size_t>(n)), qdo(static_cast<size_t>(n)), qddo(static_cast<size_t>(n));
+  if (runs.front()->median_period() > 0.0) c.nominal_period = runs.front()->median_period();
+  const auto period_of = [&](const device::SampleSource& src) { return src.median_period() > 0.0 ? src.median_period() : c.nominal_period; };
   VectorJ peak = VectorJ::Zero(n), obs_peak = VectorJ::Zero(n), load = VectorJ::Zero(n), crawl = VectorJ::Zero(n);
   double longest_rest = 0.0;
   const bool with_observer = c.observer_gain > 0.0;
   const double width = reversal_width(twin);
   c.payload_max = 0.0;  // (the heaviest payload of these runs, declared ones included)
-  for (const HealthyRun& h : runs) {
-    ident::TwinModel t = twin;
-    PayloadTimeline payload(twin, h, c.follow_payload, c.nominal_period);
-    c.payload_max = std::max(c.payload_max, payload.heaviest());
-    std::vector<VectorJ> qdds, taus;
-    auto rf = filtered_residuals(t, *h.recording, alpha_of(h), qdds, c, payload, &taus);
+  // The runs are read twice, and never held (a shift of healthy recordings is 1.7 GB per robot hour):
+  // first each run's payload from sample to sample, its crawls and rests, and how many samples the
+  // monitor decides on; then the residuals and the observer, from which the thresholds keep sums and
+  // the samples the dynamic fit uses (its uniform decimation needs their count beforehand).
+  std::vector<PayloadTimeline> timelines;
+  std::vector<size_t> skips;
+  size_t judged = 0, judged_observer = 0;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const device::SampleSource& src = *runs[i];
+    PayloadTimeline payload(twin, given[i].payload, c.follow_payload && (src.present() & kFieldPayload));
     // skip the filter's start-up
-    const size_t skip = std::min(rf.size(), static_cast<size_t>(kSettleSamples));
+    const size_t skip = std::min(src.size(), static_cast<size_t>(kSettleSamples));
     // each joint's longest crawl (its direction in doubt), and the arm's longest rest after the
     // start-up (commanded; on a run without target velocities, measured: RestBaseline::arm_rest)
-    const auto& smp = h.recording->samples;
-    for (int j = 0; j < n; ++j)
-      crawl[j] = std::max(crawl[j], longest_stretch(smp, skip, [&](const RobotSample& x) { return std::abs(x.qd[j]) < width; }));
-    longest_rest = std::max(longest_rest, longest_stretch(smp, std::min(smp.size(), static_cast<size_t>(kSettleSamples)), RestBaseline::arm_rest));
-    std::vector<VectorJ> judged_run;
-    judged_run.reserve(rf.size());
-    for (size_t k = skip; k < rf.size(); ++k) {
-      if (!payload.judged(k)) continue;
-      judged_run.push_back(rf[k]);
-      peak = peak.cwiseMax(rf[k].cwiseAbs());
-      for (int j = 0; j < n; ++j) {
-        load[j] = std::max(load[j], reversal_load(taus[k][j], h.recording->samples[k].qd[j], width));
-        r[static_cast<size_t>(j)].push_back(rf[k][j]);
-        qd[static_cast<size_t>(j)].push_back(h.recording->samples[k].qd[j]);
-        qdd[static_cast<size_t>(j)].push_back(qdds[k][j]);
-      }
+    std::vector<LongestStretch> crawls(static_cast<size_t>(n));
+    LongestStretch rest;
+    src.replay([&](size_t k, const RobotSample& s) {
+      payload.see(k, s);
+      if (k < skip) return;
+      for (int j = 0; j < n; ++j) crawls[static_cast<size_t>(j)].see(s.timestamp, std::abs(s.qd[j]) < width);
+      rest.see(s.timestamp, RestBaseline::arm_rest(s));
+    });
+    payload.finish(src.size(), period_of(src));
+    for (int j = 0; j < n; ++j) crawl[j] = std::max(crawl[j], crawls[static_cast<size_t>(j)].longest());
+    longest_rest = std::max(longest_rest, rest.longest());
+    c.payload_max = std::max(c.payload_max, payload.heaviest());
+    for (size_t k = skip; k < src.size(); ++k) {
+      judged += payload.judged(k) ? 1 : 0;
+      judged_observer += payload.judged_observer(k) ? 1 : 0;
     }
-    if (!judged_run.empty()) res.push_back(std::move(judged_run));  // (a run of settling samples alone teaches nothing)
-    // the momentum observer, run sample by sample exactly as the monitor runs it
-    if (with_observer) {
-      TwinMomentumObserver obs(n, c.observer_gain);
-      std::vector<VectorJ> ro_run;
-      const auto& smp = h.recording->samples;
-      VectorJ warm = VectorJ::Zero(n), o(n);
-      RestBaseline rest(n);
-      payload.start(t);
-      for (size_t k = 0; k < smp.size(); ++k) {
-        const double dt = k == 0 ? c.nominal_period : smp[k].timestamp - smp[k - 1].timestamp;
-        if (payload.advance(k, t)) {  // (Monitor::restart_estimators, Monitor::carry)
-          obs.restart();
-          rest = RestBaseline(n);
-        }
-        temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, smp[k], warm);
-        o = obs.update(t, smp[k], dt, &warm);
-        rest.apply(smp[k], o);
-        if (k < skip || !payload.judged_observer(k)) continue;
-        obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
-        for (int j = 0; j < n; ++j) {
-          ro[static_cast<size_t>(j)].push_back(o[j]);
-          qdo[static_cast<size_t>(j)].push_back(smp[k].qd[j]);
-          qddo[static_cast<size_t>(j)].push_back(qdds[k][j]);
-        }
-        ro_run.push_back(o);
-      }
-      if (!ro_run.empty()) obs_res.push_back(std::move(ro_run));
-    }
+    timelines.push_back(std::move(payload));
+    skips.push_back(skip);
   }
-  if (res.empty()) {
+  if (judged == 0) {
     // (every run was the residual filter's start-up, or a payload change's settling, alone)
     std::vector<std::string> what;
-    for (const HealthyRun& h : runs)
-      what.push_back(fmt::format("{} ({} samples)", h.recording->path.empty() ? std::string("a run") : h.recording->path, h.recording->samples.size()));
+    for (const device::SampleSource* src : runs)
+      what.push_back(fmt::format("{} ({} samples)", src->path().empty() ? std::string("a run") : src->path(), src->size()));
     throw InvalidArgument(fmt::format("learn thresholds: no sample of the healthy run(s) to learn from: {}; each needs more than the "
                                       "residual filter's {} start-up samples ({:g} s), with samples not settling after a payload change",
                                       fmt::join(what, ", "), kSettleSamples, static_cast<double>(kSettleSamples) * c.nominal_period));
   }
-  c.static_level = StaticThreshold::learn(res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
+  StaticThresholdAccumulator level, observer_level;
+  std::vector<DynamicThresholdSampler> dynamic, observer_dynamic;
+  for (int j = 0; j < n; ++j) dynamic.emplace_back(judged, options.dynamic);
+  if (with_observer && judged_observer > 0)
+    for (int j = 0; j < n; ++j) observer_dynamic.emplace_back(judged_observer, options.dynamic);
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const device::SampleSource& src = *runs[i];
+    PayloadTimeline& payload = timelines[i];
+    const size_t skip = skips[i];
+    ident::TwinModel t = twin;
+    payload.start(t);
+    const double alpha = iir_alpha(c.filter_cutoff_hz, period_of(src));
+    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src));
+    LearnedResidual residual(t, c, alpha);
+    // the momentum observer, sample by sample exactly as the monitor runs it (its samples have their
+    // own qd, qdd: it is judged from later after a payload change)
+    TwinMomentumObserver obs(n, with_observer ? c.observer_gain : 1.0);
+    VectorJ warm = VectorJ::Zero(n), o(n);
+    RestBaseline observer_rest(n);
+    TemperatureHold hold;
+    double previous_t = 0.0;
+    src.replay([&](size_t k, const RobotSample& given_sample) {
+      const RobotSample& s = hold.apply(given_sample);
+      const VectorJ& qdd = accelerations.push(s);
+      const bool changed = payload.advance(k, t);
+      const VectorJ& rf = residual.push(t, s, qdd, changed);
+      if (k >= skip && payload.judged(k)) {
+        level.add(rf);
+        peak = peak.cwiseMax(rf.cwiseAbs());
+        for (int j = 0; j < n; ++j) {
+          load[j] = std::max(load[j], reversal_load(residual.torque()[j], s.qd[j], width));
+          dynamic[static_cast<size_t>(j)].add(rf[j], s.qd[j], qdd[j]);
+        }
+      }
+      if (with_observer) {
+        const double dt = k == 0 ? c.nominal_period : s.timestamp - previous_t;
+        if (changed) {  // (Monitor::restart_estimators, Monitor::carry)
+          obs.restart();
+          observer_rest = RestBaseline(n);
+        }
+        temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, s, warm);
+        o = obs.update(t, s, dt, &warm);
+        observer_rest.apply(s, o);
+        if (k >= skip && payload.judged_observer(k)) {
+          observer_level.add(o);
+          obs_peak = obs_peak.cwiseMax(o.cwiseAbs());
+          for (int j = 0; j < n; ++j) observer_dynamic[static_cast<size_t>(j)].add(o[j], s.qd[j], qdd[j]);
+        }
+      }
+      previous_t = s.timestamp;
+    });
+    level.end_run();  // (a run of settling samples alone teaches nothing)
+    observer_level.end_run();
+  }
+  c.static_level = level.learn(options.k_sigma).level.cwiseMax(kStaticPeakMargin * peak);
   c.dynamic.clear();
   for (int j = 0; j < n; ++j) {
-    const auto fit = fit_dynamic_threshold(r[static_cast<size_t>(j)], qd[static_cast<size_t>(j)], qdd[static_cast<size_t>(j)], options.dynamic);
+    const auto fit = dynamic[static_cast<size_t>(j)].fit();
     if (!fit.ok) throw InvalidArgument(fmt::format("dynamic threshold of joint {}: {}", j + 1, fit.message));
     c.dynamic.push_back(fit.params);
   }
   c.observer_level.resize(0);
   c.observer_dynamic.clear();
   if (with_observer) {
-    c.observer_level = StaticThreshold::learn(obs_res, options.k_sigma).level.cwiseMax(kStaticPeakMargin * obs_peak);
+    c.observer_level = observer_level.learn(options.k_sigma).level.cwiseMax(kStaticPeakMargin * obs_peak);
     for (int j = 0; j < n; ++j) {
-      const auto fit = fit_dynamic_threshold(ro[static_cast<size_t>(j)], qdo[static_cast<size_t>(j)], qddo[static_cast<size_t>(j)], options.dynamic);
+      const auto fit = observer_dynamic[static_cast<size_t>(j)].fit();
       if (!fit.ok) throw InvalidArgument(fmt::format("observer dynamic threshold of joint {}: {}", j + 1, fit.message));
       c.observer_dynamic.push_back(fit.params);
     }
@@ -817,24 +860,32 @@ ObserverDebounceChoice choose_observer_debounce(const ident::TwinModel& twin, co
   if (config.observer_raise_after > 0)
     throw InvalidArgument(fmt::format("observer debounce: observer_raise_after is set ({}) and would override a per-joint choice",
                                       config.observer_raise_after));
+  std::vector<std::unique_ptr<device::HeldSamples>> store;
+  const std::vector<const device::SampleSource*> runs = samples_of(validation, store, "observer debounce");
   const int shared = config.observer_debounce();
   ObserverDebounceChoice out;
   out.ratio.assign(static_cast<size_t>(shared), VectorJ::Zero(n));
-  for (const HealthyRun& h : validation) {
-    if (h.recording == nullptr) throw InvalidArgument("observer debounce: a validation run has no recording");
-    const auto& smp = h.recording->samples;
-    if (smp.size() > 1) out.seconds += smp.back().timestamp - smp.front().timestamp;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const device::SampleSource& src = *runs[i];
+    out.seconds += src.seconds();
     ident::TwinModel t = twin;
-    t.set_payload(h.payload);
+    t.set_payload(validation[i].payload);
+    // the monitor with each debounce d = 1..D, all over one reading of the run
+    std::vector<std::unique_ptr<Monitor>> monitors;
     for (int d = 1; d <= shared; ++d) {
       MonitorConfig c = config;
       c.observer_choice = {};
       c.observer_raise_after = d;
       // the recording's own period, as the monitor command uses it (a 125 Hz log is no stream of gaps)
-      if (h.recording->median_period > 0.0) c.nominal_period = h.recording->median_period;
-      Monitor m(t, c);
-      m.track_margin();
-      for (const auto& x : smp) m.push(x);
+      if (src.median_period() > 0.0) c.nominal_period = src.median_period();
+      monitors.push_back(std::make_unique<Monitor>(t, c));
+      monitors.back()->track_margin();
+    }
+    src.replay([&](size_t, const RobotSample& x) {
+      for (auto& m : monitors) m->push(x);
+    });
+    for (int d = 1; d <= shared; ++d) {
+      Monitor& m = *monitors[static_cast<size_t>(d - 1)];
       m.finish();
       VectorJ& row = out.ratio[static_cast<size_t>(d - 1)];
       row = row.cwiseMax(m.margin_observer());
@@ -868,8 +919,7 @@ void learn_program_thresholds(MonitorConfig& config, const std::string& name, co
   set.longest_rest = learned.longest_rest;
   // no per-joint observer debounce: a choice belongs to the thresholds it was made for (choose_observer_debounce)
   set.runs = static_cast<int>(runs.size());
-  for (const auto& r : runs)
-    if (r.recording->samples.size() > 1) set.seconds += r.recording->samples.back().timestamp - r.recording->samples.front().timestamp;
+  for (const auto& r : runs) set.seconds += r.samples != nullptr ? r.samples->seconds() : device::HeldSamples(*r.recording).seconds();
   config.programs[name] = std::move(set);
 }
 

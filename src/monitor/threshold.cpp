@@ -35,40 +35,53 @@ double robust_sigma(std::vector<double> v) {
 StaticThreshold StaticThreshold::learn(const std::vector<std::vector<VectorJ>>& runs, double k_sigma) {
   if (runs.empty()) throw InvalidArgument("static threshold: no healthy runs given, expected at least 1");
   if (!(k_sigma >= 0.0)) throw InvalidArgument(fmt::format("static threshold: k_sigma is {}, must be >= 0", k_sigma));
-  long n = -1;
-  for (size_t r = 0; r < runs.size(); ++r) {
+  for (size_t r = 0; r < runs.size(); ++r)
     if (runs[r].empty()) throw InvalidArgument(fmt::format("static threshold: healthy run {} is empty", r));
-    for (size_t k = 0; k < runs[r].size(); ++k) {
-      const VectorJ& v = runs[r][k];
-      if (n < 0) n = v.size();
-      if (v.size() != n)
-        throw InvalidArgument(fmt::format("static threshold: a residual of run {} has size {}, expected {}", r, v.size(), n));
-      // one nan would make every level nan, and a nan threshold never trips
-      if (!v.allFinite())
-        throw InvalidArgument(fmt::format("static threshold: residual {} of healthy run {} is not finite ({}); expected finite "
-                                          "residuals from finite signals",
-                                          k, r, fmt::join(v, " ")));
-    }
-  }
-  // max over runs of the per-run MAE, plus k sigma of all healthy residuals pooled
-  StaticThreshold t;
-  t.level = VectorJ::Zero(n);
-  VectorJ sum = VectorJ::Zero(n), sum2 = VectorJ::Zero(n);
-  double count = 0.0;
+  StaticThresholdAccumulator acc;
   for (const auto& run : runs) {
-    VectorJ mae = VectorJ::Zero(n);
-    for (const VectorJ& v : run) {
-      mae += v.cwiseAbs();
-      sum += v;
-      sum2 += v.cwiseProduct(v);
-    }
-    count += static_cast<double>(run.size());
-    mae /= static_cast<double>(run.size());
-    t.level = t.level.cwiseMax(mae);
+    for (const VectorJ& v : run) acc.add(v);
+    acc.end_run();
   }
-  const VectorJ mean = sum / count;
-  const VectorJ var = (sum2 / count - mean.cwiseProduct(mean)).cwiseMax(0.0);
-  t.level += k_sigma * var.cwiseSqrt();
+  return acc.learn(k_sigma);
+}
+
+void StaticThresholdAccumulator::add(const VectorJ& v) {
+  if (n_ < 0) {
+    n_ = v.size();
+    level_ = sum_ = sum2_ = VectorJ::Zero(n_);
+  }
+  if (k_ == 0) mae_ = VectorJ::Zero(n_);
+  if (v.size() != n_)
+    throw InvalidArgument(fmt::format("static threshold: a residual of run {} has size {}, expected {}", runs_, v.size(), n_));
+  // one nan would make every level nan, and a nan threshold never trips
+  if (!v.allFinite())
+    throw InvalidArgument(fmt::format("static threshold: residual {} of healthy run {} is not finite ({}); expected finite "
+                                      "residuals from finite signals",
+                                      k_, runs_, fmt::join(v, " ")));
+  mae_ += v.cwiseAbs();
+  sum_ += v;
+  sum2_ += v.cwiseProduct(v);
+  ++k_;
+}
+
+void StaticThresholdAccumulator::end_run() {
+  if (k_ == 0) return;
+  // max over runs of the per-run MAE
+  count_ += static_cast<double>(k_);
+  mae_ /= static_cast<double>(k_);
+  level_ = level_.cwiseMax(mae_);
+  k_ = 0;
+  ++runs_;
+}
+
+StaticThreshold StaticThresholdAccumulator::learn(double k_sigma) const {
+  if (runs_ == 0) throw InvalidArgument("static threshold: no healthy runs given, expected at least 1");
+  if (!(k_sigma >= 0.0)) throw InvalidArgument(fmt::format("static threshold: k_sigma is {}, must be >= 0", k_sigma));
+  // plus k sigma of all healthy residuals pooled
+  StaticThreshold t;
+  const VectorJ mean = sum_ / count_;
+  const VectorJ var = (sum2_ / count_ - mean.cwiseProduct(mean)).cwiseMax(0.0);
+  t.level = level_ + k_sigma * var.cwiseSqrt();
   return t;
 }
 
@@ -177,38 +190,72 @@ DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<c
   if (qd.size() != r.size() || qdd.size() != r.size())
     throw InvalidArgument(fmt::format("dynamic threshold: r, qd, qdd have sizes {}, {}, {}, expected equal", r.size(),
                                       qd.size(), qdd.size()));
-  if (r.size() < 10)
-    throw InvalidArgument(fmt::format("dynamic threshold: {} healthy samples, expected at least 10", r.size()));
-  // the LP solvers assert on non-finite coefficients (CLP aborts the process): refuse them here
-  for (size_t k = 0; k < r.size(); ++k)
-    if (!std::isfinite(r[k]) || !std::isfinite(qd[k]) || !std::isfinite(qdd[k]))
-      throw InvalidArgument(fmt::format("dynamic threshold: healthy sample {} is not finite (r {}, qd {}, qdd {}); expected finite "
-                                        "residuals, velocities and accelerations",
-                                        k, r[k], qd[k], qdd[k]));
+  DynamicThresholdSampler sampler(r.size(), options);
+  for (size_t k = 0; k < r.size(); ++k) sampler.add(r[k], qd[k], qdd[k]);
+  return sampler.fit();
+}
 
-  // decimate uniformly, but always keep the largest residuals: they bind the constraints
-  const size_t N = r.size();
-  const size_t K = std::min(N, static_cast<size_t>(options.max_samples));
-  std::vector<size_t> keep;
-  keep.reserve(K + 64);
-  for (size_t k = 0; k < K; ++k) keep.push_back(k * N / K);
-  std::vector<size_t> order(N);
-  std::iota(order.begin(), order.end(), 0);
-  const size_t top = std::min<size_t>(N, 64);
-  std::partial_sort(order.begin(), order.begin() + static_cast<long>(top), order.end(),
-                    [&](size_t a, size_t b) { return std::abs(r[a]) > std::abs(r[b]); });
-  keep.insert(keep.end(), order.begin(), order.begin() + static_cast<long>(top));
-  std::sort(keep.begin(), keep.end());
-  keep.erase(std::unique(keep.begin(), keep.end()), keep.end());
+namespace {
+constexpr size_t kLargestKept = 64;  // the largest |r| kept beside the uniform decimation: they bind the constraints
+// the heap's order: the smallest |r| on top (of equal ones, the later sample: the earlier is kept)
+template <class Kept>
+bool kept_before(const Kept& a, const Kept& b) {
+  const double x = std::abs(a.r), y = std::abs(b.r);
+  return x > y || (x == y && a.k < b.k);
+}
+}  // namespace
+
+DynamicThresholdSampler::DynamicThresholdSampler(size_t total, const DynamicThresholdOptions& options)
+    : options_(options), total_(total) {
+  options.validate();
+  if (total < 10) throw InvalidArgument(fmt::format("dynamic threshold: {} healthy samples, expected at least 10", total));
+  wanted_ = std::min(total, static_cast<size_t>(options.max_samples));
+  uniform_.reserve(wanted_);
+  largest_.reserve(kLargestKept);
+}
+
+void DynamicThresholdSampler::add(double r, double qd, double qdd) {
+  const size_t k = count_;
+  if (k >= total_) throw InvalidArgument(fmt::format("dynamic threshold: sample {} of {}: more than were announced", k + 1, total_));
+  // the LP solvers assert on non-finite coefficients (CLP aborts the process): refuse them here
+  if (!std::isfinite(r) || !std::isfinite(qd) || !std::isfinite(qdd))
+    throw InvalidArgument(fmt::format("dynamic threshold: healthy sample {} is not finite (r {}, qd {}, qdd {}); expected finite "
+                                      "residuals, velocities and accelerations",
+                                      k, r, qd, qdd));
+  ++count_;
+  const Kept x{k, r, qd, qdd};
+  // decimate uniformly (samples i N / K, i < K), but always keep the largest residuals
+  if (next_ < wanted_ && next_ * total_ / wanted_ == k) {
+    uniform_.push_back(x);
+    ++next_;
+  }
+  const auto cmp = [](const Kept& a, const Kept& b) { return kept_before(a, b); };
+  if (largest_.size() < kLargestKept) {
+    largest_.push_back(x);
+    std::push_heap(largest_.begin(), largest_.end(), cmp);
+  } else if (kept_before(x, largest_.front())) {
+    std::pop_heap(largest_.begin(), largest_.end(), cmp);
+    largest_.back() = x;
+    std::push_heap(largest_.begin(), largest_.end(), cmp);
+  }
+}
+
+DynamicThresholdFit DynamicThresholdSampler::fit() const {
+  if (count_ != total_)
+    throw InvalidArgument(fmt::format("dynamic threshold: {} healthy samples given of the {} announced", count_, total_));
+  std::vector<Kept> keep = uniform_;
+  keep.insert(keep.end(), largest_.begin(), largest_.end());
+  std::sort(keep.begin(), keep.end(), [](const Kept& a, const Kept& b) { return a.k < b.k; });
+  keep.erase(std::unique(keep.begin(), keep.end(), [](const Kept& a, const Kept& b) { return a.k == b.k; }), keep.end());
 
   std::vector<double> ar, aqd, aqdd, rv;
-  for (size_t k : keep) {
-    ar.push_back(std::abs(r[k]));
-    aqd.push_back(std::abs(qd[k]));
-    aqdd.push_back(std::abs(qdd[k]));
-    rv.push_back(r[k]);
+  for (const Kept& x : keep) {
+    ar.push_back(std::abs(x.r));
+    aqd.push_back(std::abs(x.qd));
+    aqdd.push_back(std::abs(x.qdd));
+    rv.push_back(x.r);
   }
-  double xi = options.margin;
+  double xi = options_.margin;
   if (xi <= 0.0) xi = kAutoMarginSigmas * robust_sigma(rv);
 
   DynamicThresholdFit best;
@@ -217,10 +264,10 @@ DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<c
   // the max gap is set by one binding sample for every rho) keep the earlier rho of the grid, so
   // the choice does not flip on rounding differences in the residuals.
   double best_obj = 0.0;
-  for (double rho : options.rho_grid) {
+  for (double rho : options_.rho_grid) {
     DynamicThresholdJoint p;
     double obj = 0.0;
-    if (!solve_lp(ar, aqd, aqdd, rho, xi, options.mean_gap_weight, p, obj)) continue;
+    if (!solve_lp(ar, aqd, aqdd, rho, xi, options_.mean_gap_weight, p, obj)) continue;
     if (!best.ok || obj < best_obj - 1e-6 * std::max(1e-12, std::abs(best_obj))) {
       best_obj = obj;
       best.ok = true;

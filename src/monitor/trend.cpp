@@ -312,27 +312,35 @@ std::size_t implausible_temperatures(const device::Recording& rec) {
 
 device::Recording hold_implausible_temperatures(const device::Recording& rec) {
   device::Recording out = rec;
-  std::vector<double> last;
-  for (RobotSample& s : out.samples) {
-    if (!s.has(kFieldTemperature)) continue;
-    const auto m = static_cast<std::size_t>(s.temperature.size());
-    if (last.size() < m) last.resize(m, std::numeric_limits<double>::quiet_NaN());
-    for (std::size_t j = 0; j < m; ++j) {
-      double& T = s.temperature[static_cast<Eigen::Index>(j)];
-      if (plausible_temperature(T)) {
-        if (!std::isnan(T)) last[j] = T;
-        continue;
-      }
-      T = last[j];
-    }
-  }
+  TemperatureHold hold;
+  for (RobotSample& s : out.samples) s = hold.apply(s);
   return out;
+}
+
+const RobotSample& TemperatureHold::apply(const RobotSample& s) {
+  if (!s.has(kFieldTemperature)) return s;
+  const auto m = static_cast<std::size_t>(s.temperature.size());
+  if (last_.size() < m) last_.resize(m, std::numeric_limits<double>::quiet_NaN());
+  bool held = false;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double T = s.temperature[static_cast<Eigen::Index>(j)];
+    if (plausible_temperature(T)) {
+      if (!std::isnan(T)) last_[j] = T;
+      continue;
+    }
+    if (!held) {
+      held_ = s;
+      held = true;
+    }
+    held_.temperature[static_cast<Eigen::Index>(j)] = last_[j];
+  }
+  return held ? held_ : s;
 }
 
 TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vector<TrendRun>& given, const TrendConfig& settings,
                                     bool follow_payload) {
-  std::vector<device::Recording> held;  // (a run's implausible temperatures, held as the monitor holds them)
-  const std::vector<TrendRun> runs = with_held_temperatures(given, held);
+  std::vector<std::unique_ptr<device::HeldSamples>> store;
+  const std::vector<const device::SampleSource*> runs = samples_of(given, store, "learn trend temperature");
   const int n = twin.n_dof();
   settings.validate(n);
   if (runs.empty()) throw InvalidArgument("learn trend temperature: no healthy runs given");
@@ -342,7 +350,7 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
   const int R = static_cast<int>(runs.size());
   // columns: [sign, qd, 1] per program (its own misfit), one shared qd (T - T_ref)
   int programs = 0;
-  for (const TrendRun& run : runs) {
+  for (const TrendRun& run : given) {
     if (run.program < 0) throw InvalidArgument(fmt::format("learn trend temperature: program index {} must be >= 0", run.program));
     programs = std::max(programs, run.program + 1);
   }
@@ -353,22 +361,27 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(P);
   VectorJ i_hat;
   for (int ri = 0; ri < R; ++ri) {
-    const TrendRun& run = runs[static_cast<size_t>(ri)];
-    if (!run.recording) throw InvalidArgument(fmt::format("learn trend temperature: run {} has no recording", ri + 1));
-    if (!(run.recording->present & kFieldTemperature))
-      throw InvalidArgument(fmt::format("learn trend temperature: recording {} has no joint temperatures", run.recording->path));
+    const device::SampleSource& src = *runs[static_cast<size_t>(ri)];
+    const TrendRun& run = given[static_cast<size_t>(ri)];
+    if (!(src.present() & kFieldTemperature))
+      throw InvalidArgument(fmt::format("learn trend temperature: recording {} has no joint temperatures", src.path()));
     ident::TwinModel t = twin;
     // (the payload the stream declares, as the monitor predicts with it: PayloadTimeline)
-    PayloadTimeline payload(twin, HealthyRun{run.recording, run.payload}, follow_payload, MonitorConfig{}.nominal_period);
+    PayloadTimeline payload(twin, run.payload, follow_payload && (src.present() & kFieldPayload));
+    src.replay([&](size_t k, const RobotSample& s) { payload.see(k, s); });
+    payload.finish(src.size(), src.median_period() > 0.0 ? src.median_period() : MonitorConfig{}.nominal_period);
     payload.start(t);
-    const std::vector<VectorJ> qdds = ident::joint_accelerations(*run.recording);
+    // (the accelerations zero-phase: each sample handed over a few samples late, with its own)
+    ident::JointAccelerationStream accelerations(src.n_dof(), src.present());
     ident::FrictionMemory memory;
-    for (size_t k = 0; k < run.recording->samples.size(); ++k) {
-      const RobotSample& s = run.recording->samples[k];
-      payload.advance(k, t);
-      t.advance(memory, s, qdds[k]);
-      if (!payload.judged(k)) continue;
-      t.predict_current(s.q, s.qd, qdds[k], s.temperature, i_hat, &memory);
+    TemperatureHold hold;
+    size_t k = 0;
+    const ident::JointAccelerationStream::Ready learn = [&](const RobotSample& s, const VectorJ& qdd) {
+      const size_t at = k++;
+      payload.advance(at, t);
+      t.advance(memory, s, qdd);
+      if (!payload.judged(at)) return;
+      t.predict_current(s.q, s.qd, qdd, s.temperature, i_hat, &memory);
       for (int j = 0; j < n; ++j) {
         if (std::abs(s.qd[j]) <= c.v_min || !std::isfinite(s.temperature[j])) continue;
         tmin[j] = std::min(tmin[j], s.temperature[j]);
@@ -383,7 +396,9 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
         A[static_cast<size_t>(j)].noalias() += phi * phi.transpose();
         b[static_cast<size_t>(j)].noalias() += phi * (s.current[j] - i_hat[j]);
       }
-    }
+    };
+    src.replay([&](size_t, const RobotSample& s) { accelerations.push(hold.apply(s), learn); });
+    accelerations.finish(learn);
   }
   for (int j = 0; j < n; ++j) {
     if (!(tmax[j] - tmin[j] >= kMinTemperatureSpan))

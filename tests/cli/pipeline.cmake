@@ -27,6 +27,13 @@ add_test(NAME cli.report_nothing_driven
 $<TARGET_FILE:twinwatch> report --twin ${d}/twin.json ${d}/fig_off.csv -o ${d}/report_off.html && grep -o 'No sample of this recording is one in which the controller drives the arm' ${d}/report_off.html")
 set_tests_properties(cli.report_nothing_driven PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "report written to [^\n]*\nNo sample of this recording is one in which the controller drives the arm")
+# thresholds reads each recording several times and never holds it (a shift of healthy recordings):
+# one from a pipe is refused by name, and the twin file is left as it was
+add_test(NAME cli.thresholds_from_a_pipe
+  COMMAND sh -c "cp ${d}/twin.json ${d}/twin_pipe.json && (cat ${d}/fig.csv | $<TARGET_FILE:twinwatch> thresholds --twin ${d}/twin_pipe.json /dev/stdin --payload-mass 0.5 2>&1; echo exit $?) && \
+cmp ${d}/twin.json ${d}/twin_pipe.json && echo TWIN-UNCHANGED")
+set_tests_properties(cli.thresholds_from_a_pipe PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "/dev/stdin: thresholds reads a recording twice or more [^\n]*save it to a file first\nexit 2\nTWIN-UNCHANGED")
 add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.yaml -o ${d}/bad.csv)
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)

@@ -10,9 +10,13 @@
 
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <filesystem>
+#include <unistd.h>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/log.hpp"
+#include "twinwatch/device/recording.hpp"
+#include "twinwatch/monitor/trend.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "monitor/simulated_run.hpp"
@@ -2569,6 +2573,72 @@ TEST_F(MonitorLoop, ImplausibleTemperaturesInATrainingRunAreHeldAsTheMonitorHold
   stub.path = "two_rows.csv";
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { learn_thresholds(declared_twin(), {{&stub, payload}}, settings); }),
               ::testing::HasSubstr("two_rows.csv (3 samples)"));
+}
+
+// `twinwatch thresholds` hands the learners each recording as FileSamples, read again on every pass
+// and never held (a shift of healthy recordings is 1.7 GB per robot hour at 500 Hz). Learned so from
+// a file with a stop in it (two driven stretches) and implausible temperatures, the thresholds, the
+// observer's debounce and the temperature slope are the ones learned on the same runs held, to the
+// bit; a file rewritten between two passes is refused by name.
+TEST_F(MonitorLoop, ThresholdsLearnedFromFilesReadAgainAreTheOnesLearnedFromTheHeldRuns) {
+  auto rec = run(scenario(503, 24, 0.5));
+  ASSERT_TRUE(rec.present & kFieldRobotMode);
+  for (size_t k = 5000; k < 5400; ++k) rec.samples[k].robot_mode = 5;  // a stop: the arm not driven
+  for (size_t k = 3000; k < 3003; ++k) rec.samples[k].temperature[2] = 6553.5;
+  const std::string path = (std::filesystem::temp_directory_path() / fmt::format("twinwatch_file_samples_{}.csv", ::getpid())).string();
+  const auto write = [&](const device::Recording& r) {
+    device::RecordingWriter w(path, 6, r.present);
+    for (const auto& s : r.samples) w.write(s);
+    w.close();
+  };
+  write(rec);
+  const std::vector<device::Recording> held = device::driven_segments(device::read_recording(path), 1.0, nullptr);
+  ASSERT_EQ(held.size(), 2u);
+  device::RecordingReader reader(path);
+  device::DrivenStretches driven(1.0);
+  const device::RecordingScan scan = device::scan_rows(reader, [&](const RobotSample& s) { driven.see(s); });
+  driven.finish();
+  ASSERT_EQ(driven.used().size(), 2u);
+  std::vector<std::unique_ptr<device::FileSamples>> files;
+  std::vector<HealthyRun> held_runs, file_runs;
+  std::vector<TrendRun> held_trend, file_trend;
+  for (size_t i = 0; i < 2; ++i) {
+    files.push_back(std::make_unique<device::FileSamples>(path, nullptr, scan, driven.used()[i], driven.whole()));
+    EXPECT_EQ(files[i]->size(), held[i].samples.size());
+    EXPECT_EQ(files[i]->seconds(), held[i].samples.back().timestamp - held[i].samples.front().timestamp);
+    held_runs.push_back({&held[i], payload});
+    file_runs.push_back({nullptr, payload, files[i].get()});
+    held_trend.push_back({&held[i], payload});
+    file_trend.push_back({nullptr, payload, 0, files[i].get()});
+  }
+  MonitorConfig settings = *config;
+  settings.trend.temperature_slope = Eigen::VectorXd::Constant(6, -2e-3);
+  settings.trend.temperature_ref = twin->temperature_ref;
+  const MonitorConfig a = learn_thresholds(*twin, held_runs, settings), b = learn_thresholds(*twin, file_runs, settings);
+  EXPECT_EQ(a.to_json(), b.to_json());
+  const ObserverDebounceChoice da = choose_observer_debounce(*twin, a, held_runs), db = choose_observer_debounce(*twin, b, file_runs);
+  EXPECT_EQ(da.raise_after, db.raise_after);
+  EXPECT_EQ(da.seconds, db.seconds);
+  ASSERT_EQ(da.ratio.size(), db.ratio.size());
+  for (size_t d = 0; d < da.ratio.size(); ++d) EXPECT_EQ(da.ratio[d], db.ratio[d]) << "debounce " << d + 1;
+  // (24 s may span too little temperature for a slope: then the same refusal)
+  const auto slope = [&](const std::vector<TrendRun>& runs) {
+    try {
+      const TrendConfig t = learn_trend_temperature(*twin, runs);
+      std::string out;
+      for (int j = 0; j < 6; ++j) out += fmt::format("{:.17g} ", t.temperature_slope[j]);
+      return out;
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+  };
+  EXPECT_EQ(slope(held_trend), slope(file_trend));
+  // rewritten between two passes (as many rows): refused by name, not learned from
+  rec.samples[100].current[1] += 0.5;
+  write(rec);
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] { files[0]->replay([](size_t, const RobotSample&) {}); }),
+              ::testing::AllOf(::testing::HasSubstr(path), ::testing::HasSubstr("its rows changed while it was read")));
+  std::filesystem::remove(path);
 }
 
 // A current reading that jumps and is back at the next sample (an electrical spike, a corrupted

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "error_text.hpp"
 
 namespace twinwatch::monitor {
 namespace {
@@ -173,6 +174,67 @@ TEST(StaticThreshold, RejectsEmptyAndRaggedRuns) {
   } catch (const InvalidArgument& e) {
     EXPECT_THAT(e.what(), HasSubstr("has size 3, expected 2"));
   }
+}
+
+
+// A learner reading runs without holding them (twinwatch thresholds on a shift's recordings) hands
+// the samples one at a time; the fit keeps the uniform decimation and the largest residuals. Spikes
+// between the decimation's samples, at speed where the threshold is otherwise low, must still bind
+// it: every one lies below the fitted threshold by the margin.
+TEST(DynamicThreshold, TheLargestResidualsBindTheFitThoughTheDecimationPassesThem) {
+  Healthy h = make_healthy(31, 0.3, 0.01, 400.0);  // 200,000 samples
+  DynamicThresholdOptions o;
+  o.max_samples = 2000;  // the decimation keeps samples 0, 100, 200, ...
+  const size_t N = h.r.size();
+  std::vector<size_t> spikes;
+  for (size_t k = 1050; k < N && spikes.size() < 5; k += 39000)
+    if (std::abs(h.qd[k]) > 0.5) {
+      h.r[k] = (spikes.size() % 2 ? -1.0 : 1.0) * 0.6;
+      spikes.push_back(k);
+    }
+  ASSERT_GE(spikes.size(), 3u);
+  DynamicThresholdSampler sampler(N, o);
+  for (size_t k = 0; k < N; ++k) sampler.add(h.r[k], h.qd[k], h.qdd[k]);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { sampler.add(0.0, 0.0, 0.0); }), HasSubstr("more than were announced"));
+  const DynamicThresholdFit fit = sampler.fit();
+  ASSERT_TRUE(fit.ok) << fit.message;
+  for (size_t k : spikes)
+    EXPECT_GE(fit.params.evaluate(h.qd[k], h.qdd[k]), std::abs(h.r[k]) + fit.params.margin * (1.0 - 1e-6)) << "spike at sample " << k;
+  // handed whole, the same fit
+  const DynamicThresholdFit whole = fit_dynamic_threshold(h.r, h.qd, h.qdd, o);
+  EXPECT_EQ(whole.params.upsilon, fit.params.upsilon);
+  EXPECT_EQ(whole.params.psi_qd, fit.params.psi_qd);
+  // fewer samples than announced: no fit on part of the data
+  DynamicThresholdSampler part(N, o);
+  for (size_t k = 0; k < 100; ++k) part.add(h.r[k], h.qd[k], h.qdd[k]);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { (void)part.fit(); }), HasSubstr("100 healthy samples given of the 200000 announced"));
+}
+
+// The static level from residuals handed one at a time: a run without any (all of it settling) is
+// no run, and the level is the one learned on the runs held.
+TEST(StaticThreshold, AccumulatedRunByRunItIsTheLevelLearnedOnTheHeldRuns) {
+  std::vector<std::vector<VectorJ>> runs(2);
+  for (int k = 0; k < 1000; ++k) {
+    runs[0].push_back(VectorJ::Constant(2, 0.1));
+    runs[1].push_back(VectorJ::Constant(2, k % 2 ? 0.2 : -0.2));
+  }
+  StaticThresholdAccumulator acc;
+  acc.end_run();  // (nothing judged in it)
+  for (const auto& run : runs) {
+    for (const VectorJ& v : run) acc.add(v);
+    acc.end_run();
+  }
+  EXPECT_EQ(acc.runs(), 2);
+  const double sigma = std::sqrt(0.025 - 0.05 * 0.05);
+  EXPECT_NEAR(acc.learn().level[0], 0.2 + 3.0 * sigma, 1e-12);
+  EXPECT_EQ(acc.learn().level, StaticThreshold::learn(runs).level);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([] { (void)StaticThresholdAccumulator().learn(); }), HasSubstr("no healthy runs"));
+  StaticThresholdAccumulator bad;
+  bad.add(VectorJ::Zero(2));
+  bad.end_run();
+  bad.add(VectorJ::Zero(2));
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { bad.add(VectorJ::Constant(2, std::nan(""))); }),
+              HasSubstr("residual 1 of healthy run 1 is not finite"));
 }
 
 }  // namespace

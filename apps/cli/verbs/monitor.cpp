@@ -490,36 +490,35 @@ int run_thresholds(const ThresholdOptions& o) {
   std::vector<std::string> all = o.recordings;
   all.insert(all.end(), o.debounce_validation.begin(), o.debounce_validation.end());
   const cli::ColumnMaps maps(o.column_maps, all);
-  std::vector<device::Recording> recs;
+  // Each recording is checked now (a bad one fails in seconds, not after minutes of learning) and read
+  // again by the learners, never held: a shift of healthy recordings at 500 Hz is 1.7 GB per robot
+  // hour, which held did not fit the machine (docs/recordings.md)
+  std::vector<std::unique_ptr<device::FileSamples>> recs;
   for (const auto& f : o.recordings) {
-    recs.push_back(device::read_recording(f, maps.of(f)));
-    device::require_fields(recs.back(), kFieldActualQd | kFieldActualCurrent, "learning thresholds");
-    cli::check_training_recording(recs.back(), twin.robot(), "thresholds");
+    std::size_t bad = 0;
+    auto runs = cli::scan_training_runs(f, maps.of(f), twin.robot(), "thresholds", "learning thresholds", "thresholds", &bad);
+    // (the learners hold them as the monitor does: said here, where the recording has its name)
+    if (bad > 0)
+      fmt::print(stderr, "note: {}: {} joint temperature reading(s) outside {:g} to {:g} °C, which no joint reads: learned with each "
+                         "joint's last plausible reading, as the monitor judges such samples\n",
+                 f, bad, monitor::kTemperatureMin, monitor::kTemperatureMax);
+    for (auto& r : runs) recs.push_back(std::move(r));
   }
-  recs = cli::driven_only(std::move(recs));
-  // (read before the learning run: a bad one fails in a second, not after minutes)
   // the observer's debounce per joint, chosen on healthy recordings the thresholds were not learned on
-  std::vector<device::Recording> vrecs;
+  std::vector<std::unique_ptr<device::FileSamples>> vrecs;
   for (const auto& f : o.debounce_validation) {
     for (const auto& r : o.recordings)
       if (same_file(f, r))
         throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
                                           "the choice needs healthy runs they were not learned on",
                                           f));
-    vrecs.push_back(device::read_recording(f, maps.of(f)));
-    device::require_fields(vrecs.back(), kFieldActualQd | kFieldActualCurrent, "--debounce-validation");
-    cli::check_training_recording(vrecs.back(), twin.robot(), "thresholds --debounce-validation");
+    auto runs = cli::scan_training_runs(f, maps.of(f), twin.robot(), "thresholds", "--debounce-validation", "thresholds --debounce-validation",
+                                        nullptr);
+    for (auto& r : runs) vrecs.push_back(std::move(r));
   }
-  vrecs = cli::driven_only(std::move(vrecs));
-  // (the learners hold them as the monitor does: said here, where the recording has its name)
-  for (const auto& r : recs)
-    if (const std::size_t bad = monitor::implausible_temperatures(r); bad > 0)
-      fmt::print(stderr, "note: {}: {} joint temperature reading(s) outside {:g} to {:g} °C, which no joint reads: learned with each "
-                         "joint's last plausible reading, as the monitor judges such samples\n",
-                 r.path, bad, monitor::kTemperatureMin, monitor::kTemperatureMax);
   std::vector<monitor::HealthyRun> runs;
   const model::RigidBodyInertia p = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
-  for (const auto& r : recs) runs.push_back({&r, p});
+  for (const auto& r : recs) runs.push_back({nullptr, p, r.get()});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
@@ -544,7 +543,7 @@ int run_thresholds(const ThresholdOptions& o) {
                  "default set again, without --program, on a warm-up from cold to learn one)\n");
   } else {
     std::vector<monitor::TrendRun> trend_runs;
-    for (const auto& r : runs) trend_runs.push_back({r.recording, r.payload, 0});
+    for (const auto& r : runs) trend_runs.push_back({nullptr, r.payload, 0, r.samples});
     try {
       settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
       fmt::print("temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
@@ -561,8 +560,7 @@ int run_thresholds(const ThresholdOptions& o) {
   bool program_is_default = false;
   {
     double seconds = 0.0;
-    for (const auto& r : recs)
-      if (r.samples.size() > 1) seconds += r.samples.back().timestamp - r.samples.front().timestamp;
+    for (const auto& r : recs) seconds += r->seconds();
     fmt::print(stderr, "learning thresholds on {} recording(s), {:.0f} s of data (the monitor runs over them, then a linear program "
                        "per joint) ...\n", recs.size(), seconds);
   }
@@ -580,7 +578,7 @@ int run_thresholds(const ThresholdOptions& o) {
   shown.select_program(o.program);
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
-    for (const auto& r : vrecs) val.push_back({&r, p});
+    for (const auto& r : vrecs) val.push_back({nullptr, p, r.get()});
     fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} validation recording(s) once per "
                        "count ...\n", vrecs.size());
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);

@@ -143,7 +143,7 @@ RecordingScan scan_rows(RecordingReader& reader, const std::function<void(const 
 long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each);
 
 /// Throws InvalidArgument naming `path` unless it is a file that can be read twice (a regular file,
-/// or a link to one): `user` (e.g. "report") reads a recording twice and never holds it, which a pipe,
+/// or a link to one): `user` (e.g. "report") reads a recording twice or more and never holds it, which a pipe,
 /// a process substitution or /dev/stdin cannot give.
 void require_rereadable(const std::string& path, const std::string& user);
 
@@ -155,6 +155,92 @@ void require_rereadable(const std::string& path, const std::string& user);
 /// `min_seconds` are left out too. A recording driven throughout comes back whole. `left_out` (may be
 /// null) gets a sentence for the user when anything was left out, else "".
 std::vector<Recording> driven_segments(const Recording& rec, double min_seconds, std::string* left_out);
+
+/// driven_segments sample by sample, for a recording read row by row and not held: see() each sample
+/// in order, then finish(); stretches() are then the driven ones as sample ranges [begin, end).
+class DrivenStretches {
+ public:
+  struct Stretch {
+    size_t begin = 0, end = 0;
+    double first = 0.0, last = 0.0;  ///< the timestamps of its first and last sample [s]
+  };
+  explicit DrivenStretches(double min_seconds) : min_seconds_(min_seconds) {}
+  void see(const RobotSample& s);
+  void finish();
+  /// driven in every sample (driven_segments then gives the recording whole, however short)
+  bool whole() const { return not_driven_ == 0; }
+  /// the driven stretches at least min_seconds long (none shorter is used; the last is known at finish())
+  const std::vector<Stretch>& stretches() const { return stretches_; }
+  /// what driven_segments gives: the whole recording when it is driven throughout, else stretches()
+  std::vector<Stretch> used() const;
+  /// driven_segments' sentence for the user when anything was left out (`period`: the recording's
+  /// median period, for the seconds), else ""
+  std::string note(const std::string& path, double period) const;
+
+ private:
+  void close();
+  double min_seconds_;
+  size_t k_ = 0;
+  bool in_ = false;
+  size_t begin_ = 0;
+  double began_ = 0.0, last_ = 0.0, first_sample_ = 0.0, last_sample_ = 0.0;
+  long not_driven_ = 0, short_samples_ = 0;
+  int short_stretches_ = 0;
+  std::vector<Stretch> stretches_;
+};
+
+/// A recording's samples in order from the first, as often as a reader asks: held in memory
+/// (HeldSamples), or read again from its file on every replay and never held (FileSamples). The
+/// learners of the monitor's thresholds and temperature slope read their runs through it two or
+/// three times each; `twinwatch thresholds` hands them files, so that a shift of healthy recordings
+/// is learned from without holding it (1.7 GB per robot hour at 500 Hz).
+class SampleSource {
+ public:
+  virtual ~SampleSource() = default;
+  const std::string& path() const { return path_; }
+  int n_dof() const { return n_dof_; }
+  std::uint32_t present() const { return present_; }  ///< SampleField flags
+  double median_period() const { return median_period_; }  ///< [s]
+  size_t size() const { return size_; }  ///< samples
+  /// from the first sample's timestamp to the last's [s] (0 with fewer than two)
+  double seconds() const { return seconds_; }
+  /// hands every sample to `each` in order, k counting from 0; throws what reading throws
+  virtual void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const = 0;
+
+ protected:
+  std::string path_;
+  int n_dof_ = 0;
+  std::uint32_t present_ = 0;
+  double median_period_ = 0.0, seconds_ = 0.0;
+  size_t size_ = 0;
+};
+
+/// A held recording as a SampleSource (it must outlive this)
+class HeldSamples : public SampleSource {
+ public:
+  explicit HeldSamples(const Recording& rec);
+  void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const override;
+
+ private:
+  const Recording* rec_;
+};
+
+/// Samples [stretch.begin, stretch.end) of a recording file that scan_rows checked, read again with
+/// replay_rows on every replay: the samples driven_segments gives (`whole`: the recording driven
+/// throughout, given whole; else the stretch's first sample is marked as no gap, the stretch starts there).
+/// Throws std::runtime_error naming the file when it was cut, rewritten or replaced since the scan.
+class FileSamples : public SampleSource {
+ public:
+  /// `map` (may be null) must outlive this
+  FileSamples(const std::string& path, const ColumnMap* map, const RecordingScan& scan, DrivenStretches::Stretch stretch, bool whole);
+  void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const override;
+
+ private:
+  const ColumnMap* map_;
+  RecordingScan scan_;
+  DrivenStretches::Stretch stretch_;
+  bool whole_;
+};
 
 /// Throws twinwatch::ParseError (line 1, the first missing group's column) unless every group in
 /// `fields` (SampleField flags) is present in the recording; `user` says who needs them, e.g.

@@ -249,6 +249,9 @@ struct LearnOptions {
 struct HealthyRun {
   const device::Recording* recording = nullptr;
   model::RigidBodyInertia payload;
+  /// instead of `recording`: a run read as often as the learner asks and not held (learn_thresholds
+  /// reads it twice, choose_observer_debounce once)
+  const device::SampleSource* samples = nullptr;
 };
 
 /// Learns static and dynamic thresholds from healthy runs with the twin's residuals (temperature-

@@ -34,6 +34,27 @@ struct StaticThreshold {
   static StaticThreshold learn(const std::vector<std::vector<VectorJ>>& runs, double k_sigma = 3.0);
 };
 
+/// StaticThreshold::learn a residual at a time, for runs read and not held (learn_thresholds): add()
+/// each residual of a run, end_run() after each run (a run with none is no run), then learn().
+/// The same sums in the same order: the same levels.
+class StaticThresholdAccumulator {
+ public:
+  /// Throws InvalidArgument naming the run and the sample for a residual of another size than the
+  /// first, or one not finite (one NaN would make every level NaN, and a NaN threshold never trips).
+  void add(const VectorJ& v);
+  void end_run();
+  int runs() const { return runs_; }
+  /// Throws InvalidArgument without a run, or for k_sigma < 0.
+  StaticThreshold learn(double k_sigma = 3.0) const;
+
+ private:
+  long n_ = -1;
+  int runs_ = 0;
+  size_t k_ = 0;  // residuals of the current run
+  VectorJ mae_, level_, sum_, sum2_;
+  double count_ = 0.0;
+};
+
 /// Options of the dynamic-threshold fit.
 struct DynamicThresholdOptions {
   double margin = 0.0;        ///< xi_i: minimum distance between threshold and healthy |r| (units of r); <= 0: auto = 3 * MAD-sigma of r
@@ -82,6 +103,28 @@ struct DynamicThresholdFit {
 /// @param r residual samples, @param qd [rad/s], @param qdd [rad/s²]: equal lengths, >= 10.
 DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<const double> qd,
                                           std::span<const double> qdd, const DynamicThresholdOptions& options = {});
+
+/// fit_dynamic_threshold a sample at a time, for runs read and not held (learn_thresholds): it keeps
+/// what the fit uses of `total` samples (the uniform decimation to options.max_samples and the 64
+/// largest |r|), so `total` must be known before the first add(). The same samples: the same fit.
+class DynamicThresholdSampler {
+ public:
+  /// Throws InvalidArgument for invalid options or fewer than 10 samples.
+  DynamicThresholdSampler(size_t total, const DynamicThresholdOptions& options = {});
+  /// the next sample; throws InvalidArgument naming it when it is not finite, or past `total`
+  void add(double r, double qd, double qdd);
+  /// after `total` add()s (InvalidArgument otherwise)
+  DynamicThresholdFit fit() const;
+
+ private:
+  struct Kept {
+    size_t k;
+    double r, qd, qdd;
+  };
+  DynamicThresholdOptions options_;
+  size_t total_, count_ = 0, wanted_ = 0, next_ = 0;  // next_: the uniform decimation's next sample
+  std::vector<Kept> uniform_, largest_;  // largest_: a heap, the smallest |r| on top
+};
 
 /// The load a joint reverses under, as far as the direction of its drive is in doubt.
 ///

@@ -34,10 +34,14 @@
 ///
 /// push() is allocation-free; closing a window allocates nothing either (history and scratch are
 /// reserved at construction).
+#include <fmt/format.h>
+
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/core/types.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/twin_model.hpp"
@@ -170,6 +174,7 @@ struct TrendRun {
   const device::Recording* recording = nullptr;
   model::RigidBodyInertia payload;
   int program = 0;  ///< runs of one program share its Coulomb/viscous/offset misfit (0-based)
+  const device::SampleSource* samples = nullptr;  ///< instead of `recording`: a run read and not held
 };
 /// (follow_payload: a run whose stream declares its payload is predicted with each declaration the
 /// twin takes, as the monitor does with MonitorConfig::follow_payload; else with TrendRun::payload alone)
@@ -194,20 +199,36 @@ std::size_t implausible_temperatures(const device::Recording& rec);
 /// does not widen the thresholds or tilt the slope.
 device::Recording hold_implausible_temperatures(const device::Recording& rec);
 
-/// `runs` (anything with a `const device::Recording* recording`), each whose recording reads an
-/// implausible temperature pointed at a held copy kept in `store`; the others as given.
+/// hold_implausible_temperatures a sample at a time, for a run read and not held: the sample as
+/// given while its temperatures are plausible, else a copy with them held.
+class TemperatureHold {
+ public:
+  const RobotSample& apply(const RobotSample& s);
+
+ private:
+  std::vector<double> last_;
+  RobotSample held_;
+};
+
+/// The samples of each of `runs` (anything with `const device::Recording* recording` and `const
+/// device::SampleSource* samples`: a held recording, or samples read as often as asked), the held
+/// ones read through a HeldSamples kept in `store`. Throws InvalidArgument naming `who` for a run
+/// with neither.
 template <class Run>
-std::vector<Run> with_held_temperatures(const std::vector<Run>& runs, std::vector<device::Recording>& store) {
-  std::vector<Run> out = runs;
-  std::size_t copies = 0;
-  for (const Run& r : runs) copies += r.recording != nullptr && implausible_temperatures(*r.recording) > 0 ? 1 : 0;
-  store.clear();
-  store.reserve(copies);  // (no reallocation below: the pointers into it stay valid)
-  for (Run& r : out)
-    if (r.recording != nullptr && implausible_temperatures(*r.recording) > 0) {
-      store.push_back(hold_implausible_temperatures(*r.recording));
-      r.recording = &store.back();
+std::vector<const device::SampleSource*> samples_of(const std::vector<Run>& runs, std::vector<std::unique_ptr<device::HeldSamples>>& store,
+                                                    const std::string& who) {
+  std::vector<const device::SampleSource*> out;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    if (r.samples != nullptr) {
+      out.push_back(r.samples);
+    } else if (r.recording != nullptr) {
+      store.push_back(std::make_unique<device::HeldSamples>(*r.recording));
+      out.push_back(store.back().get());
+    } else {
+      throw InvalidArgument(fmt::format("{}: run {} has no recording", who, i + 1));
     }
+  }
   return out;
 }
 
