@@ -2,6 +2,7 @@
 // on recordings, threshold re-learning, and scoring against scenario labels.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -476,10 +477,73 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
+  bool progress = false;
   std::string twin, filter, program;
   std::vector<std::string> recordings, debounce_validation, column_maps;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
+};
+
+// The progress of a learner's reading: "  thresholds  37 %" on one line of stderr, rewritten as the
+// samples are read (shown on a terminal, or with --progress); a phase an error leaves ends its line
+class ReadProgress {
+ public:
+  explicit ReadProgress(bool shown) : shown_(shown) {}
+  ~ReadProgress() { end(); }
+  ReadProgress(const ReadProgress&) = delete;
+  ReadProgress& operator=(const ReadProgress&) = delete;
+  /// `samples`: how many the phase reads in all
+  void begin(std::string what, size_t samples) {
+    end();
+    what_ = std::move(what);
+    total_ = std::max<size_t>(samples, 1);
+    read_ = 0;
+    pct_ = -1;
+    open_ = true;
+    add(0);
+  }
+  void add(size_t samples) {
+    if (!open_) return;
+    read_ += samples;
+    const int pct = static_cast<int>(100.0 * static_cast<double>(std::min(read_, total_)) / static_cast<double>(total_));
+    if (shown_ && pct != pct_) fmt::print(stderr, "\r  {} {:3d} %", what_, pct);
+    pct_ = pct;
+  }
+  void end() {
+    if (open_ && shown_) fmt::print(stderr, "\n");
+    open_ = false;
+  }
+
+ private:
+  bool shown_, open_ = false;
+  std::string what_;
+  size_t total_ = 1, read_ = 0;
+  int pct_ = -1;
+};
+
+// A run read through another source, counting what is read on a ReadProgress
+class CountedSamples : public device::SampleSource {
+ public:
+  CountedSamples(const device::SampleSource& inner, ReadProgress& progress) : inner_(&inner), progress_(&progress) {
+    path_ = inner.path();
+    n_dof_ = inner.n_dof();
+    present_ = inner.present();
+    median_period_ = inner.median_period();
+    size_ = inner.size();
+    seconds_ = inner.seconds();
+  }
+  void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const override {
+    constexpr size_t kEvery = 1u << 14;  // (33 s of 500 Hz data)
+    inner_->replay([&](size_t k, const RobotSample& s) {
+      each(k, s);
+      if ((k + 1) % kEvery == 0) progress_->add(kEvery);
+    });
+    progress_->add(size_ % kEvery);
+  }
+
+ private:
+  const device::SampleSource* inner_;
+  ReadProgress* progress_;
 };
 
 int run_thresholds(const ThresholdOptions& o) {
@@ -516,9 +580,21 @@ int run_thresholds(const ThresholdOptions& o) {
                                         nullptr);
     for (auto& r : runs) vrecs.push_back(std::move(r));
   }
+  // the progress of each learner's reading, which on a shift's recordings takes minutes
+  ReadProgress progress(o.progress || isatty(STDERR_FILENO));
+  size_t samples = 0, validation_samples = 0;
+  std::vector<std::unique_ptr<CountedSamples>> counted, vcounted;
+  for (const auto& r : recs) {
+    counted.push_back(std::make_unique<CountedSamples>(*r, progress));
+    samples += r->size();
+  }
+  for (const auto& r : vrecs) {
+    vcounted.push_back(std::make_unique<CountedSamples>(*r, progress));
+    validation_samples += r->size();
+  }
   std::vector<monitor::HealthyRun> runs;
   const model::RigidBodyInertia p = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
-  for (const auto& r : recs) runs.push_back({nullptr, p, r.get()});
+  for (const auto& r : counted) runs.push_back({nullptr, p, r.get()});
   // keep the user's settings and the learned temperature slope; only the thresholds are re-learned
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
@@ -545,11 +621,14 @@ int run_thresholds(const ThresholdOptions& o) {
     std::vector<monitor::TrendRun> trend_runs;
     for (const auto& r : runs) trend_runs.push_back({nullptr, r.payload, 0, r.samples});
     try {
+      progress.begin("temperature slope", 2 * samples);
       settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
+      progress.end();
       fmt::print("temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
                  "monitor and the wear trend compensate with it)\n",
                  fmt::join(settings.trend.temperature_slope, " "));
     } catch (const InvalidArgument& e) {
+      progress.end();
       fmt::print("note: no temperature slope learned ({}){}\n", e.what(),
                  settings.trend.temperature_slope.size() ? "; the twin's is kept" : "; give a warm-up from cold to learn one");
     }
@@ -564,6 +643,7 @@ int run_thresholds(const ThresholdOptions& o) {
     fmt::print(stderr, "learning thresholds on {} recording(s), {:.0f} s of data (the monitor runs over them, then a linear program "
                        "per joint) ...\n", recs.size(), seconds);
   }
+  progress.begin("thresholds", 2 * samples);
   if (o.program.empty()) {
     cfg = monitor::learn_thresholds(twin, runs, settings);
   } else {
@@ -574,14 +654,17 @@ int run_thresholds(const ThresholdOptions& o) {
       program_is_default = true;
     }
   }
+  progress.end();
   monitor::MonitorConfig shown = cfg;  // the set just learned, for the choice and the table below
   shown.select_program(o.program);
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
-    for (const auto& r : vrecs) val.push_back({nullptr, p, r.get()});
+    for (const auto& r : vcounted) val.push_back({nullptr, p, r.get()});
     fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} validation recording(s) once per "
                        "count ...\n", vrecs.size());
+    progress.begin("observer debounce", validation_samples);
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);
+    progress.end();
     if (o.program.empty() || program_is_default) cfg.observer_choice = choice;
     if (!o.program.empty()) cfg.programs.at(o.program).observer_choice = choice;
     fmt::print("observer debounce per joint {} (samples), chosen on {} validation recording(s), {:.0f} s; their healthy observer "
@@ -691,7 +774,8 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   auto o = std::make_shared<ThresholdOptions>();
   auto* sub = app.add_subcommand("thresholds", "Re-learn the monitor's thresholds from healthy recordings (per payload/program)");
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
-  sub->add_option("RECORDINGS", o->recordings, "Healthy recordings")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDINGS", o->recordings, "Healthy recordings (files: each is read several times and never held)")->required()->check(CLI::ExistingFile);
+  sub->add_flag("--progress", o->progress, "Show each learner's progress even when stderr is not a terminal");
   sub->add_option("--payload-mass", o->payload_mass,
                   "Payload carried in these recordings [kg] (default: the twin file's 'payload'). A recording that carries the payload the controller declares (RTDE "
                   "payload / payload_cog, controllers 5.5.1 and newer; a recording's payload columns) is learned with each "
