@@ -65,6 +65,14 @@ void PayloadTimeline::see(size_t k, const RobotSample& s) {
   steps_.push_back({k, now, s.timestamp});
 }
 
+bool PayloadTimeline::judged_seen(size_t k, double period) const {
+  const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
+  // the latest change at or before k: the settlings are of one length, so its is the one that ends last
+  for (size_t i = steps_.size(); i-- > 1;)
+    if (steps_[i].from <= k) return k >= steps_[i].from + wait;
+  return true;
+}
+
 void PayloadTimeline::finish(size_t samples, double period) {
   judged_.assign(samples, 1);
   judged_observer_.assign(samples, 1);

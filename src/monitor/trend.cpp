@@ -367,20 +367,20 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
       throw InvalidArgument(fmt::format("learn trend temperature: recording {} has no joint temperatures", src.path()));
     ident::TwinModel t = twin;
     // (the payload the stream declares, as the monitor predicts with it: PayloadTimeline)
+    // (read once: the accelerations are zero-phase, each sample handed over a few samples after it
+    // was seen, and whether it is judged looks back only)
     PayloadTimeline payload(twin, run.payload, follow_payload && (src.present() & kFieldPayload));
-    src.replay([&](size_t k, const RobotSample& s) { payload.see(k, s); });
-    payload.finish(src.size(), src.median_period() > 0.0 ? src.median_period() : MonitorConfig{}.nominal_period);
-    payload.start(t);
-    // (the accelerations zero-phase: each sample handed over a few samples late, with its own)
+    const double period = src.median_period() > 0.0 ? src.median_period() : MonitorConfig{}.nominal_period;
     ident::JointAccelerationStream accelerations(src.n_dof(), src.present());
     ident::FrictionMemory memory;
     TemperatureHold hold;
     size_t k = 0;
     const ident::JointAccelerationStream::Ready learn = [&](const RobotSample& s, const VectorJ& qdd) {
       const size_t at = k++;
+      if (at == 0) payload.start(t);  // (after the first sample's declaration was seen)
       payload.advance(at, t);
       t.advance(memory, s, qdd);
-      if (!payload.judged(at)) return;
+      if (!payload.judged_seen(at, period)) return;
       t.predict_current(s.q, s.qd, qdd, s.temperature, i_hat, &memory);
       for (int j = 0; j < n; ++j) {
         if (std::abs(s.qd[j]) <= c.v_min || !std::isfinite(s.temperature[j])) continue;
@@ -397,7 +397,10 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
         b[static_cast<size_t>(j)].noalias() += phi * (s.current[j] - i_hat[j]);
       }
     };
-    src.replay([&](size_t, const RobotSample& s) { accelerations.push(hold.apply(s), learn); });
+    src.replay([&](size_t i, const RobotSample& s) {
+      payload.see(i, s);
+      accelerations.push(hold.apply(s), learn);
+    });
     accelerations.finish(learn);
   }
   for (int j = 0; j < n; ++j) {

@@ -16,6 +16,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/monitor/declaration.hpp"
 #include "twinwatch/monitor/trend.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
@@ -1025,6 +1026,20 @@ TEST_F(MonitorLoop, ThresholdsAreLearnedWithThePayloadTheStreamDeclares) {
   const auto pick = run(scenario(505, 16, 0.0, part_change(false, 0.5, 8.0)));
   const auto plain = run(scenario(505, 16, 0.0)), loaded = run(scenario(505, 16, 0.5));
   const MonitorConfig followed = learn_thresholds(*twin, {{&pick, {}}});
+  // (the slope's learner reads a run once and asks whether a sample is judged as soon as it has seen
+  // it: the same answer as the whole run's timeline, the settling after the pick included)
+  {
+    const PayloadTimeline whole(*twin, HealthyRun{&pick, {}}, true, 0.002);
+    ASSERT_EQ(whole.steps(), 2u);
+    PayloadTimeline seen(*twin, model::RigidBodyInertia{}, true);
+    size_t settling = 0;
+    for (size_t k = 0; k < pick.samples.size(); ++k) {
+      seen.see(k, pick.samples[k]);
+      ASSERT_EQ(seen.judged_seen(k, pick.median_period), whole.judged(k)) << "sample " << k;
+      settling += whole.judged(k) ? 0 : 1;
+    }
+    EXPECT_EQ(settling, 25u) << "0.05 s at 500 Hz after the pick";
+  }
   const MonitorConfig apart = learn_thresholds(*twin, {{&plain, {}}, {&loaded, {}}});
   MonitorConfig keep;
   keep.follow_payload = false;

@@ -621,7 +621,7 @@ int run_thresholds(const ThresholdOptions& o) {
     std::vector<monitor::TrendRun> trend_runs;
     for (const auto& r : runs) trend_runs.push_back({nullptr, r.payload, 0, r.samples});
     try {
-      progress.begin("temperature slope", 2 * samples);
+      progress.begin("temperature slope", samples);
       settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
       progress.end();
       fmt::print("temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "

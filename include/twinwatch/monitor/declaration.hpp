@@ -72,6 +72,9 @@ class PayloadTimeline {
   }
   /// A sample the monitor decides on the current residual at (not settling after a change).
   bool judged(size_t k) const { return judged_[k] != 0; }
+  /// judged() for a run read once, without finish(): sample k and every one before it seen, `period`
+  /// as finish() takes it (a change's settling looks back only: the same answer)
+  bool judged_seen(size_t k, double period) const;
   /// A sample the monitor decides on the observer at (its start-up after a change too).
   bool judged_observer(size_t k) const { return judged_observer_[k] != 0; }
   /// The payloads in order (step 0 from sample 0: the run's own, or what it declares from its start)
