@@ -34,6 +34,16 @@ add_test(NAME cli.thresholds_from_a_pipe
 cmp ${d}/twin.json ${d}/twin_pipe.json && echo TWIN-UNCHANGED")
 set_tests_properties(cli.thresholds_from_a_pipe PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "/dev/stdin: thresholds reads a recording twice or more [^\n]*save it to a file first\nexit 2\nTWIN-UNCHANGED")
+# several files watched as one stream (the parts --split-every writes): the events are those of the
+# whole recording, each stored under the file it started in; parts given out of order are refused
+add_test(NAME cli.monitor_parts_as_one_stream
+  COMMAND sh -c "head -2001 ${d}/collision.csv > ${d}/part_a.csv && (head -1 ${d}/collision.csv; tail -n +2002 ${d}/collision.csv) > ${d}/part_b.csv && \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' --events ${d}/whole.jsonl -q && rm -f ${d}/parts.db && \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/part_a.csv ${d}/part_b.csv --db ${d}/parts.db --events ${d}/parts.jsonl && \
+cmp ${d}/whole.jsonl ${d}/parts.jsonl && echo SAME-EVENTS && $<TARGET_FILE:twinwatch> events --db ${d}/parts.db && \
+($<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/part_b.csv ${d}/part_a.csv --db '' 2>&1; echo exit $?)")
+set_tests_properties(cli.monitor_parts_as_one_stream PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "5000 samples, 0 gap\\(s\\), 1 event\\(s\\)[^\n]*\nSAME-EVENTS\n.*part_b\\.csv.*collision.*part_a\\.csv: it starts at t = 0\\.002 s, not after [^ ]*part_b\\.csv ends \\(t = 10\\.000 s\\)[^\n]*\nexit 2")
 add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.yaml -o ${d}/bad.csv)
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)

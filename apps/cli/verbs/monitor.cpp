@@ -51,7 +51,8 @@ const CLI::Validator kProgramNameGiven(
 using namespace twinwatch;
 
 struct MonitorOptions {
-  std::string twin, recording, events_path, db_path = "events.db";
+  std::string twin, events_path, db_path = "events.db";
+  std::vector<std::string> recordings;  // watched as one stream, in order (the parts --split-every writes)
   std::string column_map;  // foreign logs: CSV column -> RTDE name, scale
   std::string trace;  // per-sample residuals and thresholds as CSV
   std::string rtde, record_to;  // live input: controller address, optional copy of the stream
@@ -161,12 +162,23 @@ int run_monitor(const MonitorOptions& o) {
     fmt::print(stderr, "observer debounce per joint: {} sample(s) (chosen on healthy validation runs; --observer-raise-after N "
                        "sets one count for all)\n",
                fmt::join(cfg.observer_choice.raise_after, " "));
-  if (o.recording.empty() == o.rtde.empty())
-    throw InvalidArgument("give either a RECORDING or --rtde HOST[:PORT] (exactly one input)");
+  if (o.recordings.empty() == o.rtde.empty())
+    throw InvalidArgument("give either RECORDING(s) or --rtde HOST[:PORT] (exactly one input)");
+  cli::require_distinct(o.recordings, "RECORDING");
   std::unique_ptr<device::rtde::Client> client;
   // a file is stored by its absolute path: `events` then tells one file given as j5.csv and as
-  // ./logs/../j5.csv for what it is, and two files of one name in two folders apart
-  const std::string source = o.rtde.empty() ? stored_path(o.recording) : "rtde://" + o.rtde;
+  // ./logs/../j5.csv for what it is, and two files of one name in two folders apart. Of several
+  // files watched as one stream, an event is stored under the one it started in.
+  std::vector<std::pair<double, std::string>> sources;  // (first timestamp, stored path) per file, in order
+  if (!o.rtde.empty()) sources.push_back({-std::numeric_limits<double>::infinity(), "rtde://" + o.rtde});
+  const auto source_of = [&](const monitor::Event& e) -> const std::string& {
+    size_t i = 0;
+    while (i + 1 < sources.size() && sources[i + 1].first <= e.t_start) ++i;
+    return sources[i].second;
+  };
+  std::vector<std::string> inputs = o.recordings;
+  inputs.push_back(o.twin);
+  inputs.push_back(o.column_map);
   // the residual filter and the acceleration estimate run at the data's rate; thresholds learned
   // at another one do not fit them (a 1 kHz log against a 500 Hz set is filtered differently)
   const auto use_rate = [&](double period, const std::string& what) {
@@ -182,7 +194,7 @@ int run_monitor(const MonitorOptions& o) {
   // (with --split-every, --record's first file is rec.000.csv)
   const std::string record_first = o.record_to.empty() ? o.record_to : device::SplitRecordingWriter::first_file(o.record_to, o.split_every);
   for (const std::string* out : {&o.events_path, &o.trace, &record_first, &o.db_path})
-    if (!out->empty()) require_output(*out, {o.recording, o.twin, o.column_map});
+    if (!out->empty()) require_output(*out, inputs);
   // nor one output another's file: events over the trace's rows, a store that is a JSON-lines file
   const std::pair<const char*, const std::string*> outs[] = {
       {"--events", &o.events_path}, {"--trace", &o.trace}, {"--record", &record_first}, {"--db", &o.db_path}};
@@ -195,14 +207,47 @@ int run_monitor(const MonitorOptions& o) {
   // monitor it. Held whole it took ~0.9 kB a sample (1.6 GB per hour at 500 Hz: a day's recording
   // did not fit this 24 GB machine); the first pass keeps 32 bytes a sample (the steps, and the
   // currents for the units check), the second one row (docs/validation.md, "A soak audit").
+  // Several files are one stream in the order given (the parts `--split-every` writes, or a shift's
+  // recordings): each is checked on its own, then they must share their columns and follow each other
+  // in time; the step from one file's last sample to the next one's first is judged as any other step
+  // (a jump is a gap, a stream fault), and the estimators and the wear trend go on across it.
   std::optional<device::ColumnMap> map;
-  device::RecordingScan scan;
+  std::vector<device::RecordingScan> scans;
+  std::vector<double> last_t;  // each file's last timestamp
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
-    scan = cli::scan_recording(o.recording, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor");
-    if (scan.timing.median_period > 0) use_rate(scan.timing.median_period, o.recording);
-    // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
-    cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);
+    for (size_t i = 0; i < o.recordings.size(); ++i) {
+      const std::string& f = o.recordings[i];
+      double first = std::numeric_limits<double>::quiet_NaN(), last = first;
+      scans.push_back(cli::scan_recording(f, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor", [&](const RobotSample& s) {
+        if (std::isnan(first)) first = s.timestamp;
+        last = s.timestamp;
+      }));
+      const device::RecordingScan& scan = scans.back();
+      if (i > 0) {
+        const std::string& before = o.recordings[i - 1];
+        if (scan.n_dof != scans.front().n_dof || scan.present != scans.front().present)
+          throw InvalidArgument(fmt::format("{}: its header's columns are not those of {}{}: the files watched as one stream must be "
+                                            "parts of one recording, with the same columns",
+                                            f, o.recordings.front(),
+                                            scan.n_dof != scans.front().n_dof
+                                                ? fmt::format(" ({} joints against {})", scan.n_dof, scans.front().n_dof)
+                                                : std::string()));
+        if (!(first > last_t.back()))
+          throw InvalidArgument(fmt::format("{}: it starts at t = {:.3f} s, not after {} ends (t = {:.3f} s): the files are watched as one "
+                                            "stream in the order given; give them in the order they were recorded",
+                                            f, first, before, last_t.back()));
+      }
+      const double p0 = scans.front().timing.median_period, p = scan.timing.median_period;
+      if (i > 0 && p0 > 0.0 && p > 0.0 && std::abs(p / p0 - 1.0) > 0.05)
+        log::warn(fmt::format("{} runs at {:.0f} Hz, {} at {:.0f} Hz: the monitor filters them all at the first one's rate", f, 1.0 / p,
+                              o.recordings.front(), 1.0 / p0));
+      last_t.push_back(last);
+      sources.push_back({first, stored_path(f)});
+      // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
+      cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);
+    }
+    if (scans.front().timing.median_period > 0) use_rate(scans.front().timing.median_period, o.recordings.front());
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
@@ -234,7 +279,7 @@ int run_monitor(const MonitorOptions& o) {
   std::deque<monitor::Event> unstored;
   bool lock_said = false;
   const auto store_waiting = [&](int wait_ms) {
-    while (!unstored.empty() && store->try_insert(unstored.front(), source, wait_ms)) unstored.pop_front();
+    while (!unstored.empty() && store->try_insert(unstored.front(), source_of(unstored.front()), wait_ms)) unstored.pop_front();
     if (unstored.empty() && lock_said) {
       log::warn(fmt::format("{}: the store is free again; the events that waited are stored", o.db_path));
       lock_said = false;
@@ -362,24 +407,33 @@ int run_monitor(const MonitorOptions& o) {
   bool silent_gap = false;   // the silence at the end is one of the monitor's gaps (a stream fault)
   bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
   if (!client) {
-    // the rows the first pass read and checked (a file still being written has more by now)
-    device::RecordingReader again(o.recording, map ? &*map : nullptr);
-    double previous = 0.0;
-    long k = 0;
-    try {
-      k = device::replay_rows(again, scan, [&](RobotSample& s) {
-        previous = s.timestamp;
-        push(s);
-      });
-    } catch (...) {
-      // (the file changed under the second pass: what was watched up to there is still reported)
-      mon.finish();
-      throw;
+    double previous = std::numeric_limits<double>::quiet_NaN();
+    for (size_t i = 0; i < o.recordings.size(); ++i) {
+      const device::RecordingScan& scan = scans[i];
+      // the rows the first pass read and checked (a file still being written has more by now)
+      device::RecordingReader again(o.recordings[i], map ? &*map : nullptr);
+      long k = 0;
+      bool first_row = true;
+      try {
+        k = device::replay_rows(again, scan, [&](RobotSample& s) {
+          // (the step from the file before: a gap as the first file's timing measures one)
+          if (first_row && !std::isnan(previous) && scans.front().timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+          first_row = false;
+          previous = s.timestamp;
+          push(s);
+        });
+      } catch (...) {
+        // (the file changed under the second pass: what was watched up to there is still reported)
+        mon.finish();
+        throw;
+      }
+      if (k < scan.rows) {
+        log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
+                              "monitoring ends at t = {:.3f} s",
+                              o.recordings[i], k, scan.rows, previous));
+        break;
+      }
     }
-    if (k < scan.rows)
-      log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
-                            "monitoring ends at t = {:.3f} s",
-                            o.recording, k, scan.rows, previous));
   } else {
     std::unique_ptr<device::SplitRecordingWriter> copy;
     if (!o.record_to.empty()) copy = std::make_unique<device::SplitRecordingWriter>(o.record_to, 6, client->sample_fields(), o.split_every);
@@ -726,7 +780,11 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "twin has no momentum observer; docs/validation.md, 'What an event's confidence means'). Joints and\n"
       "links are numbered from 1, as in the scenario labels."));
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
-  sub->add_option("RECORDING", o->recording, "Recording CSV (or use --rtde for a live robot)")->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recordings,
+                  "Recording CSV (or use --rtde for a live robot); several are watched as one stream in the order given, e.g. the parts "
+                  "--split-every writes (rec.000.csv rec.001.csv ...): the estimators and the wear trend go on across them, a jump in "
+                  "time between two is a gap, and each event is stored under the file it started in")
+      ->check(CLI::ExistingFile);
   sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
   auto* duration = sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
                        ->check(twinwatch::cli::positive_number());
