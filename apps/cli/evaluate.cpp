@@ -433,7 +433,7 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
   device::DrivenStretches driven(kMinDrivenStretch);
   // implausible temperatures: of the whole recording, and of the driven stretches kept so far
   std::size_t all = 0, kept = 0, open = 0;
-  const device::RecordingScan scan = scan_recording(path, map, robot, verb, user, [&](const RobotSample& s) {
+  device::RecordingScan scan = scan_recording(path, map, robot, verb, user, [&](const RobotSample& s) {
     if (!check) check = std::make_unique<TrainingCheck>(path, static_cast<int>(s.q.size()), robot, what);
     check->add(s);
     std::size_t bad = 0;
@@ -454,6 +454,7 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
     driven.finish();
     if (driven.stretches().size() > before) kept += open;
   }
+  if (check) check->finish();  // (after the units check: currents in mA are said as such, not as a corrupted word)
   const std::vector<device::DrivenStretches::Stretch> used = driven.used();
   if (used.empty())
     throw InvalidArgument(fmt::format("{}: the controller does not drive the arm for {:g} s or more at a time in this recording "
@@ -462,9 +463,7 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
                                       path, kMinDrivenStretch));
   if (const std::string note = driven.note(path, scan.timing.median_period); !note.empty() && !quiet) fmt::print(stderr, "note: {}\n", note);
   if (implausible) *implausible = driven.whole() ? all : kept;
-  std::vector<std::unique_ptr<device::FileSamples>> out;
-  for (const auto& stretch : used) out.push_back(std::make_unique<device::FileSamples>(path, map, scan, stretch, driven.whole()));
-  return out;
+  return device::FileSamples::of(path, map, scan, used, driven.whole());
 }
 
 void require_driven(const device::Recording& rec, const std::string& user) {
@@ -563,12 +562,26 @@ void check_training_recording(const device::Recording& rec, const model::RobotMo
   check_units(rec, robot);
   TrainingCheck check(rec.path, rec.n_dof, robot, what);
   for (const RobotSample& s : rec.samples) check.add(s);
+  check.finish();
+}
+
+void TrainingCheck::add(const RobotSample& s) {
+  if (!failure_.empty()) return;
+  try {
+    check(s);
+  } catch (const InvalidArgument& e) {
+    failure_ = e.what();
+  }
+}
+
+void TrainingCheck::finish() const {
+  if (!failure_.empty()) throw InvalidArgument(failure_);
 }
 
 TrainingCheck::TrainingCheck(std::string path, int n_dof, const model::RobotModel& robot, std::string what)
     : path_(std::move(path)), what_(std::move(what)), n_(n_dof), robot_(&robot) {}
 
-void TrainingCheck::add(const RobotSample& s) {
+void TrainingCheck::check(const RobotSample& s) {
   const size_t k = k_++;
   if (k == 0) first_ = s.timestamp;
   const double limit = robot_->payload_limit();

@@ -81,13 +81,17 @@ inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's
 /// it would carry the wrong payload into every residual.
 void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
 /// check_training_recording's checks of each sample (not its units: UnitsCheck) a sample at a time,
-/// for a recording read row by row: add() each in order
+/// for a recording read row by row: add() each in order, then finish() throws the first failure
+/// (after the units check: a current in mA is said as such, not as a corrupted word)
 class TrainingCheck {
  public:
   TrainingCheck(std::string path, int n_dof, const model::RobotModel& robot, std::string what);
   void add(const RobotSample& s);
+  void finish() const;
 
  private:
+  void check(const RobotSample& s);
+  std::string failure_;
   std::string path_, what_;
   int n_;
   const model::RobotModel* robot_;

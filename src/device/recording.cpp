@@ -548,34 +548,71 @@ void HeldSamples::replay(const std::function<void(size_t k, const RobotSample& s
   for (size_t k = 0; k < rec_->samples.size(); ++k) each(k, rec_->samples[k]);
 }
 
-FileSamples::FileSamples(const std::string& path, const ColumnMap* map, const RecordingScan& scan, DrivenStretches::Stretch stretch,
-                         bool whole)
-    : map_(map), scan_(scan), stretch_(stretch), whole_(whole) {
-  if (stretch.begin > stretch.end || stretch.end > static_cast<size_t>(scan.rows))
-    throw std::invalid_argument(fmt::format("{}: samples [{}, {}) of {} rows: not a stretch of the recording", path, stretch.begin,
-                                            stretch.end, scan.rows));
-  path_ = path;
-  n_dof_ = scan.n_dof;
-  present_ = scan.present;
-  median_period_ = scan.timing.median_period;
+struct FileSamples::Reading {
+  std::string path;
+  const ColumnMap* map;
+  RecordingScan scan;
+  std::unique_ptr<RecordingReader> reader;  // null: to be opened
+  long row = 0;                             // the next row it reads
+  double previous = 0.0;                    // the timestamp of the row before it
+};
+
+std::vector<std::unique_ptr<FileSamples>> FileSamples::of(const std::string& path, const ColumnMap* map, const RecordingScan& scan,
+                                                          const std::vector<DrivenStretches::Stretch>& stretches, bool whole) {
+  auto reading = std::make_shared<Reading>(Reading{path, map, scan, nullptr, 0, 0.0});
+  std::vector<std::unique_ptr<FileSamples>> out;
+  for (size_t i = 0; i < stretches.size(); ++i) {
+    const auto& st = stretches[i];
+    if (st.begin > st.end || st.end > static_cast<size_t>(scan.rows) || (i > 0 && st.begin < stretches[i - 1].end))
+      throw std::invalid_argument(fmt::format("{}: samples [{}, {}) of {} rows: not a stretch of the recording after the last", path,
+                                              st.begin, st.end, scan.rows));
+    out.push_back(std::unique_ptr<FileSamples>(new FileSamples(reading, st, whole, i + 1 == stretches.size())));
+  }
+  return out;
+}
+
+FileSamples::FileSamples(std::shared_ptr<Reading> reading, DrivenStretches::Stretch stretch, bool whole, bool last)
+    : reading_(std::move(reading)), stretch_(stretch), whole_(whole), last_(last) {
+  path_ = reading_->path;
+  n_dof_ = reading_->scan.n_dof;
+  present_ = reading_->scan.present;
+  median_period_ = reading_->scan.timing.median_period;
   size_ = stretch.end - stretch.begin;
   seconds_ = size_ > 1 ? stretch.last - stretch.first : 0.0;
 }
 
 void FileSamples::replay(const std::function<void(size_t k, const RobotSample& s)>& each) const {
-  RecordingReader again(path_, map_);
-  size_t k = 0;
-  const long rows = replay_rows(again, scan_, [&](RobotSample& s) {
-    if (k >= stretch_.begin && k < stretch_.end) {
-      if (k == stretch_.begin && !whole_) s.gap_before = false;  // (a driven stretch starts here: driven_segments)
-      each(k - stretch_.begin, s);
-    }
-    ++k;
-  });
-  if (rows < scan_.rows)
-    throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to learn from (the file was cut or replaced while it was "
-                                         "read): read a copy",
-                                         path_, rows, scan_.rows));
+  Reading& r = *reading_;
+  const long begin = static_cast<long>(stretch_.begin), end = static_cast<long>(stretch_.end);
+  // (what replay_rows does, a stretch at a time; an error leaves the reading to be opened again)
+  if (!r.reader || r.row > begin) {
+    r.reader.reset();
+    auto again = std::make_unique<RecordingReader>(r.path, r.map);
+    again->quiet();  // (a cut-off last row was said by the scan)
+    if (again->n_dof() != r.scan.n_dof || again->present() != r.scan.present)
+      throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): read a copy", r.path));
+    r.reader = std::move(again);
+    r.row = 0;
+  }
+  RecordingReader& reader = *r.reader;
+  std::unique_ptr<RecordingReader> guard = std::move(r.reader);  // (given back once the stretch is read)
+  RobotSample s;
+  const long stop = last_ ? r.scan.rows : end;  // (the last stretch reads on to the end, for the hash)
+  for (; r.row < stop; ++r.row) {
+    if (!reader.next(s))
+      throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to learn from (the file was cut or replaced while "
+                                           "it was read): read a copy",
+                                           r.path, r.row, r.scan.rows));
+    if (r.row > 0 && r.scan.timing.is_gap(s.timestamp - r.previous)) s.gap_before = true;
+    r.previous = s.timestamp;
+    if (r.row < begin || r.row >= end) continue;
+    if (r.row == begin && !whole_) s.gap_before = false;  // (a driven stretch starts here: driven_segments)
+    each(static_cast<size_t>(r.row - begin), s);
+  }
+  if (last_ && reader.rows_hash() != r.scan.rows_hash)
+    throw std::runtime_error(fmt::format("{}: its rows changed while it was read (replaced or rewritten by another program?): read a copy",
+                                         r.path));
+  r.reader = std::move(guard);
 }
 
 namespace {

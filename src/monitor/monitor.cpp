@@ -775,8 +775,13 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   StaticThresholdAccumulator level, observer_level;
   std::vector<DynamicThresholdSampler> dynamic, observer_dynamic;
   for (int j = 0; j < n; ++j) dynamic.emplace_back(judged, options.dynamic);
-  if (with_observer && judged_observer > 0)
-    for (int j = 0; j < n; ++j) observer_dynamic.emplace_back(judged_observer, options.dynamic);
+  if (with_observer && judged_observer > 0) {
+    try {
+      for (int j = 0; j < n; ++j) observer_dynamic.emplace_back(judged_observer, options.dynamic);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(fmt::format("observer {}", e.what()));  // (too few samples the observer is judged at)
+    }
+  }
   for (size_t i = 0; i < runs.size(); ++i) {
     const device::SampleSource& src = *runs[i];
     PayloadTimeline& payload = timelines[i];

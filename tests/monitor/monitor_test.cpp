@@ -2614,11 +2614,10 @@ TEST_F(MonitorLoop, ThresholdsLearnedFromFilesReadAgainAreTheOnesLearnedFromTheH
   const device::RecordingScan scan = device::scan_rows(reader, [&](const RobotSample& s) { driven.see(s); });
   driven.finish();
   ASSERT_EQ(driven.used().size(), 2u);
-  std::vector<std::unique_ptr<device::FileSamples>> files;
+  const std::vector<std::unique_ptr<device::FileSamples>> files = device::FileSamples::of(path, nullptr, scan, driven.used(), driven.whole());
   std::vector<HealthyRun> held_runs, file_runs;
   std::vector<TrendRun> held_trend, file_trend;
   for (size_t i = 0; i < 2; ++i) {
-    files.push_back(std::make_unique<device::FileSamples>(path, nullptr, scan, driven.used()[i], driven.whole()));
     EXPECT_EQ(files[i]->size(), held[i].samples.size());
     EXPECT_EQ(files[i]->seconds(), held[i].samples.back().timestamp - held[i].samples.front().timestamp);
     held_runs.push_back({&held[i], payload});
@@ -2648,11 +2647,27 @@ TEST_F(MonitorLoop, ThresholdsLearnedFromFilesReadAgainAreTheOnesLearnedFromTheH
     }
   };
   EXPECT_EQ(slope(held_trend), slope(file_trend));
-  // rewritten between two passes (as many rows): refused by name, not learned from
+  // the stretches share the file's reading: read in order, a pass reads it once; a stretch read
+  // again (the second before the first) opens it again and hands the same samples
+  std::vector<double> second, again;
+  files[1]->replay([&](size_t, const RobotSample& s) { second.push_back(s.current[1]); });
+  files[0]->replay([](size_t, const RobotSample&) {});
+  files[1]->replay([&](size_t, const RobotSample& s) { again.push_back(s.current[1]); });
+  EXPECT_EQ(second, again);
+  EXPECT_EQ(second.size(), held[1].samples.size());
+  // rewritten between two passes (as many rows): refused by name once the pass reads to the end
   rec.samples[100].current[1] += 0.5;
   write(rec);
-  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] { files[0]->replay([](size_t, const RobotSample&) {}); }),
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] {
+                files[0]->replay([](size_t, const RobotSample&) {});
+                files[1]->replay([](size_t, const RobotSample&) {});
+              }),
               ::testing::AllOf(::testing::HasSubstr(path), ::testing::HasSubstr("its rows changed while it was read")));
+  // cut: refused by name
+  rec.samples.resize(8000);
+  write(rec);
+  EXPECT_THAT(twinwatch::test::error_text<std::runtime_error>([&] { files[1]->replay([](size_t, const RobotSample&) {}); }),
+              ::testing::AllOf(::testing::HasSubstr(path), ::testing::HasSubstr("8000 of the 12000 rows checked")));
   std::filesystem::remove(path);
 }
 

@@ -225,21 +225,27 @@ class HeldSamples : public SampleSource {
   const Recording* rec_;
 };
 
-/// Samples [stretch.begin, stretch.end) of a recording file that scan_rows checked, read again with
-/// replay_rows on every replay: the samples driven_segments gives (`whole`: the recording driven
-/// throughout, given whole; else the stretch's first sample is marked as no gap, the stretch starts there).
-/// Throws std::runtime_error naming the file when it was cut, rewritten or replaced since the scan.
+/// The driven stretches of a recording file that scan_rows checked (DrivenStretches::used()), each a
+/// run of its own read again on every replay: the samples driven_segments gives (`whole`: the
+/// recording driven throughout, given whole; else each stretch's first sample is marked as no gap,
+/// the stretch starts there). The stretches of one file share its reading: replayed in order, as the
+/// learners read their runs, each pass reads the file once (a shift with a stop a minute is read as
+/// often as one without); replaying a stretch behind the reading opens the file again. The rows are
+/// checked as replay_rows checks them, the hash when the last stretch's replay has read to the end:
+/// a file cut, rewritten or replaced since the scan throws std::runtime_error naming it.
 class FileSamples : public SampleSource {
  public:
-  /// `map` (may be null) must outlive this
-  FileSamples(const std::string& path, const ColumnMap* map, const RecordingScan& scan, DrivenStretches::Stretch stretch, bool whole);
+  /// `map` (may be null) must outlive them
+  static std::vector<std::unique_ptr<FileSamples>> of(const std::string& path, const ColumnMap* map, const RecordingScan& scan,
+                                                      const std::vector<DrivenStretches::Stretch>& stretches, bool whole);
   void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const override;
 
  private:
-  const ColumnMap* map_;
-  RecordingScan scan_;
+  struct Reading;  // the file's reader and where it is
+  FileSamples(std::shared_ptr<Reading> reading, DrivenStretches::Stretch stretch, bool whole, bool last);
+  std::shared_ptr<Reading> reading_;
   DrivenStretches::Stretch stretch_;
-  bool whole_;
+  bool whole_, last_;
 };
 
 /// Throws twinwatch::ParseError (line 1, the first missing group's column) unless every group in

@@ -106,7 +106,8 @@ DynamicThresholdFit fit_dynamic_threshold(std::span<const double> r, std::span<c
 
 /// fit_dynamic_threshold a sample at a time, for runs read and not held (learn_thresholds): it keeps
 /// what the fit uses of `total` samples (the uniform decimation to options.max_samples and the 64
-/// largest |r|), so `total` must be known before the first add(). The same samples: the same fit.
+/// largest |r|), so `total` must be known before the first add(). Of samples tied at the 64th largest
+/// |r| the earlier are kept (std::partial_sort, which fit_dynamic_threshold used before, kept any).
 class DynamicThresholdSampler {
  public:
   /// Throws InvalidArgument for invalid options or fewer than 10 samples.
