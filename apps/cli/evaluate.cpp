@@ -20,6 +20,7 @@
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/data_dir.hpp"
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/log.hpp"
 #include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
@@ -394,6 +395,50 @@ model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::str
         "--known-payload REC.csv=MASS,CX,CY,CZ')",
         twin_path, mass));
   return p;
+}
+
+namespace {
+// /proc/meminfo's `key` [bytes]; NaN where it cannot be read
+double meminfo(const std::string& key) {
+  std::ifstream f("/proc/meminfo");
+  std::string name, unit;
+  double kb = 0.0;
+  while (f >> name >> kb) {
+    std::getline(f, unit);
+    if (name == key + ":") return kb * 1024.0;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+}  // namespace
+
+void check_held_size(const std::vector<std::string>& files, const std::string& verb) {
+  double bytes = 0.0, samples = 0.0;
+  for (const std::string& path : files) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    std::ifstream f(path);
+    std::string line;
+    if (ec || !f || !std::getline(f, line)) continue;  // (not a file to size: the reading says what it is)
+    const double header = static_cast<double>(line.size() + 1);
+    double rows = 0.0, row_bytes = 0.0;
+    while (rows < 100 && std::getline(f, line)) {
+      rows += 1.0;
+      row_bytes += static_cast<double>(line.size() + 1);
+    }
+    bytes += static_cast<double>(size);
+    if (rows > 0.0) samples += (static_cast<double>(size) - header) / (row_bytes / rows);
+  }
+  const double need = samples * kHeldBytesPerSample, total = meminfo("MemTotal"), free = meminfo("MemAvailable");
+  const auto gb = [](double b) { return fmt::format("{:.1f} GB", b / 1e9); };
+  const std::string what = fmt::format("{} holds its recordings whole: {} file(s), {} of CSV, about {:.2g} samples, need about {} of memory",
+                                       verb, files.size(), gb(bytes), samples, gb(need));
+  const std::string advice = "identify from shorter runs (an excitation run of minutes: 'twinwatch excite'), or cut them ('head -n 300001 "
+                             "rec.csv > part.csv' keeps 10 minutes at 500 Hz); monitor, report, validate and thresholds read long "
+                             "recordings without holding them";
+  if (std::isfinite(total) && need > total)
+    throw InvalidArgument(fmt::format("{}, more than this machine's {}: it would be stopped part-way. {}", what, gb(total), advice));
+  if (std::isfinite(free) && need > free)
+    log::warn(fmt::format("{}, more than the {} free now: the system may stop it part-way. {}", what, gb(free), advice));
 }
 
 void require_distinct(const std::vector<std::string>& files, const std::string& what) {

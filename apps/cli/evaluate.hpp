@@ -125,6 +125,16 @@ void require_driven(const device::Recording& rec, const std::string& user);
 /// e.g. "RECORDINGS").
 void require_distinct(const std::vector<std::string>& files, const std::string& what);
 
+/// [B] what a verb that holds its recordings whole takes per sample: the sample (~0.95 kB) and what
+/// identification keeps beside it (identify on an hour at 500 Hz, 1.8 M samples: 2.52 GB)
+inline constexpr double kHeldBytesPerSample = 1400.0;
+
+/// `verb` (identify) holds `files` whole: their samples, estimated from each file's size and its first
+/// rows' length, times kHeldBytesPerSample. Throws InvalidArgument naming the files' size and the
+/// need when it is more than the machine's memory (it would be stopped part-way), and warns when it
+/// is more than is free now. Files it cannot size are left to the reading.
+void check_held_size(const std::vector<std::string>& files, const std::string& verb);
+
 /// `--robot`: a built-in name as given, a description file (.json, .urdf) as an absolute path, so
 /// that the twin (or model) that stores it still finds it from another working directory.
 std::string robot_reference(const std::string& name_or_path);

@@ -44,6 +44,13 @@ cmp ${d}/whole.jsonl ${d}/parts.jsonl && echo SAME-EVENTS && $<TARGET_FILE:twinw
 ($<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/part_b.csv ${d}/part_a.csv --db '' 2>&1; echo exit $?)")
 set_tests_properties(cli.monitor_parts_as_one_stream PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "5000 samples, 0 gap\\(s\\), 1 event\\(s\\)[^\n]*\nSAME-EVENTS\n.*part_b\\.csv.*collision.*part_a\\.csv: it starts at t = 0\\.002 s, not after [^ ]*part_b\\.csv ends \\(t = 10\\.000 s\\)[^\n]*\nexit 2")
+# identify holds its recordings whole: one more than the machine holds (a sparse 4 TB file, 100 real
+# rows) is refused before it is read, with the need and what to do, instead of being stopped part-way
+add_test(NAME cli.identify_more_than_the_machine_holds
+  COMMAND sh -c "head -101 ${d}/fig.csv > ${d}/huge.csv && truncate -s 4T ${d}/huge.csv && \
+($<TARGET_FILE:twinwatch> identify ${d}/huge.csv -o ${d}/huge_twin.json 2>&1; echo exit $?); rm -f ${d}/huge.csv")
+set_tests_properties(cli.identify_more_than_the_machine_holds PROPERTIES FIXTURES_REQUIRED recordings
+  PASS_REGULAR_EXPRESSION "identify holds its recordings whole: 1 file\\(s\\), 4398\\.0 GB of CSV[^\n]*more than this machine's [0-9.]+ GB: it would be stopped part-way\\. identify from shorter runs[^\n]*\nexit 2")
 add_test(NAME cli.simulate_bad_field COMMAND twinwatch simulate ${s}/bad_field.yaml -o ${d}/bad.csv)
 set_tests_properties(cli.simulate_bad_field PROPERTIES PASS_REGULAR_EXPRESSION "bad_field.yaml:2: field 'duration': expected a number, got 'fast'")
 add_test(NAME cli.validate_missing_file COMMAND twinwatch validate --twin ${d}/nonexistent.json ${d}/fig.csv)

@@ -194,6 +194,7 @@ int run_identify(const IdentifyOptions& o) {
   }
   const bool learned = o.method == "mlp" || o.method == "hybrid";
   const ident::LearnedIdentOptions lo = learned ? learned_options(o) : ident::LearnedIdentOptions{};
+  cli::check_held_size(o.recordings, "identify");
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) {
     recs.push_back(device::read_recording(f, maps.of(f)));
@@ -331,6 +332,12 @@ int run_identify_sequential(const IdentifyOptions& o) {
     for (const auto& f : files) v.push_back(device::read_recording(f, maps.of(f)));
     return cli::driven_only(std::move(v), o.quiet);
   };
+  {
+    std::vector<std::string> all = o.quasi_static;
+    all.insert(all.end(), o.sine.begin(), o.sine.end());
+    all.insert(all.end(), o.recordings.begin(), o.recordings.end());
+    cli::check_held_size(all, "identify");
+  }
   const auto qs = read_all(o.quasi_static), sn = read_all(o.sine), gen = read_all(o.recordings);
   const model::RobotModel robot = model::load_robot(o.robot);
   for (const auto* v : {&qs, &sn, &gen})
