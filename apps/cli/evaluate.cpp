@@ -474,16 +474,13 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
                                                                      const model::RobotModel& robot, const std::string& verb,
                                                                      const std::string& user, const std::string& what,
                                                                      std::size_t* implausible, bool quiet) {
-  std::unique_ptr<TrainingCheck> check;
+  TrainingCheck check(path, robot, what);
   device::DrivenStretches driven(kMinDrivenStretch);
   // implausible temperatures: of the whole recording, and of the driven stretches kept so far
   std::size_t all = 0, kept = 0, open = 0;
-  device::RecordingScan scan = scan_recording(path, map, robot, verb, user, [&](const RobotSample& s) {
-    if (!check) check = std::make_unique<TrainingCheck>(path, static_cast<int>(s.q.size()), robot, what);
-    check->add(s);
-    std::size_t bad = 0;
-    if (s.has(kFieldTemperature))
-      for (Eigen::Index j = 0; j < s.temperature.size(); ++j) bad += monitor::plausible_temperature(s.temperature[j]) ? 0 : 1;
+  const device::RecordingScan scan = scan_recording(path, map, robot, verb, user, [&](const RobotSample& s) {
+    check.add(s);
+    const std::size_t bad = monitor::implausible_temperatures(s);
     all += bad;
     const std::size_t before = driven.stretches().size();
     driven.see(s);
@@ -499,16 +496,15 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
     driven.finish();
     if (driven.stretches().size() > before) kept += open;
   }
-  if (check) check->finish();  // (after the units check: currents in mA are said as such, not as a corrupted word)
-  const std::vector<device::DrivenStretches::Stretch> used = driven.used();
-  if (used.empty())
+  check.finish();  // (after the units check: currents in mA are said as such, not as a corrupted word)
+  if (driven.used().empty())
     throw InvalidArgument(fmt::format("{}: the controller does not drive the arm for {:g} s or more at a time in this recording "
                                       "(robot_mode RUNNING and safety_mode NORMAL or REDUCED): nothing in it shows the driven arm a "
                                       "twin models",
                                       path, kMinDrivenStretch));
   if (const std::string note = driven.note(path, scan.timing.median_period); !note.empty() && !quiet) fmt::print(stderr, "note: {}\n", note);
   if (implausible) *implausible = driven.whole() ? all : kept;
-  return device::FileSamples::of(path, map, scan, used, driven.whole());
+  return device::FileSamples::of(path, map, scan, driven);
 }
 
 void require_driven(const device::Recording& rec, const std::string& user) {
@@ -605,58 +601,53 @@ void check_units(const device::Recording& rec, const model::RobotModel& robot) {
 
 void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
   check_units(rec, robot);
-  TrainingCheck check(rec.path, rec.n_dof, robot, what);
+  TrainingCheck check(rec.path, robot, what);
   for (const RobotSample& s : rec.samples) check.add(s);
   check.finish();
 }
 
 void TrainingCheck::add(const RobotSample& s) {
-  if (!failure_.empty()) return;
-  try {
-    check(s);
-  } catch (const InvalidArgument& e) {
-    failure_ = e.what();
-  }
+  if (failure_.empty()) failure_ = check(s);
+  ++k_;
 }
 
 void TrainingCheck::finish() const {
   if (!failure_.empty()) throw InvalidArgument(failure_);
 }
 
-TrainingCheck::TrainingCheck(std::string path, int n_dof, const model::RobotModel& robot, std::string what)
-    : path_(std::move(path)), what_(std::move(what)), n_(n_dof), robot_(&robot) {}
+TrainingCheck::TrainingCheck(std::string path, const model::RobotModel& robot, std::string what)
+    : path_(std::move(path)), what_(std::move(what)), robot_(&robot) {}
 
-void TrainingCheck::check(const RobotSample& s) {
-  const size_t k = k_++;
+std::string TrainingCheck::check(const RobotSample& s) {
+  const size_t k = k_;
   if (k == 0) first_ = s.timestamp;
   const double limit = robot_->payload_limit();
   const double t = s.timestamp - first_;
-  const std::string& what = what_;
   // a corrupted word (1.7e308 A) among healthy samples: the monitor skips such a sample as a
   // sensor fault; a learner would fit it
-  for (int j = 0; j < n_; ++j)
+  for (int j = 0; j < s.n_dof(); ++j)
     if (s.has(kFieldActualCurrent) && !(std::abs(s.current[j]) <= kTrainingCurrentMax))
-      throw InvalidArgument(fmt::format("{}: column 'actual_current_{}' is {:g} A at t = {:.3f} s (sample {}), no reading a joint's drive "
-                                        "gives (above {:g} A); {} learns from healthy runs: leave this stretch out of the recording",
-                                        path_, j, s.current[j], t, k + 1, kTrainingCurrentMax, what));
-  if (!s.has(kFieldPayload)) return;
+      return fmt::format("{}: column 'actual_current_{}' is {:g} A at t = {:.3f} s (sample {}), no reading a joint's drive gives (above "
+                         "{:g} A); {} learns from healthy runs: leave this stretch out of the recording",
+                         path_, j, s.current[j], t, k + 1, kTrainingCurrentMax, what_);
+  if (!s.has(kFieldPayload)) return {};
   const Eigen::Vector3d c(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
   if (!std::isfinite(s.payload) || !c.allFinite())
-    throw InvalidArgument(fmt::format("{}: the payload declared at t = {:.3f} s (sample {}) is not a finite mass and centre of mass; {} "
-                                      "needs the payload each healthy run carried",
-                                      path_, t, k + 1, what));
+    return fmt::format("{}: the payload declared at t = {:.3f} s (sample {}) is not a finite mass and centre of mass; {} needs the "
+                       "payload each healthy run carried",
+                       path_, t, k + 1, what_);
   if (s.payload > limit)
-    throw InvalidArgument(fmt::format("{}: column 'payload' declares {:g} kg at t = {:.3f} s (sample {}), more than {:g} kg ({}){}; {} "
-                                      "would learn from a run whose payload the monitor cannot take",
-                                      path_, s.payload, t, k + 1, limit, robot_->payload_limit_text(),
-                                      s.payload / 1000.0 <= limit ? ": is it in grams? Scale it with a column map ('COLUMN,payload,0.001', docs/recordings.md)" : "",
-                                      what));
+    return fmt::format("{}: column 'payload' declares {:g} kg at t = {:.3f} s (sample {}), more than {:g} kg ({}){}; {} would learn "
+                       "from a run whose payload the monitor cannot take",
+                       path_, s.payload, t, k + 1, limit, robot_->payload_limit_text(),
+                       s.payload / 1000.0 <= limit ? ": is it in grams? Scale it with a column map ('COLUMN,payload,0.001', docs/recordings.md)" : "",
+                       what_);
   if (s.payload > 0.0 && c.norm() > model::kPayloadComMax)
-    throw InvalidArgument(fmt::format("{}: columns 'payload_cog_0..2' declare a centre of mass ({:g}, {:g}, {:g}) {:.3g} m from the flange at "
-                                      "t = {:.3f} s (sample {}), more than {:g} m: is it in mm? Scale it with a column map "
-                                      "('COLUMN,payload_cog_0,0.001', docs/recordings.md); {} would learn from a run whose payload the "
-                                      "monitor cannot take",
-                                      path_, c.x(), c.y(), c.z(), c.norm(), t, k + 1, model::kPayloadComMax, what));
+    return fmt::format("{}: columns 'payload_cog_0..2' declare a centre of mass ({:g}, {:g}, {:g}) {:.3g} m from the flange at t = "
+                       "{:.3f} s (sample {}), more than {:g} m: is it in mm? Scale it with a column map ('COLUMN,payload_cog_0,0.001', "
+                       "docs/recordings.md); {} would learn from a run whose payload the monitor cannot take",
+                       path_, c.x(), c.y(), c.z(), c.norm(), t, k + 1, model::kPayloadComMax, what_);
+  return {};
 }
 
 std::string magnitude_text(double value, const std::string& units) {

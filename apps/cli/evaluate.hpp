@@ -85,15 +85,14 @@ void check_training_recording(const device::Recording& rec, const model::RobotMo
 /// (after the units check: a current in mA is said as such, not as a corrupted word)
 class TrainingCheck {
  public:
-  TrainingCheck(std::string path, int n_dof, const model::RobotModel& robot, std::string what);
+  TrainingCheck(std::string path, const model::RobotModel& robot, std::string what);
   void add(const RobotSample& s);
   void finish() const;
 
  private:
-  void check(const RobotSample& s);
+  std::string check(const RobotSample& s);  // what is wrong with sample k_, or ""
   std::string failure_;
   std::string path_, what_;
-  int n_;
   const model::RobotModel* robot_;
   size_t k_ = 0;
   double first_ = 0.0;

@@ -403,21 +403,36 @@ void require_rereadable(const std::string& path, const std::string& user) {
                                       path, user));
 }
 
-long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each) {
+namespace {
+// A reader opened again for the second pass over rows a scan checked (replay_rows, FileSamples): its
+// header must be the scan's; each row gets gap_before from the scan's timing, as read_recording
+// marks it; check_hash() once all the scan's rows are read.
+void check_header(RecordingReader& again, const RecordingScan& scan) {
   again.quiet();  // (a cut-off last row was said by the scan)
   if (again.n_dof() != scan.n_dof || again.present() != scan.present)
     throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): read a copy", again.file()));
+}
+void mark_gap(RobotSample& s, long k, double previous, const RecordingScan& scan) {
+  if (k > 0 && scan.timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+}
+void check_hash(const RecordingReader& again, const RecordingScan& scan) {
+  if (again.rows_hash() != scan.rows_hash)
+    throw std::runtime_error(fmt::format("{}: its rows changed while it was read (replaced or rewritten by another program?): read a copy",
+                                         again.file()));
+}
+}  // namespace
+
+long replay_rows(RecordingReader& again, const RecordingScan& scan, const std::function<void(RobotSample&)>& each) {
+  check_header(again, scan);
   RobotSample s;
   double previous = 0.0;
   long k = 0;
   for (; k < scan.rows && again.next(s); ++k) {
-    if (k > 0 && scan.timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+    mark_gap(s, k, previous, scan);
     previous = s.timestamp;
     each(s);
   }
-  if (k == scan.rows && again.rows_hash() != scan.rows_hash)
-    throw std::runtime_error(fmt::format("{}: its rows changed while it was read (replaced or rewritten by another program?): read a copy",
-                                         again.file()));
+  if (k == scan.rows) check_hash(again, scan);
   return k;
 }
 
@@ -558,16 +573,12 @@ struct FileSamples::Reading {
 };
 
 std::vector<std::unique_ptr<FileSamples>> FileSamples::of(const std::string& path, const ColumnMap* map, const RecordingScan& scan,
-                                                          const std::vector<DrivenStretches::Stretch>& stretches, bool whole) {
+                                                          const DrivenStretches& driven) {
   auto reading = std::make_shared<Reading>(Reading{path, map, scan, nullptr, 0, 0.0});
+  const std::vector<DrivenStretches::Stretch> stretches = driven.used();
   std::vector<std::unique_ptr<FileSamples>> out;
-  for (size_t i = 0; i < stretches.size(); ++i) {
-    const auto& st = stretches[i];
-    if (st.begin > st.end || st.end > static_cast<size_t>(scan.rows) || (i > 0 && st.begin < stretches[i - 1].end))
-      throw std::invalid_argument(fmt::format("{}: samples [{}, {}) of {} rows: not a stretch of the recording after the last", path,
-                                              st.begin, st.end, scan.rows));
-    out.push_back(std::unique_ptr<FileSamples>(new FileSamples(reading, st, whole, i + 1 == stretches.size())));
-  }
+  for (size_t i = 0; i < stretches.size(); ++i)
+    out.push_back(std::unique_ptr<FileSamples>(new FileSamples(reading, stretches[i], driven.whole(), i + 1 == stretches.size())));
   return out;
 }
 
@@ -584,35 +595,32 @@ FileSamples::FileSamples(std::shared_ptr<Reading> reading, DrivenStretches::Stre
 void FileSamples::replay(const std::function<void(size_t k, const RobotSample& s)>& each) const {
   Reading& r = *reading_;
   const long begin = static_cast<long>(stretch_.begin), end = static_cast<long>(stretch_.end);
-  // (what replay_rows does, a stretch at a time; an error leaves the reading to be opened again)
+  // (replay_rows, a stretch at a time)
   if (!r.reader || r.row > begin) {
-    r.reader.reset();
     auto again = std::make_unique<RecordingReader>(r.path, r.map);
-    again->quiet();  // (a cut-off last row was said by the scan)
-    if (again->n_dof() != r.scan.n_dof || again->present() != r.scan.present)
-      throw std::runtime_error(fmt::format("{}: its header changed while it was read (another program writing it?): read a copy", r.path));
+    check_header(*again, r.scan);
     r.reader = std::move(again);
     r.row = 0;
   }
-  RecordingReader& reader = *r.reader;
-  std::unique_ptr<RecordingReader> guard = std::move(r.reader);  // (given back once the stretch is read)
-  RobotSample s;
-  const long stop = last_ ? r.scan.rows : end;  // (the last stretch reads on to the end, for the hash)
-  for (; r.row < stop; ++r.row) {
-    if (!reader.next(s))
-      throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to learn from (the file was cut or replaced while "
-                                           "it was read): read a copy",
-                                           r.path, r.row, r.scan.rows));
-    if (r.row > 0 && r.scan.timing.is_gap(s.timestamp - r.previous)) s.gap_before = true;
-    r.previous = s.timestamp;
-    if (r.row < begin || r.row >= end) continue;
-    if (r.row == begin && !whole_) s.gap_before = false;  // (a driven stretch starts here: driven_segments)
-    each(static_cast<size_t>(r.row - begin), s);
+  try {
+    RobotSample s;
+    const long stop = last_ ? r.scan.rows : end;  // (the last stretch reads on to the end, for the hash)
+    for (; r.row < stop; ++r.row) {
+      if (!r.reader->next(s))
+        throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to learn from (the file was cut or replaced while "
+                                             "it was read): read a copy",
+                                             r.path, r.row, r.scan.rows));
+      mark_gap(s, r.row, r.previous, r.scan);
+      r.previous = s.timestamp;
+      if (r.row < begin || r.row >= end) continue;
+      if (r.row == begin && !whole_) s.gap_before = false;  // (a driven stretch starts here: driven_segments)
+      each(static_cast<size_t>(r.row - begin), s);
+    }
+    if (last_) check_hash(*r.reader, r.scan);
+  } catch (...) {
+    r.reader.reset();  // (read again from the start next time)
+    throw;
   }
-  if (last_ && reader.rows_hash() != r.scan.rows_hash)
-    throw std::runtime_error(fmt::format("{}: its rows changed while it was read (replaced or rewritten by another program?): read a copy",
-                                         r.path));
-  r.reader = std::move(guard);
 }
 
 namespace {

@@ -65,8 +65,13 @@ void PayloadTimeline::see(size_t k, const RobotSample& s) {
   steps_.push_back({k, now, s.timestamp});
 }
 
+namespace {
+// the samples the current residual settles for after a change, at `period`
+size_t settle_samples(double period) { return static_cast<size_t>(std::ceil(kDeclarationSettle / period)); }
+}  // namespace
+
 bool PayloadTimeline::judged_seen(size_t k, double period) const {
-  const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
+  const size_t wait = settle_samples(period);
   // the latest change at or before k: the settlings are of one length, so its is the one that ends last
   for (size_t i = steps_.size(); i-- > 1;)
     if (steps_[i].from <= k) return k >= steps_[i].from + wait;
@@ -76,7 +81,7 @@ bool PayloadTimeline::judged_seen(size_t k, double period) const {
 void PayloadTimeline::finish(size_t samples, double period) {
   judged_.assign(samples, 1);
   judged_observer_.assign(samples, 1);
-  const size_t wait = static_cast<size_t>(std::ceil(kDeclarationSettle / period));
+  const size_t wait = settle_samples(period);
   const size_t observer_wait = std::max(wait, static_cast<size_t>(kObserverSettle));
   for (size_t i = 1; i < steps_.size(); ++i) {
     const size_t k = steps_[i].from;

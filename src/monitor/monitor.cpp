@@ -221,17 +221,14 @@ std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
 // streamed, else the causal filtered difference of qd (a threshold learned on a zero-phase
 // derivative would not be the one the monitor's residual meets)
 // The monitor's joint acceleration a sample at a time (Monitor::push): the target's where the
-// recording has one, else the IIR-smoothed difference of the measured velocity (a gap holds it)
+// recording has one, else the IIR-smoothed difference of the measured velocity (a gap holds it).
+// The reference is valid while `s` is.
 class MonitorAcceleration {
  public:
   MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period)
-      : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)), stream_(n, present) {}
+      : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)) {}
   const VectorJ& push(const RobotSample& s) {
-    if (target_) {
-      // (ident::joint_accelerations: at once, with target_qdd)
-      stream_.push(s, [this](const RobotSample&, const VectorJ& qdd) { qdd_ = qdd; });
-      return qdd_;
-    }
+    if (target_) return s.target_qdd;  // (as ident::joint_accelerations takes it)
     if (started_) {
       const double dt = s.timestamp - previous_t_;
       if (dt > 0.0 && dt <= gap_period_ && !s.gap_before) qdd_ += alpha_ * ((s.qd - previous_qd_) / dt - qdd_);
@@ -248,7 +245,6 @@ class MonitorAcceleration {
   VectorJ qdd_, previous_qd_;
   double previous_t_ = 0.0;
   bool started_ = false;
-  ident::JointAccelerationStream stream_;
 };
 
 }  // namespace
@@ -793,7 +789,8 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     LearnedResidual residual(t, c, alpha);
     // the momentum observer, sample by sample exactly as the monitor runs it (its samples have their
     // own qd, qdd: it is judged from later after a payload change)
-    TwinMomentumObserver obs(n, with_observer ? c.observer_gain : 1.0);
+    std::optional<TwinMomentumObserver> obs;
+    if (with_observer) obs.emplace(n, c.observer_gain);
     VectorJ warm = VectorJ::Zero(n), o(n);
     RestBaseline observer_rest(n);
     TemperatureHold hold;
@@ -814,11 +811,11 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       if (with_observer) {
         const double dt = k == 0 ? c.nominal_period : s.timestamp - previous_t;
         if (changed) {  // (Monitor::restart_estimators, Monitor::carry)
-          obs.restart();
+          obs->restart();
           observer_rest = RestBaseline(n);
         }
         temperature_drive_torque(t, c.trend.temperature_slope, c.trend.temperature_ref, s, warm);
-        o = obs.update(t, s, dt, &warm);
+        o = obs->update(t, s, dt, &warm);
         observer_rest.apply(s, o);
         if (k >= skip && payload.judged_observer(k)) {
           observer_level.add(o);

@@ -302,11 +302,16 @@ bool TrendDetector::take_note(std::string& note) {
 
 bool plausible_temperature(double celsius) { return std::isnan(celsius) || (celsius >= kTemperatureMin && celsius <= kTemperatureMax); }
 
+std::size_t implausible_temperatures(const RobotSample& s) {
+  std::size_t count = 0;
+  if (s.has(kFieldTemperature))
+    for (Eigen::Index j = 0; j < s.temperature.size(); ++j) count += plausible_temperature(s.temperature[j]) ? 0 : 1;
+  return count;
+}
+
 std::size_t implausible_temperatures(const device::Recording& rec) {
   std::size_t count = 0;
-  for (const RobotSample& s : rec.samples)
-    if (s.has(kFieldTemperature))
-      for (Eigen::Index j = 0; j < s.temperature.size(); ++j) count += plausible_temperature(s.temperature[j]) ? 0 : 1;
+  for (const RobotSample& s : rec.samples) count += implausible_temperatures(s);
   return count;
 }
 

@@ -2614,7 +2614,7 @@ TEST_F(MonitorLoop, ThresholdsLearnedFromFilesReadAgainAreTheOnesLearnedFromTheH
   const device::RecordingScan scan = device::scan_rows(reader, [&](const RobotSample& s) { driven.see(s); });
   driven.finish();
   ASSERT_EQ(driven.used().size(), 2u);
-  const std::vector<std::unique_ptr<device::FileSamples>> files = device::FileSamples::of(path, nullptr, scan, driven.used(), driven.whole());
+  const std::vector<std::unique_ptr<device::FileSamples>> files = device::FileSamples::of(path, nullptr, scan, driven);
   std::vector<HealthyRun> held_runs, file_runs;
   std::vector<TrendRun> held_trend, file_trend;
   for (size_t i = 0; i < 2; ++i) {

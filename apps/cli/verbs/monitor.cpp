@@ -645,6 +645,10 @@ int run_thresholds(const ThresholdOptions& o) {
                                         nullptr);
     for (auto& r : runs) vrecs.push_back(std::move(r));
   }
+  // (a recording with stops in it is learned from as its driven stretches: "1 healthy recording(s) (2 driven stretches)")
+  const auto files = [](size_t recordings, size_t stretches, const char* kind) {
+    return fmt::format("{} {}recording(s){}", recordings, kind, stretches > recordings ? fmt::format(" ({} driven stretches)", stretches) : "");
+  };
   // the progress of each learner's reading, which on a shift's recordings takes minutes
   ReadProgress progress(o.progress || isatty(STDERR_FILENO));
   size_t samples = 0, validation_samples = 0;
@@ -702,15 +706,11 @@ int run_thresholds(const ThresholdOptions& o) {
   // set (observer thresholds and debounce included) left as it was
   monitor::MonitorConfig cfg = settings;
   bool program_is_default = false;
-  // (a recording with stops in it is learned from as its driven stretches)
-  const auto files = [](size_t recordings, size_t stretches) {
-    return fmt::format("{} recording(s){}", recordings, stretches > recordings ? fmt::format(" ({} driven stretches)", stretches) : "");
-  };
   {
     double seconds = 0.0;
     for (const auto& r : recs) seconds += r->seconds();
     fmt::print(stderr, "learning thresholds on {}, {:.0f} s of data (the monitor runs over them, then a linear program per joint) ...\n",
-               files(o.recordings.size(), recs.size()), seconds);
+               files(o.recordings.size(), recs.size(), ""), seconds);
   }
   progress.begin("thresholds", 2 * samples);
   if (o.program.empty()) {
@@ -729,19 +729,16 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vcounted) val.push_back({nullptr, p, r.get()});
-    fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} validation {} once per count ...\n",
-               o.debounce_validation.size(),
-               vrecs.size() > o.debounce_validation.size() ? fmt::format("recording(s) ({} driven stretches)", vrecs.size()) : "recording(s)");
+    fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} once per count ...\n",
+               files(o.debounce_validation.size(), vrecs.size(), "validation "));
     progress.begin("observer debounce", validation_samples);
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);
     progress.end();
     if (o.program.empty() || program_is_default) cfg.observer_choice = choice;
     if (!o.program.empty()) cfg.programs.at(o.program).observer_choice = choice;
-    fmt::print("observer debounce per joint {} (samples), chosen on {} validation {}, {:.0f} s; their healthy observer "
+    fmt::print("observer debounce per joint {} (samples), chosen on {}, {:.0f} s; their healthy observer "
                "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
-               fmt::join(choice.raise_after, " "), o.debounce_validation.size(),
-               vrecs.size() > o.debounce_validation.size() ? fmt::format("recording(s) ({} driven stretches)", vrecs.size()) : "recording(s)",
-               choice.seconds, fmt::join(choice.ratio.front(), " "),
+               fmt::join(choice.raise_after, " "), files(o.debounce_validation.size(), vrecs.size(), "validation "), choice.seconds, fmt::join(choice.ratio.front(), " "),
                choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
   } else if (o.program.empty() ? !settings.observer_choice.raise_after.empty()
                                  : settings.programs.count(o.program) > 0 &&
@@ -755,10 +752,10 @@ int run_thresholds(const ThresholdOptions& o) {
   stored.program.clear();
   out.monitor_json = stored.to_json();
   out.save(o.twin);
-  fmt::print("thresholds {} learned from {} healthy {} with residual filter '{}' and stored in {}; the heaviest payload "
+  fmt::print("thresholds {} learned from {} with residual filter '{}' and stored in {}; the heaviest payload "
              "among them, {:.2f} kg, is recorded (the monitor says when it predicts with more than {:g} kg above it)\n",
-             o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program), o.recordings.size(),
-             recs.size() > o.recordings.size() ? fmt::format("recording(s) ({} driven stretches)", recs.size()) : "recording(s)",
+             o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program),
+             files(o.recordings.size(), recs.size(), "healthy "),
              o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::payload_envelope_margin(shown));
   if (shown.reversal_load_max.size() == twin.n_dof()) {
     std::string loads;

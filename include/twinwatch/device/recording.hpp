@@ -235,9 +235,9 @@ class HeldSamples : public SampleSource {
 /// a file cut, rewritten or replaced since the scan throws std::runtime_error naming it.
 class FileSamples : public SampleSource {
  public:
-  /// `map` (may be null) must outlive them
+  /// the stretches `driven` found in the scan (finished); `map` (may be null) must outlive them
   static std::vector<std::unique_ptr<FileSamples>> of(const std::string& path, const ColumnMap* map, const RecordingScan& scan,
-                                                      const std::vector<DrivenStretches::Stretch>& stretches, bool whole);
+                                                      const DrivenStretches& driven);
   void replay(const std::function<void(size_t k, const RobotSample& s)>& each) const override;
 
  private:

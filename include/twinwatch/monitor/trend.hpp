@@ -192,6 +192,8 @@ bool plausible_temperature(double celsius);
 
 /// How many joint temperature readings of `rec` are not plausible_temperature.
 std::size_t implausible_temperatures(const device::Recording& rec);
+/// The same of one sample
+std::size_t implausible_temperatures(const RobotSample& s);
 
 /// `rec` with every implausible joint temperature replaced by that joint's last plausible reading
 /// (NaN before the first), as the monitor judges such samples (Monitor::push): what the learners
