@@ -42,6 +42,22 @@ class Fourier final : public Trajectory {
       }
     }
   }
+  std::optional<ClosedForm> closed_form() const override {
+    // harmonic l: a/(l w_f) sin(l w_f t) - b/(l w_f) cos(l w_f t)
+    const int n = n_dof(), L = static_cast<int>(c_.a.cols());
+    ClosedForm f;
+    f.q0 = c_.q0;
+    f.s.resize(n, L);
+    f.c.resize(n, L);
+    for (int l = 1; l <= L; ++l) {
+      const double w = l * c_.w_f;
+      f.omega.push_back(w);
+      f.sweep.push_back(0.0);
+      f.s.col(l - 1) = c_.a.col(l - 1) / w;
+      f.c.col(l - 1) = -c_.b.col(l - 1) / w;
+    }
+    return f;
+  }
 
  private:
   FourierCoefficients c_;
@@ -66,6 +82,21 @@ class Sine final : public Trajectory {
       qd[j] = A_[j] * w * c;
       qdd[j] = -A_[j] * w * w * s;
     }
+  }
+  std::optional<ClosedForm> closed_form() const override {
+    // joint j's own component: A sin(w t + phi) = A cos(phi) sin(w t) + A sin(phi) cos(w t)
+    const int n = n_dof();
+    ClosedForm f;
+    f.q0 = q0_;
+    f.s = Eigen::MatrixXd::Zero(n, n);
+    f.c = Eigen::MatrixXd::Zero(n, n);
+    for (int j = 0; j < n; ++j) {
+      f.omega.push_back(2 * M_PI * f_[j]);
+      f.sweep.push_back(0.0);
+      f.s(j, j) = A_[j] * std::cos(phi_[j]);
+      f.c(j, j) = A_[j] * std::sin(phi_[j]);
+    }
+    return f;
   }
 
  private:
@@ -103,6 +134,17 @@ class Chirp final : public Trajectory {
       qd[j] = A * (dwin * s + win * c * dph);
       qdd[j] = A * (ddwin * s + 2 * dwin * c * dph + win * (-s * dph * dph + c * ddph));
     }
+  }
+  std::optional<ClosedForm> closed_form() const override {
+    ClosedForm f;
+    f.q0 = q0_;
+    f.omega = {2 * M_PI * f0_};
+    f.sweep = {2 * M_PI * (f1_ - f0_) / T_};
+    f.s = A_;
+    f.c = Eigen::MatrixXd::Zero(n_dof(), 1);
+    f.wrap = T_;
+    f.fade = 0.05 * T_;
+    return f;
   }
 
  private:
@@ -215,6 +257,35 @@ std::unique_ptr<Trajectory> cartesian(const model::RobotModel& m, const VectorJ&
 }
 
 }  // namespace
+
+void ClosedForm::evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const {
+  const double u = wrap_time(t, std::isfinite(wrap) ? wrap : 0.0);
+  double w = 1.0, dw = 0.0, ddw = 0.0;  // the fade and its derivatives in u
+  if (fade > 0.0) {
+    const bool rising = u < fade, falling = u > wrap - fade;
+    if (rising || falling) {
+      const double x = rising ? u : wrap - u, sign = rising ? 1.0 : -1.0, k = M_PI / fade;
+      w = 0.5 - 0.5 * std::cos(k * x);
+      dw = sign * 0.5 * k * std::sin(k * x);
+      ddw = 0.5 * k * k * std::cos(k * x);
+    }
+  }
+  const int n = n_dof();
+  VectorJ y = VectorJ::Zero(n), yd = VectorJ::Zero(n), ydd = VectorJ::Zero(n);  // the sum before the fade
+  for (int k = 0; k < components(); ++k) {
+    const double th = omega[k] * u + 0.5 * sweep[k] * u * u, thd = omega[k] + sweep[k] * u, thdd = sweep[k];
+    const double sn = std::sin(th), cs = std::cos(th);
+    for (int j = 0; j < n; ++j) {
+      const double S = s(j, k), C = c(j, k);
+      y[j] += S * sn + C * cs;
+      yd[j] += (S * cs - C * sn) * thd;
+      ydd[j] += (S * cs - C * sn) * thdd - (S * sn + C * cs) * thd * thd;
+    }
+  }
+  q = q0 + w * y;
+  qd = dw * y + w * yd;
+  qdd = ddw * y + 2 * dw * yd + w * ydd;
+}
 
 std::unique_ptr<Trajectory> make_fourier(const FourierCoefficients& c) {
   if (!(c.w_f > 0.0)) throw InvalidArgument(fmt::format("Fourier base pulsation w_f is {}, must be > 0", c.w_f));

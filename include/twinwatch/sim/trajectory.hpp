@@ -3,7 +3,9 @@
 /// Target trajectories for the virtual robot (and, exported, for a real robot program).
 /// All are smooth (C2) so target_qdd exists; cyclic ones repeat with period().
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +13,26 @@
 #include "twinwatch/model/robot_model.hpp"
 
 namespace twinwatch::sim {
+
+/// A joint-space target in closed form, which a robot program can evaluate on the controller itself
+/// (robot_program.hpp): a sum of K sinusoidal components whose phases are polynomials of degree two,
+///   q_j(t) = q0_j + w(u) * sum_k ( s_jk sin(theta_k(u)) + c_jk cos(theta_k(u)) ),
+///   theta_k(u) = omega_k u + sweep_k u^2 / 2,   u = t mod wrap (u = t when wrap is infinite),
+/// w(u) the raised-cosine fade 0 -> 1 over the first and 1 -> 0 over the last `fade` seconds of each
+/// wrap (w = 1 when fade is 0). Fourier series and sines are components of constant pulsation; the
+/// linear chirp is one component with its sweep rate, faded, repeating every sweep.
+struct ClosedForm {
+  VectorJ q0;                    ///< [rad]
+  std::vector<double> omega;     ///< pulsation of each component at u = 0 [rad/s]
+  std::vector<double> sweep;     ///< d(omega)/du of each component [rad/s²]
+  Eigen::MatrixXd s, c;          ///< n_dof x K amplitudes of sin and cos [rad]
+  double wrap = std::numeric_limits<double>::infinity();  ///< [s]
+  double fade = 0.0;             ///< [s], at most wrap / 2
+  int n_dof() const { return static_cast<int>(q0.size()); }
+  int components() const { return static_cast<int>(omega.size()); }
+  /// Target and its first two time derivatives at t >= 0 (the formula above).
+  void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const;
+};
 
 class Trajectory {
  public:
@@ -20,6 +42,10 @@ class Trajectory {
   virtual void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const = 0;
   /// Duration of one cycle [s]; evaluation beyond it repeats the cycle.
   virtual double period() const = 0;
+  /// The same target as a ClosedForm, for trajectories that have one (Fourier series, sines, the
+  /// chirp); nullopt for those computed numerically or piecewise (Cartesian paths through inverse
+  /// kinematics, point-to-point and quasi-static segments).
+  virtual std::optional<ClosedForm> closed_form() const { return std::nullopt; }
 };
 
 /// Finite Fourier series [Cao eq. 21] per joint j, harmonics l = 1..L, base pulsation w_f:

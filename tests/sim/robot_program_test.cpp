@@ -1,0 +1,273 @@
+// The scenario's motion as a program for a real UR arm (sim/robot_program.hpp): the closed forms are
+// the trajectories, the program's motion starts and ends at rest and is the trajectory in between,
+// and the URScript text, run by a 32-bit interpreter of the subset it is written in, commands that
+// motion every 2 ms.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "error_text.hpp"
+#include "twinwatch/core/error.hpp"
+#include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/robot_program.hpp"
+#include "twinwatch/sim/scenario.hpp"
+#include "urscript_interpreter.hpp"
+
+namespace twinwatch::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+VectorJ v6(double a, double b, double c, double d, double e, double f) {
+  VectorJ v(6);
+  v << a, b, c, d, e, f;
+  return v;
+}
+
+const VectorJ kStart = v6(0.0, -1.0, 1.0, -1.57, 0.0, 0.0);
+
+// random coefficients (which start moving), or made to start at rest as excite's do (sum_l a_l = 0)
+std::unique_ptr<Trajectory> fourier(unsigned seed, bool at_rest = true) {
+  FourierCoefficients c = random_fourier(kStart, 0.6, 10.0, 5, seed);
+  if (at_rest) c.a.col(0) = -c.a.rightCols(4).rowwise().sum();
+  return make_fourier(c);
+}
+std::unique_ptr<Trajectory> sine() {
+  return make_sine(kStart, v6(1.2, 0.3, 0.3, 0.8, 1.0, 1.5), v6(0.35, 0.23, 0.29, 0.19, 0.27, 0.31), v6(0.0, 0.4, -1.1, 2.0, 0.0, 3.0));
+}
+std::unique_ptr<Trajectory> chirp() { return make_chirp(kStart, v6(0.3, 0.2, 0.2, 0.3, 0.3, 0.4), 0.1, 1.0, 20.0); }
+
+ProgramOptions options(double duration) {
+  ProgramOptions o;
+  o.duration = duration;
+  o.name = "test motion";
+  return o;
+}
+
+TEST(RobotProgram, TheClosedFormIsTheTrajectory) {
+  std::mt19937 rng(7);
+  for (const auto& [what, traj] : std::vector<std::pair<std::string, std::shared_ptr<Trajectory>>>{
+           {"fourier", fourier(3, false)}, {"sine", sine()}, {"chirp", chirp()}}) {
+    const auto form = traj->closed_form();
+    ASSERT_TRUE(form) << what;
+    // three periods, the chirp's wrap and fades included
+    std::uniform_real_distribution<double> u(0.0, 3.0 * traj->period());
+    VectorJ q, qd, qdd, fq, fqd, fqdd;
+    for (int k = 0; k < 2000; ++k) {
+      const double t = k < 3 ? std::array{0.0, 0.02, traj->period() - 0.03}[static_cast<size_t>(k)] : u(rng);
+      traj->evaluate(t, q, qd, qdd);
+      form->evaluate(t, fq, fqd, fqdd);
+      ASSERT_LT((q - fq).cwiseAbs().maxCoeff(), 1e-12) << what << " t = " << t;
+      ASSERT_LT((qd - fqd).cwiseAbs().maxCoeff(), 1e-11) << what << " t = " << t;
+      ASSERT_LT((qdd - fqdd).cwiseAbs().maxCoeff(), 1e-10) << what << " t = " << t;
+    }
+  }
+  // a path through inverse kinematics and piecewise segments have none
+  EXPECT_FALSE(parse_scenario("robot: ur3e\nduration: 8\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\n", "f8.yaml")
+                   .trajectory->closed_form());
+  EXPECT_FALSE(make_point_to_point({kStart, kStart + VectorJ::Constant(6, 0.2)}, {2.0, 2.0})->closed_form());
+}
+
+TEST(RobotProgram, TheMotionStartsAndEndsAtRestAndIsTheTrajectoryInBetween) {
+  VectorJ q, qd, qdd, tq, tqd, tqdd;
+  // a sine starts and ends moving: the clock rises over 2 s and falls over 2 s
+  const auto s = sine();
+  const ProgramMotion m(*s->closed_form(), options(30.0));
+  EXPECT_DOUBLE_EQ(m.ramp_in(), 2.0);
+  EXPECT_DOUBLE_EQ(m.ramp_out(), 2.0);
+  EXPECT_EQ(m.steps(), 16000);  // 30 s of the sine's time and half of each ramp
+  EXPECT_NEAR(m.clock(m.total()), 30.0, 1e-12);
+  m.evaluate(0.0, q, qd, qdd);
+  s->evaluate(0.0, tq, tqd, tqdd);
+  EXPECT_LT((q - tq).cwiseAbs().maxCoeff(), 1e-15) << "it starts where the trajectory starts";
+  EXPECT_GT(tqd.cwiseAbs().maxCoeff(), 2.0) << "the sine itself starts at 2.6 rad/s";
+  EXPECT_LT(qd.cwiseAbs().maxCoeff(), 1e-15) << "the program's target starts at rest";
+  EXPECT_LT(qdd.cwiseAbs().maxCoeff(), 1e-12);
+  m.evaluate(m.total(), q, qd, qdd);
+  s->evaluate(30.0, tq, tqd, tqdd);
+  EXPECT_LT((q - tq).cwiseAbs().maxCoeff(), 1e-12) << "it ends where the trajectory is at its duration";
+  EXPECT_LT(qd.cwiseAbs().maxCoeff(), 1e-15) << "and at rest";
+  // between the ramps it is the trajectory, late by half the first ramp
+  for (double t = 2.0; t <= m.total() - 2.0; t += 0.137) {
+    m.evaluate(t, q, qd, qdd);
+    s->evaluate(t - 1.0, tq, tqd, tqdd);
+    ASSERT_LT((q - tq).cwiseAbs().maxCoeff(), 1e-12) << t;
+    ASSERT_LT((qd - tqd).cwiseAbs().maxCoeff(), 1e-11) << t;
+    ASSERT_LT((qdd - tqdd).cwiseAbs().maxCoeff(), 1e-10) << t;
+  }
+  // its velocity and acceleration are the derivatives of its position, in the ramps too
+  const double h = 1e-5;
+  for (double t : {0.3, 1.0, 1.7, 2.0, 29.5, 30.9, 31.6}) {
+    VectorJ qm, qp, qdm, qdp, dummy;
+    m.evaluate(t - h, qm, qdm, dummy);
+    m.evaluate(t + h, qp, qdp, dummy);
+    m.evaluate(t, q, qd, qdd);
+    EXPECT_LT(((qp - qm) / (2 * h) - qd).cwiseAbs().maxCoeff(), 1e-7) << t;
+    EXPECT_LT(((qdp - qdm) / (2 * h) - qdd).cwiseAbs().maxCoeff(), 1e-5) << t;
+  }
+  // the ramp adds at most the trajectory's speed times the rate's slope pi / 2R to its acceleration
+  VectorJ qd_max = VectorJ::Zero(6), qdd_max = VectorJ::Zero(6), prog_qdd = VectorJ::Zero(6);
+  for (double t = 0.0; t <= 30.0; t += 0.001) {
+    s->evaluate(t, tq, tqd, tqdd);
+    qd_max = qd_max.cwiseMax(tqd.cwiseAbs());
+    qdd_max = qdd_max.cwiseMax(tqdd.cwiseAbs());
+  }
+  for (double t = 0.0; t <= m.total(); t += 0.001) {
+    m.evaluate(t, q, qd, qdd);
+    prog_qdd = prog_qdd.cwiseMax(qdd.cwiseAbs());
+  }
+  for (int j = 0; j < 6; ++j) EXPECT_LE(prog_qdd[j], qdd_max[j] + qd_max[j] * M_PI / 4.0 + 1e-9) << "J" << j + 1;
+  // a Fourier excitation over whole periods starts and ends at rest: run as it is
+  const auto f = fourier(5);
+  const ProgramMotion whole(*f->closed_form(), options(20.0));
+  EXPECT_EQ(whole.ramp_in(), 0.0);
+  EXPECT_EQ(whole.ramp_out(), 0.0);
+  for (double t = 0.0; t <= 20.0; t += 0.0913) {
+    whole.evaluate(t, q, qd, qdd);
+    f->evaluate(t, tq, tqd, tqdd);
+    ASSERT_LT((q - tq).cwiseAbs().maxCoeff(), 1e-13) << t;
+  }
+  // stopped part-way through a period it ends moving: only the end is ramped
+  const ProgramMotion cut(*f->closed_form(), options(13.0));
+  EXPECT_EQ(cut.ramp_in(), 0.0);
+  EXPECT_DOUBLE_EQ(cut.ramp_out(), 2.0);
+  cut.evaluate(cut.total(), q, qd, qdd);
+  EXPECT_LT(qd.cwiseAbs().maxCoeff(), 1e-15);
+  // a chirp fades in and out of each sweep: two sweeps run as they are
+  const ProgramMotion sweeps(*chirp()->closed_form(), options(40.0));
+  EXPECT_EQ(sweeps.ramp_in() + sweeps.ramp_out(), 0.0);
+}
+
+TEST(RobotProgram, OptionsAndMotionsARobotCannotRunAreRefusedByName) {
+  const auto form = *sine()->closed_form();
+  auto refused = [&](ProgramOptions o) { return twinwatch::test::error_text<InvalidArgument>([&] { ProgramMotion(form, o); }); };
+  ProgramOptions o = options(30.0);
+  o.ramp = 0.0;
+  EXPECT_THAT(refused(o), HasSubstr("ramp: the target does not start at rest, and a ramp of 0 s would make the arm take a step of velocity"));
+  o = options(1.5);
+  EXPECT_THAT(refused(o), HasSubstr("duration: 1.5 s is shorter than half the ramps (2 s) take"));
+  o = options(30.0);
+  o.lookahead = 0.5;
+  EXPECT_THAT(refused(o), HasSubstr("lookahead: expected 0.03 to 0.2 s (servoj's range), got 0.5"));
+  o = options(30.0);
+  o.gain = 50;
+  EXPECT_THAT(refused(o), HasSubstr("gain: expected 100 to 2000"));
+  o = options(std::nan(""));
+  EXPECT_THAT(refused(o), HasSubstr("duration: expected a time > 0 s"));
+  ClosedForm bad = form;
+  bad.s(2, 2) = std::numeric_limits<double>::infinity();
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { ProgramMotion(bad, options(30.0)); }), HasSubstr("not finite"));
+  // a motion beyond the robot's speed limits is seen before anything is written (the verb refuses it)
+  const model::RobotModel ur3e = model::load_robot("ur3e");
+  const auto fast = make_sine(kStart, v6(1.2, 0, 0, 0, 0, 0), v6(0.5, 0.1, 0.1, 0.1, 0.1, 0.1), VectorJ::Zero(6));
+  const ProgramMotion too_fast(*fast->closed_form(), options(30.0));
+  EXPECT_THAT(joint_limit_violation(too_fast, ur3e, too_fast.total(), 500.0),
+              HasSubstr("joint 1 target velocity reaches"));
+}
+
+// What the URScript program commands, run by the 32-bit interpreter, against the motion it was
+// written from: the movej to the start pose, one servoj every 2 ms, each target within a fraction of
+// a milliradian of the motion (the floats' phase drift) and its step-to-step change the motion's
+// velocity (no jitter a servo would feel), then stopj.
+struct ProgramRun {
+  double worst_q = 0.0;      // |target - motion| [rad]
+  double worst_qd = 0.0;     // |difference of targets / dt - motion's qd| [rad/s]
+  double worst_jerk = 0.0;   // |second difference of (target - motion)| [rad]
+  urscript_test::Trace trace;
+};
+
+ProgramRun run_program(const ProgramMotion& m, const ProgramOptions& o) {
+  const model::RobotModel ur3e = model::load_robot("ur3e");
+  const std::string text = urscript_program(m, o, ur3e, {"a test"});
+  urscript_test::Interpreter interp(text);
+  ProgramRun r;
+  r.trace = interp.run();
+  const auto& targets = r.trace.servo_targets;
+  EXPECT_EQ(static_cast<long>(targets.size()), m.steps());
+  VectorJ q, qd, qdd;
+  std::vector<double> prev_err(6, 0.0), prev_err2(6, 0.0);
+  for (size_t k = 0; k < targets.size(); ++k) {
+    const double t = static_cast<double>(k + 1) * m.servo_period();
+    m.evaluate(t, q, qd, qdd);
+    for (int j = 0; j < 6; ++j) {
+      const double err = targets[k][static_cast<size_t>(j)] - q[j];
+      r.worst_q = std::max(r.worst_q, std::abs(err));
+      if (k > 0) {
+        const double step = (targets[k][static_cast<size_t>(j)] - targets[k - 1][static_cast<size_t>(j)]) / m.servo_period();
+        VectorJ qm, qdm, qddm;  // the motion's mean velocity over the step
+        m.evaluate(t - m.servo_period(), qm, qdm, qddm);
+        r.worst_qd = std::max(r.worst_qd, std::abs(step - (q[j] - qm[j]) / m.servo_period()));
+      }
+      if (k > 1) r.worst_jerk = std::max(r.worst_jerk, std::abs(err - 2 * prev_err[static_cast<size_t>(j)] + prev_err2[static_cast<size_t>(j)]));
+      prev_err2[static_cast<size_t>(j)] = prev_err[static_cast<size_t>(j)];
+      prev_err[static_cast<size_t>(j)] = err;
+    }
+  }
+  return r;
+}
+
+TEST(RobotProgram, TheURScriptCommandsTheMotionEvery2msIn32BitFloats) {
+  struct Case {
+    std::string what;
+    std::shared_ptr<Trajectory> traj;
+    double duration;
+  };
+  // a 2 min Fourier excitation (whole periods), a sine swing with both ramps, a chirp over 2.5 sweeps
+  // (its wrap and fades), a Fourier run cut part-way (the falling clock alone)
+  for (const Case& c : std::vector<Case>{{"fourier", fourier(11), 120.0}, {"sine", sine(), 40.0}, {"chirp", chirp(), 50.0},
+                                         {"fourier cut", fourier(12), 25.0}}) {
+    ProgramOptions o = options(c.duration);
+    o.declare_payload = c.what == "sine";
+    o.payload.mass = 2.0;
+    o.payload.com = Eigen::Vector3d(0.06, 0.04, 0.05);
+    const ProgramMotion m(*c.traj->closed_form(), o);
+    const ProgramRun r = run_program(m, o);
+    const auto& calls = r.trace.calls;
+    ASSERT_GE(calls.size(), 4u) << c.what;
+    // textmsg, [set_payload,] movej to the start pose, textmsg, servoj..., stopj, textmsg
+    size_t k = 1;
+    if (o.declare_payload) {
+      ASSERT_EQ(calls[k].name, "set_payload") << c.what;
+      EXPECT_FLOAT_EQ(calls[k].args.at(0).as_float(), 2.0f);
+      EXPECT_FLOAT_EQ(calls[k].args.at(1).list.at(0).as_float(), 0.06f);
+      ++k;
+    }
+    ASSERT_EQ(calls[k].name, "movej") << c.what;
+    VectorJ q0, qd, qdd;
+    m.evaluate(0.0, q0, qd, qdd);
+    for (int j = 0; j < 6; ++j) EXPECT_NEAR(calls[k].args.at(0).list.at(static_cast<size_t>(j)).as_float(), q0[j], 1e-6) << c.what;
+    EXPECT_FLOAT_EQ(calls[k].named.at("v").as_float(), 0.25f);
+    EXPECT_FLOAT_EQ(calls[k].named.at("a").as_float(), 0.5f);
+    const auto servo = std::find_if(calls.begin(), calls.end(), [](const urscript_test::Call& x) { return x.name == "servoj"; });
+    ASSERT_NE(servo, calls.end());
+    EXPECT_FLOAT_EQ(servo->named.at("t").as_float(), 0.002f);
+    EXPECT_FLOAT_EQ(servo->named.at("lookahead_time").as_float(), 0.1f);
+    EXPECT_FLOAT_EQ(servo->named.at("gain").as_float(), 300.0f);
+    EXPECT_EQ(calls[calls.size() - 2].name, "stopj") << c.what;
+    // the targets: the motion within 0.05 mrad (measured 1-9 µrad; summed plainly, without the
+    // compensation, 0.9-2.0 mrad), and no step a servo would feel (second differences within 5 µrad:
+    // a 32-bit clock's jitter at 600 s is 10 times that, below)
+    EXPECT_LT(r.worst_q, 5e-5) << c.what;
+    EXPECT_LT(r.worst_qd, 0.002) << c.what;
+    EXPECT_LT(r.worst_jerk, 5e-6) << c.what;
+    // and the first target is one step from the start pose at the motion's first velocity
+    EXPECT_LT(std::abs(r.trace.servo_targets.front()[0] - q0[0]), 0.01) << c.what;
+  }
+}
+
+// Ten minutes of excitation (300000 steps; a 32-bit clock's own resolution at 600 s is 61 µs, where
+// sin(omega t) in floats would jitter by 0.1 mrad a step): the compensated phases stay on the motion.
+TEST(RobotProgram, TenMinutesOfExcitationStayOnTheMotion) {
+  const auto f = fourier(21);
+  const ProgramOptions o = options(600.0);
+  const ProgramMotion m(*f->closed_form(), o);
+  const ProgramRun r = run_program(m, o);
+  EXPECT_LT(r.worst_q, 5e-5);
+  EXPECT_LT(r.worst_qd, 0.002);
+  EXPECT_LT(r.worst_jerk, 5e-6);
+}
+
+}  // namespace
+}  // namespace twinwatch::sim
