@@ -58,21 +58,24 @@ int run(Options o) {
   o.program.title = o.scenario;
   o.program.name = o.name.empty() ? s.name : o.name;
   o.program.payload = s.options.payload;
-  try {
-    o.program.validate();
-  } catch (const InvalidArgument& e) {
-    // the library names its fields; the user typed options
-    std::string m = e.what();
-    for (const auto& [field, option] : {std::pair{"ramp", "--ramp"}, std::pair{"lookahead", "--lookahead"}, std::pair{"gain", "--gain"},
-                                        std::pair{"approach_speed", "--approach-speed"},
-                                        std::pair{"approach_acceleration", "--approach-acceleration"}, std::pair{"duration", "--duration"}})
-      if (m.rfind(std::string(field) + ":", 0) == 0) {
-        m = option + m.substr(std::string(field).size());
-        break;
-      }
-    throw InvalidArgument(m);
-  }
-  const sim::ProgramMotion motion(*form, o.program);
+  // (the library names its fields; the user typed options)
+  const auto motion_of = [&]() {
+    try {
+      return sim::ProgramMotion(*form, o.program);
+    } catch (const InvalidArgument& e) {
+      std::string m = e.what();
+      for (const auto& [field, option] : {std::pair{"ramp", "--ramp"}, std::pair{"lookahead", "--lookahead"}, std::pair{"gain", "--gain"},
+                                          std::pair{"approach_speed", "--approach-speed"},
+                                          std::pair{"approach_acceleration", "--approach-acceleration"},
+                                          std::pair{"duration", o.duration_given ? "--duration" : "the scenario's duration"}})
+        if (m.rfind(std::string(field) + ":", 0) == 0) {
+          m = option + m.substr(std::string(field).size());
+          break;
+        }
+      throw InvalidArgument(fmt::format("{}: {}", o.scenario, m));
+    }
+  };
+  const sim::ProgramMotion motion = motion_of();
   // the motion the arm makes, ramps included, within the robot's joint ranges and speed limits
   const std::string violation = sim::joint_limit_violation(motion, robot, motion.total(), 1.0 / motion.servo_period());
   if (!violation.empty())
