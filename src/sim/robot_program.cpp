@@ -153,6 +153,23 @@ void ProgramMotion::evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) co
   qdd = r * r * y2 + dr * y1;
 }
 
+ClosedForm scenario_closed_form(const Scenario& s) {
+  if (auto f = s.trajectory ? s.trajectory->closed_form() : std::nullopt) return *f;
+  throw InvalidArgument(fmt::format(
+      "{}:{}: trajectory '{}' has no closed form that a robot program can evaluate: programs are made of the joint-space "
+      "trajectories fourier, fourier_series, sine and chirp (an excitation from 'twinwatch excite ROBOT -o exc.yaml', the swing pair "
+      "scenarios/ur3e/train/swing_train*.yaml). A Cartesian path (figure_eight, triangle) or a point-to-point or quasi-static program is "
+      "taught on the pendant (MoveP, MoveJ); record it with 'twinwatch record --rtde'",
+      s.path.empty() ? s.name : s.path, s.trajectory_line, s.trajectory_type));
+}
+
+std::shared_ptr<const ProgramMotion> rehearse_as_program(Scenario& s, const ProgramOptions& options) {
+  auto motion = std::make_shared<const ProgramMotion>(scenario_closed_form(s), options);
+  s.trajectory = motion;
+  s.options.duration = motion->total();
+  return motion;
+}
+
 MotionPeaks motion_peaks(const ProgramMotion& motion) {
   const int n = motion.n_dof();
   MotionPeaks p{VectorJ::Zero(n), VectorJ::Zero(n), VectorJ::Constant(n, std::numeric_limits<double>::infinity()),

@@ -16,9 +16,16 @@ set_tests_properties(cli.urscript_excitation_json PROPERTIES PASS_REGULAR_EXPRES
 add_test(NAME cli.urscript_cartesian_refused
   COMMAND sh -c "$<TARGET_FILE:twinwatch> urscript ${S}/nominal_figure_eight.yaml -o ${d}/f8.script 2>&1; echo exit \$?; test -e ${d}/f8.script && echo FILE-EXISTS")
 set_tests_properties(cli.urscript_cartesian_refused PROPERTIES
-  PASS_REGULAR_EXPRESSION "error: [^\n]*nominal_figure_eight.yaml:[0-9]+: trajectory 'figure_eight' has no closed form that a robot program can evaluate: urscript exports the joint-space trajectories fourier, fourier_series, sine and chirp[^\n]*\nexit 2\n"
+  PASS_REGULAR_EXPRESSION "error: [^\n]*nominal_figure_eight.yaml:[0-9]+: trajectory 'figure_eight' has no closed form that a robot program can evaluate: programs are made of the joint-space trajectories fourier, fourier_series, sine and chirp[^\n]*\nexit 2\n"
   FAIL_REGULAR_EXPRESSION "FILE-EXISTS")
 add_test(NAME cli.urscript_bad_options
   COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --lookahead 0.5 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --ramp 0 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --duration 1 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${S}/train/swing_train.yaml 2>&1; echo exit \$?")
 set_tests_properties(cli.urscript_bad_options PROPERTIES PASS_REGULAR_EXPRESSION
   "error: [^\n]*swing_train.yaml: --lookahead: expected 0\\.03 to 0\\.2 s \\(servoj's range\\), got 0\\.5\nexit 2\nerror: [^\n]*swing_train.yaml: --ramp: the target does not start at rest, and a ramp of 0 s would make the arm take a step of velocity[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: --duration: 1 s is shorter than half the ramps \\(2 s\\) take[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: cannot write: it is the input [^\n]*\nexit 2\n")
+# the virtual robot rehearses the program: 40 s of the swing in 42 s, from rest (J1's first measured
+# velocity ~0, where the scenario starts it at 2.6 rad/s); --ramp only with --as-program, and a
+# Cartesian path has no program to rehearse
+add_test(NAME cli.simulate_as_program
+  COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T simulate ${S}/train/swing_train.yaml -o ${d}/swr.csv --as-program && awk -F, 'NR==1{for(i=1;i<=NF;i++) if(\$i==\"actual_qd_0\") c=i} NR==2{v=\$c; if (v<0) v=-v; print (v < 0.01 ? \"AT-REST\" : \"MOVING \" \$c)}' ${d}/swr.csv; \$T simulate ${S}/excitation.yaml -o ${d}/x.csv --ramp 3 2>&1; echo exit \$?; \$T simulate ${S}/nominal_figure_eight.yaml -o ${d}/x.csv --as-program 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_as_program PROPERTIES PASS_REGULAR_EXPRESSION
+  "swing_train: rehearsed as its URScript program runs it: started at rest, the clock rising over 2\\.0 s and falling over 2\\.0 s \\(40\\.0 s of the trajectory in 42\\.0 s[^\n]*\nswing_train: 21000 samples[^\n]*\nAT-REST\nerror: --ramp applies only with --as-program\nexit 2\nerror: [^\n]*nominal_figure_eight.yaml:[0-9]+: trajectory 'figure_eight' has no closed form[^\n]*\nexit 2\n")

@@ -269,5 +269,39 @@ TEST(RobotProgram, TenMinutesOfExcitationStayOnTheMotion) {
   EXPECT_LT(r.worst_jerk, 5e-6);
 }
 
+// The virtual robot rehearsing the program (simulate --as-program) starts the swing at rest, where the
+// scenario itself starts J1 at its sine's 2.6 rad/s; after the rise it runs the scenario's motion, late
+// by half the ramp, and the faults keep their times.
+TEST(RobotProgram, TheVirtualRobotRehearsesTheProgramFromRest) {
+  const std::string yaml =
+      "robot: ur3e\nseed: 4\nduration: 8\n"
+      "trajectory: {type: sine, start: [0, -1.0, 1.0, -1.57, 0, 0], amplitude: [1.2, 0.3, 0.3, 0.8, 1.0, 1.5], "
+      "frequency: [0.35, 0.23, 0.29, 0.19, 0.27, 0.31]}\n"
+      "faults:\n  - {type: collision, link: 3, onset: 5.0, magnitude: 5, duration: 0.05, point: [-0.1, 0, 0.03], direction: [0.3, 1, -0.2]}\n";
+  auto first = [](const Scenario& sc, double* duration) {
+    std::vector<RobotSample> out;
+    make_simulator(sc)->run([&](const RobotSample& x) { out.push_back(x); });
+    *duration = static_cast<double>(out.size()) / sc.options.rate;
+    return out;
+  };
+  Scenario raw = parse_scenario(yaml, "swing.yaml"), rehearsed = parse_scenario(yaml, "swing.yaml");
+  ProgramOptions o = options(8.0);
+  const auto motion = rehearse_as_program(rehearsed, o);
+  EXPECT_DOUBLE_EQ(rehearsed.options.duration, 10.0);
+  double d_raw = 0, d_reh = 0;
+  const auto a = first(raw, &d_raw), b = first(rehearsed, &d_reh);
+  EXPECT_NEAR(d_reh, 10.0, 0.01);
+  EXPECT_GT(std::abs(a.front().qd[0]), 2.5) << "the scenario starts J1 moving";
+  EXPECT_LT(b.front().qd.cwiseAbs().maxCoeff(), 0.01) << "the program starts the arm at rest";
+  EXPECT_LT(b.back().target_qd.cwiseAbs().maxCoeff(), 1e-4) << "and ends it at rest (the last sample is one period before the end)";
+  // between the ramps, the scenario's target half a ramp later
+  for (size_t k = 1500; k < 3500; k += 250) EXPECT_LT((b[k].target_q - a[k - 500].target_q).cwiseAbs().maxCoeff(), 1e-9) << k;
+  EXPECT_EQ(rehearsed.faults.size(), 1u);
+  EXPECT_DOUBLE_EQ(rehearsed.faults[0].onset, 5.0);
+  Scenario f8 = parse_scenario("robot: ur3e\nduration: 8\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\n", "f8.yaml");
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { rehearse_as_program(f8, o); }),
+              HasSubstr("f8.yaml:3: trajectory 'figure_eight' has no closed form"));
+}
+
 }  // namespace
 }  // namespace twinwatch::sim

@@ -14,6 +14,7 @@
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/description_io.hpp"
+#include "twinwatch/sim/robot_program.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "verb_registry.hpp"
 
@@ -25,6 +26,8 @@ struct Options {
   double duration = -1;
   bool seed_given = false, duration_given = false;  // (the values above are then the user's)
   bool quiet = false, progress = false;
+  bool as_program = false;  // rehearse the motion `twinwatch urscript` writes (ramps, started at rest)
+  double ramp = 2.0;
 };
 
 std::string labels_path(const std::string& output) {
@@ -57,6 +60,23 @@ int run(const Options& o) {
     s.options.seed = static_cast<unsigned>(o.seed);
   }
   if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
+  std::shared_ptr<const sim::ProgramMotion> program;
+  if (o.as_program) {
+    sim::ProgramOptions po;
+    po.duration = s.options.duration;
+    po.ramp = o.ramp;
+    try {
+      program = sim::rehearse_as_program(s, po);
+    } catch (const InvalidArgument& e) {
+      std::string m = e.what();  // (the library names its fields; the user typed options)
+      if (m.rfind("ramp:", 0) == 0) m = "--ramp" + m.substr(4);
+      if (m.rfind("duration:", 0) == 0) m = (o.duration_given ? "--duration" : "the scenario's duration") + m.substr(8);
+      throw InvalidArgument(m.rfind(o.scenario, 0) == 0 ? m : fmt::format("{}: {}", o.scenario, m));
+    }
+    const model::RobotModel robot = model::load_robot(s.robot);
+    if (const std::string v = sim::joint_limit_violation(*program, robot, program->total(), s.options.rate); !v.empty())
+      throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; nothing written", o.scenario, v));
+  }
   auto simulator = sim::make_simulator(s);
   const int n = simulator->truth_model().n_dof();
   device::RecordingWriter writer(o.output, n, simulator->sample_fields());
@@ -82,6 +102,10 @@ int run(const Options& o) {
   writer.close();
   write_text_file(labels_path(o.output), sim::labels_json(s) + "\n");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.quiet && program)
+    fmt::print("{}: rehearsed as its URScript program runs it: started at rest, the clock rising over {:.1f} s and falling over {:.1f} s "
+               "({:.1f} s of the trajectory in {:.1f} s; the approach to the start pose is not simulated)\n",
+               s.name, program->ramp_in(), program->ramp_out(), program->clock(program->total()), program->total());
   if (!o.quiet)
     fmt::print("{}: {} samples, {:.1f} s of robot time at {:g} Hz in {:.2f} s ({:.0f}x real time), {} fault(s) -> {}\n",
                s.name, writer.rows(), s.options.duration, s.options.rate, wall, s.options.duration / wall, s.faults.size(),
@@ -98,9 +122,16 @@ twinwatch::cli::VerbRegistrar reg{"simulate", 20, [](CLI::App& app) {
   sub->add_option("-o,--output", o->output, "Recording CSV to write; the labels go beside it (rec.csv -> rec.labels.json)")->required();
   auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
   auto* duration = sub->add_option("--duration", o->duration, "Override the duration [s] (one sample period to 1e6 s)");
+  auto* as_program = sub->add_flag("--as-program", o->as_program,
+                "Run the motion 'twinwatch urscript' writes for a real arm instead: started at rest, the clock ramped where the "
+                "trajectory starts or ends moving (joint-space trajectories only)");
+  auto* ramp = sub->add_option("--ramp", o->ramp, "With --as-program: seconds of the clock's rise and fall (as urscript --ramp)")
+                   ->capture_default_str()
+                   ->check(twinwatch::cli::nonnegative_number());
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
-  sub->callback([o, seed, duration] {
+  sub->callback([o, seed, duration, as_program, ramp] {
+    twinwatch::cli::refuse_unless({ramp}, as_program->count() > 0, "with --as-program");
     o->seed_given = seed->count() > 0;
     o->duration_given = duration->count() > 0;
     twinwatch::cli::set_exit_code(run(*o));

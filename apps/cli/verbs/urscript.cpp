@@ -45,14 +45,7 @@ int run(Options o) {
   sim::Scenario s = sim::load_scenario(o.scenario);
   require_output(o.output, {model::robot_file(s.robot)});
   if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
-  const std::optional<sim::ClosedForm> form = s.trajectory->closed_form();
-  if (!form)
-    throw InvalidArgument(fmt::format(
-        "{}:{}: trajectory '{}' has no closed form that a robot program can evaluate: urscript exports the joint-space "
-        "trajectories fourier, fourier_series, sine and chirp (an excitation from 'twinwatch excite ROBOT -o exc.yaml', the swing pair "
-        "scenarios/ur3e/train/swing_train*.yaml). A Cartesian path (figure_eight, triangle) or a point-to-point or quasi-static program is "
-        "taught on the pendant (MoveP, MoveJ); record it with 'twinwatch record --rtde'",
-        o.scenario, s.trajectory_line, s.trajectory_type));
+  const sim::ClosedForm form = sim::scenario_closed_form(s);
   const model::RobotModel robot = model::load_robot(s.robot);
   o.program.duration = s.options.duration;
   o.program.title = o.scenario;
@@ -61,7 +54,7 @@ int run(Options o) {
   // (the library names its fields; the user typed options)
   const auto motion_of = [&]() {
     try {
-      return sim::ProgramMotion(*form, o.program);
+      return sim::ProgramMotion(form, o.program);
     } catch (const InvalidArgument& e) {
       std::string m = e.what();
       for (const auto& [field, option] : {std::pair{"ramp", "--ramp"}, std::pair{"lookahead", "--lookahead"}, std::pair{"gain", "--gain"},

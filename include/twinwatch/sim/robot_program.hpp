@@ -21,7 +21,10 @@
 #include <string>
 #include <vector>
 
+#include <memory>
+
 #include "twinwatch/model/robot_model.hpp"
+#include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/sim/trajectory.hpp"
 
 namespace twinwatch::sim {
@@ -78,6 +81,17 @@ class ProgramMotion final : public Trajectory {
   double dt_;
   long duration_steps_, ramp_in_steps_ = 0, ramp_out_steps_ = 0;
 };
+
+/// The scenario's trajectory in closed form. Throws InvalidArgument naming the file, the line of its
+/// `trajectory:` and its type when it has none (a Cartesian path, point-to-point, quasi-static).
+ClosedForm scenario_closed_form(const Scenario& s);
+
+/// The scenario as its robot program runs it, for the virtual robot to rehearse (simulate
+/// --as-program): its trajectory becomes the program's motion over options.duration seconds of the
+/// trajectory's time (ramps included, started at rest), its duration the program's time. The faults
+/// keep their times, on the program's clock. Returns the motion; throws as scenario_closed_form and
+/// ProgramMotion do.
+std::shared_ptr<const ProgramMotion> rehearse_as_program(Scenario& s, const ProgramOptions& options);
 
 /// Peak |target velocity| and |acceleration| per joint over a motion, sampled every servo period.
 struct MotionPeaks {
