@@ -80,6 +80,9 @@ void ProgramOptions::validate() const {
   need(std::isfinite(approach_acceleration) && approach_acceleration > 0.0 && approach_acceleration <= 40.0, "approach_acceleration",
        "> 0 and at most 40 rad/s²", approach_acceleration);
   if (declare_payload) {
+    if (payload.mass == 0.0)
+      throw InvalidArgument("payload: the motion carries no payload, so there is none to declare (set_payload(0) would tell the "
+                            "controller the flange carries nothing, a gripper included)");
     need(std::isfinite(payload.mass) && payload.mass >= 0.0, "payload mass", "a mass >= 0 kg", payload.mass);
     need(payload.com.allFinite() && payload.com.norm() <= 1.0, "payload com", "a point within 1 m of the flange", payload.com.norm());
   }
@@ -114,9 +117,8 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
   if (moving_in) ramp_in_steps_ = ramp_steps(o.ramp, dt_);
   if (moving_out) ramp_out_steps_ = ramp_steps(o.ramp, dt_);
   if (ramp_in_steps_ + ramp_out_steps_ > 2 * duration_steps_)
-    throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps ({} s) take: expected at least {} s or a shorter ramp",
-                                      o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_,
-                                      0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_));
+    throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps take ({} s): expected a longer run or a shorter ramp",
+                                      o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_));
 }
 
 void ProgramMotion::rate(double t, double& r, double& dr) const {
@@ -204,36 +206,47 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
 
   std::string s;
   auto line = [&s](int indent, const std::string& text) { s += std::string(static_cast<size_t>(2 * indent), ' ') + text + "\n"; };
-  // the header: what moves, and what to check first
-  line(0, fmt::format("# twinwatch: {} on a Universal Robots e-Series arm ({})", o.title.empty() ? name : o.title, robot.name()));
-  for (const std::string& h : header) line(0, "# " + h);
-  line(0, fmt::format("# Motion: {:.3f} s, servoj every {} s (t={}, lookahead_time={}, gain={}); {} sinusoidal component(s),", motion.total(), dt,
+  // (a comment is one line: no control character of a title or header line may end it)
+  auto comment = [](std::string text) {
+    for (char& ch : text)
+      if (static_cast<unsigned char>(ch) < 0x20) ch = ' ';
+    return text;
+  };
+  // the header inside the def (a controller that takes one def block reads nothing outside it): what
+  // moves, and what to check first
+  line(0, fmt::format("def {}():", name));
+  line(1, fmt::format("# twinwatch: {} on a Universal Robots e-Series arm ({})", comment(o.title.empty() ? name : o.title), robot.name()));
+  for (const std::string& h : header) line(1, "# " + h);
+  line(1, fmt::format("# Motion: {:.3f} s, servoj every {} s (t={}, lookahead_time={}, gain={}); {} sinusoidal component(s),", motion.total(), dt,
                       dt, o.lookahead, o.gain, K));
-  line(0, fmt::format("#   evaluated on the controller (32-bit floats: phases kept in [0, 2 pi), steps counted in an integer)."));
+  line(1, fmt::format("#   evaluated on the controller (32-bit floats: phases kept in [0, 2 pi), steps counted in an integer)."));
   if (n_in || n_out)
-    line(0, fmt::format("# The target's clock rises over the first {:.3f} s and falls over the last {:.3f} s, so the arm starts and ends at rest.",
+    line(1, fmt::format("# The target's clock rises over the first {:.3f} s and falls over the last {:.3f} s, so the arm starts and ends at rest.",
                         motion.ramp_in(), motion.ramp_out()));
-  line(0, fmt::format("# Start pose [rad]: {}; reached with movej at {} rad/s, {} rad/s^2.", list(q_start), o.approach_speed,
+  line(1, fmt::format("# Start pose [rad]: {}; reached with movej at {} rad/s, {} rad/s^2.", list(q_start), o.approach_speed,
                       o.approach_acceleration));
-  line(0, fmt::format("# End pose [rad]:   {}.", list(q_end)));
-  line(0, fmt::format("# Joint range [rad]: {}", [&] {
+  line(1, fmt::format("# End pose [rad]:   {}.", list(q_end)));
+  line(1, fmt::format("# Joint range [rad]: {}", [&] {
          std::string r;
          for (int j = 0; j < n; ++j) r += fmt::format("{}J{} {:.3f} .. {:.3f}", j ? ", " : "", j + 1, peaks.q_min[j], peaks.q_max[j]);
          return r;
        }()));
-  line(0, fmt::format("# Peak speed [rad/s]: {}", joints_text(peaks.qd, 3)));
-  line(0, fmt::format("# Peak acceleration [rad/s^2]: {}", joints_text(peaks.qdd, 3)));
+  line(1, fmt::format("# Peak speed [rad/s]: {}", joints_text(peaks.qd, 3)));
+  line(1, fmt::format("# Peak acceleration [rad/s^2]: {}", joints_text(peaks.qdd, 3)));
   if (o.declare_payload)
-    line(0, fmt::format("# Payload: declared with set_payload({} kg, CoG [{}, {}, {}] m) before the arm moves.", o.payload.mass,
+    line(1, fmt::format("# Payload: declared with set_payload({} kg, CoG [{}, {}, {}] m) before the arm moves.", o.payload.mass,
                         o.payload.com.x(), o.payload.com.y(), o.payload.com.z()));
   else
-    line(0, "# Payload: not changed: the controller uses the installation's (set it to what the flange carries).");
-  line(0, "# Before running it: run it in URSim or at a low speed slider first (speed scaling slows the whole");
-  line(0, "#   motion, it does not change its path); clear the arm's whole reach; keep the emergency stop at hand.");
-  line(0, fmt::format("# Record it meanwhile: twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o RECORDING.csv, started",
+    line(1, "# Payload: not changed: the controller uses the installation's (set it to what the flange carries).");
+  line(1, "# Before running it: run it in URSim or at a low speed slider first (speed scaling slows the whole");
+  line(1, "#   motion, it does not change its path); jog the arm near the start pose (the approach is a movej from");
+  line(1, "#   wherever it is); clear the arm's whole reach; keep the emergency stop at hand. Over port 30002 the");
+  line(1, "#   controller must be in Remote Control; a Polyscope Script node (file) needs the call line after the");
+  line(1, "#   def: 'twinwatch urscript --call'.");
+  line(1, fmt::format("# Record it meanwhile: twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o RECORDING.csv, started",
                       std::ceil(motion.total() + 30.0)));
-  line(0, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion).");
-  line(0, fmt::format("def {}():", name));
+  line(1, "#   (at full speed: at a speed slider of x %, the motion takes 100 / x times as long; record for that).");
+  line(1, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion).");
   const std::string shown = name.substr(std::min(name.size(), std::string("twinwatch_").size()));  // (in messages)
   line(1, fmt::format("textmsg(\"twinwatch: {}: moving to the start pose\")", shown));
   if (o.declare_payload)
@@ -280,9 +293,10 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   // Each component's phase, advanced exactly for its polynomial: (omega + sweep u) dtau + sweep dtau^2 / 2,
   // and u by dtau. A 32-bit float sum of 2 ms steps loses up to half a unit in the last place a step:
   // summed plainly, 20000 steps of a sine drifted 1.8 mrad (tests/sim/robot_program_test.cpp). So each
-  // sum is compensated (Kahan): tw_c* holds what the float sum holds too much, and the true phase is
-  // tw_th - tw_c, whatever the number of steps. Wrapping by the float nearest 2 pi (exact by Sterbenz)
+  // sum is compensated (Kahan): tw_c* holds what the float sum holds too much (the phase is tw_th - tw_c). Wrapping by the float nearest 2 pi (exact by Sterbenz)
   // moves the difference to the exact 2 pi into the compensation.
+  // Kahan's sum errs by at most 2 eps times the phase travelled (eps = 6e-8): a frequency error below
+  // 1.2e-7, smooth; summed plainly it errs by up to n eps times it (tests/sim/robot_program_test.cpp).
   const float two_pi_f = static_cast<float>(kTwoPi);
   const double two_pi_excess = static_cast<double>(two_pi_f) - kTwoPi;
   auto compensated = [&](const std::string& sum, const std::string& comp, const std::string& increment) {
@@ -350,6 +364,7 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, "stopj(2.0)");
   line(1, fmt::format("textmsg(\"twinwatch: {}: done\")", shown));
   line(0, "end");
+  if (o.call) line(0, fmt::format("{}()", name));
   return s;
 }
 

@@ -6,13 +6,13 @@ set(d ${PROJECT_BINARY_DIR}/cli-urscript)
 file(MAKE_DIRECTORY ${d})
 set(S ${PROJECT_SOURCE_DIR}/scenarios/ur3e)
 add_test(NAME cli.urscript_swing
-  COMMAND sh -c "$<TARGET_FILE:twinwatch> urscript ${S}/train/swing_train.yaml -o ${d}/swing.script && grep -c 'servoj(\\[tw_q0, tw_q1, tw_q2, tw_q3, tw_q4, tw_q5\\], t=0.002, lookahead_time=0.1, gain=300.0)' ${d}/swing.script && head -n 1 ${d}/swing.script")
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> urscript ${S}/train/swing_train.yaml -o ${d}/swing.script && grep -c 'servoj(\\[tw_q0, tw_q1, tw_q2, tw_q3, tw_q4, tw_q5\\], t=0.002, lookahead_time=0.1, gain=300.0)' ${d}/swing.script && head -n 2 ${d}/swing.script")
 set_tests_properties(cli.urscript_swing PROPERTIES PASS_REGULAR_EXPRESSION
-  "swing_train -> [^\n]*swing.script: URScript for a ur3e \\(e-Series\\), 42\\.0 s of motion, servoj every 2 ms\n  the target's clock rises over 2\\.0 s and falls over 2\\.0 s[^\n]*\n  start pose \\[rad\\] +J1 0\\.000  J2 -1\\.000  J3 1\\.000  J4 -1\\.570[^\n]*\n  peak speed \\[rad/s\\] +J1 2\\.639 \\(84 %\\)[^@]*payload: not changed[^@]*\n1\n# twinwatch: [^\n]*swing_train.yaml on a Universal Robots e-Series arm \\(ur3e\\)\n")
+  "swing_train -> [^\n]*swing.script: URScript for a ur3e \\(e-Series\\), 42\\.0 s of motion, servoj every 2 ms\n  the target's clock rises over 2\\.0 s and falls over 2\\.0 s[^\n]*\n  start pose \\[rad\\] +J1 0\\.000  J2 -1\\.000  J3 1\\.000  J4 -1\\.570[^\n]*\n  peak speed \\[rad/s\\] +J1 2\\.639 \\(84 %\\)[^@]*payload: not changed[^@]*\n1\ndef twinwatch_swing_train\\(\\):\n  # twinwatch: [^\n]*swing_train.yaml on a Universal Robots e-Series arm \\(ur3e\\)\n")
 add_test(NAME cli.urscript_excitation_json
-  COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/exc.yaml -q --harmonics 4 --global-evals 200 --local-evals 200 --duration 20 && $<TARGET_FILE:twinwatch> urscript ${d}/exc.yaml -o ${d}/exc.script --json --declare-payload")
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/exc.yaml -q --harmonics 4 --global-evals 200 --local-evals 200 --duration 20 && $<TARGET_FILE:twinwatch> urscript ${d}/exc.yaml -o ${d}/exc.script --json")
 set_tests_properties(cli.urscript_excitation_json PROPERTIES PASS_REGULAR_EXPRESSION
-  "\"motion_s\": 20\\.0,[^@]*\"payload_declared\": true,[^@]*\"ramp_in_s\": 0\\.0,\n  \"ramp_out_s\": 0\\.0,")
+  "\"motion_s\": 20\\.0,[^@]*\"payload_declared\": false,[^@]*\"ramp_in_s\": 0\\.0,\n  \"ramp_out_s\": 0\\.0,")
 add_test(NAME cli.urscript_cartesian_refused
   COMMAND sh -c "$<TARGET_FILE:twinwatch> urscript ${S}/nominal_figure_eight.yaml -o ${d}/f8.script 2>&1; echo exit \$?; test -e ${d}/f8.script && echo FILE-EXISTS")
 set_tests_properties(cli.urscript_cartesian_refused PROPERTIES
@@ -21,7 +21,7 @@ set_tests_properties(cli.urscript_cartesian_refused PROPERTIES
 add_test(NAME cli.urscript_bad_options
   COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --lookahead 0.5 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --ramp 0 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${d}/x.script --duration 1 2>&1; echo exit \$?; \$T urscript ${S}/train/swing_train.yaml -o ${S}/train/swing_train.yaml 2>&1; echo exit \$?")
 set_tests_properties(cli.urscript_bad_options PROPERTIES PASS_REGULAR_EXPRESSION
-  "error: [^\n]*swing_train.yaml: --lookahead: expected 0\\.03 to 0\\.2 s \\(servoj's range\\), got 0\\.5\nexit 2\nerror: [^\n]*swing_train.yaml: --ramp: the target does not start at rest, and a ramp of 0 s would make the arm take a step of velocity[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: --duration: 1 s is shorter than half the ramps \\(2 s\\) take[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: cannot write: it is the input [^\n]*\nexit 2\n")
+  "error: [^\n]*swing_train.yaml: --lookahead: expected 0\\.03 to 0\\.2 s \\(servoj's range\\), got 0\\.5\nexit 2\nerror: [^\n]*swing_train.yaml: --ramp: the target does not start at rest, and a ramp of 0 s would make the arm take a step of velocity[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: --duration: 1 s is shorter than half the ramps take \\(2 s\\)[^\n]*\nexit 2\nerror: [^\n]*swing_train.yaml: cannot write: it is the input [^\n]*\nexit 2\n")
 # the virtual robot rehearses the program: 40 s of the swing in 42 s, from rest (J1's first measured
 # velocity ~0, where the scenario starts it at 2.6 rad/s); --ramp only with --as-program, and a
 # Cartesian path has no program to rehearse

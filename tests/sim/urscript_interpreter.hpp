@@ -57,6 +57,8 @@ class Interpreter {
     return t;
   }
   const std::string& name() const { return name_; }
+  /// whether the file calls its def after it
+  bool called() const { return called_; }
 
  private:
   struct Expr {
@@ -234,6 +236,11 @@ class Interpreter {
     std::string closer;
     body_ = block(lines, k, closer);
     if (closer != "end") throw std::runtime_error("the def is not closed by 'end'");
+    // one call of the def after it (a Script node's file), nothing else
+    if (k < lines.size() && lines[k].second == name_ + "()") {
+      called_ = true;
+      ++k;
+    }
     if (k != lines.size()) throw std::runtime_error("line " + std::to_string(lines[k].first) + ": a statement after the def's end");
   }
   // statements up to the line that closes the block (end, elif, else), which `closer` gets
@@ -354,8 +361,16 @@ class Interpreter {
           for (const std::string& k : it->second) ok |= k == nm;
           if (!ok) throw std::runtime_error(c.name + " has no argument '" + nm + "'");
         }
+        // positional arguments as the subset uses them: textmsg(s), set_payload(m, [cx, cy, cz]),
+        // movej(q, a=, v=), servoj(q, t=, lookahead_time=, gain=), stopj(a)
+        const size_t positional = c.name == "set_payload" ? 2 : 1;
+        if (c.args.size() != positional) throw std::runtime_error(c.name + " takes " + std::to_string(positional) + " positional argument(s)");
+        const bool joints = c.name == "movej" || c.name == "servoj";
+        if (joints && (c.args[0].kind != Value::List || c.args[0].list.size() != 6))
+          throw std::runtime_error(c.name + " takes a list of six joint positions");
+        if (c.name == "set_payload" && (c.args[1].kind != Value::List || c.args[1].list.size() != 3))
+          throw std::runtime_error("set_payload takes a centre of gravity of three numbers");
         if (c.name == "servoj") {
-          if (c.args.size() != 1 || c.args[0].kind != Value::List) throw std::runtime_error("servoj takes a list of joint positions");
           std::vector<float> q;
           for (const Value& v : c.args[0].list) q.push_back(v.as_float());
           t.servo_targets.push_back(q);
@@ -401,6 +416,7 @@ class Interpreter {
   std::vector<Stmt> body_;
   std::map<std::string, Value> vars_;
   long limit_ = 0;
+  bool called_ = false;
 };
 
 }  // namespace urscript_test

@@ -19,7 +19,7 @@ namespace {
 using namespace twinwatch;
 
 struct Options {
-  std::string scenario, output, name;
+  std::string scenario, output, name, robot;
   double duration = 0.0;
   sim::ProgramOptions program;
   bool duration_given = false, json = false, quiet = false;
@@ -46,6 +46,14 @@ int run(Options o) {
   require_output(o.output, {model::robot_file(s.robot)});
   if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
   const sim::ClosedForm form = sim::scenario_closed_form(s);
+  // another arm than the scenario's (the swing pair is written for the UR3e): its file's limits are checked
+  if (!o.robot.empty()) {
+    const model::RobotModel other = model::load_robot(o.robot);
+    if (other.n_dof() != form.n_dof())
+      throw InvalidArgument(fmt::format("--robot {}: it has {} joints, the scenario's trajectory {}", o.robot, other.n_dof(), form.n_dof()));
+    require_output(o.output, {model::robot_file(o.robot)});
+    s.robot = o.robot;
+  }
   const model::RobotModel robot = model::load_robot(s.robot);
   o.program.duration = s.options.duration;
   o.program.title = o.scenario;
@@ -60,7 +68,7 @@ int run(Options o) {
       for (const auto& [field, option] : {std::pair{"ramp", "--ramp"}, std::pair{"lookahead", "--lookahead"}, std::pair{"gain", "--gain"},
                                           std::pair{"approach_speed", "--approach-speed"},
                                           std::pair{"approach_acceleration", "--approach-acceleration"},
-                                          std::pair{"duration", o.duration_given ? "--duration" : "the scenario's duration"}})
+                                          std::pair{"payload", "--declare-payload"}, std::pair{"duration", o.duration_given ? "--duration" : "the scenario's duration"}})
         if (m.rfind(std::string(field) + ":", 0) == 0) {
           m = option + m.substr(std::string(field).size());
           break;
@@ -142,11 +150,11 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
       "evaluated on the controller, and stops. A target that starts or ends moving (a sine) runs on a clock that rises\n"
       "and falls over --ramp seconds, so the arm starts and ends at rest. The motion is checked against the robot\n"
       "file's joint ranges and speed limits before anything is written. Send it to the controller's port 30002 or load\n"
-      "it in a Script node, and record it meanwhile with 'twinwatch record --rtde'. Faults in the scenario are the\n"
+      "it in a Script node (with --call), and record it meanwhile with 'twinwatch record --rtde'. Faults in the scenario are the\n"
       "virtual robot's and are left out. Exports fourier, fourier_series, sine and chirp trajectories.\n\n"
       "Building a twin of your own arm (docs/rtde.md, \"A twin of your own arm\"):\n"
       "  twinwatch excite ur5e -o exc.yaml --tool-point 0 0 0.15 && twinwatch urscript exc.yaml -o exc.script\n"
-      "  twinwatch urscript scenarios/ur3e/train/swing_train.yaml -o swing.script   # then again with the test weight\n"
+      "  twinwatch urscript scenarios/ur3e/train/swing_train.yaml --robot ur5e -o swing.script   # then again with the test weight\n"
       "  twinwatch identify exc.csv swing.csv swing_weight.csv --known-payload swing_weight.csv=M,X,Y,Z -o twin.json"));
   sub->add_option("SCENARIO", o->scenario, "Scenario YAML whose trajectory the program runs (its robot's limits are checked)")
       ->required()
@@ -167,6 +175,10 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
       ->check(twinwatch::cli::positive_number());
   sub->add_flag("--declare-payload", o->program.declare_payload,
                 "Declare the scenario's payload with set_payload before moving (else the installation's payload is kept)");
+  sub->add_flag("--call", o->program.call,
+                "End the file with the call NAME() after the def, as a Polyscope Script node (file) needs (port 30002 takes the def alone)");
+  sub->add_option("--robot", o->robot,
+                  "Check and write the motion for this robot (name or file) instead of the scenario's, e.g. the UR3e swing pair on a ur5e");
   sub->add_option("--name", o->name, "The program's name (default: the scenario's name, as twinwatch_NAME)");
   sub->add_flag("--json", o->json, "Print the summary as one JSON object");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success (warnings still go to stderr)");

@@ -39,6 +39,9 @@ struct ProgramOptions {
   double approach_speed = 0.25;         ///< movej to the start pose: joint speed [rad/s]
   double approach_acceleration = 0.5;   ///< and acceleration [rad/s²]
   bool declare_payload = false;  ///< the program calls set_payload(mass, com) before it moves
+  /// the file ends with the call `NAME()` after the def, as a Polyscope Script node (file) needs; without
+  /// it the file is the one def block the controller's port 30002 runs
+  bool call = false;
   model::RigidBodyInertia payload;  ///< declared when declare_payload
   std::string name;           ///< the program's name (letters, digits, '_'; made so from any text)
   std::string title;          ///< the header comment's first line (e.g. the scenario's path)
