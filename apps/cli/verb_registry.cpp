@@ -1,5 +1,7 @@
 #include "verb_registry.hpp"
 
+#include <cctype>
+
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -102,6 +104,16 @@ CLI::Validator whole_number(long lo, long hi) {
         return fmt::format("expected a whole number from {} to {}, got '{}'", lo, hi, text);
       },
       fmt::format("INT {}..{}", lo, hi));
+}
+
+std::string with_option_names(std::string message, std::initializer_list<std::pair<std::string_view, std::string_view>> fields) {
+  for (const auto& [field, option] : fields) {
+    if (message.rfind(field, 0) != 0) continue;
+    const char next = message.size() > field.size() ? message[field.size()] : ' ';
+    if (std::isalnum(static_cast<unsigned char>(next)) || next == '_') continue;
+    return std::string(option) + message.substr(field.size());
+  }
+  return message;
 }
 
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {

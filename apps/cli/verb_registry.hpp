@@ -14,6 +14,7 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace twinwatch::cli {
 
@@ -50,6 +51,11 @@ const CLI::Validator& nonnegative_number();
 /// A whole number from lo to hi: CLI11's Range on an int option said "Value 2.5 not in range 1 to
 /// 1000" for 2.5, which is in range and not whole.
 CLI::Validator whole_number(long lo, long hi);
+
+/// A library's message that begins with one of its fields ("ramp: expected ...", "q0 has 3 values")
+/// said with the option the user typed instead ("--ramp: expected ..."): the first `fields` pair
+/// (field, option) whose field begins the message, followed by no letter, digit or '_', is replaced.
+std::string with_option_names(std::string message, std::initializer_list<std::pair<std::string_view, std::string_view>> fields);
 
 /// An option that does nothing in this run is refused, not ignored (audit, session 34: '--links 9'
 /// without --sweep-collisions, '--robot panda' with a --twin file, '--prune' with the physics method

@@ -18,8 +18,6 @@ namespace {
 constexpr double kAtRest = 1e-9;
 constexpr double kTwoPi = 2.0 * M_PI;
 
-bool finite(const Eigen::MatrixXd& m) { return m.allFinite(); }
-
 // steps of a ramp of `seconds`: rounded up to an even number, so that its half (what it adds to the
 // program's time) is whole
 long ramp_steps(double seconds, double dt) {
@@ -96,7 +94,7 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
       form_.c.cols() != K)
     throw InvalidArgument(fmt::format("the closed form's sizes disagree: {} pulsations, {} sweeps, s {}x{}, c {}x{} for {} joints", K,
                                       form_.sweep.size(), form_.s.rows(), form_.s.cols(), form_.c.rows(), form_.c.cols(), n));
-  const bool numbers_ok = form_.q0.allFinite() && finite(form_.s) && finite(form_.c) &&
+  const bool numbers_ok = form_.q0.allFinite() && form_.s.allFinite() && form_.c.allFinite() &&
                           std::all_of(form_.omega.begin(), form_.omega.end(), [](double x) { return std::isfinite(x); }) &&
                           std::all_of(form_.sweep.begin(), form_.sweep.end(), [](double x) { return std::isfinite(x); }) &&
                           std::isfinite(form_.fade) && form_.fade >= 0.0 && !(form_.wrap <= 0.0) && !std::isnan(form_.wrap) &&
@@ -216,7 +214,7 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   // moves, and what to check first
   line(0, fmt::format("def {}():", name));
   line(1, fmt::format("# twinwatch: {} on a Universal Robots e-Series arm ({})", comment(o.title.empty() ? name : o.title), robot.name()));
-  for (const std::string& h : header) line(1, "# " + h);
+  for (const std::string& h : header) line(1, "# " + comment(h));
   line(1, fmt::format("# Motion: {:.3f} s, servoj every {} s (t={}, lookahead_time={}, gain={}); {} sinusoidal component(s),", motion.total(), dt,
                       dt, o.lookahead, o.gain, K));
   line(1, fmt::format("#   evaluated on the controller (32-bit floats: phases kept in [0, 2 pi), steps counted in an integer)."));
@@ -245,8 +243,8 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, "#   def: 'twinwatch urscript --call'.");
   line(1, fmt::format("# Record it meanwhile: twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o RECORDING.csv, started",
                       std::ceil(motion.total() + 30.0)));
-  line(1, "#   (at full speed: at a speed slider of x %, the motion takes 100 / x times as long; record for that).");
-  line(1, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion).");
+  line(1, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion),");
+  line(1, "#   at full speed: at a speed slider of x %, the motion takes 100 / x times as long; record for that.");
   const std::string shown = name.substr(std::min(name.size(), std::string("twinwatch_").size()));  // (in messages)
   line(1, fmt::format("textmsg(\"twinwatch: {}: moving to the start pose\")", shown));
   if (o.declare_payload)

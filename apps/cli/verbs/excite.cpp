@@ -85,14 +85,10 @@ int run(const Options& o) {
       const int k = std::atoi(what.c_str() + 12);
       what = fmt::format("--tool-point (number {} of {})", k + 1, eo.tool_points.size()) + what.substr(close + 1);
     }
-    for (const auto& [field, option] : std::initializer_list<std::pair<const char*, const char*>>{
-             {"harmonics", "--harmonics"}, {"base_frequency", "--base-frequency"}, {"samples", "--samples"}, {"q0", "--q0"},
-             {"amplitude", "--amplitude"}, {"limit_fraction", "--limit-fraction"}, {"default_qdd_max", "--default-qdd-max"},
-             {"min_height", "--min-height"}, {"global_evaluations", "--global-evals"}, {"local_evaluations", "--local-evals"}})
-      if (what.rfind(field, 0) == 0) {
-        what = std::string(option) + what.substr(std::string(field).size());
-        break;
-      }
+    what = twinwatch::cli::with_option_names(
+        what, {{"harmonics", "--harmonics"}, {"base_frequency", "--base-frequency"}, {"samples", "--samples"}, {"q0", "--q0"},
+               {"amplitude", "--amplitude"}, {"limit_fraction", "--limit-fraction"}, {"default_qdd_max", "--default-qdd-max"},
+               {"min_height", "--min-height"}, {"global_evaluations", "--global-evals"}, {"local_evaluations", "--local-evals"}});
     throw InvalidArgument(what + fmt::format(" ({})", m.name()));
   }
   // the run must end at rest: a whole number of periods

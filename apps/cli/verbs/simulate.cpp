@@ -68,9 +68,9 @@ int run(const Options& o) {
     try {
       program = sim::rehearse_as_program(s, po);
     } catch (const InvalidArgument& e) {
-      std::string m = e.what();  // (the library names its fields; the user typed options)
-      if (m.rfind("ramp:", 0) == 0) m = "--ramp" + m.substr(4);
-      if (m.rfind("duration:", 0) == 0) m = (o.duration_given ? "--duration" : "the scenario's duration") + m.substr(8);
+      // (the library names its fields; the user typed options)
+      const std::string m = twinwatch::cli::with_option_names(
+          e.what(), {{"ramp", "--ramp"}, {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
       throw InvalidArgument(m.rfind(o.scenario, 0) == 0 ? m : fmt::format("{}: {}", o.scenario, m));
     }
     const model::RobotModel robot = model::load_robot(s.robot);

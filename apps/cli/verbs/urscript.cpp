@@ -64,15 +64,10 @@ int run(Options o) {
     try {
       return sim::ProgramMotion(form, o.program);
     } catch (const InvalidArgument& e) {
-      std::string m = e.what();
-      for (const auto& [field, option] : {std::pair{"ramp", "--ramp"}, std::pair{"lookahead", "--lookahead"}, std::pair{"gain", "--gain"},
-                                          std::pair{"approach_speed", "--approach-speed"},
-                                          std::pair{"approach_acceleration", "--approach-acceleration"},
-                                          std::pair{"payload", "--declare-payload"}, std::pair{"duration", o.duration_given ? "--duration" : "the scenario's duration"}})
-        if (m.rfind(std::string(field) + ":", 0) == 0) {
-          m = option + m.substr(std::string(field).size());
-          break;
-        }
+      const std::string m = twinwatch::cli::with_option_names(
+          e.what(), {{"ramp", "--ramp"}, {"lookahead", "--lookahead"}, {"gain", "--gain"}, {"approach_speed", "--approach-speed"},
+                     {"approach_acceleration", "--approach-acceleration"}, {"payload", "--declare-payload"},
+                     {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
       throw InvalidArgument(fmt::format("{}: {}", o.scenario, m));
     }
   };
