@@ -8,6 +8,7 @@
 #include <string>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/model/dynamics.hpp"
 
 namespace twinwatch::sim {
 
@@ -77,6 +78,8 @@ void ProgramOptions::validate() const {
        approach_speed);
   need(std::isfinite(approach_acceleration) && approach_acceleration > 0.0 && approach_acceleration <= 40.0, "approach_acceleration",
        "> 0 and at most 40 rad/s²", approach_acceleration);
+  need(std::isfinite(max_approach) && max_approach > 0.0 && max_approach <= kTwoPi, "max_approach", "> 0 and at most 2 pi rad",
+       max_approach);
   if (declare_payload) {
     if (payload.mass == 0.0)
       throw InvalidArgument("payload: the motion carries no payload, so there is none to declare (set_payload(0) would tell the "
@@ -185,6 +188,50 @@ MotionPeaks motion_peaks(const ProgramMotion& motion) {
   return p;
 }
 
+SafetyPeaks safety_peaks(const ProgramMotion& motion, const model::RobotModel& robot, const std::vector<Eigen::Vector3d>& tool_points,
+                         const model::RigidBodyInertia& payload) {
+  const int n = robot.n_dof();
+  if (n != motion.n_dof())
+    throw InvalidArgument(fmt::format("the motion has {} joints, the robot {} has {}", motion.n_dof(), robot.name(), n));
+  if (n < 3) throw InvalidArgument(fmt::format("the robot {} has {} joints: it has no elbow (the third joint)", robot.name(), n));
+  for (size_t k = 0; k < tool_points.size(); ++k)
+    if (!tool_points[k].allFinite()) throw InvalidArgument(fmt::format("tool point {} is not finite", k + 1));
+  model::DynamicsData d(robot);
+  Matrix6J J(6, n);
+  SafetyPeaks p;
+  VectorJ q, qd, qdd;
+  const int last = n - 1;
+  // a point fixed on the last body, from the flange frame: the flange's centre, then each tool point
+  std::vector<Eigen::Vector3d> on_last;
+  const Eigen::Isometry3d& lastMf = robot.description().flange;
+  on_last.push_back(lastMf.translation());
+  for (const Eigen::Vector3d& t : tool_points) on_last.push_back(lastMf * t);
+  for (long k = 0; k <= motion.steps(); ++k) {
+    const double t = static_cast<double>(k) * motion.servo_period();
+    motion.evaluate(t, q, qd, qdd);
+    model::forward_kinematics(robot, d, q);
+    for (size_t i = 0; i < on_last.size(); ++i) {
+      model::point_jacobian(robot, d, last, on_last[i], J);
+      if (const double v = (J.topRows<3>() * qd).norm(); v > p.tool_speed) p.tool_speed = v, p.tool_t = t, p.tool_point = static_cast<int>(i) - 1;
+    }
+    model::point_jacobian(robot, d, 2, Eigen::Vector3d::Zero(), J);
+    if (const double v = (J.topRows<3>() * qd).norm(); v > p.elbow_speed) p.elbow_speed = v, p.elbow_t = t;
+    Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
+    for (int b = 0; b < n; ++b) {
+      const model::RigidBodyInertia& body = robot.joint(b).body;
+      if (body.mass == 0.0) continue;
+      model::point_jacobian(robot, d, b, body.com, J);
+      momentum += body.mass * (J.topRows<3>() * qd);
+    }
+    if (payload.mass > 0.0) {
+      model::point_jacobian(robot, d, last, lastMf * payload.com, J);
+      momentum += payload.mass * (J.topRows<3>() * qd);
+    }
+    if (const double m = momentum.norm(); m > p.momentum) p.momentum = m, p.momentum_t = t;
+  }
+  return p;
+}
+
 std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& o, const model::RobotModel& robot,
                              const std::vector<std::string>& header) {
   const ClosedForm& f = motion.form();
@@ -238,14 +285,41 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
     line(1, "# Payload: not changed: the controller uses the installation's (set it to what the flange carries).");
   line(1, "# Before running it: run it in URSim or at a low speed slider first (speed scaling slows the whole");
   line(1, "#   motion, it does not change its path); jog the arm near the start pose (the approach is a movej from");
-  line(1, "#   wherever it is); clear the arm's whole reach; keep the emergency stop at hand. Over port 30002 the");
-  line(1, "#   controller must be in Remote Control; a Polyscope Script node (file) needs the call line after the");
-  line(1, "#   def: 'twinwatch urscript --call'.");
+  line(1, fmt::format("#   wherever it is: when a joint is more than {} rad from it, the program halts before anything moves);", o.max_approach));
+  line(1, "#   clear the arm's whole reach; keep the emergency stop at hand. Over port 30002 the controller must be");
+  line(1, "#   in Remote Control; a Polyscope Script node (file) needs the call line after the def: 'twinwatch urscript --call'.");
   line(1, fmt::format("# Record it meanwhile: twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o RECORDING.csv, started",
                       std::ceil(motion.total() + 30.0)));
   line(1, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion),");
   line(1, "#   at full speed: at a speed slider of x %, the motion takes 100 / x times as long; record for that.");
   const std::string shown = name.substr(std::min(name.size(), std::string("twinwatch_").size()));  // (in messages)
+  // The approach is a movej from wherever the arm stands, through a path nobody checked: farther than
+  // max_approach on any joint, the program says so and halts before anything moves.
+  line(1, "tw_a = get_actual_joint_positions()");
+  line(1, "tw_far = 0.0");
+  line(1, "tw_j = 0");
+  for (int j = 0; j < n; ++j) {
+    line(1, fmt::format("tw_d = tw_a[{}] {} {}", j, q_start[j] < 0.0 ? "+" : "-", flt(std::abs(q_start[j]))));
+    line(1, "if tw_d < 0.0:");
+    line(2, "tw_d = -tw_d");
+    line(1, "end");
+    line(1, "if tw_d > tw_far:");
+    line(2, "tw_far = tw_d");
+    line(2, fmt::format("tw_j = {}", j + 1));
+    line(1, "end");
+  }
+  line(1, fmt::format("if tw_far > {}:", flt(o.max_approach)));
+  line(2, fmt::format("textmsg(\"twinwatch: {}: not started: the joint farthest from the start pose is joint \", tw_j)", shown));
+  line(2, fmt::format("textmsg(\"twinwatch: {}: by [rad]: \", tw_far)", shown));
+  {
+    std::string deg;
+    for (int j = 0; j < n; ++j) deg += fmt::format("{}{:.1f}", j ? ", " : "", q_start[j] * 180.0 / M_PI);
+    line(2, fmt::format("popup(\"twinwatch {}: a joint is more than {} rad from the start pose; nothing moved. Jog the arm near the "
+                        "start pose first (Move tab, joints in degrees: {}).\", title=\"twinwatch\", error=True, blocking=True)",
+                        shown, flt(o.max_approach), deg));
+  }
+  line(2, "halt");
+  line(1, "end");
   line(1, fmt::format("textmsg(\"twinwatch: {}: moving to the start pose\")", shown));
   if (o.declare_payload)
     line(1, fmt::format("set_payload({}, [{}, {}, {}])", flt(o.payload.mass), flt(o.payload.com.x()), flt(o.payload.com.y()),

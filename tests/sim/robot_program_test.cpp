@@ -11,6 +11,7 @@
 #include "error_text.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
+#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/sim/robot_program.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "urscript_interpreter.hpp"
@@ -186,6 +187,13 @@ ProgramRun run_program(const ProgramMotion& m, const ProgramOptions& o) {
   const std::string text = urscript_program(m, o, ur3e, {"a test"});
   urscript_test::Interpreter interp(text);
   EXPECT_EQ(interp.called(), o.call);
+  {  // the arm stands 0.3 rad from the start pose on J2 (within the approach's 0.5 rad)
+    VectorJ q0, qd0, qdd0;
+    m.evaluate(0.0, q0, qd0, qdd0);
+    std::vector<float> arm(q0.data(), q0.data() + 6);
+    arm[1] += 0.3f;
+    interp.arm_at(arm);
+  }
   ProgramRun r;
   r.trace = interp.run();
   const auto& targets = r.trace.servo_targets;
@@ -231,8 +239,10 @@ TEST(RobotProgram, TheURScriptCommandsTheMotionEvery2msIn32BitFloats) {
     const ProgramRun r = run_program(m, o);
     const auto& calls = r.trace.calls;
     ASSERT_GE(calls.size(), 4u) << c.what;
-    // textmsg, [set_payload,] movej to the start pose, textmsg, servoj..., stopj, textmsg
-    size_t k = 1;
+    // the arm's pose read, textmsg, [set_payload,] movej to the start pose, textmsg, servoj..., stopj, textmsg
+    EXPECT_EQ(calls[0].name, "get_actual_joint_positions") << c.what;
+    EXPECT_FALSE(r.trace.halted) << c.what;
+    size_t k = 2;
     if (o.declare_payload) {
       ASSERT_EQ(calls[k].name, "set_payload") << c.what;
       EXPECT_FLOAT_EQ(calls[k].args.at(0).as_float(), 2.0f);
@@ -319,6 +329,115 @@ TEST(RobotProgram, AFastSineDriftsNoMoreThanTheFloatsFrequencyError) {
   const double travelled = 2 * M_PI * 5.0 * 100.0, eps = std::ldexp(1.0, -24);
   EXPECT_LT(r.worst_q, 2 * eps * travelled * 1.0);
   EXPECT_LT(r.worst_jerk, 5e-6) << "and it drifts smoothly";
+}
+
+// The approach is a movej from wherever the arm stands: farther than max_approach from the start pose
+// on any joint (either side), the program says which joint and how far, shows an error popup and halts
+// before anything moves; nearer, it moves.
+TEST(RobotProgram, TheProgramHaltsBeforeMovingWhenTheArmStandsFarFromTheStartPose) {
+  const auto f = fourier(5);
+  ProgramOptions o = options(4.0);
+  const ProgramMotion m(*f->closed_form(), o);
+  const model::RobotModel ur3e = model::load_robot("ur3e");
+  VectorJ q0, qd, qdd;
+  m.evaluate(0.0, q0, qd, qdd);
+  auto run_from = [&](int joint, double offset, double max_approach) {
+    o.max_approach = max_approach;
+    urscript_test::Interpreter interp(urscript_program(m, o, ur3e));
+    std::vector<float> arm(q0.data(), q0.data() + 6);
+    arm[static_cast<size_t>(joint)] += static_cast<float>(offset);
+    interp.arm_at(arm);
+    return interp.run();
+  };
+  auto called = [](const urscript_test::Trace& t, const std::string& name) {
+    return std::count_if(t.calls.begin(), t.calls.end(), [&](const urscript_test::Call& c) { return c.name == name; });
+  };
+  for (const auto& [joint, offset] : std::vector<std::pair<int, double>>{{2, 0.55}, {2, -0.55}, {0, 0.8}, {5, -3.0}}) {
+    const urscript_test::Trace t = run_from(joint, offset, 0.5);
+    EXPECT_TRUE(t.halted) << joint << " " << offset;
+    EXPECT_EQ(called(t, "movej"), 0) << "nothing moves";
+    EXPECT_EQ(called(t, "servoj"), 0);
+    EXPECT_EQ(called(t, "popup"), 1);
+    const auto msg = std::find_if(t.calls.begin(), t.calls.end(), [](const urscript_test::Call& c) { return c.name == "textmsg"; });
+    ASSERT_NE(msg, t.calls.end());
+    EXPECT_THAT(msg->args.at(0).s, HasSubstr("not started"));
+    EXPECT_EQ(msg->args.at(1).i, joint + 1) << "names the farthest joint";
+    const auto by = std::next(msg);
+    EXPECT_NEAR(by->args.at(1).as_float(), std::abs(offset), 1e-5) << "and how far";
+    const auto pop = std::find_if(t.calls.begin(), t.calls.end(), [](const urscript_test::Call& c) { return c.name == "popup"; });
+    EXPECT_TRUE(pop->named.at("error").b);
+    EXPECT_THAT(pop->args.at(0).s, HasSubstr("nothing moved"));
+  }
+  for (const auto& [joint, offset, limit] : std::vector<std::tuple<int, double, double>>{{2, 0.45, 0.5}, {2, -0.45, 0.5}, {0, 0.8, 1.0}}) {
+    const urscript_test::Trace t = run_from(joint, offset, limit);
+    EXPECT_FALSE(t.halted) << joint << " " << offset;
+    EXPECT_EQ(called(t, "movej"), 1);
+    EXPECT_EQ(called(t, "popup"), 0);
+    EXPECT_EQ(called(t, "servoj"), m.steps());
+  }
+  o.max_approach = 0.0;
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { ProgramMotion(*f->closed_form(), o); }), HasSubstr("max_approach"));
+}
+
+// The figures the installation's safety limits bound, against finite differences of the forward
+// kinematics (no Jacobian): the flange's and the elbow's speed, and the momentum as the total mass
+// times the velocity of the centre of mass of links and payload; a tool point far out is faster
+// than the flange; J1 alone moves the elbow at qd1 times its distance from the base axis.
+TEST(RobotProgram, SafetyPeaksAreTheKinematicsSpeedsAndTheArmsMomentum) {
+  const model::RobotModel ur3e = model::load_robot("ur3e");
+  model::RigidBodyInertia payload;
+  payload.mass = 1.5;
+  payload.com = Eigen::Vector3d(0.02, 0.0, 0.08);
+  const std::vector<Eigen::Vector3d> tool{Eigen::Vector3d(0.0, 0.0, 0.3)};
+  const ProgramMotion m(*sine()->closed_form(), options(12.0));
+  const SafetyPeaks flange = safety_peaks(m, ur3e, {}, payload), with_tool = safety_peaks(m, ur3e, tool, payload);
+  model::DynamicsData d(ur3e);
+  struct Points {
+    Eigen::Vector3d flange, elbow, mass_moment;  // (sum m c)
+  };
+  auto points = [&](double t) {
+    VectorJ q, qd, qdd;
+    m.evaluate(t, q, qd, qdd);
+    model::forward_kinematics(ur3e, d, q);
+    Points p{d.oMf.translation(), d.oMi[2].translation(), Eigen::Vector3d::Zero()};
+    for (int b = 0; b < 6; ++b) p.mass_moment += ur3e.joint(b).body.mass * (d.oMi[static_cast<size_t>(b)] * ur3e.joint(b).body.com);
+    p.mass_moment += payload.mass * (d.oMf * payload.com);
+    return p;
+  };
+  const double h = 1e-6;
+  double tool_fd = 0, elbow_fd = 0, momentum_fd = 0;
+  for (long k = 1; k < m.steps(); ++k) {
+    const double t = static_cast<double>(k) * m.servo_period();
+    const Points a = points(t - h), b = points(t + h);
+    tool_fd = std::max(tool_fd, (b.flange - a.flange).norm() / (2 * h));
+    elbow_fd = std::max(elbow_fd, (b.elbow - a.elbow).norm() / (2 * h));
+    momentum_fd = std::max(momentum_fd, (b.mass_moment - a.mass_moment).norm() / (2 * h));
+  }
+  EXPECT_GT(flange.tool_speed, 1.0) << "the swing moves the flange fast";
+  EXPECT_NEAR(flange.tool_speed, tool_fd, 1e-6 * tool_fd);
+  EXPECT_EQ(flange.tool_point, -1);
+  EXPECT_NEAR(flange.elbow_speed, elbow_fd, 1e-6 * elbow_fd);
+  EXPECT_NEAR(flange.momentum, momentum_fd, 1e-6 * momentum_fd);
+  EXPECT_GT(with_tool.tool_speed, flange.tool_speed * 1.1) << "the tool point 0.3 m out is faster";
+  EXPECT_EQ(with_tool.tool_point, 0);
+  EXPECT_EQ(with_tool.elbow_speed, flange.elbow_speed);
+  const SafetyPeaks light = safety_peaks(m, ur3e, {}, model::RigidBodyInertia{});
+  EXPECT_LT(light.momentum, flange.momentum) << "the payload's momentum counts";
+
+  // J1 alone: the elbow moves on a circle about the base's z axis
+  const auto j1 = make_sine(kStart, v6(0.5, 0, 0, 0, 0, 0), v6(0.2, 0.1, 0.1, 0.1, 0.1, 0.1), VectorJ::Zero(6));
+  const ProgramMotion spin(*j1->closed_form(), options(10.0));
+  const SafetyPeaks sp = safety_peaks(spin, ur3e, {}, model::RigidBodyInertia{});
+  const MotionPeaks pk = motion_peaks(spin);
+  model::forward_kinematics(ur3e, d, kStart);
+  const double radius = d.oMi[2].translation().head<2>().norm();
+  EXPECT_GT(radius, 0.1);  // (a2 cos q2: 0.13 m)
+  EXPECT_NEAR(sp.elbow_speed, pk.qd[0] * radius, 1e-9);
+  EXPECT_NEAR(sp.tool_speed, pk.qd[0] * d.oMf.translation().head<2>().norm(), 1e-9);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] {
+                safety_peaks(spin, ur3e, {Eigen::Vector3d(std::nan(""), 0, 0)}, {});
+              }),
+              HasSubstr("tool point 1 is not finite"));
 }
 
 }  // namespace

@@ -1,9 +1,11 @@
 #pragma once
 // A test's interpreter for the subset of URScript that sim::urscript_program writes, with URScript's
 // 32-bit floats and ints: one `def NAME(): ... end` block (comments outside it), assignments, while /
-// if / elif / else ... end, + - * / and comparisons, unary minus, lists, and the calls sin, cos,
-// textmsg, set_payload, movej, servoj, stopj (named arguments as URScript takes them). What the
-// program commands is recorded, so a test can compare it with the motion it was written from.
+// if / elif / else ... end, halt, + - * / and comparisons, unary minus, lists and indexing a list by
+// an int, and the calls sin, cos, textmsg, popup, get_actual_joint_positions, set_payload, movej,
+// servoj, stopj (named arguments as URScript takes them). What the program commands is recorded, so
+// a test can compare it with the motion it was written from; the arm's pose that
+// get_actual_joint_positions returns is the test's (Interpreter::arm_at).
 // Anything outside the subset (an unknown name, a call, a statement, int / int) is an error: the
 // test then fails on a program that the controller might read otherwise.
 #include <cctype>
@@ -44,6 +46,7 @@ struct Trace {
   std::vector<Call> calls;        // every builtin call but sin/cos
   std::vector<std::vector<float>> servo_targets;
   long statements = 0;
+  bool halted = false;  // the program ran `halt`
 };
 
 class Interpreter {
@@ -53,23 +56,30 @@ class Interpreter {
     Trace t;
     vars_.clear();
     limit_ = max_statements;
-    exec(body_, t);
+    try {
+      exec(body_, t);
+    } catch (const Halt&) {
+      t.halted = true;
+    }
     return t;
   }
+  /// The pose get_actual_joint_positions() returns [rad]; without it the call is an error.
+  void arm_at(std::vector<float> q) { arm_ = std::move(q); }
   const std::string& name() const { return name_; }
   /// whether the file calls its def after it
   bool called() const { return called_; }
 
  private:
   struct Expr {
-    enum Kind { Num, Name, Str, ListLit, Unary, Binary, CallE } kind;
+    enum Kind { Num, Name, Str, ListLit, Unary, Binary, CallE, Index } kind;
     Value value;
     std::string text;  // name, operator, function
     std::vector<std::unique_ptr<Expr>> args;
     std::vector<std::string> arg_names;  // "" for a positional argument
   };
+  struct Halt {};
   struct Stmt {
-    enum Kind { Assign, CallS, While, If } kind;
+    enum Kind { Assign, CallS, While, If, HaltS } kind;
     std::string target;
     std::unique_ptr<Expr> expr;
     std::vector<std::pair<std::unique_ptr<Expr>, std::vector<Stmt>>> branches;  // if/elif (condition), else (null)
@@ -177,6 +187,14 @@ class Interpreter {
     }
     e->kind = Expr::Name;
     e->text = id;
+    if (L.eat("[")) {  // a list's element
+      auto ix = std::make_unique<Expr>();
+      ix->kind = Expr::Index;
+      ix->args.push_back(std::move(e));
+      ix->args.push_back(expression(L));
+      if (!L.eat("]")) L.fail("']' expected");
+      return ix;
+    }
     return e;
   }
   std::unique_ptr<Expr> unary(Lexer& L) {
@@ -255,7 +273,9 @@ class Interpreter {
       }
       Stmt st;
       st.line = no;
-      if (L.eat("while ")) {
+      if (text == "halt") {
+        st.kind = Stmt::HaltS;
+      } else if (L.eat("while ")) {
         st.kind = Stmt::While;
         st.expr = expression(L);
         if (!L.eat(":") || !L.at_end()) L.fail("':' expected");
@@ -320,6 +340,13 @@ class Interpreter {
         for (const auto& a : e.args) v.list.push_back(eval(*a, t));
         return v;
       }
+      case Expr::Index: {
+        const Value l = eval(*e.args[0], t), i = eval(*e.args[1], t);
+        if (l.kind != Value::List) throw std::runtime_error("'" + e.args[0]->text + "' indexed, but it is no list");
+        if (i.kind != Value::Int) throw std::runtime_error("a list indexed by a value that is no int");
+        if (i.i < 0 || i.i >= static_cast<long>(l.list.size())) throw std::runtime_error("a list index out of range");
+        return l.list[static_cast<size_t>(i.i)];
+      }
       case Expr::Unary: {
         const Value a = eval(*e.args[0], t);
         if (a.kind == Value::Int) return Value::of_int(-a.i);
@@ -352,8 +379,18 @@ class Interpreter {
           const double x = c.args[0].as_float();
           return Value::of_float(static_cast<float>(c.name == "sin" ? std::sin(x) : std::cos(x)));
         }
+        if (c.name == "get_actual_joint_positions") {
+          if (!c.args.empty() || !c.named.empty()) throw std::runtime_error(c.name + " takes no argument");
+          if (arm_.size() != 6) throw std::runtime_error("the test gave the arm no pose of six joints (arm_at)");
+          Value v;
+          v.kind = Value::List;
+          for (float x : arm_) v.list.push_back(Value::of_float(x));
+          t.calls.push_back(std::move(c));
+          return v;
+        }
         static const std::map<std::string, std::vector<std::string>> known{
-            {"textmsg", {}}, {"set_payload", {}}, {"movej", {"a", "v"}}, {"servoj", {"t", "lookahead_time", "gain"}}, {"stopj", {}}};
+            {"textmsg", {}}, {"set_payload", {}}, {"movej", {"a", "v"}}, {"servoj", {"t", "lookahead_time", "gain"}}, {"stopj", {}},
+            {"popup", {"title", "warning", "error", "blocking"}}};
         const auto it = known.find(c.name);
         if (it == known.end()) throw std::runtime_error("unknown function '" + c.name + "'");
         for (const auto& [nm, v] : c.named) {
@@ -363,8 +400,15 @@ class Interpreter {
         }
         // positional arguments as the subset uses them: textmsg(s), set_payload(m, [cx, cy, cz]),
         // movej(q, a=, v=), servoj(q, t=, lookahead_time=, gain=), stopj(a)
+        // textmsg(s1, s2=""), popup(s, title=, warning=, error=, blocking=)
         const size_t positional = c.name == "set_payload" ? 2 : 1;
-        if (c.args.size() != positional) throw std::runtime_error(c.name + " takes " + std::to_string(positional) + " positional argument(s)");
+        if (c.args.size() != positional && !(c.name == "textmsg" && c.args.size() == 2))
+          throw std::runtime_error(c.name + " takes " + std::to_string(positional) + " positional argument(s)");
+        if ((c.name == "textmsg" || c.name == "popup") && c.args[0].kind != Value::Str)
+          throw std::runtime_error(c.name + "'s first argument is a string");
+        for (const auto& [nm, v] : c.named)
+          if (c.name == "popup" && (nm == "title" ? v.kind != Value::Str : v.kind != Value::Bool))
+            throw std::runtime_error("popup's " + nm + " is a " + (nm == "title" ? "string" : "bool"));
         const bool joints = c.name == "movej" || c.name == "servoj";
         if (joints && (c.args[0].kind != Value::List || c.args[0].list.size() != 6))
           throw std::runtime_error(c.name + " takes a list of six joint positions");
@@ -398,6 +442,7 @@ class Interpreter {
           break;
         }
         case Stmt::CallS: eval(*s.expr, t); break;
+        case Stmt::HaltS: throw Halt{};
         case Stmt::While:
           while (truth(eval(*s.expr, t))) exec(s.body, t);
           break;
@@ -417,6 +462,7 @@ class Interpreter {
   std::map<std::string, Value> vars_;
   long limit_ = 0;
   bool called_ = false;
+  std::vector<float> arm_;
 };
 
 }  // namespace urscript_test

@@ -21,6 +21,9 @@ using namespace twinwatch;
 struct Options {
   std::string scenario, output, name, robot;
   double duration = 0.0;
+  std::vector<double> tool;  // --tool-point, three numbers per point [m, flange frame]
+  // the installation's safety limits (Installation > Safety > Robot Limits), checked when given
+  double tool_speed_limit = 0.0, elbow_speed_limit = 0.0, momentum_limit = 0.0;
   sim::ProgramOptions program;
   bool duration_given = false, json = false, quiet = false;
 };
@@ -66,7 +69,8 @@ int run(Options o) {
     } catch (const InvalidArgument& e) {
       const std::string m = twinwatch::cli::with_option_names(
           e.what(), {{"ramp", "--ramp"}, {"lookahead", "--lookahead"}, {"gain", "--gain"}, {"approach_speed", "--approach-speed"},
-                     {"approach_acceleration", "--approach-acceleration"}, {"payload", "--declare-payload"},
+                     {"approach_acceleration", "--approach-acceleration"}, {"max_approach", "--max-approach"},
+                     {"payload", "--declare-payload"},
                      {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
       throw InvalidArgument(fmt::format("{}: {}", o.scenario, m));
     }
@@ -77,7 +81,41 @@ int run(Options o) {
   if (!violation.empty())
     throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; no program written", o.scenario, violation));
   const sim::MotionPeaks peaks = sim::motion_peaks(motion);
+  // the speeds and the momentum the installation's safety limits bound (the payload moves too, declared or not)
+  std::vector<Eigen::Vector3d> tool_points;
+  for (size_t k = 0; k + 2 < o.tool.size(); k += 3) tool_points.emplace_back(o.tool[k], o.tool[k + 1], o.tool[k + 2]);
+  for (size_t k = 0; k < tool_points.size(); ++k)
+    if (!tool_points[k].allFinite() || tool_points[k].norm() > 2.0)
+      throw InvalidArgument(fmt::format("--tool-point (number {} of {}): expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})",
+                                        k + 1, tool_points.size(), tool_points[k].x(), tool_points[k].y(), tool_points[k].z()));
+  const sim::SafetyPeaks safety = sim::safety_peaks(motion, robot, tool_points, s.options.payload);
+  const std::string tool_where =
+      safety.tool_point < 0 ? std::string("the flange's centre")
+                            : fmt::format("tool point {} ({:g}, {:g}, {:g}) m", safety.tool_point + 1, tool_points[safety.tool_point].x(),
+                                          tool_points[safety.tool_point].y(), tool_points[safety.tool_point].z());
+  struct Limit {
+    const char* option;
+    const char* what;
+    double peak, at, limit;
+    const char* unit;
+  };
+  const std::vector<Limit> limits{{"--tool-speed-limit", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s"},
+                                  {"--elbow-speed-limit", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s"},
+                                  {"--momentum-limit", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s"}};
+  for (const Limit& l : limits)
+    if (l.limit > 0.0 && l.peak > l.limit)
+      throw InvalidArgument(fmt::format(
+          "{}: the program's {} reaches {:.3f} {} at {:.2f} s{}, beyond {} {:g} {}: the arm would stop or slow mid-run; no program written. "
+          "Make the motion slower ({}), or run it where the installation allows more",
+          o.scenario, l.what, l.peak, l.unit, l.at, std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(), l.option,
+          l.limit, l.unit,
+          s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
+                                         : "lower the trajectory's amplitudes or frequencies"));
   std::vector<std::string> header{fmt::format("Written by 'twinwatch urscript' from {} (trajectory {}).", o.scenario, s.trajectory_type)};
+  header.push_back(fmt::format("Peak tool speed {:.3f} m/s ({}, at {:.2f} s), elbow speed {:.3f} m/s, momentum {:.2f} kg m/s{}:",
+                               safety.tool_speed, tool_where, safety.tool_t, safety.elbow_speed, safety.momentum,
+                               s.options.payload.mass > 0 ? fmt::format(" (with the {:g} kg payload)", s.options.payload.mass) : std::string()));
+  header.push_back("  the installation's Robot Limits (tool speed, elbow speed, momentum) must allow them, or the arm stops or slows mid-run.");
   if (!s.faults.empty())
     header.push_back(fmt::format("The scenario's {} fault(s) are the virtual robot's: the program has none.", s.faults.size()));
   write_text_file(o.output, sim::urscript_program(motion, o.program, robot, header));
@@ -109,10 +147,27 @@ int run(Options o) {
     j["q_max"] = vec(peaks.q_max);
     j["peak_qd"] = vec(peaks.qd);
     j["peak_qdd"] = vec(peaks.qdd);
+    j["peak_tool_speed"] = safety.tool_speed;
+    j["peak_tool_speed_t"] = safety.tool_t;
+    j["peak_tool_speed_point"] = safety.tool_point < 0 ? nlohmann::json("flange")
+                                                       : nlohmann::json::array({tool_points[safety.tool_point].x(), tool_points[safety.tool_point].y(),
+                                                                                tool_points[safety.tool_point].z()});
+    j["peak_elbow_speed"] = safety.elbow_speed;
+    j["peak_elbow_speed_t"] = safety.elbow_t;
+    j["peak_momentum"] = safety.momentum;
+    j["peak_momentum_t"] = safety.momentum_t;
+    j["limits_checked"] = [&] {
+      nlohmann::json c = nlohmann::json::object();
+      for (const Limit& l : limits)
+        if (l.limit > 0.0) c[std::string(l.option).substr(2)] = l.limit;
+      return c;
+    }();
+    j["max_approach"] = o.program.max_approach;
     j["payload_declared"] = o.program.declare_payload;
     j["faults_left_out"] = s.faults.size();
     j["warnings"] = warnings;
-    j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"peak_qd", "rad/s"}, {"peak_qdd", "rad/s^2"}};
+    j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"peak_qd", "rad/s"}, {"peak_qdd", "rad/s^2"},
+                  {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}, {"max_approach", "rad"}};
     fmt::print("{}\n", j.dump(2));
   } else if (!o.quiet) {
     fmt::print("{} -> {}: URScript for a {} (e-Series), {:.1f} s of motion, servoj every {:g} ms\n", s.name, o.output, robot.name(),
@@ -123,8 +178,21 @@ int run(Options o) {
     else
       fmt::print("  the target starts and ends at rest: run as the scenario runs it\n");
     fmt::print("  start pose [rad]           {}\n", joints(q0, nullptr));
+    fmt::print("  start pose [deg]           {}\n", [&] {
+      std::string d;
+      for (Eigen::Index j = 0; j < q0.size(); ++j) d += fmt::format("{}J{} {:.1f}", j ? "  " : "", j + 1, q0[j] * 180.0 / M_PI);
+      return d;
+    }());
+    fmt::print("  (jog the arm within {:g} rad of it on every joint first: farther, the program halts before anything moves)\n",
+               o.program.max_approach);
     fmt::print("  peak speed [rad/s]         {}\n", joints(peaks.qd, &qd_limit));
     fmt::print("  peak acceleration [rad/s²] {}\n", joints(peaks.qdd, &qdd_limit));
+    for (const Limit& l : limits)
+      fmt::print("  peak {:<22} {:.3f} {} at {:.2f} s{}{}\n", l.what, l.peak, l.unit, l.at,
+                 std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(),
+                 l.limit > 0.0 ? fmt::format(": within {} {:g} ({:.0f} %)", l.option, l.limit, 100.0 * l.peak / l.limit)
+                               : fmt::format(": not checked (the installation's limit: {})", l.option));
+    if (tool_points.empty()) fmt::print("  a tool on the flange was not checked: give its farthest points with --tool-point X Y Z (flange frame, m)\n");
     fmt::print("  payload: {}\n", o.program.declare_payload
                                       ? fmt::format("declared with set_payload({:g} kg, [{:g}, {:g}, {:g}] m)", s.options.payload.mass,
                                                     s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z())
@@ -144,9 +212,11 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
       "The program moves the arm to the trajectory's start pose (movej), then commands the trajectory with servoj every 2 ms,\n"
       "evaluated on the controller, and stops. A target that starts or ends moving (a sine) runs on a clock that rises\n"
       "and falls over --ramp seconds, so the arm starts and ends at rest. The motion is checked against the robot\n"
-      "file's joint ranges and speed limits before anything is written. Send it to the controller's port 30002 or load\n"
-      "it in a Script node (with --call), and record it meanwhile with 'twinwatch record --rtde'. Faults in the scenario are the\n"
-      "virtual robot's and are left out. Exports fourier, fourier_series, sine and chirp trajectories.\n\n"
+      "file's joint ranges and speed limits before anything is written; its peak tool and elbow speed and momentum\n"
+      "are reported, and checked against the installation's safety limits when given (--tool-speed-limit ...). The\n"
+      "program halts before moving when the arm stands farther than --max-approach from the start pose. Send it to\n"
+      "the controller's port 30002 or load it in a Script node (with --call), and record it meanwhile with 'twinwatch\n"
+      "record --rtde'. Faults in the scenario are the virtual robot's and are left out. Exports fourier, fourier_series, sine and chirp trajectories.\n\n"
       "Building a twin of your own arm (docs/rtde.md, \"A twin of your own arm\"):\n"
       "  twinwatch excite ur5e -o exc.yaml --tool-point 0 0 0.15 && twinwatch urscript exc.yaml -o exc.script\n"
       "  twinwatch urscript scenarios/ur3e/train/swing_train.yaml --robot ur5e -o swing.script   # then again with the test weight\n"
@@ -167,6 +237,25 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
       ->check(twinwatch::cli::positive_number());
   sub->add_option("--approach-acceleration", o->program.approach_acceleration, "movej acceleration to the start pose [rad/s²]")
       ->capture_default_str()
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--max-approach", o->program.max_approach,
+                  "The program halts before anything moves when a joint is farther than this from the start pose [rad] (the approach "
+                  "is a movej from wherever the arm stands)")
+      ->capture_default_str()
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--tool-point", o->tool,
+                  "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points): its speed counts as "
+                  "the tool's, as the installation's tool positions do")
+      ->type_size(-3)
+      ->allow_extra_args(false);
+  sub->add_option("--tool-speed-limit", o->tool_speed_limit,
+                  "The installation's tool speed limit [m/s] (Safety > Robot Limits): a motion faster at the flange or a tool point is "
+                  "refused, no program written (default: reported, not checked)")
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--elbow-speed-limit", o->elbow_speed_limit, "The installation's elbow speed limit [m/s], checked as --tool-speed-limit")
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--momentum-limit", o->momentum_limit,
+                  "The installation's momentum limit [kg·m/s], checked against the arm's linear momentum with the scenario's payload")
       ->check(twinwatch::cli::positive_number());
   sub->add_flag("--declare-payload", o->program.declare_payload,
                 "Declare the scenario's payload with set_payload before moving (else the installation's payload is kept)");

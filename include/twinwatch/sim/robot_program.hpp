@@ -38,6 +38,10 @@ struct ProgramOptions {
   double gain = 300.0;        ///< servoj gain, 100-2000
   double approach_speed = 0.25;         ///< movej to the start pose: joint speed [rad/s]
   double approach_acceleration = 0.5;   ///< and acceleration [rad/s²]
+  /// [rad] the program refuses to start (popup, halt: nothing moves) when any joint is farther than
+  /// this from the start pose: the approach is a movej from wherever the arm is, through a path
+  /// nobody checked. 0.5 rad takes the movej at most 2 s at 0.25 rad/s.
+  double max_approach = 0.5;
   bool declare_payload = false;  ///< the program calls set_payload(mass, com) before it moves
   /// the file ends with the call `NAME()` after the def, as a Polyscope Script node (file) needs; without
   /// it the file is the one def block the controller's port 30002 runs
@@ -102,6 +106,31 @@ struct MotionPeaks {
   VectorJ q_min, q_max;
 };
 MotionPeaks motion_peaks(const ProgramMotion& motion);
+
+/// The figures of a motion that a UR installation's safety limits bound (PolyScope: Installation >
+/// Safety > Robot Limits: tool speed, elbow speed, momentum), at their peaks, sampled every servo
+/// period: a limit below them stops or slows the arm mid-run (a protective stop, or speed scaling
+/// that changes the motion the recording was to take). The installation's values are the user's:
+/// they are checked when given (urscript --tool-speed-limit ...), else only reported.
+struct SafetyPeaks {
+  double tool_speed = 0.0;   ///< [m/s] the largest linear speed of the flange's centre or a tool point
+  double tool_t = 0.0;       ///< [s] of the program's time, when
+  int tool_point = -1;       ///< which point: -1 the flange's centre, k the tool point k
+  /// [m/s] the largest speed of the elbow: the origin of the third joint's body frame, on the elbow
+  /// joint's axis where the kinematic (DH) chain crosses it (UR's elbow is that joint; the housing's
+  /// centre lies a few cm along the axis, which changes its speed by what base rotation adds there)
+  double elbow_speed = 0.0;
+  double elbow_t = 0.0;
+  /// [kg·m/s] the largest |sum of m v| over the links' centres of mass and the payload's: the arm's
+  /// linear momentum (UR: "limits maximum robot momentum")
+  double momentum = 0.0;
+  double momentum_t = 0.0;
+};
+/// `tool_points` in the flange frame [m]; `payload` the part the flange carries (flange frame), part
+/// of the momentum. Throws InvalidArgument when the robot has fewer than three joints or other than
+/// the motion's, or a tool point is not finite.
+SafetyPeaks safety_peaks(const ProgramMotion& motion, const model::RobotModel& robot, const std::vector<Eigen::Vector3d>& tool_points,
+                         const model::RigidBodyInertia& payload);
 
 /// The URScript program (text) that commands `motion` on a UR e-Series controller: one `def ... end`
 /// block, as the controller's port 30002 and a Polyscope Script node take it. It moves to the start
