@@ -20,7 +20,7 @@ set_tests_properties(cli.align_window_edge PROPERTIES FIXTURES_REQUIRED "recordi
   PASS_REGULAR_EXPRESSION "peak lies on the edge of the \\+-500 ms search window")
 add_test(NAME cli.align_bad_signal COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --signal qdd)
 set_tests_properties(cli.align_bad_signal PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"
-  PASS_REGULAR_EXPRESSION "--signal 'qdd' is not a recording column group; expected one of actual_q")
+  PASS_REGULAR_EXPRESSION "--signal 'qdd' is not a recording column group. expected one of actual_q")
 add_test(NAME cli.align_bad_signal_fails COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv --signal qdd)
 set_tests_properties(cli.align_bad_signal_fails PROPERTIES FIXTURES_REQUIRED "recordings;align_pair" WILL_FAIL TRUE)
 # the monitor with Cao's FIR on the residuals (thresholds learned with the IIR: a note says so)
@@ -54,7 +54,7 @@ add_test(NAME cli.thresholds_debounce_validation_in_sample
 $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_ins.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 \
 --debounce-validation ${PROJECT_BINARY_DIR}/cli-pipeline/../cli-pipeline/fig.csv 2>&1; echo exit \$?")
 set_tests_properties(cli.thresholds_debounce_validation_in_sample PROPERTIES FIXTURES_REQUIRED twin
-  PASS_REGULAR_EXPRESSION "fig.csv is also one of the recordings the thresholds are learned on; the choice needs healthy runs they were not learned on.*exit [1-9]")
+  PASS_REGULAR_EXPRESSION "fig.csv is also one of the recordings the thresholds are learned on. the choice needs healthy runs they were not learned on.*exit [1-9]")
 # per-joint observer debounce chosen for the default set and for a program's set, each kept and used
 add_test(NAME cli.thresholds_debounce_program
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/thresholds_debounce_program.sh $<TARGET_FILE:twinwatch>
@@ -80,7 +80,7 @@ $<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_prog.json ${PROJECT_BINARY
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --program fig8_loop 2>&1 && \
 $<TARGET_FILE:twinwatch> monitor --twin ${da}/twin_prog.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' 2>&1")
 set_tests_properties(cli.thresholds_program PROPERTIES FIXTURES_REQUIRED twin
-  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording[^\n]*\nthe largest load each joint reversed under in them \\[N[^]]*m; \\*: in the twin's own torque scale, the joint's gain not fixed by a known payload\\], beyond which both of its thresholds widen[^\n]*: J1 [0-9]+\\.[0-9][0-9]\\*?  J2 [0-9]+\\.[0-9][0-9]  J3 .*  J6 [0-9]+\\.[0-9][0-9]\\*\n.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\); choose one with --program\\)")
+  PASS_REGULAR_EXPRESSION "thresholds of program 'fig8_loop' learned from 1 healthy recording[^\n]*\nthe largest load each joint reversed under in them \\[N[^]]*m. \\*: in the twin's own torque scale, the joint's gain not fixed by a known payload\\], beyond which both of its thresholds widen[^\n]*: J1 [0-9]+\\.[0-9][0-9]\\*?  J2 [0-9]+\\.[0-9][0-9]  J3 .*  J6 [0-9]+\\.[0-9][0-9]\\*\n.*thresholds: learned for program 'fig8_loop'.*0 event\\(s\\).*thresholds: the default set \\(.* has sets for 1 program\\(s\\). choose one with --program\\)")
 add_test(NAME cli.monitor_unknown_program COMMAND twinwatch monitor --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json
   ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --db "" --program palletizing)
 set_tests_properties(cli.monitor_unknown_program PROPERTIES FIXTURES_REQUIRED twin

@@ -60,10 +60,10 @@ set_tests_properties(cli.excite_lowest_point_warning PROPERTIES
 add_test(NAME cli.excite_tool_point
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/tool.yaml --global-evals 300 --local-evals 300 --tool-point 0 0 0.2 --tool-point 0.03 0 0.18 && grep 'lowest point' ${d}/tool.yaml")
 set_tests_properties(cli.excite_tool_point PROPERTIES PASS_REGULAR_EXPRESSION
-  "kept above --min-height 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m; tool point 2 \\(0\\.03, 0, 0\\.18\\) m; no other collision check\\)
+  "kept above --min-height 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m. tool point 2 \\(0\\.03, 0, 0\\.18\\) m. no other collision check\\)
 .*# lowest point: [^
 ]*comes down to z = \\+0\\.(0[5-9]|[1-9])[0-9]* m [^
-]*\\(kept above 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m; tool point 2")
+]*\\(kept above 0\\.05 m with tool point 1 \\(0, 0, 0\\.2\\) m. tool point 2")
 add_test(NAME cli.excite_no_tool_point COMMAND twinwatch excite ur3e -o ${d}/notool.yaml --global-evals 100 --local-evals 100)
 set_tests_properties(cli.excite_no_tool_point PROPERTIES PASS_REGULAR_EXPRESSION
   "a tool on the flange was not checked: give its lowest points with --tool-point X Y Z")

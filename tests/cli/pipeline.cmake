@@ -74,7 +74,7 @@ set_tests_properties(cli.identify_velocity_lag PROPERTIES FIXTURES_REQUIRED reco
 add_test(NAME cli.identify_target_direction COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5,0,0,0.04
          -o ${d}/twin_target.json)
 set_tests_properties(cli.identify_target_direction PROPERTIES FIXTURES_REQUIRED recordings PASS_REGULAR_EXPRESSION
-  "drive direction near standstill: read on target_qd \\+ lead x target_qdd where it agrees with actual_qd; lead \\[ms\\] [-0-9. ]+; tracking error")
+  "drive direction near standstill: read on target_qd \\+ lead x target_qdd where it agrees with actual_qd. lead \\[ms\\] [-0-9. ]+. tracking error")
 add_test(NAME cli.identify_no_target_direction COMMAND sh -c "'$<TARGET_FILE:twinwatch>' identify '${d}/exc.csv' --no-target-direction -o '${d}/twin_notarget.json' && ! grep -q target_direction '${d}/twin_notarget.json'")
 set_tests_properties(cli.identify_no_target_direction PROPERTIES FIXTURES_REQUIRED recordings)
 file(WRITE ${d}/qd_scaled.map "actual_qd_0,actual_qd_0,1.2\nactual_qd_1,actual_qd_1,1.2\nactual_qd_2,actual_qd_2,1.2\nactual_qd_3,actual_qd_3,1.2\nactual_qd_4,actual_qd_4,1.2\nactual_qd_5,actual_qd_5,1.2\n")
@@ -147,7 +147,7 @@ set_tests_properties(cli.bad_output_path_exits_2 PROPERTIES FIXTURES_REQUIRED "r
   PASS_REGULAR_EXPRESSION "does not exist\nexit 2\n[^\n]*which it would replace\nexit 2\n[^\n]*garbage.db[^\n]*\nexit 2")
 add_test(NAME cli.identify_same_recording_twice COMMAND twinwatch identify ${d}/exc.csv ${d}/../cli-pipeline/exc.csv -o ${d}/dup.json)
 set_tests_properties(cli.identify_same_recording_twice PROPERTIES FIXTURES_REQUIRED recordings
-  PASS_REGULAR_EXPRESSION "RECORDINGS: '[^']*exc.csv' and '[^']*exc.csv' are the same file; a recording given twice would count twice")
+  PASS_REGULAR_EXPRESSION "RECORDINGS: '[^']*exc.csv' and '[^']*exc.csv' are the same file. a recording given twice would count twice")
 add_test(NAME cli.identify_two_payloads_for_one_recording
   COMMAND twinwatch identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5 --known-payload ${d}/fig.csv=1.0 -o ${d}/dup.json)
 set_tests_properties(cli.identify_two_payloads_for_one_recording PROPERTIES FIXTURES_REQUIRED recordings
@@ -211,7 +211,7 @@ add_test(NAME cli.identify_says_the_declared_payload
   COMMAND sh -c "$<TARGET_FILE:twinwatch> identify ${d}/fig.csv -o ${d}/twin_declared.json > /dev/null; \
 $<TARGET_FILE:twinwatch> identify ${d}/exc.csv ${d}/fig.csv --known-payload ${d}/fig.csv=0.5 -o ${d}/twin_declared2.json > /dev/null")
 set_tests_properties(cli.identify_says_the_declared_payload PROPERTIES FIXTURES_REQUIRED recordings
-  PASS_REGULAR_EXPRESSION "fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m throughout; it is not taken as a known payload. If the arm carried it, give --known-payload [^\n]*fig.csv=0.5,0,0,0.04.*fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m; --known-payload says 0.5 kg at \\(0, 0, 0\\) m, which is taken")
+  PASS_REGULAR_EXPRESSION "fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m throughout. it is not taken as a known payload. If the arm carried it, give --known-payload [^\n]*fig.csv=0.5,0,0,0.04.*fig.csv: the controller declares 0.5 kg at \\(0, 0, 0.04\\) m. --known-payload says 0.5 kg at \\(0, 0, 0\\) m, which is taken")
 # a log without the controller's targets, end to end (session 33)
 add_test(NAME cli.monitor_a_log_without_targets
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/without_targets.sh $<TARGET_FILE:twinwatch> ${PROJECT_SOURCE_DIR}/tests/data/cli

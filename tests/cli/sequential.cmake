@@ -9,7 +9,7 @@ set_tests_properties(cli.sequential_simulate_qs cli.sequential_simulate_sine cli
 add_test(NAME cli.identify_sequential COMMAND twinwatch identify --method sequential --quasi-static ${d}/qs.csv --sine ${d}/sine.csv
          ${d}/exc.csv --lasso-joints 3 -o ${d}/twin.json)
 set_tests_properties(cli.identify_sequential PROPERTIES FIXTURES_REQUIRED seq_recordings FIXTURES_SETUP seq_twin
-                     PASS_REGULAR_EXPRESSION "gravity from 12 paired poses; Lasso on 135 candidates")
+                     PASS_REGULAR_EXPRESSION "gravity from 12 paired poses. Lasso on 135 candidates")
 add_test(NAME cli.validate_sequential COMMAND twinwatch validate --twin ${d}/twin.json ${d}/sine.csv --json)
 set_tests_properties(cli.validate_sequential PROPERTIES FIXTURES_REQUIRED seq_twin PASS_REGULAR_EXPRESSION "\"joints\":\\[\\{\"d_tau_pct\"")
 add_test(NAME cli.identify_sequential_needs_sine COMMAND twinwatch identify --method sequential --quasi-static ${d}/qs.csv ${d}/exc.csv
