@@ -22,6 +22,13 @@ namespace {
 constexpr double kCondInfinite = 1e16;
 // the dense-grid rescale aims this far inside the limit, so round-off cannot land on the wrong side
 constexpr double kRescaleSafety = 1e-9;
+// passes of the whole-trajectory rescale onto the Cartesian limits on the dense grid (each leaves
+// a fraction of the last excess: the pose moves little as the trajectory shrinks)
+constexpr int kSpeedPasses = 20;
+// ... aimed this far inside the limits: a program sampled between the dense grid's points (urscript
+// samples every 2 ms, the dense grid a period / check_samples) sees at most ~ (2 pi L / check_samples)^2 / 8
+// more (3e-4 for L = 20 harmonics), so the design it refuses is not the one excite wrote
+constexpr double kSpeedSafety = 1e-3;
 // NLopt stops a step when the relative change of log cond(W) falls below this
 constexpr double kFtolRel = 1e-6;
 
@@ -191,9 +198,46 @@ class Design {
     return std::sqrt(lmax / lmin);
   }
 
+  // the largest ratio of the Cartesian figures (tool, elbow speed, momentum) to their limits on a grid
+  // (0 when none is limited), and the peaks
+  double speed_ratio(const ExcitationTrajectory& t, const Eigen::MatrixXd& S, const Eigen::MatrixXd& C, model::CartesianSpeeds* peak = nullptr) {
+    if (!limits_speeds() && (!peak || n_ < 3)) return 0.0;  // (an arm of fewer than three joints has no elbow)
+    double r = 0.0;
+    VectorJ q(n_), qd(n_), qdd(n_);
+    for (Eigen::Index m = 0; m < S.rows(); ++m) {
+      state(t, S, C, m, q, qd, qdd);
+      const model::CartesianSpeeds c = model::cartesian_speeds(m_, d_, q, qd, o_.tool_points, {});
+      r = std::max({r, c.tool / o_.tool_speed_max, c.elbow / o_.elbow_speed_max, c.momentum / o_.momentum_max});
+      if (peak) {
+        if (c.tool > peak->tool) peak->tool = c.tool, peak->tool_point = c.tool_point;
+        peak->elbow = std::max(peak->elbow, c.elbow);
+        peak->momentum = std::max(peak->momentum, c.momentum);
+      }
+    }
+    return r;
+  }
+  bool limits_speeds() const {
+    return std::isfinite(o_.tool_speed_max) || std::isfinite(o_.elbow_speed_max) || std::isfinite(o_.momentum_max);
+  }
+  // scales the whole trajectory (every joint alike, so the path's shape is kept) until the Cartesian
+  // figures keep their limits on the grid. They are linear in qd at a fixed pose; the pose moves
+  // towards q0 as the trajectory shrinks, so the ratio is taken again (a few passes, each within a
+  // fraction of the last). Scaling down keeps the joint limits, which are homogeneous about q0.
+  void project_speeds(ExcitationTrajectory& t, const Eigen::MatrixXd& S, const Eigen::MatrixXd& C, double safety, int passes) {
+    if (!limits_speeds()) return;
+    for (int p = 0; p < passes; ++p) {
+      const double r = speed_ratio(t, S, C);
+      if (r <= 1.0 - safety) return;
+      const double s = (1.0 - 2.0 * safety) / r;
+      t.a *= s;
+      t.b *= s;
+    }
+  }
+
   double objective(const double* x) {
     coefficients(x, traj_);
     project(traj_, S_, C_, 0.0);
+    project_speeds(traj_, S_, C_, 0.0, 1);
     ++evaluations;
     double f = std::log(cond_fast(traj_));
     if (std::isfinite(o_.min_height)) {
@@ -205,12 +249,17 @@ class Design {
 
   // q, qd, qdd at point m of the design grid
   void grid_state(const ExcitationTrajectory& t, Eigen::Index m, VectorJ& q, VectorJ& qd, VectorJ& qdd) const {
+    state(t, S_, C_, m, q, qd, qdd);
+  }
+  // ... and of any grid (S, C from grid())
+  void state(const ExcitationTrajectory& t, const Eigen::MatrixXd& S, const Eigen::MatrixXd& C, Eigen::Index m, VectorJ& q, VectorJ& qd,
+             VectorJ& qdd) const {
     q = t.q0;
     qd.setZero(n_);
     qdd.setZero(n_);
     for (int j = 0; j < n_; ++j)
       for (int k = 1; k <= L_; ++k) {
-        const double a = t.a(j, k - 1), b = t.b(j, k - 1), s = S_(m, k - 1), c = C_(m, k - 1), kw = k * w_;
+        const double a = t.a(j, k - 1), b = t.b(j, k - 1), s = S(m, k - 1), c = C(m, k - 1), kw = k * w_;
         q[j] += (a * s - b * c) / kw;
         qd[j] += a * c + b * s;
         qdd[j] += kw * (b * c - a * s);
@@ -323,6 +372,9 @@ void ExcitationOptions::validate(int n_dof) const {
   if (!(default_qdd_max > 0.0)) throw InvalidArgument(fmt::format("default_qdd_max is {} rad/s², must be > 0", default_qdd_max));
   if (std::isnan(min_height)) throw InvalidArgument("min_height is NaN, must be a height [m] or -infinity (none)");
   validate_tool_points(tool_points);
+  for (const auto& [name, v] : {std::pair{"tool_speed_max", tool_speed_max}, std::pair{"elbow_speed_max", elbow_speed_max},
+                                std::pair{"momentum_max", momentum_max}})
+    if (!(v > 0.0)) throw InvalidArgument(fmt::format("{} is {}, must be > 0 (or infinity: none)", name, v));
   if (global_evaluations < 0) throw InvalidArgument(fmt::format("global_evaluations is {}, must be >= 0", global_evaluations));
   if (local_evaluations < 0) throw InvalidArgument(fmt::format("local_evaluations is {}, must be >= 0", local_evaluations));
 }
@@ -398,6 +450,7 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
   auto finish = [&](const std::vector<double>& x) {
     design.coefficients(x.data(), t);
     design.project(t, Sg, Cg, 0.0);
+    design.project_speeds(t, Sg, Cg, 0.0, 1);
     return excitation_condition_number(model, t, o.samples, o.friction);
   };
   ctx.best_f = design.objective(x_start.data());
@@ -412,9 +465,14 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
   // final coefficients, re-checked on the dense grid
   design.coefficients(ctx.best_x.data(), t);
   design.project(t, Sg, Cg, 0.0);
+  design.project_speeds(t, Sg, Cg, 0.0, 1);
   Eigen::MatrixXd Sd, Cd;
   design.grid(o.check_samples, Sd, Cd);
   design.project(t, Sd, Cd, kRescaleSafety);
+  design.project_speeds(t, Sd, Cd, kSpeedSafety, kSpeedPasses);
+  if (design.limits_speeds() && design.speed_ratio(t, Sd, Cd) > 1.0)
+    throw InvalidArgument(fmt::format("the design could not be brought within the tool, elbow speed and momentum limits in {} passes",
+                                      kSpeedPasses));
   res.trajectory = t;
   res.cond_final = excitation_condition_number(model, t, o.samples, o.friction);
   res.evaluations = design.evaluations;
@@ -438,6 +496,7 @@ ExcitationResult design_excitation(const model::RobotModel& model, const Excitat
     res.qdd_peak = res.qdd_peak.cwiseMax(qdd.cwiseAbs());
   }
   res.lowest = excitation_lowest_point(model, t, o.check_samples, o.tool_points);
+  design.speed_ratio(t, Sd, Cd, &res.speed_peak);
   if (progress) progress(1.0, res.cond_final);
   return res;
 }

@@ -190,44 +190,20 @@ MotionPeaks motion_peaks(const ProgramMotion& motion) {
 
 SafetyPeaks safety_peaks(const ProgramMotion& motion, const model::RobotModel& robot, const std::vector<Eigen::Vector3d>& tool_points,
                          const model::RigidBodyInertia& payload) {
-  const int n = robot.n_dof();
-  if (n != motion.n_dof())
-    throw InvalidArgument(fmt::format("the motion has {} joints, the robot {} has {}", motion.n_dof(), robot.name(), n));
-  if (n < 3) throw InvalidArgument(fmt::format("the robot {} has {} joints: it has no elbow (the third joint)", robot.name(), n));
+  if (robot.n_dof() != motion.n_dof())
+    throw InvalidArgument(fmt::format("the motion has {} joints, the robot {} has {}", motion.n_dof(), robot.name(), robot.n_dof()));
   for (size_t k = 0; k < tool_points.size(); ++k)
     if (!tool_points[k].allFinite()) throw InvalidArgument(fmt::format("tool point {} is not finite", k + 1));
   model::DynamicsData d(robot);
-  Matrix6J J(6, n);
   SafetyPeaks p;
   VectorJ q, qd, qdd;
-  const int last = n - 1;
-  // a point fixed on the last body, from the flange frame: the flange's centre, then each tool point
-  std::vector<Eigen::Vector3d> on_last;
-  const Eigen::Isometry3d& lastMf = robot.description().flange;
-  on_last.push_back(lastMf.translation());
-  for (const Eigen::Vector3d& t : tool_points) on_last.push_back(lastMf * t);
   for (long k = 0; k <= motion.steps(); ++k) {
     const double t = static_cast<double>(k) * motion.servo_period();
     motion.evaluate(t, q, qd, qdd);
-    model::forward_kinematics(robot, d, q);
-    for (size_t i = 0; i < on_last.size(); ++i) {
-      model::point_jacobian(robot, d, last, on_last[i], J);
-      if (const double v = (J.topRows<3>() * qd).norm(); v > p.tool_speed) p.tool_speed = v, p.tool_t = t, p.tool_point = static_cast<int>(i) - 1;
-    }
-    model::point_jacobian(robot, d, 2, Eigen::Vector3d::Zero(), J);
-    if (const double v = (J.topRows<3>() * qd).norm(); v > p.elbow_speed) p.elbow_speed = v, p.elbow_t = t;
-    Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
-    for (int b = 0; b < n; ++b) {
-      const model::RigidBodyInertia& body = robot.joint(b).body;
-      if (body.mass == 0.0) continue;
-      model::point_jacobian(robot, d, b, body.com, J);
-      momentum += body.mass * (J.topRows<3>() * qd);
-    }
-    if (payload.mass > 0.0) {
-      model::point_jacobian(robot, d, last, lastMf * payload.com, J);
-      momentum += payload.mass * (J.topRows<3>() * qd);
-    }
-    if (const double m = momentum.norm(); m > p.momentum) p.momentum = m, p.momentum_t = t;
+    const model::CartesianSpeeds c = model::cartesian_speeds(robot, d, q, qd, tool_points, payload);
+    if (c.tool > p.tool_speed) p.tool_speed = c.tool, p.tool_t = t, p.tool_point = c.tool_point;
+    if (c.elbow > p.elbow_speed) p.elbow_speed = c.elbow, p.elbow_t = t;
+    if (c.momentum > p.momentum) p.momentum = c.momentum, p.momentum_t = t;
   }
   return p;
 }

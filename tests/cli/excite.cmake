@@ -45,7 +45,7 @@ set_tests_properties(cli.excite_duration_negative PROPERTIES PASS_REGULAR_EXPRES
 add_test(NAME cli.excite_min_height_default
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/high.yaml --global-evals 300 --local-evals 300 --json && grep -c 'centre was raised' ${d}/high.yaml")
 set_tests_properties(cli.excite_min_height_default PROPERTIES
-  PASS_REGULAR_EXPRESSION "\"centre_raised\": true,[^}]*\"lowest_point\": {[^}]*\"z\": 0\\.(0[5-9]|[1-9])[0-9]*[^}]*}[^}]*\"min_height\": 0\\.05,[^@]*\"units\": {[^}]*\"min_height\": \"m\"[^@]*}\n1\n")
+  PASS_REGULAR_EXPRESSION "\"centre_raised\": true,[^@]*\"lowest_point\": {[^}]*\"z\": 0\\.(0[5-9]|[1-9])[0-9]*[^}]*}[^}]*\"min_height\": 0\\.05,[^@]*\"units\": {[^}]*\"min_height\": \"m\"[^@]*}\n1\n")
 add_test(NAME cli.excite_min_height_unreachable
   COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/never_high.yaml --global-evals 100 --local-evals 100 --min-height 0.3 2>&1; echo exit \$?; test -e ${d}/never_high.yaml && echo FILE-EXISTS")
 set_tests_properties(cli.excite_min_height_unreachable PROPERTIES
@@ -89,3 +89,10 @@ foreach(case "dup;joint,phi1,phi2,phi3\n1,0.1,2,0\n2,0.1,2,0\n3,0.1,2,0\n4,0.1,2
   set_tests_properties(cli.validate_torque_friction_table_${name} PROPERTIES FIXTURES_REQUIRED excite_model
                        PASS_REGULAR_EXPRESSION "ft_${name}.csv${want}.*exit=2")
 endforeach()
+# the installation's safety limits as constraints of the design: the tool 0.1 m out kept within
+# 0.3 m/s and the elbow within 0.1 m/s, said in the summary and the file's comment, and the program
+# urscript writes from it passes the same limits
+add_test(NAME cli.excite_safety_limits
+  COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T excite ur3e -o ${d}/slow.yaml --harmonics 4 --global-evals 200 --local-evals 200 --duration 20 --tool-point 0 0 0.1 --tool-speed-limit 0.3 --elbow-speed-limit 0.1 2>/dev/null | grep '^peak'; grep -c '^# peak tool speed 0.[0-9]* m/s at tool point 1 (0, 0, 0.1) m (kept within 0.3, --tool-speed-limit)' ${d}/slow.yaml; \$T urscript ${d}/slow.yaml -o ${d}/slow.script --tool-point 0 0 0.1 --tool-speed-limit 0.3 --elbow-speed-limit 0.1 | grep -E 'peak (tool|elbow)'; \$T excite ur3e -o ${d}/x.yaml --momentum-limit 0 2>&1; echo exit \$?")
+set_tests_properties(cli.excite_safety_limits PROPERTIES PASS_REGULAR_EXPRESSION
+  "^peak tool speed 0\\.(2[0-9]*|300) m/s at tool point 1 \\(0, 0, 0\\.1\\) m \\(kept within 0\\.3, --tool-speed-limit\\), elbow 0\\.(0[0-9]*|100) m/s \\(kept within 0\\.1, --elbow-speed-limit\\), momentum of the links [0-9.]+ kg m/s \\(not limited, --momentum-limit\\)\n1\n  peak tool speed +0\\.[0-9]+ m/s at [0-9.]+ s \\(tool point 1 \\(0, 0, 0\\.1\\) m\\): within --tool-speed-limit 0\\.3 \\([0-9]+ %\\)\n  peak elbow speed +0\\.[0-9]+ m/s at [0-9.]+ s: within --elbow-speed-limit 0\\.1 \\([0-9]+ %\\)\n--momentum-limit: expected a finite number > 0, got '0'[^\n]*\n[^\n]*\nexit 2\n")

@@ -8,6 +8,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
+#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/sim/trajectory.hpp"
 
@@ -170,6 +171,51 @@ TEST(Excitation, AToolOnTheFlangeIsKeptAboveTheTableWhenItIsGiven) {
       EXPECT_THAT(e.what(), ::testing::HasSubstr("tool_points[1]"));
     }
     EXPECT_THROW(excitation_lowest_point(m, still, 1, {bad}), InvalidArgument);
+  }
+}
+
+// The installation's tool speed, elbow speed and momentum limits: a design without them goes beyond
+// each; with them, it keeps each on a grid four times the design's own check grid (the figures from
+// model::cartesian_speeds at every point, and the tool's at a point 0.2 m out), still starts and ends at
+// rest and keeps the joint limits, and still excites the parameters. The result reports the peaks.
+TEST(Excitation, TheInstallationsToolElbowAndMomentumLimitsAreKept) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  ExcitationOptions o = small_options(3);
+  o.tool_points = {Eigen::Vector3d(0, 0, 0.2)};
+  auto peaks = [&](const ExcitationTrajectory& t) {
+    model::DynamicsData d(m);
+    model::CartesianSpeeds p;
+    VectorJ q, qd, qdd;
+    for (int k = 0; k <= kDenseSamples; ++k) {
+      t.evaluate(t.period() * k / kDenseSamples, q, qd, qdd);
+      const model::CartesianSpeeds c = model::cartesian_speeds(m, d, q, qd, o.tool_points, {});
+      p.tool = std::max(p.tool, c.tool), p.elbow = std::max(p.elbow, c.elbow), p.momentum = std::max(p.momentum, c.momentum);
+    }
+    return p;
+  };
+  const ExcitationResult free = design_excitation(m, o);
+  const model::CartesianSpeeds fp = peaks(free.trajectory);
+  EXPECT_NEAR(free.speed_peak.tool, fp.tool, kGridSlack * fp.tool) << "the result reports the peaks";
+  EXPECT_NEAR(free.speed_peak.elbow, fp.elbow, kGridSlack * fp.elbow);
+  EXPECT_NEAR(free.speed_peak.momentum, fp.momentum, kGridSlack * fp.momentum);
+  EXPECT_EQ(free.speed_peak.tool_point, 0) << "the point 0.2 m out is the tool's fastest";
+  // limits at 60 % of what the free design reaches: each binds
+  for (int which = 0; which < 3; ++which) {
+    ExcitationOptions lo = o;
+    double limit = 0.0;
+    if (which == 0) lo.tool_speed_max = limit = 0.6 * fp.tool;
+    if (which == 1) lo.elbow_speed_max = limit = 0.6 * fp.elbow;
+    if (which == 2) lo.momentum_max = limit = 0.6 * fp.momentum;
+    const ExcitationResult r = design_excitation(m, lo);
+    const model::CartesianSpeeds p = peaks(r.trajectory);
+    const double got = which == 0 ? p.tool : which == 1 ? p.elbow : p.momentum;
+    EXPECT_LE(got, limit * (1.0 + kGridSlack)) << which;
+    EXPECT_GT(got, 0.5 * limit) << which << ": the design uses what the limit allows";
+    VectorJ q, qd, qdd;
+    r.trajectory.evaluate(0.0, q, qd, qdd);
+    EXPECT_LT(qd.cwiseAbs().maxCoeff(), kEndTolerance) << which;
+    EXPECT_LT((r.qd_peak - r.qd_lim).maxCoeff(), 1e-9) << which;
+    EXPECT_LT(r.cond_final, 1e4) << which;
   }
 }
 
@@ -354,6 +400,15 @@ TEST(ExcitationOptions, EachBadFieldIsNamed) {
   o = {};
   o.local_evaluations = -2;
   expect_invalid(o, 6, "local_evaluations is -2");
+  o = {};
+  o.tool_speed_max = 0.0;
+  expect_invalid(o, 6, "tool_speed_max is 0");
+  o = {};
+  o.elbow_speed_max = -1.0;
+  expect_invalid(o, 6, "elbow_speed_max is -1");
+  o = {};
+  o.momentum_max = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(o, 6, "momentum_max is nan");
 }
 
 TEST(ExcitationOptions, CentreOutsideTheLimitsIsRejected) {

@@ -41,6 +41,9 @@ struct Options {
   unsigned seed = 1;
   std::vector<double> q0;
   std::vector<double> tool;  // --tool-point, three numbers per point [m, flange frame]
+  // the installation's safety limits (Installation > Safety > Robot Limits), kept when given
+  double tool_speed_limit = std::numeric_limits<double>::infinity(), elbow_speed_limit = std::numeric_limits<double>::infinity(),
+         momentum_limit = std::numeric_limits<double>::infinity();
   bool duration_given = false;  // (else one period)
   bool json = false, quiet = false, progress = false;
 };
@@ -68,6 +71,9 @@ int run(const Options& o) {
   eo.amplitude = o.amplitude;
   eo.default_qdd_max = o.qdd_default;
   eo.limit_fraction = o.fraction;
+  eo.tool_speed_max = o.tool_speed_limit;
+  eo.elbow_speed_max = o.elbow_speed_limit;
+  eo.momentum_max = o.momentum_limit;
   eo.global_evaluations = o.global;
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
@@ -88,7 +94,8 @@ int run(const Options& o) {
     what = twinwatch::cli::with_option_names(
         what, {{"harmonics", "--harmonics"}, {"base_frequency", "--base-frequency"}, {"samples", "--samples"}, {"q0", "--q0"},
                {"amplitude", "--amplitude"}, {"limit_fraction", "--limit-fraction"}, {"default_qdd_max", "--default-qdd-max"},
-               {"min_height", "--min-height"}, {"global_evaluations", "--global-evals"}, {"local_evaluations", "--local-evals"}});
+               {"min_height", "--min-height"}, {"global_evaluations", "--global-evals"}, {"local_evaluations", "--local-evals"},
+               {"tool_speed_max", "--tool-speed-limit"}, {"elbow_speed_max", "--elbow-speed-limit"}, {"momentum_max", "--momentum-limit"}});
     throw InvalidArgument(what + fmt::format(" ({})", m.name()));
   }
   // the run must end at rest: a whole number of periods
@@ -152,13 +159,24 @@ int run(const Options& o) {
                "WARNING: {} (--min-height {:g} m): on a real robot this may hit the table or the robot itself. Check it in "
                "simulation first\n",
                low_text, o.min_height);
+  // the figures the installation's safety limits bound, at their peaks on the dense grid
+  const model::CartesianSpeeds& sp = r.speed_peak;
+  const std::string tool_peak_where = sp.tool_point < 0 ? std::string("the flange's centre") : tool_text(static_cast<size_t>(sp.tool_point));
+  const auto kept = [](double limit) {
+    return std::isfinite(limit) ? fmt::format("kept within {:g}", limit) : std::string("not limited");
+  };
+  const std::string speeds_text =
+      fmt::format("peak tool speed {:.3f} m/s at {} ({}, --tool-speed-limit), elbow {:.3f} m/s ({}, --elbow-speed-limit), "
+                  "momentum of the links {:.2f} kg m/s ({}, --momentum-limit)",
+                  sp.tool, tool_peak_where, kept(o.tool_speed_limit), sp.elbow, kept(o.elbow_speed_limit), sp.momentum,
+                  kept(o.momentum_limit));
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
       "cond(W) over {} base-parameter columns on {} points: random start {:.6g}, global {:.6g}, final {:.6g}\n"
-      "lowest point: {} (kept above {:g} m{})",
+      "lowest point: {} (kept above {:g} m{})\n{}",
       m.name(), o.harmonics, o.base_frequency, o.seed, r.base_columns, o.samples, r.cond_start, r.cond_global, r.cond_final, low_text,
-      o.min_height, tools_checked);
+      o.min_height, tools_checked, speeds_text);
   const std::string comment_all = raised.empty() ? comment : comment + "\n" + raised;
   write_text_file(o.output, ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment_all));
   if (o.json) {
@@ -185,10 +203,21 @@ int run(const Options& o) {
                      {"qdd_peak", vec(r.qdd_peak)},
                      {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}},
                      {"tool_points", tool_json(eo.tool_points)},
+                     {"peak_tool_speed", sp.tool},
+                     {"peak_elbow_speed", sp.elbow},
+                     {"peak_momentum", sp.momentum},
+                     {"limits", [&] {
+                        nlohmann::json c = nlohmann::json::object();
+                        if (std::isfinite(o.tool_speed_limit)) c["tool_speed"] = o.tool_speed_limit;
+                        if (std::isfinite(o.elbow_speed_limit)) c["elbow_speed"] = o.elbow_speed_limit;
+                        if (std::isfinite(o.momentum_limit)) c["momentum"] = o.momentum_limit;
+                        return c;
+                      }()},
                      {"min_height", o.min_height},
                      {"q0", vec(r.trajectory.q0)},
                      {"centre_raised", !raised.empty()},
-                     {"units", {{"z", "m (base frame)"}, {"t", "s"}, {"tool_points", "m (flange frame)"}, {"min_height", "m"}, {"q0", "rad"}}}};
+                     {"units", {{"z", "m (base frame)"}, {"t", "s"}, {"tool_points", "m (flange frame)"}, {"min_height", "m"}, {"q0", "rad"},
+                                {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}}}};
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
@@ -205,6 +234,7 @@ int run(const Options& o) {
                fmt::format("{:.2f}/{:.2f}", r.qdd_peak[j], r.qdd_lim[j]));
   fmt::print("lowest point: {} (kept above --min-height {:g} m{}; no other collision check)\n", low_text, o.min_height,
              tools_checked);
+  fmt::print("{}\n", speeds_text);
   if (eo.tool_points.empty())
     fmt::print("  a tool on the flange was not checked: give its lowest points with --tool-point X Y Z (flange frame, m), e.g. a "
                "gripper's fingertips 0.15 m out: --tool-point 0 0 0.15\n");
@@ -247,6 +277,15 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
                   "gripper's two fingertips): kept above --min-height like the flange. Without it a tool is not checked")
       ->type_size(-3)  // three numbers an occurrence, any number of occurrences
       ->allow_extra_args(false);
+  sub->add_option("--tool-speed-limit", o->tool_speed_limit,
+                  "Keep the tool's speed (the flange's centre and the --tool-point points) within the installation's tool speed "
+                  "limit [m/s] (Safety > Robot Limits), so the program runs without a stop")
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--elbow-speed-limit", o->elbow_speed_limit, "Keep the elbow's speed within this [m/s], as --tool-speed-limit")
+      ->check(twinwatch::cli::positive_number());
+  sub->add_option("--momentum-limit", o->momentum_limit,
+                  "Keep the links' linear momentum within this [kg·m/s] (a payload's is not counted: give the limit less it)")
+      ->check(twinwatch::cli::positive_number());
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");

@@ -37,6 +37,7 @@
 #include <Eigen/Geometry>
 
 #include "twinwatch/core/types.hpp"
+#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/model/regressor.hpp"
 #include "twinwatch/model/robot_model.hpp"
 
@@ -65,6 +66,15 @@ struct ExcitationOptions {
   /// tool's corners): kept above min_height like the flange. A gripper 15 cm long reaches 15 cm
   /// lower than the flange the check would otherwise stop at. Each finite and within 2 m.
   std::vector<Eigen::Vector3d> tool_points;
+  /// The installation's safety limits the program will run under (PolyScope: Installation > Safety >
+  /// Robot Limits), model::CartesianSpeeds: the tool speed (the flange's centre and the tool points)
+  /// [m/s], the elbow speed [m/s], the links' momentum [kg·m/s] (no payload: excitations are run on
+  /// the arm as it is). +infinity: none. Each is linear in qd at a fixed pose, so they are enforced as
+  /// the joint limits are, by projection: a candidate beyond one on the grid is scaled down as a whole
+  /// (all joints alike) until it keeps them, and checked so on the dense grid.
+  double tool_speed_max = std::numeric_limits<double>::infinity();
+  double elbow_speed_max = std::numeric_limits<double>::infinity();
+  double momentum_max = std::numeric_limits<double>::infinity();
   /// Throws InvalidArgument naming the first bad field (q0 is checked against the model's joints).
   void validate(int n_dof) const;
 };
@@ -115,6 +125,8 @@ struct ExcitationResult {
   VectorJ q_lo, q_hi, qd_lim, qdd_lim;  ///< the limits enforced [rad], [rad/s], [rad/s²]
   VectorJ q_min_seen, q_max_seen, qd_peak, qdd_peak;  ///< extremes on the dense grid
   ExcitationLowestPoint lowest;   ///< on the dense grid (no other collision check: the user's cell is unknown)
+  /// peaks on the dense grid of model::CartesianSpeeds (tool_point: where the tool's peak is)
+  model::CartesianSpeeds speed_peak;
 };
 
 /// Designs an excitation trajectory for `model`. `progress` (may be empty) gets (fraction done,

@@ -15,6 +15,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <array>
+#include <vector>
 
 #include "twinwatch/core/types.hpp"
 #include "twinwatch/model/robot_model.hpp"
@@ -59,6 +60,24 @@ const Eigen::Isometry3d& forward_kinematics(const RobotModel& model, DynamicsDat
 /// @param J output, resized to 6 × n_dof
 void point_jacobian(const RobotModel& model, const DynamicsData& data, int link, const Eigen::Vector3d& point,
                     Matrix6J& J);
+
+/// The linear speeds and the momentum a UR installation's safety limits bound (PolyScope:
+/// Installation > Safety > Robot Limits: tool speed, elbow speed, momentum), at one state. Each is
+/// linear in qd at a fixed q. Calls forward_kinematics.
+struct CartesianSpeeds {
+  double tool = 0.0;     ///< [m/s] the largest linear speed of the flange's centre and the tool points
+  int tool_point = -1;   ///< which: -1 the flange's centre, k tool point k
+  /// [m/s] the speed of the elbow: the origin of the third joint's body frame, on the elbow joint's
+  /// axis where the kinematic chain crosses it (UR's elbow; the housing's centre lies a few cm
+  /// along that axis)
+  double elbow = 0.0;
+  double momentum = 0.0;  ///< [kg·m/s] |sum m v| over the links' centres of mass and the payload's
+};
+/// @param tool_points points of the tool in the flange frame [m]
+/// @param payload the part the flange carries (flange frame), counted in the momentum
+/// Throws InvalidArgument when the robot has fewer than three joints (no elbow) or on a size mismatch.
+CartesianSpeeds cartesian_speeds(const RobotModel& model, DynamicsData& data, const VectorJ& q, const VectorJ& qd,
+                                 const std::vector<Eigen::Vector3d>& tool_points, const RigidBodyInertia& payload);
 
 /// Recursive Newton-Euler inverse dynamics [Luh1980]:
 ///   tau = M(q) qdd + C(q, qd) qd + g(q)

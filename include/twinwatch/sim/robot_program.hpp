@@ -23,6 +23,7 @@
 
 #include <memory>
 
+#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/model/robot_model.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/sim/trajectory.hpp"
@@ -113,17 +114,12 @@ MotionPeaks motion_peaks(const ProgramMotion& motion);
 /// that changes the motion the recording was to take). The installation's values are the user's:
 /// they are checked when given (urscript --tool-speed-limit ...), else only reported.
 struct SafetyPeaks {
-  double tool_speed = 0.0;   ///< [m/s] the largest linear speed of the flange's centre or a tool point
+  double tool_speed = 0.0;   ///< [m/s] model::CartesianSpeeds::tool at its peak
   double tool_t = 0.0;       ///< [s] of the program's time, when
   int tool_point = -1;       ///< which point: -1 the flange's centre, k the tool point k
-  /// [m/s] the largest speed of the elbow: the origin of the third joint's body frame, on the elbow
-  /// joint's axis where the kinematic (DH) chain crosses it (UR's elbow is that joint; the housing's
-  /// centre lies a few cm along the axis, which changes its speed by what base rotation adds there)
-  double elbow_speed = 0.0;
+  double elbow_speed = 0.0;  ///< [m/s] model::CartesianSpeeds::elbow at its peak
   double elbow_t = 0.0;
-  /// [kg·m/s] the largest |sum of m v| over the links' centres of mass and the payload's: the arm's
-  /// linear momentum (UR: "limits maximum robot momentum")
-  double momentum = 0.0;
+  double momentum = 0.0;     ///< [kg·m/s] model::CartesianSpeeds::momentum at its peak
   double momentum_t = 0.0;
 };
 /// `tool_points` in the flange frame [m]; `payload` the part the flange carries (flange frame), part
