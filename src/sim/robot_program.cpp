@@ -71,6 +71,7 @@ void ProgramOptions::validate() const {
   };
   need(std::isfinite(duration) && duration > 0.0 && duration <= 1e6, "duration", "a time > 0 s and at most 1e6 s", duration);
   need(std::isfinite(ramp) && ramp >= 0.0 && ramp <= 60.0, "ramp", "a time from 0 to 60 s", ramp);
+  need(std::isfinite(slow_down) && slow_down >= 1.0 && slow_down <= 100.0, "slow_down", "a factor from 1 to 100", slow_down);
   need(std::isfinite(servo_period) && servo_period >= 0.001 && servo_period <= 0.1, "servo_period", "0.001 to 0.1 s", servo_period);
   need(lookahead >= 0.03 && lookahead <= 0.2, "lookahead", "0.03 to 0.2 s (servoj's range)", lookahead);
   need(gain >= 100.0 && gain <= 2000.0, "gain", "100 to 2000 (servoj's range)", gain);
@@ -91,6 +92,7 @@ void ProgramOptions::validate() const {
 
 ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(std::move(form)), dt_(o.servo_period) {
   o.validate();
+  if (o.slow_down != 1.0) form_ = form_.slowed(o.slow_down);
   const int n = form_.n_dof(), K = form_.components();
   if (n < 1 || K < 1) throw InvalidArgument(fmt::format("the closed form has {} joints and {} components: nothing moves", n, K));
   if (static_cast<int>(form_.sweep.size()) != K || form_.s.rows() != n || form_.c.rows() != n || form_.s.cols() != K ||
@@ -103,7 +105,7 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
                           std::isfinite(form_.fade) && form_.fade >= 0.0 && !(form_.wrap <= 0.0) && !std::isnan(form_.wrap) &&
                           (std::isfinite(form_.wrap) || form_.fade == 0.0) && form_.fade <= 0.5 * form_.wrap;
   if (!numbers_ok) throw InvalidArgument("the closed form holds a number that is not finite, or a fade longer than half its wrap");
-  duration_steps_ = std::llround(o.duration / dt_);
+  duration_steps_ = std::llround(o.duration * o.slow_down / dt_);
   if (duration_steps_ < 2)
     throw InvalidArgument(fmt::format("duration: expected at least two servo periods ({} s), got {} s", 2 * dt_, o.duration));
   VectorJ q, qd, qdd;
@@ -241,6 +243,8 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, fmt::format("# Motion: {:.3f} s, servoj every {} s (t={}, lookahead_time={}, gain={}); {} sinusoidal component(s),", motion.total(), dt,
                       dt, o.lookahead, o.gain, K));
   line(1, fmt::format("#   evaluated on the controller (32-bit floats: phases kept in [0, 2 pi), steps counted in an integer)."));
+  if (o.slow_down != 1.0)
+    line(1, fmt::format("# The trajectory runs {} times slower than its scenario: the same path, speeds / {}.", o.slow_down, o.slow_down));
   if (n_in || n_out)
     line(1, fmt::format("# The target's clock rises over the first {:.3f} s and falls over the last {:.3f} s, so the arm starts and ends at rest.",
                         motion.ramp_in(), motion.ramp_out()));

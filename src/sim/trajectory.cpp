@@ -287,6 +287,16 @@ void ClosedForm::evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const
   qdd = ddw * y + 2 * dw * yd + w * ydd;
 }
 
+ClosedForm ClosedForm::slowed(double f) const {
+  if (!(f > 0.0) || !std::isfinite(f)) throw InvalidArgument(fmt::format("a slow-down factor of {}, expected a finite number > 0", f));
+  ClosedForm r = *this;
+  for (double& w : r.omega) w /= f;
+  for (double& a : r.sweep) a /= f * f;
+  r.wrap *= f;  // (infinity stays)
+  r.fade *= f;
+  return r;
+}
+
 std::unique_ptr<Trajectory> make_fourier(const FourierCoefficients& c) {
   if (!(c.w_f > 0.0)) throw InvalidArgument(fmt::format("Fourier base pulsation w_f is {}, must be > 0", c.w_f));
   if (c.a.rows() != c.q0.size() || c.b.rows() != c.q0.size() || c.a.cols() != c.b.cols())

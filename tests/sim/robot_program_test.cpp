@@ -331,6 +331,45 @@ TEST(RobotProgram, AFastSineDriftsNoMoreThanTheFloatsFrequencyError) {
   EXPECT_LT(r.worst_jerk, 5e-6) << "and it drifts smoothly";
 }
 
+// The same path K times slower: q'(t) = q(t / K), qd' = qd / K, qdd' = qdd / K², for the Fourier
+// series, the sine and the chirp (its sweep, wrap and fades); the program then runs K times the
+// trajectory's time, and its tool and elbow speed and momentum fall by K.
+TEST(RobotProgram, ASlowDownRunsTheSamePathSlower) {
+  std::mt19937 rng(3);
+  for (const auto& [what, traj] : std::vector<std::pair<std::string, std::shared_ptr<Trajectory>>>{
+           {"fourier", fourier(3, false)}, {"sine", sine()}, {"chirp", chirp()}}) {
+    const ClosedForm f = *traj->closed_form();
+    for (const double K : {1.7, 3.0}) {
+      const ClosedForm g = f.slowed(K);
+      std::uniform_real_distribution<double> u(0.0, 3.0 * traj->period() * K);
+      VectorJ q, qd, qdd, p, pd, pdd;
+      for (int k = 0; k < 500; ++k) {
+        const double t = u(rng);
+        g.evaluate(t, q, qd, qdd);
+        f.evaluate(t / K, p, pd, pdd);
+        EXPECT_LT((q - p).cwiseAbs().maxCoeff(), 1e-10) << what << " " << K << " " << t;
+        EXPECT_LT((qd - pd / K).cwiseAbs().maxCoeff(), 1e-10) << what;
+        EXPECT_LT((qdd - pdd / (K * K)).cwiseAbs().maxCoeff(), 1e-9) << what;
+      }
+    }
+  }
+  EXPECT_THROW(sine()->closed_form()->slowed(0.0), InvalidArgument);
+  const model::RobotModel ur3e = model::load_robot("ur3e");
+  ProgramOptions o = options(20.0);
+  o.ramp = 0.5;
+  const auto f = fourier(9);  // (at rest at its ends: no ramp)
+  const ProgramMotion normal(*f->closed_form(), o);
+  o.slow_down = 2.5;
+  const ProgramMotion slow(*f->closed_form(), o);
+  EXPECT_NEAR(slow.total(), 2.5 * normal.total(), 1e-9);
+  const SafetyPeaks a = safety_peaks(normal, ur3e, {}, {}), b = safety_peaks(slow, ur3e, {}, {});
+  EXPECT_NEAR(b.tool_speed, a.tool_speed / 2.5, 1e-3 * a.tool_speed);  // (sampled every 2 ms on both clocks)
+  EXPECT_NEAR(b.elbow_speed, a.elbow_speed / 2.5, 1e-3 * a.elbow_speed);
+  EXPECT_NEAR(b.momentum, a.momentum / 2.5, 1e-3 * a.momentum);
+  o.slow_down = 0.5;
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { ProgramMotion(*f->closed_form(), o); }), HasSubstr("slow_down"));
+}
+
 // The approach is a movej from wherever the arm stands: farther than max_approach from the start pose
 // on any joint (either side), the program says which joint and how far, shows an error popup and halts
 // before anything moves; nearer, it moves.

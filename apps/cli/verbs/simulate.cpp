@@ -28,6 +28,7 @@ struct Options {
   bool quiet = false, progress = false;
   bool as_program = false;  // rehearse the motion `twinwatch urscript` writes (ramps, started at rest)
   double ramp = 2.0;
+  double slow_down = 1.0;  // (as urscript --slow-down)
 };
 
 std::string labels_path(const std::string& output) {
@@ -65,12 +66,13 @@ int run(const Options& o) {
     sim::ProgramOptions po;
     po.duration = s.options.duration;
     po.ramp = o.ramp;
+    po.slow_down = o.slow_down;
     try {
       program = sim::rehearse_as_program(s, po);
     } catch (const InvalidArgument& e) {
       // (the library names its fields; the user typed options)
       const std::string m = twinwatch::cli::with_option_names(
-          e.what(), {{"ramp", "--ramp"}, {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
+          e.what(), {{"ramp", "--ramp"}, {"slow_down", "--slow-down"}, {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
       throw InvalidArgument(m.rfind(o.scenario, 0) == 0 ? m : fmt::format("{}: {}", o.scenario, m));
     }
     const model::RobotModel robot = model::load_robot(s.robot);
@@ -104,8 +106,9 @@ int run(const Options& o) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.quiet && program)
     fmt::print("{}: rehearsed as its URScript program runs it: started at rest, the clock rising over {:.1f} s and falling over {:.1f} s "
-               "({:.1f} s of the trajectory in {:.1f} s; the approach to the start pose is not simulated)\n",
-               s.name, program->ramp_in(), program->ramp_out(), program->clock(program->total()), program->total());
+               "({:.1f} s of the trajectory in {:.1f} s{}; the approach to the start pose is not simulated)\n",
+               s.name, program->ramp_in(), program->ramp_out(), program->clock(program->total()) / o.slow_down, program->total(),
+               o.slow_down != 1.0 ? fmt::format(", {:g} times slower", o.slow_down) : std::string());
   if (!o.quiet)
     fmt::print("{}: {} samples, {:.1f} s of robot time at {:g} Hz in {:.2f} s ({:.0f}x real time), {} fault(s) -> {}\n",
                s.name, writer.rows(), s.options.duration, s.options.rate, wall, s.options.duration / wall, s.faults.size(),
@@ -128,10 +131,13 @@ twinwatch::cli::VerbRegistrar reg{"simulate", 20, [](CLI::App& app) {
   auto* ramp = sub->add_option("--ramp", o->ramp, "With --as-program: seconds of the clock's rise and fall (as urscript --ramp)")
                    ->capture_default_str()
                    ->check(twinwatch::cli::nonnegative_number());
+  auto* slow = sub->add_option("--slow-down", o->slow_down,
+                               "With --as-program: run the trajectory this many times slower, 1-100 (as urscript --slow-down)")
+                   ->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");
-  sub->callback([o, seed, duration, as_program, ramp] {
-    twinwatch::cli::refuse_unless({ramp}, as_program->count() > 0, "with --as-program");
+  sub->callback([o, seed, duration, as_program, ramp, slow] {
+    twinwatch::cli::refuse_unless({ramp, slow}, as_program->count() > 0, "with --as-program");
     o->seed_given = seed->count() > 0;
     o->duration_given = duration->count() > 0;
     twinwatch::cli::set_exit_code(run(*o));

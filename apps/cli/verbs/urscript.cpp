@@ -68,7 +68,7 @@ int run(Options o) {
       return sim::ProgramMotion(form, o.program);
     } catch (const InvalidArgument& e) {
       const std::string m = twinwatch::cli::with_option_names(
-          e.what(), {{"ramp", "--ramp"}, {"lookahead", "--lookahead"}, {"gain", "--gain"}, {"approach_speed", "--approach-speed"},
+          e.what(), {{"ramp", "--ramp"}, {"slow_down", "--slow-down"}, {"lookahead", "--lookahead"}, {"gain", "--gain"}, {"approach_speed", "--approach-speed"},
                      {"approach_acceleration", "--approach-acceleration"}, {"max_approach", "--max-approach"},
                      {"payload", "--declare-payload"},
                      {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
@@ -102,13 +102,25 @@ int run(Options o) {
   const std::vector<Limit> limits{{"--tool-speed-limit", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s"},
                                   {"--elbow-speed-limit", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s"},
                                   {"--momentum-limit", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s"}};
+  // the same path K times slower divides every speed and the momentum by K: the factor that fits them all
+  double fits = 1.0;
+  for (const Limit& l : limits)
+    if (l.limit > 0.0 && l.peak > l.limit) fits = std::max(fits, l.peak / l.limit);
+  const double slower = std::ceil(o.program.slow_down * fits * 1.001 * 100.0) / 100.0;
+  const double slower_total = [&] {
+    if (fits == 1.0) return motion.total();
+    sim::ProgramOptions p = o.program;
+    p.slow_down = std::min(100.0, slower);
+    return sim::ProgramMotion(form, p).total();
+  }();
   for (const Limit& l : limits)
     if (l.limit > 0.0 && l.peak > l.limit)
       throw InvalidArgument(fmt::format(
           "{}: the program's {} reaches {:.3f} {} at {:.2f} s{}, beyond {} {:g} {}: the arm would stop or slow mid-run; no program written. "
-          "Make the motion slower ({}), or run it where the installation allows more",
+          "--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s); or make the motion slower ({}), or run it where "
+          "the installation allows more",
           o.scenario, l.what, l.peak, l.unit, l.at, std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(), l.option,
-          l.limit, l.unit,
+          l.limit, l.unit, slower, fits > l.peak / l.limit ? "the limits" : "it", slower_total, motion.total(),
           s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
                                          : "lower the trajectory's amplitudes or frequencies"));
   std::vector<std::string> header{fmt::format("Written by 'twinwatch urscript' from {} (trajectory {}).", o.scenario, s.trajectory_type)};
@@ -139,6 +151,7 @@ int run(Options o) {
     j["scenario"] = o.scenario;
     j["robot"] = robot.name();
     j["motion_s"] = motion.total();
+    j["slow_down"] = o.program.slow_down;
     j["servo_period_s"] = motion.servo_period();
     j["ramp_in_s"] = motion.ramp_in();
     j["ramp_out_s"] = motion.ramp_out();
@@ -170,8 +183,9 @@ int run(Options o) {
                   {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}, {"max_approach", "rad"}};
     fmt::print("{}\n", j.dump(2));
   } else if (!o.quiet) {
-    fmt::print("{} -> {}: URScript for a {} (e-Series), {:.1f} s of motion, servoj every {:g} ms\n", s.name, o.output, robot.name(),
-               motion.total(), 1e3 * motion.servo_period());
+    fmt::print("{} -> {}: URScript for a {} (e-Series), {:.1f} s of motion{}, servoj every {:g} ms\n", s.name, o.output, robot.name(),
+               motion.total(), o.program.slow_down != 1.0 ? fmt::format(" ({:g} times slower than the scenario)", o.program.slow_down) : "",
+               1e3 * motion.servo_period());
     if (motion.ramp_in() > 0 || motion.ramp_out() > 0)
       fmt::print("  the target's clock rises over {:.1f} s and falls over {:.1f} s: the arm starts and ends at rest\n", motion.ramp_in(),
                  motion.ramp_out());
@@ -230,6 +244,10 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
   sub->add_option("--ramp", o->program.ramp, "Seconds over which the clock rises and falls where the target moves at its start or end")
       ->capture_default_str()
       ->check(twinwatch::cli::nonnegative_number());
+  sub->add_option("--slow-down", o->program.slow_down,
+                  "Run the trajectory this many times slower, 1-100: the same path, speeds (joint and Cartesian) and momentum / K, "
+                  "accelerations / K²")
+      ->capture_default_str();
   sub->add_option("--lookahead", o->program.lookahead, "servoj lookahead_time [s], 0.03-0.2")->capture_default_str();
   sub->add_option("--gain", o->program.gain, "servoj gain, 100-2000")->capture_default_str();
   sub->add_option("--approach-speed", o->program.approach_speed, "movej speed to the start pose [rad/s]")

@@ -32,6 +32,9 @@ struct ClosedForm {
   int components() const { return static_cast<int>(omega.size()); }
   /// Target and its first two time derivatives at t >= 0 (the formula above).
   void evaluate(double t, VectorJ& q, VectorJ& qd, VectorJ& qdd) const;
+  /// The same path `factor` times slower: q'(t) = q(t / factor), so velocities divide by factor and
+  /// accelerations by its square (omega / f, sweep / f², wrap and fade times f). factor > 0.
+  ClosedForm slowed(double factor) const;
 };
 
 class Trajectory {
