@@ -274,7 +274,8 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--tool-point", o->tool,
                   "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points, e.g. a "
-                  "gripper's two fingertips): kept above --min-height like the flange. Without it a tool is not checked")
+                  "gripper's two fingertips): kept above --min-height like the flange, and its speed counts as the tool's for "
+                  "--tool-speed-limit. Without it a tool is not checked")
       ->type_size(-3)  // three numbers an occurrence, any number of occurrences
       ->allow_extra_args(false);
   sub->add_option("--tool-speed-limit", o->tool_speed_limit,
