@@ -201,16 +201,16 @@ class Design {
   // the largest ratio of the Cartesian figures (tool, elbow speed, momentum) to their limits on a grid
   // (0 when none is limited), and the peaks
   double speed_ratio(const ExcitationTrajectory& t, const Eigen::MatrixXd& S, const Eigen::MatrixXd& C, model::CartesianSpeeds* peak = nullptr) {
-    if (!limits_speeds() && (!peak || n_ < 3)) return 0.0;  // (an arm of fewer than three joints has no elbow)
+    if (!limits_speeds() && !peak) return 0.0;
     double r = 0.0;
     VectorJ q(n_), qd(n_), qdd(n_);
     for (Eigen::Index m = 0; m < S.rows(); ++m) {
       state(t, S, C, m, q, qd, qdd);
       const model::CartesianSpeeds c = model::cartesian_speeds(m_, d_, q, qd, o_.tool_points, {});
-      r = std::max({r, c.tool / o_.tool_speed_max, c.elbow / o_.elbow_speed_max, c.momentum / o_.momentum_max});
+      r = std::max({r, c.tool / o_.tool_speed_max, n_ >= 3 ? c.elbow / o_.elbow_speed_max : 0.0, c.momentum / o_.momentum_max});
       if (peak) {
         if (c.tool > peak->tool) peak->tool = c.tool, peak->tool_point = c.tool_point;
-        peak->elbow = std::max(peak->elbow, c.elbow);
+        peak->elbow = n_ >= 3 ? std::max(peak->elbow, c.elbow) : c.elbow;  // (NaN: no elbow)
         peak->momentum = std::max(peak->momentum, c.momentum);
       }
     }
@@ -375,6 +375,8 @@ void ExcitationOptions::validate(int n_dof) const {
   for (const auto& [name, v] : {std::pair{"tool_speed_max", tool_speed_max}, std::pair{"elbow_speed_max", elbow_speed_max},
                                 std::pair{"momentum_max", momentum_max}})
     if (!(v > 0.0)) throw InvalidArgument(fmt::format("{} is {}, must be > 0 (or infinity: none)", name, v));
+  if (std::isfinite(elbow_speed_max) && n_dof < 3)
+    throw InvalidArgument(fmt::format("elbow_speed_max is {}, but an arm of {} joints has no elbow (the third joint)", elbow_speed_max, n_dof));
   if (global_evaluations < 0) throw InvalidArgument(fmt::format("global_evaluations is {}, must be >= 0", global_evaluations));
   if (local_evaluations < 0) throw InvalidArgument(fmt::format("local_evaluations is {}, must be >= 0", local_evaluations));
 }

@@ -5,6 +5,8 @@
 #include "vec3.hpp"
 #include <fmt/format.h>
 
+#include <limits>
+
 #include "twinwatch/core/error.hpp"
 
 namespace twinwatch::model {
@@ -155,7 +157,6 @@ void point_jacobian(const RobotModel& model, const DynamicsData& d, int link, co
 CartesianSpeeds cartesian_speeds(const RobotModel& model, DynamicsData& d, const VectorJ& q, const VectorJ& qd,
                                  const std::vector<Eigen::Vector3d>& tool_points, const RigidBodyInertia& payload) {
   const int n = model.n_dof();
-  if (n < 3) throw InvalidArgument(fmt::format("the robot {} has {} joints: it has no elbow (the third joint)", model.name(), n));
   check_size("qd", qd.size(), n, "model.n_dof");
   forward_kinematics(model, d, q);
   // the velocity of a point p (base frame) on body b: sum over joints j <= b of qd_j z_j x (p - o_j)
@@ -169,7 +170,7 @@ CartesianSpeeds cartesian_speeds(const RobotModel& model, DynamicsData& d, const
   c.tool = velocity(last, d.oMf.translation()).norm();
   for (size_t k = 0; k < tool_points.size(); ++k)
     if (const double v = velocity(last, d.oMf * tool_points[k]).norm(); v > c.tool) c.tool = v, c.tool_point = static_cast<int>(k);
-  c.elbow = velocity(2, d.oMi[2].translation()).norm();
+  c.elbow = n >= 3 ? velocity(2, d.oMi[2].translation()).norm() : std::numeric_limits<double>::quiet_NaN();
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   for (int b = 0; b < n; ++b)
     if (const RigidBodyInertia& body = model.joint(b).body; body.mass != 0.0) p += body.mass * velocity(b, d.oMi[b] * body.com);

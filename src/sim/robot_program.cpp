@@ -117,8 +117,9 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
     throw InvalidArgument(fmt::format("ramp: the target {} at rest, and a ramp of 0 s would make the arm take a step of velocity; "
                                       "expected a ramp > 0 s (default 2 s)",
                                       moving_in ? "does not start" : "does not end"));
-  if (moving_in) ramp_in_steps_ = ramp_steps(o.ramp, dt_);
-  if (moving_out) ramp_out_steps_ = ramp_steps(o.ramp, dt_);
+  // (a slow-down stretches the ramps too: the whole program runs K times slower, every speed / K)
+  if (moving_in) ramp_in_steps_ = ramp_steps(o.ramp * o.slow_down, dt_);
+  if (moving_out) ramp_out_steps_ = ramp_steps(o.ramp * o.slow_down, dt_);
   if (ramp_in_steps_ + ramp_out_steps_ > 2 * duration_steps_)
     throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps take ({} s): expected a longer run or a shorter ramp",
                                       o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_));

@@ -366,6 +366,16 @@ TEST(RobotProgram, ASlowDownRunsTheSamePathSlower) {
   EXPECT_NEAR(b.tool_speed, a.tool_speed / 2.5, 1e-3 * a.tool_speed);  // (sampled every 2 ms on both clocks)
   EXPECT_NEAR(b.elbow_speed, a.elbow_speed / 2.5, 1e-3 * a.elbow_speed);
   EXPECT_NEAR(b.momentum, a.momentum / 2.5, 1e-3 * a.momentum);
+  // a sine starts and ends moving: its ramps stretch too, so the whole program is K times slower
+  ProgramOptions so = options(20.0);
+  const ProgramMotion sn(*sine()->closed_form(), so);
+  so.slow_down = 2.5;
+  const ProgramMotion ss(*sine()->closed_form(), so);
+  EXPECT_NEAR(ss.total(), 2.5 * sn.total(), 1e-9);
+  EXPECT_NEAR(ss.ramp_in(), 2.5 * sn.ramp_in(), 1e-9);
+  const SafetyPeaks c = safety_peaks(sn, ur3e, {}, {}), e = safety_peaks(ss, ur3e, {}, {});
+  EXPECT_NEAR(e.tool_speed, c.tool_speed / 2.5, 1e-3 * c.tool_speed);
+  EXPECT_NEAR(e.tool_t, 2.5 * c.tool_t, 0.01);
   o.slow_down = 0.5;
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { ProgramMotion(*f->closed_form(), o); }), HasSubstr("slow_down"));
 }

@@ -166,10 +166,12 @@ int run(const Options& o) {
     return std::isfinite(limit) ? fmt::format("kept within {:g}", limit) : std::string("not limited");
   };
   const std::string speeds_text =
-      fmt::format("peak tool speed {:.3f} m/s at {} ({}, --tool-speed-limit), elbow {:.3f} m/s ({}, --elbow-speed-limit), "
+      fmt::format("peak tool speed {:.3f} m/s at {} ({}, --tool-speed-limit), {}, "
                   "momentum of the links {:.2f} kg m/s ({}, --momentum-limit)",
-                  sp.tool, tool_peak_where, kept(o.tool_speed_limit), sp.elbow, kept(o.elbow_speed_limit), sp.momentum,
-                  kept(o.momentum_limit));
+                  sp.tool, tool_peak_where, kept(o.tool_speed_limit),
+                  std::isnan(sp.elbow) ? std::string("no elbow (fewer than three joints)")
+                                       : fmt::format("elbow {:.3f} m/s ({}, --elbow-speed-limit)", sp.elbow, kept(o.elbow_speed_limit)),
+                  sp.momentum, kept(o.momentum_limit));
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
@@ -204,7 +206,7 @@ int run(const Options& o) {
                      {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}},
                      {"tool_points", tool_json(eo.tool_points)},
                      {"peak_tool_speed", sp.tool},
-                     {"peak_elbow_speed", sp.elbow},
+                     {"peak_elbow_speed", std::isnan(sp.elbow) ? nlohmann::json(nullptr) : nlohmann::json(sp.elbow)},
                      {"peak_momentum", sp.momentum},
                      {"limits", [&] {
                         nlohmann::json c = nlohmann::json::object();

@@ -58,6 +58,9 @@ int run(Options o) {
     s.robot = o.robot;
   }
   const model::RobotModel robot = model::load_robot(s.robot);
+  if (robot.n_dof() != 6)
+    throw InvalidArgument(fmt::format("{}: the robot {} has {} joints: URScript programs run on Universal Robots arms, of six", o.scenario,
+                                      robot.name(), robot.n_dof()));
   o.program.duration = s.options.duration;
   o.program.title = o.scenario;
   o.program.name = o.name.empty() ? s.name : o.name;
@@ -95,13 +98,14 @@ int run(Options o) {
                                           tool_points[safety.tool_point].y(), tool_points[safety.tool_point].z());
   struct Limit {
     const char* option;
+    const char* key;  // (--json, as excite's)
     const char* what;
     double peak, at, limit;
     const char* unit;
   };
-  const std::vector<Limit> limits{{"--tool-speed-limit", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s"},
-                                  {"--elbow-speed-limit", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s"},
-                                  {"--momentum-limit", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s"}};
+  const std::vector<Limit> limits{{"--tool-speed-limit", "tool_speed", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s"},
+                                  {"--elbow-speed-limit", "elbow_speed", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s"},
+                                  {"--momentum-limit", "momentum", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s"}};
   // the same path K times slower divides every speed and the momentum by K: the factor that fits them all
   double fits = 1.0;
   for (const Limit& l : limits)
@@ -117,10 +121,12 @@ int run(Options o) {
     if (l.limit > 0.0 && l.peak > l.limit)
       throw InvalidArgument(fmt::format(
           "{}: the program's {} reaches {:.3f} {} at {:.2f} s{}, beyond {} {:g} {}: the arm would stop or slow mid-run; no program written. "
-          "--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s); or make the motion slower ({}), or run it where "
-          "the installation allows more",
+          "{}; or make the motion slower ({}), or run it where the installation allows more",
           o.scenario, l.what, l.peak, l.unit, l.at, std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(), l.option,
-          l.limit, l.unit, slower, fits > l.peak / l.limit ? "the limits" : "it", slower_total, motion.total(),
+          l.limit, l.unit,
+          slower <= 100.0 ? fmt::format("--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s)", slower,
+                                        fits > l.peak / l.limit ? "the limits" : "it", slower_total, motion.total())
+                          : fmt::format("no --slow-down up to 100 fits it (it needs {:.0f})", slower),
           s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
                                          : "lower the trajectory's amplitudes or frequencies"));
   std::vector<std::string> header{fmt::format("Written by 'twinwatch urscript' from {} (trajectory {}).", o.scenario, s.trajectory_type)};
@@ -169,10 +175,10 @@ int run(Options o) {
     j["peak_elbow_speed_t"] = safety.elbow_t;
     j["peak_momentum"] = safety.momentum;
     j["peak_momentum_t"] = safety.momentum_t;
-    j["limits_checked"] = [&] {
+    j["limits"] = [&] {
       nlohmann::json c = nlohmann::json::object();
       for (const Limit& l : limits)
-        if (l.limit > 0.0) c[std::string(l.option).substr(2)] = l.limit;
+        if (l.limit > 0.0) c[l.key] = l.limit;
       return c;
     }();
     j["max_approach"] = o.program.max_approach;
@@ -180,7 +186,8 @@ int run(Options o) {
     j["faults_left_out"] = s.faults.size();
     j["warnings"] = warnings;
     j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"peak_qd", "rad/s"}, {"peak_qdd", "rad/s^2"},
-                  {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}, {"max_approach", "rad"}};
+                  {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}, {"max_approach", "rad"},
+                  {"peak_tool_speed_t", "s"}, {"peak_elbow_speed_t", "s"}, {"peak_momentum_t", "s"}, {"limits", "m/s, m/s, kg m/s"}};
     fmt::print("{}\n", j.dump(2));
   } else if (!o.quiet) {
     fmt::print("{} -> {}: URScript for a {} (e-Series), {:.1f} s of motion{}, servoj every {:g} ms\n", s.name, o.output, robot.name(),

@@ -69,13 +69,13 @@ struct CartesianSpeeds {
   int tool_point = -1;   ///< which: -1 the flange's centre, k tool point k
   /// [m/s] the speed of the elbow: the origin of the third joint's body frame, on the elbow joint's
   /// axis where the kinematic chain crosses it (UR's elbow; the housing's centre lies a few cm
-  /// along that axis)
+  /// along that axis); NaN for an arm of fewer than three joints, which has none
   double elbow = 0.0;
   double momentum = 0.0;  ///< [kg·m/s] |sum m v| over the links' centres of mass and the payload's
 };
 /// @param tool_points points of the tool in the flange frame [m]
 /// @param payload the part the flange carries (flange frame), counted in the momentum
-/// Throws InvalidArgument when the robot has fewer than three joints (no elbow) or on a size mismatch.
+/// Throws InvalidArgument on a size mismatch.
 CartesianSpeeds cartesian_speeds(const RobotModel& model, DynamicsData& data, const VectorJ& q, const VectorJ& qd,
                                  const std::vector<Eigen::Vector3d>& tool_points, const RigidBodyInertia& payload);
 

@@ -35,8 +35,9 @@ struct ProgramOptions {
   double duration = 0.0;      ///< [s] of the trajectory's own time to run (the scenario's duration)
   double ramp = 2.0;          ///< [s] of the clock's rise (fall) where the target starts (ends) moving
   /// runs the trajectory this many times slower (ClosedForm::slowed): the same path, its speeds
-  /// (joint and Cartesian) divided by it, its accelerations by its square, and the program `duration`
-  /// times it long; >= 1. For an installation whose safety limits the motion would exceed.
+  /// (joint and Cartesian) divided by it, its accelerations by its square: the whole program, ramps
+  /// included (each `ramp` times it), K times as long; 1-100. For an installation whose safety limits
+  /// the motion would exceed.
   double slow_down = 1.0;
   double servo_period = 0.002;  ///< servoj's t [s]: the e-Series controller's 500 Hz
   double lookahead = 0.1;     ///< servoj lookahead_time [s], 0.03-0.2
