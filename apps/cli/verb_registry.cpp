@@ -116,6 +116,18 @@ std::string with_option_names(std::string message, std::initializer_list<std::pa
   return message;
 }
 
+CLI::Option* add_tool_point_option(CLI::App* sub, std::vector<double>& values, const std::string& help) {
+  return sub->add_option("--tool-point", values, help)
+      ->type_size(-3)  // three numbers an occurrence, any number of occurrences
+      ->allow_extra_args(false);
+}
+
+std::vector<Eigen::Vector3d> tool_points(const std::vector<double>& values) {
+  std::vector<Eigen::Vector3d> points;
+  for (size_t k = 0; k + 2 < values.size(); k += 3) points.emplace_back(values[k], values[k + 1], values[k + 2]);
+  return points;
+}
+
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {
   if (applies) return;
   std::string given;

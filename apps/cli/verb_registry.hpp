@@ -10,11 +10,13 @@
 //
 // The `order` sorts verbs in --help (foundation 10-19, simulator 20-29, ...).
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <functional>
 #include <initializer_list>
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace twinwatch::cli {
 
@@ -63,6 +65,12 @@ std::string with_option_names(std::string message, std::initializer_list<std::pa
 /// line, throws InvalidArgument "--a, --b apply only WHERE" (an option with a default counts only
 /// when given).
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where);
+
+/// --tool-point X Y Z (a point of the tool in the flange frame [m]), repeatable: three numbers an
+/// occurrence (CLI11 refuses two), appended to `values`. excite and urscript take it alike.
+CLI::Option* add_tool_point_option(CLI::App* sub, std::vector<double>& values, const std::string& help);
+/// The --tool-point values as points [m, flange frame].
+std::vector<Eigen::Vector3d> tool_points(const std::vector<double>& values);
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

@@ -78,8 +78,7 @@ int run(const Options& o) {
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
   if (!o.q0.empty()) eo.q0 = Eigen::Map<const Eigen::VectorXd>(o.q0.data(), static_cast<Eigen::Index>(o.q0.size()));
-  // (CLI11 takes exactly three numbers per --tool-point)
-  for (size_t k = 0; k + 2 < o.tool.size(); k += 3) eo.tool_points.emplace_back(o.tool[k], o.tool[k + 1], o.tool[k + 2]);
+  eo.tool_points = twinwatch::cli::tool_points(o.tool);
   try {
     eo.validate(m.n_dof());
   } catch (const InvalidArgument& e) {
@@ -274,12 +273,10 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
                   "of the search, and a design that still comes lower is refused, no file written. Negative for an arm on "
                   "a pedestal (e.g. -0.3); below 0.05 m a warning is printed. No other collision check is made")
       ->capture_default_str();
-  sub->add_option("--tool-point", o->tool,
-                  "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points, e.g. a "
-                  "gripper's two fingertips): kept above --min-height like the flange, and its speed counts as the tool's for "
-                  "--tool-speed-limit. Without it a tool is not checked")
-      ->type_size(-3)  // three numbers an occurrence, any number of occurrences
-      ->allow_extra_args(false);
+  twinwatch::cli::add_tool_point_option(sub, o->tool,
+                                        "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points, e.g. a "
+                                        "gripper's two fingertips): kept above --min-height like the flange, and its speed counts as the tool's for "
+                                        "--tool-speed-limit. Without it a tool is not checked");
   sub->add_option("--tool-speed-limit", o->tool_speed_limit,
                   "Keep the tool's speed (the flange's centre and the --tool-point points) within the installation's tool speed "
                   "limit [m/s] (Safety > Robot Limits), so the program runs without a stop")

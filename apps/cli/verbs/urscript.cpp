@@ -85,8 +85,7 @@ int run(Options o) {
     throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; no program written", o.scenario, violation));
   const sim::MotionPeaks peaks = sim::motion_peaks(motion);
   // the speeds and the momentum the installation's safety limits bound (the payload moves too, declared or not)
-  std::vector<Eigen::Vector3d> tool_points;
-  for (size_t k = 0; k + 2 < o.tool.size(); k += 3) tool_points.emplace_back(o.tool[k], o.tool[k + 1], o.tool[k + 2]);
+  const std::vector<Eigen::Vector3d> tool_points = twinwatch::cli::tool_points(o.tool);
   for (size_t k = 0; k < tool_points.size(); ++k)
     if (!tool_points[k].allFinite() || tool_points[k].norm() > 2.0)
       throw InvalidArgument(fmt::format("--tool-point (number {} of {}): expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})",
@@ -102,10 +101,12 @@ int run(Options o) {
     const char* what;
     double peak, at, limit;
     const char* unit;
+    std::string where;  // " (the point)" for the tool, else empty
   };
-  const std::vector<Limit> limits{{"--tool-speed-limit", "tool_speed", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s"},
-                                  {"--elbow-speed-limit", "elbow_speed", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s"},
-                                  {"--momentum-limit", "momentum", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s"}};
+  const std::vector<Limit> limits{{"--tool-speed-limit", "tool_speed", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s",
+                                   " (" + tool_where + ")"},
+                                  {"--elbow-speed-limit", "elbow_speed", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s", ""},
+                                  {"--momentum-limit", "momentum", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s", ""}};
   // the same path K times slower divides every speed and the momentum by K: the factor that fits them all
   double fits = 1.0;
   for (const Limit& l : limits)
@@ -122,7 +123,7 @@ int run(Options o) {
       throw InvalidArgument(fmt::format(
           "{}: the program's {} reaches {:.3f} {} at {:.2f} s{}, beyond {} {:g} {}: the arm would stop or slow mid-run; no program written. "
           "{}; or make the motion slower ({}), or run it where the installation allows more",
-          o.scenario, l.what, l.peak, l.unit, l.at, std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(), l.option,
+          o.scenario, l.what, l.peak, l.unit, l.at, l.where, l.option,
           l.limit, l.unit,
           slower <= 100.0 ? fmt::format("--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s)", slower,
                                         fits > l.peak / l.limit ? "the limits" : "it", slower_total, motion.total())
@@ -210,7 +211,7 @@ int run(Options o) {
     fmt::print("  peak acceleration [rad/s²] {}\n", joints(peaks.qdd, &qdd_limit));
     for (const Limit& l : limits)
       fmt::print("  peak {:<22} {:.3f} {} at {:.2f} s{}{}\n", l.what, l.peak, l.unit, l.at,
-                 std::string(l.what) == "tool speed" ? " (" + tool_where + ")" : std::string(),
+                 l.where,
                  l.limit > 0.0 ? fmt::format(": within {} {:g} ({:.0f} %)", l.option, l.limit, 100.0 * l.peak / l.limit)
                                : fmt::format(": not checked (the installation's limit: {})", l.option));
     if (tool_points.empty()) fmt::print("  a tool on the flange was not checked: give its farthest points with --tool-point X Y Z (flange frame, m)\n");
@@ -268,11 +269,9 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
                   "is a movej from wherever the arm stands)")
       ->capture_default_str()
       ->check(twinwatch::cli::positive_number());
-  sub->add_option("--tool-point", o->tool,
-                  "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points): its speed counts as "
-                  "the tool's, as the installation's tool positions do")
-      ->type_size(-3)
-      ->allow_extra_args(false);
+  twinwatch::cli::add_tool_point_option(sub, o->tool,
+                                        "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points): "
+                                        "its speed counts as the tool's, as the installation's tool positions do");
   sub->add_option("--tool-speed-limit", o->tool_speed_limit,
                   "The installation's tool speed limit [m/s] (Safety > Robot Limits): a motion faster at the flange or a tool point is "
                   "refused, no program written (default: reported, not checked)")

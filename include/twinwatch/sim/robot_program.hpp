@@ -23,7 +23,6 @@
 
 #include <memory>
 
-#include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/model/robot_model.hpp"
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/sim/trajectory.hpp"
