@@ -156,7 +156,8 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   }
   require_unique_keys(text, origin);  // (a key given twice: the JSON reader kept one of them silently)
   const Reader r(origin);
-  r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment", "rated_payload"});
+  r.only_keys(root, "", {"name", "convention", "gravity", "joints", "flange", "notes", "sources", "comment", "rated_payload",
+                          "elbow_housing"});
   RobotDescription d;
   d.source = origin;
   d.name = r.text(root, "", "name");
@@ -175,6 +176,14 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   if (root.contains("rated_payload")) {
     d.rated_payload = r.number(root, "", "rated_payload");
     if (!(d.rated_payload > 0.0)) r.fail("rated_payload", fmt::format("expected a mass > 0 kg, got {}", d.rated_payload));
+  }
+
+  if (root.contains("elbow_housing")) {
+    const Eigen::Vector2d e = r.vec<2>(root, "", "elbow_housing");
+    if (!(std::abs(e[0]) <= 1.0 && std::abs(e[1]) <= 1.0))
+      r.fail("elbow_housing", fmt::format("expected two distances along the elbow's axis within ±1 m, got [{}, {}] (in mm? give metres)",
+                                          e[0], e[1]));
+    d.elbow_housing = e;
   }
 
   const json& joints = r.required(root, "", "joints");

@@ -170,7 +170,13 @@ CartesianSpeeds cartesian_speeds(const RobotModel& model, DynamicsData& d, const
   c.tool = velocity(last, d.oMf.translation()).norm();
   for (size_t k = 0; k < tool_points.size(); ++k)
     if (const double v = velocity(last, d.oMf * tool_points[k]).norm(); v > c.tool) c.tool = v, c.tool_point = static_cast<int>(k);
-  c.elbow = n >= 3 ? velocity(2, d.oMi[2].translation()).norm() : std::numeric_limits<double>::quiet_NaN();
+  if (n >= 3) {
+    const Eigen::Vector2d& span = model.description().elbow_housing;
+    const Eigen::Vector3d o = d.oMi[2].translation(), z = d.oMi[2].linear().col(2);
+    c.elbow = std::max(velocity(2, o + span[0] * z).norm(), velocity(2, o + span[1] * z).norm());
+  } else {
+    c.elbow = std::numeric_limits<double>::quiet_NaN();
+  }
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   for (int b = 0; b < n; ++b)
     if (const RigidBodyInertia& body = model.joint(b).body; body.mass != 0.0) p += body.mass * velocity(b, d.oMi[b] * body.com);

@@ -77,6 +77,23 @@ TEST(DescriptionJson, TheRatedPayloadIsTheLimitOfADeclaredPayload) {
   EXPECT_THAT(error_of(bad), HasSubstr("field 'rated_payload': expected a number, got string"));
 }
 
+// where the elbow's housing lies along the elbow's axis (session 46): the elbow speed's two ends;
+// none given, the kinematic chain's point; a length in mm is refused
+TEST(DescriptionJson, TheElbowHousingIsReadInMetresAlongTheElbowsAxis) {
+  const std::string with = R"({"name": "t", "convention": "dh", "elbow_housing": [0.02, 0.1], "joints": [{"a": 0.1, "d": 0.2, "alpha": 0.0, )" +
+                           kGood + "}]}";
+  EXPECT_EQ(RobotModel(parse_description_json(with, "robot.json")).description().elbow_housing, Eigen::Vector2d(0.02, 0.1));
+  EXPECT_EQ(RobotModel(parse_description_json(one_joint(kGood), "robot.json")).description().elbow_housing, Eigen::Vector2d::Zero());
+  EXPECT_EQ(load_robot("ur5e").description().elbow_housing, Eigen::Vector2d(0.007, 0.138));
+  std::string bad = with;
+  bad.replace(bad.find("[0.02, 0.1]"), 11, "[27, 120]");
+  EXPECT_THAT(error_of(bad), HasSubstr("robot.json: field 'elbow_housing': expected two distances along the elbow's axis within ±1 m, "
+                                       "got [27, 120] (in mm? give metres)"));
+  bad = with;
+  bad.replace(bad.find("[0.02, 0.1]"), 11, "[0.1]");
+  EXPECT_THAT(error_of(bad), HasSubstr("field 'elbow_housing': expected 2 numbers, got 1"));
+}
+
 TEST(DescriptionJson, NonPositiveDefiniteInertiaIsRejected) {
   EXPECT_THAT(error_of(one_joint(R"("mass": 1.0, "com": [0,0,0], "inertia": [0.01,0,0,-0.01,0,0.01])")),
               HasSubstr("not positive semi-definite"));

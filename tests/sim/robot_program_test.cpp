@@ -429,9 +429,10 @@ TEST(RobotProgram, TheProgramHaltsBeforeMovingWhenTheArmStandsFarFromTheStartPos
 }
 
 // The figures the installation's safety limits bound, against finite differences of the forward
-// kinematics (no Jacobian): the flange's and the elbow's speed, and the momentum as the total mass
-// times the velocity of the centre of mass of links and payload; a tool point far out is faster
-// than the flange; J1 alone moves the elbow at qd1 times its distance from the base axis.
+// kinematics (no Jacobian): the flange's and the elbow's speed (the faster end of its housing on the
+// elbow's axis, 0.027 and 0.120 m out on a UR3e), and the momentum as the total mass times the
+// velocity of the centre of mass of links and payload; a tool point far out is faster than the
+// flange; J1 alone moves the elbow at qd1 times the farther housing end's distance from the base axis.
 TEST(RobotProgram, SafetyPeaksAreTheKinematicsSpeedsAndTheArmsMomentum) {
   const model::RobotModel ur3e = model::load_robot("ur3e");
   model::RigidBodyInertia payload;
@@ -442,13 +443,16 @@ TEST(RobotProgram, SafetyPeaksAreTheKinematicsSpeedsAndTheArmsMomentum) {
   const SafetyPeaks flange = safety_peaks(m, ur3e, {}, payload), with_tool = safety_peaks(m, ur3e, tool, payload);
   model::DynamicsData d(ur3e);
   struct Points {
-    Eigen::Vector3d flange, elbow, mass_moment;  // (sum m c)
+    Eigen::Vector3d flange, elbow_near, elbow_far, mass_moment;  // (sum m c)
   };
+  const Eigen::Vector2d housing = ur3e.description().elbow_housing;
+  EXPECT_EQ(housing, Eigen::Vector2d(0.027, 0.120));
   auto points = [&](double t) {
     VectorJ q, qd, qdd;
     m.evaluate(t, q, qd, qdd);
     model::forward_kinematics(ur3e, d, q);
-    Points p{d.oMf.translation(), d.oMi[2].translation(), Eigen::Vector3d::Zero()};
+    const Eigen::Vector3d o = d.oMi[2].translation(), z = d.oMi[2].linear().col(2);
+    Points p{d.oMf.translation(), o + housing[0] * z, o + housing[1] * z, Eigen::Vector3d::Zero()};
     for (int b = 0; b < 6; ++b) p.mass_moment += ur3e.joint(b).body.mass * (d.oMi[static_cast<size_t>(b)] * ur3e.joint(b).body.com);
     p.mass_moment += payload.mass * (d.oMf * payload.com);
     return p;
@@ -459,7 +463,7 @@ TEST(RobotProgram, SafetyPeaksAreTheKinematicsSpeedsAndTheArmsMomentum) {
     const double t = static_cast<double>(k) * m.servo_period();
     const Points a = points(t - h), b = points(t + h);
     tool_fd = std::max(tool_fd, (b.flange - a.flange).norm() / (2 * h));
-    elbow_fd = std::max(elbow_fd, (b.elbow - a.elbow).norm() / (2 * h));
+    elbow_fd = std::max({elbow_fd, (b.elbow_near - a.elbow_near).norm() / (2 * h), (b.elbow_far - a.elbow_far).norm() / (2 * h)});
     momentum_fd = std::max(momentum_fd, (b.mass_moment - a.mass_moment).norm() / (2 * h));
   }
   EXPECT_GT(flange.tool_speed, 1.0) << "the swing moves the flange fast";
@@ -479,8 +483,9 @@ TEST(RobotProgram, SafetyPeaksAreTheKinematicsSpeedsAndTheArmsMomentum) {
   const SafetyPeaks sp = safety_peaks(spin, ur3e, {}, model::RigidBodyInertia{});
   const MotionPeaks pk = motion_peaks(spin);
   model::forward_kinematics(ur3e, d, kStart);
-  const double radius = d.oMi[2].translation().head<2>().norm();
-  EXPECT_GT(radius, 0.1);  // (a2 cos q2: 0.13 m)
+  const Eigen::Vector3d o = d.oMi[2].translation(), z = d.oMi[2].linear().col(2);
+  const double radius = std::max((o + housing[0] * z).head<2>().norm(), (o + housing[1] * z).head<2>().norm());
+  EXPECT_GT(radius, 1.3 * o.head<2>().norm()) << "the upper arm's end of the housing lies 0.12 m out along the axis";
   EXPECT_NEAR(sp.elbow_speed, pk.qd[0] * radius, 1e-9);
   EXPECT_NEAR(sp.tool_speed, pk.qd[0] * d.oMf.translation().head<2>().norm(), 1e-9);
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] {

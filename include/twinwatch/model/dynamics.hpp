@@ -67,9 +67,10 @@ void point_jacobian(const RobotModel& model, const DynamicsData& data, int link,
 struct CartesianSpeeds {
   double tool = 0.0;     ///< [m/s] the largest linear speed of the flange's centre and the tool points
   int tool_point = -1;   ///< which: -1 the flange's centre, k tool point k
-  /// [m/s] the speed of the elbow: the origin of the third joint's body frame, on the elbow joint's
-  /// axis where the kinematic chain crosses it (UR's elbow; the housing's centre lies a few cm
-  /// along that axis); NaN for an arm of fewer than three joints, which has none
+  /// [m/s] the speed of the elbow: the larger of the speeds at the two ends of its housing on the
+  /// elbow joint's axis (RobotDescription::elbow_housing; a point's speed is affine along the axis,
+  /// so no point of the housing's axis between them is faster); NaN for an arm of fewer than three
+  /// joints, which has none
   double elbow = 0.0;
   double momentum = 0.0;  ///< [kg·m/s] |sum m v| over the links' centres of mass and the payload's
 };

@@ -102,6 +102,11 @@ struct RobotDescription {
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};                  ///< [m/s²] in the base frame
   /// [kg] the manufacturer's rated payload (the description's "rated_payload"); NaN: not given
   double rated_payload = std::numeric_limits<double>::quiet_NaN();
+  /// [m] where the elbow's housing lies along the elbow joint's axis (the third joint's z), from the
+  /// point where the kinematic chain crosses it to its far end: the description's "elbow_housing"
+  /// [from, to]. A UR's upper arm and forearm are offset sideways from that point (UR3e: forearm
+  /// 0.027 m, upper arm 0.120 m), and the housing joins them. {0, 0}: the chain's point itself.
+  Eigen::Vector2d elbow_housing = Eigen::Vector2d::Zero();
 };
 
 namespace detail {
