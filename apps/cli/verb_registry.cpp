@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <csignal>
+#include <limits>
 #include <cstdlib>
 #include <vector>
 
@@ -126,6 +127,70 @@ std::vector<Eigen::Vector3d> tool_points(const std::vector<double>& values) {
   std::vector<Eigen::Vector3d> points;
   for (size_t k = 0; k + 2 < values.size(); k += 3) points.emplace_back(values[k], values[k + 1], values[k + 2]);
   return points;
+}
+
+void add_safety_limit_options(CLI::App* sub, SafetyLimitOptions& o, const std::string& purpose) {
+  sub->add_option("--tool-speed-limit", o.tool_speed,
+                  purpose + " the installation's tool speed limit [m/s] (Safety > Robot Limits), at the flange's centre and the "
+                            "--tool-point points, less --speed-tolerance")
+      ->check(positive_number());
+  sub->add_option("--elbow-speed-limit", o.elbow_speed,
+                  purpose + " the installation's elbow speed limit [m/s] (the faster end of the elbow's housing), less --speed-tolerance")
+      ->check(positive_number());
+  sub->add_option("--momentum-limit", o.momentum,
+                  purpose + " the installation's momentum limit [kg·m/s] (the links', the tool's (--tool-mass) and any payload's), "
+                            "less --momentum-tolerance")
+      ->check(positive_number());
+  sub->add_option("--speed-tolerance", o.speed_tolerance,
+                  "What the safety system keeps a speed below its limit by [m/s] (UR e-Series: 0.05, the speed limit's accuracy); "
+                  "0: the limit as entered")
+      ->capture_default_str()
+      ->check(nonnegative_number());
+  sub->add_option("--momentum-tolerance", o.momentum_tolerance,
+                  "The same for the momentum [kg·m/s] (UR e-Series: 3)")
+      ->capture_default_str()
+      ->check(nonnegative_number());
+  sub->add_option("--tool-mass", o.tool_mass, "The gripper or tool on the flange [kg], counted in the momentum (default: none)")
+      ->check(nonnegative_number());
+  sub->add_option("--tool-cog", o.tool_cog, "Its centre of mass in the flange frame [m] (3 numbers; default 0 0 0)")->expected(3);
+}
+
+std::string OperationalLimit::text(const char* unit) const {
+  if (tolerance == 0.0) return fmt::format("{:g} {} (the {} as entered)", entered, unit, option);
+  return fmt::format("{:g} {} (the {} {:g} less the safety system's {:g} {} tolerance)", value(), unit, option, entered, tolerance, unit);
+}
+
+std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o) {
+  std::vector<OperationalLimit> out{{"--tool-speed-limit", o.tool_speed, o.speed_tolerance},
+                                    {"--elbow-speed-limit", o.elbow_speed, o.speed_tolerance},
+                                    {"--momentum-limit", o.momentum, o.momentum_tolerance}};
+  for (OperationalLimit& l : out) {
+    if (!l.given()) {
+      l.entered = std::numeric_limits<double>::infinity(), l.tolerance = 0.0;
+      continue;
+    }
+    if (!(l.value() > 0.0))
+      throw InvalidArgument(fmt::format("{} {:g}: the safety system keeps a motion {:g} {} below it ({}), which leaves nothing to move "
+                                        "at; give a larger limit, or a smaller tolerance if your controller's is smaller",
+                                        l.option, l.entered, l.tolerance, l.option == std::string("--momentum-limit") ? "kg·m/s" : "m/s",
+                                        l.option == std::string("--momentum-limit") ? "--momentum-tolerance" : "--speed-tolerance"));
+  }
+  return out;
+}
+
+ToolBody tool_body(const SafetyLimitOptions& o, double carried_mass, const Eigen::Vector3d& carried_com) {
+  if (!o.tool_cog.empty() && o.tool_mass == 0.0) throw InvalidArgument("--tool-cog applies only with --tool-mass (the tool's mass [kg])");
+  Eigen::Vector3d cog = Eigen::Vector3d::Zero();
+  if (!o.tool_cog.empty()) cog = Eigen::Vector3d(o.tool_cog[0], o.tool_cog[1], o.tool_cog[2]);
+  if (!(std::isfinite(o.tool_mass) && o.tool_mass <= 1000.0))
+    throw InvalidArgument(fmt::format("--tool-mass: expected a mass from 0 to 1000 kg, got {}", o.tool_mass));
+  if (!cog.allFinite() || cog.norm() > 2.0)
+    throw InvalidArgument(fmt::format("--tool-cog: expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})", cog.x(), cog.y(),
+                                      cog.z()));
+  ToolBody b;
+  b.mass = o.tool_mass + carried_mass;
+  if (b.mass > 0.0) b.com = (o.tool_mass * cog + carried_mass * carried_com) / b.mass;
+  return b;
 }
 
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {

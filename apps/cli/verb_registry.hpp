@@ -11,6 +11,7 @@
 // The `order` sorts verbs in --help (foundation 10-19, simulator 20-29, ...).
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
 #include <initializer_list>
 #include <string>
@@ -71,6 +72,43 @@ void refuse_unless(std::initializer_list<const CLI::Option*> options, bool appli
 CLI::Option* add_tool_point_option(CLI::App* sub, std::vector<double>& values, const std::string& help);
 /// The --tool-point values as points [m, flange frame].
 std::vector<Eigen::Vector3d> tool_points(const std::vector<double>& values);
+
+/// The installation's Robot Limits (PolyScope: Installation > Safety > Robot Limits) that excite
+/// designs within and urscript checks, and the tool the flange carries. UR's safety system keeps a
+/// motion below each limit by its accuracy (e-Series user manual, functional safety table: speed
+/// 50 mm/s, momentum 3 kg·m/s; the CB3 manual's "Tolerances": "the maximum operational speed will
+/// be 250 - 150 = 100 mm/s" for its 150 mm/s), slowing the arm before the entered value: a motion
+/// is kept within the operational value, the limit less that tolerance.
+struct SafetyLimitOptions {
+  double tool_speed = 0.0, elbow_speed = 0.0, momentum = 0.0;  ///< as entered; 0: not given
+  double speed_tolerance = 0.05;   ///< [m/s] --speed-tolerance
+  double momentum_tolerance = 3.0;  ///< [kg·m/s] --momentum-tolerance
+  double tool_mass = 0.0;           ///< [kg] --tool-mass: the gripper or tool on the flange
+  std::vector<double> tool_cog;     ///< [m] --tool-cog X Y Z, flange frame (default: the flange's centre)
+};
+/// --tool-speed-limit, --elbow-speed-limit, --momentum-limit, the two tolerances and --tool-mass/--tool-cog.
+/// `purpose`: what the verb does with a limit ("keep the design within" / "refuse a program beyond").
+void add_safety_limit_options(CLI::App* sub, SafetyLimitOptions& o, const std::string& purpose);
+/// One limit the motion is held to: the entered value, the tolerance and the operational value.
+struct OperationalLimit {
+  const char* option;  ///< "--tool-speed-limit"
+  double entered = 0.0, tolerance = 0.0;
+  double value() const { return entered - tolerance; }  ///< (infinity when not given)
+  bool given() const { return entered > 0.0 && std::isfinite(entered); }
+  /// "1.45 m/s (the --tool-speed-limit 1.5 less the safety system's 0.05 m/s tolerance)"
+  std::string text(const char* unit) const;
+};
+/// The three limits as the motion must keep them. Throws InvalidArgument naming the option when a
+/// limit is no more than its tolerance (nothing can be kept below it), or when --tool-cog is given
+/// without --tool-mass.
+std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o);
+/// The tool (--tool-mass at --tool-cog) as a body for the momentum; with `carried` (a scenario's
+/// payload) added to it: their masses summed at their common centre of mass. Validates the numbers.
+struct ToolBody {
+  double mass = 0.0;
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();
+};
+ToolBody tool_body(const SafetyLimitOptions& o, double carried_mass = 0.0, const Eigen::Vector3d& carried_com = Eigen::Vector3d::Zero());
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

@@ -206,7 +206,7 @@ class Design {
     VectorJ q(n_), qd(n_), qdd(n_);
     for (Eigen::Index m = 0; m < S.rows(); ++m) {
       state(t, S, C, m, q, qd, qdd);
-      const model::CartesianSpeeds c = model::cartesian_speeds(m_, d_, q, qd, o_.tool_points, {});
+      const model::CartesianSpeeds c = model::cartesian_speeds(m_, d_, q, qd, o_.tool_points, o_.carried);
       r = std::max({r, c.tool / o_.tool_speed_max, n_ >= 3 ? c.elbow / o_.elbow_speed_max : 0.0, c.momentum / o_.momentum_max});
       if (peak) {
         if (c.tool > peak->tool) peak->tool = c.tool, peak->tool_point = c.tool_point;
@@ -375,6 +375,9 @@ void ExcitationOptions::validate(int n_dof) const {
   for (const auto& [name, v] : {std::pair{"tool_speed_max", tool_speed_max}, std::pair{"elbow_speed_max", elbow_speed_max},
                                 std::pair{"momentum_max", momentum_max}})
     if (!(v > 0.0)) throw InvalidArgument(fmt::format("{} is {}, must be > 0 (or infinity: none)", name, v));
+  if (!(std::isfinite(carried.mass) && carried.mass >= 0.0 && carried.com.allFinite()))
+    throw InvalidArgument(fmt::format("carried is {} kg at ({}, {}, {}) m, must be a mass >= 0 at a finite point", carried.mass,
+                                      carried.com.x(), carried.com.y(), carried.com.z()));
   if (std::isfinite(elbow_speed_max) && n_dof < 3)
     throw InvalidArgument(fmt::format("elbow_speed_max is {}, but an arm of {} joints has no elbow (the third joint)", elbow_speed_max, n_dof));
   if (global_evaluations < 0) throw InvalidArgument(fmt::format("global_evaluations is {}, must be >= 0", global_evaluations));

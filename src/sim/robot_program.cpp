@@ -121,8 +121,12 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
   if (moving_in) ramp_in_steps_ = ramp_steps(o.ramp * o.slow_down, dt_);
   if (moving_out) ramp_out_steps_ = ramp_steps(o.ramp * o.slow_down, dt_);
   if (ramp_in_steps_ + ramp_out_steps_ > 2 * duration_steps_)
-    throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps take ({} s): expected a longer run or a shorter ramp",
-                                      o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_));
+    throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps: expected at least {:g} s of the trajectory{}, or a "
+                                      "shorter ramp",
+                                      o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_ / o.slow_down,
+                                      o.slow_down != 1.0 ? fmt::format(" (its ramps take {:g} s of the program, {:g} times slower)",
+                                                                       0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_, o.slow_down)
+                                                         : std::string()));
 }
 
 void ProgramMotion::rate(double t, double& r, double& dr) const {
@@ -191,6 +195,11 @@ MotionPeaks motion_peaks(const ProgramMotion& motion) {
   return p;
 }
 
+double approach_time_at_most(const ProgramOptions& o) {
+  const double v = o.approach_speed, a = o.approach_acceleration, d = o.max_approach;
+  return d >= v * v / a ? d / v + v / a : 2.0 * std::sqrt(d / a);
+}
+
 SafetyPeaks safety_peaks(const ProgramMotion& motion, const model::RobotModel& robot, const std::vector<Eigen::Vector3d>& tool_points,
                          const model::RigidBodyInertia& payload) {
   if (robot.n_dof() != motion.n_dof())
@@ -198,11 +207,19 @@ SafetyPeaks safety_peaks(const ProgramMotion& motion, const model::RobotModel& r
   for (size_t k = 0; k < tool_points.size(); ++k)
     if (!tool_points[k].allFinite()) throw InvalidArgument(fmt::format("tool point {} is not finite", k + 1));
   model::DynamicsData d(robot);
+  model::RobotModel loaded = robot;  // (for the torque: the payload on the flange)
+  if (payload.mass > 0.0) loaded.set_payload(payload);
+  model::DynamicsData dl(loaded);
   SafetyPeaks p;
+  p.torque = VectorJ::Zero(robot.n_dof());
+  p.torque_t = VectorJ::Zero(robot.n_dof());
   VectorJ q, qd, qdd;
   for (long k = 0; k <= motion.steps(); ++k) {
     const double t = static_cast<double>(k) * motion.servo_period();
     motion.evaluate(t, q, qd, qdd);
+    const VectorJ& tau = model::rnea(loaded, dl, q, qd, qdd);
+    for (int j = 0; j < robot.n_dof(); ++j)
+      if (std::abs(tau[j]) > p.torque[j]) p.torque[j] = std::abs(tau[j]), p.torque_t[j] = t;
     const model::CartesianSpeeds c = model::cartesian_speeds(robot, d, q, qd, tool_points, payload);
     if (c.tool > p.tool_speed) p.tool_speed = c.tool, p.tool_t = t, p.tool_point = c.tool_point;
     if (c.elbow > p.elbow_speed) p.elbow_speed = c.elbow, p.elbow_t = t;
@@ -270,7 +287,7 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, "#   clear the arm's whole reach; keep the emergency stop at hand. Over port 30002 the controller must be");
   line(1, "#   in Remote Control; a Polyscope Script node (file) needs the call line after the def: 'twinwatch urscript --call'.");
   line(1, fmt::format("# Record it meanwhile: twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o RECORDING.csv, started",
-                      std::ceil(motion.total() + 30.0)));
+                      std::ceil(approach_time_at_most(o) + motion.total() + 30.0)));
   line(1, "#   before the program (the approach and the rests before and after are recorded too: identify reads them as any motion),");
   line(1, "#   at full speed: at a speed slider of x %, the motion takes 100 / x times as long; record for that.");
   const std::string shown = name.substr(std::min(name.size(), std::string("twinwatch_").size()));  // (in messages)

@@ -28,6 +28,12 @@ using namespace twinwatch;
 // for a lower one [m] (5 cm over the base's mounting plane: the flange and the wrist bodies are that
 // wide). Without it the default UR3e design took the wrist 0.28-0.38 m below the table (session 19).
 constexpr double kWarnHeight = 0.05;
+// cond(W) above which a design is said to excite the dynamics too little to identify them [-].
+// Measured on the virtual UR3e (session 46, docs/validation.md "A design the limits leave too
+// little motion"): the tool speed limit shrinks the design; with the swing pair beside it, designs of
+// cond 147 and 1005 identified the twin alike, 5.5e4 raised J2's current error by 18-45 %, 5e6 by
+// 72-134 %; with the swing pair slowed to the same limit, 2.5e4 raised it by 17-38 %.
+constexpr double kWarnCond = 1e4;
 constexpr const char* kBodyNames[] = {"", "J2", "J3", "J4", "J5", "J6", "J7"};
 
 // a duration is a whole number of periods when it is within this of one (relative)
@@ -41,9 +47,8 @@ struct Options {
   unsigned seed = 1;
   std::vector<double> q0;
   std::vector<double> tool;  // --tool-point, three numbers per point [m, flange frame]
-  // the installation's safety limits (Installation > Safety > Robot Limits), kept when given
-  double tool_speed_limit = std::numeric_limits<double>::infinity(), elbow_speed_limit = std::numeric_limits<double>::infinity(),
-         momentum_limit = std::numeric_limits<double>::infinity();
+  // the installation's safety limits (Installation > Safety > Robot Limits), kept when given, and the tool
+  twinwatch::cli::SafetyLimitOptions safety;
   bool duration_given = false;  // (else one period)
   bool json = false, quiet = false, progress = false;
 };
@@ -71,9 +76,16 @@ int run(const Options& o) {
   eo.amplitude = o.amplitude;
   eo.default_qdd_max = o.qdd_default;
   eo.limit_fraction = o.fraction;
-  eo.tool_speed_max = o.tool_speed_limit;
-  eo.elbow_speed_max = o.elbow_speed_limit;
-  eo.momentum_max = o.momentum_limit;
+  // (each limit less the safety system's tolerance: what the controller lets the arm reach)
+  const std::vector<twinwatch::cli::OperationalLimit> held = twinwatch::cli::operational_limits(o.safety);
+  eo.tool_speed_max = held[0].value();
+  eo.elbow_speed_max = held[1].value();
+  eo.momentum_max = held[2].value();
+  const twinwatch::cli::ToolBody tool = twinwatch::cli::tool_body(o.safety);
+  if (tool.mass > m.payload_limit())
+    throw InvalidArgument(fmt::format("--tool-mass {:g} kg: beyond {} ({:g} kg)", tool.mass, m.payload_limit_text(), m.payload_limit()));
+  eo.carried.mass = tool.mass;
+  eo.carried.com = tool.com;
   eo.global_evaluations = o.global;
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
@@ -153,6 +165,19 @@ int run(const Options& o) {
   // which points were kept up: the tool's, when the user gave them
   std::string tools_checked;
   for (size_t k = 0; k < eo.tool_points.size(); ++k) tools_checked += (k ? "; " : " with ") + tool_text(k);
+  std::vector<std::string> warnings;
+  if (r.cond_final > kWarnCond) {
+    const bool limited = std::any_of(held.begin(), held.end(), [](const twinwatch::cli::OperationalLimit& l) { return l.given(); });
+    warnings.push_back(fmt::format(
+        "cond(W) is {:.3g}, above {:g}: the design moves the arm too little to identify its dynamics well{} (on the virtual UR3e a "
+        "design of cond 5.5e4 raised the twin's J2 current error by 18-45 %, one of 1e3 did not). Identify it together with the swing "
+        "pair (scenarios/ur3e/train/swing_train*.yaml, through twinwatch urscript), and check the twin with twinwatch validate on a "
+        "run it was not identified from; {}",
+        r.cond_final, kWarnCond,
+        limited ? fmt::format(" (the safety limits scaled it down: peak tool speed {:.3f} m/s)", r.speed_peak.tool) : std::string(),
+        limited ? "or, where the risk assessment allows, identify under a safety configuration with higher limits (a fenced cell)"
+                : "or raise --amplitude or --limit-fraction"));
+  }
   if (low.z < kWarnHeight)
     fmt::print(stderr,
                "WARNING: {} (--min-height {:g} m): on a real robot this may hit the table or the robot itself. Check it in "
@@ -161,16 +186,16 @@ int run(const Options& o) {
   // the figures the installation's safety limits bound, at their peaks on the dense grid
   const model::CartesianSpeeds& sp = r.speed_peak;
   const std::string tool_peak_where = sp.tool_point < 0 ? std::string("the flange's centre") : tool_text(static_cast<size_t>(sp.tool_point));
-  const auto kept = [](double limit) {
-    return std::isfinite(limit) ? fmt::format("kept within {:g}", limit) : std::string("not limited");
+  const auto kept = [](const twinwatch::cli::OperationalLimit& l, const char* unit) {
+    return l.given() ? "kept within " + l.text(unit) : fmt::format("not limited: {}", l.option);
   };
   const std::string speeds_text =
-      fmt::format("peak tool speed {:.3f} m/s at {} ({}, --tool-speed-limit), {}, "
-                  "momentum of the links {:.2f} kg m/s ({}, --momentum-limit)",
-                  sp.tool, tool_peak_where, kept(o.tool_speed_limit),
+      fmt::format("peak tool speed {:.3f} m/s at {} ({}), {}, "
+                  "momentum {:.2f} kg m/s of the links{} ({})",
+                  sp.tool, tool_peak_where, kept(held[0], "m/s"),
                   std::isnan(sp.elbow) ? std::string("no elbow (fewer than three joints)")
-                                       : fmt::format("elbow {:.3f} m/s ({}, --elbow-speed-limit)", sp.elbow, kept(o.elbow_speed_limit)),
-                  sp.momentum, kept(o.momentum_limit));
+                                       : fmt::format("elbow {:.3f} m/s ({})", sp.elbow, kept(held[1], "m/s")),
+                  sp.momentum, tool.mass > 0 ? fmt::format(" and the {:g} kg tool", tool.mass) : std::string(), kept(held[2], "kg m/s"));
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
@@ -180,6 +205,7 @@ int run(const Options& o) {
       o.min_height, tools_checked, speeds_text);
   const std::string comment_all = raised.empty() ? comment : comment + "\n" + raised;
   write_text_file(o.output, ident::excitation_scenario_yaml(r.trajectory, o.robot, cycles, comment_all));
+  for (const std::string& w : warnings) fmt::print(stderr, "WARNING: {}\n", w);
   if (o.json) {
     nlohmann::json j{{"robot", m.name()},
                      {"output", o.output},
@@ -205,18 +231,25 @@ int run(const Options& o) {
                      {"lowest_point", {{"z", low.z}, {"t", low.t}, {"where", where}}},
                      {"tool_points", tool_json(eo.tool_points)},
                      {"peak_tool_speed", sp.tool},
+                     {"peak_tool_speed_point", sp.tool_point < 0 ? nlohmann::json("flange")
+                                                                 : nlohmann::json::array({eo.tool_points[static_cast<size_t>(sp.tool_point)].x(),
+                                                                                          eo.tool_points[static_cast<size_t>(sp.tool_point)].y(),
+                                                                                          eo.tool_points[static_cast<size_t>(sp.tool_point)].z()})},
+                     {"tool_mass", tool.mass},
                      {"peak_elbow_speed", std::isnan(sp.elbow) ? nlohmann::json(nullptr) : nlohmann::json(sp.elbow)},
                      {"peak_momentum", sp.momentum},
                      {"limits", [&] {
                         nlohmann::json c = nlohmann::json::object();
-                        if (std::isfinite(o.tool_speed_limit)) c["tool_speed"] = o.tool_speed_limit;
-                        if (std::isfinite(o.elbow_speed_limit)) c["elbow_speed"] = o.elbow_speed_limit;
-                        if (std::isfinite(o.momentum_limit)) c["momentum"] = o.momentum_limit;
+                        const char* keys[] = {"tool_speed", "elbow_speed", "momentum"};
+                        for (size_t k = 0; k < held.size(); ++k)
+                          if (held[k].given())
+                            c[keys[k]] = {{"entered", held[k].entered}, {"tolerance", held[k].tolerance}, {"kept_within", held[k].value()}};
                         return c;
                       }()},
                      {"min_height", o.min_height},
                      {"q0", vec(r.trajectory.q0)},
                      {"centre_raised", !raised.empty()},
+                     {"warnings", warnings},
                      {"units", {{"z", "m (base frame)"}, {"t", "s"}, {"tool_points", "m (flange frame)"}, {"min_height", "m"}, {"q0", "rad"},
                                 {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}}}};
     fmt::print("{}\n", j.dump(2));
@@ -277,15 +310,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
                                         "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points, e.g. a "
                                         "gripper's two fingertips): kept above --min-height like the flange, and its speed counts as the tool's for "
                                         "--tool-speed-limit. Without it a tool is not checked");
-  sub->add_option("--tool-speed-limit", o->tool_speed_limit,
-                  "Keep the tool's speed (the flange's centre and the --tool-point points) within the installation's tool speed "
-                  "limit [m/s] (Safety > Robot Limits), so the program runs without a stop")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_option("--elbow-speed-limit", o->elbow_speed_limit, "Keep the elbow's speed within this [m/s], as --tool-speed-limit")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_option("--momentum-limit", o->momentum_limit,
-                  "Keep the links' linear momentum within this [kg·m/s] (a payload's is not counted: give the limit less it)")
-      ->check(twinwatch::cli::positive_number());
+  twinwatch::cli::add_safety_limit_options(sub, o->safety, "Keep the design within");
   sub->add_flag("--json", o->json, "Print the summary (condition numbers, limits, peaks) as JSON");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success but the JSON that --json asks for");
   sub->add_flag("--progress", o->progress, "Show the progress bar even when stderr is not a terminal");

@@ -18,12 +18,17 @@ namespace {
 
 using namespace twinwatch;
 
+// the largest joint acceleration a program is written with when the robot file publishes no
+// acceleration limit [rad/s²]: the approach movej's own bound (ProgramOptions::approach_acceleration).
+// The designs and the swing pair stay below 6.
+constexpr double kMaxProgramAcceleration = 40.0;
+
 struct Options {
   std::string scenario, output, name, robot;
   double duration = 0.0;
   std::vector<double> tool;  // --tool-point, three numbers per point [m, flange frame]
-  // the installation's safety limits (Installation > Safety > Robot Limits), checked when given
-  double tool_speed_limit = 0.0, elbow_speed_limit = 0.0, momentum_limit = 0.0;
+  // the installation's safety limits (Installation > Safety > Robot Limits), checked when given, and the tool
+  twinwatch::cli::SafetyLimitOptions safety;
   sim::ProgramOptions program;
   bool duration_given = false, json = false, quiet = false;
 };
@@ -90,50 +95,88 @@ int run(Options o) {
     if (!tool_points[k].allFinite() || tool_points[k].norm() > 2.0)
       throw InvalidArgument(fmt::format("--tool-point (number {} of {}): expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})",
                                         k + 1, tool_points.size(), tool_points[k].x(), tool_points[k].y(), tool_points[k].z()));
-  const sim::SafetyPeaks safety = sim::safety_peaks(motion, robot, tool_points, s.options.payload);
+  // the momentum counts the tool on the flange (--tool-mass) and the scenario's payload
+  const twinwatch::cli::ToolBody carried = twinwatch::cli::tool_body(o.safety, s.options.payload.mass, s.options.payload.com);
+  if (carried.mass > robot.payload_limit())
+    throw InvalidArgument(fmt::format("--tool-mass {:g} kg{}: the flange would carry {:g} kg, beyond {} ({:g} kg)", o.safety.tool_mass,
+                                      s.options.payload.mass > 0 ? fmt::format(" and the scenario's {:g} kg payload", s.options.payload.mass)
+                                                                 : std::string(),
+                                      carried.mass, robot.payload_limit_text(), robot.payload_limit()));
+  model::RigidBodyInertia carried_body;
+  carried_body.mass = carried.mass;
+  carried_body.com = carried.com;
+  const std::vector<twinwatch::cli::OperationalLimit> held = twinwatch::cli::operational_limits(o.safety);
+  const sim::SafetyPeaks safety = sim::safety_peaks(motion, robot, tool_points, carried_body);
   const std::string tool_where =
       safety.tool_point < 0 ? std::string("the flange's centre")
                             : fmt::format("tool point {} ({:g}, {:g}, {:g}) m", safety.tool_point + 1, tool_points[safety.tool_point].x(),
                                           tool_points[safety.tool_point].y(), tool_points[safety.tool_point].z());
   struct Limit {
-    const char* option;
     const char* key;  // (--json, as excite's)
     const char* what;
-    double peak, at, limit;
+    double peak, at;
+    twinwatch::cli::OperationalLimit limit;
     const char* unit;
     std::string where;  // " (the point)" for the tool, else empty
+    bool exceeded() const { return limit.given() && peak > limit.value(); }
   };
-  const std::vector<Limit> limits{{"--tool-speed-limit", "tool_speed", "tool speed", safety.tool_speed, safety.tool_t, o.tool_speed_limit, "m/s",
-                                   " (" + tool_where + ")"},
-                                  {"--elbow-speed-limit", "elbow_speed", "elbow speed", safety.elbow_speed, safety.elbow_t, o.elbow_speed_limit, "m/s", ""},
-                                  {"--momentum-limit", "momentum", "momentum", safety.momentum, safety.momentum_t, o.momentum_limit, "kg·m/s", ""}};
+  const std::vector<Limit> limits{{"tool_speed", "tool speed", safety.tool_speed, safety.tool_t, held[0], "m/s", " (" + tool_where + ")"},
+                                  {"elbow_speed", "elbow speed", safety.elbow_speed, safety.elbow_t, held[1], "m/s", ""},
+                                  {"momentum", "momentum", safety.momentum, safety.momentum_t, held[2], "kg·m/s", ""}};
   // the same path K times slower divides every speed and the momentum by K: the factor that fits them all
   double fits = 1.0;
+  std::string beyond;  // every limit the motion passes
   for (const Limit& l : limits)
-    if (l.limit > 0.0 && l.peak > l.limit) fits = std::max(fits, l.peak / l.limit);
-  const double slower = std::ceil(o.program.slow_down * fits * 1.001 * 100.0) / 100.0;
-  const double slower_total = [&] {
-    if (fits == 1.0) return motion.total();
-    sim::ProgramOptions p = o.program;
-    p.slow_down = std::min(100.0, slower);
-    return sim::ProgramMotion(form, p).total();
-  }();
-  for (const Limit& l : limits)
-    if (l.limit > 0.0 && l.peak > l.limit)
-      throw InvalidArgument(fmt::format(
-          "{}: the program's {} reaches {:.3f} {} at {:.2f} s{}, beyond {} {:g} {}: the arm would stop or slow mid-run; no program written. "
-          "{}; or make the motion slower ({}), or run it where the installation allows more",
-          o.scenario, l.what, l.peak, l.unit, l.at, l.where, l.option,
-          l.limit, l.unit,
-          slower <= 100.0 ? fmt::format("--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s)", slower,
-                                        fits > l.peak / l.limit ? "the limits" : "it", slower_total, motion.total())
-                          : fmt::format("no --slow-down up to 100 fits it (it needs {:.0f})", slower),
-          s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
-                                         : "lower the trajectory's amplitudes or frequencies"));
+    if (l.exceeded()) {
+      fits = std::max(fits, l.peak / l.limit.value());
+      beyond += fmt::format("{}its {} reaches {:.3f} {} at {:.2f} s{}, beyond {}", beyond.empty() ? "" : "; ", l.what, l.peak, l.unit, l.at,
+                            l.where, l.limit.text(l.unit));
+    }
+  if (!beyond.empty()) {
+    const double slower = std::ceil(o.program.slow_down * fits * 1.001 * 100.0) / 100.0;
+    std::string remedy;
+    if (slower <= 100.0) {
+      sim::ProgramOptions p = o.program;
+      p.slow_down = slower;
+      remedy = fmt::format("--slow-down {:.2f} runs the same path within {} ({:.1f} s instead of {:.1f} s)", slower,
+                           std::count_if(limits.begin(), limits.end(), [](const Limit& l) { return l.exceeded(); }) > 1 ? "them" : "it",
+                           sim::ProgramMotion(form, p).total(), motion.total());
+    } else {
+      remedy = fmt::format("No --slow-down up to 100 fits it (it needs {:.3g})", slower);
+    }
+    throw InvalidArgument(fmt::format(
+        "{}: the program passes the installation's limits: {}: the arm would be slowed or stopped mid-run; no program written. {}; or make the motion slower ({}), or "
+        "run it where the installation allows more",
+        o.scenario, beyond, remedy,
+        s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
+                                       : "lower the trajectory's amplitudes or frequencies"));
+  }
+  // what the drives can follow: the rigid body's torque within each joint's torque_max, and, where the
+  // robot file publishes no acceleration limit (UR publishes none), accelerations within
+  // kMaxProgramAcceleration (a ramp of a few ms commanded 1000 rad/s², review of session 45)
+  for (int j = 0; j < robot.n_dof(); ++j)
+    if (!std::isfinite(robot.joint(j).limits.qdd_max) && peaks.qdd[j] > kMaxProgramAcceleration)
+      throw InvalidArgument(fmt::format("{}: the program accelerates J{} at up to {:.3g} rad/s², beyond {:g} rad/s² (the most a program "
+                                        "written here commands where the robot file gives no acceleration limit, as for the approach's "
+                                        "movej); no program written. {}",
+                                        o.scenario, j + 1, peaks.qdd[j], kMaxProgramAcceleration,
+                                        motion.ramp_in() + motion.ramp_out() > 0.0 && motion.ramp_in() < 0.5 && motion.ramp_out() < 0.5
+                                            ? fmt::format("Its ramps are short (--ramp {:g} s): lengthen them, or slow it down (--slow-down)",
+                                                          o.program.ramp)
+                                            : std::string("Slow it down (--slow-down)")));
+  for (int j = 0; j < robot.n_dof(); ++j) {
+    const double tmax = robot.joint(j).limits.torque_max;
+    if (std::isfinite(tmax) && safety.torque[j] > tmax)
+      throw InvalidArgument(fmt::format("{}: the program's motion needs {:.1f} N·m on J{} at {:.2f} s (rigid body{}, no friction), beyond "
+                                        "its {:g} N·m: the drive cannot follow it; no program written. {}",
+                                        o.scenario, safety.torque[j], j + 1, safety.torque_t[j],
+                                        carried.mass > 0 ? fmt::format(" with {:g} kg on the flange", carried.mass) : std::string(), tmax,
+                                        peaks.qdd[j] > 1.0 ? "Slow it down (--slow-down) or lengthen --ramp" : "Carry less"));
+  }
   std::vector<std::string> header{fmt::format("Written by 'twinwatch urscript' from {} (trajectory {}).", o.scenario, s.trajectory_type)};
   header.push_back(fmt::format("Peak tool speed {:.3f} m/s ({}, at {:.2f} s), elbow speed {:.3f} m/s, momentum {:.2f} kg m/s{}:",
                                safety.tool_speed, tool_where, safety.tool_t, safety.elbow_speed, safety.momentum,
-                               s.options.payload.mass > 0 ? fmt::format(" (with the {:g} kg payload)", s.options.payload.mass) : std::string()));
+                               carried.mass > 0 ? fmt::format(" (with {:g} kg on the flange)", carried.mass) : std::string()));
   header.push_back("  the installation's Robot Limits (tool speed, elbow speed, momentum) must allow them, or the arm stops or slows mid-run.");
   if (!s.faults.empty())
     header.push_back(fmt::format("The scenario's {} fault(s) are the virtual robot's: the program has none.", s.faults.size()));
@@ -151,7 +194,10 @@ int run(Options o) {
   }
   VectorJ q0, qd, qdd;
   motion.evaluate(0.0, q0, qd, qdd);
-  const double record_for = std::ceil(motion.total() + 30.0);  // (and the approach, whose length depends on where the arm is)
+  // the approach's movej is the controller's: the longest it takes, from --max-approach away (a
+  // trapezoid in the leading joint; the controller itself keeps it within the installation's limits)
+  const double approach_s = sim::approach_time_at_most(o.program);
+  const double record_for = std::ceil(approach_s + motion.total() + 30.0);
   if (o.json) {
     nlohmann::json j;
     j["program"] = o.output;
@@ -179,16 +225,28 @@ int run(Options o) {
     j["limits"] = [&] {
       nlohmann::json c = nlohmann::json::object();
       for (const Limit& l : limits)
-        if (l.limit > 0.0) c[l.key] = l.limit;
+        if (l.limit.given()) c[l.key] = {{"entered", l.limit.entered}, {"tolerance", l.limit.tolerance}, {"kept_within", l.limit.value()}};
       return c;
     }();
     j["max_approach"] = o.program.max_approach;
+    j["approach_s_at_most"] = approach_s;
+    j["record_for_s"] = record_for;
+    j["tool_points"] = [&] {
+      nlohmann::json a = nlohmann::json::array();
+      for (const Eigen::Vector3d& p : tool_points) a.push_back({p.x(), p.y(), p.z()});
+      return a;
+    }();
+    j["tool_mass"] = o.safety.tool_mass;
+    j["carried_mass"] = carried.mass;
+    j["peak_torque"] = vec(safety.torque);
     j["payload_declared"] = o.program.declare_payload;
     j["faults_left_out"] = s.faults.size();
     j["warnings"] = warnings;
-    j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"peak_qd", "rad/s"}, {"peak_qdd", "rad/s^2"},
+    j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"q_min", "rad"}, {"q_max", "rad"}, {"approach_s_at_most", "s"}, {"record_for_s", "s"},
+                  {"tool_points", "m (flange frame)"}, {"tool_mass", "kg"}, {"carried_mass", "kg (tool and the scenario's payload)"},
+                  {"peak_torque", "N·m (rigid body)"}, {"peak_qd", "rad/s"}, {"peak_qdd", "rad/s^2"},
                   {"peak_tool_speed", "m/s"}, {"peak_elbow_speed", "m/s"}, {"peak_momentum", "kg m/s"}, {"max_approach", "rad"},
-                  {"peak_tool_speed_t", "s"}, {"peak_elbow_speed_t", "s"}, {"peak_momentum_t", "s"}, {"limits", "m/s, m/s, kg m/s"}};
+                  {"peak_tool_speed_t", "s"}, {"peak_elbow_speed_t", "s"}, {"peak_momentum_t", "s"}, {"limits", "m/s, m/s, kg m/s (entered, the tolerance, and the value kept within)"}};
     fmt::print("{}\n", j.dump(2));
   } else if (!o.quiet) {
     fmt::print("{} -> {}: URScript for a {} (e-Series), {:.1f} s of motion{}, servoj every {:g} ms\n", s.name, o.output, robot.name(),
@@ -212,16 +270,17 @@ int run(Options o) {
     for (const Limit& l : limits)
       fmt::print("  peak {:<22} {:.3f} {} at {:.2f} s{}{}\n", l.what, l.peak, l.unit, l.at,
                  l.where,
-                 l.limit > 0.0 ? fmt::format(": within {} {:g} ({:.0f} %)", l.option, l.limit, 100.0 * l.peak / l.limit)
-                               : fmt::format(": not checked (the installation's limit: {})", l.option));
+                 l.limit.given() ? fmt::format(": within {} ({:.0f} %)", l.limit.text(l.unit), 100.0 * l.peak / l.limit.value())
+                                 : fmt::format(": not checked (the installation's limit: {})", l.limit.option));
     if (tool_points.empty()) fmt::print("  a tool on the flange was not checked: give its farthest points with --tool-point X Y Z (flange frame, m)\n");
     fmt::print("  payload: {}\n", o.program.declare_payload
                                       ? fmt::format("declared with set_payload({:g} kg, [{:g}, {:g}, {:g}] m)", s.options.payload.mass,
                                                     s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z())
                                       : std::string("not changed (the installation's payload is used; --declare-payload declares the scenario's)"));
     if (!s.faults.empty()) fmt::print("  note: the scenario's {} fault(s) are the virtual robot's; the program has none\n", s.faults.size());
-    fmt::print("  record it: start 'twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o {}.csv', then run the program\n",
-               record_for, s.name);
+    fmt::print("  record it: start 'twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o {}.csv', then run the program\n"
+               "    (the motion, up to {:.1f} s of approach from --max-approach away at --approach-speed {:g} rad/s, and 30 s to spare)\n",
+               record_for, s.name, approach_s, o.program.approach_speed);
   }
   for (const std::string& w : warnings) fmt::print(stderr, "WARNING: {}\n", w);
   return 0;
@@ -272,15 +331,7 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
   twinwatch::cli::add_tool_point_option(sub, o->tool,
                                         "A point of the tool on the flange, in the flange frame [m] (3 numbers; repeat for more points): "
                                         "its speed counts as the tool's, as the installation's tool positions do");
-  sub->add_option("--tool-speed-limit", o->tool_speed_limit,
-                  "The installation's tool speed limit [m/s] (Safety > Robot Limits): a motion faster at the flange or a tool point is "
-                  "refused, no program written (default: reported, not checked)")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_option("--elbow-speed-limit", o->elbow_speed_limit, "The installation's elbow speed limit [m/s], checked as --tool-speed-limit")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_option("--momentum-limit", o->momentum_limit,
-                  "The installation's momentum limit [kg·m/s], checked against the arm's linear momentum with the scenario's payload")
-      ->check(twinwatch::cli::positive_number());
+  twinwatch::cli::add_safety_limit_options(sub, o->safety, "Refuse (no program written) a motion beyond");
   sub->add_flag("--declare-payload", o->program.declare_payload,
                 "Declare the scenario's payload with set_payload before moving (else the installation's payload is kept)");
   sub->add_flag("--call", o->program.call,

@@ -68,13 +68,15 @@ struct ExcitationOptions {
   std::vector<Eigen::Vector3d> tool_points;
   /// The installation's safety limits the program will run under (PolyScope: Installation > Safety >
   /// Robot Limits), model::CartesianSpeeds: the tool speed (the flange's centre and the tool points)
-  /// [m/s], the elbow speed [m/s], the links' momentum [kg·m/s] (no payload: excitations are run on
-  /// the arm as it is). +infinity: none. Each is linear in qd at a fixed pose, so they are enforced as
+  /// [m/s], the elbow speed [m/s], the momentum of the links and of `carried` [kg·m/s]. +infinity: none. Each is linear in qd at a fixed pose, so they are enforced as
   /// the joint limits are, by projection: a candidate beyond one on the grid is scaled down as a whole
   /// (all joints alike) until it keeps them, and checked so on the dense grid.
   double tool_speed_max = std::numeric_limits<double>::infinity();
   double elbow_speed_max = std::numeric_limits<double>::infinity();
   double momentum_max = std::numeric_limits<double>::infinity();
+  /// What the flange carries while the excitation runs (a gripper; mass and centre of mass in the
+  /// flange frame): counted in the momentum only (the design's cond(W) is the arm's).
+  model::RigidBodyInertia carried;
   /// Throws InvalidArgument naming the first bad field (q0 is checked against the model's joints).
   void validate(int n_dof) const;
 };

@@ -106,6 +106,11 @@ ClosedForm scenario_closed_form(const Scenario& s);
 std::shared_ptr<const ProgramMotion> rehearse_as_program(Scenario& s, const ProgramOptions& options);
 
 /// Peak |target velocity| and |acceleration| per joint over a motion, sampled every servo period.
+/// The longest the approach (movej from wherever the arm stands to the start pose) takes [s]: the
+/// leading joint's trapezoid over max_approach at approach_speed and approach_acceleration (farther,
+/// the program halts instead). The recording a program suggests covers it.
+double approach_time_at_most(const ProgramOptions& o);
+
 struct MotionPeaks {
   VectorJ qd, qdd;
   VectorJ q_min, q_max;
@@ -125,6 +130,10 @@ struct SafetyPeaks {
   double elbow_t = 0.0;
   double momentum = 0.0;     ///< [kg·m/s] model::CartesianSpeeds::momentum at its peak
   double momentum_t = 0.0;
+  /// [N·m] per joint, the largest |torque| the rigid body needs along the motion (inverse dynamics
+  /// with the payload's mass at its centre; no friction, no rotor inertia: a lower bound of what the
+  /// drive gives), and when [s]: beyond the joint's torque_max no drive follows the motion
+  VectorJ torque, torque_t;
 };
 /// `tool_points` in the flange frame [m]; `payload` the part the flange carries (flange frame), part
 /// of the momentum. Throws InvalidArgument when the robot has fewer than three joints or other than
