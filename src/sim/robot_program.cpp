@@ -81,7 +81,10 @@ void ProgramOptions::validate() const {
        "> 0 and at most 40 rad/s²", approach_acceleration);
   need(std::isfinite(max_approach) && max_approach > 0.0 && max_approach <= kTwoPi, "max_approach", "> 0 and at most 2 pi rad",
        max_approach);
+  if (target_payload && !declare_payload) throw InvalidArgument("target_payload: it says how the payload is declared, and none is (declare_payload)");
   if (declare_payload) {
+    need(payload.inertia_com.allFinite() && (payload.inertia_com - payload.inertia_com.transpose()).norm() <= 1e-12 * (1.0 + payload.inertia_com.norm()),
+         "payload inertia", "a finite symmetric matrix", payload.inertia_com.norm());
     if (payload.mass == 0.0)
       throw InvalidArgument("payload: the motion carries no payload, so there is none to declare (set_payload(0) would tell the "
                             "controller the flange carries nothing, a gripper included)");
@@ -277,8 +280,9 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, fmt::format("# Peak speed [rad/s]: {}", joints_text(peaks.qd, 3)));
   line(1, fmt::format("# Peak acceleration [rad/s^2]: {}", joints_text(peaks.qdd, 3)));
   if (o.declare_payload)
-    line(1, fmt::format("# Payload: declared with set_payload({} kg, CoG [{}, {}, {}] m) before the arm moves.", o.payload.mass,
-                        o.payload.com.x(), o.payload.com.y(), o.payload.com.z()));
+    line(1, fmt::format("# Payload: declared with {}({} kg, CoG [{}, {}, {}] m{}) before the arm moves.",
+                        o.target_payload ? "set_target_payload" : "set_payload", o.payload.mass, o.payload.com.x(), o.payload.com.y(),
+                        o.payload.com.z(), o.target_payload ? ", its inertia about the CoG" : ""));
   else
     line(1, "# Payload: not changed: the controller uses the installation's (set it to what the flange carries).");
   line(1, "# Before running it: run it in URSim or at a low speed slider first (speed scaling slows the whole");
@@ -319,9 +323,15 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(2, "halt");
   line(1, "end");
   line(1, fmt::format("textmsg(\"twinwatch: {}: moving to the start pose\")", shown));
-  if (o.declare_payload)
+  if (o.declare_payload && o.target_payload) {
+    const Eigen::Matrix3d& I = o.payload.inertia_com;  // (URScript's order: Ixx, Iyy, Izz, Ixy, Ixz, Iyz)
+    line(1, fmt::format("set_target_payload({}, [{}, {}, {}], [{}, {}, {}, {}, {}, {}])", flt(o.payload.mass), flt(o.payload.com.x()),
+                        flt(o.payload.com.y()), flt(o.payload.com.z()), flt(I(0, 0)), flt(I(1, 1)), flt(I(2, 2)), flt(I(0, 1)), flt(I(0, 2)),
+                        flt(I(1, 2))));
+  } else if (o.declare_payload) {
     line(1, fmt::format("set_payload({}, [{}, {}, {}])", flt(o.payload.mass), flt(o.payload.com.x()), flt(o.payload.com.y()),
                         flt(o.payload.com.z())));
+  }
   line(1, fmt::format("movej({}, a={}, v={})", list(q_start), flt(o.approach_acceleration), flt(o.approach_speed)));
   line(1, fmt::format("textmsg(\"twinwatch: {}: the motion starts ({:.1f} s)\")", shown, motion.total()));
   line(1, "tw_n = 0");

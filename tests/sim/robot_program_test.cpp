@@ -156,6 +156,9 @@ TEST(RobotProgram, OptionsAndMotionsARobotCannotRunAreRefusedByName) {
   o.declare_payload = true;  // (no payload in the options)
   EXPECT_THAT(refused(o), HasSubstr("payload: the motion carries no payload, so there is none to declare"));
   o = options(30.0);
+  o.target_payload = true;  // (how to declare, with nothing declared)
+  EXPECT_THAT(refused(o), HasSubstr("target_payload: it says how the payload is declared, and none is"));
+  o = options(30.0);
   o.lookahead = 0.5;
   EXPECT_THAT(refused(o), HasSubstr("lookahead: expected 0.03 to 0.2 s (servoj's range), got 0.5"));
   o = options(30.0);
@@ -234,10 +237,12 @@ TEST(RobotProgram, TheURScriptCommandsTheMotionEvery2msIn32BitFloats) {
   for (const Case& c : std::vector<Case>{{"fourier", fourier(11), 120.0}, {"sine", sine(), 40.0}, {"chirp", chirp(), 50.0},
                                          {"fourier cut", fourier(12), 25.0}}) {
     ProgramOptions o = options(c.duration);
-    o.declare_payload = c.what == "sine";
+    o.declare_payload = c.what == "sine" || c.what == "fourier cut";
+    o.target_payload = c.what == "fourier cut";  // (set_target_payload, with the inertia about the CoG)
     o.call = c.what == "chirp";  // (a Script node's file)
     o.payload.mass = 2.0;
     o.payload.com = Eigen::Vector3d(0.06, 0.04, 0.05);
+    o.payload.inertia_com << 0.004, 0.0001, -0.0002, 0.0001, 0.005, 0.0003, -0.0002, 0.0003, 0.006;
     const ProgramMotion m(*c.traj->closed_form(), o);
     const ProgramRun r = run_program(m, o);
     const auto& calls = r.trace.calls;
@@ -247,9 +252,14 @@ TEST(RobotProgram, TheURScriptCommandsTheMotionEvery2msIn32BitFloats) {
     EXPECT_FALSE(r.trace.halted) << c.what;
     size_t k = 2;
     if (o.declare_payload) {
-      ASSERT_EQ(calls[k].name, "set_payload") << c.what;
+      ASSERT_EQ(calls[k].name, o.target_payload ? "set_target_payload" : "set_payload") << c.what;
       EXPECT_FLOAT_EQ(calls[k].args.at(0).as_float(), 2.0f);
       EXPECT_FLOAT_EQ(calls[k].args.at(1).list.at(0).as_float(), 0.06f);
+      EXPECT_FLOAT_EQ(calls[k].args.at(1).list.at(2).as_float(), 0.05f);
+      if (o.target_payload) {  // URScript's order: Ixx, Iyy, Izz, Ixy, Ixz, Iyz
+        const std::vector<float> want{0.004f, 0.005f, 0.006f, 0.0001f, -0.0002f, 0.0003f};
+        for (size_t i = 0; i < 6; ++i) EXPECT_FLOAT_EQ(calls[k].args.at(2).list.at(i).as_float(), want[i]) << i;
+      }
       ++k;
     }
     ASSERT_EQ(calls[k].name, "movej") << c.what;

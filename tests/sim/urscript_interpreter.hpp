@@ -2,7 +2,7 @@
 // A test's interpreter for the subset of URScript that sim::urscript_program writes, with URScript's
 // 32-bit floats and ints: one `def NAME(): ... end` block (comments outside it), assignments, while /
 // if / elif / else ... end, halt, + - * / and comparisons, unary minus, lists and indexing a list by
-// an int, and the calls sin, cos, textmsg, popup, get_actual_joint_positions, set_payload, movej,
+// an int, and the calls sin, cos, textmsg, popup, get_actual_joint_positions, set_payload, set_target_payload, movej,
 // servoj, stopj (named arguments as URScript takes them). What the program commands is recorded, so
 // a test can compare it with the motion it was written from; the arm's pose that
 // get_actual_joint_positions returns is the test's (Interpreter::arm_at).
@@ -389,7 +389,7 @@ class Interpreter {
           return v;
         }
         static const std::map<std::string, std::vector<std::string>> known{
-            {"textmsg", {}}, {"set_payload", {}}, {"movej", {"a", "v"}}, {"servoj", {"t", "lookahead_time", "gain"}}, {"stopj", {}},
+            {"textmsg", {}}, {"set_payload", {}}, {"set_target_payload", {}}, {"movej", {"a", "v"}}, {"servoj", {"t", "lookahead_time", "gain"}}, {"stopj", {}},
             {"popup", {"title", "warning", "error", "blocking"}}};
         const auto it = known.find(c.name);
         if (it == known.end()) throw std::runtime_error("unknown function '" + c.name + "'");
@@ -401,7 +401,7 @@ class Interpreter {
         // positional arguments as the subset uses them: textmsg(s), set_payload(m, [cx, cy, cz]),
         // movej(q, a=, v=), servoj(q, t=, lookahead_time=, gain=), stopj(a)
         // textmsg(s1, s2=""), popup(s, title=, warning=, error=, blocking=)
-        const size_t positional = c.name == "set_payload" ? 2 : 1;
+        const size_t positional = c.name == "set_payload" ? 2 : c.name == "set_target_payload" ? 3 : 1;
         if (c.args.size() != positional && !(c.name == "textmsg" && c.args.size() == 2))
           throw std::runtime_error(c.name + " takes " + std::to_string(positional) + " positional argument(s)");
         if ((c.name == "textmsg" || c.name == "popup") && c.args[0].kind != Value::Str)
@@ -412,8 +412,10 @@ class Interpreter {
         const bool joints = c.name == "movej" || c.name == "servoj";
         if (joints && (c.args[0].kind != Value::List || c.args[0].list.size() != 6))
           throw std::runtime_error(c.name + " takes a list of six joint positions");
-        if (c.name == "set_payload" && (c.args[1].kind != Value::List || c.args[1].list.size() != 3))
-          throw std::runtime_error("set_payload takes a centre of gravity of three numbers");
+        if ((c.name == "set_payload" || c.name == "set_target_payload") && (c.args[1].kind != Value::List || c.args[1].list.size() != 3))
+          throw std::runtime_error(c.name + " takes a centre of gravity of three numbers");
+        if (c.name == "set_target_payload" && (c.args[2].kind != Value::List || c.args[2].list.size() != 6))
+          throw std::runtime_error("set_target_payload takes an inertia of six numbers [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]");
         if (c.name == "servoj") {
           std::vector<float> q;
           for (const Value& v : c.args[0].list) q.push_back(v.as_float());

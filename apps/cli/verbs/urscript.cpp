@@ -70,6 +70,7 @@ int run(Options o) {
   o.program.title = o.scenario;
   o.program.name = o.name.empty() ? s.name : o.name;
   o.program.payload = s.options.payload;
+  if (o.program.target_payload) o.program.declare_payload = true;
   // (the library names its fields; the user typed options)
   const auto motion_of = [&]() {
     try {
@@ -240,6 +241,8 @@ int run(Options o) {
     j["carried_mass"] = carried.mass;
     j["peak_torque"] = vec(safety.torque);
     j["payload_declared"] = o.program.declare_payload;
+    j["payload_command"] = o.program.declare_payload ? nlohmann::json(o.program.target_payload ? "set_target_payload" : "set_payload")
+                                                     : nlohmann::json(nullptr);
     j["faults_left_out"] = s.faults.size();
     j["warnings"] = warnings;
     j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"q_min", "rad"}, {"q_max", "rad"}, {"approach_s_at_most", "s"}, {"record_for_s", "s"},
@@ -274,8 +277,10 @@ int run(Options o) {
                                  : fmt::format(": not checked (the installation's limit: {})", l.limit.option));
     if (tool_points.empty()) fmt::print("  a tool on the flange was not checked: give its farthest points with --tool-point X Y Z (flange frame, m)\n");
     fmt::print("  payload: {}\n", o.program.declare_payload
-                                      ? fmt::format("declared with set_payload({:g} kg, [{:g}, {:g}, {:g}] m)", s.options.payload.mass,
-                                                    s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z())
+                                      ? fmt::format("declared with {}({:g} kg, [{:g}, {:g}, {:g}] m{})",
+                                                    o.program.target_payload ? "set_target_payload" : "set_payload", s.options.payload.mass,
+                                                    s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z(),
+                                                    o.program.target_payload ? ", its inertia about the CoG" : "")
                                       : std::string("not changed (the installation's payload is used; --declare-payload declares the scenario's)"));
     if (!s.faults.empty()) fmt::print("  note: the scenario's {} fault(s) are the virtual robot's; the program has none\n", s.faults.size());
     fmt::print("  record it: start 'twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o {}.csv', then run the program\n"
@@ -334,6 +339,9 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
   twinwatch::cli::add_safety_limit_options(sub, o->safety, "Refuse (no program written) a motion beyond");
   sub->add_flag("--declare-payload", o->program.declare_payload,
                 "Declare the scenario's payload with set_payload before moving (else the installation's payload is kept)");
+  sub->add_flag("--set-target-payload", o->program.target_payload,
+                "Declare it with set_target_payload (mass, CoG and the inertia about the CoG; PolyScope 5.10 and newer, where "
+                "set_payload is deprecated) instead; implies --declare-payload");
   sub->add_flag("--call", o->program.call,
                 "End the file with the call NAME() after the def, as a Polyscope Script node (file) needs (port 30002 takes the def alone)");
   sub->add_option("--robot", o->robot,

@@ -48,6 +48,9 @@ struct ProgramOptions {
   /// nobody checked. 0.5 rad takes the movej at most 2 s at 0.25 rad/s.
   double max_approach = 0.5;
   bool declare_payload = false;  ///< the program calls set_payload(mass, com) before it moves
+  /// ... with set_target_payload(mass, com, [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]) instead (the inertia about
+  /// the CoG, flange axes; PolyScope 5.10 and newer, where set_payload is deprecated)
+  bool target_payload = false;
   /// the file ends with the call `NAME()` after the def, as a Polyscope Script node (file) needs; without
   /// it the file is the one def block the controller's port 30002 runs
   bool call = false;
