@@ -1062,9 +1062,9 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
       // the onset moves with the seed so that contacts hit different phases of the cycle
       const double onset = kOnset + 0.37 * static_cast<double>(run.seed % 11);
       const std::string yaml = fmt::format(
-          "robot: ur3e\nseed: {}\nduration: {}\ntrajectory: {}\npayload: {{mass: 0.5, com: [0, 0, 0.04]}}\n"
+          "robot: {}\nseed: {}\nduration: {}\ntrajectory: {}\npayload: {{mass: 0.5, com: [0, 0, 0.04]}}\n"
           "faults:\n  - {{type: collision, link: {}, onset: {}, magnitude: {}, duration: 0.05, point: {}, direction: [0.3, 1.0, -0.2]}}\n",
-          run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
+          twin.robot_name(), run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
       const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m));
       const device::Recording rec = simulate_to_memory(s, s.path);
       ident::TwinModel t = twin;

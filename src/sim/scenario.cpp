@@ -329,7 +329,7 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
 }  // namespace
 
 
-Scenario parse_scenario(const std::string& text, const std::string& origin) {
+Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -342,7 +342,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
-  s.robot = y.text(root, "", "robot", "ur3e");
+  s.robot = robot.empty() ? y.text(root, "", "robot", "ur3e") : robot;
   s.program = y.text(root, "", "program", "");
   if (root["program"] && (s.program.empty() || s.program.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") !=
                                                    std::string::npos))
@@ -602,13 +602,13 @@ Scenario parse_scenario(const std::string& text, const std::string& origin) {
   return s;
 }
 
-Scenario load_scenario(const std::string& path) {
+Scenario load_scenario(const std::string& path, const std::string& robot) {
   refuse_directory_input(path);
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the scenario file");
   std::stringstream ss;
   ss << f.rdbuf();
-  return parse_scenario(ss.str(), path);
+  return parse_scenario(ss.str(), path, robot);
 }
 
 void override_duration(Scenario& s, double duration, const std::string& option) {

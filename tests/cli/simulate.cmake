@@ -52,3 +52,10 @@ set_tests_properties(cli.serve_robot_wait_client_negative PROPERTIES
 add_test(NAME cli.record_wait_negative
          COMMAND sh -c "$<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --wait -1 --duration 1 -o ${ds}/never.csv 2>&1; echo exit \$?")
 set_tests_properties(cli.record_wait_negative PROPERTIES PASS_REGULAR_EXPRESSION "error: --wait must be a finite time >= 0 s, got -1\nexit [1-9]")
+# a scenario run on another robot (simulate --robot), and identify checking the arm against the
+# recordings' controller torque: a UR5e's recording is refused under the default --robot ur3e, naming
+# the ur5e; taken with --robot ur5e (no warning); a UR3e's taken as a ur5e only with a warning
+add_test(NAME cli.identify_checks_the_arm
+  COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; S=${PROJECT_SOURCE_DIR}/scenarios/ur3e; \$T simulate \$S/excitation.yaml --robot ur5e --duration 20 -o ${ds}/arm5.csv -q && \$T simulate \$S/excitation.yaml --duration 20 -o ${ds}/arm3.csv -q; \$T identify ${ds}/arm5.csv -o ${ds}/arm.json 2>&1; echo exit \$?; \$T identify ${ds}/arm5.csv --robot ur5e -o ${ds}/arm.json 2>&1 | grep -E 'WARNING|^twin'; \$T identify ${ds}/arm3.csv --robot ur5e -o ${ds}/arm.json 2>&1 | grep -E 'WARNING|^twin'; \$T identify ${ds}/arm3.csv -o ${ds}/arm.json 2>&1 | grep -E 'note: --robot'; \$T simulate \$S/excitation.yaml --robot nosuch -o ${ds}/x.csv 2>&1; echo exit \$?")
+set_tests_properties(cli.identify_checks_the_arm PROPERTIES PASS_REGULAR_EXPRESSION
+  "error: the recordings are not of a ur3e: the controller's own torque \\(target_moment\\) along its targets is reproduced by the ur5e's model \\(relative rms 0\\.[01][0-9]\\) and not by the ur3e's \\(0\\.[5-9][0-9][^\n]*Give --robot ur5e[^\n]*\nexit 2\ntwin 'ur5e'[^\n]*\nWARNING: the recordings are not of a ur5e: [^\n]*reproduced by the ur3e's model[^\n]*identified as the ur5e you gave, as asked\ntwin 'ur5e'[^\n]*\nnote: --robot not given: identified as a ur3e \\(the default\\), whose model reproduces the controller's torque to 0\\.[0-2][0-9] relative rms\nerror: robot 'nosuch' is unknown[^\n]*\nexit 2\n")

@@ -16,12 +16,13 @@
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/robot_program.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#include "evaluate.hpp"
 #include "verb_registry.hpp"
 
 namespace {
 
 struct Options {
-  std::string scenario, output;
+  std::string scenario, output, robot;
   long seed = -1;
   double duration = -1;
   bool seed_given = false, duration_given = false;  // (the values above are then the user's)
@@ -51,7 +52,8 @@ int run(const Options& o) {
   // neither output may be the scenario (or the other output): checked before the run writes anything
   require_output(o.output, {o.scenario});
   require_output(labels_path(o.output), {o.scenario, o.output});
-  sim::Scenario s = sim::load_scenario(o.scenario);
+  if (!o.robot.empty()) model::load_robot(o.robot);  // (a bad --robot said as such, not as the scenario's)
+  sim::Scenario s = sim::load_scenario(o.scenario, o.robot);
   // nor the robot description the scenario names
   require_output(o.output, {model::robot_file(s.robot)});
   require_output(labels_path(o.output), {model::robot_file(s.robot)});
@@ -124,6 +126,10 @@ twinwatch::cli::VerbRegistrar reg{"simulate", 20, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "Recording CSV to write; the labels go beside it (rec.csv -> rec.labels.json)")->required();
   auto* seed = sub->add_option("--seed", o->seed, "Override the scenario's seed");
+  sub->add_option("--robot", o->robot,
+                  "Run the scenario on this robot (name or file) instead of its own, e.g. the UR3e swing pair on a ur5e (its limits "
+                  "and rated payload are checked for this one)")
+      ->transform([](std::string r) { return twinwatch::cli::robot_reference(r); });
   auto* duration = sub->add_option("--duration", o->duration, "Override the duration [s] (one sample period to 1e6 s)");
   auto* as_program = sub->add_flag("--as-program", o->as_program,
                 "Run the motion 'twinwatch urscript' writes for a real arm instead: started at rest, the clock ramped where the "

@@ -32,10 +32,12 @@ struct Scenario {
   unsigned serial = 1;  ///< which physical robot (hidden parameters); the seed only changes noise
 };
 
-/// Loads and validates a scenario file (needs the robot to build Cartesian trajectories).
-Scenario load_scenario(const std::string& path);
+/// Loads and validates a scenario file (needs the robot to build Cartesian trajectories). `robot`
+/// (a name or description file) runs it on another robot than the file's `robot`, validated for
+/// that one (its joint limits, its rated payload); empty: the file's.
+Scenario load_scenario(const std::string& path, const std::string& robot = "");
 /// Same from YAML text; `origin` names it in errors.
-Scenario parse_scenario(const std::string& text, const std::string& origin);
+Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot = "");
 
 /// Replaces the scenario's duration [s] by a command-line override and checks it as the file's own:
 /// duration_problem() and the trajectory's joint limits over the new run. A fault that starts at or
