@@ -118,3 +118,10 @@ grep -A6 '\"temperature_slope\"' ${da}/twin_slope.json > ${da}/slope_after.txt &
 test -s ${da}/slope_before.txt && cmp ${da}/slope_before.txt ${da}/slope_after.txt && echo SLOPE-KEPT")
 set_tests_properties(cli.thresholds_program_keeps_the_temperature_slope PROPERTIES FIXTURES_REQUIRED twin
   PASS_REGULAR_EXPRESSION "learned on these recordings.*the twin's, which every threshold set shares.*SLOPE-KEPT")
+# thresholds -q: nothing on stdout on success (the twin is still updated); without it the summary
+add_test(NAME cli.thresholds_quiet
+  COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${da}/twin_q.json && \
+$<TARGET_FILE:twinwatch> thresholds --twin ${da}/twin_q.json ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv --payload-mass 0.5 -q 2>/dev/null | wc -c; echo exit \$?; \
+grep -c static_level ${da}/twin_q.json")
+set_tests_properties(cli.thresholds_quiet PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "^0\nexit 0\n[1-9]")

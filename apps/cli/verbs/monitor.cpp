@@ -540,7 +540,7 @@ int run_monitor(const MonitorOptions& o) {
 }
 
 struct ThresholdOptions {
-  bool progress = false;
+  bool progress = false, quiet = false;
   std::string twin, filter, program;
   std::vector<std::string> recordings, debounce_validation, column_maps;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
@@ -609,6 +609,12 @@ class CountedSamples : public device::SampleSource {
   ReadProgress* progress_;
 };
 
+// a line of the summary on stdout, unless -q
+template <typename... Args>
+void say(bool on, fmt::format_string<Args...> f, Args&&... a) {
+  if (on) fmt::print(f, std::forward<Args>(a)...);
+}
+
 int run_thresholds(const ThresholdOptions& o) {
   // before the learning run, which takes minutes on long recordings
   if (!o.program.empty()) monitor::check_program_name(o.program, "--program");
@@ -623,7 +629,7 @@ int run_thresholds(const ThresholdOptions& o) {
   std::vector<std::unique_ptr<device::FileSamples>> recs;
   for (const auto& f : o.recordings) {
     std::size_t bad = 0;
-    say_checking(f);
+    if (!o.quiet) say_checking(f);
     auto runs = cli::scan_training_runs(f, maps.of(f), twin.robot(), "thresholds", "learning thresholds", "thresholds", &bad);
     // (the learners hold them as the monitor does: said here, where the recording has its name)
     if (bad > 0)
@@ -640,7 +646,7 @@ int run_thresholds(const ThresholdOptions& o) {
         throw InvalidArgument(fmt::format("--debounce-validation {} is also one of the recordings the thresholds are learned on; "
                                           "the choice needs healthy runs they were not learned on",
                                           f));
-    say_checking(f);
+    if (!o.quiet) say_checking(f);
     auto runs = cli::scan_training_runs(f, maps.of(f), twin.robot(), "thresholds", "--debounce-validation", "thresholds --debounce-validation",
                                         nullptr);
     for (auto& r : runs) vrecs.push_back(std::move(r));
@@ -650,7 +656,7 @@ int run_thresholds(const ThresholdOptions& o) {
     return fmt::format("{} {}recording(s){}", recordings, kind, stretches > recordings ? fmt::format(" ({} driven stretches)", stretches) : "");
   };
   // the progress of each learner's reading, which on a shift's recordings takes minutes
-  ReadProgress progress(o.progress || isatty(STDERR_FILENO));
+  ReadProgress progress(o.progress || (!o.quiet && isatty(STDERR_FILENO)));
   size_t samples = 0, validation_samples = 0;
   std::vector<std::unique_ptr<CountedSamples>> counted, vcounted;
   for (const auto& r : recs) {
@@ -680,11 +686,11 @@ int run_thresholds(const ThresholdOptions& o) {
   const bool has_slope = settings.trend.temperature_slope.size() == twin.n_dof();
   if (!o.program.empty() && (has_slope || has_default_set)) {
     if (has_slope)
-      fmt::print("temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
+      say(!o.quiet, "temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
                  "again, without --program, on a warm-up from cold to change it)\n",
                  fmt::join(settings.trend.temperature_slope, " "));
     else
-      fmt::print("no temperature slope: the twin's default set was learned without one, and every threshold set shares it (learn the "
+      say(!o.quiet, "no temperature slope: the twin's default set was learned without one, and every threshold set shares it (learn the "
                  "default set again, without --program, on a warm-up from cold to learn one)\n");
   } else {
     std::vector<monitor::TrendRun> trend_runs;
@@ -693,12 +699,12 @@ int run_thresholds(const ThresholdOptions& o) {
       progress.begin("temperature slope", samples);
       settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
       progress.end();
-      fmt::print("temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
+      say(!o.quiet, "temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
                  "monitor and the wear trend compensate with it)\n",
                  fmt::join(settings.trend.temperature_slope, " "));
     } catch (const InvalidArgument& e) {
       progress.end();
-      fmt::print("note: no temperature slope learned ({}){}\n", e.what(),
+      say(!o.quiet, "note: no temperature slope learned ({}){}\n", e.what(),
                  settings.trend.temperature_slope.size() ? "; the twin's is kept" : "; give a warm-up from cold to learn one");
     }
   }
@@ -709,7 +715,7 @@ int run_thresholds(const ThresholdOptions& o) {
   {
     double seconds = 0.0;
     for (const auto& r : recs) seconds += r->seconds();
-    fmt::print(stderr, "learning thresholds on {}, {:.0f} s of data (the monitor runs over them, then a linear program per joint) ...\n",
+    if (!o.quiet) fmt::print(stderr, "learning thresholds on {}, {:.0f} s of data (the monitor runs over them, then a linear program per joint) ...\n",
                files(o.recordings.size(), recs.size(), ""), seconds);
   }
   progress.begin("thresholds", 2 * samples);
@@ -729,21 +735,21 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!vrecs.empty()) {
     std::vector<monitor::HealthyRun> val;
     for (const auto& r : vcounted) val.push_back({nullptr, p, r.get()});
-    fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} once per count ...\n",
+    if (!o.quiet) fmt::print(stderr, "choosing the observer's debounce per joint: the monitor runs over the {} once per count ...\n",
                files(o.debounce_validation.size(), vrecs.size(), "validation "));
     progress.begin("observer debounce", validation_samples);
     const auto choice = monitor::choose_observer_debounce(twin, shown, val);
     progress.end();
     if (o.program.empty() || program_is_default) cfg.observer_choice = choice;
     if (!o.program.empty()) cfg.programs.at(o.program).observer_choice = choice;
-    fmt::print("observer debounce per joint {} (samples), chosen on {}, {:.0f} s; their healthy observer "
+    say(!o.quiet, "observer debounce per joint {} (samples), chosen on {}, {:.0f} s; their healthy observer "
                "ratio per joint at 1 sample {:.3f}, at {} {:.3f}\n",
                fmt::join(choice.raise_after, " "), files(o.debounce_validation.size(), vrecs.size(), "validation "), choice.seconds, fmt::join(choice.ratio.front(), " "),
                choice.ratio.size(), fmt::join(choice.ratio.back(), " "));
   } else if (o.program.empty() ? !settings.observer_choice.raise_after.empty()
                                  : settings.programs.count(o.program) > 0 &&
                                        !settings.programs.at(o.program).observer_choice.raise_after.empty()) {
-    fmt::print("note: the per-joint observer debounce of {} belonged to the old thresholds and is dropped; choose one "
+    say(!o.quiet, "note: the per-joint observer debounce of {} belonged to the old thresholds and is dropped; choose one "
                "for the new ones with --debounce-validation HEALTHY.csv...\n",
                o.program.empty() ? std::string("the default set") : fmt::format("program '{}'", o.program));
   }
@@ -752,7 +758,7 @@ int run_thresholds(const ThresholdOptions& o) {
   stored.program.clear();
   out.monitor_json = stored.to_json();
   out.save(o.twin);
-  fmt::print("thresholds {} learned from {} with residual filter '{}' and stored in {}; the heaviest payload "
+  say(!o.quiet, "thresholds {} learned from {} with residual filter '{}' and stored in {}; the heaviest payload "
              "among them, {:.2f} kg, is recorded (the monitor says when it predicts with more than {:g} kg above it)\n",
              o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program),
              files(o.recordings.size(), recs.size(), "healthy "),
@@ -765,13 +771,13 @@ int run_thresholds(const ThresholdOptions& o) {
       relative |= !nm;
       loads += fmt::format("{}J{} {:.2f}{}", j ? "  " : "", j + 1, shown.reversal_load_max[j], nm ? "" : "*");
     }
-    fmt::print("the largest load each joint reversed under in them [N·m{}], beyond which both of its thresholds widen by the drive's "
+    say(!o.quiet, "the largest load each joint reversed under in them [N·m{}], beyond which both of its thresholds widen by the drive's "
                "motoring/back-driven step: {}\n",
                relative ? "; *: in the twin's own torque scale, the joint's gain not fixed by a known payload" : "", loads);
   }
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];
-    fmt::print("J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
+    say(!o.quiet, "J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
                shown.static_level[j], d.psi_qdd, d.psi_qd, d.psi_rev, d.rho, d.upsilon);
   }
   return 0;
@@ -850,6 +856,7 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
   sub->add_option("--twin", o->twin, "Twin file to update")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDINGS", o->recordings, "Healthy recordings (files: each is read several times and never held)")->required()->check(CLI::ExistingFile);
   sub->add_flag("--progress", o->progress, "Show each learner's progress even when stderr is not a terminal");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success (notes on the recordings and warnings still go to stderr)");
   sub->add_option("--payload-mass", o->payload_mass,
                   "Payload carried in these recordings [kg] (default: the twin file's 'payload'). A recording that carries the payload the controller declares (RTDE "
                   "payload / payload_cog, controllers 5.5.1 and newer; a recording's payload columns) is learned with each "
