@@ -1038,6 +1038,11 @@ void SweepOptions::validate() const {
 
 Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool quiet) {
   o.validate();
+  // the sweep's figure-eight and contact points are a six-joint arm's (a UR's links 2, 3, 5)
+  if (twin.n_dof() != 6)
+    throw InvalidArgument(fmt::format("the collision sweep runs on six-joint arms (a UR's links and contact points); the twin's {} has {} "
+                                      "joints: score its contacts with evaluate on scenarios of its own",
+                                      twin.robot_name(), twin.n_dof()));
   // contact points and the onset phase of the library's collision scenarios, per link
   auto point_of = [](int link) -> std::string {
     if (link == 2) return "[-0.12, 0.0, 0.1]";
@@ -1062,10 +1067,11 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
       // the onset moves with the seed so that contacts hit different phases of the cycle
       const double onset = kOnset + 0.37 * static_cast<double>(run.seed % 11);
       const std::string yaml = fmt::format(
-          "robot: {}\nseed: {}\nduration: {}\ntrajectory: {}\npayload: {{mass: 0.5, com: [0, 0, 0.04]}}\n"
+          "seed: {}\nduration: {}\ntrajectory: {}\npayload: {{mass: 0.5, com: [0, 0, 0.04]}}\n"
           "faults:\n  - {{type: collision, link: {}, onset: {}, magnitude: {}, duration: 0.05, point: {}, direction: [0.3, 1.0, -0.2]}}\n",
-          twin.robot_name(), run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
-      const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m));
+          run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
+      // (on the twin's robot, passed as such: a description file's path is no YAML scalar to splice in)
+      const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m), twin.robot_name());
       const device::Recording rec = simulate_to_memory(s, s.path);
       ident::TwinModel t = twin;
       t.set_payload(s.options.payload);

@@ -53,8 +53,9 @@ ControllerTorqueFit controller_torque_fit(const model::RobotModel& robot, const 
     }
   }
   if (fit.samples == 0) return fit;
+  if (!(t2 > 0.0)) return ControllerTorqueFit{0.0, VectorJ::Zero(n), 0};  // (a torque of zeros: no model to compare with)
   fit.rms = (e2 / static_cast<double>(fit.samples)).cwiseSqrt();
-  fit.relative_rms = t2 > 0.0 ? std::sqrt(e2.sum() / t2) : 0.0;
+  fit.relative_rms = std::sqrt(e2.sum() / t2);
   return fit;
 }
 

@@ -127,7 +127,7 @@ ProgramMotion::ProgramMotion(ClosedForm form, const ProgramOptions& o) : form_(s
     throw InvalidArgument(fmt::format("duration: {} s is shorter than half the ramps: expected at least {:g} s of the trajectory{}, or a "
                                       "shorter ramp",
                                       o.duration, 0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_ / o.slow_down,
-                                      o.slow_down != 1.0 ? fmt::format(" (its ramps take {:g} s of the program, {:g} times slower)",
+                                      o.slow_down != 1.0 ? fmt::format(" (half its ramps take {:g} s of the program, {:g} times slower)",
                                                                        0.5 * static_cast<double>(ramp_in_steps_ + ramp_out_steps_) * dt_, o.slow_down)
                                                          : std::string()));
 }
@@ -280,7 +280,7 @@ std::string urscript_program(const ProgramMotion& motion, const ProgramOptions& 
   line(1, fmt::format("# Peak speed [rad/s]: {}", joints_text(peaks.qd, 3)));
   line(1, fmt::format("# Peak acceleration [rad/s^2]: {}", joints_text(peaks.qdd, 3)));
   if (o.declare_payload)
-    line(1, fmt::format("# Payload: declared with {}({} kg, CoG [{}, {}, {}] m{}) before the arm moves.",
+    line(1, fmt::format("# Payload: declared with {}({:.6g} kg, CoG [{:.6g}, {:.6g}, {:.6g}] m{}) before the arm moves.",
                         o.target_payload ? "set_target_payload" : "set_payload", o.payload.mass, o.payload.com.x(), o.payload.com.y(),
                         o.payload.com.z(), o.target_payload ? ", its inertia about the CoG" : ""));
   else

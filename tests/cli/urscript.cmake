@@ -60,3 +60,9 @@ add_test(NAME cli.urscript_set_target_payload
   COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T urscript ${S}/train/swing_train_payload.yaml -o ${d}/tp.script --set-target-payload | grep 'payload:'; grep -E '^  (set_target_payload|set_payload)' ${d}/tp.script; \$T urscript ${S}/train/swing_train_payload.yaml -o ${d}/tp.script --declare-payload --json | grep payload_command")
 set_tests_properties(cli.urscript_set_target_payload PROPERTIES PASS_REGULAR_EXPRESSION
   "  payload: declared with set_target_payload\\(2 kg, \\[0\\.06, 0\\.04, 0\\.05\\] m, its inertia about the CoG\\)\n  set_target_payload\\(2\\.0, \\[0\\.06, 0\\.04, 0\\.05\\], \\[0\\.0, 0\\.0, 0\\.0, 0\\.0, 0\\.0, 0\\.0\\]\\)\n  \"payload_command\": \"set_payload\",\n$")
+# the tool on the flange is declared with the scenario's payload (URScript's payload is everything on
+# it): 2 kg at (0.06, 0.04, 0.05) and 0.8 kg at (0, 0, 0.1) make 2.8 kg at their common centre (review)
+add_test(NAME cli.urscript_tool_declared
+  COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; \$T urscript ${S}/train/swing_train_payload.yaml -o ${d}/td.script --tool-mass 0.8 --tool-cog 0 0 0.1 --declare-payload | grep 'payload:'; grep -E '^  set_payload' ${d}/td.script")
+set_tests_properties(cli.urscript_tool_declared PROPERTIES PASS_REGULAR_EXPRESSION
+  "  payload: declared with set_payload\\(2\\.8 kg, \\[0\\.0428571, 0\\.0285714, 0\\.0642857\\] m\\)\n  set_payload\\(2\\.8, \\[0\\.0428571429, 0\\.0285714286, 0\\.0642857143\\]\\)\n$")

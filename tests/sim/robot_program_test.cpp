@@ -150,8 +150,8 @@ TEST(RobotProgram, OptionsAndMotionsARobotCannotRunAreRefusedByName) {
   o = options(1.5);
   EXPECT_THAT(refused(o), HasSubstr("duration: 1.5 s is shorter than half the ramps: expected at least 2 s of the trajectory, or a shorter ramp"));
   o.slow_down = 2.0;  // (the ramps stretch with the program; the duration is the trajectory's: both said in its clock)
-  EXPECT_THAT(refused(o), HasSubstr("duration: 1.5 s is shorter than half the ramps: expected at least 2 s of the trajectory (its ramps take "
-                                    "4 s of the program, 2 times slower)"));
+  EXPECT_THAT(refused(o), HasSubstr("duration: 1.5 s is shorter than half the ramps: expected at least 2 s of the trajectory (half its ramps "
+                                    "take 4 s of the program, 2 times slower)"));
   o = options(30.0);
   o.declare_payload = true;  // (no payload in the options)
   EXPECT_THAT(refused(o), HasSubstr("payload: the motion carries no payload, so there is none to declare"));

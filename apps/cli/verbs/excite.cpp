@@ -171,7 +171,7 @@ int run(const Options& o) {
     warnings.push_back(fmt::format(
         "cond(W) is {:.3g}, above {:g}: the design moves the arm too little to identify its dynamics well{} (on the virtual UR3e a "
         "design of cond 5.5e4 raised the twin's J2 current error by 18-45 %, one of 1e3 did not). Identify it together with the swing "
-        "pair (scenarios/ur3e/train/swing_train*.yaml, through twinwatch urscript), and check the twin with twinwatch validate on a "
+        "pair (scenarios/ur3e/train/swing_train*.yaml through twinwatch urscript, with --robot for another arm), and check the twin with twinwatch validate on a "
         "run it was not identified from; {}",
         r.cond_final, kWarnCond,
         limited ? fmt::format(" (the safety limits scaled it down: peak tool speed {:.3f} m/s)", r.speed_peak.tool) : std::string(),

@@ -184,44 +184,58 @@ void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const st
 }
 
 // The recordings' controller torque (target_moment) against the robot's model and every built-in
-// arm's of the same joint count (ident::controller_torque_fit): a recording of another arm than the
-// robot identified is refused when --robot was the default, and said when it was given (a
-// description file of the user's own may be right where the built-in ones are not).
+// arm's of the same joint count (ident::controller_torque_fit), each recording on its own (a UR5e's
+// among UR3e recordings must not hide in a pooled fit that no arm explains): a recording of another
+// arm is refused when --robot was the default, and said when it was given (a description file of
+// the user's own may be right where the built-in ones are not); a recording no arm reproduces well
+// (an undeclared payload, another controller's torque) is said too.
 void check_robot_against_controller(const IdentifyOptions& o, const model::RobotModel& robot,
                                     const std::vector<const device::Recording*>& recs) {
-  const ident::ControllerTorqueFit mine = ident::controller_torque_fit(robot, recs);
-  if (mine.samples == 0) {
-    if (!o.robot_given && !o.quiet)
-      fmt::print(stderr, "note: --robot not given: identified as a {} (the default); the recordings carry no target_moment to tell "
-                         "which arm they are from. Give --robot for another arm (twinwatch model list)\n",
-                 robot.name());
-    return;
-  }
-  std::string best;
-  double best_fit = mine.relative_rms;
-  for (const std::string& name : model::builtin_robot_names()) {
-    if (name == robot.name()) continue;
-    const model::RobotModel other = model::load_robot(name);
-    if (other.n_dof() != robot.n_dof()) continue;
-    const ident::ControllerTorqueFit f = ident::controller_torque_fit(other, recs);
-    if (f.samples > 0 && f.relative_rms < best_fit) best_fit = f.relative_rms, best = name;
-  }
-  // (measured: the arm's own model 0.05-0.17, another's 0.6-2.2)
+  // (measured: the arm's own model 0.05-0.17 relative rms, another's 0.6-2.2)
   constexpr double kOwnFit = 0.3, kFactor = 3.0;
-  if (!best.empty() && best_fit < kOwnFit && mine.relative_rms > kFactor * best_fit) {
-    const std::string what = fmt::format(
-        "the recordings are not of a {}: the controller's own torque (target_moment) along its targets is reproduced by the {}'s model "
-        "(relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms)",
-        robot.name(), best, best_fit, robot.name(), mine.relative_rms, robot.n_dof() >= 2 ? mine.rms[1] : mine.rms[0]);
-    if (!o.robot_given)
-      throw InvalidArgument(fmt::format("{}. Give --robot {} (or --robot {} to identify them as a {} all the same)", what, best,
-                                        robot.name(), robot.name()));
-    fmt::print(stderr, "WARNING: {}; identified as the {} you gave, as asked\n", what, robot.name());
-  } else if (!o.robot_given && !o.quiet) {
-    fmt::print(stderr, "note: --robot not given: identified as a {} (the default), whose model reproduces the controller's torque to "
-                       "{:.2f} relative rms\n",
-               robot.name(), mine.relative_rms);
+  std::vector<model::RobotModel> others;
+  for (const std::string& name : model::builtin_robot_names())
+    if (name != robot.name())
+      if (model::RobotModel m = model::load_robot(name); m.n_dof() == robot.n_dof()) others.push_back(std::move(m));
+  size_t checked = 0;
+  double worst = 0.0;
+  for (const device::Recording* r : recs) {
+    const ident::ControllerTorqueFit mine = ident::controller_torque_fit(robot, {r});
+    if (mine.samples == 0) continue;
+    ++checked;
+    worst = std::max(worst, mine.relative_rms);
+    std::string best;
+    double best_fit = mine.relative_rms;
+    for (const model::RobotModel& other : others)
+      if (const ident::ControllerTorqueFit f = ident::controller_torque_fit(other, {r}); f.samples > 0 && f.relative_rms < best_fit)
+        best_fit = f.relative_rms, best = other.name();
+    const double j2 = robot.n_dof() >= 2 ? mine.rms[1] : mine.rms[0];
+    if (!best.empty() && best_fit < kOwnFit && mine.relative_rms > kFactor * best_fit) {
+      const std::string what = fmt::format(
+          "{} is not a recording of a {}: the controller's own torque (target_moment) along its targets is reproduced by the {}'s model "
+          "(relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms)",
+          r->path, robot.name(), best, best_fit, robot.name(), mine.relative_rms, j2);
+      if (!o.robot_given)
+        throw InvalidArgument(fmt::format("{}. Give --robot {} (or --robot {} to identify it as a {} all the same)", what, best,
+                                          robot.name(), robot.name()));
+      fmt::print(stderr, "WARNING: {}; identified as the {} you gave, as asked\n", what, robot.name());
+    } else if (mine.relative_rms > kOwnFit) {
+      fmt::print(stderr,
+                 "WARNING: {}: the {}'s model reproduces the controller's own torque (target_moment) only to {:.2f} relative rms (J2 "
+                 "off by {:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry a payload its "
+                 "program does not declare?\n",
+                 r->path, robot.name(), mine.relative_rms, j2);
+    }
   }
+  if (o.robot_given || o.quiet) return;
+  if (checked == 0)
+    fmt::print(stderr, "note: --robot not given: identified as a {} (the default); the recordings carry no usable target_moment (none, or only zeros) to tell "
+                       "which arm they are from. Give --robot for another arm (twinwatch model list)\n",
+               robot.name());
+  else
+    fmt::print(stderr, "note: --robot not given: identified as a {} (the default), whose model reproduces the controller's torque to "
+                       "{:.2f} relative rms at worst over {} recording(s)\n",
+               robot.name(), worst, checked);
 }
 
 int run_identify(const IdentifyOptions& o) {

@@ -53,7 +53,14 @@ int run(const Options& o) {
   require_output(o.output, {o.scenario});
   require_output(labels_path(o.output), {o.scenario, o.output});
   if (!o.robot.empty()) model::load_robot(o.robot);  // (a bad --robot said as such, not as the scenario's)
-  sim::Scenario s = sim::load_scenario(o.scenario, o.robot);
+  sim::Scenario s = [&] {
+    if (o.robot.empty()) return sim::load_scenario(o.scenario);
+    try {
+      return sim::load_scenario(o.scenario, o.robot);
+    } catch (const std::exception& e) {  // (the file's field is right for its own robot: the message says which robot it was read for)
+      throw InvalidArgument(fmt::format("{} (the scenario read for --robot {})", e.what(), o.robot));
+    }
+  }();
   // nor the robot description the scenario names
   require_output(o.output, {model::robot_file(s.robot)});
   require_output(labels_path(o.output), {model::robot_file(s.robot)});

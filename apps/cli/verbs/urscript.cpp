@@ -50,18 +50,19 @@ std::string joints(const VectorJ& v, const VectorJ* limit) {
 
 int run(Options o) {
   require_output(o.output, {o.scenario});
-  sim::Scenario s = sim::load_scenario(o.scenario);
+  // another arm than the scenario's (the swing pair is written for the UR3e): the scenario is loaded
+  // for it (its limits and rated payload checked), as simulate --robot does
+  if (!o.robot.empty()) {
+    const model::RobotModel other = model::load_robot(o.robot);
+    if (other.n_dof() != 6)
+      throw InvalidArgument(fmt::format("--robot {}: it has {} joints: URScript programs run on Universal Robots arms, of six", o.robot,
+                                        other.n_dof()));
+    require_output(o.output, {model::robot_file(o.robot)});
+  }
+  sim::Scenario s = sim::load_scenario(o.scenario, o.robot);
   require_output(o.output, {model::robot_file(s.robot)});
   if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
   const sim::ClosedForm form = sim::scenario_closed_form(s);
-  // another arm than the scenario's (the swing pair is written for the UR3e): its file's limits are checked
-  if (!o.robot.empty()) {
-    const model::RobotModel other = model::load_robot(o.robot);
-    if (other.n_dof() != form.n_dof())
-      throw InvalidArgument(fmt::format("--robot {}: it has {} joints, the scenario's trajectory {}", o.robot, other.n_dof(), form.n_dof()));
-    require_output(o.output, {model::robot_file(o.robot)});
-    s.robot = o.robot;
-  }
   const model::RobotModel robot = model::load_robot(s.robot);
   if (robot.n_dof() != 6)
     throw InvalidArgument(fmt::format("{}: the robot {} has {} joints: URScript programs run on Universal Robots arms, of six", o.scenario,
@@ -69,8 +70,22 @@ int run(Options o) {
   o.program.duration = s.options.duration;
   o.program.title = o.scenario;
   o.program.name = o.name.empty() ? s.name : o.name;
-  o.program.payload = s.options.payload;
+  const bool declare_given = o.program.declare_payload;  // (--set-target-payload implies it; messages name the one typed)
   if (o.program.target_payload) o.program.declare_payload = true;
+  // what the flange carries: the tool (--tool-mass, a point mass at --tool-cog) and the scenario's
+  // payload; the momentum and the torque count both, and a declared payload is both (URScript's
+  // payload is everything on the flange)
+  const twinwatch::cli::ToolBody carried = twinwatch::cli::tool_body(o.safety, s.options.payload.mass, s.options.payload.com);
+  if (carried.mass > robot.payload_limit())
+    throw InvalidArgument(fmt::format("--tool-mass {:g} kg{}: the flange would carry {:g} kg, beyond {} ({:g} kg)", o.safety.tool_mass,
+                                      s.options.payload.mass > 0 ? fmt::format(" and the scenario's {:g} kg payload", s.options.payload.mass)
+                                                                 : std::string(),
+                                      carried.mass, robot.payload_limit_text(), robot.payload_limit()));
+  model::RigidBodyInertia tool_point_mass;
+  tool_point_mass.mass = o.safety.tool_mass;
+  tool_point_mass.com = o.safety.tool_cog.empty() ? Eigen::Vector3d::Zero()
+                                                  : Eigen::Vector3d(o.safety.tool_cog[0], o.safety.tool_cog[1], o.safety.tool_cog[2]);
+  o.program.payload = o.safety.tool_mass > 0.0 ? s.options.payload + tool_point_mass : s.options.payload;
   // (the library names its fields; the user typed options)
   const auto motion_of = [&]() {
     try {
@@ -79,7 +94,7 @@ int run(Options o) {
       const std::string m = twinwatch::cli::with_option_names(
           e.what(), {{"ramp", "--ramp"}, {"slow_down", "--slow-down"}, {"lookahead", "--lookahead"}, {"gain", "--gain"}, {"approach_speed", "--approach-speed"},
                      {"approach_acceleration", "--approach-acceleration"}, {"max_approach", "--max-approach"},
-                     {"payload", "--declare-payload"},
+                     {"payload", o.program.target_payload && !declare_given ? "--set-target-payload" : "--declare-payload"},
                      {"duration", o.duration_given ? "--duration" : "the scenario's duration"}});
       throw InvalidArgument(fmt::format("{}: {}", o.scenario, m));
     }
@@ -96,13 +111,6 @@ int run(Options o) {
     if (!tool_points[k].allFinite() || tool_points[k].norm() > 2.0)
       throw InvalidArgument(fmt::format("--tool-point (number {} of {}): expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})",
                                         k + 1, tool_points.size(), tool_points[k].x(), tool_points[k].y(), tool_points[k].z()));
-  // the momentum counts the tool on the flange (--tool-mass) and the scenario's payload
-  const twinwatch::cli::ToolBody carried = twinwatch::cli::tool_body(o.safety, s.options.payload.mass, s.options.payload.com);
-  if (carried.mass > robot.payload_limit())
-    throw InvalidArgument(fmt::format("--tool-mass {:g} kg{}: the flange would carry {:g} kg, beyond {} ({:g} kg)", o.safety.tool_mass,
-                                      s.options.payload.mass > 0 ? fmt::format(" and the scenario's {:g} kg payload", s.options.payload.mass)
-                                                                 : std::string(),
-                                      carried.mass, robot.payload_limit_text(), robot.payload_limit()));
   model::RigidBodyInertia carried_body;
   carried_body.mass = carried.mass;
   carried_body.com = carried.com;
@@ -278,8 +286,8 @@ int run(Options o) {
     if (tool_points.empty()) fmt::print("  a tool on the flange was not checked: give its farthest points with --tool-point X Y Z (flange frame, m)\n");
     fmt::print("  payload: {}\n", o.program.declare_payload
                                       ? fmt::format("declared with {}({:g} kg, [{:g}, {:g}, {:g}] m{})",
-                                                    o.program.target_payload ? "set_target_payload" : "set_payload", s.options.payload.mass,
-                                                    s.options.payload.com.x(), s.options.payload.com.y(), s.options.payload.com.z(),
+                                                    o.program.target_payload ? "set_target_payload" : "set_payload", o.program.payload.mass,
+                                                    o.program.payload.com.x(), o.program.payload.com.y(), o.program.payload.com.z(),
                                                     o.program.target_payload ? ", its inertia about the CoG" : "")
                                       : std::string("not changed (the installation's payload is used; --declare-payload declares the scenario's)"));
     if (!s.faults.empty()) fmt::print("  note: the scenario's {} fault(s) are the virtual robot's; the program has none\n", s.faults.size());
@@ -338,7 +346,8 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
                                         "its speed counts as the tool's, as the installation's tool positions do");
   twinwatch::cli::add_safety_limit_options(sub, o->safety, "Refuse (no program written) a motion beyond");
   sub->add_flag("--declare-payload", o->program.declare_payload,
-                "Declare the scenario's payload with set_payload before moving (else the installation's payload is kept)");
+                "Declare the scenario's payload (and the --tool-mass tool: everything on the flange) with set_payload before moving "
+                "(else the installation's payload is kept)");
   sub->add_flag("--set-target-payload", o->program.target_payload,
                 "Declare it with set_target_payload (mass, CoG and the inertia about the CoG; PolyScope 5.10 and newer, where "
                 "set_payload is deprecated) instead; implies --declare-payload");

@@ -20,7 +20,7 @@ struct ControllerTorqueFit {
   /// sqrt(sum over samples and joints of (target_moment - RNEA(targets))^2 / sum of target_moment^2)
   double relative_rms = 0.0;
   VectorJ rms;          ///< [N·m] per joint
-  size_t samples = 0;   ///< the samples compared (0: the recordings carry no targets and torque)
+  size_t samples = 0;   ///< the samples compared (0: the recordings carry no targets and torque, or a torque of zeros)
 };
 
 /// The fit of `robot` to the controller's torque over `recordings` (at most `max_samples`, spread
