@@ -313,8 +313,8 @@ twinwatch::cli::VerbRegistrar reg{"urscript", 27, [](CLI::App& app) {
       "record --rtde'. Faults in the scenario are the virtual robot's and are left out. Exports fourier, fourier_series, sine and chirp trajectories.\n\n"
       "Building a twin of your own arm (docs/rtde.md, \"A twin of your own arm\"):\n"
       "  twinwatch excite ur5e -o exc.yaml --tool-point 0 0 0.15 && twinwatch urscript exc.yaml -o exc.script\n"
-      "  twinwatch urscript scenarios/ur3e/train/swing_train.yaml --robot ur5e -o swing.script   # then again with the test weight\n"
-      "  twinwatch identify exc.csv swing.csv swing_weight.csv --known-payload swing_weight.csv=M,X,Y,Z -o twin.json"));
+      "  twinwatch urscript scenarios/ur3e/train/swing_train.yaml --robot ur5e -o swing.script   # then again with the test weight (--slow-down as it says)\n"
+      "  twinwatch identify exc.csv swing.csv swing_weight.csv --robot ur5e --known-payload swing_weight.csv=M,X,Y,Z -o twin.json"));
   sub->add_option("SCENARIO", o->scenario, "Scenario YAML whose trajectory the program runs (its robot's limits are checked)")
       ->required()
       ->check(CLI::ExistingFile);
