@@ -12,6 +12,7 @@
 #include <limits>
 #include <utility>
 #include <memory>
+#include <optional>
 #include <random>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +24,7 @@
 #include "twinwatch/core/log.hpp"
 #include "twinwatch/core/quasi_random.hpp"
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/controller_torque.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
@@ -583,12 +585,33 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
   device::RecordingReader reader(path, map);
   device::require_fields(reader, kFieldActualQd | kFieldActualCurrent, user);
   UnitsCheck units(path, reader.n_dof(), reader.present(), robot);
+  // is it the twin's arm? (its controller's torque against the arm's model and the other built-in
+  // arms', every 25th sample: 20 a second at 500 Hz; ident::ArmCheck)
+  std::optional<ident::ArmCheck> arm;
+  if (reader.n_dof() == robot.n_dof()) arm.emplace(robot, 25);
   const device::RecordingScan scan = device::scan_rows(reader, [&](const RobotSample& s) {
     units.add(s);
+    if (arm) arm->add(s);
     if (each) each(s);
   });
   units.check_period(scan.timing.median_period);
   units.finish();
+  if (arm) {
+    const ident::ArmVerdict v = arm->verdict();
+    const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
+    if (v.other_arm())
+      fmt::print(stderr,
+                 "WARNING: {} is not a recording of a {} (the twin's arm): the controller's own torque (target_moment) along its targets "
+                 "is reproduced by the {}'s model (relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms): {} "
+                 "reads it with a model of another arm (a twin of this arm: twinwatch identify --robot {})\n",
+                 path, robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms, j2, user, v.better);
+    else if (v.poor())
+      fmt::print(stderr,
+                 "WARNING: {}: the {}'s model (the twin's arm) reproduces the controller's own torque (target_moment) only to {:.2f} "
+                 "relative rms (J2 off by {:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry "
+                 "a payload its program does not declare?\n",
+                 path, robot.name(), v.own.relative_rms, j2);
+  }
   return scan;
 }
 

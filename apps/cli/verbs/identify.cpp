@@ -191,40 +191,31 @@ void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const st
 // (an undeclared payload, another controller's torque) is said too.
 void check_robot_against_controller(const IdentifyOptions& o, const model::RobotModel& robot,
                                     const std::vector<const device::Recording*>& recs) {
-  // (measured: the arm's own model 0.05-0.17 relative rms, another's 0.6-2.2)
-  constexpr double kOwnFit = 0.3, kFactor = 3.0;
-  std::vector<model::RobotModel> others;
-  for (const std::string& name : model::builtin_robot_names())
-    if (name != robot.name())
-      if (model::RobotModel m = model::load_robot(name); m.n_dof() == robot.n_dof()) others.push_back(std::move(m));
   size_t checked = 0;
   double worst = 0.0;
   for (const device::Recording* r : recs) {
-    const ident::ControllerTorqueFit mine = ident::controller_torque_fit(robot, {r});
-    if (mine.samples == 0) continue;
+    ident::ArmCheck check(robot, std::max<size_t>(1, r->samples.size() / 20000));
+    for (const RobotSample& s : r->samples) check.add(s);
+    const ident::ArmVerdict v = check.verdict();
+    if (v.own.samples == 0) continue;
     ++checked;
-    worst = std::max(worst, mine.relative_rms);
-    std::string best;
-    double best_fit = mine.relative_rms;
-    for (const model::RobotModel& other : others)
-      if (const ident::ControllerTorqueFit f = ident::controller_torque_fit(other, {r}); f.samples > 0 && f.relative_rms < best_fit)
-        best_fit = f.relative_rms, best = other.name();
-    const double j2 = robot.n_dof() >= 2 ? mine.rms[1] : mine.rms[0];
-    if (!best.empty() && best_fit < kOwnFit && mine.relative_rms > kFactor * best_fit) {
+    worst = std::max(worst, v.own.relative_rms);
+    const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
+    if (v.other_arm()) {
       const std::string what = fmt::format(
           "{} is not a recording of a {}: the controller's own torque (target_moment) along its targets is reproduced by the {}'s model "
           "(relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms)",
-          r->path, robot.name(), best, best_fit, robot.name(), mine.relative_rms, j2);
+          r->path, robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms, j2);
       if (!o.robot_given)
-        throw InvalidArgument(fmt::format("{}. Give --robot {} (or --robot {} to identify it as a {} all the same)", what, best,
+        throw InvalidArgument(fmt::format("{}. Give --robot {} (or --robot {} to identify it as a {} all the same)", what, v.better,
                                           robot.name(), robot.name()));
       fmt::print(stderr, "WARNING: {}; identified as the {} you gave, as asked\n", what, robot.name());
-    } else if (mine.relative_rms > kOwnFit) {
+    } else if (v.poor()) {
       fmt::print(stderr,
                  "WARNING: {}: the {}'s model reproduces the controller's own torque (target_moment) only to {:.2f} relative rms (J2 "
                  "off by {:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry a payload its "
                  "program does not declare?\n",
-                 r->path, robot.name(), mine.relative_rms, j2);
+                 r->path, robot.name(), v.own.relative_rms, j2);
     }
   }
   if (o.robot_given || o.quiet) return;
