@@ -578,6 +578,22 @@ void UnitsCheck::finish() {
   currents_.clear();
 }
 
+void warn_if_another_arm(const std::string& path, const model::RobotModel& robot, const ident::ArmVerdict& v, const std::string& user) {
+  const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
+  if (v.other_arm())
+    fmt::print(stderr,
+               "WARNING: {} is not a recording of a {} (the arm it is read for): the controller's own torque (target_moment) along its "
+               "targets is reproduced by the {}'s model (relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms): {} "
+               "reads it with a model of another arm (this arm's: --robot {})\n",
+               path, robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms, j2, user, v.better);
+  else if (v.poor())
+    fmt::print(stderr,
+               "WARNING: {}: the {}'s model reproduces the controller's own torque (target_moment) only to {:.2f} relative rms (J2 off by "
+               "{:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry a payload its program does "
+               "not declare?\n",
+               path, robot.name(), v.own.relative_rms, j2);
+}
+
 device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
                                      const std::string& verb, const std::string& user,
                                      const std::function<void(const RobotSample&)>& each) {
@@ -596,22 +612,7 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
   });
   units.check_period(scan.timing.median_period);
   units.finish();
-  if (arm) {
-    const ident::ArmVerdict v = arm->verdict();
-    const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
-    if (v.other_arm())
-      fmt::print(stderr,
-                 "WARNING: {} is not a recording of a {} (the twin's arm): the controller's own torque (target_moment) along its targets "
-                 "is reproduced by the {}'s model (relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms): {} "
-                 "reads it with a model of another arm (a twin of this arm: twinwatch identify --robot {})\n",
-                 path, robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms, j2, user, v.better);
-    else if (v.poor())
-      fmt::print(stderr,
-                 "WARNING: {}: the {}'s model (the twin's arm) reproduces the controller's own torque (target_moment) only to {:.2f} "
-                 "relative rms (J2 off by {:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry "
-                 "a payload its program does not declare?\n",
-                 path, robot.name(), v.own.relative_rms, j2);
-  }
+  if (arm) warn_if_another_arm(path, robot, arm->verdict(), user);
   return scan;
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "twinwatch/device/recording.hpp"
+#include "twinwatch/ident/controller_torque.hpp"
 #include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/sim/scenario.hpp"
 
@@ -67,6 +68,10 @@ inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-perce
 /// actual_qd / actual_current for `user` (device::require_fields); then every row is checked, its
 /// units too (UnitsCheck, with the median period of the steps), and handed to `each` (may be empty).
 /// Returns what the second pass needs (device::replay_rows).
+/// A warning on stderr when the verdict says the recording at `path` is another built-in arm's than
+/// `robot`, or fits it beyond 0.3 (ident::ArmCheck); `user` names who reads it ("the monitor").
+void warn_if_another_arm(const std::string& path, const model::RobotModel& robot, const ident::ArmVerdict& v, const std::string& user);
+
 device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
                                      const std::string& verb, const std::string& user,
                                      const std::function<void(const RobotSample&)>& each = {});

@@ -134,6 +134,10 @@ int run_identify(const IdentOpts& o) {
     recs.push_back(device::read_recording(f, map ? &*map : nullptr));
     cli::check_units(recs.back(), m);
     cli::require_driven(recs.back(), "identify-torque");
+    // is it the arm's recording? (the controller's torque against its model and the other built-in arms')
+    ident::ArmCheck arm(m, std::max<size_t>(1, recs.back().samples.size() / 20000));
+    for (const RobotSample& s : recs.back().samples) arm.add(s);
+    cli::warn_if_another_arm(f, m, arm.verdict(), "identify-torque");
   }
   // FWD=REV pairs: REV is FWD's trajectory played backwards
   std::vector<std::pair<std::string, std::string>> pairs;
