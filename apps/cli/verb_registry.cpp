@@ -178,19 +178,25 @@ std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o) {
   return out;
 }
 
-ToolBody tool_body(const SafetyLimitOptions& o, double carried_mass, const Eigen::Vector3d& carried_com) {
+model::RigidBodyInertia carried_on_flange(const SafetyLimitOptions& o, const model::RobotModel& robot, const model::RigidBodyInertia& payload) {
   if (!o.tool_cog.empty() && o.tool_mass == 0.0) throw InvalidArgument("--tool-cog applies only with --tool-mass (the tool's mass [kg])");
-  Eigen::Vector3d cog = Eigen::Vector3d::Zero();
-  if (!o.tool_cog.empty()) cog = Eigen::Vector3d(o.tool_cog[0], o.tool_cog[1], o.tool_cog[2]);
+  model::RigidBodyInertia tool;
+  tool.mass = o.tool_mass;
+  if (!o.tool_cog.empty()) tool.com = Eigen::Vector3d(o.tool_cog[0], o.tool_cog[1], o.tool_cog[2]);
   if (!(std::isfinite(o.tool_mass) && o.tool_mass <= 1000.0))
     throw InvalidArgument(fmt::format("--tool-mass: expected a mass from 0 to 1000 kg, got {}", o.tool_mass));
-  if (!cog.allFinite() || cog.norm() > 2.0)
-    throw InvalidArgument(fmt::format("--tool-cog: expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})", cog.x(), cog.y(),
-                                      cog.z()));
-  ToolBody b;
-  b.mass = o.tool_mass + carried_mass;
-  if (b.mass > 0.0) b.com = (o.tool_mass * cog + carried_mass * carried_com) / b.mass;
-  return b;
+  if (!tool.com.allFinite() || tool.com.norm() > 2.0)
+    throw InvalidArgument(fmt::format("--tool-cog: expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})", tool.com.x(),
+                                      tool.com.y(), tool.com.z()));
+  const model::RigidBodyInertia carried = tool.mass > 0.0 ? payload + tool : payload;
+  if (carried.mass > robot.payload_limit())
+    throw InvalidArgument(payload.mass > 0.0
+                              ? fmt::format("--tool-mass {:g} kg and the scenario's {:g} kg payload: the flange would carry {:g} kg, beyond {} "
+                                            "({:g} kg)",
+                                            o.tool_mass, payload.mass, carried.mass, robot.payload_limit_text(), robot.payload_limit())
+                              : fmt::format("--tool-mass {:g} kg: beyond {} ({:g} kg)", o.tool_mass, robot.payload_limit_text(),
+                                            robot.payload_limit()));
+  return carried;
 }
 
 void refuse_unless(std::initializer_list<const CLI::Option*> options, bool applies, std::string_view where) {

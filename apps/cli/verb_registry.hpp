@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "twinwatch/model/robot_model.hpp"
+
 namespace twinwatch::cli {
 
 using VerbSetup = std::function<void(CLI::App&)>;
@@ -102,13 +104,12 @@ struct OperationalLimit {
 /// limit is no more than its tolerance (nothing can be kept below it), or when --tool-cog is given
 /// without --tool-mass.
 std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o);
-/// The tool (--tool-mass at --tool-cog) as a body for the momentum; with `carried` (a scenario's
-/// payload) added to it: their masses summed at their common centre of mass. Validates the numbers.
-struct ToolBody {
-  double mass = 0.0;
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();
-};
-ToolBody tool_body(const SafetyLimitOptions& o, double carried_mass = 0.0, const Eigen::Vector3d& carried_com = Eigen::Vector3d::Zero());
+/// What the flange carries: the tool (--tool-mass, a point mass at --tool-cog) joined with `payload`
+/// (a scenario's; none for excite), validated, and refused beyond the robot's payload limit naming
+/// both. The momentum and the torque count it, and a declared payload is it (URScript's payload is
+/// everything on the flange).
+model::RigidBodyInertia carried_on_flange(const SafetyLimitOptions& o, const model::RobotModel& robot,
+                                          const model::RigidBodyInertia& payload = {});
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

@@ -55,19 +55,6 @@ ControllerTorqueFit ControllerTorqueAccumulator::fit() const {
   return f;
 }
 
-ControllerTorqueFit controller_torque_fit(const model::RobotModel& robot, const std::vector<const device::Recording*>& recordings,
-                                          size_t max_samples) {
-  size_t total = 0;
-  for (const device::Recording* r : recordings)
-    if (r->n_dof == robot.n_dof() && (r->present & kNeeded) == kNeeded) total += r->samples.size();
-  if (total == 0 || max_samples == 0) return ControllerTorqueAccumulator(robot).fit();
-  ControllerTorqueAccumulator acc(robot, std::max<size_t>(1, total / max_samples));
-  for (const device::Recording* r : recordings)
-    if (r->n_dof == robot.n_dof())
-      for (const RobotSample& s : r->samples) acc.add(s);
-  return acc.fit();
-}
-
 ArmCheck::ArmCheck(const model::RobotModel& robot, size_t stride) {
   fits_.emplace_back(robot, stride);
   for (const std::string& name : model::builtin_robot_names())

@@ -81,11 +81,7 @@ int run(const Options& o) {
   eo.tool_speed_max = held[0].value();
   eo.elbow_speed_max = held[1].value();
   eo.momentum_max = held[2].value();
-  const twinwatch::cli::ToolBody tool = twinwatch::cli::tool_body(o.safety);
-  if (tool.mass > m.payload_limit())
-    throw InvalidArgument(fmt::format("--tool-mass {:g} kg: beyond {} ({:g} kg)", tool.mass, m.payload_limit_text(), m.payload_limit()));
-  eo.carried.mass = tool.mass;
-  eo.carried.com = tool.com;
+  eo.carried = twinwatch::cli::carried_on_flange(o.safety, m);
   eo.global_evaluations = o.global;
   eo.local_evaluations = o.local;
   eo.min_height = o.min_height;
@@ -195,7 +191,7 @@ int run(const Options& o) {
                   sp.tool, tool_peak_where, kept(held[0], "m/s"),
                   std::isnan(sp.elbow) ? std::string("no elbow (fewer than three joints)")
                                        : fmt::format("elbow {:.3f} m/s ({})", sp.elbow, kept(held[1], "m/s")),
-                  sp.momentum, tool.mass > 0 ? fmt::format(" and the {:g} kg tool", tool.mass) : std::string(), kept(held[2], "kg m/s"));
+                  sp.momentum, eo.carried.mass > 0 ? fmt::format(" and the {:g} kg tool", eo.carried.mass) : std::string(), kept(held[2], "kg m/s"));
   const std::string comment = fmt::format(
       "excitation trajectory for {} by `twinwatch excite` (finite Fourier series, Cao eq. 21-22)\n"
       "{} harmonics, base frequency {} Hz, seed {}; zero velocity and acceleration at start and end\n"
@@ -235,7 +231,7 @@ int run(const Options& o) {
                                                                  : nlohmann::json::array({eo.tool_points[static_cast<size_t>(sp.tool_point)].x(),
                                                                                           eo.tool_points[static_cast<size_t>(sp.tool_point)].y(),
                                                                                           eo.tool_points[static_cast<size_t>(sp.tool_point)].z()})},
-                     {"tool_mass", tool.mass},
+                     {"tool_mass", eo.carried.mass},
                      {"peak_elbow_speed", std::isnan(sp.elbow) ? nlohmann::json(nullptr) : nlohmann::json(sp.elbow)},
                      {"peak_momentum", sp.momentum},
                      {"limits", [&] {

@@ -184,7 +184,7 @@ void say_declared_payloads(const std::vector<ident::TrainingRun>& runs, const st
 }
 
 // The recordings' controller torque (target_moment) against the robot's model and every built-in
-// arm's of the same joint count (ident::controller_torque_fit), each recording on its own (a UR5e's
+// arm's of the same joint count (ident::ArmCheck), each recording on its own (a UR5e's
 // among UR3e recordings must not hide in a pooled fit that no arm explains): a recording of another
 // arm is refused when --robot was the default, and said when it was given (a description file of
 // the user's own may be right where the built-in ones are not); a recording no arm reproduces well
@@ -200,8 +200,8 @@ void check_robot_against_controller(const IdentifyOptions& o, const model::Robot
     if (v.own.samples == 0) continue;
     ++checked;
     worst = std::max(worst, v.own.relative_rms);
-    const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
     if (v.other_arm()) {
+      const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
       const std::string what = fmt::format(
           "{} is not a recording of a {}: the controller's own torque (target_moment) along its targets is reproduced by the {}'s model "
           "(relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms)",
@@ -210,12 +210,8 @@ void check_robot_against_controller(const IdentifyOptions& o, const model::Robot
         throw InvalidArgument(fmt::format("{}. Give --robot {} (or --robot {} to identify it as a {} all the same)", what, v.better,
                                           robot.name(), robot.name()));
       fmt::print(stderr, "WARNING: {}; identified as the {} you gave, as asked\n", what, robot.name());
-    } else if (v.poor()) {
-      fmt::print(stderr,
-                 "WARNING: {}: the {}'s model reproduces the controller's own torque (target_moment) only to {:.2f} relative rms (J2 "
-                 "off by {:.1f} N·m rms; its own arm's model does to 0.05-0.17): is it another arm, or does the arm carry a payload its "
-                 "program does not declare?\n",
-                 r->path, robot.name(), v.own.relative_rms, j2);
+    } else {
+      cli::warn_if_another_arm(r->path, robot, v, "identify");  // (a poor fit: the same warning as the other verbs')
     }
   }
   if (o.robot_given || o.quiet) return;

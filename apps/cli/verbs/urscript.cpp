@@ -72,20 +72,9 @@ int run(Options o) {
   o.program.name = o.name.empty() ? s.name : o.name;
   const bool declare_given = o.program.declare_payload;  // (--set-target-payload implies it; messages name the one typed)
   if (o.program.target_payload) o.program.declare_payload = true;
-  // what the flange carries: the tool (--tool-mass, a point mass at --tool-cog) and the scenario's
-  // payload; the momentum and the torque count both, and a declared payload is both (URScript's
-  // payload is everything on the flange)
-  const twinwatch::cli::ToolBody carried = twinwatch::cli::tool_body(o.safety, s.options.payload.mass, s.options.payload.com);
-  if (carried.mass > robot.payload_limit())
-    throw InvalidArgument(fmt::format("--tool-mass {:g} kg{}: the flange would carry {:g} kg, beyond {} ({:g} kg)", o.safety.tool_mass,
-                                      s.options.payload.mass > 0 ? fmt::format(" and the scenario's {:g} kg payload", s.options.payload.mass)
-                                                                 : std::string(),
-                                      carried.mass, robot.payload_limit_text(), robot.payload_limit()));
-  model::RigidBodyInertia tool_point_mass;
-  tool_point_mass.mass = o.safety.tool_mass;
-  tool_point_mass.com = o.safety.tool_cog.empty() ? Eigen::Vector3d::Zero()
-                                                  : Eigen::Vector3d(o.safety.tool_cog[0], o.safety.tool_cog[1], o.safety.tool_cog[2]);
-  o.program.payload = o.safety.tool_mass > 0.0 ? s.options.payload + tool_point_mass : s.options.payload;
+  // what the flange carries: the tool and the scenario's payload (the momentum, the torque and a declared payload)
+  const model::RigidBodyInertia carried = twinwatch::cli::carried_on_flange(o.safety, robot, s.options.payload);
+  o.program.payload = carried;
   // (the library names its fields; the user typed options)
   const auto motion_of = [&]() {
     try {
@@ -111,11 +100,8 @@ int run(Options o) {
     if (!tool_points[k].allFinite() || tool_points[k].norm() > 2.0)
       throw InvalidArgument(fmt::format("--tool-point (number {} of {}): expected a point within 2 m of the flange [m], got ({:g}, {:g}, {:g})",
                                         k + 1, tool_points.size(), tool_points[k].x(), tool_points[k].y(), tool_points[k].z()));
-  model::RigidBodyInertia carried_body;
-  carried_body.mass = carried.mass;
-  carried_body.com = carried.com;
   const std::vector<twinwatch::cli::OperationalLimit> held = twinwatch::cli::operational_limits(o.safety);
-  const sim::SafetyPeaks safety = sim::safety_peaks(motion, robot, tool_points, carried_body);
+  const sim::SafetyPeaks safety = sim::safety_peaks(motion, robot, tool_points, carried);
   const std::string tool_where =
       safety.tool_point < 0 ? std::string("the flange's centre")
                             : fmt::format("tool point {} ({:g}, {:g}, {:g}) m", safety.tool_point + 1, tool_points[safety.tool_point].x(),

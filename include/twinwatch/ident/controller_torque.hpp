@@ -15,7 +15,6 @@
 
 #include "twinwatch/core/sample.hpp"
 #include "twinwatch/core/types.hpp"
-#include "twinwatch/device/recording.hpp"
 #include "twinwatch/model/dynamics.hpp"
 #include "twinwatch/model/robot_model.hpp"
 
@@ -45,12 +44,6 @@ class ControllerTorqueAccumulator {
   double t2_ = 0.0, declared_ = -1.0;
   Eigen::Vector3d declared_cog_ = Eigen::Vector3d::Zero();
 };
-
-/// The fit of `robot` to the controller's torque over `recordings` (at most `max_samples`, spread
-/// evenly over them). Recordings of another joint count than the robot's, or without target_q/_qd/_qdd
-/// and target_moment, give samples 0.
-ControllerTorqueFit controller_torque_fit(const model::RobotModel& robot, const std::vector<const device::Recording*>& recordings,
-                                          size_t max_samples = 20000);
 
 /// A recording's fit to its supposed arm and to every other built-in arm of the same joint count.
 struct ArmVerdict {
