@@ -11,7 +11,7 @@ PACKAGES=(
   libeigen3-dev liborocos-kdl-dev liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev libyaml-cpp-dev libsqlite3-dev
   libboost-dev libceres-dev libnlopt-cxx-dev libnlopt-dev libglpk-dev coinor-libclp-dev
-  libgtest-dev libgmock-dev googletest libbenchmark-dev sqlite3
+  libgtest-dev libgmock-dev googletest libbenchmark-dev sqlite3 curl
 )
 
 if [[ "${SKIP_APT:-0}" != "1" ]]; then

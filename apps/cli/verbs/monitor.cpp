@@ -28,6 +28,7 @@
 #include "twinwatch/sim/scenario.hpp"
 #include "twinwatch/ui/html_report.hpp"
 #include "evaluate.hpp"
+#include "monitor_run.hpp"
 #include "verb_registry.hpp"
 
 namespace {
@@ -58,23 +59,8 @@ void say_checking(const std::string& path) {
   if (!ec && bytes >= 100'000'000) fmt::print(stderr, "checking {} ({:.2f} GB) ...\n", path, static_cast<double>(bytes) / 1e9);
 }
 
-struct MonitorOptions {
-  std::string twin, events_path, db_path = "events.db";
-  std::vector<std::string> recordings;  // watched as one stream, in order (the parts --split-every writes)
-  std::string column_map;  // foreign logs: CSV column -> RTDE name, scale
-  std::string trace;  // per-sample residuals and thresholds as CSV
-  std::string rtde, record_to;  // live input: controller address, optional copy of the stream
-  double split_every = 0.0;      // [s of controller time] --record: a new file this often (0: one file)
-  double duration = 0.0, wait = 0.0;
-  double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
-  double cycle_period = 0.0;
-  std::vector<double> payload_com;
-  std::vector<double> sensitivity;
-  int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
-  std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
-  std::string program;  // threshold set of this program ("" = the default set)
-  bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
-};
+using cli::MonitorOptions;
+using cli::MonitorHooks;
 
 
 constexpr const char* kColumnMapHelp =
@@ -135,7 +121,10 @@ constexpr const char* kObserverRaiseAfterHelp =
     "count per joint, chosen on healthy validation runs ('thresholds --debounce-validation'); else --raise-after). 1 "
     "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 
-int run_monitor(const MonitorOptions& o) {
+// a replay stopped by MonitorHooks::stop_requested (Ctrl-C under serve)
+struct ReplayStopped {};
+
+int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing": no info lines either (warnings still show)
   ident::TwinModel twin = cli::load_twin(o.twin);
   // the declared payload is checked before anything is read or connected
@@ -273,6 +262,10 @@ int run_monitor(const MonitorOptions& o) {
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
   }
   monitor::Monitor mon(twin, cfg);
+  if (hooks.on_start) {
+    std::string source = o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde;
+    hooks.on_start(mon, source);
+  }
   std::ofstream jl;
   if (!o.events_path.empty()) {
     jl.open(o.events_path);
@@ -339,6 +332,7 @@ int run_monitor(const MonitorOptions& o) {
   mon.on_event = [&](const monitor::Event& raw) {
     monitor::Event e = raw;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
+    if (hooks.on_event) hooks.on_event(e);
     if (e.open) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
@@ -373,6 +367,7 @@ int run_monitor(const MonitorOptions& o) {
     std::fflush(stdout);  // the same for a pipe or a log file
   };
   mon.on_note = [&](double t, const std::string& note) {
+    if (hooks.on_note) hooks.on_note(t, note);
     if (o.quiet || o.json) return;
     fmt::print("{:9.3f} s  note: {}\n", t, note);
     std::fflush(stdout);
@@ -387,6 +382,12 @@ int run_monitor(const MonitorOptions& o) {
       trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
     trace << '\n';
   }
+  // the RTDE stream's counters for a status line ("" for a recording)
+  const auto stream_line = [&]() -> std::string {
+    if (!client) return {};
+    const auto st = client->stats();
+    return fmt::format("{} received, {} lost in {} gaps, {} reconnects", st.received, st.lost, st.gaps, st.reconnects);
+  };
   long pushed = 0;
   // live, the monitor lets go of events stored and written ten minutes of robot time ago (its own
   // look-backs span seconds): its memory stays bounded however long it runs
@@ -397,15 +398,20 @@ int run_monitor(const MonitorOptions& o) {
       if (client && pushed % 5000 == 0) mon.forget_events_before(s.timestamp - kKeepEventsS);
     }
     const monitor::Excursion x = watch.check(s);
-    if (!x.inside() && chatty) {
+    if (!x.inside() && (chatty || hooks.on_note)) {
       auto seen = noted[static_cast<size_t>(2 * x.joint + (x.speed ? 0 : 1))];  // (a vector<bool> reference)
       if (!seen) {
         seen = true;
-        fmt::print("{:9.3f} s  note: {}: beyond the motion the twin was identified on; residuals there may be model error\n",
-                   s.timestamp, x.describe(watch.envelope()));
+        const std::string note =
+            fmt::format("{}: beyond the motion the twin was identified on; residuals there may be model error", x.describe(watch.envelope()));
+        if (hooks.on_note) hooks.on_note(s.timestamp, note);
+        if (chatty) fmt::print("{:9.3f} s  note: {}\n", s.timestamp, note);
       }
     }
+    if (hooks.before_sample) hooks.before_sample(s);
     mon.push(s);
+    if (hooks.after_sample) hooks.after_sample(mon, s);
+    if (hooks.on_status && pushed % 500 == 0) hooks.on_status(mon, "monitoring", stream_line());
     if (!trace.is_open()) return;
     trace << fmt::format("{:.6f}", s.timestamp);
     const VectorJ obs = mon.observer_torque(), obs_level = mon.observer_torque_threshold();
@@ -415,6 +421,7 @@ int run_monitor(const MonitorOptions& o) {
   };
   bool silent_gap = false;   // the silence at the end is one of the monitor's gaps (a stream fault)
   bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
+  bool replay_stopped = false;  // a replay stopped at the user's request (serve, Ctrl-C)
   if (!client) {
     double previous = std::numeric_limits<double>::quiet_NaN();
     for (size_t i = 0; i < o.recordings.size(); ++i) {
@@ -425,12 +432,17 @@ int run_monitor(const MonitorOptions& o) {
       bool first_row = true;
       try {
         k = device::replay_rows(again, scan, [&](RobotSample& s) {
+          if (hooks.stop_requested && hooks.stop_requested()) throw ReplayStopped{};
           // (the step from the file before: a gap as the first file's timing measures one)
           if (first_row && !std::isnan(previous) && scans.front().timing.is_gap(s.timestamp - previous)) s.gap_before = true;
           first_row = false;
           previous = s.timestamp;
           push(s);
         });
+      } catch (const ReplayStopped&) {
+        replay_stopped = true;
+        if (!o.quiet && !o.json) fmt::print("stopped at t = {:.3f} s, in {}: what was watched up to there is reported\n", previous, o.recordings[i]);
+        break;
       } catch (...) {
         // (the file changed under the second pass: what was watched up to there is still reported)
         mon.finish();
@@ -494,6 +506,8 @@ int run_monitor(const MonitorOptions& o) {
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
+  if (hooks.on_status)
+    hooks.on_status(mon, lost_at_end ? "connection lost" : replay_stopped || (client && cli::interrupted()) ? "stopped" : "finished", stream_line());
   close_written(jl, o.events_path);
   if (store && !unstored.empty()) {
     store_the_rest();
@@ -793,60 +807,10 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "beyond the healthy noise before the alert that the diagnosis explains (of the whole residual where the\n"
       "twin has no momentum observer; docs/validation.md, 'What an event's confidence means'). Joints and\n"
       "links are numbered from 1, as in the scenario labels."));
-  sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
-  sub->add_option("RECORDING", o->recordings,
-                  "Recording CSV (or use --rtde for a live robot); several are watched as one stream in the order given, e.g. the parts "
-                  "--split-every writes (rec.000.csv rec.001.csv ...): the estimators and the wear trend go on across them, a jump in "
-                  "time between two is a gap, and each event is stored under the file it started in")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
-  auto* duration = sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
-                       ->check(twinwatch::cli::positive_number());
-  auto* wait = sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")
-                   ->check(twinwatch::cli::nonnegative_number());
-  auto* no_reconnect = sub->add_flag("--no-reconnect", o->no_reconnect,
-                "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
-                "reconnecting with back-off");
-  auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
-  auto* split_every = sub->add_option("--split-every", o->split_every,
-                                      "With --record: start a new file each SECONDS of controller time (>= 1): rec.csv -> rec.000.csv, "
-                                      "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp);
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
-  sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
-  sub->add_option("--payload-mass", o->payload_mass,
-                  "Payload the program declares [kg] (default: the twin file's 'payload', 0 kg as identify writes it). A stream that carries the controller's declared payload (RTDE payload / "
-                  "payload_cog, controllers 5.5.1 and newer; a recording's payload columns) overrides it: the twin takes the first "
-                  "declaration that differs and every change of it, so a declared pick raises nothing")
-      ->check(twinwatch::cli::nonnegative_number());
-  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
-  sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
-  sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
-  sub->add_flag("--keep-payload", o->keep_payload,
-                "Keep the payload the twin starts with (--payload-mass, else the twin file's) for the whole run. Default: 2.5 s "
-                "after a payload change is raised the twin takes the diagnosed payload (a dropped part: none), the alert clears "
-                "and monitoring goes on, so that a contact or the next pick is an event of its own; and the twin takes each "
-                "payload the stream declares (RTDE payload, controllers 5.5.1+). With this flag neither: a payload change stays "
-                "open while the robot runs with it, and a pick the program declares is an alert too");
-  sub->add_option("--filter", o->filter, kFilterHelp);
-  sub->add_option("--program", o->program,
-                  "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
-                  "default set")->check(kProgramNameGiven);
-  sub->add_option("--cycle-period", o->cycle_period,
-                  "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
-                  "trend.window_s)")
-      ->check(twinwatch::cli::positive_number());
-  sub->add_flag("--json", o->json, "Print closed events as JSON lines only (the --events format)");
-  sub->add_option("--trace", o->trace,
-                  "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
-                  "per joint to this CSV (to see why an alert was raised or late)");
-  sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
+  const auto check = twinwatch::cli::add_monitor_options(sub, o);
   sub->callback([=] {
-    twinwatch::cli::refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
-    twinwatch::cli::refuse_unless({split_every}, !o->record_to.empty(), "with --record");
-    twinwatch::cli::set_exit_code(run_monitor(*o));
+    check();
+    twinwatch::cli::set_exit_code(run_monitor_impl(*o, {}));
   });
 }};
 
@@ -1073,3 +1037,66 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
 }};
 
 }  // namespace
+
+namespace twinwatch::cli {
+
+std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<MonitorOptions>& o) {
+  sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recordings,
+                  "Recording CSV (or use --rtde for a live robot); several are watched as one stream in the order given, e.g. the parts "
+                  "--split-every writes (rec.000.csv rec.001.csv ...): the estimators and the wear trend go on across them, a jump in "
+                  "time between two is a gap, and each event is stored under the file it started in")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--rtde", o->rtde, "Monitor a live controller at HOST[:PORT] over RTDE instead of a recording");
+  auto* duration = sub->add_option("--duration", o->duration, "With --rtde: stop after this many seconds (default: until Ctrl-C)")
+                       ->check(positive_number());
+  auto* wait = sub->add_option("--wait", o->wait, "With --rtde: keep trying the first connection for this long [s]")
+                   ->check(nonnegative_number());
+  auto* no_reconnect = sub->add_flag("--no-reconnect", o->no_reconnect,
+                "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
+                "reconnecting with back-off");
+  auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
+  auto* split_every = sub->add_option("--split-every", o->split_every,
+                                      "With --record: start a new file each SECONDS of controller time (>= 1): rec.csv -> rec.000.csv, "
+                                      "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
+  sub->add_option("--column-map", o->column_map, kColumnMapHelp);
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
+  sub->add_option("--payload-mass", o->payload_mass,
+                  "Payload the program declares [kg] (default: the twin file's 'payload', 0 kg as identify writes it). A stream that carries the controller's declared payload (RTDE payload / "
+                  "payload_cog, controllers 5.5.1 and newer; a recording's payload columns) overrides it: the twin takes the first "
+                  "declaration that differs and every change of it, so a declared pick raises nothing")
+      ->check(nonnegative_number());
+  sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
+  sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(whole_number(1, 1000));
+  sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one (Cao eq. 24)");
+  sub->add_flag("--keep-payload", o->keep_payload,
+                "Keep the payload the twin starts with (--payload-mass, else the twin file's) for the whole run. Default: 2.5 s "
+                "after a payload change is raised the twin takes the diagnosed payload (a dropped part: none), the alert clears "
+                "and monitoring goes on, so that a contact or the next pick is an event of its own; and the twin takes each "
+                "payload the stream declares (RTDE payload, controllers 5.5.1+). With this flag neither: a payload change stays "
+                "open while the robot runs with it, and a pick the program declares is an alert too");
+  sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--program", o->program,
+                  "Use the thresholds learned for this program ('twinwatch thresholds --program NAME'); default: the twin's "
+                  "default set")->check(kProgramNameGiven);
+  sub->add_option("--cycle-period", o->cycle_period,
+                  "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
+                  "trend.window_s)")
+      ->check(positive_number());
+  sub->add_flag("--json", o->json, "Print closed events as JSON lines only (the --events format)");
+  sub->add_option("--trace", o->trace,
+                  "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
+                  "per joint to this CSV (to see why an alert was raised or late)");
+  sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
+  return [=] {
+    refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
+    refuse_unless({split_every}, !o->record_to.empty(), "with --record");
+  };
+}
+
+int run_monitor(const MonitorOptions& o, const MonitorHooks& hooks) { return run_monitor_impl(o, hooks); }
+
+}  // namespace twinwatch::cli
