@@ -3,7 +3,9 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include "twinwatch/core/error.hpp"
@@ -60,6 +62,12 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  // what the verb printed must have reached its file: '> /dev/full' (a full disk) exited 0 with the
+  // output lost (review, session 47)
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::fprintf(stderr, "error: the output could not be written (standard output: %s)\n", errno != 0 ? std::strerror(errno) : "write error");
     return 1;
   }
   return twinwatch::cli::exit_code();

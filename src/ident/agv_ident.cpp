@@ -13,6 +13,9 @@ namespace twinwatch::ident {
 namespace {
 // a steady-state point needs the wheel turning (U / w is undefined at rest) [rad/s]
 constexpr double kMinSpeed = 0.5;
+// [1] the step response's last fifth within this of the fifth before counts as settled (a first-order
+// step recorded over 5 time constants differs by 2.0 %, over 8.7 as make-tests records by 0.2 %)
+constexpr double kSettled = 0.03;
 
 // least squares y = a x + b
 void line_fit(const std::vector<double>& x, const std::vector<double>& y, double& a, double& b) {
@@ -63,10 +66,24 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
   // eq. 6: tau from the step: time to 63.2 % of the final speed (mean of the last fifth)
   if (step.size() < 10) throw InvalidArgument(fmt::format("{} motor: {} step samples, expected at least 10", motor, step.size()));
   std::sort(step.begin(), step.end());
-  double final = 0;
+  // the step is applied one logging period before the first step row (make-tests' rows start at
+  // t = dt): tau counts from there, not from t = 0 (a log whose clock started 2 s earlier gave a
+  // tau of 2.17 s and J 13x too large; review, session 47)
+  const double onset = step[0].first - (step[1].first - step[0].first);
+  // the final value: the mean of the last fifth, which must have settled (a step cut off while the
+  // wheel still accelerates gave tau 0.116 s, exit 0): the fifth before it within kSettled
+  double final = 0, before = 0;
   const size_t tail = step.size() / 5;
   for (size_t k = step.size() - tail; k < step.size(); ++k) final += step[k].second;
+  for (size_t k = step.size() - 2 * tail; k < step.size() - tail; ++k) before += step[k].second;
   final /= static_cast<double>(tail);
+  before /= static_cast<double>(tail);
+  if (!(std::abs(final - before) <= kSettled * std::abs(final)))
+    throw InvalidArgument(fmt::format("{} motor: the step response has not settled: the mean speed of its last fifth ({:.4g} rad/s, from t = "
+                                      "{:.3f} s) differs by {:.1f} % from the fifth before, at most {:.0f} %; record the step until the "
+                                      "speed is steady (about 5 time constants)",
+                                      motor, final, step[step.size() - tail].first, 100 * std::abs(final - before) / std::abs(final),
+                                      100 * kSettled));
   const double target = 0.632 * final;
   // the encoder speed of sample k is the mean over (t_k - dt, t_k]: read it at the mid-point,
   // interpolating linearly between the samples around the crossing
@@ -75,7 +92,7 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
       const double dt = step[k].first - step[k - 1].first;
       const double t0 = step[k - 1].first - dt / 2, t1 = step[k].first - dt / 2;
       const double f = (target - step[k - 1].second) / (step[k].second - step[k - 1].second);
-      fit.tau = t0 + f * (t1 - t0);
+      fit.tau = t0 + f * (t1 - t0) - onset;
       break;
     }
   }

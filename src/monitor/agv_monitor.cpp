@@ -34,28 +34,63 @@ void AgvMonitor::push_bytes(const std::uint8_t* data, std::size_t n) {
 void AgvMonitor::push(const device::AgvStateDatagram& d) {
   ++c_.received;
   const int r = d.role == device::AgvRole::Twin ? 1 : 0;
-  if (have_[static_cast<size_t>(r)]) {
-    const std::uint32_t prev = last_seq_[static_cast<size_t>(r)];
+  const auto k = static_cast<size_t>(r);
+  auto& held = suspect_[k];
+  const std::uint32_t prev = last_seq_[k];
+  const bool far = have_[k] && (d.seq > prev ? d.seq - prev : prev - d.seq) > kResyncJump;
+  if (!far) {
+    // a believed number: the unconfirmed jump was a stray
+    c_.stray += static_cast<long>(held.size());
+    held.clear();
+    accept(d, r);
+    return;
+  }
+  // a jump: held until kConfirm states in a row confirm it
+  if (!held.empty() && d.seq != held.back().seq + 1) {
+    c_.stray += static_cast<long>(held.size());
+    held.clear();
+  }
+  held.push_back(d);
+  if (static_cast<int>(held.size()) < kConfirm) return;
+  // confirmed: the side's numbering starts again at the first held state (forward: the skipped
+  // numbers are lost; backward: a restart, its ring emptied so old states do not pair with new)
+  ++c_.resyncs;
+  if (held.front().seq > prev) c_.lost += held.front().seq - prev - 1;
+  for (Slot& slot : ring_[k])
+    if (slot.used && !slot.paired) ++c_.unpaired, slot.paired = true;
+  have_[k] = false;
+  if (held.front().seq < prev) paired_any_ = false;  // (pairs stay in order within the new numbering)
+  const std::vector<device::AgvStateDatagram> confirmed = std::move(held);
+  held.clear();
+  for (const auto& x : confirmed) accept(x, r);
+}
+
+void AgvMonitor::accept(const device::AgvStateDatagram& d, int r) {
+  const auto k = static_cast<size_t>(r);
+  if (have_[k]) {
+    const std::uint32_t prev = last_seq_[k];
     if (d.seq == prev) {
       ++c_.duplicated;
       return;
     }
     if (d.seq < prev) {
       ++c_.reordered;  // late: its partner has moved on, it cannot be paired any more
-      first_seq_[static_cast<size_t>(r)] = std::min(first_seq_[static_cast<size_t>(r)], d.seq);  // came, not lost
+      first_seq_[k] = std::min(first_seq_[k], d.seq);  // came, not lost
       return;
     }
     c_.lost += d.seq - prev - 1;
+  } else if (first_seq_[k] == 0 && last_seq_[k] == 0) {
+    first_seq_[k] = d.seq;
   } else {
-    first_seq_[static_cast<size_t>(r)] = d.seq;
+    first_seq_[k] = std::min(first_seq_[k], d.seq);
   }
-  have_[static_cast<size_t>(r)] = true;
-  last_seq_[static_cast<size_t>(r)] = d.seq;
-  Slot& mine = ring_[static_cast<size_t>(r)][d.seq % kHistory];
+  have_[k] = true;
+  last_seq_[k] = d.seq;
+  Slot& mine = ring_[k][d.seq % kHistory];
   if (mine.used && !mine.paired) ++c_.unpaired;  // kHistory states later its partner has not come
   mine = Slot{d, true, false};
   // the partner of the same sequence number, if it came already; pairs stay in sequence order
-  Slot& other = ring_[static_cast<size_t>(1 - r)][d.seq % kHistory];
+  Slot& other = ring_[1 - k][d.seq % kHistory];
   if (other.used && !other.paired && other.d.seq == d.seq && (!paired_any_ || d.seq > last_paired_)) {
     mine.paired = other.paired = true;
     r == 0 ? pair(d, other.d) : pair(other.d, d);
@@ -106,6 +141,14 @@ void AgvMonitor::finish(double t) {
         ++c_.unpaired;
         slot.paired = true;  // counted once
       }
+  for (auto& held : suspect_) {
+    c_.stray += static_cast<long>(held.size());
+    held.clear();
+  }
+  close_alerts(t);
+}
+
+void AgvMonitor::close_alerts(double t) {
   for (int* open : {&open_v_, &open_w_})
     if (*open >= 0) {
       alerts_[static_cast<size_t>(*open)].end = t;

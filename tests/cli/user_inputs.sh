@@ -45,8 +45,8 @@ for want in '"class":"sensor_fault"' '"joint":3,' 'temperature reads 6553.5 °C'
 done
 # 6. an unknown verb is named; evaluate with every scenario skipped evaluated nothing and says so; a
 #    column map that is a directory is no (empty) map
-if "$B" serve > "$W/err" 2>&1; then fail "an unknown verb ran"; fi
-grep -q "'serve' is not a twinwatch command; the commands are: .*serve-robot" "$W/err" || fail "unknown verb: $(cat "$W/err")"
+if "$B" serv > "$W/err" 2>&1; then fail "an unknown verb ran"; fi
+grep -q "'serv' is not a twinwatch command; the commands are: .*serve-robot" "$W/err" || fail "unknown verb: $(cat "$W/err")"
 if "$B" evaluate "$SC" --twin "$D/twin.json" --max-duration 1 --json > "$W/err" 2>&1; then fail "evaluate of nothing succeeded"; fi
 grep -q "every scenario (1) is longer than --max-duration 1 s: nothing evaluated" "$W/err" || fail "evaluate of nothing: $(cat "$W/err")"
 if "$B" validate --twin "$D/twin.json" "$D/fig.csv" --column-map "$W" > "$W/err" 2>&1; then fail "a directory taken as a column map"; fi

@@ -3,11 +3,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/device/agv_tests.hpp"
 #include "twinwatch/sim/agv.hpp"
 #include "error_text.hpp"
 
@@ -30,6 +32,27 @@ TEST(AgvIdent, RecoversTable1FromNoisyTests) {
       EXPECT_GE(fit.steady_points, 13);
     }
   }
+}
+
+// tau counts from the step's instant (one logging period before its first row), whatever the log's
+// clock origin; a step cut off before it settles is refused (review, session 47: +2 s on the clock
+// gave tau 2.17 s and J 13x; a step cut at 0.3 s gave tau 0.116 s, exit 0)
+TEST(AgvIdent, TheStepIsTimedFromItsOnsetAndMustHaveSettled) {
+  const auto rows = sim::simulate_agv_tests(sim::AgvParams{}, 2);
+  auto shifted = rows, cut = rows;
+  for (auto& r : shifted)
+    if (r.test == "step") r.time += 2.0;
+  for (const char* m : {"right", "left"}) {
+    const auto a = fit_agv_motor(rows, m), b = fit_agv_motor(shifted, m);
+    EXPECT_NEAR(b.tau, a.tau, 1e-9) << m;
+    EXPECT_NEAR(b.params.J, a.params.J, 1e-12) << m;
+    // the time constant of AGV Table 1's motor, J Ra / (B Ra + k^2), within the encoder's resolution
+    const auto t = std::string(m) == "right" ? model::agv_table1_right() : model::agv_table1_left();
+    EXPECT_NEAR(a.tau, t.J * t.Ra / (t.B * t.Ra + t.k * t.k), 0.01) << m;
+  }
+  cut.erase(std::remove_if(cut.begin(), cut.end(), [](const AgvTestRow& r) { return r.test == "step" && r.time > 0.3; }), cut.end());
+  EXPECT_THAT([&] { fit_agv_motor(cut, "right"); },
+              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("right motor: the step response has not settled")));
 }
 
 TEST(AgvIdent, TestFileRoundTripsAndBadCellsAreNamed) {
@@ -124,10 +147,10 @@ TEST(AgvIdent, NonPhysicalFitIsRefused) {
   // the voltage falls as the wheel speeds up: the fitted k (intercept of U/w over i/w) is negative
   std::vector<device::AgvTestRow> rows;
   for (int k = 1; k <= 5; ++k) rows.push_back({"right", "steady", 6.0 - k, 0.1 * k, 2.0 * k, 0.0});
-  for (int k = 1; k <= 20; ++k) rows.push_back({"right", "step", 6.0, 0.1, 10.0 * (1 - std::exp(-k * 0.01 / 0.2)), k * 0.01});
+  for (int k = 1; k <= 100; ++k) rows.push_back({"right", "step", 6.0, 0.1, 10.0 * (1 - std::exp(-k * 0.02 / 0.2)), k * 0.02});  // (settled: 10 tau)
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { fit_agv_motor(rows, "right"); }),
               ::testing::AllOf(::testing::HasSubstr("right motor: "), ::testing::HasSubstr("must be > 0"),
-                               ::testing::HasSubstr("(fitted from 5 steady-state and 20 step rows: they do not describe a DC motor")));
+                               ::testing::HasSubstr("(fitted from 5 steady-state and 100 step rows: they do not describe a DC motor")));
 }
 
 TEST(AgvIdent, TooFewSteadyPoints) {

@@ -132,5 +132,57 @@ TEST(AgvMonitor, DebouncedAlertHasStartAndDuration) {
   EXPECT_NEAR(m.alerts()[0].duration(), 3.0, 0.25);
 }
 
+
+// one stray datagram with a far sequence number (review, session 47: seq 0xFFFFFFF0 made every
+// later state "reordered" and 4294967251 "lost") is dropped as stray; a jump that kConfirm states
+// in a row confirm (a robot that restarted its numbering) is followed
+TEST(AgvMonitor, AStrayFarSequenceNumberIsDroppedAndAConfirmedRestartIsFollowed) {
+  AgvMonitor m;
+  for (std::uint32_t k = 0; k < 20; ++k) {
+    m.push(state(AgvRole::Real, k, 0.0));
+    if (k == 10) m.push(state(AgvRole::Real, 0xFFFFFFF0u, 0.0));  // the stray
+    m.push(state(AgvRole::Twin, k, 0.0));
+  }
+  EXPECT_EQ(m.counters().paired, 20);
+  EXPECT_EQ(m.counters().lost, 0);
+  EXPECT_EQ(m.counters().reordered, 0);
+  EXPECT_EQ(m.counters().stray, 1);
+  EXPECT_EQ(m.counters().resyncs, 0);
+  // both robots restart at 0 (backwards, far): followed after kConfirm states, none lost
+  for (std::uint32_t k = 0; k < 20; ++k) {
+    m.push(state(AgvRole::Real, 5000 + k, 0.0));
+    m.push(state(AgvRole::Twin, 5000 + k, 0.0));
+  }
+  EXPECT_EQ(m.counters().resyncs, 2);  // one per robot
+  EXPECT_EQ(m.counters().lost, 2 * (5000 - 19 - 1));  // the jump forward: the numbers skipped
+  EXPECT_EQ(m.counters().paired, 40);
+  EXPECT_EQ(m.counters().stray, 1);
+  AgvMonitor back;
+  for (std::uint32_t k = 3000; k < 3010; ++k) back.push(state(AgvRole::Real, k, 0.0)), back.push(state(AgvRole::Twin, k, 0.0));
+  for (std::uint32_t k = 0; k < 10; ++k) back.push(state(AgvRole::Real, k, 0.0)), back.push(state(AgvRole::Twin, k, 0.0));
+  EXPECT_EQ(back.counters().resyncs, 2);
+  EXPECT_EQ(back.counters().reordered, 0);
+  EXPECT_EQ(back.counters().lost, 0);
+  EXPECT_EQ(back.counters().paired, 20);
+}
+
+// a test's end closes its alerts but not the pairing: the partner of a state that came before the
+// boundary still pairs after it (review, session 47: finish() per test counted it unpaired)
+TEST(AgvMonitor, ClosingAlertsAtATestsEndKeepsThePairing) {
+  AgvMonitor m;
+  m.push(state(AgvRole::Real, 5, 0.0));
+  m.close_alerts(0.2);
+  m.push(state(AgvRole::Twin, 5, 0.0));
+  EXPECT_EQ(m.counters().paired, 1);
+  EXPECT_EQ(m.counters().unpaired, 0);
+  std::uint32_t seq = 6;
+  for (int k = 0; k < 20; ++k, ++seq) m.push(state(AgvRole::Real, seq, 2.0)), m.push(state(AgvRole::Twin, seq, 0.0));
+  ASSERT_EQ(m.alerts().size(), 1u);
+  EXPECT_TRUE(m.alerts()[0].open);
+  m.close_alerts(seq * 0.04);
+  EXPECT_FALSE(m.alerts()[0].open);
+  EXPECT_NEAR(m.alerts()[0].end, seq * 0.04, 1e-12);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor
