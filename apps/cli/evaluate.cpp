@@ -10,6 +10,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <utility>
 #include <memory>
 #include <optional>
@@ -542,11 +543,22 @@ void UnitsCheck::add(const RobotSample& s) {
   for (int j = 0; j < n_; ++j) {
     const model::JointLimits& l = robot_.joint(j).limits;
     const double t = s.timestamp - t0_;
-    if (s.q[j] < l.q_min - kUnitsPositionMargin || s.q[j] > l.q_max + kUnitsPositionMargin)
+    if (s.q[j] < l.q_min - kUnitsPositionMargin || s.q[j] > l.q_max + kUnitsPositionMargin) {
+      // degrees only where degrees would fit the range (a Kinova's 0.43 rad against a Panda's range
+      // read "are the positions in degrees?", which scaling would make worse; review, session 47)
+      const double as_radians = s.q[j] * kDegree;
+      const bool degrees = as_radians >= l.q_min - kUnitsPositionMargin && as_radians <= l.q_max + kUnitsPositionMargin;
       throw InvalidArgument(fmt::format("{}: J{} is at {:.4g} rad at t = {:.3f} s (sample {}), beyond the {}'s range {:.3g} to {:.3g} "
-                                        "rad: are the positions in degrees? Scale them with a column map "
-                                        "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
-                                        path_, j + 1, s.q[j], t, samples_, robot_.name(), l.q_min, l.q_max, j));
+                                        "rad: {}",
+                                        path_, j + 1, s.q[j], t, samples_, robot_.name(), l.q_min, l.q_max,
+                                        degrees ? fmt::format("are the positions in degrees? Scale them with a column map "
+                                                              "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
+                                                              j)
+                                                : fmt::format("is it a recording of another arm than the {}, or are the joints in another "
+                                                              "order or with another zero? (in degrees it would be {:.4g} rad, beyond the "
+                                                              "range too; give the arm's description with --robot)",
+                                                              robot_.name(), as_radians)));
+    }
     if (std::abs(s.qd[j]) > kUnitsSpeedFactor * l.qd_max)
       throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), more than {:g} times the {}'s limit "
                                         "{:.3g} rad/s: are the speeds in degrees/s? Scale them with a column map "
@@ -1382,6 +1394,13 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   std::vector<std::vector<std::string>> note_rows;
   mon.on_note = [&](double t_note, const std::string& text) { note_rows.push_back({fmt::format("{:.3f}", t_note), text}); };
   monitor::EnvelopeWatch watch(twin.envelope);  // where the robot moves beyond the identified motion
+  // each event's envelope note as monitor prints it: made when the event closes, from the motion up
+  // to then (made after the replay, it named a position the arm reached 1.7 s after the event, in the
+  // same excursion; review, session 47)
+  std::map<std::pair<double, double>, std::string> envelope_note;
+  mon.on_event = [&](const monitor::Event& e) {
+    if (!e.open) envelope_note[{e.t_start, e.t_detected}] = watch.alert_note(e.t_start, e.t_detected);
+  };
   const int n = scan.n_dof;
   const bool observer = cfg.observer_level.size() == n;  // (as Monitor turns it on)
   // every plot spans the recording's timestamps (one time axis for all) at the default width
@@ -1398,8 +1417,8 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   monitor::ResidualVelocityCorrelation correlation(n);
   device::RecordingReader again(recording, map);
   const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) {
+    watch.check(s);  // (first, as monitor does: an event closed at this sample sees it)
     mon.push(s);
-    watch.check(s);
     const double t = s.timestamp;
     const VectorJ tau_ext = mon.observer_torque(), tau_lev = mon.observer_torque_threshold();
     for (int j = 0; j < n; ++j) {
@@ -1453,7 +1472,10 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
     rows.push_back({fmt::format("{:.3f}", e.t_start), fmt::format("{:.3f}", e.duration()), std::string(monitor::to_string(e.fault)),
                     e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", magnitude_text(e.magnitude, e.units),
                     fmt::format("{:.0f} %", 100 * e.confidence),
-                    e.detail + (e.fault == monitor::FaultClass::Wear ? "" : watch.alert_note(e.t_start, e.t_detected))});
+                    e.detail + (e.fault == monitor::FaultClass::Wear ? "" : [&] {
+                      const auto at = envelope_note.find({e.t_start, e.t_detected});
+                      return at != envelope_note.end() ? at->second : watch.alert_note(e.t_start, e.t_detected);
+                    }())});
   r.add_heading("Events");
   if (mon.judged() == 0)
     r.add_paragraph(fmt::format("Caution: no sample was judged: the recording's {} samples are all within the monitor's start-up (or not "

@@ -38,6 +38,7 @@ model::RigidBodyInertia payload_for(const ident::TwinModel& twin, const std::str
 /// time, the value and the limit, and the column map scale that fixes it (docs/recordings.md).
 /// Throws InvalidArgument.
 inline constexpr double kUnitsPositionMargin = 0.5;  ///< [rad] beyond q_min / q_max
+inline constexpr double kDegree = 0.017453292519943295;  ///< [rad] one degree (a column map's scale for degrees)
 inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);

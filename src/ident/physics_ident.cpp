@@ -44,6 +44,9 @@ constexpr double kCGenMax = 1.0;
 constexpr double kMinViscousTemperatureSpan = 2.0;
 // a joint whose speed never reaches this in any recording is refused [rad/s]
 constexpr double kMinJointSpeed = 0.02;
+// [rad/s] the temperature span that lets identify fit a joint's viscous-temperature slope is taken
+// over the samples where the joint moves at least this fast (review, session 47)
+constexpr double kTemperatureSpanSpeed = 0.05;
 // a drive gain counts as identified when the known payload's current on the joint (rms) is at
 // least this multiple of the joint's fit RMSE. Set on the simulated UR3e (docs/validation.md):
 // ratios J2 4.2, J3 5.7, J4 1.9 (gains within 1, 0.3, 12 %) against J5 1.4, J1 0.02, J6 0
@@ -753,7 +756,12 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       fastest = fastest.cwiseMax(s.qd.cwiseAbs());
       if (k % static_cast<size_t>(o.decimate) != 0 || s.temperature.size() != n) continue;
       for (int j = 0; j < n; ++j) {
-        if (!std::isfinite(s.temperature[j]) || (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen)) continue;
+        // (a joint's temperature counts where it moves: viscous friction scales with its speed, and a
+        // joint that warmed while at rest in one log says nothing of the slope; a Kinova J5 at 29 °C in
+        // one log and at rest at 39 °C in another got a slope that made its held-out error 13x)
+        if (!std::isfinite(s.temperature[j]) || std::abs(s.qd[j]) < kTemperatureSpanSpeed ||
+            (o.reversal_screen > 0.0 && std::abs(s.qd[j]) < o.reversal_screen))
+          continue;
         t_lo[j] = std::min(t_lo[j], s.temperature[j]);
         t_hi[j] = std::max(t_hi[j], s.temperature[j]);
       }

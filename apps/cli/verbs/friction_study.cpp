@@ -509,6 +509,7 @@ int run(const StudyOptions& o) {
     }
     write_text_file(o.predictions, fmt::to_string(buf));
   }
+  std::string refused;  // why --save-twin stores nothing (said after the tables, exit 1)
   if (twin) {
     // the friction block: ParFam-H of every studied joint, re-loadable into the compiled evaluator
     std::vector<JointFrictionEquation> eqs;
@@ -519,11 +520,25 @@ int run(const StudyOptions& o) {
                                           twin->n_dof()));
       const auto* m = dynamic_cast<const ParFamModel*>(r.study.model("ParFam-H").model.get());
       if (!m) throw InvalidArgument(fmt::format("{}: ParFam-H was not fitted, nothing to store", r.study.joint));
+      // an equation that predicts the validation record worse than zero friction would is not a
+      // friction model of the joint: the Kinova run stored one at 29303313.7 rms, said only as
+      // "stored 1 friction equation(s)" (review, session 47)
+      const ModelStudy& ms = r.study.model("ParFam-H");
+      double tau_rms = 0.0;
+      for (const double x : r.study.fourier.tau) tau_rms += x * x;
+      tau_rms = r.study.fourier.tau.empty() ? 0.0 : std::sqrt(tau_rms / static_cast<double>(r.study.fourier.tau.size()));
+      if (!(ms.fourier_rmse <= tau_rms) && refused.empty())
+        refused = (fmt::format("--save-twin {}: not written: {}'s ParFam-H errs {:.4g} {} rms on the validation record, more "
+                                             "than the record's own {:.4g} (zero friction would predict it better); no equation of "
+                                             "this study is stored",
+                                             o.save_twin, r.study.joint, ms.fourier_rmse, torque_unit(o), tau_rms));
       eqs.push_back(friction_equation_of(*m, joint));
     }
-    twin->friction_json = friction_block_to_json(eqs);
-    twin->save(o.save_twin);
-    if (!o.quiet) fmt::print(stderr, "stored {} friction equation(s) in {}\n", eqs.size(), o.save_twin);
+    if (refused.empty()) {
+      twin->friction_json = friction_block_to_json(eqs);
+      twin->save(o.save_twin);
+      if (!o.quiet) fmt::print(stderr, "stored {} friction equation(s) in {}\n", eqs.size(), o.save_twin);
+    }
   }
   if (o.json) {
     nlohmann::json j = to_json(res);
@@ -534,6 +549,10 @@ int run(const StudyOptions& o) {
       fmt::print(stderr, "note: --torque current without --gain: the currents are studied as they are, and every torque below is in A "
                          "(give --gain, the drive's N·m/A, for N·m)\n");
     print_tables(res, o);
+  }
+  if (!refused.empty()) {
+    std::fflush(stdout);  // (the tables first)
+    throw std::runtime_error(refused);
   }
   return 0;
 }
