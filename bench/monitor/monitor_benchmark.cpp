@@ -11,6 +11,9 @@
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/sim/scenario.hpp"
+#ifdef TWINWATCH_HAVE_DASHBOARD
+#include "twinwatch/ui/dashboard.hpp"
+#endif
 
 namespace {
 
@@ -123,6 +126,43 @@ void BM_MonitorThroughput(benchmark::State& st) {
   r.count(st);
 }
 BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->MinTime(2.0);
+
+#ifdef TWINWATCH_HAVE_DASHBOARD
+// The loop as `twinwatch serve` runs it: BM_MonitorThroughput/1 plus the dashboard's feed of every
+// sample (ui::DashboardFeed::push: a lock, and a point kept per 20 ms), side by side with /1 in the
+// same run; range(0) 1: a page polling the feed's JSON every 300 ms of robot time, 0: none.
+void BM_MonitorThroughputWithDashboard(benchmark::State& st) {
+  Replayer r(setup(), 1);
+  ui::DashboardSetup ds;
+  ds.n_dof = r.s.twin.n_dof();
+  ui::DashboardFeed feed(ds);
+  std::uint64_t cursor = 0;
+  size_t pushed = 0;
+  for (auto _ : st) {
+    r.push();
+    const RobotSample& x = r.rec.samples[r.k];
+    const VectorJ obs = r.mon.observer_torque(), obs_th = r.mon.observer_torque_threshold();
+    ui::DashboardSignals sig;
+    sig.t = x.timestamp + static_cast<double>(r.replays) * 20.0;  // (each replay later than the last)
+    sig.measured = x.current.data();
+    sig.predicted = r.mon.predicted_current().data();
+    sig.residual = r.mon.filtered_residual().data();
+    sig.threshold = r.mon.level().data();
+    sig.observer = obs.data();
+    sig.observer_threshold = obs_th.data();
+    sig.total_current = r.mon.total_current();
+    feed.push(sig);
+    if (st.range(0) == 1 && ++pushed % 150 == 0) {
+      const std::string page = feed.json_since(cursor);
+      benchmark::DoNotOptimize(page.data());
+      cursor = feed.cursor();
+    }
+    r.next(st);
+  }
+  r.count(st);
+}
+BENCHMARK(BM_MonitorThroughputWithDashboard)->Arg(0)->Arg(1)->MinTime(2.0);
+#endif
 
 // A replay with faults (session 27): a 0.5 kg part dropped (none declared) and a 5 N·m contact 1 s
 // later, before the payload change's longer look; the twin is identified with a known payload, so

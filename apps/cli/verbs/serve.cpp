@@ -31,6 +31,7 @@ struct ServeOptions {
   bool exit_when_done = false;
 };
 
+#ifdef TWINWATCH_HAVE_DASHBOARD
 // "HOST:PORT", "PORT" or "[V6]:PORT" -> host, port
 std::pair<std::string, unsigned short> split_listen(const std::string& s) {
   std::string host = "127.0.0.1", port = s;
@@ -50,7 +51,6 @@ std::pair<std::string, unsigned short> split_listen(const std::string& s) {
 
 bool loopback(const std::string& host) { return host == "localhost" || host.rfind("127.", 0) == 0 || host == "::1"; }
 
-#ifdef TWINWATCH_HAVE_DASHBOARD
 int run_serve(const cli::MonitorOptions& mo, const ServeOptions& so) {
   const auto [host, port] = split_listen(so.listen);
   const int n_dof = cli::load_twin(mo.twin).n_dof();
