@@ -91,30 +91,22 @@ void DashboardFeed::push(const DashboardSignals& s) {
   p.t = s.t;
   p.total = s.total_current;
   const auto ratio = [](double v, double thr) { return thr > 0.0 && std::isfinite(v) ? std::abs(v) / thr : std::abs(v); };
+  // a signal and its threshold: the interval's sample with the largest |value| / threshold
+  using Joints = std::array<double, kMaxJoints>;
+  const auto keep_peak = [&](const double* value, const double* thr, size_t k, Joints& best, Joints& v, Joints& th) {
+    if (value && thr) {
+      const double r = ratio(value[k], thr[k]);
+      if (first || !(r <= best[k])) best[k] = r, v[k] = value[k], th[k] = thr[k];
+    } else if (first) {
+      v[k] = th[k] = NAN;
+    }
+  };
   for (int j = 0; j < n; ++j) {
     const auto k = static_cast<size_t>(j);
     p.measured[k] = s.measured ? s.measured[j] : NAN;
     p.predicted[k] = s.predicted ? s.predicted[j] : NAN;
-    if (s.residual && s.threshold) {
-      const double r = ratio(s.residual[j], s.threshold[j]);
-      if (first || !(r <= p.ratio[k])) {
-        p.ratio[k] = r;
-        p.residual[k] = s.residual[j];
-        p.threshold[k] = s.threshold[j];
-      }
-    } else if (first) {
-      p.residual[k] = p.threshold[k] = NAN;
-    }
-    if (s.observer && s.observer_threshold) {
-      const double r = ratio(s.observer[j], s.observer_threshold[j]);
-      if (first || !(r <= p.observer_ratio[k])) {
-        p.observer_ratio[k] = r;
-        p.observer[k] = s.observer[j];
-        p.observer_threshold[k] = s.observer_threshold[j];
-      }
-    } else if (first) {
-      p.observer[k] = p.observer_threshold[k] = NAN;
-    }
+    keep_peak(s.residual, s.threshold, k, p.ratio, p.residual, p.threshold);
+    keep_peak(s.observer, s.observer_threshold, k, p.observer_ratio, p.observer, p.observer_threshold);
   }
 }
 
@@ -155,24 +147,43 @@ std::uint64_t DashboardFeed::cursor() const {
 }
 
 std::string DashboardFeed::json_since(std::uint64_t since) const {
+  // what is new is copied under the lock and written out after it: the monitoring loop waits for
+  // the copy (a page's first load, the whole window: 6000 points, a memcpy), not for the JSON
   State& st = *st_;
-  const std::lock_guard lock(st.m);
-  // a cursor beyond the newest (a page left open while the program restarted): everything
-  if (since > st.seq) since = 0;
+  std::vector<Point> points;
+  std::vector<Tagged> active, events, notes;
+  std::uint64_t cursor = 0;
+  std::string state, counters;
+  bool reset = false;
+  {
+    const std::lock_guard lock(st.m);
+    // a cursor beyond the newest (a page left open while the program restarted): everything
+    if (since > st.seq) since = 0;
+    cursor = st.seq;
+    state = st.state;
+    counters = st.counters;
+    // the points newer than the cursor; a cursor older than the window's start gets the window
+    // (every retained point new: the page takes it in place of its own)
+    const auto first = std::upper_bound(st.points.begin(), st.points.end(), since, [](std::uint64_t c, const Point& p) { return c < p.seq; });
+    reset = since == 0 || first == st.points.begin();
+    points.assign(first, st.points.end());
+    active = st.active;
+    for (const Tagged& e : st.events)
+      if (e.seq > since) events.push_back(e);
+    for (const Tagged& x : st.notes)
+      if (x.seq > since) notes.push_back(x);
+  }
   using nlohmann::json;
   const int n = setup_.n_dof;
   json out;
-  out["cursor"] = st.seq;
+  out["cursor"] = cursor;
   out["whole"] = since == 0;  // everything kept: the page replaces what it holds
+  out["reset"] = reset;
   out["setup"] = {{"title", setup_.title},   {"source", setup_.source},     {"n_dof", n},
                   {"window_s", setup_.window_s}, {"points_per_s", setup_.points_per_s}, {"live", setup_.live}};
-  out["status"] = {{"state", st.state}, {"counters", json::parse(st.counters, nullptr, false)}};
+  out["status"] = {{"state", state}, {"counters", json::parse(counters, nullptr, false)}};
   if (out["status"]["counters"].is_discarded()) out["status"]["counters"] = json::object();
-  // the points newer than the cursor, column-wise (a number array per signal and joint)
-  const auto first = std::upper_bound(st.points.begin(), st.points.end(), since, [](std::uint64_t c, const Point& p) { return c < p.seq; });
-  // a cursor older than the window's start: the page missed points and starts again from the window
-  // (every retained point is new: the whole window, which the page takes in place of its own)
-  out["reset"] = since == 0 || first == st.points.begin();
+  // the points column-wise (a number array per signal and joint)
   const auto finite_or_null = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json t = json::array(), total = json::array();
   std::array<json, 6> per;  // measured, predicted, residual, threshold, observer, observer_threshold
@@ -180,26 +191,24 @@ std::string DashboardFeed::json_since(std::uint64_t since) const {
     a = json::array();
     for (int j = 0; j < n; ++j) a.push_back(json::array());
   }
-  for (auto it = first; it != st.points.end(); ++it) {
-    t.push_back(it->t);
-    total.push_back(finite_or_null(it->total));
-    const std::array<const std::array<double, kMaxJoints>*, 6> src = {&it->measured, &it->predicted, &it->residual,
-                                                                      &it->threshold, &it->observer, &it->observer_threshold};
-    for (size_t s = 0; s < per.size(); ++s)
-      for (int j = 0; j < n; ++j) per[s][static_cast<size_t>(j)].push_back(finite_or_null((*src[s])[static_cast<size_t>(j)]));
+  for (const Point& pt : points) {
+    t.push_back(pt.t);
+    total.push_back(finite_or_null(pt.total));
+    const std::array<const std::array<double, kMaxJoints>*, 6> src = {&pt.measured, &pt.predicted, &pt.residual,
+                                                                      &pt.threshold, &pt.observer, &pt.observer_threshold};
+    for (size_t k = 0; k < per.size(); ++k)
+      for (int j = 0; j < n; ++j) per[k][static_cast<size_t>(j)].push_back(finite_or_null((*src[k])[static_cast<size_t>(j)]));
   }
   out["points"] = {{"t", std::move(t)},           {"total_current", std::move(total)}, {"measured", std::move(per[0])},
                    {"predicted", std::move(per[1])}, {"residual", std::move(per[2])},     {"threshold", std::move(per[3])},
                    {"observer", std::move(per[4])},  {"observer_threshold", std::move(per[5])}};
   // open alerts: always all of them (the page replaces its list); events and notes: the new ones
   out["active"] = json::array();
-  for (const Tagged& a : st.active) out["active"].push_back(json::parse(a.json, nullptr, false));
+  for (const Tagged& x : active) out["active"].push_back(json::parse(x.json, nullptr, false));
   out["events"] = json::array();
-  for (const Tagged& e : st.events)
-    if (e.seq > since) out["events"].push_back(json::parse(e.json, nullptr, false));
+  for (const Tagged& e : events) out["events"].push_back(json::parse(e.json, nullptr, false));
   out["notes"] = json::array();
-  for (const Tagged& x : st.notes)
-    if (x.seq > since) out["notes"].push_back({{"t", x.t}, {"text", json::parse(x.json, nullptr, false)}});
+  for (const Tagged& x : notes) out["notes"].push_back({{"t", x.t}, {"text", json::parse(x.json, nullptr, false)}});
   return out.dump();
 }
 
