@@ -525,7 +525,16 @@ UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present
     : path_(path), robot_(robot), present_(present), n_(std::min(n_dof, robot.n_dof())) {
   // (report read a 7-joint log into a 6-joint twin and said "q has size 7, expected 6 (model.n_dof)")
   if (n_dof != robot.n_dof())
-    throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}", path, n_dof, robot.name(), robot.n_dof()));
+    throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}{}", path, n_dof, robot.name(), robot.n_dof(),
+                                      // (the joints a description has, and where the robot is chosen)
+                                      fmt::format(" ({}): give the arm's description with --robot (a built-in name, e.g. panda, or a "
+                                                  ".json/.urdf file), or, for a twin's verbs, a twin of that arm",
+                                                  [&] {
+                                                    std::string names;
+                                                    for (int j = 0; j < robot.n_dof(); ++j)
+                                                      names += (j ? ", " : "") + robot.joint(j).name;
+                                                    return names;
+                                                  }())));
   currents_.resize(static_cast<size_t>(n_dof));
 }
 

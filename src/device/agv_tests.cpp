@@ -48,7 +48,16 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
     std::stringstream ss(line);
     std::string cell;
     while (std::getline(ss, cell, ',')) c.push_back(cell);
-    if (c.size() != 6) throw ParseError(path, ln, "", fmt::format("expected 6 cells, got {}", c.size()));
+    // (getline drops a last empty cell: a trailing comma is a seventh cell, not nothing)
+    if (!line.empty() && line.back() == ',') c.push_back("");
+    if (c.size() != 6)
+      throw ParseError(path, ln, "", fmt::format("expected 6 cells ({}), got {}", kHeader, c.size()));
+    // blanks around a cell are a spreadsheet's, read as the number they surround (" 0.5" was read and
+    // "0.5 " refused)
+    for (std::string& x : c) {
+      const size_t a = x.find_first_not_of(" \t"), b = x.find_last_not_of(" \t");
+      x = a == std::string::npos ? std::string() : x.substr(a, b - a + 1);
+    }
     AgvTestRow r;
     r.motor = c[0];
     r.test = c[1];

@@ -73,6 +73,15 @@ TEST(AgvIdent, TestFileRoundTripsAndBadCellsAreNamed) {
   }
   std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\nmiddle,steady,1.0,0.1,2,0\n";
   EXPECT_THROW(device::read_agv_tests(bad), ParseError);
+  // a trailing comma is a seventh cell (it was dropped unsaid); blanks around a number are read
+  std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\nright,steady,1.0,0.1,2,0,\n";
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(bad); }),
+              ::testing::HasSubstr("agv_ident_bad.csv:2: expected 6 cells (motor,test,voltage_V,current_A,speed_rad_s,time_s), got 7"));
+  std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\nright,steady, 1.0,0.1 ,2,0\n";
+  const auto blanks = device::read_agv_tests(bad);
+  ASSERT_EQ(blanks.size(), 1u);
+  EXPECT_EQ(blanks[0].voltage, 1.0);
+  EXPECT_EQ(blanks[0].current, 0.1);
 }
 
 // a CRLF file (and one with a byte-order mark) reads as the LF file does
