@@ -1524,7 +1524,14 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
                            "changes it diagnosed followed (see the events). 'twinwatch validate' predicts with the payload the "
                            "recording declares (else the given one) and follows no diagnosed change, so after one its table differs "
                            "from this; --keep-payload here follows nothing either, and takes no declaration"
-                         : "Twin fidelity on this recording (UR3e Table 3 layout)",
+                         : std::string("Twin fidelity on this recording (UR3e Table 3 layout)") +
+                               // (the monitor's causal acceleration estimate against validate's
+                               // centred one: J1 5.04 against 4.34 A on a Kinova log; review, session 47)
+                               ((scan.present & kFieldTargetQdd) == 0
+                                    ? ", predicted as the monitor predicts: the recording has no target_qdd, so the acceleration is "
+                                      "the monitor's causal estimate from the measured velocity; 'twinwatch validate' differentiates "
+                                      "the whole recording centred, and its table differs"
+                                    : ""),
                 head, mrows);
     const MatrixJ C = correlation.matrix();
     std::vector<std::vector<std::string>> crows;
