@@ -13,3 +13,12 @@ if(BUILD_DASHBOARD)
   set_tests_properties(cli.serve_speed_live PROPERTIES FIXTURES_REQUIRED twin
                        PASS_REGULAR_EXPRESSION "--speed applies only with a RECORDING. a live robot sets its own pace")
 endif()
+# the page's script parses (where node is installed: a syntax error would leave the page blank with
+# nothing said but in the browser's console)
+find_program(NODE_EXECUTABLE node)
+if(BUILD_DASHBOARD AND NODE_EXECUTABLE)
+  add_test(NAME cli.dashboard_page_script_parses
+           COMMAND sh -c "sed -n '/^<script>$/,/^<\\/script>$/p' ${PROJECT_SOURCE_DIR}/web/dashboard.html | sed '1d;$d' > ${PROJECT_BINARY_DIR}/dashboard_page.js && \
+test -s ${PROJECT_BINARY_DIR}/dashboard_page.js && ${NODE_EXECUTABLE} --check ${PROJECT_BINARY_DIR}/dashboard_page.js && echo PARSES")
+  set_tests_properties(cli.dashboard_page_script_parses PROPERTIES PASS_REGULAR_EXPRESSION "PARSES")
+endif()
