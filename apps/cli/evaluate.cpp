@@ -539,6 +539,12 @@ UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present
 }
 
 void UnitsCheck::check_period(double median_period) const {
+  // (a sample index scaled by 1e-6 for 1e-3 was written into a twin, exit 0; review, session 47)
+  if (median_period > 0.0 && median_period < kUnitsMinPeriod)
+    throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "
+                                      "column in microseconds, or scaled wrongly? Scale it to seconds with a column map "
+                                      "('TIME_COLUMN,timestamp,0.000001' for microseconds, docs/recordings.md)",
+                                      path_, median_period));
   if (median_period > kUnitsMaxPeriod)
     throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "
                                       "column in milliseconds? Scale it to seconds with a column map ('TIME_COLUMN,timestamp,0.001', "

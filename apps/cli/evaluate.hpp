@@ -41,6 +41,7 @@ inline constexpr double kUnitsPositionMargin = 0.5;  ///< [rad] beyond q_min / q
 inline constexpr double kDegree = 0.017453292519943295;  ///< [rad] one degree (a column map's scale for degrees)
 inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
+inline constexpr double kUnitsMinPeriod = 1e-4;      ///< [s] (10 kHz; controllers stream 10-1000 Hz, a few up to 4 kHz)
 void check_units(const device::Recording& rec, const model::RobotModel& robot);
 /// check_units a sample at a time, for a recording read row by row (monitor): the joint count at
 /// construction, check_period once the median period is known, add() per sample (positions and

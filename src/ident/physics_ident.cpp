@@ -447,10 +447,13 @@ VelocityLag estimate_velocity_lag(const std::vector<const device::Recording*>& r
   const double sc = (cv * aa - ca * av) / det;
   const double m = (ca * cv - cc * av) / det;
   if (!(std::abs(sc - 1.0) <= kLagScaleTolerance)) {
+    // (a scale on every joint at once may as well be the clock's: a time column mapped with 0.01
+    // for 0.001 read as a velocity 0.1 x too small; review, session 47)
     lag.note = fmt::format("actual_qd is {:.4g} x the derivative of actual_q (expected 1: a velocity in rad/s of the same joint): a unit or "
-                           "scale of the velocity columns? The streamed velocity's lag was not measured, and the velocity is read as at "
-                           "its sample's instant",
-                           sc);
+                           "scale of the velocity columns, or of the timestamps (the samples are {:.4g} s apart; for the velocity in "
+                           "rad/s they would be {:.4g} s apart)? The streamed velocity's lag was not measured, and the velocity is read "
+                           "as at its sample's instant",
+                           sc, lag.period, lag.period / sc);
     return lag;
   }
   const double l = m / sc;

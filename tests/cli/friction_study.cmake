@@ -76,3 +76,14 @@ cmp ${fs}/x.json ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json && echo UNCHANGED"
   set_tests_properties(cli.kinova_temperature_slope_only_where_the_joint_moves PROPERTIES PASS_REGULAR_EXPRESSION
     "RMSE +[0-9.]+ +[0-9.]+ +[0-9.]+ +[0-9.]+ +0\\.[0-2][0-9]* +0\\.[0-3][0-9]* +0\\.[0-2][0-9]*\n")
 endif()
+if(EXISTS ${kinova}/RecordTrajectory_quadratic.csv)
+  # a time column scaled to microseconds is refused (it was written into a twin); one scaled 10x is
+  # said as a velocity scale that may be the clock's, with the period it would have
+  add_test(NAME cli.kinova_time_scale_wrong
+           COMMAND sh -c "sed 's/^Time,timestamp,0.001/Time,timestamp,0.000001/' ${PROJECT_SOURCE_DIR}/data/column_maps/kinova_gen3_chiha.csv > ${PROJECT_BINARY_DIR}/cli-friction/us.map && \
+$<TARGET_FILE:twinwatch> identify ${kinova}/RecordTrajectory_quadratic.csv --robot ${PROJECT_SOURCE_DIR}/data/robots/kinova_gen3.urdf --column-map ${PROJECT_BINARY_DIR}/cli-friction/us.map -q -o ${PROJECT_BINARY_DIR}/cli-friction/us.json 2>&1; echo exit $?; \
+sed 's/^Time,timestamp,0.001/Time,timestamp,0.01/' ${PROJECT_SOURCE_DIR}/data/column_maps/kinova_gen3_chiha.csv > ${PROJECT_BINARY_DIR}/cli-friction/cs.map && \
+$<TARGET_FILE:twinwatch> identify ${kinova}/RecordTrajectory_quadratic.csv --robot ${PROJECT_SOURCE_DIR}/data/robots/kinova_gen3.urdf --column-map ${PROJECT_BINARY_DIR}/cli-friction/cs.map -o ${PROJECT_BINARY_DIR}/cli-friction/cs.json 2>&1 | grep -o 'or of the timestamps (the samples are 0.01 s apart. for the velocity in rad/s they would be 0.00[0-9]* s apart)'")
+  set_tests_properties(cli.kinova_time_scale_wrong PROPERTIES PASS_REGULAR_EXPRESSION
+    "the samples are 1e-06 s apart .median., expected a controller's 0.001-0.1 s: is the time column in microseconds.*exit 2\nor of the timestamps .the samples are 0.01 s apart")
+endif()
