@@ -31,6 +31,7 @@ struct MonitorOptions {
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   std::string program;  // threshold set of this program ("" = the default set)
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
+  bool events_open = false;  // --events-open: a line at each raise and re-diagnosis too ("open": true)
 };
 
 /// What another front end sees of the loop (each may be empty). Called on the loop's thread.

@@ -78,7 +78,10 @@ struct EventStore::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string path;
-  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false;
+  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false, has_run = false;
+  long run = 0;  // the run's id (its row written with its first event), 0: none yet
+  bool run_pending = false;  // begin_run was called, its row not yet written
+  std::string run_source, run_twin, run_program;
   bool from_one = true;  // joint/link/other_links numbered from 1 (user_version 1); false: a 0-based store from before
 };
 
@@ -214,6 +217,12 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     // (session 22) whether the fault was still there when monitoring stopped; older rows read as no
     if (!has("active_at_stop"))
       exec("ALTER TABLE events ADD COLUMN active_at_stop INTEGER;", "cannot add the active_at_stop column to the events table");
+    // (session 47) the monitoring runs: two runs of one recording into one store were rows alike but
+    // for their storage time
+    if (!has("run")) exec("ALTER TABLE events ADD COLUMN run INTEGER;", "cannot add the run column to the events table");
+    exec("CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY AUTOINCREMENT, started_at TEXT DEFAULT CURRENT_TIMESTAMP,"
+         " source TEXT, twin TEXT, program TEXT);",
+         "cannot create the runs table");
     if (!existed) {
       exec("PRAGMA user_version = 1;", "cannot mark the event store's numbering");
     } else if (version == 0) {
@@ -225,10 +234,11 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   impl_->has_t_detected = mode == Mode::Write || has("t_detected");
   impl_->has_active_at_stop = mode == Mode::Write || has("active_at_stop");
   impl_->has_recorded_at = mode == Mode::Write || has("recorded_at");
+  impl_->has_run = mode == Mode::Write || has("run");
   if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail, other_links, t_detected, active_at_stop) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links, t_detected, active_at_stop, run) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
@@ -245,6 +255,36 @@ void EventStore::insert(const Event& e, const std::string& source) {
 
 bool EventStore::try_insert(const Event& e, const std::string& source, int wait_ms) {
   if (!impl_->insert) throw std::logic_error(fmt::format("{}: the event store was opened for reading", impl_->path));
+  sqlite3_busy_timeout(impl_->db, std::max(0, wait_ms));
+  // the run's row with its first event: the two in one transaction, or neither (locked: the event
+  // waits, and the row with it)
+  const bool new_run = impl_->run_pending;
+  if (new_run) {
+    const int rc = sqlite3_exec(impl_->db, "BEGIN IMMEDIATE;", nullptr, nullptr, nullptr);
+    if ((rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED) {
+      sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+      return false;
+    }
+    if (rc != SQLITE_OK) throw std::runtime_error(fmt::format("{}: cannot begin the run's row: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+    sqlite3_stmt* raw = nullptr;
+    const auto rollback = [&](const char* what) {
+      const std::string why = sqlite3_errmsg(impl_->db);
+      if (raw) sqlite3_finalize(raw);
+      sqlite3_exec(impl_->db, "ROLLBACK;", nullptr, nullptr, nullptr);
+      sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+      throw std::runtime_error(fmt::format("{}: {}: {}", impl_->path, what, why));
+    };
+    if (sqlite3_prepare_v2(impl_->db, "INSERT INTO runs (source, twin, program) VALUES (?,?,?);", -1, &raw, nullptr) != SQLITE_OK)
+      rollback("cannot prepare the run's row");
+    sqlite3_bind_text(raw, 1, impl_->run_source.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(raw, 2, impl_->run_twin.c_str(), -1, SQLITE_TRANSIENT);
+    if (impl_->run_program.empty()) sqlite3_bind_null(raw, 3);
+    else sqlite3_bind_text(raw, 3, impl_->run_program.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(raw) != SQLITE_DONE) rollback("cannot store the run's row");
+    sqlite3_finalize(raw);
+    raw = nullptr;
+    impl_->run = static_cast<long>(sqlite3_last_insert_rowid(impl_->db));
+  }
   sqlite3_stmt* s = impl_->insert;
   sqlite3_reset(s);
   sqlite3_bind_text(s, 1, source.c_str(), -1, SQLITE_TRANSIENT);
@@ -265,8 +305,25 @@ bool EventStore::try_insert(const Event& e, const std::string& source, int wait_
   sqlite3_bind_text(s, 13, others.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_double(s, 14, e.t_detected);
   sqlite3_bind_int(s, 15, e.active_at_stop ? 1 : 0);
-  sqlite3_busy_timeout(impl_->db, std::max(0, wait_ms));
+  if (impl_->run > 0) sqlite3_bind_int64(s, 16, impl_->run); else sqlite3_bind_null(s, 16);
   const int rc = sqlite3_step(s);
+  if (new_run) {
+    // (the commit waits for readers to let go, as an insert outside a transaction does)
+    const int commit = rc == SQLITE_DONE ? sqlite3_exec(impl_->db, "COMMIT;", nullptr, nullptr, nullptr) : rc;
+    if (commit == SQLITE_OK) {
+      impl_->run_pending = false;
+      sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+      return true;
+    }
+    const std::string why = sqlite3_errmsg(impl_->db);
+    sqlite3_reset(s);
+    sqlite3_exec(impl_->db, "ROLLBACK;", nullptr, nullptr, nullptr);
+    impl_->run = 0;
+    sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+    // locked: the event (and the run's row) wait to be stored
+    if ((commit & 0xff) == SQLITE_BUSY || (commit & 0xff) == SQLITE_LOCKED) return false;
+    throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, why));
+  }
   sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
   if (rc == SQLITE_DONE) return true;
   // (a busy step leaves the statement to be reset; the event is still the caller's to store)
@@ -276,6 +333,17 @@ bool EventStore::try_insert(const Event& e, const std::string& source, int wait_
   }
   throw std::runtime_error(fmt::format("{}: cannot insert event: {}", impl_->path, sqlite3_errmsg(impl_->db)));
 }
+
+void EventStore::begin_run(const std::string& source, const std::string& twin, const std::string& program) {
+  if (!impl_->insert) throw std::logic_error(fmt::format("{}: the event store was opened for reading", impl_->path));
+  impl_->run = 0;
+  impl_->run_pending = true;
+  impl_->run_source = source;
+  impl_->run_twin = twin;
+  impl_->run_program = program;
+}
+
+long EventStore::run() const { return impl_->run; }
 
 long EventStore::count() const {
   sqlite3_stmt* s = nullptr;
@@ -290,9 +358,10 @@ std::vector<StoredEvent> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
   const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " {}, {}, {}, {} FROM events ORDER BY id;",
+      " {}, {}, {}, {}, {} FROM events ORDER BY id;",
       impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL",
-      impl_->has_active_at_stop ? "active_at_stop" : "NULL", impl_->has_recorded_at ? "recorded_at" : "NULL");
+      impl_->has_active_at_stop ? "active_at_stop" : "NULL", impl_->has_recorded_at ? "recorded_at" : "NULL",
+      impl_->has_run ? "run" : "NULL");
   if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
@@ -368,7 +437,7 @@ std::vector<StoredEvent> EventStore::read() const {
     } catch (const std::exception& x) {
       throw PathError(fmt::format("{}: events row id {}: {}", impl_->path, id, x.what()));
     }
-    out.push_back({text(1), text(15), std::move(e)});
+    out.push_back({text(1), text(15), std::move(e), sqlite3_column_type(s, 16) == SQLITE_INTEGER ? static_cast<long>(sqlite3_column_int64(s, 16)) : 0L});
   }
   if (rc != SQLITE_DONE) throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errstr(rc)));
   return out;

@@ -1112,7 +1112,7 @@ double Monitor::trusted_gain(int j) const {
   return ok[ok.size() / 2];
 }
 
-void Monitor::open_event(int joint, double start, double t) {
+void Monitor::open_event(int joint, double start, double t, const char* channel) {
   report_held();
   Event e;
   e.t_start = start;
@@ -1121,7 +1121,9 @@ void Monitor::open_event(int joint, double start, double t) {
   e.open = true;
   e.joint = joint;
   e.fault = FaultClass::Unknown;
-  e.detail = fmt::format("residual above threshold on J{}", joint + 1);
+  // (which channel raised it: a contact's momentum observer on J1 read "residual above threshold on
+  // J1" while J1's current residual was a third of its threshold; review, session 47)
+  e.detail = fmt::format("{} above threshold on J{}", channel, joint + 1);
   events_.push_back(e);
   open_ = static_cast<int>(events_.size()) - 1;
   diagnosed_ = false;
@@ -2435,6 +2437,9 @@ void Monitor::judge(const RobotSample& s) {
       Event& f = events_[static_cast<size_t>(frozen_event_[J])];
       f.t_end = t;
       f.magnitude = std::round((t - f.t_start) / cfg_.nominal_period) + 1.0;
+      // (as every alert's: the largest |filtered current residual| of any joint during it; it read 0.0
+      // while the frozen J2 was 0.53 A off its prediction; review, session 47)
+      if (rf_.size() == n_) f.peak_residual = std::max(f.peak_residual, rf_.cwiseAbs().maxCoeff());
     }
   }
 
@@ -2489,6 +2494,9 @@ void Monitor::judge(const RobotSample& s) {
     const auto raise_start = [&] {
       return dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
     };
+    const auto raised_by = [&] {
+      return dc.active() && dob.active() ? "current residual and momentum observer" : dc.active() ? "current residual" : "momentum observer";
+    };
     joint_active_[static_cast<size_t>(j)] = active;
     if (raised && open_ >= 0 && background_ < 0 && diagnosed_ && j != events_[static_cast<size_t>(open_)].joint &&
         events_[static_cast<size_t>(open_)].joint >= 0 &&
@@ -2500,7 +2508,7 @@ void Monitor::judge(const RobotSample& s) {
       background_rediagnosed_ = rediagnosed_;
       background_raise_time_ = raise_time_;
       background_last_over_ = last_over_;
-      open_event(j, raise_start(), t);
+      open_event(j, raise_start(), t, raised_by());
       last_over_ = t;
     } else if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
@@ -2522,7 +2530,7 @@ void Monitor::judge(const RobotSample& s) {
         } else {
           report_pending_close();
         }
-        open_event(j, raise_start(), t);
+        open_event(j, raise_start(), t, raised_by());
       }
     }
     if (background_ >= 0 && j == background_joint_) {

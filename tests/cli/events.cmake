@@ -174,7 +174,7 @@ set_tests_properties(cli.monitor_payload_beyond_thresholds PROPERTIES FIXTURES_R
 add_test(NAME cli.events_one_file_two_paths
   COMMAND sh -c "rm -f ${d}/events_paths.db && cd ${d} && $0 monitor --twin twin.json collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 monitor --twin twin.json ${d}/./collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db events_paths.db -q && $0 events --db events_paths.db --json | grep -o '\"source\":\"[^\"]*\"' | sort -u && $0 events --db events_paths.db" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.events_one_file_two_paths PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
-                     PASS_REGULAR_EXPRESSION "^\"source\":\"/[^\"]*/cli-pipeline/collision\\.csv\"\nstored \\(UTC\\) +source +t \\[s\\][^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ [^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ ")
+                     PASS_REGULAR_EXPRESSION "^\"source\":\"/[^\"]*/cli-pipeline/collision\\.csv\"\nstored \\(UTC\\) +run +source +t \\[s\\][^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ [^\n]*\n[0-9: -]+ collision\\.csv +6\\.[0-9]+ ")
 # a store another connection holds a read transaction on (a sqlite3 shell, a dashboard): the event
 # waits and is stored when the lock is free, and monitoring goes on (before: after 10 s of stalling,
 # "database is locked" and exit 1, the event in --events but not in the store)
@@ -186,3 +186,12 @@ $tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payloa
 echo exit=$?; wait; echo rows=$(sqlite3 $db 'SELECT count(*) FROM events;') lines=$(wc -l < ${d}/locked.jsonl)")
 set_tests_properties(cli.monitor_store_locked_by_a_reader PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" TIMEOUT 60
   PASS_REGULAR_EXPRESSION "events_locked.db: locked by another connection: events wait to be stored [^\n]*\n[^\n]*the store is free again[^\n]*\nexit=0\nrows=2 lines=1\n")
+# --events-open: the alert's lines while it is open ("open": true, named by the channel that raised
+# it), then its closing line; refused without --events or --json
+add_test(NAME cli.monitor_events_open COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5
+         --payload-com 0 0 0.04 --db "" --json --events-open)
+set_tests_properties(cli.monitor_events_open PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" PASS_REGULAR_EXPRESSION
+  "\"class\":\"unknown\",[^\n]*\"detail\":\"(current residual|momentum observer|current residual and momentum observer) above threshold on J[1-6]\"[^\n]*\"open\":true[^\n]*\n.*\"class\":\"collision\"[^\n]*\"open\":false")
+add_test(NAME cli.monitor_events_open_needs_an_output COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --events-open)
+set_tests_properties(cli.monitor_events_open_needs_an_output PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" PASS_REGULAR_EXPRESSION
+  "--events-open applies only with --events or --json")

@@ -157,6 +157,56 @@ TEST(EventStore, AnInsertWaitsForAnotherConnectionsLock) {
   std::filesystem::remove(path);
 }
 
+// two monitoring runs into one store are told apart (review, session 47: their rows were alike but
+// for the storage time); the run's row is written with its first event, and waits with it while
+// another connection holds a reader's transaction (a live monitor must not stall at its start)
+TEST(EventStore, EachRunsEventsCarryItsNumberAndTheRunsRowWaitsWithTheFirstEvent) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_runs_test.db";
+  std::filesystem::remove(path);
+  Event e;
+  e.fault = FaultClass::Collision;
+  e.detail = "contact on link 3";
+  {
+    EventStore store(path.string());
+    store.insert(e, "before.csv");  // (no run begun: NULL)
+    store.begin_run("rec.csv", "twin.json", "");
+    EXPECT_EQ(store.run(), 0);
+    store.insert(e, "rec.csv");
+    store.insert(e, "rec.csv");
+    EXPECT_EQ(store.run(), 1);
+  }
+  {
+    EventStore store(path.string());
+    store.begin_run("rec.csv", "twin.json", "pick_place");
+    sqlite3* other = nullptr;
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), &other), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(other, "BEGIN; SELECT count(*) FROM events;", nullptr, nullptr, nullptr), SQLITE_OK);  // a reader's lock
+    EXPECT_FALSE(store.try_insert(e, "rec.csv", 50));  // locked: neither the run's row nor the event
+    EXPECT_EQ(store.run(), 0);
+    sqlite3_exec(other, "COMMIT;", nullptr, nullptr, nullptr);
+    sqlite3_close(other);
+    EXPECT_TRUE(store.try_insert(e, "rec.csv", 50));
+    EXPECT_EQ(store.run(), 2);
+  }
+  const EventStore reader(path.string(), EventStore::Mode::Read);
+  const auto rows = reader.read();
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0].run, 0);
+  EXPECT_EQ(rows[1].run, 1);
+  EXPECT_EQ(rows[2].run, 1);
+  EXPECT_EQ(rows[3].run, 2);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT count(*), max(program) FROM runs;", -1, &q, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(q, 0), 2);  // (the attempt that was locked left no row)
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), "pick_place");
+  sqlite3_finalize(q);
+  sqlite3_close(db);
+  std::filesystem::remove(path);
+}
+
 // a store written before other_links existed (the session-9 schema) opens, keeps its rows, gains
 // the column, and takes new events with it; a row that cannot be read back names the file and row
 TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {

@@ -22,6 +22,7 @@ struct EventsOptions {
   std::string fault;   // only this class ("" = all)
   std::string source;  // only events whose source contains this text
   int last = 0;        // only the newest N (0 = all)
+  long run = 0;        // only this monitoring run (0 = all)
   bool json = false;
   bool fault_given = false;  // --class '' (an unset variable) listed every class
 };
@@ -65,13 +66,14 @@ void run_events(const EventsOptions& o) {
   auto rows = store.read();
   std::erase_if(rows, [&](const monitor::StoredEvent& r) {
     return (!o.fault.empty() && monitor::to_string(r.event.fault) != o.fault) ||
-           (!o.source.empty() && r.source.find(o.source) == std::string::npos);
+           (!o.source.empty() && r.source.find(o.source) == std::string::npos) || (o.run > 0 && r.run != o.run);
   });
   if (o.last > 0 && rows.size() > static_cast<size_t>(o.last)) rows.erase(rows.begin(), rows.end() - o.last);
   if (o.json) {
-    for (const auto& [source, recorded_at, e] : rows) {
+    for (const auto& [source, recorded_at, e, run] : rows) {
       nlohmann::json j = nlohmann::json::parse(e.to_json_line());
       j["source"] = source;
+      j["run"] = run > 0 ? nlohmann::json(run) : nlohmann::json(nullptr);
       j["recorded_at"] = recorded_at.empty() ? nlohmann::json(nullptr) : nlohmann::json(recorded_at + " UTC");
       fmt::print("{}\n", j.dump());
     }
@@ -87,12 +89,12 @@ void run_events(const EventsOptions& o) {
     shown.push_back(shown_source(r.source));
     width = std::max(width, std::min(shown.back().size(), kSourceWidth));
   }
-  fmt::print("{:<19} {:<{}} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "source", width, "t [s]", "dur ms", "class",
-             "joint", "link", "magnitude", "detail");
+  fmt::print("{:<19} {:>4} {:<{}} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "run", "source", width, "t [s]", "dur ms",
+             "class", "joint", "link", "magnitude", "detail");
   for (size_t k = 0; k < rows.size(); ++k) {
-    const auto& [source, recorded_at, e] = rows[k];
-    fmt::print("{:<19} {:<{}} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
-               cut_left(shown[k], width), width, e.t_start, 1000.0 * e.duration(),
+    const auto& [source, recorded_at, e, run] = rows[k];
+    fmt::print("{:<19} {:>4} {:<{}} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
+               run > 0 ? std::to_string(run) : "-", cut_left(shown[k], width), width, e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
                cli::magnitude_text(e.magnitude, e.units), e.detail);
   }
@@ -107,7 +109,10 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
                   "Only this class: collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
   sub->add_option("--source", o->source, "Only events whose source contains this text (monitor stores a recording by its absolute path, a robot as rtde://HOST)");
   sub->add_option("--last", o->last, "Only the newest N events (0: all)")->capture_default_str();
-  sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\")");
+  sub->add_option("--run", o->run, "Only the events of this monitoring run (the number 'monitor' prints with its summary; 0: all)")
+      ->check(twinwatch::cli::whole_number(0, 1'000'000'000'000L))
+      ->capture_default_str();
+  sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\", \"recorded_at\" and \"run\", null for rows from before runs were stored)");
   sub->footer(twinwatch::cli::with_exit_status(
       "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"
       "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"

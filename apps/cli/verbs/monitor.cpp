@@ -272,7 +272,12 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (!jl) throw PathError(o.events_path + ": cannot open for writing");
   }
   std::unique_ptr<monitor::EventStore> store;
-  if (!o.db_path.empty()) store = std::make_unique<monitor::EventStore>(o.db_path);
+  if (!o.db_path.empty()) {
+    store = std::make_unique<monitor::EventStore>(o.db_path);
+    std::string watched;
+    for (const auto& source : sources) watched += (watched.empty() ? "" : " ") + source.second;
+    store->begin_run(watched, stored_path(o.twin), o.program);
+  }
   // Events the store was locked for (another connection holding a transaction: 'sqlite3 events.db',
   // a dashboard), oldest first. Before, a lock held over 10 s stopped a live monitor with exit 1 and
   // stalled it for those 10 s (soak audit, session 39); now an event waits here, in memory and in
@@ -333,6 +338,22 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     monitor::Event e = raw;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
     if (hooks.on_event) hooks.on_event(e);
+    if (e.open && o.events_open) {
+      // an alert that is still open, for a consumer that must see an active fault (a resistance that
+      // lasts a shift was seen only when it cleared or monitoring stopped); t_detected names the
+      // alert, its closing line ("open": false) ends it
+      const std::string line = e.to_json_line();
+      if (jl.is_open()) {
+        errno = 0;
+        jl << line << '\n';
+        jl.flush();
+        check_written(jl, o.events_path, true);
+      }
+      if (o.json) {
+        fmt::print("{}\n", line);
+        std::fflush(stdout);
+      }
+    }
     if (e.open) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
@@ -541,7 +562,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                mon.not_driven() > 0 ? fmt::format("; {} sample(s) ({:.1f} s) not judged: the controller did not drive the arm (see the notes)",
                                                   mon.not_driven(), mon.not_driven_seconds())
                                     : "",
-               o.db_path.empty() ? "" : fmt::format(", stored in {}", o.db_path));
+               o.db_path.empty()     ? ""
+               : store && store->run() > 0 ? fmt::format(", stored in {} (run {}: 'twinwatch events --db {} --run {}')", o.db_path, store->run(),
+                                                         o.db_path, store->run())
+                                           : fmt::format(", stored in {}", o.db_path));
   // (45 rows covering a whole contact read "0 event(s)": nothing had been judged)
   if (mon.judged() == 0 && !o.quiet) {
     std::fflush(stdout);  // (after the summary above)
@@ -1061,6 +1085,11 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                                       "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  auto* events_open = sub->add_flag("--events-open", o->events_open,
+                                     "With --events or --json: also a line when an alert is raised and at each re-diagnosis (\"open\": true, "
+                                     "\"class\" \"unknown\" until diagnosed); \"t_detected\" names the alert, and its line with \"open\": "
+                                     "false, written when it ends, ends it. Default: one line per event, when it ends. The store (--db) keeps "
+                                     "the closed events only");
   sub->add_option("--db", o->db_path, "SQLite event store ('' to disable)")->capture_default_str();
   sub->add_option("--payload-mass", o->payload_mass,
                   "Payload the program declares [kg] (default: the twin file's 'payload', 0 kg as identify writes it). A stream that carries the controller's declared payload (RTDE payload / "
@@ -1092,6 +1121,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                   "per joint to this CSV (to see why an alert was raised or late)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
   return [=] {
+    refuse_unless({events_open}, !o->events_path.empty() || o->json, "with --events or --json");
     refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
     refuse_unless({split_every}, !o->record_to.empty(), "with --record");
   };

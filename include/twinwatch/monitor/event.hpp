@@ -82,6 +82,7 @@ struct StoredEvent {
   std::string source;       ///< the recording file or the robot address
   std::string recorded_at;  ///< when the monitor stored it, "YYYY-MM-DD HH:MM:SS" UTC (SQLite's CURRENT_TIMESTAMP); "" if unknown
   Event event;
+  long run = 0;             ///< the monitoring run that stored it (EventStore::begin_run); 0: none (a row from before session 47)
 };
 
 /// SQLite event store (embedded; default file events.db). Thread-compatible, not for RT loops:
@@ -107,6 +108,14 @@ class EventStore {
   EventStore(const EventStore&) = delete;
   EventStore& operator=(const EventStore&) = delete;
 
+  /// Starts a monitoring run: the first event inserted after it writes a row of the `runs` table
+  /// (id, started_at UTC, source, twin, program), whose id it and every later event carry in their
+  /// `run` column, so that two runs of the same recording into one store are told apart. The row is
+  /// written with the first event, under the same wait for another connection's lock: a reader's
+  /// transaction must not stall a live monitor at its start either.
+  void begin_run(const std::string& source, const std::string& twin, const std::string& program);
+  /// The run's id once its first event is stored; 0 before.
+  long run() const;
   /// Inserts an event (source names the run, e.g. the recording file or the robot address).
   /// Waits up to 10 s for another connection's lock, then throws std::runtime_error naming the file.
   void insert(const Event& e, const std::string& source);

@@ -403,7 +403,7 @@ class Monitor {
   const ident::TwinModel& twin() const { return twin_; }
 
  private:
-  void open_event(int joint, double start, double t);
+  void open_event(int joint, double start, double t, const char* channel);  // channel: what raised it, for the detail
   bool skip_invalid(const RobotSample& s);  // true: the sample is not processed (repeated time, non-finite value)
   // A joint temperature no joint can have (kTemperatureMin..kTemperatureMax: a 0xFFFF/10 overflow, a
   // sensor fault) is not taken: the sample is judged with the joint's last plausible reading, and the
