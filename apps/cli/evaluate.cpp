@@ -1359,7 +1359,7 @@ std::string evaluation_json(const Evaluation& e) {
 
 void write_report(const ident::TwinModel& twin_in, const std::string& recording, const model::RigidBodyInertia& payload,
                   const std::string& out, const std::optional<sim::Labels>& labels, const device::ColumnMap* map,
-                  const std::string& program, bool keep_payload) {
+                  const std::string& program, bool keep_payload, const std::function<void(monitor::MonitorConfig&)>& adjust) {
   ident::TwinModel twin = twin_in;
   twin.set_payload(payload);
   // The recording is read twice, row by row, and never held, as `monitor` reads one: first to check
@@ -1401,6 +1401,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   cfg.select_program(program);  // the set `monitor --program` would use
   cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`
+  if (adjust) adjust(cfg);
   if (period > 0) cfg.nominal_period = period;
   cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);  // a jittery logger clock (device::RecordingTiming)
   monitor::Monitor mon(twin, cfg);

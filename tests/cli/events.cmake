@@ -195,3 +195,11 @@ set_tests_properties(cli.monitor_events_open PROPERTIES FIXTURES_REQUIRED "twin;
 add_test(NAME cli.monitor_events_open_needs_an_output COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --events-open)
 set_tests_properties(cli.monitor_events_open_needs_an_output PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" PASS_REGULAR_EXPRESSION
   "--events-open applies only with --events or --json")
+# report takes monitor's alert settings: with the same ones it shows the events monitor finds
+# (it had no --sensitivity, --static, --raise-after, --filter: some monitor runs it could not show)
+add_test(NAME cli.report_takes_monitors_alert_settings
+         COMMAND sh -c "tw=$<TARGET_FILE:twinwatch>; m=$($tw monitor --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 \
+--sensitivity 0.5 --static --raise-after 1 --db '' --json | wc -l); $tw report --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 \
+--payload-com 0 0 0.04 --sensitivity 0.5 --static --raise-after 1 -o ${d}/settings.html -q || exit 9; \
+r=$(grep -o '<tr><td>[0-9.]*</td><td>[0-9.]*</td><td>[a-z_]*' ${d}/settings.html | wc -l); echo monitor=$m report=$r; [ $m -gt 1 ] && [ $m -eq $r ] && echo SAME")
+set_tests_properties(cli.report_takes_monitors_alert_settings PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "SAME")

@@ -953,6 +953,11 @@ int run_evaluate(const EvaluateOptions& o) {
 struct ReportOptions {
   std::string twin, recording, output = "report.html", labels, column_map, program;
   bool quiet = false, keep_payload = false;
+  // monitor's alert settings, so that the report shows the run monitor makes with them
+  std::vector<double> sensitivity;
+  int raise_after = 0, observer_raise_after = 0;
+  std::string filter;
+  bool static_threshold = false;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
 };
@@ -976,7 +981,16 @@ int run_report(const ReportOptions& o) {
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
-  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload);
+  // (what monitor applies over the twin's block, in its order: the filter, then the alert settings)
+  const auto adjust = [&](monitor::MonitorConfig& cfg) {
+    if (o.static_threshold) cfg.use_dynamic = false;
+    if (!o.filter.empty()) {
+      cfg.residual_filter = split_filter(o.filter);
+      cfg.validate(twin.n_dof());
+    }
+    apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+  };
+  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload, adjust);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }
@@ -1056,6 +1070,13 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Keep the payload the twin starts with for the whole run, as 'monitor --keep-payload': no diagnosed change is "
                 "followed and no declared payload taken (default: the twin follows both, as 'monitor' does)");
+  sub->add_option("--sensitivity", o->sensitivity, std::string(kSensitivityHelp) + ", as 'monitor --sensitivity'")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one, as 'monitor --static'");
+  sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};
