@@ -13,9 +13,12 @@ fail() { echo "FAIL: $*"; cat "$dir/serve.err" 2>/dev/null; kill -INT "$pid" 2>/
 "$tw" serve --twin "$twin" "$rec" --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --events "$dir/serve.events" \
   --speed 4 --listen 127.0.0.1:0 >"$dir/serve.out" 2>"$dir/serve.err" &
 pid=$!
+# whatever ends this script, the server does not outlive it (it serves until Ctrl-C)
+trap 'kill -INT "$pid" 2>/dev/null || true' EXIT
 url=""
 for i in $(seq 1 100); do
-  url=$(sed -n 's/^dashboard: \(http:[^ ]*\).*/\1/p' "$dir/serve.err")
+  # (the shell may not have created serve.err yet: a missing file is no URL yet, not a failure)
+  url=$(sed -n 's/^dashboard: \(http:[^ ]*\).*/\1/p' "$dir/serve.err" 2>/dev/null || true)
   [ -n "$url" ] && break
   sleep 0.1
 done
