@@ -334,6 +334,15 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                        "the robot moves beyond it are not marked; identify again to have them marked\n",
                o.twin);
   std::vector<bool> noted(static_cast<size_t>(2 * twin.n_dof()), false);  // per joint: speed, position
+  // a line of --events, flushed at once ('tail -f' and a crash must see it); an event lost to a full
+  // disk is an error, not a shorter file
+  const auto write_event_line = [&](const std::string& line) {
+    if (!jl.is_open()) return;
+    errno = 0;
+    jl << line << '\n';
+    jl.flush();
+    check_written(jl, o.events_path, true);
+  };
   mon.on_event = [&](const monitor::Event& raw) {
     monitor::Event e = raw;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
@@ -343,12 +352,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       // lasts a shift was seen only when it cleared or monitoring stopped); t_detected names the
       // alert, its closing line ("open": false) ends it
       const std::string line = e.to_json_line();
-      if (jl.is_open()) {
-        errno = 0;
-        jl << line << '\n';
-        jl.flush();
-        check_written(jl, o.events_path, true);
-      }
+      write_event_line(line);
       if (o.json) {
         fmt::print("{}\n", line);
         std::fflush(stdout);
@@ -369,12 +373,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     }
     // stored first, printed after: a terminal that went away (a dropped SSH session) must not cost
     // the event its files
-    if (jl.is_open()) {
-      errno = 0;
-      jl << e.to_json_line() << '\n';
-      jl.flush();  // one line per event when it ends: 'tail -f' and a crash must see it
-      check_written(jl, o.events_path, true);  // an event lost to a full disk is an error, not a shorter file
-    }
+    const std::string line = e.to_json_line();
+    write_event_line(line);
     if (store) {
       // (behind events already waiting no wait: a burst of events must not stall the stream)
       const int wait_ms = unstored.empty() ? kLiveLockWaitMs : 0;
@@ -384,7 +384,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (!o.quiet && !o.json)
       fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
                  e.duration(), 100 * e.confidence);
-    if (o.json) fmt::print("{}\n", e.to_json_line());
+    if (o.json) fmt::print("{}\n", line);
     std::fflush(stdout);  // the same for a pipe or a log file
   };
   mon.on_note = [&](double t, const std::string& note) {
