@@ -30,6 +30,7 @@ struct MonitorOptions {
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
   std::string program;  // threshold set of this program ("" = the default set)
+  std::string started_at;  // a recording: the wall-clock time of its first sample (ISO 8601 with zone)
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
   bool events_open = false;  // --events-open: a line at each raise and re-diagnosis too ("open": true)
 };

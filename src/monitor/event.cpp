@@ -13,6 +13,7 @@
 #include <string_view>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/core/wall_clock.hpp"
 
 namespace twinwatch::monitor {
 
@@ -50,6 +51,11 @@ std::vector<int> shifted(std::vector<int> v, int by) {
 }
 }  // namespace
 
+std::string Event::wall_time(double t) const {
+  if (!std::isfinite(wall_offset) || !std::isfinite(t)) return {};
+  return iso_utc(t + wall_offset);
+}
+
 std::string Event::to_json_line() const {
   nlohmann::json j;
   j["t_start"] = t_start;
@@ -71,6 +77,15 @@ std::string Event::to_json_line() const {
   j["peak_residual"] = peak_residual;  // the largest |filtered current residual| of any joint during the alert
   j["peak_residual_units"] = "A";
   j["detail"] = detail;
+  // the wall clock of the three times, where the source's is known (null: a recording watched
+  // without --started-at)
+  const auto wall = [&](double t) {
+    const std::string w = wall_time(t);
+    return w.empty() ? nlohmann::json(nullptr) : nlohmann::json(w);
+  };
+  j["wall_start"] = wall(t_start);
+  j["wall_detected"] = wall(t_detected);
+  j["wall_end"] = wall(t_end);
   return j.dump();
 }
 
@@ -78,7 +93,8 @@ struct EventStore::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string path;
-  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false, has_run = false;
+  bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false, has_run = false,
+       has_wall_offset = false;
   long run = 0;  // the run's id (its row written with its first event), 0: none yet
   bool run_pending = false;  // begin_run was called, its row not yet written
   std::string run_source, run_twin, run_program;
@@ -220,6 +236,11 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     // (session 47) the monitoring runs: two runs of one recording into one store were rows alike but
     // for their storage time
     if (!has("run")) exec("ALTER TABLE events ADD COLUMN run INTEGER;", "cannot add the run column to the events table");
+    // (session 48) the wall clock, where the source's is known: Unix time minus controller time,
+    // and t_start's wall time for a reader of the table
+    if (!has("wall_offset"))
+      exec("ALTER TABLE events ADD COLUMN wall_offset REAL;", "cannot add the wall_offset column to the events table");
+    if (!has("wall_start")) exec("ALTER TABLE events ADD COLUMN wall_start TEXT;", "cannot add the wall_start column to the events table");
     exec("CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY AUTOINCREMENT, started_at TEXT DEFAULT CURRENT_TIMESTAMP,"
          " source TEXT, twin TEXT, program TEXT);",
          "cannot create the runs table");
@@ -235,10 +256,12 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   impl_->has_active_at_stop = mode == Mode::Write || has("active_at_stop");
   impl_->has_recorded_at = mode == Mode::Write || has("recorded_at");
   impl_->has_run = mode == Mode::Write || has("run");
+  impl_->has_wall_offset = mode == Mode::Write || has("wall_offset");
   if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail, other_links, t_detected, active_at_stop, run) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links, t_detected, active_at_stop, run, wall_offset, wall_start)"
+      " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
@@ -306,6 +329,14 @@ bool EventStore::try_insert(const Event& e, const std::string& source, int wait_
   sqlite3_bind_double(s, 14, e.t_detected);
   sqlite3_bind_int(s, 15, e.active_at_stop ? 1 : 0);
   if (impl_->run > 0) sqlite3_bind_int64(s, 16, impl_->run); else sqlite3_bind_null(s, 16);
+  const std::string wall_start = e.wall_time(e.t_start);
+  if (wall_start.empty()) {
+    sqlite3_bind_null(s, 17);
+    sqlite3_bind_null(s, 18);
+  } else {
+    sqlite3_bind_double(s, 17, e.wall_offset);
+    sqlite3_bind_text(s, 18, wall_start.c_str(), -1, SQLITE_TRANSIENT);
+  }
   const int rc = sqlite3_step(s);
   if (new_run) {
     // (the commit waits for readers to let go, as an insert outside a transaction does)
@@ -358,10 +389,10 @@ std::vector<StoredEvent> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
   const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " {}, {}, {}, {}, {} FROM events ORDER BY id;",
+      " {}, {}, {}, {}, {}, {} FROM events ORDER BY id;",
       impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL",
       impl_->has_active_at_stop ? "active_at_stop" : "NULL", impl_->has_recorded_at ? "recorded_at" : "NULL",
-      impl_->has_run ? "run" : "NULL");
+      impl_->has_run ? "run" : "NULL", impl_->has_wall_offset ? "wall_offset" : "NULL");
   if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
@@ -418,6 +449,10 @@ std::vector<StoredEvent> EventStore::read() const {
     if (!(e.confidence >= 0.0 && e.confidence <= 1.0)) throw bad(9, "a confidence from 0 to 1");
     if (!std::isfinite(e.peak_residual)) throw bad(10, "a finite number");
     e.active_at_stop = sqlite3_column_type(s, 14) == SQLITE_INTEGER && sqlite3_column_int64(s, 14) != 0;
+    if (sqlite3_column_type(s, 17) != SQLITE_NULL) {
+      e.wall_offset = number(17);
+      if (!std::isfinite(e.wall_offset)) throw bad(17, "a finite offset [s] or NULL");
+    }
     try {
       e.fault = fault_class_from_string(text(4));
       const std::string others = text(12);

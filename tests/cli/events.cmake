@@ -22,6 +22,25 @@ add_test(NAME cli.events_missing_store COMMAND twinwatch events --db ${d}/no_suc
 set_tests_properties(cli.events_missing_store PROPERTIES PASS_REGULAR_EXPRESSION "no_such_events.db: no such event store")
 add_test(NAME cli.events_bad_class COMMAND twinwatch events --db ${d}/events_collision.db --class earthquake)
 set_tests_properties(cli.events_bad_class PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "'earthquake' is unknown")
+# wall-clock times (session 48): a recording watched with --started-at gives its events the wall
+# time of each (t − the first sample's t after the time given, here +01:00 read as 07:00 UTC), the
+# printed lines start with the time of day, and the store keeps it (a column of 'events'); a time
+# without its zone is refused, and live the machine's clock is read instead
+add_test(NAME cli.monitor_started_at COMMAND sh -c "rm -f ${d}/events_wall.db; \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events_wall.db \
+  --started-at 2026-12-03T08:00:00+01:00 | grep -E '^07:00:0[0-9.]+ UTC +6[.][0-9]+ s  collision'; \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json \
+  --started-at 2026-12-03T08:00:00+01:00; \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json; \
+$<TARGET_FILE:twinwatch> events --db ${d}/events_wall.db")
+set_tests_properties(cli.monitor_started_at PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+  PASS_REGULAR_EXPRESSION "07:00:06[.][0-9]+ UTC +6[.][0-9]+ s  collision[^\n]*\n[^\n]*\"t_start\":6[.][0-9]+,[^\n]*\"wall_detected\":\"2026-12-03T07:00:06[.][0-9][0-9][0-9]Z\",\"wall_end\":\"2026-12-03T07:00:06[.][0-9]+Z\",\"wall_start\":\"2026-12-03T07:00:06[.][0-9]+Z\"}\n[^\n]*\"wall_detected\":null,\"wall_end\":null,\"wall_start\":null}\nstored \\(UTC\\) +run source +started \\(UTC\\) +t \\[s\\][^\n]*\n[^\n]*collision.csv +2026-12-03 07:00:06[.][0-9][0-9][0-9] +6[.][0-9]+ +[0-9]+ collision")
+add_test(NAME cli.monitor_started_at_without_zone COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --db "" --started-at 2026-12-03T08:00:00)
+set_tests_properties(cli.monitor_started_at_without_zone PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+  PASS_REGULAR_EXPRESSION "--started-at '2026-12-03T08:00:00': it has no zone \\(Z for UTC, or [+]HH:MM\\)")
+add_test(NAME cli.monitor_started_at_live COMMAND twinwatch monitor --twin ${d}/twin.json --rtde 127.0.0.1:1 --db "" --started-at 2026-12-03T08:00:00Z)
+set_tests_properties(cli.monitor_started_at_live PROPERTIES FIXTURES_REQUIRED twin
+  PASS_REGULAR_EXPRESSION "--started-at applies only with a RECORDING. a live stream's wall clock is read against this machine's")
 # the live lines: an ALERT carries the raise time (what a detection delay counts to) and when the
 # exceedance began; the diagnosed contact says how likely its link is
 add_test(NAME cli.monitor_alert_line COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5

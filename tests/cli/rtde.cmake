@@ -17,13 +17,14 @@ foreach(ep "" ":30004" "127.0.0.1:+80" "http://127.0.0.1:30004" "127.0.0.1:30004
     PASS_REGULAR_EXPRESSION "(expected HOST\\[:PORT\\] \\(an IPv6 address in brackets: \\[::1\\]:30004\\), (the host is missing|not a URL|more than one ':'|the '\\[' has no '\\]')|port '\\+80' is not a number in 1..65535).*exit=2")
 endforeach()
 # live monitoring over RTDE: the J5 resistance of the scenario (onset 12 s + 42 s controller boot
-# offset) is found from the stream, as it is from the recording (the alert is printed when it
+# offset) is found from the stream, as it is from the recording, its line led by the wall-clock time
+# of day (session 48) (the alert is printed when it
 # closes: before the stream summary, or after it when the resistance is still on at the end)
 add_test(NAME cli.rtde_monitor_live
   COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/j5_resistance.yaml --port 35918 --speed 8 --duration 20 --wait-client 20 -q & \
 $<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35918 --wait 10 --duration 4 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db ''; wait")
 set_tests_properties(cli.rtde_monitor_live PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
-  PASS_REGULAR_EXPRESSION "(5[4-6]\\.[0-9]+ s  resistance +extra friction on J5.*stream: 10000 received, 0 lost|stream: 10000 received, 0 lost.*5[4-6]\\.[0-9]+ s  resistance +extra friction on J5)")
+  PASS_REGULAR_EXPRESSION "([0-9][0-9]:[0-9][0-9]:[0-9][0-9][.][0-9][0-9][0-9] UTC +5[4-6]\\.[0-9]+ s  resistance +extra friction on J5.*stream: 10000 received, 0 lost|stream: 10000 received, 0 lost.*[0-9][0-9]:[0-9][0-9]:[0-9][0-9][.][0-9][0-9][0-9] UTC +5[4-6]\\.[0-9]+ s  resistance +extra friction on J5)")
 # serve-robot --wait-client waits for a client that streams (START), not one that only connects
 add_test(NAME cli.serve_robot_help_wait_client COMMAND twinwatch serve-robot --help)
 set_tests_properties(cli.serve_robot_help_wait_client PROPERTIES PASS_REGULAR_EXPRESSION "--wait-client[^\n]*until a client starts streaming")
@@ -104,7 +105,7 @@ add_test(NAME cli.rtde_record_slow_rate
   COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35942 --duration 12 --wait-client 20 -q & \
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:35942 --wait 10 --frequency 0.5 --duration 6.5 -o ${PROJECT_BINARY_DIR}/slow_rec.csv; echo exit=\$?; kill \$! 2>/dev/null; wait")
 set_tests_properties(cli.rtde_record_slow_rate PROPERTIES TIMEOUT 60
-  PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*. lost 0 samples in 0 gaps, 0 reconnects[^\n]*. arrival jitter p99 [0-9.]+ ms.[^\n]*\nexit=0")
+  PASS_REGULAR_EXPRESSION "slow_rec.csv: [34] samples [^\n]*. lost 0 samples in 0 gaps, 0 reconnects[^\n]*. arrival jitter p99 [0-9.]+ ms.[^\n]*\nits first sample was taken at 20[0-9][0-9]-[0-9][0-9]-[0-9][0-9]T[0-9][0-9]:[0-9][0-9]:[0-9][0-9][.][0-9][0-9][0-9]Z by this machine's clock: 'twinwatch monitor --started-at [^\n]*\nexit=0")
 # a write that fails stops the recording at once, naming the file (before: the whole --duration was
 # streamed, then "write error"; on a disk that fills during an hour, the hour was lost unsaid)
 execute_process(COMMAND test -c /dev/full RESULT_VARIABLE no_dev_full_rtde)

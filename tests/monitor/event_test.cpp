@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <thread>
 #include <nlohmann/json.hpp>
@@ -74,6 +75,26 @@ TEST(Event, JsonLineCarriesClassJointMagnitudeAndDuration) {
   EXPECT_EQ(c["other_links"], nlohmann::json::array({6, 1}));
 }
 
+// the wall clock (session 48): null where the source's is unknown, the three times in UTC where it is
+TEST(Event, JsonLineCarriesWallClockTimesWhereTheSourcesClockIsKnown) {
+  Event e;
+  e.t_start = 54.31;
+  e.t_detected = 54.312;
+  e.t_end = 54.36;
+  e.open = false;
+  auto j = nlohmann::json::parse(e.to_json_line());
+  for (const char* k : {"wall_start", "wall_detected", "wall_end"}) {
+    ASSERT_TRUE(j.contains(k)) << k;
+    EXPECT_TRUE(j[k].is_null()) << k;
+  }
+  EXPECT_EQ(e.wall_time(e.t_start), "");
+  e.wall_offset = 1796324562.0 - 54.31;  // 2026-12-03T19:02:42Z at t_start
+  j = nlohmann::json::parse(e.to_json_line());
+  EXPECT_EQ(j["wall_start"], "2026-12-03T19:02:42.000Z");
+  EXPECT_EQ(j["wall_detected"], "2026-12-03T19:02:42.002Z");
+  EXPECT_EQ(j["wall_end"], "2026-12-03T19:02:42.050Z");
+}
+
 TEST(FaultClass, RoundTripsAndRejectsUnknownNames) {
   for (FaultClass c : {FaultClass::Collision, FaultClass::Resistance, FaultClass::PayloadChange, FaultClass::SensorFault,
                        FaultClass::StreamFault, FaultClass::Wear, FaultClass::Unknown})
@@ -105,6 +126,7 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
     e.link = -1;
     e.other_links.clear();
     e.active_at_stop = true;
+    e.wall_offset = 1796324562.0 - 7.25;  // a live robot's: Unix time − controller time
     store.insert(e, "robot 10.0.0.2");
     EXPECT_EQ(store.count(), 2);
   }
@@ -126,6 +148,11 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
   EXPECT_TRUE(rows[1].event.other_links.empty());
   EXPECT_FALSE(rows[0].event.active_at_stop);
   EXPECT_TRUE(rows[1].event.active_at_stop);
+  // the wall clock where it was known, and the start's wall time for a reader of the table
+  EXPECT_TRUE(std::isnan(rows[0].event.wall_offset));
+  EXPECT_DOUBLE_EQ(rows[1].event.wall_offset, 1796324562.0 - 7.25);
+  EXPECT_EQ(raw_cell(path, "SELECT wall_start FROM events WHERE id = 1"), "NULL");
+  EXPECT_EQ(raw_cell(path, "SELECT wall_start FROM events WHERE id = 2"), "2026-12-03T19:02:42.000Z");
   // when each was stored (two runs of the same file are told apart by it)
   EXPECT_THAT(rows[0].recorded_at, ::testing::MatchesRegex("[0-9]{4}-[0-9]{2}-[0-9]{2} [0-9]{2}:[0-9]{2}:[0-9]{2}"));
   std::filesystem::remove(path);

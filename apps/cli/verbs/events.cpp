@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -89,12 +90,23 @@ void run_events(const EventsOptions& o) {
     shown.push_back(shown_source(r.source));
     width = std::max(width, std::min(shown.back().size(), kSourceWidth));
   }
-  fmt::print("{:<19} {:>4} {:<{}} {:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "run", "source", width, "t [s]", "dur ms",
-             "class", "joint", "link", "magnitude", "detail");
+  // the wall-clock time of the start, a column where a row has one (a live robot's events, or a
+  // recording watched with --started-at): "2026-12-03 19:02:11.234"
+  const bool any_wall = std::any_of(rows.begin(), rows.end(), [](const monitor::StoredEvent& r) { return std::isfinite(r.event.wall_offset); });
+  const auto wall_cell = [&](const monitor::Event& e) -> std::string {
+    if (!any_wall) return "";
+    std::string w = e.wall_time(e.t_start);
+    if (w.empty()) return fmt::format("{:<23} ", "-");
+    w[10] = ' ';
+    w.pop_back();  // (the 'Z': the column says UTC)
+    return w + " ";
+  };
+  fmt::print("{:<19} {:>4} {:<{}} {}{:>9} {:>8} {:<15} {:>5} {:>10} {:>12}  {}\n", "stored (UTC)", "run", "source", width,
+             any_wall ? fmt::format("{:<23} ", "started (UTC)") : "", "t [s]", "dur ms", "class", "joint", "link", "magnitude", "detail");
   for (size_t k = 0; k < rows.size(); ++k) {
     const auto& [source, recorded_at, e, run] = rows[k];
-    fmt::print("{:<19} {:>4} {:<{}} {:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
-               run > 0 ? std::to_string(run) : "-", cut_left(shown[k], width), width, e.t_start, 1000.0 * e.duration(),
+    fmt::print("{:<19} {:>4} {:<{}} {}{:>9.3f} {:>8.0f} {:<15} {:>5} {:>10} {:>12}  {}\n", recorded_at.empty() ? "-" : recorded_at,
+               run > 0 ? std::to_string(run) : "-", cut_left(shown[k], width), width, wall_cell(e), e.t_start, 1000.0 * e.duration(),
                monitor::to_string(e.fault), e.joint >= 0 ? fmt::format("J{}", e.joint + 1) : "-", link_text(e),
                cli::magnitude_text(e.magnitude, e.units), e.detail);
   }
@@ -112,7 +124,7 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   sub->add_option("--run", o->run, "Only the events of this monitoring run (the number 'monitor' prints with its summary; 0: all)")
       ->check(twinwatch::cli::whole_number(0, 1'000'000'000'000L))
       ->capture_default_str();
-  sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format plus \"source\", \"recorded_at\" and \"run\", null for rows from before runs were stored)");
+  sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format, wall_start/wall_detected/wall_end included, plus \"source\", \"recorded_at\" and \"run\", null for rows from before runs were stored)");
   sub->footer(twinwatch::cli::with_exit_status(
       "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"
       "passes near the contact link's own joint axis); --json gives it as \"other_links\". Joints and links are\n"

@@ -19,6 +19,7 @@
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/log.hpp"
+#include "twinwatch/core/wall_clock.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/physics_ident.hpp"
 #include "twinwatch/monitor/envelope.hpp"
@@ -126,6 +127,8 @@ struct ReplayStopped {};
 
 int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing": no info lines either (warnings still show)
+  // (checked before anything is read)
+  const double started_at = o.started_at.empty() ? std::numeric_limits<double>::quiet_NaN() : parse_iso_time(o.started_at, "--started-at");
   ident::TwinModel twin = cli::load_twin(o.twin);
   // the declared payload is checked before anything is read or connected
   twin.set_payload(cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com));
@@ -210,6 +213,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   // (a jump is a gap, a stream fault), and the estimators and the wear trend go on across it.
   std::optional<device::ColumnMap> map;
   std::vector<device::RecordingScan> scans;
+  // the wall clock: Unix time − controller time (NaN: unknown). A recording's is --started-at's; a
+  // live stream's is read against this machine's clock as the samples come (StreamWallClock)
+  double wall_offset = std::numeric_limits<double>::quiet_NaN();
+  StreamWallClock live_clock;
   std::vector<double> last_t;  // each file's last timestamp
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
@@ -246,6 +253,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);
     }
     if (scans.front().timing.median_period > 0) use_rate(scans.front().timing.median_period, o.recordings.front());
+    if (std::isfinite(started_at)) wall_offset = started_at - sources.front().first;
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
@@ -343,8 +351,15 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     jl.flush();
     check_written(jl, o.events_path, true);
   };
+  // "19:02:11.234 UTC  " before a printed line's controller time, where the wall clock is known
+  const auto wall_prefix = [&](double t) -> std::string {
+    if (!std::isfinite(wall_offset)) return {};
+    const std::string w = iso_utc(t + wall_offset);
+    return w.substr(11, 12) + " UTC  ";
+  };
   mon.on_event = [&](const monitor::Event& raw) {
     monitor::Event e = raw;
+    e.wall_offset = wall_offset;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
     if (hooks.on_event) hooks.on_event(e);
     if (e.open && o.events_open) {
@@ -363,10 +378,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
       // diagnosis of the same alert is printed at the time it was made
       if (e.t_detected != raise_shown)
-        fmt::print("{:9.3f} s  ALERT  {} ({} {:.3f} s)\n", e.t_detected, e.detail,
+        fmt::print("{}{:9.3f} s  ALERT  {} ({} {:.3f} s)\n", wall_prefix(e.t_detected), e.t_detected, e.detail,
                    e.fault == monitor::FaultClass::Unknown ? "above the threshold since" : "since", e.t_start);
       else
-        fmt::print("{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", e.t_end, e.detail, e.t_detected);
+        fmt::print("{}{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", wall_prefix(e.t_end), e.t_end, e.detail, e.t_detected);
       std::fflush(stdout);
       raise_shown = e.t_detected;
       return;
@@ -382,7 +397,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       store_waiting(wait_ms);
     }
     if (!o.quiet && !o.json)
-      fmt::print("{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", e.t_start, monitor::to_string(e.fault), e.detail,
+      fmt::print("{}{:9.3f} s  {:<14} {} (duration {:.3f} s, confidence {:.0f} %)\n", wall_prefix(e.t_start), e.t_start, monitor::to_string(e.fault), e.detail,
                  e.duration(), 100 * e.confidence);
     if (o.json) fmt::print("{}\n", line);
     std::fflush(stdout);  // the same for a pipe or a log file
@@ -390,7 +405,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   mon.on_note = [&](double t, const std::string& note) {
     if (hooks.on_note) hooks.on_note(t, note);
     if (o.quiet || o.json) return;
-    fmt::print("{:9.3f} s  note: {}\n", t, note);
+    fmt::print("{}{:9.3f} s  note: {}\n", wall_prefix(t), t, note);
     std::fflush(stdout);
   };
   // --trace: what the decision saw, per sample and joint (to plot a false alarm or a late detection)
@@ -426,7 +441,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         const std::string note =
             fmt::format("{}: beyond the motion the twin was identified on; residuals there may be model error", x.describe(watch.envelope()));
         if (hooks.on_note) hooks.on_note(s.timestamp, note);
-        if (chatty) fmt::print("{:9.3f} s  note: {}\n", s.timestamp, note);
+        if (chatty) fmt::print("{}{:9.3f} s  note: {}\n", wall_prefix(s.timestamp), s.timestamp, note);
       }
     }
     if (hooks.before_sample) hooks.before_sample(s);
@@ -482,8 +497,18 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.duration > 0 ? o.duration : 1e9);
     RobotSample s;
     auto last_sample = std::chrono::steady_clock::now();
+    // (a controller whose clock restarted, a reboot behind a reconnection: said once per restart)
+    const auto read_wall_clock = [&](double t) {
+      const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+      const bool had = std::isfinite(wall_offset);
+      if (live_clock.sample(t, now) && had && chatty)
+        fmt::print("{}{:9.3f} s  note: the controller's clock jumped (a restart?): wall-clock times are read afresh from here\n",
+                   iso_utc(now).substr(11, 12) + " UTC  ", t);
+      wall_offset = live_clock.offset();
+    };
     while (!cli::interrupted() && std::chrono::steady_clock::now() < end) {
       if (client->pop(s, std::chrono::milliseconds(50))) {
+        read_wall_clock(s.timestamp);
         push(s);
         last_sample = std::chrono::steady_clock::now();
         if (copy) copy->write(s);
@@ -495,6 +520,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     }
     client->stop();
     while (client->pop(s, std::chrono::nanoseconds(0))) {  // what was received is still analysed
+      read_wall_clock(s.timestamp);
       push(s);
       last_sample = std::chrono::steady_clock::now();
       if (copy) copy->write(s);
@@ -1136,6 +1162,11 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                   "Program cycle time [s]: the wear trend's windows become whole cycles (default: plain windows of the twin's "
                   "trend.window_s)")
       ->check(positive_number());
+  auto* started = sub->add_option("--started-at", o->started_at,
+                  "A recording: the wall-clock time of its first sample, ISO 8601 with its zone (2026-12-03T08:00:00Z, "
+                  "2026-12-03T09:00:00.250+01:00; 'twinwatch record' prints it). Events then carry wall-clock times "
+                  "(\"wall_start\", \"wall_detected\", \"wall_end\"; the printed lines start with the time of day in UTC). "
+                  "Live (--rtde) they always do, read against this machine's clock");
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only (the --events format)");
   sub->add_option("--trace", o->trace,
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
@@ -1144,6 +1175,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
   return [=] {
     refuse_unless({events_open}, !o->events_path.empty() || o->json, "with --events or --json");
     refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
+    refuse_unless({started}, o->rtde.empty(), "with a RECORDING; a live stream's wall clock is read against this machine's");
     refuse_unless({split_every}, !o->record_to.empty(), "with --record");
   };
 }

@@ -19,6 +19,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/log.hpp"
+#include "twinwatch/core/wall_clock.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/device/rtde_client.hpp"
 #include "twinwatch/device/rtde_server.hpp"
@@ -119,9 +120,14 @@ int run_record(const RecordOptions& o) {
   RobotSample s;
   double t_first = std::numeric_limits<double>::quiet_NaN(), t_last = t_first;
   auto last_sample = t0;
+  // the wall clock of the first sample, for 'monitor --started-at' (a recording has only the
+  // controller's clock, which counts from its boot)
+  StreamWallClock wall;
+  const auto unix_now = [] { return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(); };
   while (Clock::now() < end && !interrupted()) {
     if (client.pop(s, std::chrono::milliseconds(50))) {
       write(s);
+      if (std::isnan(t_first) || s.timestamp - t_first < 30.0) wall.sample(s.timestamp, unix_now());
       if (std::isnan(t_first)) t_first = s.timestamp;
       t_last = s.timestamp;
       last_sample = Clock::now();
@@ -167,6 +173,7 @@ int run_record(const RecordOptions& o) {
                         "(a robot served faster or slower than real time?)",
                         1e3 * st.arrival_interval_s, st.frequency > 0.0 ? 1e3 / st.frequency : 0.0)
           : std::string("arrival jitter not measured (fewer than two samples in a row)");
+  const std::string started_at = std::isnan(t_first) || !std::isfinite(wall.offset()) ? std::string() : iso_utc(t_first + wall.offset());
   if (o.json) {
     nlohmann::json j = {{"output", o.output},
                         {"files", files},
@@ -178,6 +185,7 @@ int run_record(const RecordOptions& o) {
                         {"frequency_hz", st.frequency},
                         {"samples", rows},
                         {"robot_time_s", std::isnan(t_first) ? 0.0 : t_last - t_first},
+                        {"started_at", started_at.empty() ? nlohmann::json() : nlohmann::json(started_at)},
                         {"received", st.received},
                         {"lost", st.lost},
                         {"gaps", st.gaps},
@@ -204,6 +212,10 @@ int run_record(const RecordOptions& o) {
                interrupted() ? fmt::format("; stopped by a signal after {:.1f} of the {:g} s asked for",
                                            std::chrono::duration<double>(stopped - t0).count(), o.duration)
                              : "");
+    if (!started_at.empty())
+      fmt::print("its first sample was taken at {} by this machine's clock: 'twinwatch monitor --started-at {}' gives its events "
+                 "wall-clock times\n",
+                 started_at, started_at);
   }
   if (ended_early && !o.quiet)
     log::warn(fmt::format("{}: no data for the last {:.1f} s {} (the connection was lost{}): the recording ends at {:.3f} s of "

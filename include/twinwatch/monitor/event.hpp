@@ -2,6 +2,7 @@
 /// @file event.hpp
 /// What the monitor reports: alerts with a diagnosis, written as JSON lines and into an SQLite
 /// event store (the last stage of sample -> residual -> decision -> event).
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -69,8 +70,15 @@ struct Event {
   /// contacts: the joint impulse the link was chosen on (in memory only: not in the JSON line or
   /// the event store; `evaluate --link-ceiling` reads its noise)
   ContactImpulse contact;
+  /// [s] Unix time minus controller time, where the source's wall clock is known (a live robot:
+  /// the monitor reads it against its own clock; a recording watched with `--started-at`); NaN
+  /// where it is not. The monitor itself works in controller time; the front end sets this.
+  double wall_offset = std::numeric_limits<double>::quiet_NaN();
 
   double duration() const { return t_end - t_start; }
+  /// The wall-clock time of controller time `t` as ISO 8601 UTC with milliseconds
+  /// ("2026-12-03T19:02:11.234Z"); "" where wall_offset is not known.
+  std::string wall_time(double t) const;
   /// One JSON object on one line (no trailing newline). Joints and links are numbered from 1 there,
   /// as in the scenario labels and every table (J5 is "joint": 5), and none is null; in memory
   /// they are 0-based indices.
