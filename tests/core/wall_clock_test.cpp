@@ -96,7 +96,9 @@ TEST(WallClock, StreamOffsetIsTheLeastDelayedSampleAndFollowsDriftAndRestarts) {
     EXPECT_EQ(fresh, first) << k;
     first = false;
     ASSERT_GE(clock.offset(), boot + drift * (t - 42.0) - 20.0 * drift - 1e-6) << k;  // (two windows of drift; a double at 1.7e9 resolves 0.24 µs)
-    if (k > 500 * 20) ASSERT_LT(std::abs(clock.offset() - true_offset), 0.001) << k;
+    if (k > 500 * 20) {
+      ASSERT_LT(std::abs(clock.offset() - true_offset), 0.001) << k;
+    }
   }
   // the controller restarted: its clock counts from 0 again
   EXPECT_TRUE(clock.sample(0.002, boot + 2000.0));
