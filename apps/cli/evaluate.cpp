@@ -607,12 +607,15 @@ void UnitsCheck::finish() {
 
 void warn_if_another_arm(const std::string& path, const model::RobotModel& robot, const ident::ArmVerdict& v, const std::string& user) {
   const double j2 = robot.n_dof() >= 2 ? v.own.rms[1] : v.own.rms[0];
+  const bool live = path.rfind("rtde://", 0) == 0;  // (a stream's first seconds, not a file)
   if (v.other_arm())
     fmt::print(stderr,
-               "WARNING: {} is not a recording of a {} (the arm it is read for): the controller's own torque (target_moment) along its "
+               "WARNING: {} is not {} of a {} (the arm it is read for): the controller's own torque (target_moment) along its "
                "targets is reproduced by the {}'s model (relative rms {:.2f}) and not by the {}'s ({:.2f}; J2 off by {:.1f} N·m rms): {} "
-               "reads it with a model of another arm (this arm's: --robot {})\n",
-               path, robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms, j2, user, v.better);
+               "reads it with a model of another arm{}\n",
+               path, live ? "the stream" : "a recording", robot.name(), v.better, v.theirs.relative_rms, robot.name(), v.own.relative_rms,
+               j2, user, live ? fmt::format(": its residuals are that model's error, not faults (identify a twin of this {})", v.better)
+                              : fmt::format(" (this arm's: --robot {})", v.better));
   else if (v.poor())
     fmt::print(stderr,
                "WARNING: {}: the {}'s model reproduces the controller's own torque (target_moment) only to {:.2f} relative rms (J2 off by "
@@ -802,7 +805,7 @@ const device::ColumnMap* ColumnMaps::of(const std::string& recording) const {
 }
 
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
-                              double max_duration, bool quiet, const std::string& report_dir, const std::string& trend_csv,
+                              double max_duration, bool quiet, const std::string& trend_csv,
                               double link_ceiling) {
   Evaluation ev;
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
@@ -823,6 +826,18 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     if (scenarios.back().robot != twin.robot_name())
       throw InvalidArgument(fmt::format("{} runs robot '{}', the twin is of '{}': evaluate scores a twin on scenarios of its own robot",
                                         f, scenarios.back().robot, twin.robot_name()));
+    {
+      const sim::Scenario& sc = scenarios.back();
+      // a twin whose gains no known payload fixed has relative gains: a payload
+      // in kg cannot be added to it (monitor --payload-mass refuses it alike); added, it raised false
+      // payload alarms and let a collision by (review of session 48)
+      if (sc.options.payload_declared && sc.options.payload.mass > 0.0 && !twin.gains_known())
+        throw InvalidArgument(fmt::format(
+            "{} carries a declared payload of {:g} kg, and the twin was identified without a known payload that fixes its gains: its "
+            "current-to-torque gains are relative, so a payload in kg cannot be added to it. Evaluate it on scenarios without a payload, "
+            "or identify the twin again with a known payload ('twinwatch identify ... --known-payload REC.csv=MASS,CX,CY,CZ')",
+            sc.path, sc.options.payload.mass));
+    }
     for (const sim::FaultSpec& fs : scenarios.back().faults)
       if (fs.type == sim::FaultType::Collision) mag_min = std::min(mag_min, fs.magnitude), mag_max = std::max(mag_max, fs.magnitude);
   }
@@ -838,8 +853,11 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       continue;
     }
     const sim::Labels labels = sim::parse_labels(sim::labels_json(s), s.path + " (its labels)");
+    // what the program declares (a payload the controller is not told of is no more known to the
+    // twin's user: none; a twin with relative gains is refused one above)
+    const model::RigidBodyInertia declared = s.options.payload_declared ? s.options.payload : model::RigidBodyInertia{};
     ident::TwinModel t = twin;
-    t.set_payload(s.options.payload);  // what the program declares
+    t.set_payload(declared);
     monitor::MonitorConfig scfg = cfg;
     scfg.trend.cycle_period = s.trajectory->period();  // the program's cycle time
     // the thresholds learned for the program that runs: the one the file names (a set the twin must
@@ -1072,7 +1090,6 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                                                     : fmt::format("{} false alarm(s)", sc.false_alarms)));
       ev.scores.push_back(sc);
     }
-    (void)report_dir;
   }
   return ev;
 }
@@ -1094,6 +1111,12 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
     throw InvalidArgument(fmt::format("the collision sweep runs on six-joint arms (a UR's links and contact points); the twin's {} has {} "
                                       "joints: score its contacts with evaluate on scenarios of its own",
                                       twin.robot_name(), twin.n_dof()));
+  // its runs carry a declared 0.5 kg, which a twin with relative gains cannot take (evaluate_scenarios)
+  if (!twin.gains_known())
+    throw InvalidArgument("the collision sweep's runs carry a declared payload of 0.5 kg, and the twin was identified without a known "
+                          "payload that fixes its gains: its current-to-torque gains are relative, so a payload in kg cannot be added "
+                          "to it; identify the twin again with a known payload ('twinwatch identify ... --known-payload "
+                          "REC.csv=MASS,CX,CY,CZ')");
   // contact points and the onset phase of the library's collision scenarios, per link
   auto point_of = [](int link) -> std::string {
     if (link == 2) return "[-0.12, 0.0, 0.1]";
@@ -1125,7 +1148,7 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
       const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m), twin.robot_name());
       const device::Recording rec = simulate_to_memory(s, s.path);
       ident::TwinModel t = twin;
-      t.set_payload(s.options.payload);
+      t.set_payload(s.options.payload_declared ? s.options.payload : model::RigidBodyInertia{});
       for (int k = 0; k < 2; ++k) {
         monitor::MonitorConfig cfg = base;
         cfg.use_dynamic = k == 1;
@@ -1133,9 +1156,11 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
         monitor::Monitor mon(t, cfg);
         for (const auto& x : rec.samples) mon.push(x);
         mon.finish();
-        // detection: the first alert raised between the onset and onset + max_delay
+        // detection: the first alert raised between the onset and onset + max_delay. An alert that
+        // opened before the onset and spans it is a false alarm, not a detection after 0 ms (it
+        // was scored so until the review of session 48)
         for (const auto& e : mon.events()) {
-          const bool in_window = e.t_end >= onset - 0.01 && e.t_start <= onset + 0.05 + kWindowAfter;
+          const bool in_window = e.t_start >= onset - 0.01 && e.t_start <= onset + 0.05 + kWindowAfter;
           if (!in_window) {
             ++run.false_alarms[k];
             continue;

@@ -254,9 +254,9 @@ struct Evaluation {
 inline bool longer_than_max(const sim::Scenario& s, double max_duration) { return max_duration > 0 && s.options.duration > max_duration; }
 
 /// Runs every scenario file: simulate, monitor with `twin`, score against the labels.
-/// `max_duration` skips longer scenarios (0: none skipped). `report_dir` (may be empty) gets one
-/// HTML report per scenario. `trend_csv` (may be empty) gets the per-window wear-trend history
-/// of every scenario appended.
+/// `max_duration` skips longer scenarios (0: none skipped). `trend_csv` (may be empty) gets the
+/// per-window wear-trend history of every scenario appended. (A report of one run is `twinwatch
+/// report`'s, on a recording: `simulate` writes the scenario's.)
 /// `link_ceiling` > 0 (evaluation only): for every detected contact the diagnosis isolated, also
 /// name the link from the simulator's true joint impulse (J^T F over the pulse), exact and plus white
 /// noise at the sd the observer's estimate had on that contact, by the choices of kLinkReferenceNames:
@@ -266,7 +266,7 @@ inline bool longer_than_max(const sim::Scenario& s, double max_duration) { retur
 /// scenarios' range) with every joint read and with resting joints as uncertain as the friction
 /// they hold. The last is what the joint torques carry at that noise (docs/validation.md).
 Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<std::string>& files, bool static_threshold,
-                              double max_duration, bool quiet, const std::string& report_dir = "", const std::string& trend_csv = "",
+                              double max_duration, bool quiet, const std::string& trend_csv = "",
                               double link_ceiling = -1.0);
 
 /// Collision-sensitivity sweep [Cao §5]: contacts of decreasing magnitude on several links, each

@@ -105,24 +105,66 @@ double parse_iso_time(const std::string& text, const std::string& what) {
   return days * 86400.0 + static_cast<double>(3600 * hour + 60 * minute + second - zone_s) + fraction;
 }
 
-bool StreamWallClock::sample(double t, double now) {
+void StreamWallClock::restart(double t, double d) {
+  offset_ = d;
+  window_min_ = d;
+  window_start_ = t;
+  block_start_ = t;
+  block_min_ = d;
+  block_min_t_ = t;
+  ended_ = 0;
+  fast_ = slow_ = steady_ = 0;
+}
+
+StreamWallClock::Change StreamWallClock::sample(double t, double now) {
   const double d = now - t;
-  if (!std::isfinite(d)) return false;
-  if (!std::isfinite(offset_) || std::abs(d - offset_) > jump_s_) {
-    offset_ = d;
-    window_min_ = d;
-    window_start_ = t;
-    return true;
+  if (!std::isfinite(d)) return Change::none;
+  // (off pace, now − t moves by design: a jump is no restart then; a clock that went back is one)
+  if (!std::isfinite(offset_) || (!off_pace_ && std::abs(d - offset_) > jump_s_) || t < block_start_) {
+    restart(t, d);
+    off_pace_ = false;
+    return Change::started;
   }
   // within a window the best so far; at its end the window's own best (which may be later: drift)
   offset_ = std::min(offset_, d);
   window_min_ = std::min(window_min_, d);
-  if (t - window_start_ >= window_s_ || t < window_start_) {
+  if (t - window_start_ >= window_s_) {
     offset_ = window_min_;
     window_min_ = std::numeric_limits<double>::infinity();
     window_start_ = t;
   }
-  return false;
+  if (d < block_min_) block_min_ = d, block_min_t_ = t;
+  if (t - block_start_ < kBlockS) return Change::none;
+  // a block ended: its least delay against the one before it. Over Δt controller seconds this
+  // machine's clock ran Δt + Δ(now − t): a pace of Δt / (Δt + Δ(now − t))
+  const int k = std::min(ended_, kPaceSteps);
+  if (ended_ > kPaceSteps)
+    for (int i = 0; i < kPaceSteps; ++i) ended_min_[i] = ended_min_[i + 1], ended_t_[i] = ended_t_[i + 1];
+  ended_min_[k] = block_min_;
+  ended_t_[k] = block_min_t_;
+  ++ended_;
+  block_start_ = t;
+  block_min_ = std::numeric_limits<double>::infinity();
+  if (k == 0) return Change::none;
+  const double dt = ended_t_[k] - ended_t_[k - 1], wall = dt + ended_min_[k] - ended_min_[k - 1];
+  const double step_pace = wall > 0.0 ? dt / wall : std::numeric_limits<double>::infinity();
+  if (step_pace > 1.0 + kPaceTolerance) ++fast_, slow_ = steady_ = 0;
+  else if (step_pace < 1.0 - kPaceTolerance) ++slow_, fast_ = steady_ = 0;
+  else ++steady_, fast_ = slow_ = 0;
+  if (k == kPaceSteps) {
+    const double span = ended_t_[k] - ended_t_[0], span_wall = span + ended_min_[k] - ended_min_[0];
+    pace_ = span_wall > 0.0 ? span / span_wall : std::numeric_limits<double>::infinity();
+  }
+  if (!off_pace_ && (fast_ >= kPaceSteps || slow_ >= kPaceSteps)) {
+    off_pace_ = true;
+    return Change::off_pace;
+  }
+  if (off_pace_ && steady_ >= kPaceSteps) {
+    restart(t, d);
+    off_pace_ = false;
+    return Change::on_pace;
+  }
+  return Change::none;
 }
 
 }  // namespace twinwatch

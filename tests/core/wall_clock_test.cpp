@@ -92,7 +92,7 @@ TEST(WallClock, StreamOffsetIsTheLeastDelayedSampleAndFollowsDriftAndRestarts) {
     const double t = 42.0 + 0.002 * k;
     const double true_offset = boot + drift * (t - 42.0);
     const double d = delay(rng) + (k % 5000 == 17 ? 12.0 : 0.0);  // now and then a 12 s backlog
-    const bool fresh = clock.sample(t, true_offset + t + d);
+    const bool fresh = clock.sample(t, true_offset + t + d) == StreamWallClock::Change::started;
     EXPECT_EQ(fresh, first) << k;
     first = false;
     ASSERT_GE(clock.offset(), boot + drift * (t - 42.0) - 20.0 * drift - 1e-6) << k;  // (two windows of drift; a double at 1.7e9 resolves 0.24 µs)
@@ -101,8 +101,65 @@ TEST(WallClock, StreamOffsetIsTheLeastDelayedSampleAndFollowsDriftAndRestarts) {
     }
   }
   // the controller restarted: its clock counts from 0 again
-  EXPECT_TRUE(clock.sample(0.002, boot + 2000.0));
+  EXPECT_EQ(clock.sample(0.002, boot + 2000.0), StreamWallClock::Change::started);
   EXPECT_NEAR(clock.offset(), boot + 2000.0 - 0.002, 1e-6);
+}
+
+
+// A replay served at 8 times real time (serve-robot --speed 8): its least-delay offset would put
+// events seconds away from when they were seen, so the clock goes off pace (offset NaN) within
+// four blocks of 2 controller seconds, reads the pace, and reads the offset afresh once the stream
+// is back at real time. A monitor that stalls a second now and then and catches up stays in pace.
+TEST(WallClock, AStreamFasterThanRealTimeHasNoWallClockUntilItIsBackInPace) {
+  StreamWallClock clock(10.0, 30.0);
+  std::mt19937_64 rng(5);
+  std::exponential_distribution<double> delay(1.0 / 0.004);
+  const double boot = 1.7e9;
+  double wall = 100.0, t = 42.0;  // (this machine's clock less boot: 0.002 added to 1.7e9 rounds up 5 % of a µs each time)
+  int off_at = -1;
+  for (int k = 0; k < 500 * 40; ++k) {  // 40 controller seconds at 8x: 5 s of this machine's
+    t += 0.002;
+    wall += 0.002 / 8.0;
+    const StreamWallClock::Change c = clock.sample(t, boot + wall + delay(rng));
+    if (c == StreamWallClock::Change::off_pace) off_at = k;
+    EXPECT_NE(c, StreamWallClock::Change::on_pace) << k;
+  }
+  ASSERT_GE(off_at, 0);
+  EXPECT_LE(off_at, 500 * 10) << "off pace after four blocks (8 s) and the one it started in";
+  EXPECT_TRUE(clock.off_pace());
+  EXPECT_TRUE(std::isnan(clock.offset()));
+  EXPECT_NEAR(clock.pace(), 8.0, 0.08);
+  // back at real time: in pace again, and the offset is now − t
+  int on_at = -1;
+  for (int k = 0; k < 500 * 20; ++k) {
+    t += 0.002;
+    wall += 0.002;
+    if (clock.sample(t, boot + wall + delay(rng)) == StreamWallClock::Change::on_pace) on_at = k;
+  }
+  ASSERT_GE(on_at, 0);
+  EXPECT_LE(on_at, 500 * 10);
+  EXPECT_FALSE(clock.off_pace());
+  EXPECT_NEAR(clock.offset(), boot + wall - t, 0.001);
+  EXPECT_NEAR(clock.pace(), 1.0, 0.005);
+  // a monitor that stalls for 1 s every 15 s and then reads its backlog at 3 times real time
+  const double in_step = boot + wall - t;
+  for (int k = 0; k < 500 * 120; ++k) {
+    t += 0.002;
+    wall += 0.002;
+    // (stamped u s into the 15: read at 1 + u/3 while the backlog lasts, until u = 1.5)
+    const double u = std::fmod(t, 15.0), behind = u < 1.5 ? 1.0 - 2.0 * u / 3.0 : 0.0;
+    const StreamWallClock::Change c = clock.sample(t, boot + wall + behind + delay(rng));
+    EXPECT_EQ(c, StreamWallClock::Change::none) << k;
+  }
+  EXPECT_NEAR(clock.offset(), in_step, 0.001);
+  // a replay slower than real time (0.5x) goes off pace too
+  for (int k = 0; k < 500 * 12; ++k) {
+    t += 0.002;
+    wall += 0.004;
+    clock.sample(t, boot + wall + delay(rng));
+  }
+  EXPECT_TRUE(clock.off_pace());
+  EXPECT_NEAR(clock.pace(), 0.5, 0.01);
 }
 
 }  // namespace

@@ -497,21 +497,58 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.duration > 0 ? o.duration : 1e9);
     RobotSample s;
     auto last_sample = std::chrono::steady_clock::now();
-    // (a controller whose clock restarted, a reboot behind a reconnection: said once per restart)
+    // (a controller whose clock restarted, a reboot behind a reconnection: said once per restart; a
+    // stream that runs at another pace than this machine's clock, a replay faster than real time:
+    // no wall-clock time while it does, StreamWallClock)
     const auto read_wall_clock = [&](double t) {
       const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
       const bool had = std::isfinite(wall_offset);
-      if (live_clock.sample(t, now) && had && chatty)
-        fmt::print("{}{:9.3f} s  note: the controller's clock jumped (a restart?): wall-clock times are read afresh from here\n",
-                   iso_utc(now).substr(11, 12) + " UTC  ", t);
+      const std::string at = iso_utc(now).substr(11, 12) + " UTC  ";
+      switch (live_clock.sample(t, now)) {
+        case StreamWallClock::Change::started:
+          if (had && chatty)
+            fmt::print("{}{:9.3f} s  note: the controller's clock jumped (a restart?): wall-clock times are read afresh from here\n", at, t);
+          break;
+        case StreamWallClock::Change::off_pace:
+          if (chatty)
+            fmt::print("{}{:9.3f} s  note: the controller's clock runs {:.2f} times as fast as this machine's (a replay at another speed, "
+                       "or a monitor that falls behind its stream): events carry no wall-clock time while it does\n",
+                       at, t, live_clock.pace());
+          break;
+        case StreamWallClock::Change::on_pace:
+          if (chatty) fmt::print("{}{:9.3f} s  note: the controller's clock is back in pace with this machine's: wall-clock times again\n", at, t);
+          break;
+        case StreamWallClock::Change::none: break;
+      }
       wall_offset = live_clock.offset();
+    };
+    // Is the stream the twin's arm? A UR5e streamed to a UR3e's twin read as a payload change and
+    // said nothing else (review of session 48): its controller's torque along its targets is fitted
+    // to this arm's model and the other built-in arms' (ident::ArmCheck, 20 samples a second at
+    // 500 Hz) over the first 10 s of the stream in which the controller drives the arm, and a
+    // warning names the arm it fits, as a recording's scan does
+    std::optional<ident::ArmCheck> arm;
+    if (client->sample_fields() & kFieldTargetMoment) arm.emplace(twin.robot(), 25);
+    double arm_from = std::numeric_limits<double>::quiet_NaN();
+    const auto take = [&](RobotSample& sample) {
+      read_wall_clock(sample.timestamp);
+      if (arm) {
+        arm->add(sample);
+        if (std::isnan(arm_from)) arm_from = sample.timestamp;
+        if (sample.timestamp - arm_from >= 10.0) {
+          if (const ident::ArmVerdict v = arm->verdict(); v.own.samples >= 100) {
+            cli::warn_if_another_arm("rtde://" + o.rtde, twin.robot(), v, "the monitor");
+            arm.reset();
+          }
+        }
+      }
+      push(sample);
+      last_sample = std::chrono::steady_clock::now();
+      if (copy) copy->write(sample);
     };
     while (!cli::interrupted() && std::chrono::steady_clock::now() < end) {
       if (client->pop(s, std::chrono::milliseconds(50))) {
-        read_wall_clock(s.timestamp);
-        push(s);
-        last_sample = std::chrono::steady_clock::now();
-        if (copy) copy->write(s);
+        take(s);
       } else if (client->finished()) {
         break;
       } else if (!unstored.empty()) {
@@ -519,12 +556,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       }
     }
     client->stop();
-    while (client->pop(s, std::chrono::nanoseconds(0))) {  // what was received is still analysed
-      read_wall_clock(s.timestamp);
-      push(s);
-      last_sample = std::chrono::steady_clock::now();
-      if (copy) copy->write(s);
-    }
+    while (client->pop(s, std::chrono::nanoseconds(0))) take(s);  // what was received is still analysed
     // a connection lost and not restored before the end: that stretch was not watched, and the
     // event history must say so (a gap is otherwise only seen when data come back). With
     // --no-reconnect the loop ends at the disconnection: what is missing runs to the end asked for.
@@ -970,7 +1002,7 @@ int run_evaluate(const EvaluateOptions& o) {
   if (!o.save_twin.empty()) twin.save(o.save_twin);
   // (the wear trend's rows are appended scenario by scenario: the file starts empty)
   if (!o.trend_csv.empty()) write_text_file(o.trend_csv, "");
-  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, "", o.trend_csv, o.link_ceiling);
+  const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);
   return 0;
