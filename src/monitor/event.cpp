@@ -242,8 +242,25 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
       exec("ALTER TABLE events ADD COLUMN wall_offset REAL;", "cannot add the wall_offset column to the events table");
     if (!has("wall_start")) exec("ALTER TABLE events ADD COLUMN wall_start TEXT;", "cannot add the wall_start column to the events table");
     exec("CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY AUTOINCREMENT, started_at TEXT DEFAULT CURRENT_TIMESTAMP,"
-         " source TEXT, twin TEXT, program TEXT);",
+         " source TEXT, twin TEXT, program TEXT, ended_at TEXT, samples INTEGER, events INTEGER, status TEXT);",
          "cannot create the runs table");
+    // (session 50) how a run ended: a runs table from sessions 47-49 gets the columns; its rows read as not ended
+    {
+      std::vector<std::string> run_columns;
+      sqlite3_stmt* q = nullptr;
+      if (sqlite3_prepare_v2(impl_->db, "PRAGMA table_info(runs);", -1, &q, nullptr) == SQLITE_OK)
+        while (sqlite3_step(q) == SQLITE_ROW) {
+          const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(q, 1));
+          if (name) run_columns.emplace_back(name);
+        }
+      sqlite3_finalize(q);
+      for (const char* c : {"ended_at TEXT", "samples INTEGER", "events INTEGER", "status TEXT"}) {
+        const std::string_view col(c);
+        if (std::find(run_columns.begin(), run_columns.end(), col.substr(0, col.find(' '))) != run_columns.end()) continue;
+        const std::string sql = fmt::format("ALTER TABLE runs ADD COLUMN {};", c);
+        exec(sql.c_str(), "cannot add a column to the runs table");
+      }
+    }
     if (!existed) {
       exec("PRAGMA user_version = 1;", "cannot mark the event store's numbering");
     } else if (version == 0) {
@@ -270,6 +287,26 @@ EventStore::~EventStore() {
   if (impl_->db) sqlite3_close(impl_->db);
 }
 
+namespace {
+// Inserts the run's row (source, twin, program): SQLITE_DONE, or SQLite's code (BUSY/LOCKED: another
+// connection holds the store)
+int insert_run_row(sqlite3* db, const std::string& source, const std::string& twin, const std::string& program, long* id) {
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(db, "INSERT INTO runs (source, twin, program) VALUES (?,?,?);", -1, &raw, nullptr) != SQLITE_OK)
+    return sqlite3_errcode(db);
+  sqlite3_bind_text(raw, 1, source.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(raw, 2, twin.c_str(), -1, SQLITE_TRANSIENT);
+  if (program.empty()) sqlite3_bind_null(raw, 3);
+  else sqlite3_bind_text(raw, 3, program.c_str(), -1, SQLITE_TRANSIENT);
+  const int rc = sqlite3_step(raw);
+  sqlite3_finalize(raw);
+  if (rc == SQLITE_DONE) *id = static_cast<long>(sqlite3_last_insert_rowid(db));
+  return rc;
+}
+
+bool busy(int rc) { return (rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED; }
+}  // namespace
+
 void EventStore::insert(const Event& e, const std::string& source) {
   if (!try_insert(e, source, kBusyTimeoutMs))
     throw std::runtime_error(fmt::format("{}: cannot insert event: {} (another connection held it for {:g} s)", impl_->path,
@@ -289,24 +326,16 @@ bool EventStore::try_insert(const Event& e, const std::string& source, int wait_
       return false;
     }
     if (rc != SQLITE_OK) throw std::runtime_error(fmt::format("{}: cannot begin the run's row: {}", impl_->path, sqlite3_errmsg(impl_->db)));
-    sqlite3_stmt* raw = nullptr;
-    const auto rollback = [&](const char* what) {
+    long id = 0;
+    const int row = insert_run_row(impl_->db, impl_->run_source, impl_->run_twin, impl_->run_program, &id);
+    if (row != SQLITE_DONE) {
       const std::string why = sqlite3_errmsg(impl_->db);
-      if (raw) sqlite3_finalize(raw);
       sqlite3_exec(impl_->db, "ROLLBACK;", nullptr, nullptr, nullptr);
       sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
-      throw std::runtime_error(fmt::format("{}: {}: {}", impl_->path, what, why));
-    };
-    if (sqlite3_prepare_v2(impl_->db, "INSERT INTO runs (source, twin, program) VALUES (?,?,?);", -1, &raw, nullptr) != SQLITE_OK)
-      rollback("cannot prepare the run's row");
-    sqlite3_bind_text(raw, 1, impl_->run_source.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(raw, 2, impl_->run_twin.c_str(), -1, SQLITE_TRANSIENT);
-    if (impl_->run_program.empty()) sqlite3_bind_null(raw, 3);
-    else sqlite3_bind_text(raw, 3, impl_->run_program.c_str(), -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(raw) != SQLITE_DONE) rollback("cannot store the run's row");
-    sqlite3_finalize(raw);
-    raw = nullptr;
-    impl_->run = static_cast<long>(sqlite3_last_insert_rowid(impl_->db));
+      if (busy(row)) return false;
+      throw std::runtime_error(fmt::format("{}: cannot store the run's row: {}", impl_->path, why));
+    }
+    impl_->run = id;
   }
   sqlite3_stmt* s = impl_->insert;
   sqlite3_reset(s);
@@ -372,6 +401,104 @@ void EventStore::begin_run(const std::string& source, const std::string& twin, c
   impl_->run_source = source;
   impl_->run_twin = twin;
   impl_->run_program = program;
+  // the row now if the store is free (no wait: a reader's transaction must not stall a live monitor
+  // at its start); locked, it waits for the first event or the run's end
+  sqlite3_busy_timeout(impl_->db, 0);
+  long id = 0;
+  const int rc = insert_run_row(impl_->db, source, twin, program, &id);
+  sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs);
+  if (rc == SQLITE_DONE) {
+    impl_->run = id;
+    impl_->run_pending = false;
+  } else if (!busy(rc)) {
+    throw std::runtime_error(fmt::format("{}: cannot store the run's row: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  }
+}
+
+bool EventStore::end_run(const RunEnd& end, int wait_ms) {
+  if (!impl_->insert) throw std::logic_error(fmt::format("{}: the event store was opened for reading", impl_->path));
+  if (!impl_->run_pending && impl_->run == 0) throw std::logic_error(fmt::format("{}: end_run without begin_run", impl_->path));
+  sqlite3_busy_timeout(impl_->db, std::max(0, wait_ms));
+  const auto restore = [&] { sqlite3_busy_timeout(impl_->db, kBusyTimeoutMs); };
+  if (impl_->run_pending) {
+    long id = 0;
+    const int rc = insert_run_row(impl_->db, impl_->run_source, impl_->run_twin, impl_->run_program, &id);
+    if (rc != SQLITE_DONE) {
+      restore();
+      if (busy(rc)) return false;
+      throw std::runtime_error(fmt::format("{}: cannot store the run's row: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+    }
+    impl_->run = id;
+    impl_->run_pending = false;
+  }
+  sqlite3_stmt* raw = nullptr;
+  if (sqlite3_prepare_v2(impl_->db, "UPDATE runs SET ended_at = CURRENT_TIMESTAMP, samples = ?, events = ?, status = ? WHERE id = ?;", -1,
+                         &raw, nullptr) != SQLITE_OK) {
+    const std::string why = sqlite3_errmsg(impl_->db);
+    restore();
+    if (busy(sqlite3_errcode(impl_->db))) return false;
+    throw std::runtime_error(fmt::format("{}: cannot prepare the run's end: {}", impl_->path, why));
+  }
+  const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
+  sqlite3_bind_int64(raw, 1, end.samples);
+  sqlite3_bind_int64(raw, 2, end.events);
+  sqlite3_bind_text(raw, 3, end.status.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_int64(raw, 4, impl_->run);
+  const int rc = sqlite3_step(raw);
+  restore();
+  if (rc == SQLITE_DONE) return true;
+  if (busy(rc)) return false;
+  throw std::runtime_error(fmt::format("{}: cannot store the run's end: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+}
+
+std::vector<StoredRun> EventStore::read_runs() const {
+  std::vector<StoredRun> out;
+  sqlite3_stmt* q = nullptr;
+  if (sqlite3_prepare_v2(impl_->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'runs';", -1, &q, nullptr) != SQLITE_OK)
+    throw std::runtime_error(fmt::format("{}: cannot read the runs: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  const bool exists = sqlite3_step(q) == SQLITE_ROW;
+  sqlite3_finalize(q);
+  if (!exists) return out;  // a store from before session 47
+  std::vector<std::string> columns;
+  if (sqlite3_prepare_v2(impl_->db, "PRAGMA table_info(runs);", -1, &q, nullptr) == SQLITE_OK)
+    while (sqlite3_step(q) == SQLITE_ROW) {
+      const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(q, 1));
+      if (name) columns.emplace_back(name);
+    }
+  sqlite3_finalize(q);
+  const auto col = [&](const char* c) { return std::find(columns.begin(), columns.end(), c) != columns.end() ? c : "NULL"; };
+  const std::string sel = fmt::format("SELECT id, started_at, source, twin, program, {}, {}, {}, {} FROM runs ORDER BY id;", col("ended_at"),
+                                      col("samples"), col("events"), col("status"));
+  if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &q, nullptr) != SQLITE_OK)
+    throw std::runtime_error(fmt::format("{}: cannot read the runs: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(q, &sqlite3_finalize);
+  const auto text = [&](int c) {
+    const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(q, c));
+    return std::string(t ? t : "");
+  };
+  const auto whole = [&](int c, long id, const char* name) -> long {
+    const int type = sqlite3_column_type(q, c);
+    if (type == SQLITE_NULL) return -1;
+    if (type != SQLITE_INTEGER)
+      throw std::runtime_error(fmt::format("{}: runs row {}: column '{}' holds '{}', expected a whole number", impl_->path, id, name, text(c)));
+    return static_cast<long>(sqlite3_column_int64(q, c));
+  };
+  int rc;
+  while ((rc = sqlite3_step(q)) == SQLITE_ROW) {
+    StoredRun r;
+    r.id = static_cast<long>(sqlite3_column_int64(q, 0));
+    r.started_at = text(1);
+    r.source = text(2);
+    r.twin = text(3);
+    r.program = text(4);
+    r.ended_at = text(5);
+    r.samples = whole(6, r.id, "samples");
+    r.events = whole(7, r.id, "events");
+    r.status = text(8);
+    out.push_back(std::move(r));
+  }
+  if (rc != SQLITE_DONE) throw std::runtime_error(fmt::format("{}: cannot read the runs: {}", impl_->path, sqlite3_errmsg(impl_->db)));
+  return out;
 }
 
 long EventStore::run() const { return impl_->run; }

@@ -22,6 +22,16 @@ add_test(NAME cli.events_missing_store COMMAND twinwatch events --db ${d}/no_suc
 set_tests_properties(cli.events_missing_store PROPERTIES PASS_REGULAR_EXPRESSION "no_such_events.db: no such event store")
 add_test(NAME cli.events_bad_class COMMAND twinwatch events --db ${d}/events_collision.db --class earthquake)
 set_tests_properties(cli.events_bad_class PROPERTIES FIXTURES_REQUIRED collision_db PASS_REGULAR_EXPRESSION "'earthquake' is unknown")
+# every monitoring run has its row, the event-free ones too (review, session 49: a healthy run left no
+# trace in the store): a healthy run then a collision into one store, listed by --runs with samples,
+# events and how each ended; --class does not apply to runs
+add_test(NAME cli.events_runs COMMAND sh -c "rm -f ${d}/events_runs.db; \
+$0 monitor --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events_runs.db -q && \
+$0 monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events_runs.db -q && \
+$0 events --db ${d}/events_runs.db --runs && $0 events --db ${d}/events_runs.db --runs --json --last 1 && \
+$0 events --db ${d}/events_runs.db --runs --class collision" $<TARGET_FILE:twinwatch>)
+set_tests_properties(cli.events_runs PROPERTIES FIXTURES_REQUIRED "twin;recordings;collision_recording"
+  PASS_REGULAR_EXPRESSION "run started \\(UTC\\) +ended \\(UTC\\) +samples +events +status +source\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +0 finished +[^\n]*fig.csv\n +2 [^\n]* +[1-9][0-9]+ +[1-9] finished +[^\n]*collision.csv\n2 run\\(s\\) of 2 stored in [^\n]*events_runs.db\n[{]\"ended_at\":\"[0-9-]+ [0-9:]+ UTC\",\"events\":[1-9],\"program\":null,\"run\":2,\"samples\":[1-9][0-9]+,[^\n]*\"status\":\"finished\"[^\n]*\n[^\n]*--class filters events. --runs lists the monitoring runs")
 # wall-clock times (session 48): a recording watched with --started-at gives its events the wall
 # time of each (t − the first sample's t after the time given, here +01:00 read as 07:00 UTC), the
 # printed lines start with the time of day, and the store keeps it (a column of 'events'); a time

@@ -185,35 +185,64 @@ TEST(EventStore, AnInsertWaitsForAnotherConnectionsLock) {
 }
 
 // two monitoring runs into one store are told apart (review, session 47: their rows were alike but
-// for the storage time); the run's row is written with its first event, and waits with it while
-// another connection holds a reader's transaction (a live monitor must not stall at its start)
-TEST(EventStore, EachRunsEventsCarryItsNumberAndTheRunsRowWaitsWithTheFirstEvent) {
+// for the storage time); the run's row is written when the run begins, so that a run without events
+// is on record too (review, session 49), and ends with its samples, events and status. While another
+// connection holds a reader's transaction the row is not waited for at the start (a live monitor
+// must not stall there): it waits with the first event, or for the run's end.
+TEST(EventStore, EachRunHasItsRowFromItsStartAndItsEventsCarryItsNumber) {
   const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_runs_test.db";
   std::filesystem::remove(path);
   Event e;
   e.fault = FaultClass::Collision;
   e.detail = "contact on link 3";
+  const auto hold_reader_lock = [&](sqlite3** other) {
+    ASSERT_EQ(sqlite3_open(path.string().c_str(), other), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(*other, "BEGIN; SELECT count(*) FROM events;", nullptr, nullptr, nullptr), SQLITE_OK);
+  };
+  const auto release = [](sqlite3* other) {
+    sqlite3_exec(other, "COMMIT;", nullptr, nullptr, nullptr);
+    sqlite3_close(other);
+  };
   {
     EventStore store(path.string());
     store.insert(e, "before.csv");  // (no run begun: NULL)
+    EXPECT_THROW(store.end_run({}, 0), std::logic_error);
     store.begin_run("rec.csv", "twin.json", "");
-    EXPECT_EQ(store.run(), 0);
+    EXPECT_EQ(store.run(), 1) << "a free store gets the run's row at once";
     store.insert(e, "rec.csv");
     store.insert(e, "rec.csv");
-    EXPECT_EQ(store.run(), 1);
+    EXPECT_TRUE(store.end_run({25000, 2, "finished"}, 50));
   }
   {
     EventStore store(path.string());
-    store.begin_run("rec.csv", "twin.json", "pick_place");
     sqlite3* other = nullptr;
-    ASSERT_EQ(sqlite3_open(path.string().c_str(), &other), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(other, "BEGIN; SELECT count(*) FROM events;", nullptr, nullptr, nullptr), SQLITE_OK);  // a reader's lock
+    hold_reader_lock(&other);
+    const auto t0 = std::chrono::steady_clock::now();
+    store.begin_run("rec.csv", "twin.json", "pick_place");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0) << "begin_run waited for the lock";
+    EXPECT_EQ(store.run(), 0);
     EXPECT_FALSE(store.try_insert(e, "rec.csv", 50));  // locked: neither the run's row nor the event
     EXPECT_EQ(store.run(), 0);
-    sqlite3_exec(other, "COMMIT;", nullptr, nullptr, nullptr);
-    sqlite3_close(other);
+    release(other);
     EXPECT_TRUE(store.try_insert(e, "rec.csv", 50));
     EXPECT_EQ(store.run(), 2);
+    EXPECT_TRUE(store.end_run({500, 1, "stopped"}, 50));
+  }
+  {
+    // a run without events, begun and ended while the store is locked: its row waits for the lock
+    EventStore store(path.string());
+    sqlite3* other = nullptr;
+    hold_reader_lock(&other);
+    store.begin_run("rtde://10.0.0.7", "twin.json", "");
+    EXPECT_FALSE(store.end_run({120000, 0, "connection lost"}, 50));
+    EXPECT_EQ(store.run(), 0);
+    release(other);
+    EXPECT_TRUE(store.end_run({120000, 0, "connection lost"}, 50));
+    EXPECT_EQ(store.run(), 3);
+  }
+  {
+    EventStore store(path.string());
+    store.begin_run("killed.csv", "twin.json", "");  // (the monitor never ended it)
   }
   const EventStore reader(path.string(), EventStore::Mode::Read);
   const auto rows = reader.read();
@@ -222,15 +251,66 @@ TEST(EventStore, EachRunsEventsCarryItsNumberAndTheRunsRowWaitsWithTheFirstEvent
   EXPECT_EQ(rows[1].run, 1);
   EXPECT_EQ(rows[2].run, 1);
   EXPECT_EQ(rows[3].run, 2);
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(path.string().c_str(), &db), SQLITE_OK);
-  sqlite3_stmt* q = nullptr;
-  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT count(*), max(program) FROM runs;", -1, &q, nullptr), SQLITE_OK);
-  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(q, 0), 2);  // (the attempt that was locked left no row)
-  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(q, 1)), "pick_place");
-  sqlite3_finalize(q);
-  sqlite3_close(db);
+  const auto runs = reader.read_runs();
+  ASSERT_EQ(runs.size(), 4u) << "(the attempts that were locked left no row)";
+  EXPECT_EQ(runs[0].id, 1);
+  EXPECT_EQ(runs[0].source, "rec.csv");
+  EXPECT_EQ(runs[0].twin, "twin.json");
+  EXPECT_EQ(runs[0].program, "");
+  EXPECT_EQ(runs[0].samples, 25000);
+  EXPECT_EQ(runs[0].events, 2);
+  EXPECT_EQ(runs[0].status, "finished");
+  EXPECT_EQ(runs[0].started_at.size(), 19u);
+  EXPECT_GE(runs[0].ended_at, runs[0].started_at);
+  EXPECT_EQ(runs[1].program, "pick_place");
+  EXPECT_EQ(runs[1].status, "stopped");
+  EXPECT_EQ(runs[2].source, "rtde://10.0.0.7");
+  EXPECT_EQ(runs[2].events, 0);
+  EXPECT_EQ(runs[2].samples, 120000);
+  EXPECT_EQ(runs[2].status, "connection lost");
+  EXPECT_EQ(runs[3].source, "killed.csv");
+  EXPECT_EQ(runs[3].ended_at, "");
+  EXPECT_EQ(runs[3].samples, -1);
+  EXPECT_EQ(runs[3].status, "");
+  std::filesystem::remove(path);
+}
+
+// a runs table of sessions 47-49 (no ended_at, samples, events, status) gains the columns, its rows
+// read as not ended; a count that is no whole number is named with its row and column
+TEST(EventStore, AnOlderRunsTableGainsHowARunEnded) {
+  const auto path = std::filesystem::temp_directory_path() / "twinwatch_event_store_old_runs.db";
+  std::filesystem::remove(path);
+  run_sql(path,
+          "CREATE TABLE events (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
+          " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
+          " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL,"
+          " active_at_stop INTEGER, run INTEGER, wall_offset REAL, wall_start TEXT);"
+          "CREATE TABLE runs (id INTEGER PRIMARY KEY AUTOINCREMENT, started_at TEXT DEFAULT CURRENT_TIMESTAMP,"
+          " source TEXT, twin TEXT, program TEXT);"
+          "INSERT INTO runs (source, twin, program) VALUES ('old.csv', 'twin.json', NULL);"
+          "PRAGMA user_version = 1;");
+  {
+    const EventStore reader(path.string(), EventStore::Mode::Read);  // (read-only: nothing added)
+    const auto runs = reader.read_runs();
+    ASSERT_EQ(runs.size(), 1u);
+    EXPECT_EQ(runs[0].source, "old.csv");
+    EXPECT_EQ(runs[0].samples, -1);
+  }
+  {
+    EventStore store(path.string());
+    store.begin_run("new.csv", "twin.json", "");
+    EXPECT_EQ(store.run(), 2);
+    EXPECT_TRUE(store.end_run({10, 0, "finished"}, 50));
+    const auto runs = store.read_runs();
+    ASSERT_EQ(runs.size(), 2u);
+    EXPECT_EQ(runs[0].ended_at, "");
+    EXPECT_EQ(runs[1].samples, 10);
+    EXPECT_EQ(runs[1].status, "finished");
+  }
+  run_sql(path, "UPDATE runs SET samples = 'many' WHERE id = 1;");
+  const EventStore reader(path.string(), EventStore::Mode::Read);
+  EXPECT_THAT([&] { reader.read_runs(); },
+              ::testing::ThrowsMessage<std::runtime_error>(::testing::HasSubstr("runs row 1: column 'samples' holds 'many', expected a whole number")));
   std::filesystem::remove(path);
 }
 

@@ -25,6 +25,7 @@ struct EventsOptions {
   int last = 0;        // only the newest N (0 = all)
   long run = 0;        // only this monitoring run (0 = all)
   bool json = false;
+  bool runs = false;   // the monitoring runs instead of the events
   bool fault_given = false;  // --class '' (an unset variable) listed every class
 };
 
@@ -56,6 +57,37 @@ std::string cut_left(const std::string& s, size_t width) {
   return s.size() > width ? "…" + s.substr(s.size() - (width - 1)) : s;
 }
 
+// `events --runs`: one line per monitoring run, the event-free ones included
+void list_runs(const monitor::EventStore& store, const EventsOptions& o) {
+  auto runs = store.read_runs();
+  std::erase_if(runs, [&](const monitor::StoredRun& r) {
+    return (!o.source.empty() && r.source.find(o.source) == std::string::npos) || (o.run > 0 && r.id != o.run);
+  });
+  if (o.last > 0 && runs.size() > static_cast<size_t>(o.last)) runs.erase(runs.begin(), runs.end() - o.last);
+  const auto utc = [](const std::string& t) { return t.empty() ? nlohmann::json(nullptr) : nlohmann::json(t + " UTC"); };
+  const auto count = [](long n) { return n < 0 ? nlohmann::json(nullptr) : nlohmann::json(n); };
+  if (o.json) {
+    for (const auto& r : runs)
+      fmt::print("{}\n", nlohmann::json{{"run", r.id}, {"started_at", utc(r.started_at)}, {"ended_at", utc(r.ended_at)},
+                                         {"source", r.source}, {"twin", r.twin},
+                                         {"program", r.program.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.program)},
+                                         {"samples", count(r.samples)}, {"events", count(r.events)},
+                                         {"status", r.status.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.status)}}
+                                .dump());
+    return;
+  }
+  fmt::print("{:>4} {:<19} {:<19} {:>10} {:>6} {:<15} {}\n", "run", "started (UTC)", "ended (UTC)", "samples", "events", "status", "source");
+  for (const auto& r : runs)
+    fmt::print("{:>4} {:<19} {:<19} {:>10} {:>6} {:<15} {}{}\n", r.id, r.started_at, r.ended_at.empty() ? "-" : r.ended_at,
+               r.samples < 0 ? "-" : std::to_string(r.samples), r.events < 0 ? "-" : std::to_string(r.events),
+               // a run whose end is not on record: still running, or killed
+               r.status.empty() ? "not ended" : r.status, shown_source(r.source), r.program.empty() ? "" : " (program " + r.program + ")");
+  fmt::print("{} run(s) of {} stored in {}{}\n", runs.size(), store.read_runs().size(), o.db,
+             std::any_of(runs.begin(), runs.end(), [](const monitor::StoredRun& r) { return r.status.empty(); })
+                 ? " ('not ended': still running, or the monitor was killed before it could store the end)"
+                 : "");
+}
+
 void run_events(const EventsOptions& o) {
   if (o.fault_given && o.fault.empty())
     throw InvalidArgument("--class is empty: give one of collision, resistance, payload_change, sensor_fault, stream_fault, wear, unknown");
@@ -64,6 +96,11 @@ void run_events(const EventsOptions& o) {
     throw InvalidArgument(fmt::format("{}: no such event store ('twinwatch monitor --db {}' writes one)", o.db, o.db));
   if (o.last < 0) throw InvalidArgument(fmt::format("--last is {}, must be >= 0", o.last));
   const monitor::EventStore store(o.db, monitor::EventStore::Mode::Read);
+  if (o.runs) {
+    if (!o.fault.empty()) throw InvalidArgument("--class filters events; --runs lists the monitoring runs: give one of them");
+    list_runs(store, o);
+    return;
+  }
   auto rows = store.read();
   std::erase_if(rows, [&](const monitor::StoredEvent& r) {
     return (!o.fault.empty() && monitor::to_string(r.event.fault) != o.fault) ||
@@ -124,6 +161,8 @@ twinwatch::cli::VerbRegistrar reg{"events", 44, [](CLI::App& app) {
   sub->add_option("--run", o->run, "Only the events of this monitoring run (the number 'monitor' prints with its summary; 0: all)")
       ->check(twinwatch::cli::whole_number(0, 1'000'000'000'000L))
       ->capture_default_str();
+  sub->add_flag("--runs", o->runs, "List the monitoring runs instead (started, ended, samples, events, status, source), those without events "
+                                   "included; --source, --run, --last and --json apply");
   sub->add_flag("--json", o->json, "One JSON object per line (the monitor's --events format, wall_start/wall_detected/wall_end included, plus \"source\", \"recorded_at\" and \"run\", null for rows from before runs were stored)");
   sub->footer(twinwatch::cli::with_exit_status(
       "A contact's link reads '3 (or 4)' when the joint torques cannot tell link 3 from link 4 (a force whose line\n"

@@ -326,11 +326,15 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       }
     }
   } unwind_store{[&] {
-    if (end_tried) return;
-    store_the_rest();
-    if (!unstored.empty())
-      fmt::print(stderr, "error: {}: {} event(s) not stored{}\n", o.db_path, unstored.size(),
-                 o.events_path.empty() ? "" : " (they are in " + o.events_path + ")");
+    if (!store) return;
+    if (!end_tried) {
+      store_the_rest();
+      if (!unstored.empty())
+        fmt::print(stderr, "error: {}: {} event(s) not stored{}\n", o.db_path, unstored.size(),
+                   o.events_path.empty() ? "" : " (they are in " + o.events_path + ")");
+    }
+    // the run's row says it failed (what failed is on stderr)
+    store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), "failed"}, kEndLockWaitMs);
   }};
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
@@ -585,8 +589,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
-  if (hooks.on_status)
-    hooks.on_status(mon, lost_at_end ? "connection lost" : replay_stopped || (client && cli::interrupted()) ? "stopped" : "finished", stream_line());
+  const char* status = lost_at_end ? "connection lost" : replay_stopped || (client && cli::interrupted()) ? "stopped" : "finished";
+  if (hooks.on_status) hooks.on_status(mon, status, stream_line());
   close_written(jl, o.events_path);
   if (store && !unstored.empty()) {
     store_the_rest();
@@ -594,6 +598,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       throw std::runtime_error(fmt::format("{}: {} event(s) not stored: another connection held the store locked to the end{}", o.db_path,
                                            unstored.size(), o.events_path.empty() ? "" : " (they are in " + o.events_path + ")"));
   }
+  // the run's row: how it ended, with or without events ('twinwatch events --runs')
+  if (store && !store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), status}, kEndLockWaitMs))
+    log::warn(fmt::format("{}: the run's end (samples, events, status) is not stored: another connection held the store locked for {:g} s",
+                          o.db_path, kEndLockWaitMs / 1000.0));
   close_written(trace, o.trace);
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
   const double declared = mon.declared_payload(), ended = mon.twin().payload().mass;

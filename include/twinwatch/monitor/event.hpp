@@ -93,6 +93,22 @@ struct StoredEvent {
   long run = 0;             ///< the monitoring run that stored it (EventStore::begin_run); 0: none (a row from before session 47)
 };
 
+/// How a monitoring run ended (EventStore::end_run).
+struct RunEnd {
+  long samples = 0;    ///< samples the monitor received
+  long events = 0;     ///< events it found
+  std::string status;  ///< "finished", "stopped" (an operator's stop) or "connection lost"
+};
+
+/// A row of the store's `runs` table.
+struct StoredRun {
+  long id = 0;
+  std::string started_at, ended_at;  ///< "YYYY-MM-DD HH:MM:SS" UTC; ended_at "" while running, or when the monitor did not end it (killed, failed)
+  std::string source, twin, program;  ///< what was watched, the twin file, the program ("" if none given)
+  long samples = -1, events = -1;     ///< -1: not ended
+  std::string status;                 ///< RunEnd::status; "" if not ended
+};
+
 /// SQLite event store (embedded; default file events.db). Thread-compatible, not for RT loops:
 /// the monitor hands events to it from the consumer side.
 class EventStore {
@@ -116,14 +132,24 @@ class EventStore {
   EventStore(const EventStore&) = delete;
   EventStore& operator=(const EventStore&) = delete;
 
-  /// Starts a monitoring run: the first event inserted after it writes a row of the `runs` table
-  /// (id, started_at UTC, source, twin, program), whose id it and every later event carry in their
-  /// `run` column, so that two runs of the same recording into one store are told apart. The row is
-  /// written with the first event, under the same wait for another connection's lock: a reader's
-  /// transaction must not stall a live monitor at its start either.
+  /// Starts a monitoring run: writes a row of the `runs` table (id, started_at UTC, source, twin,
+  /// program), whose id every later event carries in its `run` column, so that two runs of the same
+  /// recording into one store are told apart and a run without events is on record too. The row is
+  /// written at once if the store is free; when another connection holds it, it is not waited for
+  /// (a reader's transaction must not stall a live monitor at its start): it is written with the
+  /// first event, under that event's wait, or by end_run().
   void begin_run(const std::string& source, const std::string& twin, const std::string& program);
-  /// The run's id once its first event is stored; 0 before.
+  /// Ends the run begun: its row gets ended_at (UTC), samples, events and status (written first if
+  /// it is still pending). Waits at most `wait_ms` for another connection's lock: false if the store
+  /// stayed locked (nothing changed); throws std::runtime_error on any other failure, and
+  /// std::logic_error without begin_run.
+  bool end_run(const RunEnd& end, int wait_ms);
+  /// The run's id once its row is stored; 0 before.
   long run() const;
+  /// Every row of the `runs` table, oldest first (empty for a store from before runs were kept; a
+  /// row from before session 50 reads as not ended). Throws std::runtime_error naming the file, the
+  /// row and the column when a count is not a whole number.
+  std::vector<StoredRun> read_runs() const;
   /// Inserts an event (source names the run, e.g. the recording file or the robot address).
   /// Waits up to 10 s for another connection's lock, then throws std::runtime_error naming the file.
   void insert(const Event& e, const std::string& source);
