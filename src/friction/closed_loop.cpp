@@ -7,6 +7,7 @@
 #include <random>
 
 #include "twinwatch/core/error.hpp"
+#include "twinwatch/friction/protocol.hpp"
 #include "twinwatch/friction/study.hpp"
 #include "twinwatch/signal/savitzky_golay.hpp"
 
@@ -44,6 +45,7 @@ void AdaptivePdGains::validate() const {
 
 void ClosedLoopOptions::validate() const {
   check_positive("inertia", inertia);
+  check_positive("model_inertia", model_inertia);
   check_positive("kv", kv);
   check_nonnegative("ki", ki);
   check_positive("dt", dt);
@@ -149,7 +151,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
           }
         }
       }
-      const double tau_d = o.inertia * acc(t + 0.5 * o.dt) + f_hat;
+      const double tau_d = o.model_inertia * acc(t + 0.5 * o.dt) + f_hat;
       // the current-based torque estimate of the last period (its mean motor torque, noisy), compared
       // with the tau_d of that period (time-aligned), both low-passed by the same filter
       const double tau_raw = u_mean + noise(rng);
@@ -202,7 +204,7 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
     for (std::size_t k = 0; k < m; ++k) {
       run.measured.qd[k] = (q_enc[k + 1] - q_enc[k]) / o.dt;
       // I qdd = u - tau_f over the period: mean tau_f = mean u - I (qd(end) - qd(start)) / dt
-      run.measured.tau[k] = tau_rec[k] - o.inertia * (v[k + 1] - v[k]) / o.dt;
+      run.measured.tau[k] = tau_rec[k] - o.model_inertia * (v[k + 1] - v[k]) / o.dt;
     }
   }
   // Table X: tracking RMSE; Table XI: per-segment RMSE mean, +-window at desired reversals
@@ -235,12 +237,15 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
   return run;
 }
 
-ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint) {
+ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint, double model_inertia) {
+  if (!std::isfinite(model_inertia) || model_inertia <= 0.0)
+    throw InvalidArgument(fmt::format("{}: model inertia is {}, must be > 0 [kg·m^2]", joint.name, model_inertia));
   // inner loop bandwidth typical of a commercial joint velocity loop (~9 Hz), PI zero at 1 Hz
   constexpr double kBandwidth = 55.0;  // [rad/s]
   constexpr double kIntegralRatio = 6.0;  // ki / kv [1/s]
   ClosedLoopOptions o;
-  o.inertia = joint.name == "J1" ? 0.45 : joint.name == "J2" ? 0.60 : 0.20;
+  o.inertia = simulated_rigid_body(joint).inertia;
+  o.model_inertia = model_inertia;
   o.kv = kBandwidth * o.inertia;
   o.ki = kIntegralRatio * o.kv;
   // eq. 20 gains from the stability of the torque loop alone, the same for every model: through the
@@ -254,6 +259,12 @@ ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint) {
   o.gains.lambda = 4.0;
   o.torque_noise = joint.torque_noise;
   return o;
+}
+
+double identified_inertia(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
+  const ProtocolRecords r = simulated_protocol_records(joint, seed, training);
+  const JointRecord* recs[] = {&r.train, &r.fourier, &r.chirp};
+  return fit_rigid_body(recs).inertia;
 }
 
 VelocityProfile closed_loop_profile(unsigned seed) {

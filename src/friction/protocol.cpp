@@ -230,15 +230,15 @@ ProtocolResult run_hesr_protocol(const ProtocolRecords& r, const ProtocolOptions
   return out;
 }
 
+SimulatedRigidBody simulated_rigid_body(const SimulatedJoint& joint) {
+  // in the spirit of a base, shoulder and elbow joint
+  return joint.name == "J1"   ? SimulatedRigidBody{0.45, 0.0, 0.0, 0.3}
+         : joint.name == "J2" ? SimulatedRigidBody{0.60, -22.0, 2.5, -0.4}
+                              : SimulatedRigidBody{0.20, -7.0, 0.8, 0.2};
+}
+
 ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned seed, TrainingExcitation training) {
-  // a rigid body per joint in the spirit of a base, shoulder and elbow joint: a vertical base
-  // axis sees no gravity, the shoulder the largest gravity torque; values in N·m and kg·m^2
-  struct Rigid {
-    double I, gs, gc, c;
-  };
-  const Rigid rb = joint.name == "J1" ? Rigid{0.45, 0.0, 0.0, 0.3}
-                 : joint.name == "J2" ? Rigid{0.60, -22.0, 2.5, -0.4}
-                                      : Rigid{0.20, -7.0, 0.8, 0.2};
+  const SimulatedRigidBody rb = simulated_rigid_body(joint);
   // the same profiles and seeds as simulated_study_data()
   constexpr double kDuration = 20.0, kVelocity = 1.2, kFourierBase = 0.1;
   constexpr int kHarmonics = 5;
@@ -254,7 +254,8 @@ ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned
     jr.tau.resize(sr.q.size());
     // measured torque: rigid body at the true state plus the noisy friction measurement
     for (std::size_t k = 0; k < jr.tau.size(); ++k)
-      jr.tau[k] = rb.I * sr.true_qdd[k] + rb.gs * std::sin(sr.true_q[k]) + rb.gc * std::cos(sr.true_q[k]) + rb.c +
+      jr.tau[k] = rb.inertia * sr.true_qdd[k] + rb.gravity_sin * std::sin(sr.true_q[k]) +
+                  rb.gravity_cos * std::cos(sr.true_q[k]) + rb.offset +
                   sr.record.tau[k];
     if (freq) *freq = sr.frequency;
     return jr;

@@ -7,9 +7,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <string>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/friction/lugre.hpp"
+#include "twinwatch/friction/protocol.hpp"
 
 namespace twinwatch::friction {
 namespace {
@@ -54,11 +57,24 @@ class ScaledTruth final : public FrictionModel {
   double dt_ = 0.005;
 };
 
+// The loop options of a study joint with the inertia the twin identifies from the joint's records
+// (one fit per joint), as `friction-study --closed-loop` runs it.
+ClosedLoopOptions identified_options(const SimulatedJoint& joint) {
+  static std::map<std::string, double> inertia;
+  if (!inertia.contains(joint.name)) inertia[joint.name] = identified_inertia(joint, kSeed);
+  return closed_loop_options_for(joint, inertia[joint.name]);
+}
+
+// The same with the rigid body identified exactly: the cases whose exact answer is known.
+ClosedLoopOptions exact_options(const SimulatedJoint& joint) {
+  return closed_loop_options_for(joint, simulated_rigid_body(joint).inertia);
+}
+
 class ClosedLoopJoint : public ::testing::TestWithParam<int> {};
 
 TEST_P(ClosedLoopJoint, TrueFrictionFeedForwardTracksBest) {
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
-  const ClosedLoopOptions o = closed_loop_options_for(joint);
+  const ClosedLoopOptions o = identified_options(joint);
   const VelocityProfile desired = closed_loop_profile(kSeed);
   const ClosedLoopRun none = run_closed_loop(joint.truth, desired, nullptr, o, false);
   const ClosedLoopRun baseline = run_closed_loop(joint.truth, desired, nullptr, o, true);
@@ -82,7 +98,7 @@ TEST_P(ClosedLoopJoint, WithTheExactModelTheTorqueErrorVanishesOnThePath) {
   // eq. 19 PD has little to add (without noise the error stays near the feed-forward's), and beyond
   // the gain margin (kv K_p^max = 2, past the sampled loop's limit of 1) it destabilises the loop
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
-  ClosedLoopOptions o = closed_loop_options_for(joint);
+  ClosedLoopOptions o = identified_options(joint);
   o.torque_noise = 0.0;
   ClosedLoopOptions off = o, high = o;
   off.gains.kp_min = off.gains.kp_max = off.gains.kd_max = 0.0;
@@ -103,7 +119,7 @@ TEST_P(ClosedLoopJoint, WithTheExactModelTheTorqueErrorVanishesOnThePath) {
 TEST_P(ClosedLoopJoint, TrackingErrorGrowsWithTheModelError) {
   // the model's error is the only thing that differs: over- and under-prediction alike
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
-  const ClosedLoopOptions o = closed_loop_options_for(joint);
+  const ClosedLoopOptions o = identified_options(joint);
   const VelocityProfile desired = closed_loop_profile(kSeed);
   const auto rmse = [&](double eps) {
     ScaledTruth m(joint.truth, eps);
@@ -122,7 +138,7 @@ TEST_P(ClosedLoopJoint, Eq19AloneCannotFeedTheModelForward) {
   // tracking error (I (qdd_d - qdd) + f(qd_d) - f(qd)): feedback, no feed-forward, so even the
   // true friction does not beat sending qd_d alone by more than the noise of the comparison
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
-  ClosedLoopOptions o = closed_loop_options_for(joint);
+  ClosedLoopOptions o = identified_options(joint);
   o.inverse_feedforward = false;
   const VelocityProfile desired = closed_loop_profile(kSeed);
   const ClosedLoopRun none = run_closed_loop(joint.truth, desired, nullptr, o, false);
@@ -142,7 +158,7 @@ struct ViscousJoint {
 };
 ViscousJoint viscous_joint(std::size_t index, double sigma2) {
   const SimulatedJoint joint = simulated_study_joints()[index];
-  ViscousJoint v{joint.truth, closed_loop_options_for(joint)};
+  ViscousJoint v{joint.truth, exact_options(joint)};
   v.truth.Fc = v.truth.Fs = 1e-9;
   v.truth.sigma2 = sigma2;
   v.options.torque_noise = 0.0;
@@ -199,7 +215,7 @@ TEST(ClosedLoop, TheMeasuredRecordIsTheFrictionAlongTheMotion) {
 // (another element count, or the same count with other parameters) is refused.
 TEST(ClosedLoop, ATrialThatFollowsTheTrainingMotionStartsFromItsState) {
   const SimulatedJoint joint = simulated_study_joints()[1];
-  ClosedLoopOptions o = closed_loop_options_for(joint);
+  ClosedLoopOptions o = identified_options(joint);
   o.torque_noise = 0.0;
   o.record_measurements = true;
   const VelocityProfile desired = closed_loop_profile(kSeed);
@@ -276,6 +292,33 @@ TEST(ClosedLoop, InLoopTuningRecoversAViscousCoefficientFromTheTrackingError) {
   no_qd[0].qd = nullptr;
   EXPECT_THAT([&] { tune_in_loop(model, viscous, no_qd, o, nullptr, 10); },
               ThrowsMessage<InvalidArgument>(HasSubstr("has no qd(t)")));
+}
+
+// The controller's rigid body is the twin's: identified from the records within 2 % of the plant's
+// inertia on every joint, and it is what tau_d uses. On a frictionless plant Baseline (tau_d =
+// I_model qdd_d) is exact only with the plant's I: a model inertia 30 % off leaves a tau_d error of
+// 0.3 I qdd_d that the loop must take up, and it tracks measurably worse; a model inertia that is not
+// positive is refused by name.
+TEST(ClosedLoop, TheControllerUsesTheIdentifiedInertiaNotThePlants) {
+  for (const SimulatedJoint& joint : simulated_study_joints()) {
+    const double plant = simulated_rigid_body(joint).inertia;
+    const ClosedLoopOptions o = identified_options(joint);
+    EXPECT_EQ(o.inertia, plant) << joint.name;
+    EXPECT_NE(o.model_inertia, plant) << joint.name << ": identified, not copied";
+    EXPECT_NEAR(o.model_inertia, plant, 0.02 * plant) << joint.name;
+  }
+  auto [smooth, o] = viscous_joint(2, 0.0);
+  const VelocityProfile desired = closed_loop_profile(kSeed);
+  ClosedLoopOptions off = o;
+  off.model_inertia = 1.3 * o.inertia;
+  const ClosedLoopRun exact = run_closed_loop(smooth, desired, nullptr, o, true);
+  const ClosedLoopRun wrong = run_closed_loop(smooth, desired, nullptr, off, true);
+  EXPECT_GT(wrong.rmse, 3.0 * exact.rmse);
+  EXPECT_THAT([&] { closed_loop_options_for(simulated_study_joints()[0], 0.0); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("J1: model inertia is 0, must be > 0")));
+  ClosedLoopOptions bad;
+  bad.model_inertia = -1.0;
+  EXPECT_THAT([&] { bad.validate(); }, ThrowsMessage<InvalidArgument>(HasSubstr("model_inertia is -1")));
 }
 
 TEST(ClosedLoop, InvalidOptionsAreNamed) {

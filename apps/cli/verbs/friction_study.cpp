@@ -323,7 +323,10 @@ int run_closed_loop_study(const StudyOptions& o) {
     apply_parfam_options(so.parfam, o);
     const FrictionStudyData data = simulated_study_data(j, o.seed, training_of(o));
     const JointStudy study = run_friction_study(data, so);
-    ClosedLoopOptions co = closed_loop_options_for(j);
+    // the controller's rigid body as the twin identifies it from the joint's recordings
+    const double inertia = identified_inertia(j, o.seed, training_of(o));
+    say(fmt::format("{}: identified inertia {:.4f} kg·m^2 (rigid-body fit on the sweep, Fourier and chirp records)", j.name, inertia));
+    ClosedLoopOptions co = closed_loop_options_for(j, inertia);
     co.seed = o.seed;
     co.gains.kp_min *= o.pd_scale;
     co.gains.kp_max *= o.pd_scale;

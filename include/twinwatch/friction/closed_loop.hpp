@@ -47,7 +47,11 @@ struct AdaptivePdGains {
 };
 
 struct ClosedLoopOptions {
-  double inertia = 0.45;        ///< I [kg·m^2] (plant and the rigid-body part of tau_d), > 0
+  double inertia = 0.45;        ///< the plant's I [kg·m^2] (the simulated joint), > 0
+  /// The twin's I [kg·m^2], identified from the joint's recordings (fit_rigid_body), > 0: the
+  /// rigid-body part of tau_d and what the recorded residual torque subtracts. The controller never
+  /// sees the plant's `inertia`.
+  double model_inertia = 0.45;
   double kv = 25.0;             ///< inner velocity-loop proportional gain [N·m·s/rad], > 0
   double ki = 150.0;            ///< inner velocity-loop integral gain [N·m/rad], >= 0
   double dt = 0.005;            ///< command period [s] (200 Hz), > 0
@@ -90,7 +94,7 @@ struct ClosedLoopRun {
   /// With record_measurements: the residual-torque record of the whole run, ramp-in included, as the
   /// joint's sensors give it (20-bit encoder, the torque noise of the options): per command period
   /// the mean velocity from encoder increments and the mean motor torque less I times the period's
-  /// velocity change (encoder central differences). Empty otherwise.
+  /// velocity change (encoder central differences; I: the twin's model_inertia). Empty otherwise.
   FrictionRecord measured;
 };
 
@@ -108,12 +112,20 @@ ClosedLoopRun run_closed_loop(const MaxwellSlipParams& truth, const VelocityProf
                               const ClosedLoopOptions& options = {}, bool feedforward = true,
                               const MaxwellSlipFriction* plant_start = nullptr);
 
-/// Closed-loop options for a simulated study joint: its inertia (the rigid body of
-/// simulated_protocol_records), an inner velocity loop of 55 rad/s bandwidth (kv = 55 I,
+/// Closed-loop options for a simulated study joint: the plant's inertia (simulated_rigid_body()),
+/// the twin's `model_inertia` as identified (e.g. identified_inertia()), an inner velocity loop of
+/// 55 rad/s bandwidth (kv = 55 I, the robot's own loop tuned on its own inertia,
 /// ki = 6 kv), eq. 20 gains from the torque loop's stability alone (K_p^max = 0.5/kv: a gain margin
 /// of 2 on the sampled unfiltered loop qd_comp = K_p e_tau, unstable at kv K_p = 1; K_p^min =
 /// K_p^max/10, K_d 0 .. K_p^max/130 s, lambda 4 s/rad), the joint's torque noise.
-ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint);
+/// Throws InvalidArgument when model_inertia is not finite and > 0.
+ClosedLoopOptions closed_loop_options_for(const SimulatedJoint& joint, double model_inertia);
+
+/// The joint's inertia as the twin identifies it: fit_rigid_body (HESR's 0.1 rad/s reversal
+/// screening) on the joint's protocol records (simulated_protocol_records: sweep, Fourier, chirp
+/// of `seed`), never the simulator's value.
+double identified_inertia(const SimulatedJoint& joint, unsigned seed,
+                          TrainingExcitation training = TrainingExcitation::Sweep);
 
 /// Result of tune_in_loop().
 struct LoopTuning {

@@ -86,9 +86,20 @@ std::vector<double> frequency_from_reversals(std::span<const double> qd, double 
 /// Runs the protocol. Throws InvalidArgument on bad records or options.
 ProtocolResult run_hesr_protocol(const ProtocolRecords& records, const ProtocolOptions& options = {});
 
+/// The rigid body the simulator gives a study joint (simulator truth: for the plant and the
+/// records, never for the twin, which identifies it with fit_rigid_body): a vertical base axis J1
+/// sees no gravity, the shoulder J2 the largest gravity torque.
+struct SimulatedRigidBody {
+  double inertia;      ///< I [kg·m^2]
+  double gravity_sin;  ///< g_s [N·m]
+  double gravity_cos;  ///< g_c [N·m]
+  double offset;       ///< c [N·m]
+};
+SimulatedRigidBody simulated_rigid_body(const SimulatedJoint& joint);
+
 /// The simulated study joints with a rigid body added to the measured torque (what a current-based
 /// pipeline sees): tau = I qdd + g_s sin(q) + g_c cos(q) + c + tau_f + noise, with the records of
-/// simulated_study_data() (or the richer training excitation). The rigid-body values are in protocol.cpp.
+/// simulated_study_data() (or the richer training excitation), the rigid body of simulated_rigid_body().
 ProtocolRecords simulated_protocol_records(const SimulatedJoint& joint, unsigned seed,
                                            TrainingExcitation training = TrainingExcitation::Sweep);
 
