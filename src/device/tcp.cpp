@@ -32,7 +32,7 @@ void close(int& fd) {
   fd = -1;
 }
 
-int connect(const std::string& host, std::uint16_t port, int timeout_ms) {
+int connect(const std::string& host, std::uint16_t port, int timeout_ms, const std::atomic<bool>* cancel) {
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;
@@ -47,8 +47,25 @@ int connect(const std::string& host, std::uint16_t port, int timeout_ms) {
     set_nonblocking(fd);
     int rc = ::connect(fd, a->ai_addr, a->ai_addrlen);
     if (rc != 0 && errno == EINPROGRESS) {
-      pollfd p{fd, POLLOUT, 0};
-      rc = ::poll(&p, 1, timeout_ms);
+      // (in slices of 50 ms when it can be cancelled)
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+      for (;;) {
+        if (cancel && cancel->load()) {
+          ::close(fd);
+          ::freeaddrinfo(res);
+          throw ConnectError(fmt::format("connecting to {}:{}: cancelled", host, port));
+        }
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
+        pollfd p{fd, POLLOUT, 0};
+        rc = left <= 0 ? 0 : ::poll(&p, 1, static_cast<int>(cancel ? std::min<long long>(left, 50) : left));
+        if (rc < 0 && errno == EINTR) continue;
+        if (rc != 0 || left <= 0) break;
+      }
+      if (rc < 0) {
+        last = std::strerror(errno);
+        ::close(fd);
+        continue;
+      }
       if (rc == 0) {
         last = fmt::format("no answer within {} ms", timeout_ms);
         ::close(fd);

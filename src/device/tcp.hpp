@@ -1,5 +1,6 @@
 #pragma once
 // Small POSIX TCP helpers shared by the RTDE client and server (device-internal).
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -13,8 +14,10 @@ class ConnectError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Connects with a timeout; returns a blocking socket with TCP_NODELAY set.
-int connect(const std::string& host, std::uint16_t port, int timeout_ms);
+/// Connects with a timeout; returns a blocking socket with TCP_NODELAY set. With `cancel`, the wait
+/// is given up (ConnectError "cancelled") within 50 ms of *cancel turning true: a client being
+/// stopped does not wait out the timeout on an address that does not answer.
+int connect(const std::string& host, std::uint16_t port, int timeout_ms, const std::atomic<bool>* cancel = nullptr);
 /// Binds and listens (SO_REUSEADDR, so a restarted server gets its port back); port 0 picks one.
 /// Throws std::runtime_error naming the address on failure (e.g. port in use).
 int listen(const std::string& bind, std::uint16_t port);
