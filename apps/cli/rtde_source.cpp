@@ -37,10 +37,12 @@ std::unique_ptr<rtde::Client> open_rtde(const RtdeSourceOptions& o) {
   }
 }
 
+double outage_limit(double frequency) { return frequency > 0.0 ? std::max(kSilentAtEnd, 3.0 / frequency) : kSilentAtEnd; }
+
 EndSilence end_silence(SteadyTime stopped, SteadyTime end, SteadyTime last_sample, bool end_asked, double frequency) {
   const bool cut_short = !interrupted() && end_asked && stopped + std::chrono::milliseconds(100) < end;
   const double seconds = std::chrono::duration<double>((cut_short ? end : stopped) - last_sample).count();
-  const double limit = cut_short ? 0.1 : (frequency > 0.0 ? std::max(kSilentAtEnd, 3.0 / frequency) : kSilentAtEnd);
+  const double limit = cut_short ? 0.1 : outage_limit(frequency);
   return {seconds, seconds > limit};
 }
 

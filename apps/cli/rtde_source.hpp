@@ -36,6 +36,9 @@ struct EndSilence {
   double seconds = 0.0;
   bool lost = false;
 };
+/// How long a live stream may be silent before it is an outage: kSilentAtEnd, or three periods at
+/// `frequency` [Hz] if longer.
+double outage_limit(double frequency);
 EndSilence end_silence(SteadyTime stopped, SteadyTime end, SteadyTime last_sample, bool end_asked, double frequency);
 
 /// A started client. Throws (RecipeError, connection errors) with the controller's address.

@@ -2313,8 +2313,12 @@ void Monitor::judge(const RobotSample& s) {
                    : fmt::format("the stream was interrupted before this sample (flagged by its source; the timestamps are {:.1f} ms "
                                  "apart, no sample missing by them)",
                                  1000 * dt);
-    events_.push_back(g);
-    if (on_event) on_event(g);
+    if (outage_ >= 0) {
+      close_outage(g);
+    } else {
+      events_.push_back(g);
+      if (on_event) on_event(g);
+    }
   }
   // the controller does not drive the arm (power off, brakes on, a protective or emergency stop):
   // the twin's prediction is a driven arm's, so nothing is judged until it drives it again
@@ -2751,7 +2755,38 @@ void Monitor::stream_silent(double seconds) {
   g.detail = fmt::format("no data for the last {:.1f} s of monitoring (the connection was lost and not restored): nothing after "
                          "{:.3f} s was watched",
                          seconds, t_prev_);
+  if (outage_ >= 0) {
+    close_outage(g);
+    return;
+  }
   events_.push_back(g);
+  if (on_event) on_event(g);
+}
+
+void Monitor::stream_outage(double seconds) {
+  if (!have_prev_ || !(seconds > 0.0) || outage_ >= 0) return;
+  Event g;
+  g.t_start = t_prev_;
+  g.t_end = t_prev_ + seconds;
+  g.t_detected = g.t_end;
+  g.open = true;
+  g.fault = FaultClass::StreamFault;
+  g.magnitude = std::round(seconds / cfg_.nominal_period);
+  g.units = "samples";
+  g.confidence = 1.0;
+  g.detail = fmt::format("no data for {:.1f} s (the connection is lost or the controller stopped sending): nothing after {:.3f} s is "
+                         "watched until the stream is back",
+                         seconds, t_prev_);
+  events_.push_back(g);
+  outage_ = static_cast<int>(events_.size()) - 1;
+  if (on_event) on_event(g);
+}
+
+void Monitor::close_outage(Event closed) {
+  Event& g = events_[static_cast<size_t>(outage_)];
+  outage_ = -1;
+  closed.t_detected = g.t_detected;  // (the open line's name: its closing line ends it)
+  g = std::move(closed);
   if (on_event) on_event(g);
 }
 
@@ -2961,6 +2996,14 @@ void Monitor::close_open(const std::string& why) {
 }
 
 void Monitor::finish() {
+  if (outage_ >= 0) {  // (an outage no stream_silent closed: what was seen of it)
+    Event g = events_[static_cast<size_t>(outage_)];
+    g.open = false;
+    g.active_at_stop = true;
+    g.detail = fmt::format("no data for {:.1f} s when monitoring stopped: nothing after {:.3f} s was watched", g.t_end - g.t_start,
+                           g.t_start);
+    close_outage(g);
+  }
   for (int j = 0; j < n_; ++j)
     if (frozen_event_[static_cast<size_t>(j)] >= 0) close_frozen(j, true);
   // the default set on a run that looks like one of the twin's programs: most alerts would not have

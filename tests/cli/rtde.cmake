@@ -35,6 +35,14 @@ add_test(NAME cli.rtde_monitor_lost_until_the_end
 $<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35919 --wait 10 --duration 3 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json; wait")
 set_tests_properties(cli.rtde_monitor_lost_until_the_end PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
   PASS_REGULAR_EXPRESSION "\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring")
+# ... and while the outage lasts, --events-open has it as an open stream fault (1.5 s after the last
+# sample), closed at the end under the same t_detected (review of session 49)
+add_test(NAME cli.rtde_monitor_outage_open
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35929 --speed 8 --duration 2 --wait-client 20 -q & \
+$<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35929 --wait 10 --duration 4 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --json --events-open > ${PROJECT_BINARY_DIR}/outage_open.json; wait; \
+cat ${PROJECT_BINARY_DIR}/outage_open.json; grep -c . ${PROJECT_BINARY_DIR}/outage_open.json; grep -o 't_detected.:[0-9.]*' ${PROJECT_BINARY_DIR}/outage_open.json | uniq -c")
+set_tests_properties(cli.rtde_monitor_outage_open PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "\"class\":\"stream_fault\"[^\n]*\"detail\":\"no data for 1[.][5-9] s [^\n]*\"open\":true[^\n]*\n[^\n]*\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring[^\n]*\"open\":false[^\n]*\n2\n +2 t_detected.:[0-9.]+\n")
 # an output path that cannot be written is refused before connecting: not after a --wait spent on a
 # robot that is not there yet (here: nothing listens, and the 30 s wait would run out first)
 add_test(NAME cli.rtde_record_bad_output_before_connecting

@@ -409,6 +409,76 @@ TEST_F(MonitorLoop, AStreamGapIsAStreamFaultAndNothingElse) {
   EXPECT_THAT(ev4[0].detail, ::testing::HasSubstr("50 of them dropped on this computer")) << ev4[0].detail;
 }
 
+// review of session 49: a live outage was said only when the stream came back (or monitoring
+// stopped); a consumer of open events (--events-open, the dashboard) saw nothing while it lasted.
+// stream_outage raises an open stream fault once per outage; the gap when samples return closes
+// it under the same t_detected, with the gap's own detail, as one event; so do stream_silent and
+// finish when they do not return
+TEST_F(MonitorLoop, AnOutageIsAnOpenStreamFaultWhileItLastsAndOneEventWhenItEnds) {
+  const auto healthy = run(scenario(610, 12, 0.5));
+  ident::TwinModel t = *twin;
+  t.set_payload(payload);
+  const auto watch = [&](double silent_at, bool returns, bool at_end) {
+    Monitor m(t, *config);
+    std::vector<Event> seen;
+    m.on_event = [&](const Event& e) { seen.push_back(e); };
+    m.stream_outage(2.0);  // (before the first sample: nothing)
+    bool raised = false;
+    for (const auto& s : healthy.samples) {
+      if (s.timestamp >= silent_at && s.timestamp < silent_at + 3.0) {  // 3 s without samples
+        if (!raised) {
+          m.stream_outage(1.6);
+          m.stream_outage(2.4);  // still the same outage
+          raised = true;
+        }
+        continue;
+      }
+      if (!returns && s.timestamp >= silent_at) break;
+      m.push(s);
+    }
+    if (at_end) m.stream_silent(3.0);
+    m.finish();
+    return std::make_pair(seen, m.events());
+  };
+  // samples return: one open line, one closing line of the same name (t_detected), one event
+  {
+    const auto [seen, events] = watch(6.0, true, false);
+    ASSERT_EQ(seen.size(), 2u) << (seen.empty() ? "" : seen[0].detail);
+    EXPECT_TRUE(seen[0].open);
+    EXPECT_EQ(seen[0].fault, FaultClass::StreamFault);
+    EXPECT_NEAR(seen[0].t_start, 6.0, 0.003);
+    EXPECT_NEAR(seen[0].t_detected, seen[0].t_start + 1.6, 1e-9);
+    EXPECT_THAT(seen[0].detail, ::testing::HasSubstr("no data for 1.6 s"));
+    EXPECT_FALSE(seen[1].open);
+    EXPECT_EQ(seen[1].fault, FaultClass::StreamFault);
+    EXPECT_EQ(seen[1].t_detected, seen[0].t_detected);
+    EXPECT_NEAR(seen[1].t_end, 9.0, 0.003);
+    EXPECT_NEAR(seen[1].magnitude, 1499.0, 1.0);  // 3 s at 500 Hz
+    EXPECT_THAT(seen[1].detail, ::testing::HasSubstr("sample(s) missing"));
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_FALSE(events[0].open);
+  }
+  // not back before the end: stream_silent closes it
+  {
+    const auto [seen, events] = watch(6.0, false, true);
+    ASSERT_EQ(seen.size(), 2u);
+    EXPECT_TRUE(seen[0].open);
+    EXPECT_FALSE(seen[1].open);
+    EXPECT_EQ(seen[1].t_detected, seen[0].t_detected);
+    EXPECT_THAT(seen[1].detail, ::testing::HasSubstr("no data for the last 3.0 s of monitoring"));
+    ASSERT_EQ(events.size(), 1u);
+  }
+  // nor said by stream_silent: finish closes it as active at the stop
+  {
+    const auto [seen, events] = watch(6.0, false, false);
+    ASSERT_EQ(seen.size(), 2u);
+    EXPECT_FALSE(seen[1].open);
+    EXPECT_TRUE(seen[1].active_at_stop);
+    EXPECT_THAT(seen[1].detail, ::testing::HasSubstr("no data for 1.6 s when monitoring stopped"));
+    ASSERT_EQ(events.size(), 1u);
+  }
+}
+
 // A live monitor lets go of events it handed out long ago (soak audit, session 39: 0.6 kB an event,
 // kept for the whole run): what it reports afterwards is exactly what it reports keeping them all,
 // here with the two gap events let go a second after them, and a contact found after that.

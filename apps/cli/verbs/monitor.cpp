@@ -555,8 +555,12 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         take(s);
       } else if (client->finished()) {
         break;
-      } else if (!unstored.empty()) {
-        store_waiting(0);  // no samples (an outage): the store is still tried
+      } else {
+        // no samples (an outage): an open stream fault says so while it lasts (--events-open, the
+        // dashboard), from as long a silence as the end of a run counts as one; the store is still tried
+        const double silent = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
+        if (client->stats().received > 0 && silent > cli::outage_limit(client->stats().frequency)) mon.stream_outage(silent);
+        if (!unstored.empty()) store_waiting(0);
       }
     }
     client->stop();

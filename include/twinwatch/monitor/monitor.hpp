@@ -309,6 +309,13 @@ class Monitor {
   /// monitoring ended): a StreamFault event from the last sample over that time, so that the event
   /// history does not read as watched. Call before finish(); nothing before the first sample.
   void stream_silent(double seconds);
+  /// Live, while it lasts: no sample for `seconds` since the last one (an outage the source is
+  /// still reconnecting through). The first call of an outage raises an open StreamFault from the
+  /// last sample (t_detected = its time + `seconds`), so that a consumer of open events sees it
+  /// while it lasts; later calls change nothing. It is closed, with the same t_detected, by the
+  /// gap event when samples return, by stream_silent at the end, or by finish(). Nothing before
+  /// the first sample.
+  void stream_outage(double seconds);
 
   std::function<void(const Event&)> on_event;
   /// What the monitor has to say that is no event (e.g. a friction trend it cannot tell from
@@ -675,7 +682,9 @@ class Monitor {
   void withdraw_open_alert();
   void drop_event(int index);  // erases events_[index], keeping the indices into events_ right
   // the indices kept into events_ (-1: none), frozen_event_'s aside
-  std::array<int*, 5> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_}; }
+  std::array<int*, 6> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_, &outage_}; }
+  int outage_ = -1;  // the open StreamFault of an outage that still lasts (stream_outage)
+  void close_outage(Event closed);  // the gap or silence event takes the outage's place and t_detected
   // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
   // at the first sample and whenever the payload changes, said in a note each time it goes beyond
   bool payload_beyond_ = false;
