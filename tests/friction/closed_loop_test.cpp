@@ -136,7 +136,9 @@ TEST_P(ClosedLoopJoint, TrackingErrorGrowsWithTheModelError) {
 TEST_P(ClosedLoopJoint, Eq19AloneCannotFeedTheModelForward) {
   // without the inner-loop inverse, e_tau = tau_d - tau_meas with the exact model carries only the
   // tracking error (I (qdd_d - qdd) + f(qd_d) - f(qd)): feedback, no feed-forward, so even the
-  // true friction does not beat sending qd_d alone by more than the noise of the comparison
+  // true friction does not beat sending qd_d alone by more than the noise of the comparison; nor,
+  // being feedback on the tracking error only, does it make the tracking much worse (measured
+  // ideal / none = 1.060, 1.003, 1.009 on J1-J3, session 51)
   const SimulatedJoint joint = simulated_study_joints()[static_cast<std::size_t>(GetParam())];
   ClosedLoopOptions o = identified_options(joint);
   o.inverse_feedforward = false;
@@ -145,6 +147,7 @@ TEST_P(ClosedLoopJoint, Eq19AloneCannotFeedTheModelForward) {
   MaxwellSlipOracle oracle(joint.truth);
   const ClosedLoopRun ideal = run_closed_loop(joint.truth, desired, &oracle, o, true);
   EXPECT_GT(ideal.rmse, 0.9 * none.rmse) << joint.name;
+  EXPECT_LT(ideal.rmse, 1.15 * none.rmse) << joint.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Joints, ClosedLoopJoint, ::testing::Values(0, 1, 2),

@@ -106,14 +106,17 @@ TEST_F(Fixture, TrainingFitReachesTheNoiseFloor) {
   }
 }
 
-// drive gains of the joints the payload loads (J2-J4) come out near the simulator's kt N eta
+// drive gains of the joints the payload loads (J2-J4) come out near the simulator's kt N eta:
+// measured -0.01 %, +0.07 %, +2.4 % (session 51; J4 carries the least of the payload's torque), held
+// to 1 %, 1 %, 5 % (the test held 25 % before)
 TEST_F(Fixture, KnownPayloadIdentifiesTheDriveGains) {
   ASSERT_TRUE(twin->gains_known());
   const sim::PlantTruth truth = sim::default_truth(twin->robot(), 1);
+  const double tolerance[] = {0.01, 0.01, 0.05};
   for (int j = 1; j <= 3; ++j) {
     const auto& jt = truth.joints[static_cast<size_t>(j)];
     const double g_true = jt.kt * jt.gear_ratio * jt.eta;
-    EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].gain, g_true, 0.25 * g_true) << "joint " << j;
+    EXPECT_NEAR(twin->joints[static_cast<size_t>(j)].gain, g_true, tolerance[j - 1] * g_true) << "joint " << j;
   }
 }
 

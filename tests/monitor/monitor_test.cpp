@@ -2652,6 +2652,12 @@ TEST_F(MonitorLoop, ImplausibleTemperaturesInATrainingRunAreHeldAsTheMonitorHold
     EXPECT_NEAR(b.static_level[j], a.static_level[j], 0.01 * a.static_level[j]) << "J" << j + 1;
     EXPECT_NEAR(b.observer_level[j], a.observer_level[j], 0.01 * a.observer_level[j]) << "J" << j + 1;
   }
+  // and the 1 % above can see a temperature reach the levels: the same samples read wrong but within
+  // the plausible range (taken as readings, not held) move J3's static level by 1.5 % (session 51)
+  auto wrong = h1;
+  for (size_t k = 3000; k < 3003; ++k) wrong.samples[k].temperature[2] = kTemperatureMax - 1.0;
+  const auto c = learn_thresholds(declared_twin(), {{&wrong, payload}}, settings);
+  EXPECT_GT(std::abs(c.static_level[2] - a.static_level[2]), 0.01 * a.static_level[2]);
   // a run whose every sample is the filter's start-up says which run and why
   device::Recording stub = h1;
   stub.samples.resize(3);
