@@ -110,6 +110,23 @@ add_test(NAME cli.validate_relative_twin_refuses_a_payload
   COMMAND twinwatch validate --twin ${d}/twin_relative.json ${d}/fig.csv --payload-mass 0.5)
 set_tests_properties(cli.validate_relative_twin_refuses_a_payload PROPERTIES FIXTURES_REQUIRED twin_relative
                      PASS_REGULAR_EXPRESSION "identified without a known payload")
+# evaluate and its collision sweep refuse it too when their scenarios declare a payload (before: added
+# anyway, it raised false payload alarms and let a collision by; review of session 48), and take a
+# scenario whose payload is on the arm but not declared (scored: no false alarm on it)
+add_test(NAME cli.evaluate_relative_twin_refuses_a_declared_payload
+  COMMAND twinwatch evaluate ${s}/short_fig8.yaml --twin ${d}/twin_relative.json)
+set_tests_properties(cli.evaluate_relative_twin_refuses_a_declared_payload PROPERTIES FIXTURES_REQUIRED twin_relative
+                     PASS_REGULAR_EXPRESSION "short_fig8.yaml carries a declared payload of 0.5 kg, and the twin was identified without a known payload that fixes its gains")
+add_test(NAME cli.evaluate_sweep_relative_twin_refuses
+  COMMAND twinwatch evaluate --sweep-collisions --twin ${d}/twin_relative.json)
+set_tests_properties(cli.evaluate_sweep_relative_twin_refuses PROPERTIES FIXTURES_REQUIRED twin_relative TIMEOUT 60
+                     PASS_REGULAR_EXPRESSION "the collision sweep's runs carry a declared payload of 0.5 kg, and the twin was identified without a known payload")
+add_test(NAME cli.evaluate_relative_twin_undeclared_payload
+  COMMAND sh -c "(cat ${s}/short_fig8.yaml | sed 's/name: short_fig8/name: undeclared_fig8/'; echo 'payload_declared: false') > ${d}/undeclared_fig8.yaml && \
+$<TARGET_FILE:twinwatch> evaluate ${d}/undeclared_fig8.yaml --twin ${d}/twin_relative.json --json; echo exit=\$?")
+set_tests_properties(cli.evaluate_relative_twin_undeclared_payload PROPERTIES FIXTURES_REQUIRED twin_relative TIMEOUT 120
+                     PASS_REGULAR_EXPRESSION "\\{\"false_alarms\":0,[^\n]*\"name\":\"undeclared_fig8\"[^\n]*\nexit=0"
+                     FAIL_REGULAR_EXPRESSION "gains are relative")
 # options that take a fixed number of values stop there: the recordings may follow them (the
 # README's thresholds lines); --sensitivity takes one value or a comma-separated list
 add_test(NAME cli.monitor_recording_after_payload_com
