@@ -2740,18 +2740,24 @@ void Monitor::report_pending_close() {
   if (on_event) on_event(e);
 }
 
-void Monitor::stream_silent(double seconds) {
-  if (!have_prev_ || !(seconds > 0.0)) return;
-  ++n_gaps_;
+// a stream fault for `seconds` without data after the last sample: its size in samples missed
+Event Monitor::silence_event(double seconds, bool open) const {
   Event g;
   g.t_start = t_prev_;
   g.t_end = t_prev_ + seconds;
   g.t_detected = g.t_end;
-  g.open = false;
+  g.open = open;
   g.fault = FaultClass::StreamFault;
   g.magnitude = std::round(seconds / cfg_.nominal_period);
   g.units = "samples";
   g.confidence = 1.0;
+  return g;
+}
+
+void Monitor::stream_silent(double seconds) {
+  if (!have_prev_ || !(seconds > 0.0)) return;
+  ++n_gaps_;
+  Event g = silence_event(seconds, false);
   g.detail = fmt::format("no data for the last {:.1f} s of monitoring (the connection was lost and not restored): nothing after "
                          "{:.3f} s was watched",
                          seconds, t_prev_);
@@ -2765,15 +2771,7 @@ void Monitor::stream_silent(double seconds) {
 
 void Monitor::stream_outage(double seconds) {
   if (!have_prev_ || !(seconds > 0.0) || outage_ >= 0) return;
-  Event g;
-  g.t_start = t_prev_;
-  g.t_end = t_prev_ + seconds;
-  g.t_detected = g.t_end;
-  g.open = true;
-  g.fault = FaultClass::StreamFault;
-  g.magnitude = std::round(seconds / cfg_.nominal_period);
-  g.units = "samples";
-  g.confidence = 1.0;
+  Event g = silence_event(seconds, true);
   g.detail = fmt::format("no data for {:.1f} s (the connection is lost or the controller stopped sending): nothing after {:.3f} s is "
                          "watched until the stream is back",
                          seconds, t_prev_);

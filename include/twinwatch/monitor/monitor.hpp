@@ -685,6 +685,7 @@ class Monitor {
   std::array<int*, 6> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_, &outage_}; }
   int outage_ = -1;  // the open StreamFault of an outage that still lasts (stream_outage)
   void close_outage(Event closed);  // the gap or silence event takes the outage's place and t_detected
+  Event silence_event(double seconds, bool open) const;  // a stream fault: no data for seconds after the last sample
   // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
   // at the first sample and whenever the payload changes, said in a note each time it goes beyond
   bool payload_beyond_ = false;
