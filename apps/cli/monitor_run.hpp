@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "twinwatch/core/sample.hpp"
+#include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/monitor/event.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 
@@ -52,6 +53,36 @@ struct MonitorHooks {
   /// polled at each sample of a recording: true stops the replay there (what was watched is reported)
   std::function<bool()> stop_requested;
 };
+
+// What monitor's options share with `report` and `evaluate` (verbs/evaluate.cpp), which apply them
+// to the run they make: the help texts, the --program check, the filter list, the alert settings.
+inline const CLI::Validator kProgramNameGiven(  // --program '' (an unset $PROG) named no program and silently meant the default set
+    [](std::string& v) { return v.empty() ? std::string("the program name is empty (an unset variable?); leave --program out for the default set") : std::string(); },
+    "NAME");
+inline constexpr const char* kColumnMapHelp =
+    "CSV map 'file_column,rtde_name[,scale]' for foreign logs (docs/recordings.md), as given to 'twinwatch identify'; a bare "
+    "name is one of the maps twinwatch ships (e.g. kinova_gen3_chiha)";
+inline constexpr const char* kSensitivityHelp =
+    "Threshold factor (< 1: more sensitive): one value, or one per joint separated by commas (0.9,0.9,1,1,1,1)";
+inline constexpr const char* kFilterHelp =
+    "Residual filter: 'iir' (first order at the twin's filter_cutoff_hz, AGV §4.3), 'fir' (Cao eq. 29: 6 taps, "
+    "-3 dB at 42.8 Hz at 500 Hz, 2.5-sample delay), or one per joint, e.g. iir,iir,iir,iir,fir,iir";
+inline constexpr const char* kRaiseAfterHelp =
+    "Consecutive samples over the current-residual threshold that raise an alert (default: the twin's, 2); the momentum "
+    "observer's channel then uses it too, instead of the twin's per-joint count, unless --observer-raise-after is given or the "
+    "twin sets observer_raise_after";
+inline constexpr const char* kObserverRaiseAfterHelp =
+    "Consecutive samples over the momentum observer's threshold that raise an alert, on every joint (default: the twin's "
+    "count per joint, chosen on healthy validation runs ('thresholds --debounce-validation'); else --raise-after). 1 "
+    "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
+/// --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
+std::vector<std::string> split_filter(const std::string& s);
+/// The twin's monitor block; throws InvalidArgument naming `path` when it has none
+monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path);
+/// --sensitivity, --raise-after, --observer-raise-after: user settings over the twin's monitor block
+/// (0 / empty: keep the twin's); validated with the rest of the configuration
+void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vector<double>& sensitivity, int raise_after,
+                          int observer_raise_after);
 
 /// Adds monitor's options to `sub` and returns the callback's checks of them (run it first).
 std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<MonitorOptions>& o);

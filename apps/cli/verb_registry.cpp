@@ -31,6 +31,7 @@ std::vector<Entry>& registry() {
 }
 int g_exit_code = 0;
 std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_signal{0};  // the signal that stopped the verb (0: none)
 }  // namespace
 
 namespace {
@@ -45,7 +46,10 @@ bool g_stdout_tty = false, g_stderr_tty = false;
 
 void install_interrupt_handler() {
   struct sigaction sa {};
-  sa.sa_handler = [](int) { g_interrupted = true; };
+  sa.sa_handler = [](int sig) {
+    g_signal = sig;
+    g_interrupted = true;
+  };
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
@@ -53,7 +57,8 @@ void install_interrupt_handler() {
   g_stdout_tty = ::isatty(STDOUT_FILENO) != 0;
   g_stderr_tty = ::isatty(STDERR_FILENO) != 0;
   struct sigaction hup {};
-  hup.sa_handler = [](int) {
+  hup.sa_handler = [](int sig) {
+    g_signal = sig;
     g_interrupted = true;
     if (g_dev_null >= 0 && g_stdout_tty) ::dup2(g_dev_null, STDOUT_FILENO);
     if (g_dev_null >= 0 && g_stderr_tty) ::dup2(g_dev_null, STDERR_FILENO);
@@ -62,6 +67,7 @@ void install_interrupt_handler() {
   sigaction(SIGHUP, &hup, nullptr);
 }
 bool interrupted() { return g_interrupted.load(); }
+int interrupt_signal() { return g_signal.load(); }
 
 VerbRegistrar::VerbRegistrar(std::string name, int order, VerbSetup setup) {
   registry().push_back({std::move(name), order, std::move(setup)});

@@ -47,6 +47,8 @@ int exit_code();
 /// verb polls, so it can stop cleanly (flush files, say goodbye to clients) instead of dying.
 void install_interrupt_handler();
 bool interrupted();
+/// The signal that set interrupted() (SIGINT, SIGTERM, SIGHUP; 0: none)
+int interrupt_signal();
 
 /// Option checks with a readable message: CLI11's PositiveNumber and NonNegativeNumber said
 /// "Value 0 not in range 0.000000 to 1797693134862315708...", a 300-digit bound (audit, session 22).

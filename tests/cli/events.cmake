@@ -32,6 +32,17 @@ $0 events --db ${d}/events_runs.db --runs && $0 events --db ${d}/events_runs.db 
 $0 events --db ${d}/events_runs.db --runs --class collision" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.events_runs PROPERTIES FIXTURES_REQUIRED "twin;recordings;collision_recording"
   PASS_REGULAR_EXPRESSION "run started \\(UTC\\) +ended \\(UTC\\) +samples +events +status +source\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +0 finished +[^\n]*fig.csv\n +2 [^\n]* +[1-9][0-9]+ +[1-9] finished +[^\n]*collision.csv\n2 run\\(s\\) of 2 stored in [^\n]*events_runs.db\n[{]\"ended_at\":\"[0-9-]+ [0-9:]+ UTC\",\"events\":[1-9],\"program\":null,\"run\":2,\"samples\":[1-9][0-9]+,[^\n]*\"status\":\"finished\"[^\n]*\n[^\n]*--class filters events. --runs lists the monitoring runs")
+# a recording's monitor stopped by a signal (session 52: the process died, its run left 'running'):
+# Ctrl-C once the run has its row stops the replay in order; what was watched is reported and the
+# run's row says 'stopped' with its samples; the exit status is 130 (128 + SIGINT), as the signal's
+add_test(NAME cli.monitor_recording_stopped_by_a_signal COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; rm -f ${d}/stopped.db; \
+$T simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --duration 1200 -o ${d}/stopped.csv -q || exit 9; \
+$T monitor --twin ${d}/twin.json ${d}/stopped.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/stopped.db & mp=\$!; \
+for i in \$(seq 1 300); do $T events --db ${d}/stopped.db --runs 2>/dev/null | grep -q running && break; sleep 0.1; done; \
+sleep 0.3; kill -INT \$mp; wait \$mp; echo exit=\$?; $T events --db ${d}/stopped.db --runs; rm -f ${d}/stopped.csv")
+set_tests_properties(cli.monitor_recording_stopped_by_a_signal PROPERTIES FIXTURES_REQUIRED "twin"
+  PASS_REGULAR_EXPRESSION "stopped at t = [0-9.]+ s, in [^\n]*stopped.csv: what was watched up to there is reported\n[1-9][0-9]+ samples[^\n]*\nexit=130\n[^\n]*status[^\n]*\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +[0-9]+ stopped +[^\n]*stopped.csv"
+  FAIL_REGULAR_EXPRESSION "exit=0")
 # wall-clock times (session 48): a recording watched with --started-at gives its events the wall
 # time of each (t − the first sample's t after the time given, here +01:00 read as 07:00 UTC), the
 # printed lines start with the time of day, and the store keeps it (a column of 'events'); a time

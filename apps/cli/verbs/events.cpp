@@ -11,7 +11,7 @@
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/monitor/event.hpp"
-#include "evaluate.hpp"
+#include "recordings.hpp"
 #include "verb_registry.hpp"
 
 namespace {

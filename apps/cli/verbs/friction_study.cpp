@@ -18,7 +18,7 @@
 #include "twinwatch/friction/synthetic_joint.hpp"
 #include "twinwatch/friction/twin_block.hpp"
 #include "twinwatch/ident/twin_model.hpp"
-#include "evaluate.hpp"
+#include "recordings.hpp"
 #include "verb_registry.hpp"
 
 namespace {

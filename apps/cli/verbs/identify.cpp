@@ -24,7 +24,7 @@
 #include "twinwatch/monitor/declaration.hpp"
 #include "twinwatch/monitor/monitor.hpp"
 #include "twinwatch/signal/metrics.hpp"
-#include "evaluate.hpp"
+#include "recordings.hpp"
 #include "verb_registry.hpp"
 
 namespace {

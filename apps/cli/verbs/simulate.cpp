@@ -16,7 +16,7 @@
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/sim/robot_program.hpp"
 #include "twinwatch/sim/scenario.hpp"
-#include "evaluate.hpp"
+#include "recordings.hpp"
 #include "verb_registry.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 #include "twinwatch/ident/rigid_body_ls.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
-#include "evaluate.hpp"
+#include "recordings.hpp"
 #include "verb_registry.hpp"
 
 namespace {
