@@ -27,6 +27,7 @@ struct MonitorOptions {
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   double cycle_period = 0.0;
   std::vector<double> payload_com;
+  std::vector<double> part_com;  // where an undeclared part sits [m, flange frame] (empty: the twin's)
   std::vector<double> sensitivity;
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
   std::string filter;  // residual filter: "iir", "fir" or one per joint "iir,iir,iir,iir,fir,iir"
@@ -77,6 +78,13 @@ inline constexpr const char* kObserverRaiseAfterHelp =
     "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 /// --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
 std::vector<std::string> split_filter(const std::string& s);
+/// --part-com X Y Z: where a part picked with no payload declared sits (MonitorConfig::part_com) over
+/// the twin's; empty: keep it. Throws InvalidArgument naming the option for a point beyond 1 m.
+inline constexpr const char* kPartComHelp =
+    "Where a part the robot picks sits when no payload is declared [m, flange frame; 3 numbers] (default: the twin's "
+    "part_com_m, else 0 0 0.04): a payload change is fitted there and, followed, predicted as a point mass there. A part "
+    "held farther out than assumed leaves a model error at the wrist after the twin follows it (false alarms)";
+void apply_part_com(monitor::MonitorConfig& cfg, const std::vector<double>& xyz);
 /// The twin's monitor block; throws InvalidArgument naming `path` when it has none
 monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path);
 /// --sensitivity, --raise-after, --observer-raise-after: user settings over the twin's monitor block

@@ -72,9 +72,6 @@ constexpr double kOutputCheckAlertBefore = 0.05, kOutputCheckAlertAfter = 0.3;
 // this share of at least this many alerts is named in a note
 constexpr int kProgramHintRaises = 3;
 constexpr double kProgramHintShare = 2.0 / 3.0;
-// where a part picked with no payload declared sits: 4 cm out along the flange's axis [m] (the
-// diagnosis assumes the same, run_diagnosis)
-constexpr double kGrippedComZ = 0.04;
 // the stream's timestamp jitter (Monitor::track_jitter): steps averaged over (at most), steps before it
 // applies, and the growth of the widened factor that is said again in a note
 constexpr double kJitterWindow = 500.0;
@@ -520,6 +517,10 @@ void MonitorConfig::validate(int n) const {
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
   if (!(resume_widen >= 1.0 && std::isfinite(resume_widen)))
     throw InvalidArgument(fmt::format("resume_widen is {}, must be finite and >= 1", resume_widen));
+  if (!part_com.allFinite() || part_com.norm() > model::kPayloadComMax)
+    throw InvalidArgument(fmt::format("part_com_m is ({:g}, {:g}, {:g}) m, {:.3g} m from the flange: expected a centre of mass within {:g} m of it "
+                                      "(in mm? give metres)",
+                                      part_com.x(), part_com.y(), part_com.z(), part_com.norm(), model::kPayloadComMax));
   if (observer_raise_after < 0)
     throw InvalidArgument(fmt::format("observer_raise_after is {}, must be >= 1 (or 0: raise_after)", observer_raise_after));
   check_choice(observer_choice, observer_level.size() != 0, n, "monitor");
@@ -566,6 +567,7 @@ std::string MonitorConfig::to_json() const {
   if (reversal_load_max.size()) j["reversal_load_max"] = vec_json(reversal_load_max);
   if (crawl_max.size()) j["crawl_max_s"] = vec_json(crawl_max);
   if (std::isfinite(longest_rest)) j["longest_rest_s"] = longest_rest;
+  if (part_com != Eigen::Vector3d(0.0, 0.0, kDefaultPartComZ)) j["part_com_m"] = {part_com.x(), part_com.y(), part_com.z()};
   for (const auto& [name, set] : programs) {
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
@@ -596,7 +598,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     m.only({"static_level_A", "dynamic", "use_dynamic", "filter_cutoff_hz", "raise_after", "clear_after", "observer_raise_after",
             "observer_raise_after_joint", "observer_validation_ratio", "sensitivity", "nominal_period", "residual_filter", "trend", "programs",
             "observer_gain", "observer_alerts", "observer_level_Nm", "observer_dynamic", "payload_max_kg", "reversal_load_max",
-            "longest_rest_s", "crawl_max_s"});
+            "longest_rest_s", "crawl_max_s", "part_com_m"});
     // the joint count: the twin's, or (a block read on its own) that of the static levels
     const nlohmann::json& levels = m.need("static_level_A");
     const int n = n_dof > 0 ? n_dof : levels.is_array() ? static_cast<int>(std::min<size_t>(levels.size(), kMaxDof + 1)) : 0;
@@ -630,6 +632,12 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
     if (m.has("reversal_load_max")) c.reversal_load_max = nonnegative_joint_values(m, "reversal_load_max", n);
     if (m.has("crawl_max_s")) c.crawl_max = nonnegative_joint_values(m, "crawl_max_s", n);
     if (m.has("longest_rest_s")) c.longest_rest = m.nonnegative("longest_rest_s");
+    if (m.has("part_com_m")) {
+      const nlohmann::json& a = m.need("part_com_m");
+      if (!a.is_array() || a.size() != 3)
+        m.fail("part_com_m", fmt::format("expected 3 numbers (x, y, z in the flange frame, m), got {}", json_brief(a)));
+      for (int k = 0; k < 3; ++k) c.part_com[k] = json_number(a[static_cast<size_t>(k)], origin, json_element(m.field("part_com_m"), static_cast<size_t>(k)));
+    }
     // the sets learned per program
     if (m.has("programs")) {
       const JsonFields programs = m.object("programs");
@@ -1572,7 +1580,7 @@ void Monitor::follow_payload(Event& e, double t, double rebase_from) {
     return;
   }
   // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
-  // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
+  // payload's centre of mass or, with none declared, a part gripped at MonitorConfig::part_com
   const model::RigidBodyInertia had = twin_.payload();  // a copy: set_payload below replaces it
   const double change = e.magnitude;
   // kg in the twin's relative units (no known payload fixed its gains) are no mass to carry
@@ -1653,7 +1661,7 @@ double Monitor::followed_mass(double change, bool& as_declared) const {
 
 Eigen::Vector3d Monitor::payload_com() const {
   // a payload change is most likely the declared payload (or one gripped at the flange)
-  return twin_.payload().mass > 0.0 ? twin_.payload().com : Eigen::Vector3d(0.0, 0.0, kGrippedComZ);
+  return twin_.payload().mass > 0.0 ? twin_.payload().com : cfg_.part_com;
 }
 
 Eigen::Vector3d Monitor::payload_com_in_link() const { return twin_.robot().description().flange * payload_com(); }

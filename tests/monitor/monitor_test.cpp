@@ -727,6 +727,78 @@ TEST_F(MonitorLoop, AFollowedPayloadChangeLeavesTheMonitorWatching) {
   EXPECT_EQ(at_end, 0.0);
 }
 
+// Where an undeclared part sits (session 52). A 0.8 kg part held 15 cm out along the flange axis is
+// picked with no payload declared. Followed at the default point (4 cm out), the twin's wrist torques
+// miss the part's lever, and what is left peaks higher against the wrist joints' thresholds; told
+// where parts sit (MonitorConfig::part_com), the twin follows the part there and the wrist's residual
+// after the follow stays as far below its thresholds as the arm's healthy motion leaves it.
+TEST_F(MonitorLoop, APartFollowedWhereItSitsLeavesTheWristLessModelError) {
+  const double onset = 6.3, mass = 0.8;
+  const auto rec = undeclared(run(scenario(5301, 16, 0.0, "  - {type: payload_pick, onset: 6.3, io_bit: 0, mass: 0.8, com: [0, 0, 0.15]}\n")));
+  struct Watched {
+    std::vector<Event> events;
+    model::RigidBodyInertia payload;
+    double wrist_peak = 0.0;  // the largest |residual| / threshold of J4-J6 from 3.5 s after the pick
+  };
+  const auto watch = [&](const Eigen::Vector3d& part) {
+    MonitorConfig c = *config;
+    c.part_com = part;
+    Monitor m(*twin, c);
+    Watched w;
+    for (const auto& s : rec.samples) {
+      m.push(s);
+      if (s.timestamp < onset + 3.5) continue;
+      for (int j = 3; j < 6; ++j)
+        if (m.level()[j] > 0.0) w.wrist_peak = std::max(w.wrist_peak, std::abs(m.filtered_residual()[j]) / m.level()[j]);
+    }
+    m.finish();
+    w.events = m.events();
+    w.payload = m.twin().payload();
+    return w;
+  };
+  const Watched assumed = watch(Eigen::Vector3d(0.0, 0.0, MonitorConfig::kDefaultPartComZ));
+  const Watched told = watch(Eigen::Vector3d(0.0, 0.0, 0.15));
+  // both find the pick and follow it, each at the point it was given
+  for (const Watched* w : {&assumed, &told}) {
+    ASSERT_FALSE(w->events.empty());
+    EXPECT_EQ(w->events[0].fault, FaultClass::PayloadChange) << w->events[0].detail;
+    EXPECT_LT(w->events[0].t_detected - onset, 0.1);
+    EXPECT_NEAR(w->events[0].magnitude, mass, 0.2 * mass) << w->events[0].detail;
+  }
+  EXPECT_EQ(assumed.payload.com, Eigen::Vector3d(0.0, 0.0, 0.04));
+  EXPECT_EQ(told.payload.com, Eigen::Vector3d(0.0, 0.0, 0.15));
+  EXPECT_NEAR(told.payload.mass, mass, 0.1 * mass);
+  // told where it sits: the pick is the run's only event, and the wrist's residual peaks lower
+  EXPECT_EQ(told.events.size(), 1u) << told.events.back().detail;
+  EXPECT_LT(told.wrist_peak, 1.0);
+  EXPECT_LT(told.wrist_peak, 0.8 * assumed.wrist_peak) << "told " << told.wrist_peak << ", assumed " << assumed.wrist_peak;
+  std::printf("part at 0.15 m: wrist peak ratio %.3f told, %.3f assumed at 0.04 m; events %zu / %zu; mass %.3f / %.3f kg\n", told.wrist_peak,
+              assumed.wrist_peak, told.events.size(), assumed.events.size(), told.payload.mass, assumed.payload.mass);
+}
+
+// The part's point is stored in the twin's monitor block when it is not the default, read back, and
+// a point beyond a metre from the flange (millimetres given) is refused naming the field.
+TEST(MonitorConfig, ThePartsPointIsStoredWhenSetAndCheckedOnReading) {
+  MonitorConfig c;
+  c.static_level = VectorJ::Ones(6);
+  c.use_dynamic = false;
+  EXPECT_EQ(c.to_json().find("part_com_m"), std::string::npos) << "the default is not written";
+  EXPECT_EQ(MonitorConfig::from_json(c.to_json(), "twin.json").part_com, Eigen::Vector3d(0.0, 0.0, 0.04));
+  c.part_com = Eigen::Vector3d(0.02, -0.01, 0.15);
+  EXPECT_EQ(MonitorConfig::from_json(c.to_json(), "twin.json").part_com, c.part_com);
+  c.part_com = Eigen::Vector3d(0.0, 0.0, 150.0);
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }), ::testing::HasSubstr("part_com_m is (0, 0, 150) m"));
+  std::string text = c.to_json();
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); }),
+              ::testing::HasSubstr("within 1 m of it (in mm? give metres)"));
+  c.part_com = Eigen::Vector3d(0.0, 0.0, 0.1);
+  nlohmann::json j = nlohmann::json::parse(c.to_json());
+  j["part_com_m"] = 0.1;  // a number, not a point
+  text = j.dump();
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); }),
+              ::testing::HasSubstr("monitor.part_com_m"));
+}
+
 // Review of session 21: what following a payload change must not do. A sustained push on the
 // flange fits a payload too (a 12 N·m push for 6 s: "+2 kg", 76 % explained): with no gripper output
 // changing and the payload explaining less than 85 %, it is not followed, so its alert ends with

@@ -44,13 +44,15 @@ struct EvaluateOptions {
   double link_ceiling = -1.0;
   std::vector<double> sensitivity;
   int raise_after = 0, observer_raise_after = 0;  // debounce overrides (0: the twin's)
+  std::vector<double> part_com;                     // where an undeclared part sits (empty: the twin's)
   cli::SweepOptions sweep_options;
 };
 
-// evaluate's --sensitivity / --raise-after / --observer-raise-after written into the twin's monitor block
+// evaluate's --sensitivity / --raise-after / --observer-raise-after / --part-com written into the twin's monitor block
 void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
-  if (o.sensitivity.empty() && o.raise_after == 0 && o.observer_raise_after == 0) return;
+  if (o.sensitivity.empty() && o.raise_after == 0 && o.observer_raise_after == 0 && o.part_com.empty()) return;
   monitor::MonitorConfig cfg = config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
+  cli::apply_part_com(cfg, o.part_com);
   apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   twin.monitor_json = cfg.to_json();
 }
@@ -127,6 +129,7 @@ struct ReportOptions {
   bool static_threshold = false;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
+  std::vector<double> part_com;
 };
 
 int run_report(const ReportOptions& o) {
@@ -155,6 +158,7 @@ int run_report(const ReportOptions& o) {
       cfg.residual_filter = split_filter(o.filter);
       cfg.validate(twin.n_dof());
     }
+    cli::apply_part_com(cfg, o.part_com);
     apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   };
   cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload, adjust);
@@ -185,6 +189,9 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
       ->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--part-com", o->part_com, std::string(cli::kPartComHelp) + "; written into the twin scored (and --save-twin)")
+      ->expected(3)
+      ->allow_extra_args(false);
   auto* filter = sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   auto* trend_csv = sub->add_option("--trend-csv", o->trend_csv,
@@ -233,6 +240,7 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg] (default: the twin file's 'payload')")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
+  sub->add_option("--part-com", o->part_com, std::string(cli::kPartComHelp) + ", as 'monitor --part-com'")->expected(3)->allow_extra_args(false);
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Keep the payload the twin starts with for the whole run, as 'monitor --keep-payload': no diagnosed change is "

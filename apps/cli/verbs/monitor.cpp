@@ -80,6 +80,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   monitor::MonitorConfig cfg = config_of(twin, o.twin);
   if (o.static_threshold) cfg.use_dynamic = false;
   cfg.follow_payload = !o.keep_payload;
+  cli::apply_part_com(cfg, o.part_com);
   cfg.select_program(o.program);
   if (!o.quiet && !o.json && !cfg.programs.empty())
     fmt::print(stderr, "thresholds: {}\n",
@@ -610,6 +611,7 @@ struct ThresholdOptions {
   std::vector<std::string> recordings, debounce_validation, column_maps;
   double payload_mass = std::numeric_limits<double>::quiet_NaN();  // not given: the twin file's payload
   std::vector<double> payload_com;
+  std::vector<double> part_com;  // stored in the twin (MonitorConfig::part_com); empty: the twin's kept
 };
 
 // The progress of a learner's reading: "  thresholds  37 %" on one line of stderr, rewritten as the
@@ -739,6 +741,7 @@ int run_thresholds(const ThresholdOptions& o) {
   monitor::MonitorConfig settings;
   if (!twin.monitor_json.empty()) settings = monitor::MonitorConfig::from_twin(twin);
   if (!o.filter.empty()) settings.residual_filter = split_filter(o.filter);
+  cli::apply_part_com(settings, o.part_com);  // (checked before the learning run)
   // the viscous friction's temperature slope, when these runs span joint temperatures (a warm-up
   // from cold): the monitor and the wear trend compensate with it, and the thresholds below are
   // learned on the compensated residual. Runs at one temperature keep the slope the twin has. Every
@@ -828,6 +831,9 @@ int run_thresholds(const ThresholdOptions& o) {
              o.program.empty() ? std::string("(default set)") : fmt::format("of program '{}'", o.program),
              files(o.recordings.size(), recs.size(), "healthy "),
              o.filter.empty() ? "iir" : o.filter, o.twin, shown.payload_max, monitor::Monitor::payload_envelope_margin(shown));
+  if (!o.part_com.empty())
+    say(!o.quiet, "a part picked with no payload declared is fitted and followed at ({:g}, {:g}, {:g}) m in the flange frame (stored)\n",
+        cfg.part_com.x(), cfg.part_com.y(), cfg.part_com.z());
   if (shown.reversal_load_max.size() == twin.n_dof()) {
     std::string loads;
     bool relative = false;  // a joint whose gain no known payload fixed: its load is in the twin's own scale
@@ -883,6 +889,11 @@ twinwatch::cli::VerbRegistrar reg_thresholds{"thresholds", 41, [](CLI::App& app)
                   "with it; a twin with relative gains takes none")
       ->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
+  sub->add_option("--part-com", o->part_com,
+                  "Store in the twin where a part the robot picks sits when no payload is declared [m, flange frame; 3 numbers]: "
+                  "'monitor' fits and follows an undeclared pick there (default 0 0 0.04; 'monitor --part-com' for one run)")
+      ->expected(3)
+      ->allow_extra_args(false);
   sub->add_option("--filter", o->filter, kFilterHelp);
   sub->add_option("--column-map", o->column_maps,
                   kColumnMapHelp + std::string(". MAP: every recording without one of its own (--debounce-validation's too); REC=MAP: that "
@@ -919,6 +930,16 @@ monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string
   if (twin.monitor_json.empty())
     throw InvalidArgument(fmt::format("{} has no monitor thresholds: learn them with 'twinwatch thresholds --twin {} HEALTHY.csv...'", path, path));
   return monitor::MonitorConfig::from_twin(twin);
+}
+
+void apply_part_com(monitor::MonitorConfig& cfg, const std::vector<double>& xyz) {
+  if (xyz.empty()) return;
+  if (xyz.size() != 3) throw InvalidArgument(fmt::format("--part-com: expected 3 numbers (x y z, m), got {}", xyz.size()));
+  const Eigen::Vector3d c(xyz[0], xyz[1], xyz[2]);
+  if (!c.allFinite() || c.norm() > model::kPayloadComMax)
+    throw InvalidArgument(fmt::format("--part-com: expected a point within {:g} m of the flange, got ({:g}, {:g}, {:g}), {:.3g} m away (in mm? give metres)",
+                                      model::kPayloadComMax, c.x(), c.y(), c.z(), c.norm()));
+  cfg.part_com = c;
 }
 
 void apply_alert_settings(monitor::MonitorConfig& cfg, int n_dof, const std::vector<double>& sensitivity, int raise_after,
@@ -975,6 +996,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                   "declaration that differs and every change of it, so a declared pick raises nothing")
       ->check(nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
+  sub->add_option("--part-com", o->part_com, cli::kPartComHelp)->expected(3)->allow_extra_args(false);
   sub->add_option("--sensitivity", o->sensitivity, kSensitivityHelp)->delimiter(',')->allow_extra_args(false);
   sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(whole_number(1, 1000));
   sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(whole_number(1, 1000));

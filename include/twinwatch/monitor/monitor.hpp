@@ -125,6 +125,15 @@ struct MonitorConfig {
   /// the arm carries is then checked against what the controller believes (a part lost, or a pick
   /// declared with no part in the gripper, is a payload change). Off: the twin keeps its payload.
   bool follow_payload = true;
+  /// Where a part the robot picks sits when the twin holds no payload to take its centre of mass
+  /// from (none declared, none in the twin) [m, flange frame]: a payload change is fitted at it and,
+  /// followed, predicted with a point mass there. Default 4 cm out along the flange axis. A part that
+  /// sits farther out and is followed at the default leaves a model error at the wrist joints: on the
+  /// virtual UR3e, 0.6 kg picked at 0.15 m raised 3 false alarms in the 5 s after the follow, 1.0 kg
+  /// at 0.15 m was followed and dropped again (docs/validation.md, "Where a part sits", session 52).
+  /// In the twin file: "part_com_m" (written when not the default); monitor --part-com.
+  Eigen::Vector3d part_com{0.0, 0.0, 0.04};
+  static constexpr double kDefaultPartComZ = 0.04;
   /// Where the drive's direction is in doubt (ident::TwinModel::drive_in_doubt), read the current on
   /// the nearer of its two levels and the observer's torque on the level nearer the twin's
   /// (resolve_drive_doubt, measured_drive_torque). Off: the blended prediction and, without targets,
@@ -523,7 +532,7 @@ class Monitor {
   /// declared one (as_declared). NaN when that is clearly negative (more than it carried).
   double followed_mass(double change, bool& as_declared) const;
   /// That mass as a payload: at the declaration's centre of mass (as_declared), else at the twin's
-  /// or, with none, 4 cm out along the flange axis, the twin's shape scaled to the mass.
+  /// or, with none, at MonitorConfig::part_com, the twin's shape scaled to the mass.
   model::RigidBodyInertia payload_of(double mass, bool as_declared) const;
   /// The evidence that an alert's change is the payload: a gripper output changed from
   /// kPayloadIoLookback before it began, or the payload signature explains kPayloadFollowExplained of it.
@@ -531,7 +540,7 @@ class Monitor {
   /// a gripper output changed from kPayloadIoLookback before e began until now
   bool output_changed_for(const Event& e) const;
   /// the centre of mass a payload change is fitted and followed at: the twin's payload's or, with
-  /// none, kGrippedComZ out along the flange axis [m, flange frame]; and in the last link's frame
+  /// none, MonitorConfig::part_com [m, flange frame]; and in the last link's frame
   Eigen::Vector3d payload_com() const;
   Eigen::Vector3d payload_com_in_link() const;
   /// scratch_twin_ made a copy of the twin as it is now (kept between calls: its allocations are reused)
