@@ -26,15 +26,6 @@
 namespace {
 
 using namespace twinwatch;
-using cli::apply_alert_settings;
-using cli::config_of;
-using cli::kColumnMapHelp;
-using cli::kFilterHelp;
-using cli::kObserverRaiseAfterHelp;
-using cli::kProgramNameGiven;
-using cli::kRaiseAfterHelp;
-using cli::kSensitivityHelp;
-using cli::split_filter;
 
 struct EvaluateOptions {
   std::vector<std::string> dirs;
@@ -51,9 +42,9 @@ struct EvaluateOptions {
 // evaluate's --sensitivity / --raise-after / --observer-raise-after / --part-com written into the twin's monitor block
 void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
   if (o.sensitivity.empty() && o.raise_after == 0 && o.observer_raise_after == 0 && o.part_com.empty()) return;
-  monitor::MonitorConfig cfg = config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
+  monitor::MonitorConfig cfg = cli::config_of(twin, o.twin.empty() ? "the reference twin" : o.twin);
   cli::apply_part_com(cfg, o.part_com);
-  apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+  cli::apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   twin.monitor_json = cfg.to_json();
 }
 
@@ -103,7 +94,7 @@ int run_evaluate(const EvaluateOptions& o) {
     inputs.push_back(o.save_twin);
     require_output(o.trend_csv, inputs);
   }
-  ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : split_filter(o.filter), o.all_programs)
+  ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : cli::split_filter(o.filter), o.all_programs)
                                          : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
   for (size_t i = 0; i < files.size(); ++i)
@@ -155,11 +146,11 @@ int run_report(const ReportOptions& o) {
   const auto adjust = [&](monitor::MonitorConfig& cfg) {
     if (o.static_threshold) cfg.use_dynamic = false;
     if (!o.filter.empty()) {
-      cfg.residual_filter = split_filter(o.filter);
+      cfg.residual_filter = cli::split_filter(o.filter);
       cfg.validate(twin.n_dof());
     }
     cli::apply_part_com(cfg, o.part_com);
-    apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
+    cli::apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   };
   cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload, adjust);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
@@ -184,15 +175,15 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                 "pick-and-place) instead of one set per program; wider thresholds (misses payload loss on the figure-eight); "
                 "for comparison");
   sub->add_option("--sensitivity", o->sensitivity,
-                  std::string(kSensitivityHelp) + ", over the twin's; e.g. to measure the false-alarm margin of the long runs")
+                  std::string(cli::kSensitivityHelp) + ", over the twin's; e.g. to measure the false-alarm margin of the long runs")
       ->delimiter(',')
       ->allow_extra_args(false);
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--raise-after", o->raise_after, cli::kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, cli::kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
   sub->add_option("--part-com", o->part_com, std::string(cli::kPartComHelp) + "; written into the twin scored (and --save-twin)")
       ->expected(3)
       ->allow_extra_args(false);
-  auto* filter = sub->add_option("--filter", o->filter, kFilterHelp);
+  auto* filter = sub->add_option("--filter", o->filter, cli::kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   auto* trend_csv = sub->add_option("--trend-csv", o->trend_csv,
                   "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
@@ -236,22 +227,22 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   sub->add_option("--twin", o->twin, "Twin file")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
-  sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)")->check(kProgramNameGiven);
+  sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)")->check(cli::kProgramNameGiven);
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");
   sub->add_option("--payload-mass", o->payload_mass, "Payload the program declares [kg] (default: the twin file's 'payload')")->check(twinwatch::cli::nonnegative_number());
   sub->add_option("--payload-com", o->payload_com, "Payload COM in the flange frame [m] (3 numbers; with --payload-mass)")->expected(3)->allow_extra_args(false);
   sub->add_option("--part-com", o->part_com, std::string(cli::kPartComHelp) + ", as 'monitor --part-com'")->expected(3)->allow_extra_args(false);
-  sub->add_option("--column-map", o->column_map, kColumnMapHelp);
+  sub->add_option("--column-map", o->column_map, cli::kColumnMapHelp);
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Keep the payload the twin starts with for the whole run, as 'monitor --keep-payload': no diagnosed change is "
                 "followed and no declared payload taken (default: the twin follows both, as 'monitor' does)");
-  sub->add_option("--sensitivity", o->sensitivity, std::string(kSensitivityHelp) + ", as 'monitor --sensitivity'")
+  sub->add_option("--sensitivity", o->sensitivity, std::string(cli::kSensitivityHelp) + ", as 'monitor --sensitivity'")
       ->delimiter(',')
       ->allow_extra_args(false);
-  sub->add_option("--raise-after", o->raise_after, kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
-  sub->add_option("--observer-raise-after", o->observer_raise_after, kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--raise-after", o->raise_after, cli::kRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
+  sub->add_option("--observer-raise-after", o->observer_raise_after, cli::kObserverRaiseAfterHelp)->check(twinwatch::cli::whole_number(1, 1000));
   sub->add_flag("--static", o->static_threshold, "Use the static threshold (UR3e §4.1) instead of the dynamic one, as 'monitor --static'");
-  sub->add_option("--filter", o->filter, kFilterHelp);
+  sub->add_option("--filter", o->filter, cli::kFilterHelp);
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_report(*o)); });
 }};
