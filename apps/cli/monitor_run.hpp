@@ -78,12 +78,13 @@ inline constexpr const char* kObserverRaiseAfterHelp =
     "raises contacts one sample earlier but leaves less margin against false alarms (docs/validation.md, 'Observer debounce')";
 /// --filter "iir" | "fir" | "k1,k2,...,kn" -> MonitorConfig::residual_filter (checked by validate())
 std::vector<std::string> split_filter(const std::string& s);
-/// --part-com X Y Z: where a part picked with no payload declared sits (MonitorConfig::part_com) over
-/// the twin's; empty: keep it. Throws InvalidArgument naming the option for a point beyond 1 m.
 inline constexpr const char* kPartComHelp =
-    "Where a part the robot picks sits when no payload is declared [m, flange frame; 3 numbers] (default: the twin's "
+    "Where a part the robot picks sits when the twin holds no payload (none declared; with one, a change is fitted at "
+    "its centre of mass) [m, flange frame; 3 numbers] (default: the twin's "
     "part_com_m, else 0 0 0.04): a payload change is fitted there and, followed, predicted as a point mass there. A part "
     "held farther out than assumed leaves a model error at the wrist after the twin follows it (false alarms)";
+/// --part-com X Y Z: where a part picked with no payload declared sits (MonitorConfig::part_com) over
+/// the twin's; empty: keep it. Throws InvalidArgument naming the option for a point beyond 1 m.
 void apply_part_com(monitor::MonitorConfig& cfg, const std::vector<double>& xyz);
 /// The twin's monitor block; throws InvalidArgument naming `path` when it has none
 monitor::MonitorConfig config_of(const ident::TwinModel& twin, const std::string& path);

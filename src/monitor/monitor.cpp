@@ -518,7 +518,7 @@ void MonitorConfig::validate(int n) const {
   if (!(resume_widen >= 1.0 && std::isfinite(resume_widen)))
     throw InvalidArgument(fmt::format("resume_widen is {}, must be finite and >= 1", resume_widen));
   if (!part_com.allFinite() || part_com.norm() > model::kPayloadComMax)
-    throw InvalidArgument(fmt::format("part_com_m is ({:g}, {:g}, {:g}) m, {:.3g} m from the flange: expected a centre of mass within {:g} m of it "
+    throw InvalidArgument(fmt::format("part_com_m is ({:g}, {:g}, {:g}) m, {:g} m from the flange: expected a centre of mass within {:g} m of it "
                                       "(in mm? give metres)",
                                       part_com.x(), part_com.y(), part_com.z(), part_com.norm(), model::kPayloadComMax));
   if (observer_raise_after < 0)
@@ -637,6 +637,9 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
       if (!a.is_array() || a.size() != 3)
         m.fail("part_com_m", fmt::format("expected 3 numbers (x, y, z in the flange frame, m), got {}", json_brief(a)));
       for (int k = 0; k < 3; ++k) c.part_com[k] = json_number(a[static_cast<size_t>(k)], origin, json_element(m.field("part_com_m"), static_cast<size_t>(k)));
+      if (!c.part_com.allFinite() || c.part_com.norm() > model::kPayloadComMax)
+        m.fail("part_com_m", fmt::format("expected a point within {:g} m of the flange, got {:g} m away (in mm? give metres)", model::kPayloadComMax,
+                                         c.part_com.norm()));
     }
     // the sets learned per program
     if (m.has("programs")) {
@@ -1668,7 +1671,7 @@ Eigen::Vector3d Monitor::payload_com_in_link() const { return twin_.robot().desc
 
 model::RigidBodyInertia Monitor::payload_of(double mass, bool as_declared) const {
   // what the diagnosis fitted: a point mass change at o.payload_com (run_diagnosis), the declared
-  // payload's centre of mass or, with none declared, a part gripped 4 cm out from the flange
+  // payload's centre of mass or, with none declared, a part gripped at MonitorConfig::part_com
   const model::RigidBodyInertia& had = twin_.payload();
   model::RigidBodyInertia now;
   if (mass > 0.0) {

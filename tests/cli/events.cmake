@@ -36,9 +36,9 @@ set_tests_properties(cli.events_runs PROPERTIES FIXTURES_REQUIRED "twin;recordin
 # Ctrl-C once the run has its row stops the replay in order; what was watched is reported and the
 # run's row says 'stopped' with its samples; the exit status is 130 (128 + SIGINT), as the signal's
 add_test(NAME cli.monitor_recording_stopped_by_a_signal COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; rm -f ${d}/stopped.db; \
-$T simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --duration 1200 -o ${d}/stopped.csv -q || exit 9; \
+$T simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --duration 900 -o ${d}/stopped.csv -q || exit 9; \
 $T monitor --twin ${d}/twin.json ${d}/stopped.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/stopped.db & mp=\$!; \
-for i in \$(seq 1 300); do $T events --db ${d}/stopped.db --runs 2>/dev/null | grep -q running && break; sleep 0.1; done; \
+for i in \$(seq 1 600); do $T events --db ${d}/stopped.db --runs 2>/dev/null | grep -q running && break; sleep 0.1; done; \
 sleep 0.3; kill -INT \$mp; wait \$mp; echo exit=\$?; $T events --db ${d}/stopped.db --runs; rm -f ${d}/stopped.csv")
 set_tests_properties(cli.monitor_recording_stopped_by_a_signal PROPERTIES FIXTURES_REQUIRED "twin"
   PASS_REGULAR_EXPRESSION "stopped at t = [0-9.]+ s, in [^\n]*stopped.csv: what was watched up to there is reported\n[1-9][0-9]+ samples[^\n]*\nexit=130\n[^\n]*status[^\n]*\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +[0-9]+ stopped +[^\n]*stopped.csv"

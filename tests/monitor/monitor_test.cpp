@@ -789,8 +789,9 @@ TEST(MonitorConfig, ThePartsPointIsStoredWhenSetAndCheckedOnReading) {
   c.part_com = Eigen::Vector3d(0.0, 0.0, 150.0);
   EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { c.validate(6); }), ::testing::HasSubstr("part_com_m is (0, 0, 150) m"));
   std::string text = c.to_json();
-  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); }),
-              ::testing::HasSubstr("within 1 m of it (in mm? give metres)"));
+  const std::string far = twinwatch::test::error_text<ParseError>([&] { MonitorConfig::from_json(text, "twin.json"); });
+  EXPECT_THAT(far, ::testing::HasSubstr("monitor.part_com_m"));
+  EXPECT_THAT(far, ::testing::HasSubstr("expected a point within 1 m of the flange, got 150 m away (in mm? give metres)"));
   c.part_com = Eigen::Vector3d(0.0, 0.0, 0.1);
   nlohmann::json j = nlohmann::json::parse(c.to_json());
   j["part_com_m"] = 0.1;  // a number, not a point

@@ -49,6 +49,10 @@ void apply_alert_settings(ident::TwinModel& twin, const EvaluateOptions& o) {
 }
 
 int run_evaluate(const EvaluateOptions& o) {
+  {  // (the point is checked before the reference twin's minute of training)
+    monitor::MonitorConfig probe;
+    cli::apply_part_com(probe, o.part_com);
+  }
   if (o.sweep) {
     if (!o.dirs.empty())
       throw InvalidArgument(fmt::format("--sweep-collisions simulates its own contacts; it takes no scenarios (got {})", o.dirs.front()));

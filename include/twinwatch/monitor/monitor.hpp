@@ -126,14 +126,15 @@ struct MonitorConfig {
   /// declared with no part in the gripper, is a payload change). Off: the twin keeps its payload.
   bool follow_payload = true;
   /// Where a part the robot picks sits when the twin holds no payload to take its centre of mass
-  /// from (none declared, none in the twin) [m, flange frame]: a payload change is fitted at it and,
+  /// from (none declared, none in the twin; with one, a change is fitted at the payload's centre of
+  /// mass, Monitor::payload_com) [m, flange frame]: a payload change is fitted at it and,
   /// followed, predicted with a point mass there. Default 4 cm out along the flange axis. A part that
   /// sits farther out and is followed at the default leaves a model error at the wrist joints: on the
   /// virtual UR3e, 0.6 kg picked at 0.15 m raised 3 false alarms in the 5 s after the follow, 1.0 kg
   /// at 0.15 m was followed and dropped again (docs/validation.md, "Where a part sits", session 52).
   /// In the twin file: "part_com_m" (written when not the default); monitor --part-com.
-  Eigen::Vector3d part_com{0.0, 0.0, 0.04};
   static constexpr double kDefaultPartComZ = 0.04;
+  Eigen::Vector3d part_com{0.0, 0.0, kDefaultPartComZ};
   /// Where the drive's direction is in doubt (ident::TwinModel::drive_in_doubt), read the current on
   /// the nearer of its two levels and the observer's torque on the level nearer the twin's
   /// (resolve_drive_doubt, measured_drive_torque). Off: the blended prediction and, without targets,
