@@ -42,12 +42,20 @@ namespace {
 // its summary); the handler itself only calls dup2, which is async-signal-safe.
 int g_dev_null = -1;
 bool g_stdout_tty = false, g_stderr_tty = false;
+// A second signal while the first one's orderly stop runs (a store locked for its last 10 s, a
+// slow disk): the user insists, and the process ends at once, as the signal ends a process that
+// does not catch it (signal and raise are async-signal-safe).
+void stop_now(int sig) {
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
 }  // namespace
 
 void install_interrupt_handler() {
   struct sigaction sa {};
   sa.sa_handler = [](int sig) {
-    g_signal = sig;
+    if (g_interrupted.load()) stop_now(sig);
+    g_signal = sig;  // (before the flag: a verb that sees the flag reads the signal)
     g_interrupted = true;
   };
   sigemptyset(&sa.sa_mask);
@@ -58,7 +66,8 @@ void install_interrupt_handler() {
   g_stderr_tty = ::isatty(STDERR_FILENO) != 0;
   struct sigaction hup {};
   hup.sa_handler = [](int sig) {
-    g_signal = sig;
+    if (g_interrupted.load()) stop_now(sig);
+    g_signal = sig;  // (before the flag: a verb that sees the flag reads the signal)
     g_interrupted = true;
     if (g_dev_null >= 0 && g_stdout_tty) ::dup2(g_dev_null, STDOUT_FILENO);
     if (g_dev_null >= 0 && g_stderr_tty) ::dup2(g_dev_null, STDERR_FILENO);

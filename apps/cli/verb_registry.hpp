@@ -44,7 +44,8 @@ void set_exit_code(int code);
 int exit_code();
 
 /// Long-running verbs (serve-robot, record, live monitor): Ctrl-C / SIGTERM set a flag that the
-/// verb polls, so it can stop cleanly (flush files, say goodbye to clients) instead of dying.
+/// verb polls, so it can stop cleanly (flush files, say goodbye to clients) instead of dying. A
+/// second signal ends the process at once, as an uncaught signal does.
 void install_interrupt_handler();
 bool interrupted();
 /// The signal that set interrupted() (SIGINT, SIGTERM, SIGHUP; 0: none)

@@ -226,6 +226,18 @@ $tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payloa
 echo exit=$?; wait; echo rows=$(sqlite3 $db 'SELECT count(*) FROM events;') lines=$(wc -l < ${d}/locked.jsonl)")
 set_tests_properties(cli.monitor_store_locked_by_a_reader PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" TIMEOUT 60
   PASS_REGULAR_EXPRESSION "events_locked.db: locked by another connection: events wait to be stored [^\n]*\n[^\n]*the store is free again[^\n]*\nexit=0\nrows=2 lines=1\n")
+# a second signal ends the process at once (session 52): a monitor waiting at its end for a store
+# another connection holds locked (up to 10 s) keeps waiting after one Ctrl-C, and a second ends it
+# (exit 130, as an uncaught SIGINT); its event is in --events, written before the wait
+add_test(NAME cli.monitor_second_signal_ends_it_at_once
+  COMMAND sh -c "tw=$<TARGET_FILE:twinwatch>; db=${d}/events_insist.db; rm -f $db ${d}/insist.jsonl; \
+$tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db $db -q || exit 9; \
+printf 'BEGIN;\\nSELECT count(*) FROM events;\\n.shell sleep 15\\nCOMMIT;\\n' | sqlite3 $db > /dev/null 2>&1 & lp=\$!; sleep 1; \
+$tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db $db --events ${d}/insist.jsonl -q 2>&1 & mp=\$!; \
+sleep 2; kill -INT \$mp; sleep 0.5; kill -INT \$mp; wait \$mp; \
+echo exit=\$? lines=\$(wc -l < ${d}/insist.jsonl); kill \$lp 2>/dev/null; true")
+set_tests_properties(cli.monitor_second_signal_ends_it_at_once PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "exit=130 lines=1" FAIL_REGULAR_EXPRESSION "not stored")
 # --events-open: the alert's lines while it is open ("open": true, named by the channel that raised
 # it), then its closing line; refused without --events or --json
 add_test(NAME cli.monitor_events_open COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5

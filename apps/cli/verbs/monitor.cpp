@@ -871,7 +871,7 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "Ctrl-C, SIGTERM or SIGHUP stop it in order: what was watched is reported and stored. Watching a\n"
       "recording, the exit status is then 128 + the signal (130 for Ctrl-C: it was not watched to its end);\n"
       "watching a live stream (--rtde), 0, or 1 when the stream had been silent for more than 1.5 s before\n"
-      "the stop (a stream_fault event says so)."));
+      "the stop (a stream_fault event says so). A second signal ends it at once (128 + the signal)."));
   const auto check = twinwatch::cli::add_monitor_options(sub, o);
   sub->callback([=] {
     check();

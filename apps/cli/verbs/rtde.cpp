@@ -367,7 +367,8 @@ twinwatch::cli::VerbRegistrar reg_record{"record", 30, [](CLI::App& app) {
   sub->footer(twinwatch::cli::with_exit_status(
       "Ctrl-C, SIGTERM or SIGHUP stop it in order: what was received is written and the summary says the\n"
       "run was stopped. The exit status is then 0, or 1 when the stream had been silent for more than 1.5 s\n"
-      "before the stop (a warning says for how long), as at the end of --duration."));
+      "before the stop (a warning says for how long), as at the end of --duration. A second signal ends it at\n"
+      "once (128 + the signal)."));
   sub->add_option("--rtde", o->endpoint, "Controller address HOST[:PORT] (port 30004 by default)")->required();
   sub->add_option("-o,--output", o->output, "Recording CSV to write")->required();
   sub->add_option("--frequency", o->frequency, "Output rate [Hz], 0 < f <= 500 (CB3: 125)")->capture_default_str();
@@ -397,7 +398,8 @@ twinwatch::cli::VerbRegistrar reg_serve{"serve-robot", 31, [](CLI::App& app) {
   auto o = std::make_shared<ServeOptions>();
   auto* sub = app.add_subcommand("serve-robot", "Run the virtual robot in real time and serve it over RTDE like a UR e-Series controller");
   sub->footer(twinwatch::cli::with_exit_status(
-      "Ctrl-C, SIGTERM or SIGHUP stop it in order (its clients are told, the summary printed): exit status 0."));
+      "Ctrl-C, SIGTERM or SIGHUP stop it in order (its clients are told, the summary printed): exit status 0.\n"
+      "A second signal ends it at once (128 + the signal)."));
   sub->add_option("SCENARIO", o->scenario, "Scenario YAML (see scenarios/ur3e/ and docs/scenarios.md)")
       ->required()
       ->check(CLI::ExistingFile);
