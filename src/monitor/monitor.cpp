@@ -517,7 +517,7 @@ void MonitorConfig::validate(int n) const {
   if (clear_after < 1) throw InvalidArgument(fmt::format("clear_after is {}, must be >= 1", clear_after));
   if (!(resume_widen >= 1.0 && std::isfinite(resume_widen)))
     throw InvalidArgument(fmt::format("resume_widen is {}, must be finite and >= 1", resume_widen));
-  if (!part_com.allFinite() || part_com.norm() > model::kPayloadComMax)
+  if (!part_com_in_reach(part_com))
     throw InvalidArgument(fmt::format("part_com_m is ({:g}, {:g}, {:g}) m, {:g} m from the flange: expected a centre of mass within {:g} m of it "
                                       "(in mm? give metres)",
                                       part_com.x(), part_com.y(), part_com.z(), part_com.norm(), model::kPayloadComMax));
@@ -567,7 +567,7 @@ std::string MonitorConfig::to_json() const {
   if (reversal_load_max.size()) j["reversal_load_max"] = vec_json(reversal_load_max);
   if (crawl_max.size()) j["crawl_max_s"] = vec_json(crawl_max);
   if (std::isfinite(longest_rest)) j["longest_rest_s"] = longest_rest;
-  if (part_com != Eigen::Vector3d(0.0, 0.0, kDefaultPartComZ)) j["part_com_m"] = {part_com.x(), part_com.y(), part_com.z()};
+  if (part_com != default_part_com()) j["part_com_m"] = {part_com.x(), part_com.y(), part_com.z()};
   for (const auto& [name, set] : programs) {
     j["programs"][name] = {{"static_level_A", vec_json(set.static_level)}, {"dynamic", dynamic_json(set.dynamic)},
                            {"runs", set.runs}, {"seconds", set.seconds}};
@@ -637,7 +637,7 @@ MonitorConfig MonitorConfig::from_json(const std::string& text, const std::strin
       if (!a.is_array() || a.size() != 3)
         m.fail("part_com_m", fmt::format("expected 3 numbers (x, y, z in the flange frame, m), got {}", json_brief(a)));
       for (int k = 0; k < 3; ++k) c.part_com[k] = json_number(a[static_cast<size_t>(k)], origin, json_element(m.field("part_com_m"), static_cast<size_t>(k)));
-      if (!c.part_com.allFinite() || c.part_com.norm() > model::kPayloadComMax)
+      if (!part_com_in_reach(c.part_com))
         m.fail("part_com_m", fmt::format("expected a point within {:g} m of the flange, got {:g} m away (in mm? give metres)", model::kPayloadComMax,
                                          c.part_com.norm()));
     }

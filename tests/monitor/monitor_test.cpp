@@ -756,7 +756,7 @@ TEST_F(MonitorLoop, APartFollowedWhereItSitsLeavesTheWristLessModelError) {
     w.payload = m.twin().payload();
     return w;
   };
-  const Watched assumed = watch(Eigen::Vector3d(0.0, 0.0, MonitorConfig::kDefaultPartComZ));
+  const Watched assumed = watch(MonitorConfig::default_part_com());
   const Watched told = watch(Eigen::Vector3d(0.0, 0.0, 0.15));
   // both find the pick and follow it, each at the point it was given
   for (const Watched* w : {&assumed, &told}) {

@@ -81,7 +81,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (o.static_threshold) cfg.use_dynamic = false;
   cfg.follow_payload = !o.keep_payload;
   cli::apply_part_com(cfg, o.part_com);
-  if (twin.payload().mass > 0.0 && cfg.part_com != Eigen::Vector3d(0.0, 0.0, monitor::MonitorConfig::kDefaultPartComZ) && !o.quiet && !o.json)
+  if (twin.payload().mass > 0.0 && cfg.part_com != monitor::MonitorConfig::default_part_com() && !o.quiet && !o.json)
     fmt::print(stderr, "note: the twin holds a {:.2f} kg payload: a payload change is fitted at its centre of mass; the part's point ({:g}, {:g}, {:g}) m "
                        "({}) applies once it holds none\n",
                twin.payload().mass, cfg.part_com.x(), cfg.part_com.y(), cfg.part_com.z(), o.part_com.empty() ? "the twin's part_com_m" : "--part-com");
@@ -940,7 +940,7 @@ void apply_part_com(monitor::MonitorConfig& cfg, const std::vector<double>& xyz)
   if (xyz.empty()) return;
   if (xyz.size() != 3) throw InvalidArgument(fmt::format("--part-com: expected 3 numbers (x y z, m), got {}", xyz.size()));
   const Eigen::Vector3d c(xyz[0], xyz[1], xyz[2]);
-  if (!c.allFinite() || c.norm() > model::kPayloadComMax)
+  if (!monitor::MonitorConfig::part_com_in_reach(c))
     throw InvalidArgument(fmt::format("--part-com: expected a point within {:g} m of the flange, got ({:g}, {:g}, {:g}), {:g} m away (in mm? give metres)",
                                       model::kPayloadComMax, c.x(), c.y(), c.z(), c.norm()));
   cfg.part_com = c;

@@ -20,6 +20,7 @@
 #include "twinwatch/core/sample.hpp"
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/twin_model.hpp"
+#include "twinwatch/model/robot_model.hpp"
 #include "twinwatch/monitor/debounce.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
@@ -134,7 +135,11 @@ struct MonitorConfig {
   /// at 0.15 m was followed and dropped again (docs/validation.md, "Where a part sits", session 52).
   /// In the twin file: "part_com_m" (written when not the default); monitor --part-com.
   static constexpr double kDefaultPartComZ = 0.04;
-  Eigen::Vector3d part_com{0.0, 0.0, kDefaultPartComZ};
+  static Eigen::Vector3d default_part_com() { return {0.0, 0.0, kDefaultPartComZ}; }
+  /// A point a part can sit at: finite and within model::kPayloadComMax of the flange (the twin
+  /// file's reader, validate() and the CLI options each say so in their own words)
+  static bool part_com_in_reach(const Eigen::Vector3d& c) { return c.allFinite() && c.norm() <= model::kPayloadComMax; }
+  Eigen::Vector3d part_com = default_part_com();
   /// Where the drive's direction is in doubt (ident::TwinModel::drive_in_doubt), read the current on
   /// the nearer of its two levels and the observer's torque on the level nearer the twin's
   /// (resolve_drive_doubt, measured_drive_torque). Off: the blended prediction and, without targets,
