@@ -12,6 +12,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev libyaml-cpp-dev libsqlite3-dev
   libboost-dev libceres-dev libnlopt-cxx-dev libnlopt-dev libglpk-dev coinor-libclp-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev sqlite3 curl
+  libmosquitto-dev mosquitto mosquitto-clients openssl
 )
 
 if [[ "${SKIP_APT:-0}" != "1" ]]; then

@@ -13,6 +13,7 @@
 #include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/monitor/event.hpp"
 #include "twinwatch/monitor/monitor.hpp"
+#include "mqtt_sink.hpp"
 
 namespace twinwatch::cli {
 
@@ -35,6 +36,7 @@ struct MonitorOptions {
   std::string started_at;  // a recording: the wall-clock time of its first sample (ISO 8601 with zone)
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
   bool events_open = false;  // --events-open: a line at each raise and re-diagnosis too ("open": true)
+  MqttCliOptions mqtt;       // --mqtt: the events and the run's state to a broker
 };
 
 /// What another front end sees of the loop (each may be empty). Called on the loop's thread.

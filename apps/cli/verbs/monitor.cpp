@@ -236,6 +236,11 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     for (const auto& source : sources) watched += (watched.empty() ? "" : " ") + source.second;
     store->begin_run(watched, stored_path(o.twin), o.program);
   }
+  // --mqtt: the events and the run's state on a broker (it connects in the background)
+  cli::MqttSink mqtt(o.mqtt, o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde, stored_path(o.twin),
+                o.program, store ? store->run() : 0);
+  constexpr int kMqttEndWaitMs = 10000;  // as long as the store's lock is waited for
+  const bool mqtt_quiet = o.quiet || o.json;
   // A recording watched by `monitor` itself (under serve its hooks stop it): from here, where the run
   // has its row in the store, Ctrl-C, SIGTERM and SIGHUP stop the replay in order. What was watched
   // is reported and stored, the run's status is 'stopped' (it stayed 'running' when the signal ended
@@ -294,6 +299,21 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     // the run's row says it failed (what failed is on stderr)
     store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), "failed"}, kEndLockWaitMs);
   }};
+  // the broker hears that the run failed (and gets the events that wait; not for long: the error is said)
+  struct OnUnwindMqtt {
+    std::function<void()> f;
+    ~OnUnwindMqtt() {
+      if (std::uncaught_exceptions() == 0) return;
+      try {
+        f();
+      } catch (...) {
+      }
+    }
+  } unwind_mqtt{[&] {
+    if (!mqtt.active()) return;
+    const long left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), 2000, mqtt_quiet);
+    if (left > 0) fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered\n", mqtt.address(), left);
+  }};
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
   // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
@@ -330,6 +350,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       // alert, its closing line ("open": false) ends it
       const std::string line = e.to_json_line();
       write_event_line(line);
+      mqtt.event(std::string(monitor::to_string(e.fault)), line);
       if (o.json) {
         fmt::print("{}\n", line);
         std::fflush(stdout);
@@ -352,6 +373,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     // the event its files
     const std::string line = e.to_json_line();
     write_event_line(line);
+    mqtt.event(std::string(monitor::to_string(e.fault)), line);
     if (store) {
       // (behind events already waiting no wait: a burst of events must not stall the stream)
       const int wait_ms = unstored.empty() ? kLiveLockWaitMs : 0;
@@ -393,6 +415,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   const auto push = [&](const RobotSample& s) {
     if (++pushed % 500 == 0) {  // (about a second at 500 Hz)
       if (!unstored.empty()) store_waiting(0);  // (no wait)
+      mqtt.say(mqtt_quiet);
       if (client && pushed % 5000 == 0) mon.forget_events_before(s.timestamp - kKeepEventsS);
     }
     const monitor::Excursion x = watch.check(s);
@@ -521,6 +544,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         const double silent = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
         if (client->stats().received > 0 && silent > cli::outage_limit(client->stats().frequency)) mon.stream_outage(silent);
         if (!unstored.empty()) store_waiting(0);
+        mqtt.say(mqtt_quiet);
       }
     }
     client->stop();
@@ -567,6 +591,14 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     log::warn(fmt::format("{}: the run's end (samples, events, status) is not stored: another connection held the store locked for {:g} s",
                           o.db_path, kEndLockWaitMs / 1000.0));
   close_written(trace, o.trace);
+  // the broker: the run's end, and what waits for it (an error, as an event not stored is)
+  const long mqtt_left =
+      mqtt.finish(status, mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), kMqttEndWaitMs, mqtt_quiet);
+  if (mqtt_left > 0)
+    fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered: the broker did not take them within {:g} s{}\n", mqtt.address(),
+               mqtt_left, kMqttEndWaitMs / 1000.0,
+               o.events_path.empty() && o.db_path.empty() ? ""
+                                                          : fmt::format(" (the events are in {})", o.db_path.empty() ? o.events_path : o.db_path));
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
   const double declared = mon.declared_payload(), ended = mon.twin().payload().mass;
   if (chatty && std::isfinite(declared) && !mon.declaration_taken())
@@ -605,8 +637,9 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   }
   // (a recording stopped part-way: as the signal would have ended the process, its files now complete)
   if (own_stop && replay_stopped) return 128 + cli::interrupt_signal();
-  // (what was received is analysed and stored; a script learns that the end was not watched)
-  return lost_at_end ? 1 : 0;
+  // (what was received is analysed and stored; a script learns that the end was not watched, or
+  // that the broker did not get every event)
+  return lost_at_end || mqtt_left > 0 ? 1 : 0;
 }
 
 struct ThresholdOptions {
@@ -989,7 +1022,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
   sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   auto* events_open = sub->add_flag("--events-open", o->events_open,
-                                     "With --events or --json: also a line when an alert is raised and at each re-diagnosis (\"open\": true, "
+                                     "With --events, --json or --mqtt: also a line when an alert is raised and at each re-diagnosis (\"open\": true, "
                                      "\"class\" \"unknown\" until diagnosed); \"t_detected\" names the alert, and its line with \"open\": "
                                      "false, written when it ends, ends it. Default: one line per event, when it ends. The store (--db) keeps "
                                      "the closed events only");
@@ -1029,8 +1062,10 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
                   "per joint to this CSV (to see why an alert was raised or late)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
+  const auto mqtt_check = add_mqtt_options(sub, o->mqtt);
   return [=] {
-    refuse_unless({events_open}, !o->events_path.empty() || o->json, "with --events or --json");
+    mqtt_check();
+    refuse_unless({events_open}, !o->events_path.empty() || o->json || !o->mqtt.address.empty(), "with --events, --json or --mqtt");
     refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
     refuse_unless({started}, o->rtde.empty(), "with a RECORDING; a live stream's wall clock is read against this machine's");
     refuse_unless({split_every}, !o->record_to.empty(), "with --record");

@@ -1,0 +1,57 @@
+#pragma once
+// monitor's and serve's --mqtt: the events and the run's state to an MQTT broker (ui::MqttPublisher;
+// topics and delivery in include/twinwatch/ui/mqtt.hpp, for users in docs/events.md).
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace twinwatch::ui {
+class MqttPublisher;
+}
+
+namespace twinwatch::cli {
+
+/// What the command line says of the broker.
+struct MqttCliOptions {
+  std::string address;  ///< --mqtt HOST[:PORT] ("": no MQTT)
+  std::string topic = "twinwatch", user, cafile, client_id;
+  int qos = 1;
+};
+
+/// Adds --mqtt, --mqtt-topic, --mqtt-qos, --mqtt-user, --mqtt-cafile, --mqtt-client-id to `sub`;
+/// returns the check to run in the verb's callback (the --mqtt-* options need --mqtt; a build
+/// without MQTT refuses --mqtt).
+std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o);
+
+/// The run's events and state on the broker, for monitor's loop. Does nothing when --mqtt is not given.
+class MqttSink {
+ public:
+  /// Starts the publisher (it connects in the background: an unreachable broker is a note, not a
+  /// stop) and publishes the state "monitoring". The password comes from $TWINWATCH_MQTT_PASSWORD
+  /// (the command line is visible to every user of the machine). Throws InvalidArgument for
+  /// settings out of range.
+  MqttSink(const MqttCliOptions& o, const std::string& source, const std::string& twin, const std::string& program, long run);
+  ~MqttSink();
+  bool active() const { return pub_ != nullptr; }
+  /// An event's JSON line (as --events writes it) to TOPIC/events/CLASS.
+  void event(const std::string& fault_class, const std::string& json_line);
+  /// Prints what the publisher has to say (connected, lost, refused) on stderr as warnings or
+  /// notes; call it from the loop now and then (about once a second) and at the end.
+  void say(bool quiet);
+  /// The final state ("finished", "stopped", "connection lost", "failed") with the counts, then waits
+  /// up to `wait_ms` for the broker to take what waits; returns how many messages it did not take.
+  long finish(const std::string& state, long samples, long events, int wait_ms, bool quiet);
+  /// "HOST:PORT" for messages.
+  std::string address() const;
+
+ private:
+  // (a deleter of its own: a build without MQTT has no MqttPublisher to destroy)
+  std::unique_ptr<ui::MqttPublisher, void (*)(ui::MqttPublisher*)> pub_;
+  std::string source_, twin_, program_, started_at_;
+  long run_ = 0;
+  std::string status_json(const std::string& state, long samples, long events) const;
+};
+
+}  // namespace twinwatch::cli
