@@ -924,7 +924,7 @@ std::string evaluation_json(const Evaluation& e) {
   return j.dump();
 }
 
-void write_report(const ident::TwinModel& twin_in, const std::string& recording, const model::RigidBodyInertia& payload,
+void write_report(const ident::TwinModel& twin_in, const std::vector<std::string>& recordings, const model::RigidBodyInertia& payload,
                   const std::string& out, const std::optional<sim::Labels>& labels, const device::ColumnMap* map,
                   const std::string& program, bool keep_payload, const std::function<void(monitor::MonitorConfig&)>& adjust) {
   ident::TwinModel twin = twin_in;
@@ -934,16 +934,26 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   // it streams to what the page draws (ui::SeriesEnvelope: at most two points per pixel column) and
   // the tables' figures summed as they come. Held whole, an hour at 500 Hz took 2.8 GB (a shift's
   // recording did not fit this 24 GB machine; docs/validation.md, "A report of a long recording").
-  double t_first = NAN, t_last = NAN;
-  const device::RecordingScan scan = scan_recording(recording, map, twin.robot(), "report", "the report", [&](const RobotSample& s) {
-    if (std::isnan(t_first)) t_first = s.timestamp;
-    t_last = s.timestamp;
-  });
+  // Several recordings are one stream in the order given, as monitor reads them (a shift's hourly
+  // files): each checked, then their columns and times checked against each other
+  if (recordings.empty()) throw InvalidArgument("report: no recording given");
+  if (labels && recordings.size() > 1)
+    throw InvalidArgument(fmt::format("report: --labels shade the faults of one simulated run; {} recordings were given", recordings.size()));
+  const std::string& recording = recordings.front();  // (the one the labels go with)
+  const std::string named = recordings.size() == 1 ? recording
+                                                   : fmt::format("{} … {} ({} files read as one stream)", recording, recordings.back(),
+                                                                 recordings.size());
+  const StreamScan stream = scan_stream(recordings, map, twin.robot(), "report", "the report");
+  const double t_first = stream.first_t.front(), t_last = stream.last_t.back();
+  long total_rows = 0;
+  for (const auto& sc : stream.scans) total_rows += sc.rows;
+  const device::RecordingScan& scan = stream.scans.front();
+  const int n = scan.n_dof;
   const double period = scan.timing.median_period;
   // its tables' R², NRMSE and correlations need a spread of samples: on one row they printed 0 and
   // 2155 % as results (audit of session 22); validate refuses the same
-  if (scan.rows < static_cast<long>(kMinReportSamples))
-    throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", recording, scan.rows, kMinReportSamples));
+  if (total_rows < static_cast<long>(kMinReportSamples))
+    throw InvalidArgument(fmt::format("report: {} has {} sample(s), expected at least {}", named, total_rows, kMinReportSamples));
   // labels shade the fault spans of the run they were written with: another scenario's would shade
   // faults that never happened (and its scoring tables would say so as findings)
   if (labels && period > 0) {
@@ -970,7 +980,7 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   cfg.follow_payload = !keep_payload;  // as `monitor --keep-payload`
   if (adjust) adjust(cfg);
   if (period > 0) cfg.nominal_period = period;
-  cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);  // a jittery logger clock (device::RecordingTiming)
+  cfg.gap_factor = std::max(cfg.gap_factor, stream.gap_factor);  // a jittery logger clock (device::RecordingTiming)
   monitor::Monitor mon(twin, cfg);
   // what the monitor says while it runs (the payload it predicts with, stops, held readings): the
   // report's reader sees what `monitor` prints
@@ -984,7 +994,6 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   mon.on_event = [&](const monitor::Event& e) {
     if (!e.open) envelope_note[{e.t_start, e.t_detected}] = watch.alert_note(e.t_start, e.t_detected);
   };
-  const int n = scan.n_dof;
   const bool observer = cfg.observer_level.size() == n;  // (as Monitor turns it on)
   // every plot spans the recording's timestamps (one time axis for all) at the default width
   ui::Plot frame;
@@ -998,8 +1007,8 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
   // does not judge it either)
   std::vector<signal::FitAccumulator> fit(static_cast<size_t>(n));
   monitor::ResidualVelocityCorrelation correlation(n);
-  device::RecordingReader again(recording, map);
-  const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) {
+  StreamScan::Cut cut;
+  stream.replay(recordings, map, [&](const RobotSample& s) {
     watch.check(s);  // (first, as monitor does: an event closed at this sample sees it)
     mon.push(s);
     const double t = s.timestamp;
@@ -1022,14 +1031,17 @@ void write_report(const ident::TwinModel& twin_in, const std::string& recording,
     for (int j = 0; j < n; ++j) fit[static_cast<size_t>(j)].add(s.current[j], mon.predicted_current()[j]);
     correlation.add(mon.residual(), s.qd);
   });
-  if (replayed < scan.rows)
+  if (cut.file >= 0)
     throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to report on (the file was cut or replaced while it "
                                          "was read): report on a copy",
-                                         recording, replayed, scan.rows));
+                                         recordings[static_cast<size_t>(cut.file)], cut.rows,
+                                         stream.scans[static_cast<size_t>(cut.file)].rows));
   mon.finish();
-  ui::HtmlReport r("twinwatch report — " + std::filesystem::path(recording).filename().string());
-  r.add_paragraph(fmt::format("Recording {} ({} samples, {:.1f} s), twin {} identified from: {}. Thresholds: {}.", recording,
-                              scan.rows, t_last - t_first, twin.robot_name(), fmt::join(twin.recordings, ", "),
+  ui::HtmlReport r("twinwatch report — " + std::filesystem::path(recording).filename().string() +
+                   (recordings.size() > 1 ? fmt::format(" … {}", std::filesystem::path(recordings.back()).filename().string()) : ""));
+  r.add_paragraph(fmt::format("Recording{} {} ({} samples, {:.1f} s), twin {} identified from: {}. Thresholds: {}.",
+                              recordings.size() > 1 ? "s" : "", recordings.size() > 1 ? fmt::format("{}", fmt::join(recordings, ", ")) : recording,
+                              total_rows, t_last - t_first, twin.robot_name(), fmt::join(twin.recordings, ", "),
                               program.empty() ? std::string("the default set") : fmt::format("the set of program '{}'", program)));
   // the twin is only known where it was identified: beyond that motion a residual may be its model error
   if (!watch.known())

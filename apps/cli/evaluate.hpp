@@ -141,12 +141,14 @@ std::string sweep_json(const Sweep& s, const SweepOptions& o);
 void print_evaluation(const Evaluation& e);
 std::string evaluation_json(const Evaluation& e);
 
-/// Writes a self-contained HTML report for one recording monitored by the twin (UR3e Fig. 8-13
-/// style plots and Tables 3/5); `labels` (evaluation only): the true faults, shaded.
+/// Writes a self-contained HTML report for recordings monitored by the twin (UR3e Fig. 8-13 style
+/// plots and Tables 3/5); several are read as one stream, as `monitor` reads them (StreamScan: the
+/// parts `record --split-every` writes); `labels` (evaluation only, one recording): the true faults,
+/// shaded.
 /// `map`: a foreign log's column map (none: RTDE column names). `keep_payload`: as `monitor
 /// --keep-payload` (MonitorConfig::follow_payload off). `adjust`: the user's alert settings over the
 /// twin's (monitor's --sensitivity, --static, --raise-after, ...), applied after the program's set.
-void write_report(const ident::TwinModel& twin, const std::string& recording, const model::RigidBodyInertia& payload,
+void write_report(const ident::TwinModel& twin, const std::vector<std::string>& recordings, const model::RigidBodyInertia& payload,
                   const std::string& out, const std::optional<sim::Labels>& labels = std::nullopt, const device::ColumnMap* map = nullptr,
                   const std::string& program = "", bool keep_payload = false,
                   const std::function<void(monitor::MonitorConfig&)>& adjust = {});

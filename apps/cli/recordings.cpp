@@ -320,6 +320,74 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
   return scan;
 }
 
+StreamScan scan_stream(const std::vector<std::string>& files, const device::ColumnMap* map, const model::RobotModel& robot,
+                       const std::string& verb, const std::string& user, const std::function<void(const std::string&)>& before_each) {
+  StreamScan out;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const std::string& f = files[i];
+    double first = std::numeric_limits<double>::quiet_NaN(), last = first;
+    if (before_each) before_each(f);
+    out.scans.push_back(scan_recording(f, map, robot, verb, user, [&](const RobotSample& s) {
+      if (std::isnan(first)) first = s.timestamp;
+      last = s.timestamp;
+    }));
+    const device::RecordingScan& scan = out.scans.back();
+    if (i > 0) {
+      const std::string& before = files[i - 1];
+      const device::RecordingScan& head = out.scans.front();
+      if (scan.n_dof != head.n_dof || scan.present != head.present)
+        throw InvalidArgument(fmt::format("{}: its header's columns are not those of {}{}: the files read as one stream must be "
+                                          "parts of one recording, with the same columns",
+                                          f, files.front(),
+                                          scan.n_dof != head.n_dof ? fmt::format(" ({} joints against {})", scan.n_dof, head.n_dof)
+                                                                   : std::string()));
+      if (!(first > out.last_t.back()))
+        throw InvalidArgument(fmt::format("{}: it starts at t = {:.3f} s, not after {} ends (t = {:.3f} s): the files are read as one "
+                                          "stream in the order given; give them in the order they were recorded",
+                                          f, first, before, out.last_t.back()));
+      const double p0 = head.timing.median_period, p = scan.timing.median_period;
+      if (p0 > 0.0 && p > 0.0 && std::abs(p / p0 - 1.0) > 0.05)
+        log::warn(fmt::format("{} runs at {:.0f} Hz, {} at {:.0f} Hz: the monitor filters them all at the first one's rate", f, 1.0 / p,
+                              files.front(), 1.0 / p0));
+    }
+    out.first_t.push_back(first);
+    out.last_t.push_back(last);
+    out.gap_factor = std::max(out.gap_factor, scan.timing.gap_factor);
+  }
+  return out;
+}
+
+size_t StreamScan::file_at(double t) const {
+  size_t i = 0;
+  while (i + 1 < first_t.size() && first_t[i + 1] <= t) ++i;
+  return i;
+}
+
+long StreamScan::replay(const std::vector<std::string>& files, const device::ColumnMap* map, const std::function<void(RobotSample&)>& each,
+                        Cut* cut) const {
+  double previous = std::numeric_limits<double>::quiet_NaN();
+  long total = 0;
+  if (cut) *cut = Cut{};
+  for (size_t i = 0; i < files.size() && i < scans.size(); ++i) {
+    // the rows the first pass read and checked (a file still being written has more by now)
+    device::RecordingReader again(files[i], map);
+    bool first_row = true;
+    const long k = device::replay_rows(again, scans[i], [&](RobotSample& s) {
+      // (the step from the file before: a gap as the first file's timing measures one)
+      if (first_row && !std::isnan(previous) && scans.front().timing.is_gap(s.timestamp - previous)) s.gap_before = true;
+      first_row = false;
+      previous = s.timestamp;
+      each(s);
+    });
+    total += k;
+    if (k < scans[i].rows) {
+      if (cut) *cut = Cut{static_cast<long>(i), k};
+      break;
+    }
+  }
+  return total;
+}
+
 void check_units(const device::Recording& rec, const model::RobotModel& robot) {
   UnitsCheck check(rec.path, rec.n_dof, rec.present, robot);
   check.check_period(rec.median_period);

@@ -78,6 +78,33 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
                                      const std::string& verb, const std::string& user,
                                      const std::function<void(const RobotSample&)>& each = {});
 
+/// Several recordings read as one stream in the order given (monitor's and report's RECORDING...: the
+/// parts `record --split-every` writes, or a shift's files): each is checked on its own
+/// (scan_recording; `before_each` is called with its path first, may be empty), then they must share
+/// their columns and follow each other in time (InvalidArgument naming the file otherwise); a file at
+/// another rate than the first is a warning. The step from one file's last sample to the next one's
+/// first is judged as any other step: a jump is a gap.
+struct StreamScan {
+  std::vector<device::RecordingScan> scans;  ///< per file, in order
+  std::vector<double> first_t, last_t;       ///< [s] per file: its first and last timestamp
+  double gap_factor = 0.0;                   ///< the largest of the files' (a jittery logger clock)
+  /// Where a replay ended early: a file with fewer rows than were checked (cut or replaced meanwhile).
+  struct Cut {
+    long file = -1;  ///< its index (-1: none)
+    long rows = 0;   ///< the rows it had
+  };
+  /// The second pass over every file, in order (device::replay_rows), a jump between two files marked
+  /// as a gap (gap_before) as the first file's timing measures one; `each` may throw to stop. Returns
+  /// the rows replayed; a cut file ends the replay there, said in `cut` (may be null).
+  long replay(const std::vector<std::string>& files, const device::ColumnMap* map, const std::function<void(RobotSample&)>& each,
+              Cut* cut = nullptr) const;
+  /// The index of the file in which controller time `t` lies (0 before the first).
+  size_t file_at(double t) const;
+};
+StreamScan scan_stream(const std::vector<std::string>& files, const device::ColumnMap* map, const model::RobotModel& robot,
+                       const std::string& verb, const std::string& user,
+                       const std::function<void(const std::string&)>& before_each = {});
+
 inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's |current| in a training run
 
 /// For the learners (identify, thresholds): check_units, and then a current beyond

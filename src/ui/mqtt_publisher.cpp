@@ -167,8 +167,11 @@ struct MqttPublisher::Impl {
       p->last_failure.clear();
     } else {
       // a refusal by the broker (CONNACK): credentials, a client id it rejects, ...
-      std::string why = fmt::format("the broker at {} refused the connection: {}", p->s.address(), mosquitto_connack_string(rc));
-      while (why.back() == '.') why.pop_back();
+      std::string said = mosquitto_connack_string(rc);  // "Connection Refused: not authorised."
+      if (said.rfind("Connection Refused: ", 0) == 0) said.erase(0, 20);
+      while (!said.empty() && said.back() == '.') said.pop_back();
+      std::string why = fmt::format("the broker at {} refused the connection: {}", p->s.address(), said);
+      if (rc == 4 || rc == 5) why += " (check the user name and password)";  // (CONNACK 4: bad user name or password, 5: not authorised)
       if (why != p->last_failure) p->note(why + "; retrying, events are kept until it takes them");
       p->last_failure = why;
       p->link = Link::Down;

@@ -246,7 +246,7 @@ set_tests_properties(cli.monitor_events_open PROPERTIES FIXTURES_REQUIRED "twin;
   "\"class\":\"unknown\",[^\n]*\"detail\":\"(current residual|momentum observer|current residual and momentum observer) above threshold on J[1-6]\"[^\n]*\"open\":true[^\n]*\n.*\"class\":\"collision\"[^\n]*\"open\":false")
 add_test(NAME cli.monitor_events_open_needs_an_output COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/collision.csv --events-open)
 set_tests_properties(cli.monitor_events_open_needs_an_output PROPERTIES FIXTURES_REQUIRED "twin;collision_recording" PASS_REGULAR_EXPRESSION
-  "--events-open applies only with --events or --json")
+  "--events-open applies only with --events, --json or --mqtt")
 # report takes monitor's alert settings: with the same ones it shows the events monitor finds
 # (it had no --sensitivity, --static, --raise-after, --filter: some monitor runs it could not show)
 add_test(NAME cli.report_takes_monitors_alert_settings

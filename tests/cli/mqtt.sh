@@ -143,4 +143,26 @@ rc=0
 grep -q "warning: mqtt: cannot reach the broker at localhost:$port" "$dir/mqtt.forged.err" || fail "no warning for the certificate: $(cat "$dir/mqtt.forged.err")"
 grep -q "tw/test/forged" "$dir/mqtt.sub_tls" && fail "published to a broker whose certificate did not check"
 echo "6: TLS: $(wc -l <"$dir/mqtt.got_tls" | tr -d ' ') event(s) over TLS; a certificate of another CA refused"
+kill "$broker"; wait "$broker" 2>/dev/null || true
+
+# 7. a broker that wants a password: from $TWINWATCH_MQTT_PASSWORD with --mqtt-user; a wrong one is said
+port=$((port + 1))
+: >"$tls/passwords"
+mosquitto_passwd -b "$tls/passwords" monitor 's3cret pass' || fail "mosquitto_passwd failed"
+printf 'user %s\nlistener %s 127.0.0.1\nallow_anonymous false\npassword_file %s\n' "$(id -un)" "$port" "$tls/passwords" >"$tls/auth.conf"
+mosquitto -c "$tls/auth.conf" >"$dir/mqtt.broker_auth.log" 2>&1 &
+broker=$!
+pids="$pids $broker"
+sleep 0.5
+kill -0 "$broker" 2>/dev/null || fail "the broker with passwords did not start (port $port)"
+TWINWATCH_MQTT_PASSWORD='s3cret pass' "$tw" monitor --twin "$twin" "$rec" $payload --db '' --mqtt "127.0.0.1:$port" --mqtt-user monitor \
+  >"$dir/mqtt.auth.out" 2>"$dir/mqtt.auth.err" || fail "monitor with the right password exited $?"
+grep -q "^mqtt: connected to 127.0.0.1:$port" "$dir/mqtt.auth.err" || fail "not connected with the right password"
+rc=0
+TWINWATCH_MQTT_PASSWORD=wrong "$tw" monitor --twin "$twin" "$rec" $payload --db '' --mqtt "127.0.0.1:$port" --mqtt-user monitor \
+  >"$dir/mqtt.noauth.out" 2>"$dir/mqtt.noauth.err" || rc=$?
+[ "$rc" -eq 1 ] || fail "exit $rc with a wrong password, expected 1"
+grep -q "warning: mqtt: the broker at 127.0.0.1:$port refused the connection: not authorised (check the user name and password)" \
+  "$dir/mqtt.noauth.err" || fail "no refusal said: $(cat "$dir/mqtt.noauth.err")"
+echo "7: a password from the environment taken, a wrong one said"
 echo "PASS"

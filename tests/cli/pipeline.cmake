@@ -249,3 +249,16 @@ set_tests_properties(cli.monitor_a_log_without_targets PROPERTIES PASS_REGULAR_E
 add_test(NAME cli.user_inputs_refused_or_said
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/user_inputs.sh $<TARGET_FILE:twinwatch> ${d} ${s}/short_fig8.yaml ${PROJECT_BINARY_DIR}/cli-user-inputs)
 set_tests_properties(cli.user_inputs_refused_or_said PROPERTIES FIXTURES_REQUIRED "twin;recordings" PASS_REGULAR_EXPRESSION "USER-INPUTS-OK" TIMEOUT 120)
+# report reads several files as one stream, as monitor does (a shift's hourly parts): the same alerts
+# as on the whole recording, one page naming both; --labels (one simulated run's) with two is refused
+add_test(NAME cli.report_parts_as_one_stream
+  COMMAND sh -c "head -2001 ${d}/collision.csv > ${d}/rpart_a.csv && (head -1 ${d}/collision.csv; tail -n +2002 ${d}/collision.csv) > ${d}/rpart_b.csv && \
+tw=$<TARGET_FILE:twinwatch> && $tw report --twin ${d}/twin.json ${d}/collision.csv -o ${d}/rwhole.html -q && \
+$tw report --twin ${d}/twin.json ${d}/rpart_a.csv ${d}/rpart_b.csv -o ${d}/rparts.html -q && \
+grep -o '<tr><td>[0-9.]*</td><td>[0-9.]*</td><td>[a-z_]*' ${d}/rwhole.html > ${d}/rwhole.rows && \
+grep -o '<tr><td>[0-9.]*</td><td>[0-9.]*</td><td>[a-z_]*' ${d}/rparts.html > ${d}/rparts.rows && test -s ${d}/rwhole.rows && \
+cmp ${d}/rwhole.rows ${d}/rparts.rows && echo SAME-ALERTS $(wc -l < ${d}/rparts.rows) && grep -o 'rpart_a.csv … rpart_b.csv' ${d}/rparts.html | head -1 && \
+grep -o '5000 samples' ${d}/rparts.html | head -1 && \
+($tw report --twin ${d}/twin.json ${d}/rpart_a.csv ${d}/rpart_b.csv --labels ${d}/collision.labels.json -o ${d}/rnever.html 2>&1; echo exit $?)")
+set_tests_properties(cli.report_parts_as_one_stream PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+  PASS_REGULAR_EXPRESSION "SAME-ALERTS [1-9][0-9]*\nrpart_a\\.csv … rpart_b\\.csv\n5000 samples\n[^\n]*--labels shade the faults of one simulated run. 2 recordings were given\nexit 2")

@@ -119,7 +119,7 @@ int run(const Options& o) {
   model::RigidBodyInertia declared;  // what the program declares: mass and centre of mass (the report's twin takes no inertia)
   declared.mass = s.options.payload.mass;
   declared.com = s.options.payload.com;
-  cli::write_report(twin, rec, declared, html, sim::parse_labels(sim::labels_json(s), s.path + " (its labels)"));
+  cli::write_report(twin, {rec}, declared, html, sim::parse_labels(sim::labels_json(s), s.path + " (its labels)"));
   fmt::print("   {} (open it in a browser)\n", html);
   fmt::print("done in {:.1f} s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;

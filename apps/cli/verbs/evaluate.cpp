@@ -115,7 +115,8 @@ int run_evaluate(const EvaluateOptions& o) {
 }
 
 struct ReportOptions {
-  std::string twin, recording, output = "report.html", labels, column_map, program;
+  std::string twin, output = "report.html", labels, column_map, program;
+  std::vector<std::string> recordings;  // one stream in the order given, as monitor reads several
   bool quiet = false, keep_payload = false;
   // monitor's alert settings, so that the report shows the run monitor makes with them
   std::vector<double> sensitivity;
@@ -128,7 +129,10 @@ struct ReportOptions {
 };
 
 int run_report(const ReportOptions& o) {
-  require_output(o.output, {o.recording, o.twin, o.labels, o.column_map});
+  std::vector<std::string> inputs = o.recordings;
+  for (const std::string* f : {&o.twin, &o.labels, &o.column_map}) inputs.push_back(*f);
+  require_output(o.output, inputs);
+  cli::require_distinct(o.recordings, "RECORDING");
   const ident::TwinModel twin = cli::load_twin(o.twin);
   std::optional<sim::Labels> labels;
   if (!o.labels.empty()) {
@@ -139,10 +143,10 @@ int run_report(const ReportOptions& o) {
     labels = sim::parse_labels(std::string(std::istreambuf_iterator<char>(f), {}), o.labels);
     // a run of the same length and rate cannot be told apart from this one by the report (it
     // refuses one that differs): a labels file not named after the recording is said
-    const std::filesystem::path own = std::filesystem::path(o.recording).replace_extension(".labels.json");
-    if (!same_file(own.string(), o.labels))
+    const std::filesystem::path own = std::filesystem::path(o.recordings.front()).replace_extension(".labels.json");
+    if (o.recordings.size() == 1 && !same_file(own.string(), o.labels))
       fmt::print(stderr, "note: --labels {} is not {}'s own labels file ({}): the spans shaded are those of scenario '{}'\n", o.labels,
-                 o.recording, own.string(), labels->scenario);
+                 o.recordings.front(), own.string(), labels->scenario);
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
   const auto map = cli::load_column_map(o.column_map);
@@ -156,7 +160,7 @@ int run_report(const ReportOptions& o) {
     cli::apply_part_com(cfg, o.part_com);
     cli::apply_alert_settings(cfg, twin.n_dof(), o.sensitivity, o.raise_after, o.observer_raise_after);
   };
-  cli::write_report(twin, o.recording, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload, adjust);
+  cli::write_report(twin, o.recordings, payload, o.output, labels, map ? &*map : nullptr, o.program, o.keep_payload, adjust);
   if (!o.quiet) fmt::print("report written to {}\n", o.output);
   return 0;
 }
@@ -229,7 +233,11 @@ twinwatch::cli::VerbRegistrar reg_report{"report", 43, [](CLI::App& app) {
   auto o = std::make_shared<ReportOptions>();
   auto* sub = app.add_subcommand("report", "Write a self-contained HTML report: currents, residuals, thresholds, alerts, tables");
   sub->add_option("--twin", o->twin, "Twin file")->required()->check(CLI::ExistingFile);
-  sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
+  sub->add_option("RECORDING", o->recordings,
+                  "Recording CSV; several are read as one stream in the order given, as 'monitor' reads them (the parts 'record "
+                  "--split-every' writes: report --twin twin.json shift.0*.csv), into one page")
+      ->required()
+      ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->output, "HTML file")->capture_default_str();
   sub->add_option("--program", o->program, "Threshold set of this program (as 'monitor --program'; default: the default set)")->check(cli::kProgramNameGiven);
   sub->add_option("--labels", o->labels, "Ground-truth labels to shade (evaluation only)");

@@ -162,47 +162,20 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   // in time; the step from one file's last sample to the next one's first is judged as any other step
   // (a jump is a gap, a stream fault), and the estimators and the wear trend go on across it.
   std::optional<device::ColumnMap> map;
-  std::vector<device::RecordingScan> scans;
+  cli::StreamScan stream;
   // the wall clock: Unix time − controller time (NaN: unknown). A recording's is --started-at's; a
   // live stream's is read against this machine's clock as the samples come (StreamWallClock)
   double wall_offset = std::numeric_limits<double>::quiet_NaN();
   StreamWallClock live_clock;
-  std::vector<double> last_t;  // each file's last timestamp
   if (o.rtde.empty()) {
     map = cli::load_column_map(o.column_map);
-    for (size_t i = 0; i < o.recordings.size(); ++i) {
-      const std::string& f = o.recordings[i];
-      double first = std::numeric_limits<double>::quiet_NaN(), last = first;
+    stream = cli::scan_stream(o.recordings, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor", [&](const std::string& f) {
       if (!o.quiet && !o.json) say_checking(f);
-      scans.push_back(cli::scan_recording(f, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor", [&](const RobotSample& s) {
-        if (std::isnan(first)) first = s.timestamp;
-        last = s.timestamp;
-      }));
-      const device::RecordingScan& scan = scans.back();
-      if (i > 0) {
-        const std::string& before = o.recordings[i - 1];
-        if (scan.n_dof != scans.front().n_dof || scan.present != scans.front().present)
-          throw InvalidArgument(fmt::format("{}: its header's columns are not those of {}{}: the files watched as one stream must be "
-                                            "parts of one recording, with the same columns",
-                                            f, o.recordings.front(),
-                                            scan.n_dof != scans.front().n_dof
-                                                ? fmt::format(" ({} joints against {})", scan.n_dof, scans.front().n_dof)
-                                                : std::string()));
-        if (!(first > last_t.back()))
-          throw InvalidArgument(fmt::format("{}: it starts at t = {:.3f} s, not after {} ends (t = {:.3f} s): the files are watched as one "
-                                            "stream in the order given; give them in the order they were recorded",
-                                            f, first, before, last_t.back()));
-      }
-      const double p0 = scans.front().timing.median_period, p = scan.timing.median_period;
-      if (i > 0 && p0 > 0.0 && p > 0.0 && std::abs(p / p0 - 1.0) > 0.05)
-        log::warn(fmt::format("{} runs at {:.0f} Hz, {} at {:.0f} Hz: the monitor filters them all at the first one's rate", f, 1.0 / p,
-                              o.recordings.front(), 1.0 / p0));
-      last_t.push_back(last);
-      sources.push_back({first, stored_path(f)});
-      // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
-      cfg.gap_factor = std::max(cfg.gap_factor, scan.timing.gap_factor);
-    }
-    if (scans.front().timing.median_period > 0) use_rate(scans.front().timing.median_period, o.recordings.front());
+    });
+    for (size_t i = 0; i < o.recordings.size(); ++i) sources.push_back({stream.first_t[i], stored_path(o.recordings[i])});
+    // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
+    cfg.gap_factor = std::max(cfg.gap_factor, stream.gap_factor);
+    if (stream.scans.front().timing.median_period > 0) use_rate(stream.scans.front().timing.median_period, o.recordings.front());
     if (std::isfinite(started_at)) wall_offset = started_at - sources.front().first;
   } else {
     if (!o.column_map.empty())
@@ -445,39 +418,28 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   bool replay_stopped = false;  // a replay stopped at the user's request (serve, Ctrl-C)
   if (!client) {
     double previous = std::numeric_limits<double>::quiet_NaN();
-    for (size_t i = 0; i < o.recordings.size(); ++i) {
-      const device::RecordingScan& scan = scans[i];
-      // the rows the first pass read and checked (a file still being written has more by now)
-      device::RecordingReader again(o.recordings[i], map ? &*map : nullptr);
-      long k = 0;
-      bool first_row = true;
-      try {
-        k = device::replay_rows(again, scan, [&](RobotSample& s) {
-          if (stop_requested && stop_requested()) throw ReplayStopped{};
-          // (the step from the file before: a gap as the first file's timing measures one)
-          if (first_row && !std::isnan(previous) && scans.front().timing.is_gap(s.timestamp - previous)) s.gap_before = true;
-          first_row = false;
-          previous = s.timestamp;
-          push(s);
-        });
-      } catch (const ReplayStopped&) {
-        replay_stopped = true;
-        if (!o.quiet && !o.json)
-          fmt::print("stopped {}, in {}: what was watched up to there is reported\n",
-                     std::isnan(previous) ? std::string("before the first sample") : fmt::format("at t = {:.3f} s", previous), o.recordings[i]);
-        break;
-      } catch (...) {
-        // (the file changed under the second pass: what was watched up to there is still reported)
-        mon.finish();
-        throw;
-      }
-      if (k < scan.rows) {
-        log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
-                              "monitoring ends at t = {:.3f} s",
-                              o.recordings[i], k, scan.rows, previous));
-        break;
-      }
+    cli::StreamScan::Cut cut;
+    try {
+      stream.replay(o.recordings, map ? &*map : nullptr, [&](RobotSample& s) {
+        if (stop_requested && stop_requested()) throw ReplayStopped{};
+        previous = s.timestamp;
+        push(s);
+      }, &cut);
+    } catch (const ReplayStopped&) {
+      replay_stopped = true;
+      if (!o.quiet && !o.json)
+        fmt::print("stopped {}, in {}: what was watched up to there is reported\n",
+                   std::isnan(previous) ? std::string("before the first sample") : fmt::format("at t = {:.3f} s", previous),
+                   o.recordings[std::isnan(previous) ? 0 : stream.file_at(previous)]);
+    } catch (...) {
+      // (the file changed under the second pass: what was watched up to there is still reported)
+      mon.finish();
+      throw;
     }
+    if (cut.file >= 0)
+      log::warn(fmt::format("{}: {} of the {} rows checked were there to monitor (the file was cut or replaced while it was read): "
+                            "monitoring ends at t = {:.3f} s",
+                            o.recordings[static_cast<size_t>(cut.file)], cut.rows, stream.scans[static_cast<size_t>(cut.file)].rows, previous));
   } else {
     std::unique_ptr<device::SplitRecordingWriter> copy;
     if (!o.record_to.empty()) copy = std::make_unique<device::SplitRecordingWriter>(o.record_to, 6, client->sample_fields(), o.split_every);
