@@ -273,16 +273,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), "failed"}, kEndLockWaitMs);
   }};
   // the broker hears that the run failed (and gets the events that wait; not for long: the error is said)
-  struct OnUnwindMqtt {
-    std::function<void()> f;
-    ~OnUnwindMqtt() {
-      if (std::uncaught_exceptions() == 0) return;
-      try {
-        f();
-      } catch (...) {
-      }
-    }
-  } unwind_mqtt{[&] {
+  OnUnwind unwind_mqtt{[&] {
     if (!mqtt.active()) return;
     const long left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), 2000, mqtt_quiet);
     if (left > 0) fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered\n", mqtt.address(), left);
@@ -322,8 +313,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       // lasts a shift was seen only when it cleared or monitoring stopped); t_detected names the
       // alert, its closing line ("open": false) ends it
       const std::string line = e.to_json_line();
+      mqtt.event(std::string(monitor::to_string(e.fault)), line);  // (queued first: a file that fails must not cost the broker the line)
       write_event_line(line);
-      mqtt.event(std::string(monitor::to_string(e.fault)), line);
       if (o.json) {
         fmt::print("{}\n", line);
         std::fflush(stdout);
@@ -345,8 +336,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     // stored first, printed after: a terminal that went away (a dropped SSH session) must not cost
     // the event its files
     const std::string line = e.to_json_line();
+    mqtt.event(std::string(monitor::to_string(e.fault)), line);  // (queued first: a file that fails must not cost the broker the event)
     write_event_line(line);
-    mqtt.event(std::string(monitor::to_string(e.fault)), line);
     if (store) {
       // (behind events already waiting no wait: a burst of events must not stall the stream)
       const int wait_ms = unstored.empty() ? kLiveLockWaitMs : 0;
