@@ -37,7 +37,10 @@ struct MonitorOptions {
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
   bool events_open = false;  // --events-open: a line at each raise and re-diagnosis too ("open": true)
   MqttCliOptions mqtt;       // --mqtt: the events and the run's state to a broker
+  std::vector<std::string> fail_on;  // --fail-on: event classes (or "any") that make the exit status 3
 };
+/// monitor's exit status when an event of a --fail-on class was found (and the run otherwise ended 0)
+inline constexpr int kExitEventsFound = 3;
 
 /// What another front end sees of the loop (each may be empty). Called on the loop's thread.
 struct MonitorHooks {

@@ -255,3 +255,11 @@ add_test(NAME cli.report_takes_monitors_alert_settings
 --payload-com 0 0 0.04 --sensitivity 0.5 --static --raise-after 1 -o ${d}/settings.html -q || exit 9; \
 r=$(grep -o '<tr><td>[0-9.]*</td><td>[0-9.]*</td><td>[a-z_]*' ${d}/settings.html | wc -l); echo monitor=$m report=$r; [ $m -gt 1 ] && [ $m -eq $r ] && echo SAME")
 set_tests_properties(cli.report_takes_monitors_alert_settings PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "SAME")
+# --fail-on: exit 3 when the run found an event of those classes (a script's check of a recording),
+# 0 when it found none of them; an unknown class is named
+add_test(NAME cli.monitor_fail_on
+  COMMAND sh -c "tw=$0; $tw monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --fail-on resistance,wear -q; echo exit $?; \
+$tw monitor --twin ${d}/twin.json --fail-on collision ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ''; echo exit $?; \
+$tw monitor --twin ${d}/twin.json ${d}/collision.csv --db '' --fail-on colision 2>&1; echo exit $?" $<TARGET_FILE:twinwatch>)
+set_tests_properties(cli.monitor_fail_on PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+  PASS_REGULAR_EXPRESSION "^exit 0\n.*collision .*5000 samples, 0 gap\\(s\\), 1 event\\(s\\)\n1 event\\(s\\) of the classes --fail-on names \\(collision\\): exit status 3\nexit 3\n--fail-on: fault class 'colision' is unknown, expected one of collision, [^\n]*, or any\n.*exit 2")

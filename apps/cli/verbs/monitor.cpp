@@ -278,6 +278,15 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const long left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), 2000, mqtt_quiet);
     if (left > 0) fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered\n", mqtt.address(), left);
   }};
+  // --fail-on: the closed events of those classes (counted as they close: live, old events leave memory)
+  const bool fail_on_any = std::find(o.fail_on.begin(), o.fail_on.end(), "any") != o.fail_on.end();
+  std::vector<monitor::FaultClass> fail_classes;
+  for (const std::string& c : o.fail_on)
+    if (c != "any") fail_classes.push_back(monitor::fault_class_from_string(c));
+  const auto fails = [&](monitor::FaultClass c) {
+    return fail_on_any || std::find(fail_classes.begin(), fail_classes.end(), c) != fail_classes.end();
+  };
+  long failing_events = 0;
   double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
   // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
@@ -335,6 +344,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     }
     // stored first, printed after: a terminal that went away (a dropped SSH session) must not cost
     // the event its files
+    if (fails(e.fault)) ++failing_events;
     const std::string line = e.to_json_line();
     mqtt.event(std::string(monitor::to_string(e.fault)), line);  // (queued first: a file that fails must not cost the broker the event)
     write_event_line(line);
@@ -592,7 +602,16 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (own_stop && replay_stopped) return 128 + cli::interrupt_signal();
   // (what was received is analysed and stored; a script learns that the end was not watched, or
   // that the broker did not get every event)
-  return lost_at_end || mqtt_left > 0 ? 1 : 0;
+  if (lost_at_end || mqtt_left > 0) return 1;
+  // (--fail-on: a script's check of a recording or a shift, e.g. '|| notify')
+  if (failing_events > 0) {
+    std::fflush(stdout);  // (after the summary)
+    if (!o.quiet && !o.json)
+      fmt::print(stderr, "{} event(s) of the classes --fail-on names ({}): exit status {}\n", failing_events, fmt::join(o.fail_on, ","),
+                 cli::kExitEventsFound);
+    return cli::kExitEventsFound;
+  }
+  return 0;
 }
 
 struct ThresholdOptions {
@@ -857,7 +876,8 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "Ctrl-C, SIGTERM or SIGHUP stop it in order: what was watched is reported and stored. Watching a\n"
       "recording, the exit status is then 128 + the signal (130 for Ctrl-C: it was not watched to its end);\n"
       "watching a live stream (--rtde), 0, or 1 when the stream had been silent for more than 1.5 s before\n"
-      "the stop (a stream_fault event says so). A second signal ends it at once (128 + the signal)."));
+      "the stop (a stream_fault event says so). A second signal ends it at once (128 + the signal).\n"
+      "With --fail-on CLASSES, 3 when an event of those classes was found (and the run otherwise ended 0)."));
   const auto check = twinwatch::cli::add_monitor_options(sub, o);
   sub->callback([=] {
     check();
@@ -1015,6 +1035,25 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
                   "per joint to this CSV (to see why an alert was raised or late)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
+  sub->add_option("--fail-on", o->fail_on,
+                  fmt::format("Exit with status {} when the run found an event of these classes (comma-separated: collision, resistance, "
+                              "payload_change, sensor_fault, stream_fault, wear, unknown; or 'any'), for a script's check of a "
+                              "recording or a shift (twinwatch monitor ... --fail-on collision,resistance || notify). A run that "
+                              "ends with 1 (a lost stream, an undelivered MQTT message) or a signal's status keeps that status",
+                              kExitEventsFound))
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            if (v == "any") return std::string();
+            try {
+              (void)monitor::fault_class_from_string(v);
+            } catch (const InvalidArgument& e) {
+              return std::string(e.what()) + ", or any";
+            }
+            return std::string();
+          },
+          "CLASS"));
   const auto mqtt_check = add_mqtt_options(sub, o->mqtt);
   return [=] {
     mqtt_check();
