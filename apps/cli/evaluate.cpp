@@ -878,20 +878,22 @@ std::string evaluation_json(const Evaluation& e) {
   for (const auto& s : e.scores)
     j["scenarios"].push_back({{"name", s.name},
                               {"fault", s.has_fault ? nlohmann::json(s.fault) : nlohmann::json(nullptr)},
-                              {"detected", s.detected},
+                              // a healthy scenario has nothing to detect, classify or place: null, not false (a script's
+                              // mean of class_ok counted healthy runs as misclassified)
+                              {"detected", s.has_fault ? nlohmann::json(s.detected) : nlohmann::json(nullptr)},
                               {"declared", s.declared},
                               {"delay_ms", s.detected ? nlohmann::json(s.delay_ms) : nlohmann::json(nullptr)},
                               // not applicable (no detection): null, not "" and 0
                               {"class", s.detected ? nlohmann::json(s.predicted_class) : nlohmann::json(nullptr)},
-                              {"class_ok", s.class_ok},
-                              {"joint_ok", s.joint_ok},
+                              {"class_ok", s.has_fault ? nlohmann::json(s.class_ok) : nlohmann::json(nullptr)},
+                              {"joint_ok", s.has_fault ? nlohmann::json(s.joint_ok) : nlohmann::json(nullptr)},
                               {"link", s.predicted_link >= 0 ? nlohmann::json(s.predicted_link + 1) : nlohmann::json(nullptr)},
                               {"other_links", [&] {
                                  nlohmann::json a = nlohmann::json::array();
                                  for (int l : s.other_links) a.push_back(l + 1);
                                  return a;
                                }()},
-                              {"link_in_candidates", s.link_in_candidates},
+                              {"link_in_candidates", s.has_fault ? nlohmann::json(s.link_in_candidates) : nlohmann::json(nullptr)},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
                               {"link_reference", [&] {
                                  nlohmann::json r = nullptr;
