@@ -86,6 +86,8 @@ std::string Event::to_json_line() const {
   j["wall_start"] = wall(t_start);
   j["wall_detected"] = wall(t_detected);
   j["wall_end"] = wall(t_end);
+  // an open alert that ended without an event of its own (on_withdraw): its last line
+  j["withdrawn"] = withdrawn;
   return j.dump();
 }
 

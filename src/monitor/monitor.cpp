@@ -1531,7 +1531,7 @@ void Monitor::take_declared_payload(const RobotSample& s) {
     add_note(t, fmt::format("the alert raised at {:.3f} s ({}) was the pick the program declares now, after the gripper closed: "
                             "withdrawn, not an event",
                             e.t_detected, e.detail));
-    drop_event(index);
+    retract_event(index);
   };
   // a followed change held for this (may_be_declared_late): the pick, measured against what the
   // twin carried before it followed the change
@@ -2680,7 +2680,17 @@ void Monitor::add_note(double t, const std::string& text) {
   if (on_note) on_note(t, text);
 }
 
-void Monitor::drop_open_event() { drop_event(open_); }
+void Monitor::drop_open_event() { retract_event(open_); }
+
+void Monitor::retract_event(int index) {
+  if (on_withdraw) {
+    Event e = events_[static_cast<size_t>(index)];
+    e.open = false;
+    e.withdrawn = true;
+    on_withdraw(e);
+  }
+  drop_event(index);
+}
 
 void Monitor::drop_event(int index) {
   // the indices kept into events_ after it move down by one, one that pointed at it is cleared

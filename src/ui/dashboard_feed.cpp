@@ -110,7 +110,7 @@ void DashboardFeed::push(const DashboardSignals& s) {
   }
 }
 
-void DashboardFeed::event(const std::string& json, bool open, double key) {
+void DashboardFeed::event(const std::string& json, bool open, double key, bool withdrawn) {
   State& st = *st_;
   const std::lock_guard lock(st.m);
   st.flush(setup_);  // the signals up to the event are on the page with it
@@ -122,6 +122,7 @@ void DashboardFeed::event(const std::string& json, bool open, double key) {
     st.active.push_back({seq, key, json});
     return;
   }
+  if (withdrawn) return;  // (no event of its own: it leaves the open alerts, and nothing else)
   st.events.push_back({seq, key, json});
   if (st.events.size() > kKeepEvents) st.events.pop_front();
 }

@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
@@ -1567,10 +1569,27 @@ TEST_F(MonitorLoop, APickDeclaredBeforeOrAfterTheGripRaisesNothing) {
                                   "  - {type: payload_pick, onset: 6.1, io_bit: 0, mass: 0.5, com: [0, 0, 0.04], declare_delay: " +
                                       fmt::format("{}", delay) + "}\n"));
     Monitor m(*twin, *config);
+    // what a consumer of open alerts sees (--events-open, the dashboard): every alert announced open
+    // ends, the withdrawn one through on_withdraw (before session 53 it stayed open for good)
+    std::map<double, int> open_alerts;  // raise time -> open announcements
+    int withdrawn = 0;
+    m.on_event = [&](const Event& e) {
+      if (e.open) ++open_alerts[e.t_detected];
+      else open_alerts.erase(e.t_detected);
+    };
+    m.on_withdraw = [&](const Event& e) {
+      EXPECT_TRUE(e.withdrawn);
+      EXPECT_FALSE(e.open);
+      EXPECT_EQ(open_alerts.erase(e.t_detected), 1u) << "withdrew an alert never announced, raised at " << e.t_detected;
+      ++withdrawn;
+    };
     for (const auto& x : rec.samples) m.push(x);
     m.finish();
     EXPECT_TRUE(m.events().empty()) << "declared " << delay << " s after the grip\n" << listing(m.events());
     EXPECT_THAT(m.notes(), ::testing::Contains(::testing::HasSubstr("withdrawn, not an event"))) << delay;
+    EXPECT_GE(withdrawn, 1) << delay;
+    EXPECT_TRUE(open_alerts.empty()) << "declared " << delay << " s after the grip: " << open_alerts.size()
+                                     << " alert(s) announced open never ended, the first raised at " << open_alerts.begin()->first;
     EXPECT_EQ(m.twin().payload().mass, 0.5);
   }
   // a missed grip declared before the gripper closes on nothing (1 kg declared at 9.5 s, the output at 9.8 s)

@@ -124,6 +124,23 @@ TEST(DashboardFeed, ACursorGetsWhatIsNewAndAnAlertIsReplacedWhenItCloses) {
   EXPECT_EQ(h["events"].size(), 1u);
 }
 
+// an alert the monitor withdraws (monitor::Monitor::on_withdraw: a pause, a pick declared late) leaves
+// the open alerts and is no event (before session 53 it stayed on the page as active for good)
+TEST(DashboardFeed, AWithdrawnAlertLeavesTheOpenOnesAndIsNoEvent) {
+  DashboardFeed f(two_joints());
+  for (int k = 0; k < 100; ++k) push(f, 0.002 * k, {0.0, 0.0});
+  f.event(R"({"class":"unknown","t_detected":0.1,"detail":"raised"})", true, 0.1);
+  f.event(R"({"class":"collision","t_detected":0.15,"detail":"another"})", true, 0.15);
+  const json a = json::parse(f.json_since(0));
+  ASSERT_EQ(a["active"].size(), 2u);
+  f.event(R"({"class":"payload_change","t_detected":0.1,"detail":"withdrawn","withdrawn":true})", false, 0.1, true);
+  const json b = json::parse(f.json_since(a["cursor"].get<std::uint64_t>()));
+  ASSERT_EQ(b["active"].size(), 1u);
+  EXPECT_EQ(b["active"][0]["detail"], "another");
+  EXPECT_TRUE(b["events"].empty());
+  EXPECT_TRUE(json::parse(f.json_since(0))["events"].empty());
+}
+
 TEST(DashboardFeed, TimeGoingBackStartsAPointOfItsOwn) {
   DashboardFeed f(two_joints());
   push(f, 10.000, {0.3, 0.0});

@@ -360,6 +360,26 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (o.json) fmt::print("{}\n", line);
     std::fflush(stdout);  // the same for a pipe or a log file
   };
+  // an alert raised that ends without an event of its own (withdrawn, or merged into another): what
+  // showed it open ends it (--events-open's line with "withdrawn": true, the broker, the dashboard);
+  // nothing is stored, and the closed lines never showed it
+  mon.on_withdraw = [&](const monitor::Event& raw) {
+    monitor::Event e = raw;
+    e.wall_offset = wall_offset;
+    if (hooks.on_event) hooks.on_event(e);
+    if (o.events_open) {
+      const std::string line = e.to_json_line();
+      mqtt.event(std::string(monitor::to_string(e.fault)), line);
+      write_event_line(line);
+      if (o.json) {
+        fmt::print("{}\n", line);
+        std::fflush(stdout);
+      }
+    }
+    if (o.quiet || o.json) return;
+    fmt::print("{}{:9.3f} s  WITHDRAWN the alert raised at {:.3f} s: no event of its own\n", wall_prefix(e.t_end), e.t_end, e.t_detected);
+    std::fflush(stdout);
+  };
   mon.on_note = [&](double t, const std::string& note) {
     if (hooks.on_note) hooks.on_note(t, note);
     if (o.quiet || o.json) return;

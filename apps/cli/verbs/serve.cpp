@@ -109,7 +109,7 @@ int run_serve(const cli::MonitorOptions& mo, const ServeOptions& so) {
     x.total_current = mon.total_current();
     feed.push(x);
   };
-  hooks.on_event = [&](const monitor::Event& e) { feed.event(e.to_json_line(), e.open, e.t_detected); };
+  hooks.on_event = [&](const monitor::Event& e) { feed.event(e.to_json_line(), e.open, e.t_detected, e.withdrawn); };
   hooks.on_note = [&](double t, const std::string& text) { feed.note(t, text); };
   hooks.on_status = [&](const monitor::Monitor& mon, const std::string& state, const std::string& stream) {
     nlohmann::json c = {{"samples", mon.samples()},

@@ -48,6 +48,10 @@ struct Event {
   /// the alert was still active when monitoring stopped (finish() closed it; its t_end is the run's
   /// end, not the fault's)
   bool active_at_stop = false;
+  /// an alert raised (announced open) that ends without an event of its own: withdrawn (a pause, a
+  /// program's late declaration of a pick) or merged into another alert; Monitor::on_withdraw hands
+  /// it over so that a consumer of open alerts sees it end. Never stored
+  bool withdrawn = false;
   FaultClass fault = FaultClass::Unknown;
   int joint = -1;           ///< 0-based joint most affected, -1 if none
   int link = -1;            ///< 0-based link for contacts, -1 if none

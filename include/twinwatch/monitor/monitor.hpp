@@ -333,6 +333,12 @@ class Monitor {
   void stream_outage(double seconds);
 
   std::function<void(const Event&)> on_event;
+  /// An alert announced open (on_event) that ends without an event of its own: withdrawn (an alert
+  /// raised as a pause began, a pick the program declares late) or merged into another alert (a
+  /// raise that was the earlier fault dipping below its threshold). The alert as last announced,
+  /// with open false and withdrawn true; nothing is called for it on on_event after this. A consumer
+  /// of open alerts (a dashboard, --events-open) ends it here.
+  std::function<void(const Event&)> on_withdraw;
   /// What the monitor has to say that is no event (e.g. a friction trend it cannot tell from
   /// cooling): controller time [s] and the text. Also kept in notes().
   std::function<void(double, const std::string&)> on_note;
@@ -754,7 +760,9 @@ class Monitor {
   bool background_rediagnosed_ = false;
   double background_raise_time_ = 0.0, background_last_over_ = 0.0;
   void resume_background();
-  void drop_open_event();  // erases the open event (a raise merged into an earlier alert); open_ = -1
+  void drop_open_event();  // retracts the open event (a raise merged into an earlier alert, withdrawn); open_ = -1
+  // an announced alert that goes without an event of its own: on_withdraw with it, then drop_event
+  void retract_event(int index);
   // the thresholds' widening at reversals under more load than they were learned with
   // (MonitorConfig::reversal_load_max), per joint, after each channel's filter: current [A],
   // observer [twin torque]; the velocity width of the direction's doubt [rad/s]; the observer's

@@ -59,7 +59,9 @@ class DashboardFeed {
   void push(const DashboardSignals& s);
   /// An alert raised or re-diagnosed (`open`), or an event closed; `json` is the event's JSON line
   /// (monitor::Event::to_json_line), `key` the alert's raise time, which names it while open.
-  void event(const std::string& json, bool open, double key);
+  /// `withdrawn`: the alert ends without an event of its own (monitor::Monitor::on_withdraw): it
+  /// leaves the open alerts and is not listed among the events.
+  void event(const std::string& json, bool open, double key, bool withdrawn = false);
   /// A note of the monitor (a payload declaration taken, an excursion beyond the identified motion).
   void note(double t, const std::string& text);
   /// The status line: `state` ("monitoring", "finished", "connection lost", ...) and a JSON object of
