@@ -2,6 +2,7 @@
 #include "mqtt_sink.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -42,9 +43,16 @@ std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o) {
   auto* cafile = sub->add_option("--mqtt-cafile", o.cafile,
                                  "With --mqtt: connect over TLS, checking the broker's certificate against this CA certificate (PEM)")
                      ->check(CLI::ExistingFile);
-  auto* client_id = sub->add_option("--mqtt-client-id", o.client_id, "With --mqtt: the client id (default twinwatch-HOSTNAME-PID)");
+  auto* client_id = sub->add_option("--mqtt-client-id", o.client_id,
+                                    "With --mqtt: the client id (default twinwatch-HOSTNAME-PID); two clients with one id take "
+                                    "each other's connection at the broker");
+  auto* keepalive = sub->add_option("--mqtt-keepalive", o.keepalive,
+                                    "With --mqtt: the keep-alive [s]; the broker publishes the last will after 1.5 of them without a "
+                                    "word from this process")
+                        ->check(whole_number(5, 3600))
+                        ->capture_default_str();
   return [=, &o] {
-    refuse_unless({topic, qos, user, cafile, client_id}, !o.address.empty(), "with --mqtt");
+    refuse_unless({topic, qos, user, cafile, client_id, keepalive}, !o.address.empty(), "with --mqtt");
 #ifndef TWINWATCH_HAVE_MQTT
     if (!o.address.empty())
       throw InvalidArgument("--mqtt: this twinwatch was built without MQTT (BUILD_MQTT=OFF or libmosquitto-dev missing at configure "
@@ -56,10 +64,11 @@ std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o) {
       ui::parse_mqtt_address(o.address, s);
       s.topic = o.topic;
       s.qos = o.qos;
+      s.client_id = o.client_id;
       try {
         s.validate();
       } catch (const InvalidArgument& e) {
-        throw InvalidArgument(with_option_names(e.what(), {{"MQTT topic prefix", "--mqtt-topic"}}));
+        throw InvalidArgument(with_option_names(e.what(), {{"MQTT topic prefix", "--mqtt-topic"}, {"MQTT client id", "--mqtt-client-id"}}));
       }
     }
 #endif
@@ -83,6 +92,7 @@ MqttSink::MqttSink(const MqttCliOptions& o, const std::string& source, const std
   s.username = o.user;
   s.cafile = o.cafile;
   s.client_id = o.client_id;
+  s.keepalive_s = o.keepalive;
   if (const char* pw = std::getenv(kPasswordVariable); pw && *pw) {
     if (o.user.empty())
       throw InvalidArgument(fmt::format("${} is set but --mqtt-user is not: give the user the password belongs to", kPasswordVariable));
@@ -108,8 +118,10 @@ std::string MqttSink::status_json(const std::string& state, long samples, long e
   return j.dump();
 }
 
-void MqttSink::event(const std::string& fault_class, const std::string& json_line) {
-  if (pub_) pub_->publish_event(fault_class, json_line);
+void MqttSink::event(const std::string& fault_class, const std::string& json_line, bool closed, double t_detected) {
+  if (!pub_) return;
+  if (closed && !closed_.insert(t_detected).second) return;  // (closed again by an error's unwinding)
+  pub_->publish_event(fault_class, json_line);
 }
 
 void MqttSink::say(bool quiet) {
@@ -123,19 +135,32 @@ void MqttSink::say(bool quiet) {
   }
 }
 
-long MqttSink::finish(const std::string& state, long samples, long events, int wait_ms, bool quiet) {
-  if (!pub_) return 0;
+std::string MqttSink::Undelivered::describe(int wait_ms) const {
+  std::vector<std::string> parts;
+  if (waiting > 0)
+    parts.push_back(gave_up ? fmt::format("{} not taken when the wait was given up", waiting)
+                            : fmt::format("{} not taken within {:g} s", waiting, wait_ms / 1000.0));
+  if (refused > 0) parts.push_back(fmt::format("{} refused by the broker", refused));
+  if (dropped > 0) parts.push_back(fmt::format("{} dropped (the outbox was full, or the client library refused them)", dropped));
+  return fmt::format("{} message(s) not delivered: {}", total(), fmt::join(parts, ", "));
+}
+
+MqttSink::Undelivered MqttSink::finish(const std::string& state, long samples, long events, int wait_ms, bool quiet,
+                                       const std::function<bool()>& give_up) {
+  if (!pub_) return {};
   pub_->publish_status(status_json(state, samples, events));
   // (a broker that answers takes it within milliseconds: only a longer wait is said)
   constexpr int kSilentWaitMs = 500;
-  long left = pub_->drain(std::chrono::milliseconds(std::min(wait_ms, kSilentWaitMs)));
-  if (left > 0 && wait_ms > kSilentWaitMs) {
+  long left = pub_->drain(std::chrono::milliseconds(std::min(wait_ms, kSilentWaitMs)), give_up);
+  if (left > 0 && wait_ms > kSilentWaitMs && !(give_up && give_up())) {
     if (!quiet)
-      fmt::print(stderr, "mqtt: waiting up to {:g} s for the broker at {} to take {} message(s)\n", wait_ms / 1000.0, address(), left);
-    left = pub_->drain(std::chrono::milliseconds(wait_ms - kSilentWaitMs));
+      fmt::print(stderr, "mqtt: waiting up to {:g} s for the broker at {} to take {} message(s) (Ctrl-C gives up)\n", wait_ms / 1000.0,
+                 address(), left);
+    left = pub_->drain(std::chrono::milliseconds(wait_ms - kSilentWaitMs), give_up);
   }
   say(quiet);
-  return left;
+  const ui::MqttCounters c = pub_->counters();
+  return {left, c.refused, c.dropped, left > 0 && give_up && give_up()};
 }
 
 std::string MqttSink::address() const { return pub_ ? pub_->settings().address() : std::string(); }
@@ -149,9 +174,10 @@ void destroy_publisher(ui::MqttPublisher*) {}
 MqttSink::MqttSink(const MqttCliOptions&, const std::string&, const std::string&, const std::string&, long) : pub_(nullptr, &destroy_publisher) {}
 MqttSink::~MqttSink() = default;
 std::string MqttSink::status_json(const std::string&, long, long) const { return {}; }
-void MqttSink::event(const std::string&, const std::string&) {}
+void MqttSink::event(const std::string&, const std::string&, bool, double) {}
 void MqttSink::say(bool) {}
-long MqttSink::finish(const std::string&, long, long, int, bool) { return 0; }
+MqttSink::Undelivered MqttSink::finish(const std::string&, long, long, int, bool, const std::function<bool()>&) { return {}; }
+std::string MqttSink::Undelivered::describe(int) const { return {}; }
 std::string MqttSink::address() const { return {}; }
 
 #endif

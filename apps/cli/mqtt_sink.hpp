@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 
 namespace twinwatch::ui {
@@ -18,6 +19,7 @@ struct MqttCliOptions {
   std::string address;  ///< --mqtt HOST[:PORT] ("": no MQTT)
   std::string topic = "twinwatch", user, cafile, client_id;
   int qos = 1;
+  int keepalive = 30;  ///< [s]
 };
 
 /// Adds --mqtt, --mqtt-topic, --mqtt-qos, --mqtt-user, --mqtt-cafile, --mqtt-client-id to `sub`;
@@ -35,14 +37,27 @@ class MqttSink {
   MqttSink(const MqttCliOptions& o, const std::string& source, const std::string& twin, const std::string& program, long run);
   ~MqttSink();
   bool active() const { return pub_ != nullptr; }
-  /// An event's JSON line (as --events writes it) to TOPIC/events/CLASS.
-  void event(const std::string& fault_class, const std::string& json_line);
+  /// An event's JSON line (as --events writes it) to TOPIC/events/CLASS. A closed event is published
+  /// once: the same alert closed again (an error that unwinds the run closes what it finds open)
+  /// is not published twice.
+  void event(const std::string& fault_class, const std::string& json_line, bool closed = false, double t_detected = 0.0);
   /// Prints what the publisher has to say (connected, lost, refused) on stderr as warnings or
   /// notes; call it from the loop now and then (about once a second) and at the end.
   void say(bool quiet);
+  /// What the broker did not get by the end.
+  struct Undelivered {
+    long waiting = 0;  ///< not taken within the wait
+    long refused = 0;  ///< refused by the broker (MQTT 5: an access list, ...)
+    long dropped = 0;  ///< dropped: the outbox was full, or the client library refused one
+    bool gave_up = false;  ///< the wait was given up (Ctrl-C)
+    long total() const { return waiting + refused + dropped; }
+    /// "3 message(s) not delivered: 2 not taken within 10 s, 1 refused by the broker"
+    std::string describe(int wait_ms) const;
+  };
   /// The final state ("finished", "stopped", "connection lost", "failed") with the counts, then waits
-  /// up to `wait_ms` for the broker to take what waits; returns how many messages it did not take.
-  long finish(const std::string& state, long samples, long events, int wait_ms, bool quiet);
+  /// up to `wait_ms` for the broker to take what waits, or until `give_up` (Ctrl-C; may be empty).
+  Undelivered finish(const std::string& state, long samples, long events, int wait_ms, bool quiet,
+                     const std::function<bool()>& give_up = {});
   /// "HOST:PORT" for messages.
   std::string address() const;
 
@@ -51,6 +66,7 @@ class MqttSink {
   std::unique_ptr<ui::MqttPublisher, void (*)(ui::MqttPublisher*)> pub_;
   std::string source_, twin_, program_, started_at_;
   long run_ = 0;
+  std::set<double> closed_;  // the raise times of the closed events published
   std::string status_json(const std::string& state, long samples, long events) const;
 };
 

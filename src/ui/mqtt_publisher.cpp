@@ -1,10 +1,12 @@
 // MqttPublisher: the monitor's events to an MQTT broker, from a thread of its own.
 //
-// libmosquitto (Debian's libmosquitto-dev) speaks the protocol; the outbox, the reconnection and the
-// delivery accounting are ours, because the library neither queues a message published while it is
-// disconnected (mosquitto_publish returns MOSQ_ERR_NO_CONN) nor retries a first connection that
-// failed (mosquitto_loop_start after a refused mosquitto_connect_async never connects): both measured
-// with 2.0.11, and both would lose events exactly when a plant's broker restarts.
+// libmosquitto (Debian's libmosquitto-dev) speaks the protocol (MQTT 5, falling back to 3.1.1 for a
+// broker that has only that). The connection, its retries and the delivery accounting are ours: the
+// library's own loop thread (mosquitto_loop_start) never connects after a first mosquitto_connect_async
+// that failed (measured with 2.0.11: a broker that was down when the monitor started would never get
+// an event). A QoS 1/2 message the library accepted is its to keep: it queues it even while
+// disconnected and sends it again after a reconnection (measured: a review's noconn.c, session 53), so
+// ours is an outbox in front of it, for the order, its limit and the newest state only.
 //
 // The thread drives the library with mosquitto_loop(), so every library callback runs on it; the
 // caller's thread only touches the outbox under the mutex.
@@ -42,18 +44,35 @@ void init_library() {
 constexpr std::chrono::milliseconds kRetryFirst{1000};
 constexpr std::chrono::milliseconds kRetryMax{30000};
 // a connection not acknowledged (CONNACK) within this is given up and retried: a host that drops
-// SYNs would otherwise hold the attempt for the kernel's TCP timeout (minutes)
-constexpr std::chrono::milliseconds kConnectTimeout{10000};
+// SYNs would otherwise hold the attempt for the kernel's TCP timeout (minutes). Shorter than the
+// monitor's 10 s wait at its end, so that an address that never answers is said before it
+constexpr std::chrono::milliseconds kConnectTimeout{5000};
+// a connection that lasted less than this and was lost is retried after the back-off, not at once:
+// two clients with one id take each other's session at the broker in turn (a review measured 70,600
+// connections in 15 s with immediate retries)
+constexpr std::chrono::milliseconds kStableLink{5000};
+// messages handed to the library and not yet acknowledged at most (the rest wait in the outbox,
+// under its limit): a broker that takes the connection but acknowledges nothing must not grow the
+// library's queue without bound
+constexpr std::size_t kMaxInFlight = 1000;
+// how long the destructor waits for the network thread (a host name lookup the C library does not
+// interrupt can hold it: then the thread is left to end with the process)
+constexpr std::chrono::milliseconds kStopWait{3000};
 // one turn of the network loop waits at most this for the socket: how soon a queued message leaves
 // and how soon the thread sees a stop
 constexpr int kLoopWaitMs = 20;
 
+bool has_control_character(const std::string& t) {
+  return std::any_of(t.begin(), t.end(), [](char ch) { return (static_cast<unsigned char>(ch) < 0x20) || ch == 0x7f; });
+}
+
 bool valid_topic_prefix(const std::string& t, std::string& why) {
   if (t.empty()) return why = "it is empty", false;
+  if (t.front() == '$') return why = "it starts with '$', which brokers keep for their own topics ($SYS) and refuse to clients", false;
+  if (has_control_character(t)) return why = "it holds a control character", false;
   if (t.find_first_of("+#") != std::string::npos) return why = "it holds a wildcard ('+' or '#'), which only a subscription may", false;
   if (t.front() == '/' || t.back() == '/') return why = "it starts or ends with '/' (an empty level)", false;
   if (t.find("//") != std::string::npos) return why = "it has an empty level ('//')", false;
-  if (t.find('\0') != std::string::npos) return why = "it holds a NUL character", false;
   if (mosquitto_validate_utf8(t.c_str(), static_cast<int>(t.size())) != MOSQ_ERR_SUCCESS) return why = "it is not valid UTF-8", false;
   if (t.size() > 60000) return why = "it is longer than MQTT allows", false;
   return true;
@@ -61,6 +80,7 @@ bool valid_topic_prefix(const std::string& t, std::string& why) {
 
 // the library's words for a failure, without their full stop (they go inside our sentences)
 std::string reason(int rc, int err) {
+  if (rc == MOSQ_ERR_KEEPALIVE) return "no answer within the keep-alive";  // (the library says "Unknown error")
   std::string r = rc == MOSQ_ERR_ERRNO ? std::strerror(err) : mosquitto_strerror(rc);
   while (!r.empty() && r.back() == '.') r.pop_back();
   return r;
@@ -88,6 +108,11 @@ void MqttSettings::validate() const {
   if (outbox_limit < 1) throw InvalidArgument("MQTT outbox limit is 0, must be >= 1");
   if (!password.empty() && username.empty()) throw InvalidArgument("MQTT password given without a user name");
   if (!cafile.empty() && !std::ifstream(cafile)) throw InvalidArgument(fmt::format("MQTT CA file '{}': cannot be read", cafile));
+  // (the library refuses such an id only when the client is made, as "Out of memory")
+  if (!client_id.empty() && (client_id.size() > 65535 || has_control_character(client_id) ||
+                             mosquitto_validate_utf8(client_id.c_str(), static_cast<int>(client_id.size())) != MOSQ_ERR_SUCCESS))
+    throw InvalidArgument(fmt::format("MQTT client id '{}': expected up to 65535 bytes of UTF-8 without control characters",
+                                      client_id.size() > 80 ? client_id.substr(0, 80) + "..." : client_id));
 }
 
 void parse_mqtt_address(const std::string& text, MqttSettings& s, const std::string& option) {
@@ -122,14 +147,17 @@ void parse_mqtt_address(const std::string& text, MqttSettings& s, const std::str
 struct MqttPublisher::Impl {
   struct Message {
     std::string topic, payload;
+    int qos = 1;
     bool retain = false;
     bool status = false;  // the run's state: only the newest one waits
+    bool again = false;   // the state sent again after a reconnection (not counted as published)
   };
   enum class Link { Down, Connecting, Up };
 
   MqttSettings s;
   std::string status_topic, will;
   mosquitto* m = nullptr;
+  int protocol = MQTT_PROTOCOL_V5;
 
   mutable std::mutex mu;
   std::condition_variable cv;        // the thread: work queued or a stop; drain(): a delivery
@@ -139,11 +167,15 @@ struct MqttPublisher::Impl {
   bool handing = false;              // hand_over is inside mosquitto_publish
   std::vector<std::string> notes;
   MqttCounters c;
+  std::string last_status;           // the newest state published: sent again after a reconnection
   bool stop = false;
-  Link link = Link::Down;            // (the thread's; read under mu by counters())
+  bool finished = false;             // the thread has ended
+  Link link = Link::Down;            // (the thread's; the callbacks run inside its mosquitto_loop)
   bool ever_connected = false;
-  // (the link's state is the thread's; the callbacks run inside its mosquitto_loop)
+  std::chrono::steady_clock::time_point up_since;
+  int quick_losses = 0;              // connections lost within kStableLink of being made, in a row
   std::string last_failure;          // the last failure said, so that a retry does not repeat it
+  std::set<int> refusals_said;       // the broker's reason codes for refused messages, said once each
   std::thread thread;
 
   void note(std::string text) {  // (mu held)
@@ -152,52 +184,103 @@ struct MqttPublisher::Impl {
   }
 
   // --- library callbacks (on the thread, inside mosquitto_loop) -------------------------------
-  static void on_connect(mosquitto*, void* self, int rc) {
+  static void on_connect(mosquitto*, void* self, int rc, int /*flags*/, const mosquitto_property*) {
     auto* p = static_cast<Impl*>(self);
     std::lock_guard lk(p->mu);
     if (rc == 0) {
       p->link = Link::Up;
+      p->up_since = std::chrono::steady_clock::now();
       ++p->c.connects;
       p->c.connected = true;
-      p->note(p->ever_connected ? fmt::format("reconnected to {}; {} message(s) waiting are sent now", p->s.address(),
-                                              p->outbox.size() + p->inflight.size())
-                                : fmt::format("connected to {}; events go to {}/events/CLASS, the run's state to {}", p->s.address(),
-                                              p->s.topic, p->status_topic));
+      const bool again = p->ever_connected;
+      if (!again || p->quick_losses == 0)
+        p->note(again ? fmt::format("reconnected to {}; {} message(s) waiting are sent now", p->s.address(), p->waiting())
+                      : fmt::format("connected to {}; events go to {}/events/CLASS, the run's state to {}", p->s.address(), p->s.topic,
+                                    p->status_topic));
       p->ever_connected = true;
       p->last_failure.clear();
-    } else {
-      // a refusal by the broker (CONNACK): credentials, a client id it rejects, ...
-      std::string said = mosquitto_connack_string(rc);  // "Connection Refused: not authorised."
-      if (said.rfind("Connection Refused: ", 0) == 0) said.erase(0, 20);
-      while (!said.empty() && said.back() == '.') said.pop_back();
-      std::string why = fmt::format("the broker at {} refused the connection: {}", p->s.address(), said);
-      if (rc == 4 || rc == 5) why += " (check the user name and password)";  // (CONNACK 4: bad user name or password, 5: not authorised)
-      if (why != p->last_failure) p->note(why + "; retrying, events are kept until it takes them");
-      p->last_failure = why;
-      p->link = Link::Down;
+      // the broker may have published the last will while the link was down (a silence longer than
+      // the keep-alive): the run's state again, unless a newer one waits anyway
+      if (again && !p->last_status.empty() &&
+          std::none_of(p->outbox.begin(), p->outbox.end(), [](const Message& x) { return x.status; }))
+        p->outbox.push_back({p->status_topic, p->last_status, std::max(1, p->s.qos), true, true, true});
+      p->cv.notify_all();
+      return;
     }
+    // a broker with MQTT 3.1.1 only (3.1.1's "unacceptable protocol version", or 5's 132): speak that
+    if (p->protocol == MQTT_PROTOCOL_V5 && (rc == 1 || rc == 132)) {
+      p->protocol = MQTT_PROTOCOL_V311;
+      mosquitto_int_option(p->m, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V311);
+      p->note(fmt::format("the broker at {} speaks MQTT 3.1.1, not 5: publishing with 3.1.1, under which a broker that refuses a "
+                          "message (an ACL) cannot say so",
+                          p->s.address()));
+      p->link = Link::Down;
+      return;
+    }
+    // a refusal by the broker (CONNACK): credentials, a client id it rejects, ...
+    std::string said = p->protocol == MQTT_PROTOCOL_V5 ? mosquitto_reason_string(rc) : mosquitto_connack_string(rc);
+    if (said.rfind("Connection Refused: ", 0) == 0) said.erase(0, 20);
+    while (!said.empty() && said.back() == '.') said.pop_back();
+    std::string why = fmt::format("the broker at {} refused the connection: {}", p->s.address(), said);
+    // (3.1.1: 4 bad user name or password, 5 not authorised; 5: 134, 135)
+    if (rc == 4 || rc == 5 || rc == 134 || rc == 135) why += " (check the user name and password)";
+    if (why != p->last_failure) p->note(why + "; retrying, events are kept until it takes them");
+    p->last_failure = why;
+    p->link = Link::Down;
     p->cv.notify_all();
   }
-  static void on_disconnect(mosquitto*, void* self, int rc) {
+  static void on_disconnect(mosquitto*, void* self, int rc, const mosquitto_property*) {
     auto* p = static_cast<Impl*>(self);
     std::lock_guard lk(p->mu);
-    if (p->link == Link::Up && rc != 0 && !p->stop)
-      p->note(fmt::format("lost the broker at {} ({}); reconnecting, events are kept until it takes them", p->s.address(),
-                          reason(rc, errno)));
+    if (p->link == Link::Up && rc != 0 && !p->stop) p->lost(reason(rc, errno));
     p->link = Link::Down;
     p->c.connected = false;
   }
-  static void on_publish(mosquitto*, void* self, int mid) {
+  static void on_publish(mosquitto*, void* self, int mid, int reason_code, const mosquitto_property*) {
     auto* p = static_cast<Impl*>(self);
     std::lock_guard lk(p->mu);
-    if (p->inflight.erase(mid) > 0)
-      ++p->c.delivered;
-    else if (p->handing)
-      p->acked_early.insert(mid);  // (inside mosquitto_publish: hand_over counts it)
+    const auto it = p->inflight.find(mid);
+    if (it == p->inflight.end()) {
+      if (p->handing) p->acked_early.insert(mid);  // (inside mosquitto_publish: hand_over counts it)
+    } else {
+      p->settle(it->second, reason_code);
+      p->inflight.erase(it);
+    }
     p->cv.notify_all();
   }
 
-  // a failure to connect or a lost link: said once per distinct cause (a retry does not repeat it)
+  // a message the broker answered: taken, or refused (MQTT 5 reason codes 0x80 and up: an ACL's "not
+  // authorised", a topic it will not take). Under 3.1.1 a broker acknowledges a message it drops.
+  void settle(const Message& msg, int reason_code) {  // (mu held)
+    if (reason_code < 0x80) {
+      if (!msg.again) ++c.delivered;
+      return;
+    }
+    ++c.refused;
+    if (refusals_said.insert(reason_code).second) {
+      std::string said = mosquitto_reason_string(reason_code);
+      while (!said.empty() && said.back() == '.') said.pop_back();
+      note(fmt::format("the broker at {} refused a message to {}: {}{}", s.address(), msg.topic, said,
+                       reason_code == 135 ? " (does its access list let this client publish under this topic?)" : ""));
+    }
+  }
+
+  // a connection that was up is lost (mu held): said, unless connections keep being lost at once
+  void lost(const std::string& why) {
+    const bool quick = std::chrono::steady_clock::now() - up_since < kStableLink;
+    quick_losses = quick ? quick_losses + 1 : 0;
+    if (quick_losses == 3)
+      note(fmt::format("the broker at {} ended the connection within {} s of each of the last 3 connections ({}): is another client "
+                       "connected with the id '{}' (--mqtt-client-id)? retrying every {}-{} s",
+                       s.address(), kStableLink.count() / 1000, why, s.client_id, kRetryFirst.count() / 1000, kRetryMax.count() / 1000));
+    else if (quick_losses < 3)
+      note(fmt::format("lost the broker at {} ({}); reconnecting, events are kept until it takes them", s.address(), why));
+    last_failure.clear();
+    link = Link::Down;
+    c.connected = false;
+  }
+
+  // a failure to connect: said once per distinct cause (a retry does not repeat it)
   void failed(const std::string& why) {  // (mu held)
     if (why != last_failure)
       note(fmt::format("{}; retrying every {}-{} s, events are kept until it takes them", why, kRetryFirst.count() / 1000,
@@ -210,31 +293,35 @@ struct MqttPublisher::Impl {
   // hands the outbox to the library while it is connected (called with mu held; released around the
   // library's call, which writes to the socket at once and may call on_publish from inside it)
   void hand_over(std::unique_lock<std::mutex>& lk) {
-    while (!outbox.empty() && link == Link::Up && !stop) {
+    while (!outbox.empty() && link == Link::Up && !stop && inflight.size() < kMaxInFlight) {
       Message msg = std::move(outbox.front());
       outbox.pop_front();
       handing = true;
       lk.unlock();
       int mid = 0;
-      const int rc = mosquitto_publish(m, &mid, msg.topic.c_str(), static_cast<int>(msg.payload.size()), msg.payload.data(), s.qos, msg.retain);
+      const int rc = mosquitto_publish(m, &mid, msg.topic.c_str(), static_cast<int>(msg.payload.size()), msg.payload.data(), msg.qos, msg.retain);
       lk.lock();
       handing = false;
-      if (rc == MOSQ_ERR_NO_CONN || rc == MOSQ_ERR_CONN_LOST) {  // (the loop sees the loss): it waits again, first in line
+      const bool link_error = rc == MOSQ_ERR_NO_CONN || rc == MOSQ_ERR_CONN_LOST || rc == MOSQ_ERR_ERRNO;
+      if (rc == MOSQ_ERR_SUCCESS || (link_error && msg.qos > 0 && mid != 0)) {
+        // the library has it: QoS 0 was written (on_publish maybe inside the call), QoS 1/2 is queued
+        // and sent again after a reconnection if the link failed under it
+        if (acked_early.erase(mid) > 0) {
+          if (!msg.again) ++c.delivered;
+          cv.notify_all();
+        } else {
+          inflight.emplace(mid, std::move(msg));
+        }
+        if (link_error) return;  // (the loop sees the loss)
+        continue;
+      }
+      if (link_error) {  // QoS 0 the library did not keep: it waits again, first in line
         outbox.push_front(std::move(msg));
         return;
       }
-      if (rc != MOSQ_ERR_SUCCESS) {  // a message the library refuses (too large for the broker, ...): dropped, said
-        note(fmt::format("a message to {} was refused: {}; dropped", msg.topic, reason(rc, errno)));
-        ++c.dropped;
-        continue;
-      }
-      // QoS 0 is acknowledged by nothing: on_publish came when it was written, maybe inside the call
-      if (acked_early.erase(mid) > 0) {
-        ++c.delivered;
-        cv.notify_all();
-      } else {
-        inflight.emplace(mid, std::move(msg));
-      }
+      // a message the library refuses (too large for the broker, ...): dropped, said
+      note(fmt::format("a message to {} was refused by the client library: {}; dropped", msg.topic, reason(rc, errno)));
+      ++c.dropped;
     }
   }
 
@@ -243,11 +330,11 @@ struct MqttPublisher::Impl {
     auto next_attempt = std::chrono::steady_clock::now();
     auto connect_started = next_attempt;
     std::unique_lock lk(mu);
-    // after a turn that ended the link: when to try again (at once after a lost connection, which a
-    // broker's restart makes; growing waits while attempts fail)
-    auto schedule = [&](bool was_up) {
+    // after a turn that ended the link: when to try again (at once after a connection that lasted, as
+    // a broker's restart ends one; growing waits while attempts fail or links are lost at once)
+    auto schedule = [&](bool lasted) {
       const auto now = std::chrono::steady_clock::now();
-      if (was_up) {
+      if (lasted) {
         retry = kRetryFirst;
         next_attempt = now;
       } else {
@@ -262,14 +349,15 @@ struct MqttPublisher::Impl {
           cv.wait_until(lk, next_attempt, [&] { return stop; });
           continue;
         }
-        // (re)connect: the library's socket connect is non-blocking; the CONNACK comes in the loop
+        // (re)connect: the library's socket connect is non-blocking; the CONNACK comes in the loop.
+        // (A host name is looked up here, blocking: the C library's resolver)
         lk.unlock();
         const int rc = mosquitto_connect_async(m, s.host.c_str(), s.effective_port(), s.keepalive_s);
         const int err = errno;
         lk.lock();
+        if (stop) break;
         if (rc != MOSQ_ERR_SUCCESS) {
-          failed(fmt::format("cannot reach the broker at {}: {}", s.address(),
-                             reason(rc, err)));
+          failed(fmt::format("cannot reach the broker at {}: {}", s.address(), reason(rc, err)));
           schedule(false);
           continue;
         }
@@ -287,18 +375,15 @@ struct MqttPublisher::Impl {
       if (link == Link::Up) hand_over(lk);
       // one turn of the network loop (reads, writes, keep-alive, the callbacks)
       const Link before = link;
+      const auto up_at = up_since;
       lk.unlock();
       const int rc = mosquitto_loop(m, kLoopWaitMs, 1);
       const int err = errno;
       lk.lock();
       if (stop) break;
       if (rc != MOSQ_ERR_SUCCESS && link != Link::Down) {
-        const std::string why = reason(rc, err);
         if (link == Link::Up) {
-          note(fmt::format("lost the broker at {} ({}); reconnecting, events are kept until it takes them", s.address(), why));
-          last_failure.clear();
-          link = Link::Down;
-          c.connected = false;
+          lost(reason(rc, err));
         } else {
           // (the library says only "A TLS error occurred": what usually causes it)
           const std::string hint =
@@ -306,10 +391,11 @@ struct MqttPublisher::Impl {
                                                "speak TLS?)",
                                                s.cafile, s.host)
                                  : std::string();
-          failed(fmt::format("cannot reach the broker at {}: {}{}", s.address(), why, hint));
+          failed(fmt::format("cannot reach the broker at {}: {}{}", s.address(), reason(rc, err), hint));
         }
       }
-      if (link == Link::Down && before != Link::Down) schedule(before == Link::Up);
+      if (link == Link::Down && before != Link::Down)
+        schedule(before == Link::Up && std::chrono::steady_clock::now() - up_at >= kStableLink);
     }
     // a clean goodbye: the broker then keeps the status the run last published instead of the will
     if (link == Link::Up) {
@@ -319,6 +405,8 @@ struct MqttPublisher::Impl {
       }
       lk.lock();
     }
+    finished = true;
+    cv.notify_all();
   }
 
   long waiting() const { return static_cast<long>(outbox.size() + inflight.size()); }  // (mu held)
@@ -327,10 +415,11 @@ struct MqttPublisher::Impl {
     std::lock_guard lk(mu);
     ++c.published;
     if (msg.status) {  // only the newest state matters; it goes after the events it follows
+      last_status = msg.payload;
       auto old = std::find_if(outbox.begin(), outbox.end(), [](const Message& x) { return x.status; });
       if (old != outbox.end()) {
+        if (!old->again) ++c.superseded;
         outbox.erase(old);
-        ++c.delivered;  // (superseded: counted as done, for drain)
       }
     }
     if (outbox.size() >= s.outbox_limit) {
@@ -358,44 +447,61 @@ MqttPublisher::MqttPublisher(MqttSettings settings) : impl_(std::make_unique<Imp
   p.status_topic = p.s.topic + "/status";
   p.will = p.s.will.empty() ? std::string(R"({"state":"lost"})") : p.s.will;
   p.m = mosquitto_new(p.s.client_id.c_str(), true, &p);
-  if (!p.m) throw std::runtime_error(fmt::format("MQTT: cannot create a client ({})", mosquitto_strerror(MOSQ_ERR_NOMEM)));
+  if (!p.m)
+    throw std::runtime_error(fmt::format("MQTT: cannot create a client with the id '{}' ({})", p.s.client_id, std::strerror(errno)));
   auto check = [&](int rc, const char* what) {
     if (rc != MOSQ_ERR_SUCCESS) {
+      const int err = errno;
       mosquitto_destroy(p.m);
-      throw InvalidArgument(fmt::format("MQTT {}: {}", what, reason(rc, errno)));
+      throw InvalidArgument(fmt::format("MQTT {}: {}", what, reason(rc, err)));
     }
   };
-  check(mosquitto_int_option(p.m, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V311), "protocol version");
+  check(mosquitto_int_option(p.m, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V5), "protocol version");
   check(mosquitto_will_set(p.m, p.status_topic.c_str(), static_cast<int>(p.will.size()), p.will.data(), std::max(1, p.s.qos), true),
         "last will");
   if (!p.s.username.empty())
     check(mosquitto_username_pw_set(p.m, p.s.username.c_str(), p.s.password.empty() ? nullptr : p.s.password.c_str()), "user name");
   if (!p.s.cafile.empty()) check(mosquitto_tls_set(p.m, p.s.cafile.c_str(), nullptr, nullptr, nullptr, nullptr), "TLS CA file");
-  mosquitto_connect_callback_set(p.m, &Impl::on_connect);
-  mosquitto_disconnect_callback_set(p.m, &Impl::on_disconnect);
-  mosquitto_publish_callback_set(p.m, &Impl::on_publish);
+  mosquitto_connect_v5_callback_set(p.m, &Impl::on_connect);
+  mosquitto_disconnect_v5_callback_set(p.m, &Impl::on_disconnect);
+  mosquitto_publish_v5_callback_set(p.m, &Impl::on_publish);
   p.thread = std::thread([&p] { p.run(); });
 }
 
 MqttPublisher::~MqttPublisher() {
-  {
-    std::lock_guard lk(impl_->mu);
-    impl_->stop = true;
-  }
+  std::unique_lock lk(impl_->mu);
+  impl_->stop = true;
   impl_->cv.notify_all();
-  if (impl_->thread.joinable()) impl_->thread.join();
+  if (!impl_->cv.wait_for(lk, kStopWait, [&] { return impl_->finished; })) {
+    // the thread is held in a host name lookup: it is left to end with the process, and what it uses
+    // with it (destroying them under it would crash it)
+    lk.unlock();
+    impl_->thread.detach();
+    (void)impl_.release();
+    return;
+  }
+  lk.unlock();
+  impl_->thread.join();
   mosquitto_destroy(impl_->m);
 }
 
 void MqttPublisher::publish_event(const std::string& fault_class, const std::string& json_line) {
-  impl_->enqueue({impl_->s.topic + "/events/" + fault_class, json_line, false, false});
+  impl_->enqueue({impl_->s.topic + "/events/" + fault_class, json_line, impl_->s.qos, false, false, false});
 }
 
-void MqttPublisher::publish_status(const std::string& json) { impl_->enqueue({impl_->status_topic, json, true, true}); }
+void MqttPublisher::publish_status(const std::string& json) {
+  // (at least QoS 1: the state is what a control room's screen shows, and it is retained)
+  impl_->enqueue({impl_->status_topic, json, std::max(1, impl_->s.qos), true, true, false});
+}
 
-long MqttPublisher::drain(std::chrono::milliseconds timeout) {
+long MqttPublisher::drain(std::chrono::milliseconds timeout, const std::function<bool()>& give_up) {
   std::unique_lock lk(impl_->mu);
-  impl_->cv.wait_for(lk, timeout, [&] { return impl_->waiting() == 0; });
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (impl_->waiting() > 0 && std::chrono::steady_clock::now() < until) {
+    if (give_up && give_up()) break;
+    impl_->cv.wait_until(lk, std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(100)),
+                         [&] { return impl_->waiting() == 0; });
+  }
   return impl_->waiting();
 }
 

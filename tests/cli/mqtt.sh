@@ -104,7 +104,7 @@ rc=0
   >"$dir/mqtt.never.out" 2>"$dir/mqtt.never.err" || rc=$?
 [ "$rc" -eq 1 ] || fail "exit $rc without a broker, expected 1"
 n=$(wc -l <"$dir/mqtt.never.events" | tr -d ' ')
-grep -q "error: mqtt 127.0.0.1:$port: $((n + 1)) message(s) not delivered: the broker did not take them within 10 s (the events are in $dir/mqtt.never.events)" \
+grep -q "error: mqtt 127.0.0.1:$port: $((n + 1)) message(s) not delivered: $((n + 1)) not taken within 10 s (the events are in $dir/mqtt.never.events)" \
   "$dir/mqtt.never.err" || fail "no error for the undelivered messages: $(cat "$dir/mqtt.never.err")"
 grep -q "event(s)" "$dir/mqtt.never.out" || fail "no summary without a broker"
 echo "5: no broker: exit 1, $((n + 1)) messages ($n events and the last state; the first was superseded) said undelivered"
@@ -162,7 +162,62 @@ rc=0
 TWINWATCH_MQTT_PASSWORD=wrong "$tw" monitor --twin "$twin" "$rec" $payload --db '' --mqtt "127.0.0.1:$port" --mqtt-user monitor \
   >"$dir/mqtt.noauth.out" 2>"$dir/mqtt.noauth.err" || rc=$?
 [ "$rc" -eq 1 ] || fail "exit $rc with a wrong password, expected 1"
-grep -q "warning: mqtt: the broker at 127.0.0.1:$port refused the connection: not authorised (check the user name and password)" \
+grep -qE "warning: mqtt: the broker at 127.0.0.1:$port refused the connection: (Not authorized|not authorised) \(check the user name and password\)" \
   "$dir/mqtt.noauth.err" || fail "no refusal said: $(cat "$dir/mqtt.noauth.err")"
 echo "7: a password from the environment taken, a wrong one said"
+kill "$broker"; wait "$broker" 2>/dev/null || true
+
+# 8. a broker whose access list forbids the topic refuses the messages (MQTT 5 reason 135): said, exit 1
+port=$((port + 1))
+printf 'topic readwrite allowed/#\n' >"$tls/acl"
+printf 'user %s\nlistener %s 127.0.0.1\nallow_anonymous true\nacl_file %s\n' "$(id -un)" "$port" "$tls/acl" >"$tls/acl.conf"
+mosquitto -c "$tls/acl.conf" >"$dir/mqtt.broker_acl.log" 2>&1 &
+broker=$!
+pids="$pids $broker"
+sleep 0.5
+kill -0 "$broker" 2>/dev/null || fail "the broker with an access list did not start (port $port)"
+rc=0
+"$tw" monitor --twin "$twin" "$rec" $payload --db '' --events "$dir/mqtt.acl.events" --mqtt "127.0.0.1:$port" --mqtt-topic forbidden/cell \
+  >"$dir/mqtt.acl.out" 2>"$dir/mqtt.acl.err" || rc=$?
+[ "$rc" -eq 1 ] || fail "exit $rc when the broker refuses the messages, expected 1"
+n=$(wc -l <"$dir/mqtt.acl.events" | tr -d ' ')
+grep -q "warning: mqtt: the broker at 127.0.0.1:$port refused a message to forbidden/cell/[a-z/_]*: Not authorized (does its access list" \
+  "$dir/mqtt.acl.err" || fail "the refusal is not said: $(cat "$dir/mqtt.acl.err")"
+grep -q "error: mqtt 127.0.0.1:$port: $((n + 2)) message(s) not delivered: $((n + 2)) refused by the broker" "$dir/mqtt.acl.err" ||
+  fail "the refused messages are not counted: $(cat "$dir/mqtt.acl.err")"
+echo "8: an access list that forbids the topic: $((n + 2)) refusals said, exit 1"
+
+# 9. the broker published the last will while the monitor was silent (stopped for longer than 1.5
+#    keep-alives): once it speaks again it reconnects and publishes its state again
+rm -f "$dir/mqtt.sub_acl"
+mosquitto_sub -h 127.0.0.1 -p "$port" -t 'allowed/#' -v -q 1 >"$dir/mqtt.sub9" 2>"$dir/mqtt.sub9.err" &
+pids="$pids $!"
+sleep 0.3
+"$tw" serve --twin "$twin" "$rec" $payload --db '' --speed 0.25 --listen 127.0.0.1:0 --mqtt "127.0.0.1:$port" --mqtt-topic allowed/nine \
+  --mqtt-keepalive 5 >"$dir/mqtt.nine.out" 2>"$dir/mqtt.nine.err" &
+nine=$!
+pids="$pids $nine"
+for i in $(seq 1 50); do grep -q "^mqtt: connected" "$dir/mqtt.nine.err" 2>/dev/null && break; sleep 0.1; done
+kill -STOP "$nine"; sleep 9; kill -CONT "$nine"; sleep 3
+kill -INT "$nine"; wait "$nine" 2>/dev/null || true
+sed -n 's|^allowed/nine/status {"state":"\([a-z ]*\)".*|\1|p' "$dir/mqtt.sub9" | tr '\n' ' ' >"$dir/mqtt.states9"
+grep -q "^monitoring lost monitoring " "$dir/mqtt.states9" || fail "the states after the will: $(cat "$dir/mqtt.states9")"
+echo "9: after the will the state is published again: $(cat "$dir/mqtt.states9")"
+
+# 10. two monitors with one client id take each other's connection: no flood, and it is said
+"$tw" serve --twin "$twin" "$rec" $payload --db '' --speed 0.25 --listen 127.0.0.1:0 --mqtt "127.0.0.1:$port" --mqtt-topic allowed/a \
+  --mqtt-client-id twin-cell3 >"$dir/mqtt.twin_a.out" 2>"$dir/mqtt.twin_a.err" &
+a=$!
+"$tw" serve --twin "$twin" "$rec" $payload --db '' --speed 0.25 --listen 127.0.0.1:0 --mqtt "127.0.0.1:$port" --mqtt-topic allowed/b \
+  --mqtt-client-id twin-cell3 >"$dir/mqtt.twin_b.out" 2>"$dir/mqtt.twin_b.err" &
+b=$!
+pids="$pids $a $b"
+before=$(grep -c "as twin-cell3" "$dir/mqtt.broker_acl.log" || true)
+sleep 12
+kill -INT "$a" "$b"; wait "$a" 2>/dev/null || true; wait "$b" 2>/dev/null || true
+connects=$(( $(grep -c "as twin-cell3" "$dir/mqtt.broker_acl.log") - before ))
+[ "$connects" -le 30 ] || fail "$connects connections in 12 s with one client id (a flood)"
+cat "$dir/mqtt.twin_a.err" "$dir/mqtt.twin_b.err" | grep -q "is another client connected with the id 'twin-cell3'" ||
+  fail "the shared client id is not said: $(cat "$dir/mqtt.twin_a.err" "$dir/mqtt.twin_b.err")"
+echo "10: one client id for two monitors: $connects connections in 12 s, said"
 echo "PASS"

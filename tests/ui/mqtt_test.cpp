@@ -84,6 +84,11 @@ TEST(MqttSettings, EachCheckNamesItsField) {
   EXPECT_THAT(with([](auto& x) { x.topic = "plant//ur3e"; }), HasSubstr("an empty level"));
   EXPECT_THAT(with([](auto& x) { x.topic = ""; }), HasSubstr("it is empty"));
   EXPECT_THAT(with([](auto& x) { x.topic = "plant/\xff"; }), HasSubstr("not valid UTF-8"));
+  EXPECT_THAT(with([](auto& x) { x.topic = "$SYS/twinwatch"; }), HasSubstr("starts with '$'"));
+  EXPECT_THAT(with([](auto& x) { x.topic = "plant/\tcell"; }), HasSubstr("a control character"));
+  EXPECT_THAT(with([](auto& x) { x.client_id = "cell\xff"; }), HasSubstr("MQTT client id 'cell\xff': expected up to 65535 bytes of UTF-8"));
+  EXPECT_THAT(with([](auto& x) { x.client_id = std::string(70000, 'a'); }), HasSubstr("expected up to 65535 bytes"));
+  EXPECT_EQ(with([](auto& x) { x.client_id = "twinwatch-cell3-ur3e"; }), "");
   EXPECT_THAT(with([](auto& x) { x.qos = 3; }), HasSubstr("QoS is 3, must be 0, 1 or 2"));
   EXPECT_THAT(with([](auto& x) { x.keepalive_s = 2; }), HasSubstr("keep-alive is 2 s"));
   EXPECT_THAT(with([](auto& x) { x.outbox_limit = 0; }), HasSubstr("outbox limit is 0"));
@@ -110,6 +115,8 @@ TEST(MqttPublisher, WithoutABrokerPublishingDoesNotBlockAndEverythingWaits) {
   const ui::MqttCounters c = pub.counters();
   EXPECT_EQ(c.published, 102);
   EXPECT_EQ(c.waiting, 101);
+  EXPECT_EQ(c.superseded, 1);
+  EXPECT_EQ(c.delivered, 0);
   EXPECT_EQ(c.connects, 0);
   EXPECT_FALSE(c.connected);
   // the refusal is said once, not at every retry

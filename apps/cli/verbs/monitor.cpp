@@ -209,11 +209,6 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     for (const auto& source : sources) watched += (watched.empty() ? "" : " ") + source.second;
     store->begin_run(watched, stored_path(o.twin), o.program);
   }
-  // --mqtt: the events and the run's state on a broker (it connects in the background)
-  cli::MqttSink mqtt(o.mqtt, o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde, stored_path(o.twin),
-                o.program, store ? store->run() : 0);
-  constexpr int kMqttEndWaitMs = 10000;  // as long as the store's lock is waited for
-  const bool mqtt_quiet = o.quiet || o.json;
   // A recording watched by `monitor` itself (under serve its hooks stop it): from here, where the run
   // has its row in the store, Ctrl-C, SIGTERM and SIGHUP stop the replay in order. What was watched
   // is reported and stored, the run's status is 'stopped' (it stayed 'running' when the signal ended
@@ -272,11 +267,25 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     // the run's row says it failed (what failed is on stderr)
     store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), "failed"}, kEndLockWaitMs);
   }};
+  // --mqtt: the events and the run's state on a broker (it connects in the background); made after
+  // the store's guard, which ends the run's row as failed if this throws
+  cli::MqttSink mqtt(o.mqtt, o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde, stored_path(o.twin),
+                     o.program, store ? store->run() : 0);
+  constexpr int kMqttEndWaitMs = 10000;  // as long as the store's lock is waited for
+  const bool mqtt_quiet = o.quiet || o.json;
+  // a Ctrl-C during the wait at the end gives it up; one that ended the run came before the wait (a
+  // second signal then ends the process at once, as during the store's wait)
+  const auto mqtt_give_up = [] {
+    const bool before = cli::interrupted();
+    return std::function<bool()>([before] { return !before && cli::interrupted(); });
+  };
   // the broker hears that the run failed (and gets the events that wait; not for long: the error is said)
   OnUnwind unwind_mqtt{[&] {
     if (!mqtt.active()) return;
-    const long left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), 2000, mqtt_quiet);
-    if (left > 0) fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered\n", mqtt.address(), left);
+    constexpr int kFailedWaitMs = 2000;
+    const cli::MqttSink::Undelivered left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(),
+                                                        kFailedWaitMs, mqtt_quiet, mqtt_give_up());
+    if (left.total() > 0) fmt::print(stderr, "error: mqtt {}: {}\n", mqtt.address(), left.describe(kFailedWaitMs));
   }};
   // --fail-on: the closed events of those classes (counted as they close: live, old events leave memory)
   const bool fail_on_any = std::find(o.fail_on.begin(), o.fail_on.end(), "any") != o.fail_on.end();
@@ -346,7 +355,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     // the event its files
     if (fails(e.fault)) ++failing_events;
     const std::string line = e.to_json_line();
-    mqtt.event(std::string(monitor::to_string(e.fault)), line);  // (queued first: a file that fails must not cost the broker the event)
+    mqtt.event(std::string(monitor::to_string(e.fault)), line, true, e.t_detected);  // (queued first: a file that fails must not cost the broker the event)
     write_event_line(line);
     if (store) {
       // (behind events already waiting no wait: a burst of events must not stall the stream)
@@ -575,11 +584,11 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                           o.db_path, kEndLockWaitMs / 1000.0));
   close_written(trace, o.trace);
   // the broker: the run's end, and what waits for it (an error, as an event not stored is)
-  const long mqtt_left =
-      mqtt.finish(status, mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), kMqttEndWaitMs, mqtt_quiet);
+  const cli::MqttSink::Undelivered undelivered = mqtt.finish(
+      status, mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), kMqttEndWaitMs, mqtt_quiet, mqtt_give_up());
+  const long mqtt_left = undelivered.total();
   if (mqtt_left > 0)
-    fmt::print(stderr, "error: mqtt {}: {} message(s) not delivered: the broker did not take them within {:g} s{}\n", mqtt.address(),
-               mqtt_left, kMqttEndWaitMs / 1000.0,
+    fmt::print(stderr, "error: mqtt {}: {}{}\n", mqtt.address(), undelivered.describe(kMqttEndWaitMs),
                o.events_path.empty() && o.db_path.empty() ? ""
                                                           : fmt::format(" (the events are in {})", o.db_path.empty() ? o.events_path : o.db_path));
   if (chatty && watch.samples_outside() > 0) fmt::print("{}\n", watch.summary());
