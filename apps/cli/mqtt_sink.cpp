@@ -21,13 +21,29 @@ namespace {
 // the password's environment variable: an argument would be visible to every user of the machine (ps)
 constexpr const char* kPasswordVariable = "TWINWATCH_MQTT_PASSWORD";
 
+#ifdef TWINWATCH_HAVE_MQTT
+// the settings the options give (the password is the constructor's to add)
+ui::MqttSettings settings_of(const MqttCliOptions& o) {
+  ui::MqttSettings s;
+  ui::parse_mqtt_address(o.address, s);
+  s.topic = o.topic;
+  s.qos = o.qos;
+  s.username = o.user;
+  s.cafile = o.cafile;
+  s.client_id = o.client_id;
+  s.keepalive_s = o.keepalive;
+  return s;
+}
+
 double unix_now() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
+#endif
+
 }  // namespace
 
 std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o) {
-  auto* address = sub->add_option("--mqtt", o.address,
+  sub->add_option("--mqtt", o.address,
                                   "Publish the events and the run's state to the MQTT broker at HOST[:PORT] (default port 1883, 8883 with "
                                   "--mqtt-cafile): each event's JSON line (as --events writes it; with --events-open the open alerts' "
                                   "lines too) to TOPIC/events/CLASS, the run's state (monitoring, finished, stopped, connection lost, "
@@ -58,13 +74,8 @@ std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o) {
       throw InvalidArgument("--mqtt: this twinwatch was built without MQTT (BUILD_MQTT=OFF or libmosquitto-dev missing at configure "
                             "time); build it again after 'apt-get install libmosquitto-dev'");
 #else
-    (void)address;
     if (!o.address.empty()) {  // the settings' own checks, said with the option's name, before any work
-      ui::MqttSettings s;
-      ui::parse_mqtt_address(o.address, s);
-      s.topic = o.topic;
-      s.qos = o.qos;
-      s.client_id = o.client_id;
+      const ui::MqttSettings s = settings_of(o);
       try {
         s.validate();
       } catch (const InvalidArgument& e) {
@@ -85,14 +96,7 @@ MqttSink::MqttSink(const MqttCliOptions& o, const std::string& source, const std
     : pub_(nullptr, &destroy_publisher),
       source_(source), twin_(twin), program_(program), started_at_(iso_utc(unix_now())), run_(run) {
   if (o.address.empty()) return;
-  ui::MqttSettings s;
-  ui::parse_mqtt_address(o.address, s);
-  s.topic = o.topic;
-  s.qos = o.qos;
-  s.username = o.user;
-  s.cafile = o.cafile;
-  s.client_id = o.client_id;
-  s.keepalive_s = o.keepalive;
+  ui::MqttSettings s = settings_of(o);
   if (const char* pw = std::getenv(kPasswordVariable); pw && *pw) {
     if (o.user.empty())
       throw InvalidArgument(fmt::format("${} is set but --mqtt-user is not: give the user the password belongs to", kPasswordVariable));

@@ -31,6 +31,17 @@ subscribe() {  # $1: output name; every topic of the test, with its topic, QoS 1
   sleep 0.3
 }
 
+conf_broker() {  # $1: name, its configuration after the listener line in $dir/mqtt.$1.body; on port+1, sets port and broker
+  port=$((port + 1))
+  # (run as root, mosquitto becomes the user 'mosquitto', who cannot read the test's files: it stays who runs the test)
+  { printf 'user %s\nlistener %s 127.0.0.1\n' "$(id -un)" "$port"; cat "$dir/mqtt.$1.body"; } >"$dir/mqtt.$1.conf"
+  mosquitto -c "$dir/mqtt.$1.conf" >"$dir/mqtt.broker_$1.log" 2>&1 &
+  broker=$!
+  pids="$pids $broker"
+  sleep 0.5
+  kill -0 "$broker" 2>/dev/null || fail "the broker '$1' did not start (port $port)"
+}
+
 # 1. a broker that is there: every event line as --events writes it, on tw/test/events/CLASS, in
 #    order, between the retained states "monitoring" and "finished"
 start_broker broker1
@@ -118,15 +129,8 @@ printf 'subjectAltName=DNS:localhost,IP:127.0.0.1\n' >"$tls/ext"
 openssl x509 -req -in "$tls/srv.csr" -CA "$tls/ca.pem" -CAkey "$tls/ca.key" -CAcreateserial -days 2 -out "$tls/srv.pem" \
   -extfile "$tls/ext" 2>/dev/null
 openssl req -x509 -newkey rsa:2048 -nodes -days 2 -subj "/CN=another CA" -keyout "$tls/other.key" -out "$tls/other.pem" 2>/dev/null
-port=$((port + 1))
-# (run as root, mosquitto becomes the user 'mosquitto', who cannot read the test's key: it stays who runs the test)
-printf 'user %s\nlistener %s 127.0.0.1\nallow_anonymous true\ncafile %s\ncertfile %s\nkeyfile %s\n' "$(id -un)" "$port" "$tls/ca.pem" \
-  "$tls/srv.pem" "$tls/srv.key" >"$tls/broker.conf"
-mosquitto -c "$tls/broker.conf" >"$dir/mqtt.broker_tls.log" 2>&1 &
-broker=$!
-pids="$pids $broker"
-sleep 0.5
-kill -0 "$broker" 2>/dev/null || fail "the TLS broker did not start (port $port)"
+printf 'allow_anonymous true\ncafile %s\ncertfile %s\nkeyfile %s\n' "$tls/ca.pem" "$tls/srv.pem" "$tls/srv.key" >"$dir/mqtt.tls.body"
+conf_broker tls
 mosquitto_sub -h localhost -p "$port" --cafile "$tls/ca.pem" -t 'tw/test/#' -v -q 1 >"$dir/mqtt.sub_tls" 2>"$dir/mqtt.sub_tls.err" &
 pids="$pids $!"
 sleep 0.5
@@ -146,15 +150,10 @@ echo "6: TLS: $(wc -l <"$dir/mqtt.got_tls" | tr -d ' ') event(s) over TLS; a cer
 kill "$broker"; wait "$broker" 2>/dev/null || true
 
 # 7. a broker that wants a password: from $TWINWATCH_MQTT_PASSWORD with --mqtt-user; a wrong one is said
-port=$((port + 1))
 : >"$tls/passwords"
 mosquitto_passwd -b "$tls/passwords" monitor 's3cret pass' || fail "mosquitto_passwd failed"
-printf 'user %s\nlistener %s 127.0.0.1\nallow_anonymous false\npassword_file %s\n' "$(id -un)" "$port" "$tls/passwords" >"$tls/auth.conf"
-mosquitto -c "$tls/auth.conf" >"$dir/mqtt.broker_auth.log" 2>&1 &
-broker=$!
-pids="$pids $broker"
-sleep 0.5
-kill -0 "$broker" 2>/dev/null || fail "the broker with passwords did not start (port $port)"
+printf 'allow_anonymous false\npassword_file %s\n' "$tls/passwords" >"$dir/mqtt.auth.body"
+conf_broker auth
 TWINWATCH_MQTT_PASSWORD='s3cret pass' "$tw" monitor --twin "$twin" "$rec" $payload --db '' --mqtt "127.0.0.1:$port" --mqtt-user monitor \
   >"$dir/mqtt.auth.out" 2>"$dir/mqtt.auth.err" || fail "monitor with the right password exited $?"
 grep -q "^mqtt: connected to 127.0.0.1:$port" "$dir/mqtt.auth.err" || fail "not connected with the right password"
@@ -168,14 +167,9 @@ echo "7: a password from the environment taken, a wrong one said"
 kill "$broker"; wait "$broker" 2>/dev/null || true
 
 # 8. a broker whose access list forbids the topic refuses the messages (MQTT 5 reason 135): said, exit 1
-port=$((port + 1))
 printf 'topic readwrite allowed/#\n' >"$tls/acl"
-printf 'user %s\nlistener %s 127.0.0.1\nallow_anonymous true\nacl_file %s\n' "$(id -un)" "$port" "$tls/acl" >"$tls/acl.conf"
-mosquitto -c "$tls/acl.conf" >"$dir/mqtt.broker_acl.log" 2>&1 &
-broker=$!
-pids="$pids $broker"
-sleep 0.5
-kill -0 "$broker" 2>/dev/null || fail "the broker with an access list did not start (port $port)"
+printf 'allow_anonymous true\nacl_file %s\n' "$tls/acl" >"$dir/mqtt.acl.body"
+conf_broker acl
 rc=0
 "$tw" monitor --twin "$twin" "$rec" $payload --db '' --events "$dir/mqtt.acl.events" --mqtt "127.0.0.1:$port" --mqtt-topic forbidden/cell \
   >"$dir/mqtt.acl.out" 2>"$dir/mqtt.acl.err" || rc=$?
