@@ -521,6 +521,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
       sc.true_magnitude = lf.magnitude;
       const std::string want = expected_class(sc.fault);
       sc.declared = declared_pick(fi);
+      sc.has_link = lf.link >= 0;
       for (size_t k = 0; k < mon.events().size() && !sc.declared; ++k) {
         const auto& e = mon.events()[k];
         if (e.t_start < onset - kOnsetTolerance || e.t_start > window_end) continue;
@@ -878,22 +879,24 @@ std::string evaluation_json(const Evaluation& e) {
   for (const auto& s : e.scores)
     j["scenarios"].push_back({{"name", s.name},
                               {"fault", s.has_fault ? nlohmann::json(s.fault) : nlohmann::json(nullptr)},
-                              // a healthy scenario has nothing to detect, classify or place: null, not false (a script's
-                              // mean of class_ok counted healthy runs as misclassified)
-                              {"detected", s.has_fault ? nlohmann::json(s.detected) : nlohmann::json(nullptr)},
+                              // a healthy scenario, or a pick the program declares (no alert expected), has nothing to
+                              // detect, classify or place: null, not false (a script's mean of class_ok counted healthy
+                              // runs as misclassified); link_in_candidates applies to faults with a link (contacts)
+                              {"detected", s.has_fault && !s.declared ? nlohmann::json(s.detected) : nlohmann::json(nullptr)},
                               {"declared", s.declared},
                               {"delay_ms", s.detected ? nlohmann::json(s.delay_ms) : nlohmann::json(nullptr)},
                               // not applicable (no detection): null, not "" and 0
                               {"class", s.detected ? nlohmann::json(s.predicted_class) : nlohmann::json(nullptr)},
-                              {"class_ok", s.has_fault ? nlohmann::json(s.class_ok) : nlohmann::json(nullptr)},
-                              {"joint_ok", s.has_fault ? nlohmann::json(s.joint_ok) : nlohmann::json(nullptr)},
+                              {"class_ok", s.has_fault && !s.declared ? nlohmann::json(s.class_ok) : nlohmann::json(nullptr)},
+                              {"joint_ok", s.has_fault && !s.declared ? nlohmann::json(s.joint_ok) : nlohmann::json(nullptr)},
                               {"link", s.predicted_link >= 0 ? nlohmann::json(s.predicted_link + 1) : nlohmann::json(nullptr)},
                               {"other_links", [&] {
                                  nlohmann::json a = nlohmann::json::array();
                                  for (int l : s.other_links) a.push_back(l + 1);
                                  return a;
                                }()},
-                              {"link_in_candidates", s.has_fault ? nlohmann::json(s.link_in_candidates) : nlohmann::json(nullptr)},
+                              {"link_in_candidates",
+                               s.has_fault && !s.declared && s.has_link ? nlohmann::json(s.link_in_candidates) : nlohmann::json(nullptr)},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
                               {"link_reference", [&] {
                                  nlohmann::json r = nullptr;
@@ -1010,7 +1013,7 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
   std::vector<signal::FitAccumulator> fit(static_cast<size_t>(n));
   monitor::ResidualVelocityCorrelation correlation(n);
   StreamScan::Cut cut;
-  stream.replay(recordings, map, [&](const RobotSample& s) {
+  stream.replay(recordings, map, [&](RobotSample& s) {
     watch.check(s);  // (first, as monitor does: an event closed at this sample sees it)
     mon.push(s);
     const double t = s.timestamp;
@@ -1032,7 +1035,7 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
     if (!s.driven()) return;
     for (int j = 0; j < n; ++j) fit[static_cast<size_t>(j)].add(s.current[j], mon.predicted_current()[j]);
     correlation.add(mon.residual(), s.qd);
-  });
+  }, &cut);
   if (cut.file >= 0)
     throw std::runtime_error(fmt::format("{}: {} of the {} rows checked were there to report on (the file was cut or replaced while it "
                                          "was read): report on a copy",

@@ -45,6 +45,7 @@ struct ScenarioScore {
   /// streams_payload): the twin takes it, so no alert is expected and any event in its window is a
   /// false alarm
   bool declared = false;
+  bool has_link = false;  ///< the fault has a link (a contact): link_in_candidates applies
   double delay_ms = 0.0, magnitude = 0.0, true_magnitude = 0.0;
   std::string magnitude_units;  ///< the detecting event's units (N, N·m, kg, A, ...; Event::units)
   double confidence = 0.0;      ///< the detecting event's confidence (Event::confidence)

@@ -67,8 +67,13 @@ std::function<void()> add_mqtt_options(CLI::App* sub, MqttCliOptions& o) {
                                     "word from this process")
                         ->check(whole_number(5, 3600))
                         ->capture_default_str();
+  auto* status_every = sub->add_option("--mqtt-status-every", o.status_every,
+                                       "With --mqtt: publish the run's state with its counts (samples, events, open alerts, the "
+                                       "stream's) every SECONDS of wall-clock time while it runs; 0: at its start and end only")
+                           ->check(CLI::Range(0.0, 86400.0))
+                           ->capture_default_str();
   return [=, &o] {
-    refuse_unless({topic, qos, user, cafile, client_id, keepalive}, !o.address.empty(), "with --mqtt");
+    refuse_unless({topic, qos, user, cafile, client_id, keepalive, status_every}, !o.address.empty(), "with --mqtt");
 #ifndef TWINWATCH_HAVE_MQTT
     if (!o.address.empty())
       throw InvalidArgument("--mqtt: this twinwatch was built without MQTT (BUILD_MQTT=OFF or libmosquitto-dev missing at configure "
@@ -106,11 +111,21 @@ MqttSink::MqttSink(const MqttCliOptions& o, const std::string& source, const std
   s.will = nlohmann::ordered_json{{"state", "lost"}, {"source", source_}, {"twin", twin_}, {"started_at", started_at_}}.dump();
   pub_.reset(new ui::MqttPublisher(std::move(s)));
   pub_->publish_status(status_json("monitoring", 0, 0));
+  status_every_ = o.status_every;
+  last_status_ = std::chrono::steady_clock::now();
+}
+
+void MqttSink::tick(long samples, long events, long open_alerts, const std::string& stream) {
+  if (!pub_ || !(status_every_ > 0.0)) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - last_status_).count() < status_every_) return;
+  last_status_ = now;
+  pub_->publish_status(status_json("monitoring", samples, events, open_alerts, stream));
 }
 
 MqttSink::~MqttSink() = default;
 
-std::string MqttSink::status_json(const std::string& state, long samples, long events) const {
+std::string MqttSink::status_json(const std::string& state, long samples, long events, long open_alerts, const std::string& stream) const {
   nlohmann::ordered_json j{{"state", state}, {"source", source_}, {"twin", twin_}, {"started_at", started_at_}};
   if (!program_.empty()) j["program"] = program_;
   if (run_ > 0) j["run"] = run_;  // the event store's run ('twinwatch events --run N')
@@ -118,6 +133,12 @@ std::string MqttSink::status_json(const std::string& state, long samples, long e
     j["ended_at"] = iso_utc(unix_now());
     j["samples"] = samples;
     j["events"] = events;
+  } else if (open_alerts >= 0) {  // (a state while the run goes on, status_every)
+    j["updated_at"] = iso_utc(unix_now());
+    j["samples"] = samples;
+    j["events"] = events;
+    j["open_alerts"] = open_alerts;
+    if (!stream.empty()) j["stream"] = stream;
   }
   return j.dump();
 }
@@ -177,7 +198,8 @@ void destroy_publisher(ui::MqttPublisher*) {}
 
 MqttSink::MqttSink(const MqttCliOptions&, const std::string&, const std::string&, const std::string&, long) : pub_(nullptr, &destroy_publisher) {}
 MqttSink::~MqttSink() = default;
-std::string MqttSink::status_json(const std::string&, long, long) const { return {}; }
+std::string MqttSink::status_json(const std::string&, long, long, long, const std::string&) const { return {}; }
+void MqttSink::tick(long, long, long, const std::string&) {}
 void MqttSink::event(const std::string&, const std::string&, bool, double) {}
 void MqttSink::say(bool) {}
 MqttSink::Undelivered MqttSink::finish(const std::string&, long, long, int, bool, const std::function<bool()>&) { return {}; }

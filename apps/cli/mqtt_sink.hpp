@@ -3,6 +3,8 @@
 // topics and delivery in include/twinwatch/ui/mqtt.hpp, for users in docs/events.md).
 #include <CLI/CLI.hpp>
 
+#include <chrono>
+
 #include <functional>
 #include <memory>
 #include <set>
@@ -20,6 +22,7 @@ struct MqttCliOptions {
   std::string topic = "twinwatch", user, cafile, client_id;
   int qos = 1;
   int keepalive = 30;  ///< [s]
+  double status_every = 10.0;  ///< [s] of wall-clock time between the run's states while it runs (0: at the start and end only)
 };
 
 /// Adds --mqtt, --mqtt-topic, --mqtt-qos, --mqtt-user, --mqtt-cafile, --mqtt-client-id to `sub`;
@@ -44,6 +47,11 @@ class MqttSink {
   /// Prints what the publisher has to say (connected, lost, refused) on stderr as warnings or
   /// notes; call it from the loop now and then (about once a second) and at the end.
   void say(bool quiet);
+  /// While the run goes on: the state "monitoring" with its counts (`samples` watched, `events` so
+  /// far, `open_alerts` now, the live stream's counters or ""), retained on TOPIC/status, when
+  /// status_every seconds of wall-clock time have passed since the last; call it often (each second of
+  /// samples, and while a live stream is silent). A control room sees the counts move, or stop.
+  void tick(long samples, long events, long open_alerts, const std::string& stream);
   /// What the broker did not get by the end.
   struct Undelivered {
     long waiting = 0;  ///< not taken within the wait
@@ -67,7 +75,9 @@ class MqttSink {
   std::string source_, twin_, program_, started_at_;
   long run_ = 0;
   std::set<double> closed_;  // the raise times of the closed events published
-  std::string status_json(const std::string& state, long samples, long events) const;
+  std::string status_json(const std::string& state, long samples, long events, long open_alerts = -1, const std::string& stream = "") const;
+  double status_every_ = 0.0;
+  std::chrono::steady_clock::time_point last_status_;
 };
 
 }  // namespace twinwatch::cli

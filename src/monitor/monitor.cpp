@@ -1474,8 +1474,9 @@ bool Monitor::outputs_changed_within(double from, double to) const {
   return false;
 }
 
-void Monitor::withdraw_open_alert() {
-  drop_open_event();
+void Monitor::withdraw_open_alert(bool announce) {
+  if (announce) drop_open_event();
+  else drop_event(open_);  // (held: its consumers keep it open until it is settled, settle_part_steps)
   reset_decisions();
   diagnosed_ = rediagnosed_ = false;
 }
@@ -1760,7 +1761,7 @@ void Monitor::hold_part_step(double t, PartStep kind) {
                               "{:.3f} s: a part's step near the thresholds reads as such a pulse",
                               e.t_detected, e.detail, output_changed_at_));
   }
-  withdraw_open_alert();
+  withdraw_open_alert(false);
 }
 
 void Monitor::settle_part_steps(double t, double taken) {
@@ -1789,6 +1790,13 @@ void Monitor::settle_part_steps(double t, double taken) {
       add_note(t, fmt::format("the alert held at {:.3f} s was the part's step: a payload change showed {}, and it is not an event of "
                               "its own",
                               e.t_detected, h.moving ? "in the check after the gripper output's change" : "once the arm moved on"));
+      // (announced open when it was raised, and kept so while held: it ends here)
+      if (on_withdraw) {
+        Event w = e;
+        w.open = false;
+        w.withdrawn = true;
+        on_withdraw(w);
+      }
       continue;
     }
     e.open = false;

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "twinwatch/core/file_io.hpp"
@@ -321,7 +322,11 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const std::string w = iso_utc(t + wall_offset);
     return w.substr(11, 12) + " UTC  ";
   };
+  std::set<double> open_alerts;  // the raise times of the alerts open now (the broker's state counts them)
+  double sample_t = std::numeric_limits<double>::quiet_NaN();  // the latest sample's time (a withdrawal's line)
   mon.on_event = [&](const monitor::Event& raw) {
+    if (raw.open) open_alerts.insert(raw.t_detected);
+    else open_alerts.erase(raw.t_detected);
     monitor::Event e = raw;
     e.wall_offset = wall_offset;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
@@ -373,6 +378,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   // showed it open ends it (--events-open's line with "withdrawn": true, the broker, the dashboard);
   // nothing is stored, and the closed lines never showed it
   mon.on_withdraw = [&](const monitor::Event& raw) {
+    open_alerts.erase(raw.t_detected);
     monitor::Event e = raw;
     e.wall_offset = wall_offset;
     if (hooks.on_event) hooks.on_event(e);
@@ -386,7 +392,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       }
     }
     if (o.quiet || o.json) return;
-    fmt::print("{}{:9.3f} s  WITHDRAWN the alert raised at {:.3f} s: no event of its own\n", wall_prefix(e.t_end), e.t_end, e.t_detected);
+    const double at = std::isfinite(sample_t) ? sample_t : e.t_end;  // (when it was withdrawn, in order with the other lines)
+    fmt::print("{}{:9.3f} s  WITHDRAWN the alert raised at {:.3f} s: no event of its own\n", wall_prefix(at), at, e.t_detected);
     std::fflush(stdout);
   };
   mon.on_note = [&](double t, const std::string& note) {
@@ -419,6 +426,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (++pushed % 500 == 0) {  // (about a second at 500 Hz)
       if (!unstored.empty()) store_waiting(0);  // (no wait)
       mqtt.say(mqtt_quiet);
+      mqtt.tick(mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), static_cast<long>(open_alerts.size()),
+                stream_line());
       if (client && pushed % 5000 == 0) mon.forget_events_before(s.timestamp - kKeepEventsS);
     }
     const monitor::Excursion x = watch.check(s);
@@ -433,6 +442,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       }
     }
     if (hooks.before_sample) hooks.before_sample(s);
+    sample_t = s.timestamp;
     mon.push(s);
     if (hooks.after_sample) hooks.after_sample(mon, s);
     if (hooks.on_status && pushed % 500 == 0) hooks.on_status(mon, "monitoring", stream_line());
@@ -537,6 +547,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         if (client->stats().received > 0 && silent > cli::outage_limit(client->stats().frequency)) mon.stream_outage(silent);
         if (!unstored.empty()) store_waiting(0);
         mqtt.say(mqtt_quiet);
+        mqtt.tick(mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), static_cast<long>(open_alerts.size()),
+                  stream_line());
       }
     }
     client->stop();

@@ -700,7 +700,9 @@ class Monitor {
   bool late_declared_pick(const Event& e, double t, double change) const;
   void reset_decisions();  // every joint's debouncers start over
   bool outputs_changed_within(double from, double to) const;
-  void withdraw_open_alert();
+  // the open alert goes without an event of its own (announce: on_withdraw; false: held, still open to
+  // its consumers until settle_part_steps reports or withdraws it)
+  void withdraw_open_alert(bool announce = true);
   void drop_event(int index);  // erases events_[index], keeping the indices into events_ right
   // the indices kept into events_ (-1: none), frozen_event_'s aside
   std::array<int*, 6> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_, &outage_}; }
