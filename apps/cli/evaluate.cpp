@@ -876,27 +876,28 @@ std::string evaluation_json(const Evaluation& e) {
   nlohmann::json j;
   j["scenarios"] = nlohmann::json::array();
   j["skipped"] = e.skipped;  // (longer than --max-duration: not run, not scored)
-  for (const auto& s : e.scores)
+  for (const auto& s : e.scores) {
+    // a healthy scenario, or a pick the program declares (no alert expected), has nothing to detect,
+    // classify or place: null, not false (a script's mean of class_ok counted healthy runs as
+    // misclassified); link_in_candidates applies to faults with a link (contacts)
+    const bool scored = s.has_fault && !s.declared;
+    const auto scored_or_null = [&](bool v, bool applies) { return applies ? nlohmann::json(v) : nlohmann::json(nullptr); };
     j["scenarios"].push_back({{"name", s.name},
                               {"fault", s.has_fault ? nlohmann::json(s.fault) : nlohmann::json(nullptr)},
-                              // a healthy scenario, or a pick the program declares (no alert expected), has nothing to
-                              // detect, classify or place: null, not false (a script's mean of class_ok counted healthy
-                              // runs as misclassified); link_in_candidates applies to faults with a link (contacts)
-                              {"detected", s.has_fault && !s.declared ? nlohmann::json(s.detected) : nlohmann::json(nullptr)},
+                              {"detected", scored_or_null(s.detected, scored)},
                               {"declared", s.declared},
                               {"delay_ms", s.detected ? nlohmann::json(s.delay_ms) : nlohmann::json(nullptr)},
                               // not applicable (no detection): null, not "" and 0
                               {"class", s.detected ? nlohmann::json(s.predicted_class) : nlohmann::json(nullptr)},
-                              {"class_ok", s.has_fault && !s.declared ? nlohmann::json(s.class_ok) : nlohmann::json(nullptr)},
-                              {"joint_ok", s.has_fault && !s.declared ? nlohmann::json(s.joint_ok) : nlohmann::json(nullptr)},
+                              {"class_ok", scored_or_null(s.class_ok, scored)},
+                              {"joint_ok", scored_or_null(s.joint_ok, scored)},
                               {"link", s.predicted_link >= 0 ? nlohmann::json(s.predicted_link + 1) : nlohmann::json(nullptr)},
                               {"other_links", [&] {
                                  nlohmann::json a = nlohmann::json::array();
                                  for (int l : s.other_links) a.push_back(l + 1);
                                  return a;
                                }()},
-                              {"link_in_candidates",
-                               s.has_fault && !s.declared && s.has_link ? nlohmann::json(s.link_in_candidates) : nlohmann::json(nullptr)},
+                              {"link_in_candidates", scored_or_null(s.link_in_candidates, scored && s.has_link)},
                               {"own_joint_share", std::isfinite(s.own_joint_share) ? nlohmann::json(s.own_joint_share) : nlohmann::json(nullptr)},
                               {"link_reference", [&] {
                                  nlohmann::json r = nullptr;
@@ -920,6 +921,7 @@ std::string evaluation_json(const Evaluation& e) {
                               {"wear_warning", s.wear_detail},
                               {"margin", s.margin_current.empty() ? nlohmann::json(nullptr)
                                                                   : nlohmann::json{{"current", s.margin_current}, {"observer", s.margin_observer}}}});
+  }
   j["false_alarms_per_hour"] = e.false_alarms_per_hour();
   j["monitored_hours"] = e.monitored_hours;
   j["false_alarms"] = e.false_alarms;

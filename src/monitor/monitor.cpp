@@ -1790,13 +1790,7 @@ void Monitor::settle_part_steps(double t, double taken) {
       add_note(t, fmt::format("the alert held at {:.3f} s was the part's step: a payload change showed {}, and it is not an event of "
                               "its own",
                               e.t_detected, h.moving ? "in the check after the gripper output's change" : "once the arm moved on"));
-      // (announced open when it was raised, and kept so while held: it ends here)
-      if (on_withdraw) {
-        Event w = e;
-        w.open = false;
-        w.withdrawn = true;
-        on_withdraw(w);
-      }
+      announce_withdrawal(e);  // (announced open when it was raised, and kept so while held: it ends here)
       continue;
     }
     e.open = false;
@@ -2691,13 +2685,16 @@ void Monitor::add_note(double t, const std::string& text) {
 void Monitor::drop_open_event() { retract_event(open_); }
 
 void Monitor::retract_event(int index) {
-  if (on_withdraw) {
-    Event e = events_[static_cast<size_t>(index)];
-    e.open = false;
-    e.withdrawn = true;
-    on_withdraw(e);
-  }
+  announce_withdrawal(events_[static_cast<size_t>(index)]);
   drop_event(index);
+}
+
+void Monitor::announce_withdrawal(const Event& e) const {
+  if (!on_withdraw) return;
+  Event w = e;
+  w.open = false;
+  w.withdrawn = true;
+  on_withdraw(w);
 }
 
 void Monitor::drop_event(int index) {

@@ -78,12 +78,16 @@ bool valid_topic_prefix(const std::string& t, std::string& why) {
   return true;
 }
 
-// the library's words for a failure, without their full stop (they go inside our sentences)
-std::string reason(int rc, int err) {
-  if (rc == MOSQ_ERR_KEEPALIVE) return "no answer within the keep-alive";  // (the library says "Unknown error")
-  std::string r = rc == MOSQ_ERR_ERRNO ? std::strerror(err) : mosquitto_strerror(rc);
+// the library's words without their full stop (they go inside our sentences)
+std::string without_full_stop(std::string r) {
   while (!r.empty() && r.back() == '.') r.pop_back();
   return r;
+}
+
+// the library's words for a failure
+std::string reason(int rc, int err) {
+  if (rc == MOSQ_ERR_KEEPALIVE) return "no answer within the keep-alive";  // (the library says "Unknown error")
+  return without_full_stop(rc == MOSQ_ERR_ERRNO ? std::strerror(err) : mosquitto_strerror(rc));
 }
 
 std::string default_client_id() {
@@ -218,9 +222,8 @@ struct MqttPublisher::Impl {
       return;
     }
     // a refusal by the broker (CONNACK): credentials, a client id it rejects, ...
-    std::string said = p->protocol == MQTT_PROTOCOL_V5 ? mosquitto_reason_string(rc) : mosquitto_connack_string(rc);
+    std::string said = without_full_stop(p->protocol == MQTT_PROTOCOL_V5 ? mosquitto_reason_string(rc) : mosquitto_connack_string(rc));
     if (said.rfind("Connection Refused: ", 0) == 0) said.erase(0, 20);
-    while (!said.empty() && said.back() == '.') said.pop_back();
     std::string why = fmt::format("the broker at {} refused the connection: {}", p->s.address(), said);
     // (3.1.1: 4 bad user name or password, 5 not authorised; 5: 134, 135)
     if (rc == 4 || rc == 5 || rc == 134 || rc == 135) why += " (check the user name and password)";
@@ -258,9 +261,8 @@ struct MqttPublisher::Impl {
     }
     ++c.refused;
     if (refusals_said.insert(reason_code).second) {
-      std::string said = mosquitto_reason_string(reason_code);
-      while (!said.empty() && said.back() == '.') said.pop_back();
-      note(fmt::format("the broker at {} refused a message to {}: {}{}", s.address(), msg.topic, said,
+      note(fmt::format("the broker at {} refused a message to {}: {}{}", s.address(), msg.topic,
+                       without_full_stop(mosquitto_reason_string(reason_code)),
                        reason_code == 135 ? " (does its access list let this client publish under this topic?)" : ""));
     }
   }
@@ -278,6 +280,17 @@ struct MqttPublisher::Impl {
     last_failure.clear();
     link = Link::Down;
     c.connected = false;
+  }
+
+  // a connection that could not be made (rc, errno from the library's call)
+  void unreachable(int rc, int err) {  // (mu held)
+    // (the library says only "A TLS error occurred": what usually causes it)
+    const std::string hint =
+        rc == MOSQ_ERR_TLS ? fmt::format(" (does the broker's certificate check against {} and name the host '{}'? does the port "
+                                         "speak TLS?)",
+                                         s.cafile, s.host)
+                           : std::string();
+    failed(fmt::format("cannot reach the broker at {}: {}{}", s.address(), reason(rc, err), hint));
   }
 
   // a failure to connect: said once per distinct cause (a retry does not repeat it)
@@ -357,7 +370,7 @@ struct MqttPublisher::Impl {
         lk.lock();
         if (stop) break;
         if (rc != MOSQ_ERR_SUCCESS) {
-          failed(fmt::format("cannot reach the broker at {}: {}", s.address(), reason(rc, err)));
+          unreachable(rc, err);
           schedule(false);
           continue;
         }
@@ -385,13 +398,7 @@ struct MqttPublisher::Impl {
         if (link == Link::Up) {
           lost(reason(rc, err));
         } else {
-          // (the library says only "A TLS error occurred": what usually causes it)
-          const std::string hint =
-              rc == MOSQ_ERR_TLS ? fmt::format(" (does the broker's certificate check against {} and name the host '{}'? does the port "
-                                               "speak TLS?)",
-                                               s.cafile, s.host)
-                                 : std::string();
-          failed(fmt::format("cannot reach the broker at {}: {}{}", s.address(), reason(rc, err), hint));
+          unreachable(rc, err);
         }
       }
       if (link == Link::Down && before != Link::Down)

@@ -194,10 +194,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                  o.duration > 0 ? fmt::format(" for {:g} s", o.duration) : "");
   }
   monitor::Monitor mon(twin, cfg);
-  if (hooks.on_start) {
-    std::string source = o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde;
-    hooks.on_start(mon, source);
-  }
+  const std::string source = o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde;
+  if (hooks.on_start) hooks.on_start(mon, source);
   std::ofstream jl;
   if (!o.events_path.empty()) {
     jl.open(o.events_path);
@@ -266,12 +264,11 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                    o.events_path.empty() ? "" : " (they are in " + o.events_path + ")");
     }
     // the run's row says it failed (what failed is on stderr)
-    store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), "failed"}, kEndLockWaitMs);
+    store->end_run({mon.samples(), mon.events_seen(), "failed"}, kEndLockWaitMs);
   }};
   // --mqtt: the events and the run's state on a broker (it connects in the background); made after
   // the store's guard, which ends the run's row as failed if this throws
-  cli::MqttSink mqtt(o.mqtt, o.rtde.empty() ? fmt::format("{}", fmt::join(o.recordings, " ")) : "rtde://" + o.rtde, stored_path(o.twin),
-                     o.program, store ? store->run() : 0);
+  cli::MqttSink mqtt(o.mqtt, source, stored_path(o.twin), o.program, store ? store->run() : 0);
   constexpr int kMqttEndWaitMs = 10000;  // as long as the store's lock is waited for
   const bool mqtt_quiet = o.quiet || o.json;
   // a Ctrl-C during the wait at the end gives it up; one that ended the run came before the wait (a
@@ -284,7 +281,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   OnUnwind unwind_mqtt{[&] {
     if (!mqtt.active()) return;
     constexpr int kFailedWaitMs = 2000;
-    const cli::MqttSink::Undelivered left = mqtt.finish("failed", mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(),
+    const cli::MqttSink::Undelivered left = mqtt.finish("failed", mon.samples(), mon.events_seen(),
                                                         kFailedWaitMs, mqtt_quiet, mqtt_give_up());
     if (left.total() > 0) fmt::print(stderr, "error: mqtt {}: {}\n", mqtt.address(), left.describe(kFailedWaitMs));
   }};
@@ -322,6 +319,18 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const std::string w = iso_utc(t + wall_offset);
     return w.substr(11, 12) + " UTC  ";
   };
+  // --events-open's line of an alert not closed by an event (open, or withdrawn): to the broker first
+  // (a file that fails must not cost the broker the line), the file, --json
+  const auto write_open_line = [&](const monitor::Event& e) {
+    if (!o.events_open) return;
+    const std::string line = e.to_json_line();
+    mqtt.event(std::string(monitor::to_string(e.fault)), line);
+    write_event_line(line);
+    if (o.json) {
+      fmt::print("{}\n", line);
+      std::fflush(stdout);
+    }
+  };
   std::set<double> open_alerts;  // the raise times of the alerts open now (the broker's state counts them)
   double sample_t = std::numeric_limits<double>::quiet_NaN();  // the latest sample's time (a withdrawal's line)
   mon.on_event = [&](const monitor::Event& raw) {
@@ -331,18 +340,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     e.wall_offset = wall_offset;
     e.detail += watch.alert_note(e.t_start, e.t_detected);
     if (hooks.on_event) hooks.on_event(e);
-    if (e.open && o.events_open) {
-      // an alert that is still open, for a consumer that must see an active fault (a resistance that
-      // lasts a shift was seen only when it cleared or monitoring stopped); t_detected names the
-      // alert, its closing line ("open": false) ends it
-      const std::string line = e.to_json_line();
-      mqtt.event(std::string(monitor::to_string(e.fault)), line);  // (queued first: a file that fails must not cost the broker the line)
-      write_event_line(line);
-      if (o.json) {
-        fmt::print("{}\n", line);
-        std::fflush(stdout);
-      }
-    }
+    // an alert that is still open, for a consumer that must see an active fault (a resistance that
+    // lasts a shift was seen only when it cleared or monitoring stopped); t_detected names the
+    // alert, its closing line ("open": false) ends it
+    if (e.open) write_open_line(e);
     if (e.open) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
@@ -382,15 +383,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     monitor::Event e = raw;
     e.wall_offset = wall_offset;
     if (hooks.on_event) hooks.on_event(e);
-    if (o.events_open) {
-      const std::string line = e.to_json_line();
-      mqtt.event(std::string(monitor::to_string(e.fault)), line);
-      write_event_line(line);
-      if (o.json) {
-        fmt::print("{}\n", line);
-        std::fflush(stdout);
-      }
-    }
+    write_open_line(e);
     if (o.quiet || o.json) return;
     const double at = std::isfinite(sample_t) ? sample_t : e.t_end;  // (when it was withdrawn, in order with the other lines)
     fmt::print("{}{:9.3f} s  WITHDRAWN the alert raised at {:.3f} s: no event of its own\n", wall_prefix(at), at, e.t_detected);
@@ -418,6 +411,11 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const auto st = client->stats();
     return fmt::format("{} received, {} lost in {} gaps, {} reconnects", st.received, st.lost, st.gaps, st.reconnects);
   };
+  // about once a second: what the broker's client has to say, and the run's state with its counts
+  const auto tend_mqtt = [&] {
+    mqtt.say(mqtt_quiet);
+    mqtt.tick(mon.samples(), mon.events_seen(), static_cast<long>(open_alerts.size()), stream_line());
+  };
   long pushed = 0;
   // live, the monitor lets go of events stored and written ten minutes of robot time ago (its own
   // look-backs span seconds): its memory stays bounded however long it runs
@@ -425,9 +423,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   const auto push = [&](const RobotSample& s) {
     if (++pushed % 500 == 0) {  // (about a second at 500 Hz)
       if (!unstored.empty()) store_waiting(0);  // (no wait)
-      mqtt.say(mqtt_quiet);
-      mqtt.tick(mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), static_cast<long>(open_alerts.size()),
-                stream_line());
+      tend_mqtt();
       if (client && pushed % 5000 == 0) mon.forget_events_before(s.timestamp - kKeepEventsS);
     }
     const monitor::Excursion x = watch.check(s);
@@ -546,9 +542,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         const double silent = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
         if (client->stats().received > 0 && silent > cli::outage_limit(client->stats().frequency)) mon.stream_outage(silent);
         if (!unstored.empty()) store_waiting(0);
-        mqtt.say(mqtt_quiet);
-        mqtt.tick(mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), static_cast<long>(open_alerts.size()),
-                  stream_line());
+        tend_mqtt();
       }
     }
     client->stop();
@@ -591,13 +585,13 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
                                            unstored.size(), o.events_path.empty() ? "" : " (they are in " + o.events_path + ")"));
   }
   // the run's row: how it ended, with or without events ('twinwatch events --runs')
-  if (store && !store->end_run({mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), status}, kEndLockWaitMs))
+  if (store && !store->end_run({mon.samples(), mon.events_seen(), status}, kEndLockWaitMs))
     log::warn(fmt::format("{}: the run's end (samples, events, status) is not stored: another connection held the store locked for {:g} s",
                           o.db_path, kEndLockWaitMs / 1000.0));
   close_written(trace, o.trace);
   // the broker: the run's end, and what waits for it (an error, as an event not stored is)
   const cli::MqttSink::Undelivered undelivered = mqtt.finish(
-      status, mon.samples(), static_cast<long>(mon.events().size()) + mon.events_forgotten(), kMqttEndWaitMs, mqtt_quiet, mqtt_give_up());
+      status, mon.samples(), mon.events_seen(), kMqttEndWaitMs, mqtt_quiet, mqtt_give_up());
   const long mqtt_left = undelivered.total();
   if (mqtt_left > 0)
     fmt::print(stderr, "error: mqtt {}: {}{}\n", mqtt.address(), undelivered.describe(kMqttEndWaitMs),
@@ -620,7 +614,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (!o.quiet && !o.json)
     fmt::print("{} samples, {} gap(s){}, {} event(s){}{}{}\n", mon.samples(), mon.gaps(),
                silent_gap ? " (the last: the silence at the end, which the stream line does not count)" : "",
-               mon.events().size() + static_cast<size_t>(mon.events_forgotten()),
+               mon.events_seen(),
                mon.repeated() + mon.invalid() > 0
                    ? fmt::format(" ({} skipped: {} with a repeated timestamp, {} with a value that is no reading: not a number or beyond 1e4)", mon.repeated() + mon.invalid(),
                                  mon.repeated(), mon.invalid())

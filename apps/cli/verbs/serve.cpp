@@ -114,7 +114,7 @@ int run_serve(const cli::MonitorOptions& mo, const ServeOptions& so) {
   hooks.on_status = [&](const monitor::Monitor& mon, const std::string& state, const std::string& stream) {
     nlohmann::json c = {{"samples", mon.samples()},
                         {"gaps", mon.gaps()},
-                        {"events", static_cast<long>(mon.events().size()) + mon.events_forgotten()}};
+                        {"events", mon.events_seen()}};
     if (!stream.empty()) c["stream"] = stream;
     feed.status(state, c.dump());
   };

@@ -375,6 +375,8 @@ class Monitor {
   /// Returns how many it let go; events_forgotten() counts them all.
   long forget_events_before(double t);
   long events_forgotten() const { return n_forgotten_; }
+  /// Every event so far: those kept (events()) and those let go (events_forgotten()).
+  long events_seen() const { return static_cast<long>(events_.size()) + n_forgotten_; }
   /// Samples processed; gaps in the controller timestamp; samples skipped because their timestamp
   /// did not advance (a resend); samples skipped because a position, velocity or current was not
   /// finite (each run of them is one SensorFault event).
@@ -765,6 +767,8 @@ class Monitor {
   void drop_open_event();  // retracts the open event (a raise merged into an earlier alert, withdrawn); open_ = -1
   // an announced alert that goes without an event of its own: on_withdraw with it, then drop_event
   void retract_event(int index);
+  // on_withdraw with the alert as last announced, marked closed and withdrawn
+  void announce_withdrawal(const Event& e) const;
   // the thresholds' widening at reversals under more load than they were learned with
   // (MonitorConfig::reversal_load_max), per joint, after each channel's filter: current [A],
   // observer [twin torque]; the velocity width of the direction's doubt [rad/s]; the observer's
