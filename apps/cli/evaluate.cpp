@@ -43,15 +43,24 @@ namespace twinwatch::cli {
 namespace {
 
 // healthy training runs: robot, trajectory, seed, payload
-device::Recording simulate_to_memory(const sim::Scenario& s, const std::string& name) {
+// A simulated arm's sample as a joint-torque twin reads it: its torque sensors in the measured
+// channel's place (what device::ColumnMap::joint_torque_as_current does to a recording's columns)
+void as_joint_torque_channel(RobotSample& x) { x.current = x.joint_torque; }
+
+device::Recording simulate_to_memory(const sim::Scenario& given, const std::string& name, bool joint_torque = false) {
   device::Recording rec;
   rec.path = name;
   rec.n_dof = 6;
-  rec.median_period = 1.0 / s.options.rate;
+  rec.median_period = 1.0 / given.options.rate;
+  sim::Scenario s = given;
+  s.options.joint_torque_sensors |= joint_torque;
   const auto simulator = sim::make_simulator(s);
   rec.present = simulator->sample_fields();
   try {
-    simulator->run([&](const RobotSample& x) { rec.samples.push_back(x); });
+    simulator->run([&](const RobotSample& x) {
+      rec.samples.push_back(x);
+      if (joint_torque) as_joint_torque_channel(rec.samples.back());
+    });
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(fmt::format("{}: {}", s.path.empty() ? name : s.path, e.what()));
   }
@@ -146,8 +155,14 @@ void progress_line(bool quiet, const std::string& m) {
 
 }  // namespace
 
-ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter, bool all_programs) {
+ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter, bool all_programs,
+                                 bool joint_torque) {
   auto say = [&](const std::string& m) { progress_line(quiet, m); };
+  // (the arm with joint torque sensors: every run streams them, and the twin compares them)
+  const auto simulate_to_memory = [joint_torque](const sim::Scenario& s, const std::string& name) {
+    return cli::simulate_to_memory(s, name, joint_torque);
+  };
+  if (joint_torque) say("   the arm has joint torque sensors: the twin is identified on them and compares them (--signal joint_torque)");
   say("   simulating healthy training runs (excitation 60 s, figure-eight with a known 0.5 kg payload 40 s)");
   const auto exc = simulate_to_memory(
       sim::parse_scenario(fmt::format("robot: {}\nseed: 1001\nduration: 60\ntrajectory: {{type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}}\n", robot),
@@ -170,9 +185,11 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   // the back-driven factor is fitted jointly with the gains (the default); the alternating fit
   // needed ~20 passes with the heavy test weight to settle (2: gains 5-12 % high, c_gen 0.9-0.97)
   ident::IdentOptions io;
+  io.joint_torque = joint_torque;
   ident::TwinModel twin = ident::identify_physics(robot, {{&exc, {}}, {&fig, p}, {&sw0, {}}, {&sw1, test_weight}}, io, report);
   say(fmt::format("   identified drive gains {:.3g} N·m/A", fmt::join(gains_of(twin), " ")));
-  say(fmt::format("   identified: current RMSE per joint {:.3f} A", fmt::join(report.rmse, " ")));
+  say(fmt::format("   identified: {} RMSE per joint {:.3f} {}", joint_torque ? "joint torque" : "current", fmt::join(report.rmse, " "),
+                  twin.channel_unit()));
   // slow-wear trend first: the viscous friction's temperature slope on a healthy warm-up from cold
   // and a cool-down from warm of one program (the twin's training runs barely change temperature);
   // the thresholds are then learned on the residual compensated with it, as the monitor sees it
@@ -188,7 +205,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   const auto hc = simulate_to_memory(cold, "trend-cold");
   const auto hw = simulate_to_memory(healthy(robot, kFigure8, 1008, 600, 0.5), "trend-warm");
   settings.trend = monitor::learn_trend_temperature(twin, {{&hc, p}, {&hw, p}}, settings.trend);
-  say(fmt::format("   temperature slope per joint {:.2e} A·s/rad/°C", fmt::join(settings.trend.temperature_slope, " ")));
+  say(fmt::format("   temperature slope per joint {:.2e} {}·s/rad/°C", fmt::join(settings.trend.temperature_slope, " "), twin.channel_unit()));
   // thresholds on other healthy runs (seeds the scenario library does not use)
   std::vector<std::unique_ptr<device::Recording>> hs;
   auto run = [&](const std::string& trajectory, unsigned seed, double duration, double payload, bool from_cold = false) {
@@ -417,7 +434,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     monitor::Monitor mon(t, scfg);
     const bool healthy = s.faults.empty();
     if (healthy) mon.track_margin();
-    auto simulator = sim::make_simulator(s);
+    // (a joint-torque twin watches the arm with its torque sensors)
+    sim::Scenario sensed = s;
+    sensed.options.joint_torque_sensors |= t.measures_torque();
+    auto simulator = sim::make_simulator(sensed);
     const bool long_run = s.options.duration > 300;
     double shown = 0.0;
     // evaluation only: how much of each contact's joint torque falls on its own link's joint (the
@@ -439,7 +459,14 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
     // (the simulator's complaint, e.g. a diverged run, names the scenario it is about)
     try {
-    simulator->run([&](const RobotSample& x) {
+    simulator->run([&](const RobotSample& given) {
+                     RobotSample sensed_sample;
+                     const bool torque = t.measures_torque();
+                     if (torque) {
+                       sensed_sample = given;
+                       as_joint_torque_channel(sensed_sample);
+                     }
+                     const RobotSample& x = torque ? sensed_sample : given;
                      mon.push(x);
                      if (x.has(kFieldPayload)) {
                        const Declaration d{x.payload, x.payload_cog[0], x.payload_cog[1], x.payload_cog[2]};
@@ -689,7 +716,7 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
           run.seed, kDuration, kFigure8, link, onset, m, point_of(link));
       // (on the twin's robot, passed as such: a description file's path is no YAML scalar to splice in)
       const sim::Scenario s = sim::parse_scenario(yaml, fmt::format("sweep-link{}-{}Nm", link, m), twin.robot_name());
-      const device::Recording rec = simulate_to_memory(s, s.path);
+      const device::Recording rec = simulate_to_memory(s, s.path, twin.measures_torque());
       ident::TwinModel t = twin;
       t.set_payload(s.options.payload_declared ? s.options.payload : model::RigidBodyInertia{});
       for (int k = 0; k < 2; ++k) {

@@ -23,8 +23,10 @@ namespace twinwatch::cli {
 /// Simulates healthy training runs (seeds not used by the scenario library), identifies the twin
 /// and learns the thresholds on further healthy runs. Prints progress unless quiet.
 /// residual_filter: the monitor's residual filter the thresholds are learned with (MonitorConfig).
+/// joint_torque: the simulated arm has joint torque sensors, and the twin compares them
+/// (ident::TwinModel::Signal::JointTorque) instead of the motor currents.
 ident::TwinModel train_reference(const std::string& robot, bool quiet, const std::vector<std::string>& residual_filter = {},
-                                 bool all_programs = false);
+                                 bool all_programs = false, bool joint_torque = false);
 
 /// One link choice on a contact's true joint impulse (evaluate --link-ceiling): the share of noise
 /// draws it names right, and whether it does without noise (1 right, 0 wrong, -1 not run).

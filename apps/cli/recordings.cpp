@@ -151,7 +151,7 @@ std::vector<std::unique_ptr<device::FileSamples>> scan_training_runs(const std::
                                                                      const model::RobotModel& robot, const std::string& verb,
                                                                      const std::string& user, const std::string& what,
                                                                      std::size_t* implausible, bool quiet) {
-  TrainingCheck check(path, robot, what);
+  TrainingCheck check(path, robot, what, map && map->joint_torque_as_current);
   device::DrivenStretches driven(kMinDrivenStretch);
   // implausible temperatures: of the whole recording, and of the driven stretches kept so far
   std::size_t all = 0, kept = 0, open = 0;
@@ -195,8 +195,8 @@ void require_driven(const device::Recording& rec, const std::string& user) {
   }
 }
 
-UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot)
-    : path_(path), robot_(robot), present_(present), n_(std::min(n_dof, robot.n_dof())) {
+UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot, bool torque)
+    : path_(path), robot_(robot), present_(present), torque_(torque), n_(std::min(n_dof, robot.n_dof())) {
   // (report read a 7-joint log into a 6-joint twin and said "q has size 7, expected 6 (model.n_dof)")
   if (n_dof != robot.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}{}", path, n_dof, robot.name(), robot.n_dof(),
@@ -270,6 +270,18 @@ void UnitsCheck::finish() {
     if (a.empty()) continue;
     const auto at = a.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(a.size() - 1));
     std::nth_element(a.begin(), at, a.end());
+    if (torque_) {
+      // joint torque sensors: twice the joint's torque limit (1000 N·m where the description has none)
+      const double lim = static_cast<int>(j) < robot_.n_dof() && std::isfinite(robot_.joint(static_cast<int>(j)).limits.torque_max)
+                             ? 2.0 * robot_.joint(static_cast<int>(j)).limits.torque_max
+                             : kTrainingCurrentMax;
+      if (*at > lim)
+        throw InvalidArgument(fmt::format("{}: J{}'s joint torque is above {:.4g} N·m in 1 % of the samples, more than twice the {}'s "
+                                          "limit ({:g} N·m): are the torques in N·mm? Scale them with a column map "
+                                          "('COLUMN,actual_joint_torque_{},0.001', docs/recordings.md)",
+                                          path_, j + 1, *at, robot_.name(), lim, j));
+      continue;
+    }
     if (*at > kUnitsCurrentMax)
       throw InvalidArgument(fmt::format("{}: J{}'s current is above {:.4g} A in 1 % of the samples, more than the {:g} A twinwatch takes "
                                         "for a joint current: are the currents in mA? Scale them with a column map "
@@ -304,7 +316,7 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
   device::require_rereadable(path, verb);
   device::RecordingReader reader(path, map);
   device::require_fields(reader, kFieldActualQd | kFieldActualCurrent, user);
-  UnitsCheck units(path, reader.n_dof(), reader.present(), robot);
+  UnitsCheck units(path, reader.n_dof(), reader.present(), robot, map && map->joint_torque_as_current);
   // is it the twin's arm? (its controller's torque against the arm's model and the other built-in
   // arms', every 25th sample: 20 a second at 500 Hz; ident::ArmCheck)
   std::optional<ident::ArmCheck> arm;
@@ -388,16 +400,16 @@ long StreamScan::replay(const std::vector<std::string>& files, const device::Col
   return total;
 }
 
-void check_units(const device::Recording& rec, const model::RobotModel& robot) {
-  UnitsCheck check(rec.path, rec.n_dof, rec.present, robot);
+void check_units(const device::Recording& rec, const model::RobotModel& robot, bool torque) {
+  UnitsCheck check(rec.path, rec.n_dof, rec.present, robot, torque);
   check.check_period(rec.median_period);
   for (const RobotSample& s : rec.samples) check.add(s);
   check.finish();
 }
 
-void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what) {
-  check_units(rec, robot);
-  TrainingCheck check(rec.path, robot, what);
+void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what, bool torque) {
+  check_units(rec, robot, torque);
+  TrainingCheck check(rec.path, robot, what, torque);
   for (const RobotSample& s : rec.samples) check.add(s);
   check.finish();
 }
@@ -411,8 +423,8 @@ void TrainingCheck::finish() const {
   if (!failure_.empty()) throw InvalidArgument(failure_);
 }
 
-TrainingCheck::TrainingCheck(std::string path, const model::RobotModel& robot, std::string what)
-    : path_(std::move(path)), what_(std::move(what)), robot_(&robot) {}
+TrainingCheck::TrainingCheck(std::string path, const model::RobotModel& robot, std::string what, bool torque)
+    : path_(std::move(path)), what_(std::move(what)), robot_(&robot), torque_(torque) {}
 
 std::string TrainingCheck::check(const RobotSample& s) {
   const size_t k = k_;
@@ -423,9 +435,10 @@ std::string TrainingCheck::check(const RobotSample& s) {
   // sensor fault; a learner would fit it
   for (int j = 0; j < s.n_dof(); ++j)
     if (s.has(kFieldActualCurrent) && !(std::abs(s.current[j]) <= kTrainingCurrentMax))
-      return fmt::format("{}: column 'actual_current_{}' is {:g} A at t = {:.3f} s (sample {}), no reading a joint's drive gives (above "
-                         "{:g} A); {} learns from healthy runs: leave this stretch out of the recording",
-                         path_, j, s.current[j], t, k + 1, kTrainingCurrentMax, what_);
+      return fmt::format("{0}: column '{1}_{2}' is {3:g} {7} at t = {4:.3f} s (sample {5}), no reading a joint's {8} gives (above "
+                         "{6:g} {7}); {9} learns from healthy runs: leave this stretch out of the recording",
+                         path_, torque_ ? "actual_joint_torque" : "actual_current", j, s.current[j], t, k + 1, kTrainingCurrentMax,
+                         torque_ ? "N·m" : "A", torque_ ? "torque sensor" : "drive", what_);
   if (!s.has(kFieldPayload)) return {};
   const Eigen::Vector3d c(s.payload_cog[0], s.payload_cog[1], s.payload_cog[2]);
   if (!std::isfinite(s.payload) || !c.allFinite())
@@ -478,7 +491,16 @@ std::optional<device::ColumnMap> load_column_map(const std::string& path) {
   return device::ColumnMap::load(column_map_file(path));
 }
 
-ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings) {
+std::optional<device::ColumnMap> load_column_map(const std::string& path, const ident::TwinModel& twin) {
+  std::optional<device::ColumnMap> map = load_column_map(path);
+  if (twin.measures_torque()) {
+    if (!map) map.emplace();
+    map->joint_torque_as_current = true;
+  }
+  return map;
+}
+
+ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings, bool joint_torque) {
   std::string all_value;
   std::vector<std::string> own_value;  // the value that gave own_[k]
   std::error_code ec;
@@ -537,6 +559,11 @@ ColumnMaps::ColumnMaps(const std::vector<std::string>& values, const std::vector
     own_.emplace_back(rec, load(v, map, file));
     own_value.push_back(v);
     files_.push_back(file);
+  }
+  if (joint_torque) {
+    if (!all_) all_.emplace();
+    all_->joint_torque_as_current = true;
+    for (auto& own : own_) own.second.joint_torque_as_current = true;
   }
 }
 

@@ -42,14 +42,16 @@ inline constexpr double kDegree = 0.017453292519943295;  ///< [rad] one degree (
 inline constexpr double kUnitsSpeedFactor = 2.0;     ///< x qd_max
 inline constexpr double kUnitsMaxPeriod = 0.5;       ///< [s] (2 Hz; controllers stream 10-1000 Hz)
 inline constexpr double kUnitsMinPeriod = 1e-4;      ///< [s] (10 kHz; controllers stream 10-1000 Hz, a few up to 4 kHz)
-void check_units(const device::Recording& rec, const model::RobotModel& robot);
+/// `torque`: the measured channel holds joint torque sensors (device::ColumnMap::joint_torque_as_current),
+/// judged against twice the robot's torque limits (N·mm read as N·m) instead of kUnitsCurrentMax.
+void check_units(const device::Recording& rec, const model::RobotModel& robot, bool torque = false);
 /// check_units a sample at a time, for a recording read row by row (monitor): the joint count at
 /// construction, check_period once the median period is known, add() per sample (positions and
 /// speeds at once; the currents kept in single precision, 24 bytes a sample for six joints), finish()
 /// for the currents' percentile. Throws InvalidArgument as check_units does.
 class UnitsCheck {
  public:
-  UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot);
+  UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot, bool torque = false);
   void check_period(double median_period) const;
   void add(const RobotSample& s);
   void finish();
@@ -58,6 +60,7 @@ class UnitsCheck {
   std::string path_;
   const model::RobotModel& robot_;
   std::uint32_t present_;
+  bool torque_;
   int n_;
   long samples_ = 0;
   double t0_ = 0.0;
@@ -113,13 +116,14 @@ inline constexpr double kTrainingCurrentMax = 1000.0;  ///< [A] any one sample's
 /// mm; not finite) is an error naming the file, the column, the time and sample, and `what` learns
 /// from it. The monitor notes such a declaration and keeps its payload; a healthy run learned with
 /// it would carry the wrong payload into every residual.
-void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what);
+void check_training_recording(const device::Recording& rec, const model::RobotModel& robot, const std::string& what, bool torque = false);
 /// check_training_recording's checks of each sample (not its units: UnitsCheck) a sample at a time,
 /// for a recording read row by row: add() each in order, then finish() throws the first failure
 /// (after the units check: a current in mA is said as such, not as a corrupted word)
 class TrainingCheck {
  public:
-  TrainingCheck(std::string path, const model::RobotModel& robot, std::string what);
+  /// `torque`: as for UnitsCheck (the messages name the joint torque columns)
+  TrainingCheck(std::string path, const model::RobotModel& robot, std::string what, bool torque = false);
   void add(const RobotSample& s);
   void finish() const;
 
@@ -128,6 +132,7 @@ class TrainingCheck {
   std::string failure_;
   std::string path_, what_;
   const model::RobotModel* robot_;
+  bool torque_;
   size_t k_ = 0;
   double first_ = 0.0;
 };
@@ -179,6 +184,10 @@ std::string magnitude_text(double value, const std::string& units);
 /// `--column-map FILE` of the verbs that read recordings: the map of a foreign log's columns to
 /// RTDE names (device::ColumnMap::load), none when `path` is empty.
 std::optional<device::ColumnMap> load_column_map(const std::string& path);
+/// load_column_map for a verb that compares `twin`'s measured channel: for a joint-torque twin
+/// (TwinModel::measures_torque) the map, an empty one when `path` is empty, reads the joint torque
+/// sensors in the current's place (device::ColumnMap::joint_torque_as_current)
+std::optional<device::ColumnMap> load_column_map(const std::string& path, const ident::TwinModel& twin);
 /// The file `--column-map path` reads: the path itself, or a shipped map's file for a bare name.
 /// Throws InvalidArgument (listing the shipped maps) when it is neither.
 std::string column_map_file(const std::string& path);
@@ -194,7 +203,9 @@ class ColumnMaps {
   ColumnMaps() = default;
   /// `recordings`: every recording the verb reads. Throws InvalidArgument naming the value: REC not
   /// one of the recordings, a recording given two maps, two maps for all, an empty MAP, a bad map.
-  ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings);
+  /// `joint_torque`: the verb compares a joint-torque twin's channel, and every recording is read with
+  /// device::ColumnMap::joint_torque_as_current (one without a map with an empty map that does only that).
+  ColumnMaps(const std::vector<std::string>& values, const std::vector<std::string>& recordings, bool joint_torque = false);
   /// The map to read `recording` with (nullptr: its own column names).
   const device::ColumnMap* of(const std::string& recording) const;
   /// The map files read, a shipped map's as its file (inputs an output must not replace).

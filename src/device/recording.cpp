@@ -6,9 +6,9 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -204,6 +204,22 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
         scale[c] = it->second.scale;
       }
     }
+  }
+  if (map && map->joint_torque_as_current) {
+    // the twin's measured channel is the joint torque sensors': their columns fill the current's
+    // place, and the motor currents (a Kinova logs both) are not read
+    bool any = false;
+    for (std::string& nm : names) {
+      if (nm.rfind("actual_current_", 0) == 0 && nm.rfind("actual_current_as_torque_", 0) != 0) nm.clear();
+      else if (nm.rfind("actual_joint_torque_", 0) == 0) {
+        nm = "actual_current_" + nm.substr(std::strlen("actual_joint_torque_"));
+        any = true;
+      }
+    }
+    if (!any)
+      throw ParseError(path, 1, "actual_joint_torque_0",
+                       "missing required column: the twin compares joint torque sensors (its signal is joint_torque), and the header "
+                       "has no actual_joint_torque_* (map the log's torque columns onto them with --column-map, docs/recordings.md)");
   }
   // locate columns: each known name -> (group, joint)
   for (size_t c = 0; c < names.size(); ++c) {

@@ -81,7 +81,7 @@ struct Stats {
 // projected Levenberg-Marquardt with an active set: a coefficient at 0 whose gradient points below
 // 0 is fixed for that step, and every step is projected back onto the bounds. Returns the
 // coefficients the bound holds at 0 (the SSE would still fall below it).
-std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload,
+std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload, bool fixed_h,
                                       Eigen::VectorXd& theta, std::vector<double>& h, const std::vector<int>& nonneg) {
   const int p = static_cast<int>(theta.size());
   const int n = static_cast<int>(free_gen.size());
@@ -137,6 +137,12 @@ std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::v
       H(col, col) = den;
       grad.head(p) += -hg * x.b + hg * hg * At;
       grad(col) = -num + hg * den;
+      if (fixed_h) {  // (a joint-torque twin: h stays 1, theta alone is fitted, the linear least squares)
+        H.block(0, col, p, 1).setZero();
+        H.block(col, 0, 1, p).setZero();
+        H(col, col) = 1.0;
+        grad(col) = 0.0;
+      }
     }
     // the active set: a bounded coefficient at 0 that the SSE would push below 0 stays at 0 this step
     for (int i : nonneg)
@@ -159,7 +165,7 @@ std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::v
       for (size_t a = 0; a < active.size(); ++a) h2[static_cast<size_t>(active[a])] += step(p + static_cast<int>(a));
       bool positive = true;
       for (int g : active) positive &= h2[static_cast<size_t>(g)] > 0.0;
-      if (!any_payload && positive) {
+      if (!any_payload && !fixed_h && positive) {
         // no absolute scale: keep prod g = 1 (h and theta trade along the flat direction)
         double lh = 0.0;
         for (int j = 0; j < n; ++j) lh += std::log(h2[static_cast<size_t>(2 * j)]);
@@ -190,15 +196,15 @@ std::vector<int> fit_bilinear_bounded(const std::vector<Stats>& st, const std::v
 // negative (data that do not determine it, e.g. a joint moving one way only, where Coulomb, offset
 // and gravity share one column: friction pushing the motion along would be written) is the fit
 // repeated from the same start with the bounds. Returns the coefficients held at 0.
-std::vector<int> fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload,
+std::vector<int> fit_bilinear(const std::vector<Stats>& st, const std::vector<bool>& free_gen, bool any_payload, bool fixed_h,
                               Eigen::VectorXd& theta, std::vector<double>& h, const std::vector<int>& nonneg) {
   const Eigen::VectorXd theta0 = theta;
   const std::vector<double> h0 = h;
-  fit_bilinear_bounded(st, free_gen, any_payload, theta, h, {});
+  fit_bilinear_bounded(st, free_gen, any_payload, fixed_h, theta, h, {});
   if (std::all_of(nonneg.begin(), nonneg.end(), [&](int i) { return theta(i) >= 0.0; })) return {};
   theta = theta0;
   h = h0;
-  return fit_bilinear_bounded(st, free_gen, any_payload, theta, h, nonneg);
+  return fit_bilinear_bounded(st, free_gen, any_payload, fixed_h, theta, h, nonneg);
 }
 
 // Grids of the low-speed friction's two shape parameters. 1/alpha: pre-sliding distance 0.02-5 mrad
@@ -371,6 +377,8 @@ void IdentOptions::validate() const {
     throw InvalidArgument(fmt::format("direction_blend is {} rad/s, must be finite and >= 0", direction_blend));
   if (!std::isnan(velocity_lag) && !(std::abs(velocity_lag) <= TwinModel::kVelocityLagMax))
     throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, TwinModel::kVelocityLagMax));
+  if (joint_torque && efficiency_fit != EfficiencyFit::Joint)
+    throw InvalidArgument("a joint-torque twin has no drive efficiency to fit: efficiency_fit must be the joint fit (gains and c_gen stay 1)");
 }
 
 namespace {
@@ -712,7 +720,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   }
   std::vector<TrainingRun> runs = given;
   std::string same_payload_note;  // said with the fit's notes (the fit starts its report afresh)
-  if (any_payload && !contrast) {
+  if (any_payload && !contrast && !o.joint_torque) {
     same_payload_note = (fmt::format(
         "every recording carries the same known payload ({:.2f} kg): to the fit it is part of the last link, so it fixes no "
         "current-to-torque gain; the gains are relative (torque outputs disabled) and the twin predicts the arm with that payload "
@@ -721,7 +729,8 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         given.front().payload.mass));
     for (auto& r : runs) r.payload = model::RigidBodyInertia{};
   }
-  const bool scale_known = any_payload && contrast;
+  // (a joint-torque sensor reads N·m itself: its scale needs no payload)
+  const bool scale_known = o.joint_torque || (any_payload && contrast);
   const model::RobotModel rm = model::load_robot(robot);
   const int n = rm.n_dof();
   long total = 0;
@@ -729,8 +738,9 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     if (r.recording->n_dof != n)
       throw InvalidArgument(fmt::format("{}: {} joints, but robot '{}' has {}", r.recording->path, r.recording->n_dof, robot, n));
     if (!(r.recording->present & kFieldActualCurrent))
-      throw InvalidArgument(fmt::format("{}: no actual_current_* columns: the current-domain twin needs motor currents",
-                                        r.recording->path));
+      throw InvalidArgument(fmt::format("{}: no {}_* columns: the {} twin needs them", r.recording->path,
+                                        o.joint_torque ? "actual_joint_torque" : "actual_current",
+                                        o.joint_torque ? "joint-torque" : "current-domain"));
     total += static_cast<long>(r.recording->samples.size());
   }
   if (total < 200) throw InvalidArgument(fmt::format("identify: {} samples in all, expected at least 200", total));
@@ -782,6 +792,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   TwinModel twin(robot, rm);
   twin.temperature_ref = o.temperature_ref;
   twin.direction_blend = o.direction_blend;
+  if (o.joint_torque) twin.signal = TwinModel::Signal::JointTorque;
   twin.created = now_iso();
   for (const TrainingRun& r : runs) {
     // (a recording cut into its driven stretches is one recording)
@@ -1011,7 +1022,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           st[2 * J + 1] = Stats{Eigen::MatrixXd::Zero(p, p), Eigen::VectorXd::Zero(p), Eigen::VectorXd::Zero(p), 0.0, 0.0, 0.0, 0};
           hg[2 * J] = h[J];
         }
-        held = fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), scale_known, theta, hg, bounds_of(pass));
+        held = fit_bilinear(st, std::vector<bool>(static_cast<size_t>(n), false), scale_known, false, theta, hg, bounds_of(pass));
         for (int j = 0; j < n; ++j) h[static_cast<size_t>(j)] = hg[static_cast<size_t>(2 * j)];
         std::vector<double> g(static_cast<size_t>(n));
         for (int j = 0; j < n; ++j) g[static_cast<size_t>(j)] = 1.0 / h[static_cast<size_t>(j)];
@@ -1093,7 +1104,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
             // the gain is fixed by the known payload only where the payload's current stands out
             // of what the model leaves unexplained
             report.payload_current_rms[J] = pay_cnt[J] > 0 ? std::sqrt(pay2[J] / static_cast<double>(pay_cnt[J])) : 0.0;
-            m.gain_identified = scale_known && report.payload_current_rms[J] >= kPayloadSignalMin * m.rmse;
+            m.gain_identified = o.joint_torque || (scale_known && report.payload_current_rms[J] >= kPayloadSignalMin * m.rmse);
             if (scale_known && !m.gain_identified)
               report.notes.push_back(fmt::format("J{}: the known payload's current on this joint (rms {:.4f} A) is below {} x the fit RMSE "
                                                  "({:.4f} A): its gain {:.3f} N·m/A is not identified (gain_identified false in the twin)",
@@ -1113,7 +1124,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
           const Stats& g1 = st[static_cast<size_t>(2 * j + 1)];
           const long all = g1.count + st[static_cast<size_t>(2 * j)].count;
           free_gen[static_cast<size_t>(j)] =
-              pass > 0 && g1.count >= kMinGeneratingSamples && g1.count >= kMinGeneratingFraction * static_cast<double>(all);
+              !o.joint_torque && pass > 0 && g1.count >= kMinGeneratingSamples && g1.count >= kMinGeneratingFraction * static_cast<double>(all);
         }
         // a fixed factor c folds the back-driven group into the motoring one:
         // sum (i - c h t)^2 has the statistics (A c², cp c², b c, d c, e, pp c²)
@@ -1154,7 +1165,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         // the fit, then the physical range of c_gen: a factor outside it is pinned to the bound and
         // the joint fitted again with it
         for (int attempt = 0; attempt < 2; ++attempt) {
-          held = fit_bilinear(st, free_gen, scale_known, theta, h, bounds_of(pass));
+          held = fit_bilinear(st, free_gen, scale_known, o.joint_torque, theta, h, bounds_of(pass));
           bool refit = false;
           for (int j = 0; j < n; ++j) {
             const size_t J = static_cast<size_t>(j);
@@ -1193,7 +1204,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
   if (!lag.note.empty()) report.notes.push_back(lag.note);
   report.target_direction = target_dir;
   if (!target_dir.note.empty()) report.notes.push_back(target_dir.note);
-  for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint; ++j)
+  for (int j = 0; j < n && o.efficiency_fit == EfficiencyFit::Joint && !o.joint_torque; ++j)
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
                                          100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
@@ -1249,7 +1260,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         d.stribeck_velocity > 0.0 ? fmt::format("{:+.3f} {} below {:.3f} rad/s", d.stribeck, units, d.stribeck_velocity) : std::string("none")));
   }
   if (!same_payload_note.empty()) report.notes.push_back(same_payload_note);
-  if (!any_payload)
+  if (!any_payload && !o.joint_torque)
     report.notes.push_back("no recording with a known payload: current-to-torque gains are relative (torque outputs disabled); "
                            "add one with --known-payload FILE=MASS,CX,CY,CZ");
   twin.set_payload(model::RigidBodyInertia{});

@@ -461,6 +461,8 @@ std::string TwinModel::to_json() const {
                              {"width_s", numbers(Eigen::VectorXd(target_direction.width_time))}};
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
+  // (only for a joint-torque twin: a current twin's file stays what older readers load)
+  if (measures_torque()) j["signal"] = "joint_torque";
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
   if (learned) j["learned"] = nlohmann::json::parse(learned->to_json());
   if (!friction_json.empty()) j["friction_models"] = nlohmann::json::parse(friction_json);
@@ -595,7 +597,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
   try {
     const JsonFields top(j, origin, "");
     top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "velocity_lag", "target_direction",
-              "payload", "gains_absolute", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
+              "payload", "gains_absolute", "signal", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
               "motion_envelope"});
     const std::string robot = top.text("robot");
     TwinModel t;
@@ -727,6 +729,27 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       top.fail("method", fmt::format("method \"{}\" expects {}, got {}", t.method, wants,
                                      t.learned ? (mlp ? "a \"learned\" block with role \"current\"" : "a \"learned\" block with role \"residual\"")
                                                : (t.sequential ? "a \"sequential\" block" : "neither block")));
+    // optional (since session 54; absent: the motor currents)
+    if (top.has("signal")) {
+      const std::string sig = top.text("signal");
+      if (sig == "joint_torque") t.signal = TwinModel::Signal::JointTorque;
+      else if (sig != "current")
+        top.fail("signal", fmt::format("expected \"current\" (motor currents) or \"joint_torque\" (joint torque sensors), got {}",
+                                       json_brief(top.need("signal"))));
+    }
+    if (t.measures_torque()) {
+      // a torque sensor reads the link side: no drive gain or back-driven factor between it and the
+      // model's torque (a twin edited to carry them would predict other units than it compares)
+      if (!t.gains_absolute) top.fail("gains_absolute", "a joint_torque twin's torque scale is the sensors' own: expected true, got false");
+      for (size_t k = 0; k < t.joints.size(); ++k)
+        if (t.joints[k].gain != 1.0 || t.joints[k].c_gen != 1.0)
+          throw ParseError(origin, 0, json_element("joints", k),
+                           fmt::format("a joint_torque twin has no drive between its sensor and the link: expected gain 1 and c_gen 1, got "
+                                       "gain {} and c_gen {}",
+                                       t.joints[k].gain, t.joints[k].c_gen));
+      if (t.method != "physics" && t.method != "hybrid")
+        top.fail("signal", fmt::format("a joint_torque twin is identified with method \"physics\" or \"hybrid\", got \"{}\"", t.method));
+    }
     if (version == 1)
       log::warn(fmt::format("{}: a version-1 twin file, read as version {} with {}; re-identify (twinwatch identify) to write a version-{} "
                             "file, in which every field is required",

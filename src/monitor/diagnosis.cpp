@@ -468,7 +468,7 @@ std::vector<double> link_evidence(const model::RobotModel& m, const model::Dynam
 }
 
 ContactFit isolate_contact(const model::RobotModel& m, const std::vector<DiagnosisSample>& w,
-                           const std::vector<DiagnosisSample>& ref, const VectorJ& static_friction) {
+                           const std::vector<DiagnosisSample>& ref, const VectorJ& static_friction, bool rest_visible) {
   const int n = m.n_dof();
   ContactFit out;
   if (w.size() < 3 || ref.size() < 10) return out;
@@ -573,7 +573,7 @@ ContactFit isolate_contact(const model::RobotModel& m, const std::vector<Diagnos
   VectorJ wgt(n), b(n), rest_sd(n);
   for (int j = 0; j < n; ++j) {
     const double sigma = std::sqrt(var[j] + sq(kGainError * impulse[j]) + sq(kSharedError * impulse.norm()) + sq(kImpulseFloor));
-    if (mean_speed[j] >= kRestSpeed)
+    if (mean_speed[j] >= kRestSpeed || rest_visible)
       wgt[j] = 1.0 / sigma;
     else if (friction_known && static_friction[j] > 0.0)
       wgt[j] = 1.0 / std::hypot(sigma, static_friction[j] / std::sqrt(3.0) * t_equiv);
@@ -658,7 +658,7 @@ constexpr double kGlitchNoise = 10.0;
 constexpr double kGlitchAgree = 0.25;  // |after - before| at most this share of the smallest departure
 constexpr double kGlitchShare = 0.5;
 
-std::optional<Hypothesis> current_glitch(const std::vector<DiagnosisSample>& w, int n, double total) {
+std::optional<Hypothesis> current_glitch(const std::vector<DiagnosisSample>& w, int n, double total, const DiagnosisOptions& o) {
   const long N = static_cast<long>(w.size());
   if (N < 4 || !(total > 0.0)) return std::nullopt;
   std::optional<Hypothesis> best;
@@ -694,14 +694,14 @@ std::optional<Hypothesis> current_glitch(const std::vector<DiagnosisSample>& w, 
         h.fault = FaultClass::SensorFault;
         h.joint = j;
         h.magnitude = peak;
-        h.units = "A";
+        h.units = o.channel_unit;
         h.explained = std::clamp(energy / total, 0.0, 1.0);
         h.detail = fmt::format(
-            "a glitch on the J{} current channel: {} at {:.3f} s read{} {:.2f} A between samples of {:.2f} and {:.2f} A; a contact "
-            "cannot come and go in the current within {} ms (the drive answers one through the joint's motion, over tens of ms): "
+            "a glitch on the J{0} {1} channel: {2} at {3:.3f} s read{4} {5:.2f} {8} between samples of {6:.2f} and {7:.2f} {8}; a contact "
+            "cannot come and go in the {1} within {9} ms (the drive answers one through the joint's motion, over tens of ms): "
             "an electrical spike or a corrupted sample, not the arm",
-            j + 1, L == 1 ? "the sample" : fmt::format("{} samples", L), w[k].t, L == 1 ? "s" : "", peak, before, after,
-            fmt::format("{:.0f}", 1e3 * (w[k + L].t - w[k].t)));
+            j + 1, o.channel, L == 1 ? "the sample" : fmt::format("{} samples", L), w[k].t, L == 1 ? "s" : "", peak, before, after,
+            o.channel_unit, fmt::format("{:.0f}", 1e3 * (w[k + L].t - w[k].t)));
         best = h;
       }
     }
@@ -761,7 +761,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     out.push_back({FaultClass::Unknown, alert_joint, -1, 0.0, "", 0.0, "no residual energy in the window", {}, {}});
     return out;
   }
-  if (auto glitch = current_glitch(window, n, total)) {
+  if (auto glitch = current_glitch(window, n, total, options)) {
     out.push_back(*glitch);
     return out;
   }
@@ -869,7 +869,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
   double contact_noise = 0.0;
   Hypothesis contact = contact_hypothesis(model, window, total, noise_w ? &*noise_w : nullptr, &contact_noise, weight);
   if (window.front().tau_ext.size() == n && window.front().tau_ext_level.size() == n) {
-    const ContactFit fit = reference ? isolate_contact(model, window, *reference, options.static_friction) : ContactFit{};
+    const ContactFit fit = reference ? isolate_contact(model, window, *reference, options.static_friction, options.rest_visible) : ContactFit{};
     if (fit.link == 0) {
       // the first link hangs on one joint: its torque is force x lever, and no reading splits them
       // (held-out sets 5-8: the force read 0.01-1.1x the true one), so the size is that torque

@@ -75,7 +75,7 @@ std::string Event::to_json_line() const {
   j["units"] = units;
   j["confidence"] = confidence;
   j["peak_residual"] = peak_residual;  // the largest |filtered current residual| of any joint during the alert
-  j["peak_residual_units"] = "A";
+  j["peak_residual_units"] = peak_residual_units;
   j["detail"] = detail;
   // the wall clock of the three times, where the source's is known (null: a recording watched
   // without --started-at)
@@ -96,7 +96,7 @@ struct EventStore::Impl {
   sqlite3_stmt* insert = nullptr;
   std::string path;
   bool has_other_links = false, has_t_detected = false, has_active_at_stop = false, has_recorded_at = false, has_run = false,
-       has_wall_offset = false;
+       has_wall_offset = false, has_residual_units = false;
   long run = 0;  // the run's id (its row written with its first event), 0: none yet
   bool run_pending = false;  // begin_run was called, its row not yet written
   std::string run_source, run_twin, run_program;
@@ -165,7 +165,7 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
          " id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, t_start REAL, t_end REAL, duration_s REAL,"
          " class TEXT, joint INTEGER, link INTEGER, magnitude REAL, units TEXT, confidence REAL,"
          " peak_residual REAL, detail TEXT, recorded_at TEXT DEFAULT CURRENT_TIMESTAMP, other_links TEXT, t_detected REAL,"
-         " active_at_stop INTEGER);",
+         " active_at_stop INTEGER, peak_residual_units TEXT);",
          "cannot create the events table");
   // the table's columns: a table from an older version lacks the later ones
   std::vector<std::string> columns;
@@ -243,6 +243,9 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
     if (!has("wall_offset"))
       exec("ALTER TABLE events ADD COLUMN wall_offset REAL;", "cannot add the wall_offset column to the events table");
     if (!has("wall_start")) exec("ALTER TABLE events ADD COLUMN wall_start TEXT;", "cannot add the wall_start column to the events table");
+    // (session 54) the residual's units: a joint-torque twin's are N·m; older rows read as A
+    if (!has("peak_residual_units"))
+      exec("ALTER TABLE events ADD COLUMN peak_residual_units TEXT;", "cannot add the peak_residual_units column to the events table");
     exec("CREATE TABLE IF NOT EXISTS runs (id INTEGER PRIMARY KEY AUTOINCREMENT, started_at TEXT DEFAULT CURRENT_TIMESTAMP,"
          " source TEXT, twin TEXT, program TEXT, ended_at TEXT, samples INTEGER, events INTEGER, status TEXT);",
          "cannot create the runs table");
@@ -276,11 +279,12 @@ EventStore::EventStore(const std::string& path, Mode mode) : impl_(std::make_uni
   impl_->has_recorded_at = mode == Mode::Write || has("recorded_at");
   impl_->has_run = mode == Mode::Write || has("run");
   impl_->has_wall_offset = mode == Mode::Write || has("wall_offset");
+  impl_->has_residual_units = mode == Mode::Write || has("peak_residual_units");
   if (mode == Mode::Read) return;
   const char* ins =
       "INSERT INTO events (source, t_start, t_end, duration_s, class, joint, link, magnitude, units, confidence,"
-      " peak_residual, detail, other_links, t_detected, active_at_stop, run, wall_offset, wall_start)"
-      " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
+      " peak_residual, detail, other_links, t_detected, active_at_stop, run, wall_offset, wall_start, peak_residual_units)"
+      " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?);";
   if (sqlite3_prepare_v2(impl_->db, ins, -1, &impl_->insert, nullptr) != SQLITE_OK) fail("cannot prepare insert", sqlite3_errmsg(impl_->db));
 }
 
@@ -368,6 +372,7 @@ bool EventStore::try_insert(const Event& e, const std::string& source, int wait_
     sqlite3_bind_double(s, 17, e.wall_offset);
     sqlite3_bind_text(s, 18, wall_start.c_str(), -1, SQLITE_TRANSIENT);
   }
+  sqlite3_bind_text(s, 19, e.peak_residual_units.c_str(), -1, SQLITE_TRANSIENT);
   const int rc = sqlite3_step(s);
   if (new_run) {
     // (the commit waits for readers to let go, as an insert outside a transaction does)
@@ -518,10 +523,11 @@ std::vector<StoredEvent> EventStore::read() const {
   sqlite3_stmt* raw = nullptr;
   const std::string sel = fmt::format(
       "SELECT id, source, t_start, t_end, class, joint, link, magnitude, units, confidence, peak_residual, detail,"
-      " {}, {}, {}, {}, {}, {} FROM events ORDER BY id;",
+      " {}, {}, {}, {}, {}, {}, {} FROM events ORDER BY id;",
       impl_->has_other_links ? "other_links" : "NULL", impl_->has_t_detected ? "t_detected" : "NULL",
       impl_->has_active_at_stop ? "active_at_stop" : "NULL", impl_->has_recorded_at ? "recorded_at" : "NULL",
-      impl_->has_run ? "run" : "NULL", impl_->has_wall_offset ? "wall_offset" : "NULL");
+      impl_->has_run ? "run" : "NULL", impl_->has_wall_offset ? "wall_offset" : "NULL",
+      impl_->has_residual_units ? "peak_residual_units" : "NULL");
   if (sqlite3_prepare_v2(impl_->db, sel.c_str(), -1, &raw, nullptr) != SQLITE_OK)
     throw std::runtime_error(fmt::format("{}: cannot read events: {}", impl_->path, sqlite3_errmsg(impl_->db)));
   const std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)> stmt(raw, &sqlite3_finalize);
@@ -569,6 +575,7 @@ std::vector<StoredEvent> EventStore::read() const {
     e.confidence = number(9);
     e.peak_residual = number(10);
     e.detail = text(11);
+    if (sqlite3_column_type(s, 18) != SQLITE_NULL) e.peak_residual_units = text(18);  // (NULL: a row from before session 54, A)
     // values the monitor never writes (a hand-edited row): printed as they were, 1e999 read "null"
     // and a confidence of 7 or an end before the start passed as findings
     if (!std::isfinite(e.t_start)) throw bad(2, "a finite time [s]");

@@ -1125,7 +1125,7 @@ double Monitor::trusted_gain(int j) const {
 
 void Monitor::open_event(int joint, double start, double t, const char* channel) {
   report_held();
-  Event e;
+  Event e = new_event();
   e.t_start = start;
   e.t_end = t;
   e.t_detected = t;
@@ -1291,7 +1291,11 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
   o.payload_com = payload_com_in_link();
-  o.static_friction = static_friction_;
+  // (joint torque sensors read a resting joint's load: no friction hides it from them)
+  if (!twin_.measures_torque()) o.static_friction = static_friction_;
+  o.rest_visible = twin_.measures_torque();
+  o.channel = channel_name();
+  o.channel_unit = twin_.channel_unit();
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
   // A split on a rise (watch_on_top) ends a change whose samples before the rise stayed within the
@@ -2172,7 +2176,7 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   }
   ++n_invalid_;
   if (!invalid_run_) {
-    Event f;
+    Event f = new_event();
     f.t_start = f.t_end = f.t_detected = s.timestamp;
     f.open = false;
     f.fault = FaultClass::SensorFault;
@@ -2261,7 +2265,7 @@ void Monitor::hold_temperature(RobotSample& held) {
     held.temperature[j] = temperature_ok_[j];
     if (temperature_run_[static_cast<size_t>(j)]) continue;
     temperature_run_[static_cast<size_t>(j)] = 1;
-    Event f;
+    Event f = new_event();
     f.t_start = f.t_end = f.t_detected = held.timestamp;
     f.open = false;
     f.fault = FaultClass::SensorFault;
@@ -2304,7 +2308,7 @@ void Monitor::judge(const RobotSample& s) {
   }
   if (gap) {
     ++n_gaps_;
-    Event g;
+    Event g = new_event();
     g.t_start = t_prev_;
     g.t_end = t;
     g.t_detected = t;
@@ -2436,7 +2440,7 @@ void Monitor::judge(const RobotSample& s) {
     }
     frozen_val_[j] = s.current[j];
     if (run == cfg_.frozen_samples && frozen_event_[J] < 0) {
-      Event f;
+      Event f = new_event();
       f.t_start = frozen_since_[j];
       f.t_end = t;
       f.t_detected = t;
@@ -2445,7 +2449,7 @@ void Monitor::judge(const RobotSample& s) {
       f.joint = j;
       f.units = "samples";
       f.confidence = 1.0;
-      f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves", j + 1, s.current[j]);
+      f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves", channel_name(), j + 1, s.current[j], twin_.channel_unit());
       events_.push_back(f);
       frozen_event_[J] = static_cast<int>(events_.size()) - 1;
       if (on_event) on_event(f);
@@ -2642,6 +2646,7 @@ void Monitor::judge(const RobotSample& s) {
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0 || background_ >= 0)) {
     events_.push_back(trend_.warning());
+    events_.back().peak_residual_units = twin_.channel_unit();
     if (on_event) on_event(events_.back());
   }
   if (std::string note; trend_.take_note(note)) add_note(t, note);
@@ -2768,7 +2773,7 @@ void Monitor::report_pending_close() {
 
 // a stream fault for `seconds` without data after the last sample: its size in samples missed
 Event Monitor::silence_event(double seconds, bool open) const {
-  Event g;
+  Event g = new_event();
   g.t_start = t_prev_;
   g.t_end = t_prev_ + seconds;
   g.t_detected = g.t_end;
@@ -2822,7 +2827,8 @@ void Monitor::close_frozen(int j, bool at_stop, const std::string& why) {
   f.active_at_stop = at_stop;
   f.t_end = t_prev_;  // the last sample that still held the value
   f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
-  f.detail = fmt::format("current channel of J{} frozen at {:.4f} A while the joint moves ({:.0f} samples){}", j + 1, frozen_val_[j],
+  f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves ({:.0f} samples){}", channel_name(), j + 1,
+                         frozen_val_[j], twin_.channel_unit(),
                          f.magnitude, at_stop ? (why.empty() ? std::string("; still frozen when monitoring stopped") : why) : std::string());
   if (on_event) on_event(f);
   // the observer and the residual filter integrated the frozen value for the whole stretch: they

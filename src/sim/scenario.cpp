@@ -338,7 +338,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   }
   const Y y(origin);
   y.only_keys(root, "", {"name", "robot", "robot_serial", "seed", "duration", "cycles", "rate", "substeps", "cold_start", "payload",
-                         "payload_declared", "streams_payload", "streams_targets", "trajectory", "noise", "faults", "stops", "description", "program"});
+                         "payload_declared", "streams_payload", "streams_targets", "joint_torque_sensors", "trajectory", "noise", "faults", "stops", "description", "program"});
   Scenario s;
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
@@ -377,6 +377,7 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   s.options.payload_declared = y.boolean(root, "", "payload_declared", true);
   s.options.streams_payload = y.boolean(root, "", "streams_payload", true);
   s.options.streams_targets = y.boolean(root, "", "streams_targets", true);
+  s.options.joint_torque_sensors = y.boolean(root, "", "joint_torque_sensors", false);
   if (root["payload"]) s.options.payload = payload_from(y, root["payload"], "payload", m);
   s.trajectory = trajectory_from(y, root["trajectory"], m, s.trajectory_type, rate);
   // duration, given or as cycles of the trajectory (default one cycle), each checked at its own line
@@ -399,11 +400,22 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   }
   if (root["noise"]) {
     const YAML::Node nz = root["noise"];
-    y.only_keys(nz, "noise", {"current_sigma"});
-    const VectorJ sg = y.vec(nz, "noise", "current_sigma", n, true);
-    for (int j = 0; j < n; ++j) {
-      if (!(sg[j] >= 0.0)) y.fail(nz["current_sigma"], "noise.current_sigma", fmt::format("must be >= 0, got {}", sg[j]));
-      s.current_sigma.push_back(sg[j]);
+    y.only_keys(nz, "noise", {"current_sigma", "joint_torque_sigma"});
+    if (nz["current_sigma"]) {
+      const VectorJ sg = y.vec(nz, "noise", "current_sigma", n, true);
+      for (int j = 0; j < n; ++j) {
+        if (!(sg[j] >= 0.0)) y.fail(nz["current_sigma"], "noise.current_sigma", fmt::format("must be >= 0, got {}", sg[j]));
+        s.current_sigma.push_back(sg[j]);
+      }
+    }
+    if (nz["joint_torque_sigma"]) {
+      if (!s.options.joint_torque_sensors)
+        y.fail(nz["joint_torque_sigma"], "noise.joint_torque_sigma", "the joint torque sensors' noise needs 'joint_torque_sensors: true'");
+      const VectorJ sg = y.vec(nz, "noise", "joint_torque_sigma", n, true);
+      for (int j = 0; j < n; ++j) {
+        if (!(sg[j] >= 0.0)) y.fail(nz["joint_torque_sigma"], "noise.joint_torque_sigma", fmt::format("must be >= 0 [N·m], got {}", sg[j]));
+        s.joint_torque_sigma.push_back(sg[j]);
+      }
     }
   }
   // stops of the program (an operator's pause, a protective or an emergency stop): each at its line
@@ -629,6 +641,7 @@ std::unique_ptr<Simulator> make_simulator(const Scenario& s) {
   const model::RobotModel m = model::load_robot(s.robot);
   PlantTruth truth = default_truth(m, s.serial);
   for (size_t j = 0; j < s.current_sigma.size() && j < truth.joints.size(); ++j) truth.joints[j].current_sigma = s.current_sigma[j];
+  for (size_t j = 0; j < s.joint_torque_sigma.size() && j < truth.joints.size(); ++j) truth.joints[j].torque_sigma = s.joint_torque_sigma[j];
   return std::make_unique<Simulator>(m, s.trajectory, truth, s.options, s.faults);
 }
 

@@ -95,6 +95,7 @@ PlantTruth default_truth(const model::RobotModel& m, unsigned serial) {
     // DESIGN.md rule 4: sigma 0.014-0.04 A per joint, more on the base joint
     jt.current_sigma = j == 0 ? 0.03 : std::clamp(0.012 + 0.008 * size, 0.014, 0.04);
     jt.current_offset = 0.0;
+    jt.torque_sigma = 0.002 * tau_max;
     p.joints.push_back(jt);
   }
   return p;
@@ -150,7 +151,8 @@ std::uint32_t Simulator::fields() {
 }
 
 std::uint32_t Simulator::sample_fields() const {
-  return (fields() & (opt_.streams_targets ? ~0u : ~kTargetFields)) | (opt_.streams_payload ? kFieldPayload : 0u);
+  return (fields() & (opt_.streams_targets ? ~0u : ~kTargetFields)) | (opt_.streams_payload ? kFieldPayload : 0u) |
+         (opt_.joint_torque_sensors ? kFieldJointTorque : 0u);
 }
 
 // armature: motor rotor inertia reflected through the gear, J_m N^2 [kg m^2]; rotor inertia grows
@@ -190,6 +192,7 @@ Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Tra
       dtruth_(nominal),
       dctrl_(nominal),
       rng_(opt_.seed),
+      torque_rng_(opt_.seed ^ 0x5eed70c5u),
       n_(nominal.n_dof()) {
   opt_.validate(n_);
   if (!traj_) throw InvalidArgument("trajectory is missing");
@@ -231,6 +234,7 @@ Simulator::Simulator(const model::RobotModel& nominal, std::shared_ptr<const Tra
   for (int j = 0; j < n_; ++j) temp_[j] = opt_.cold_start ? truth_.ambient : truth_.joints[static_cast<size_t>(j)].T_ref;
   q_meas_prev_ = q_;
   current_held_ = VectorJ::Zero(n_);
+  link_torque_ = VectorJ::Zero(n_);
   // default gains from the joint inertia at the start pose (incl. armature)
   const MatrixJ M = model::crba(controller_model_, dctrl_, q_);
   kp_.resize(n_);
@@ -376,6 +380,7 @@ bool Simulator::step(RobotSample& s) {
   for (int k = 0; k < opt_.substeps && !ps.braked; ++k) {
     VectorJ tau = tau_cmd;
     for (int j = 0; j < n_; ++j) tau[j] -= friction_torque(j, qd_[j], h);
+    const VectorJ tau_link = tau;  // what passes the gear into the link (a torque sensor's side): no contact
     if (!pulses.empty()) {
       model::forward_kinematics(truth_model_, dtruth_, q_);
       for (const auto& [f, shape] : pulses) {
@@ -389,6 +394,8 @@ bool Simulator::step(RobotSample& s) {
     for (int j = 0; j < n_; ++j) M(j, j) += armature(truth_.joints[static_cast<size_t>(j)]);
     dtruth_.llt.compute(M);
     const VectorJ qdd = dtruth_.llt.solve(tau - hvec);
+    if (opt_.joint_torque_sensors && k == opt_.substeps - 1)
+      for (int j = 0; j < n_; ++j) link_torque_[j] = tau_link[j] - armature(truth_.joints[static_cast<size_t>(j)]) * qdd[j];
     qd_ += h * qdd;
     q_ += h * qd_;
   }
@@ -427,6 +434,12 @@ bool Simulator::step(RobotSample& s) {
     current_held_[j] = i_meas;
     s.current[j] = i_meas;
     s.temperature[j] = std::round(temp_[j] * 10.0) / 10.0;
+  }
+  if (opt_.joint_torque_sensors) {
+    // the brakes hold the arm on the motor side: the sensors carry its weight (the static torque)
+    if (ps.braked) link_torque_ = model::rnea(truth_model_, dtruth_, q_, VectorJ::Zero(n_), VectorJ::Zero(n_));
+    for (int j = 0; j < n_; ++j)
+      s.joint_torque[j] = link_torque_[j] + truth_.joints[static_cast<size_t>(j)].torque_sigma * torque_normal_(torque_rng_);
   }
   s.digital_outputs = dout_;
   s.robot_mode = ps.robot_mode;

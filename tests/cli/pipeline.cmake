@@ -245,6 +245,11 @@ add_test(NAME cli.monitor_a_log_without_targets
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/without_targets.sh $<TARGET_FILE:twinwatch> ${PROJECT_SOURCE_DIR}/tests/data/cli
           ${PROJECT_BINARY_DIR}/cli-without-targets)
 set_tests_properties(cli.monitor_a_log_without_targets PROPERTIES PASS_REGULAR_EXPRESSION "WITHOUT-TARGETS-OK" TIMEOUT 120)
+# an arm with joint torque sensors, end to end: identify --signal joint_torque, validate, monitor (session 54)
+add_test(NAME cli.joint_torque_sensors_end_to_end
+  COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/joint_torque_sensors.sh $<TARGET_FILE:twinwatch> ${PROJECT_SOURCE_DIR}/tests/data/cli
+          ${PROJECT_BINARY_DIR}/cli-joint-torque)
+set_tests_properties(cli.joint_torque_sensors_end_to_end PROPERTIES PASS_REGULAR_EXPRESSION "JOINT-TORQUE-SENSORS-OK" TIMEOUT 180)
 # what a user hands the tools by mistake (session 34 audit): refused or said, nothing replaced
 add_test(NAME cli.user_inputs_refused_or_said
   COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/user_inputs.sh $<TARGET_FILE:twinwatch> ${d} ${s}/short_fig8.yaml ${PROJECT_BINARY_DIR}/cli-user-inputs)

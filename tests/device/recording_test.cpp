@@ -287,6 +287,41 @@ TEST(Recording, ColumnMapRenamesAndScalesForeignLogs) {
   EXPECT_NEAR(r.samples[0].q[1], -M_PI / 4, 1e-15);
 }
 
+// a joint-torque twin's reading (session 54): the sensors' columns fill the measured channel, the
+// motor currents a Kinova logs beside them are not read, and a file without the sensors is refused at
+// its header, naming the column
+TEST(Recording, AJointTorqueTwinReadsTheSensorsWhereTheCurrentIs) {
+  const std::string p = tmp("both.csv");
+  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1,actual_current_0,actual_current_1,tau0,tau1\n"
+                      "0.0,0.1,0.2,1.5,-0.5,12.25,-3.5\n0.002,0.1,0.2,1.6,-0.4,12.5,-3.75\n";
+  const std::string mp = tmp("both.map");
+  std::ofstream(mp) << "tau0,actual_joint_torque_0\ntau1,actual_joint_torque_1\n";
+  ColumnMap map = ColumnMap::load(mp);
+  {  // (as mapped: both signals, each in its place)
+    const Recording r = read_recording(p, &map);
+    EXPECT_EQ(r.samples[1].current[0], 1.6);
+    EXPECT_EQ(r.samples[1].joint_torque[1], -3.75);
+  }
+  map.joint_torque_as_current = true;
+  const Recording r = read_recording(p, &map);
+  ASSERT_TRUE(r.present & kFieldActualCurrent);
+  EXPECT_FALSE(r.present & kFieldJointTorque);
+  EXPECT_EQ(r.samples[0].current[0], 12.25);
+  EXPECT_EQ(r.samples[1].current[1], -3.75);
+  // a file in twinwatch's own names, read without a map of its own
+  const std::string own = tmp("own.csv");
+  std::ofstream(own) << "timestamp,actual_q_0,actual_joint_torque_0\n0.0,0.1,7.5\n0.002,0.1,7.25\n";
+  ColumnMap only;
+  only.joint_torque_as_current = true;
+  EXPECT_EQ(read_recording(own, &only).samples[1].current[0], 7.25);
+  // no sensors: refused, with the column and why
+  const std::string none = tmp("none.csv");
+  std::ofstream(none) << "timestamp,actual_q_0,actual_current_0\n0.0,0.1,1.0\n0.002,0.1,1.1\n";
+  const std::string e = twinwatch::test::error_text<ParseError>([&] { read_recording(none, &only); });
+  EXPECT_THAT(e, HasSubstr("none.csv:1: field 'actual_joint_torque_0'"));
+  EXPECT_THAT(e, HasSubstr("the twin compares joint torque sensors"));
+}
+
 // the format's names as a header line, as docs/recordings.md writes the format, are no mapping (the
 // map was refused on them: 'rtde_name' is no RTDE name)
 TEST(Recording, ColumnMapWithTheFormatsHeaderLoads) {

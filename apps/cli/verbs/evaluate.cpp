@@ -29,7 +29,7 @@ using namespace twinwatch;
 
 struct EvaluateOptions {
   std::vector<std::string> dirs;
-  std::string twin, robot = "ur3e", save_twin, trend_csv, filter;
+  std::string twin, robot = "ur3e", save_twin, trend_csv, filter, signal = "current";
   bool json = false, static_threshold = false, sweep = false, all_programs = false;
   double max_duration = 0.0;
   double link_ceiling = -1.0;
@@ -58,7 +58,7 @@ int run_evaluate(const EvaluateOptions& o) {
       throw InvalidArgument(fmt::format("--sweep-collisions simulates its own contacts; it takes no scenarios (got {})", o.dirs.front()));
     o.sweep_options.validate();
     if (!o.save_twin.empty()) require_output(o.save_twin, {o.twin});
-    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs) : cli::load_twin(o.twin);
+    ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, {}, o.all_programs, o.signal == "joint_torque") : cli::load_twin(o.twin);
     apply_alert_settings(twin, o);
     if (!o.save_twin.empty()) twin.save(o.save_twin);
     const cli::Sweep sw = cli::sweep_collisions(twin, o.sweep_options, o.json);
@@ -98,7 +98,8 @@ int run_evaluate(const EvaluateOptions& o) {
     inputs.push_back(o.save_twin);
     require_output(o.trend_csv, inputs);
   }
-  ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : cli::split_filter(o.filter), o.all_programs)
+  ident::TwinModel twin = o.twin.empty() ? cli::train_reference(o.robot, o.json, o.filter.empty() ? std::vector<std::string>{} : cli::split_filter(o.filter), o.all_programs,
+                                                               o.signal == "joint_torque")
                                          : cli::load_twin(o.twin);
   apply_alert_settings(twin, o);
   for (size_t i = 0; i < files.size(); ++i)
@@ -174,6 +175,12 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
       ->check(CLI::ExistingPath);
   sub->add_option("--twin", o->twin, "Twin file (default: identify one from simulated healthy runs first)");
   auto* robot = sub->add_option("--robot", o->robot, "Robot for the default twin")->capture_default_str();
+  auto* signal = sub->add_option("--signal", o->signal,
+                  "What the default twin compares: current (the motor currents, as a UR streams them) or joint_torque (the simulated "
+                  "arm gets joint torque sensors between gear and link, noise 0.2 % of each joint's torque limit, and the twin is "
+                  "identified on them; a --twin file brings its own)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"current", "joint_torque"}));
   sub->add_option("--save-twin", o->save_twin, "Write the twin used (trained or loaded) to this file");
   auto* max_duration = sub->add_option("--max-duration", o->max_duration, "Skip scenarios longer than this [s] (default 0: run all)")
                            ->check(twinwatch::cli::nonnegative_number());
@@ -218,7 +225,7 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
                                     "With --sweep-collisions: an alert later than this after the contact [s] does not count")
                         ->capture_default_str();
   sub->callback([=] {
-    twinwatch::cli::refuse_unless({robot, all_programs}, o->twin.empty(),
+    twinwatch::cli::refuse_unless({robot, all_programs, signal}, o->twin.empty(),
                                   "to the twin trained here; a --twin file has its own robot and thresholds (re-learn them with "
                                   "'twinwatch thresholds')");
     twinwatch::cli::refuse_unless({links, magnitudes, sweep_seed, max_delay}, o->sweep, "with --sweep-collisions");

@@ -81,6 +81,7 @@ PayloadArg parse_payload(const std::string& s, const model::RobotModel& robot) {
 struct IdentifyOptions {
   std::vector<std::string> recordings, payloads, column_maps;
   std::string output, robot = "ur3e", method = "physics";
+  std::string signal = "current";  // current | joint_torque: what the twin predicts and the monitor compares
   double reversal_screen = 0.0;
   bool no_low_speed_friction = false;
   bool no_target_direction = false;
@@ -127,6 +128,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.low_speed_friction = !o.no_low_speed_friction;
   lo.physics.target_direction = !o.no_target_direction;
   lo.physics.efficiency_passes = o.efficiency_passes;
+  lo.physics.joint_torque = o.signal == "joint_torque";
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -228,8 +230,12 @@ void check_robot_against_controller(const IdentifyOptions& o, const model::Robot
 int run_identify(const IdentifyOptions& o) {
   // before the fit: a bad output path found after minutes of fitting costs the fit
   cli::require_distinct(o.recordings, "RECORDINGS");
+  const bool torque = o.signal == "joint_torque";
+  if (torque && (o.method == "sequential" || o.method == "mlp"))
+    throw InvalidArgument(fmt::format("--signal joint_torque takes --method physics or hybrid, got {}: the {} method predicts the motor currents",
+                                      o.method, o.method));
   if (o.method == "sequential") return run_identify_sequential(o);
-  const cli::ColumnMaps maps(o.column_maps, o.recordings);
+  const cli::ColumnMaps maps(o.column_maps, o.recordings, torque);
   {
     std::vector<std::string> inputs = o.recordings;
     inputs.insert(inputs.end(), maps.files().begin(), maps.files().end());
@@ -246,7 +252,7 @@ int run_identify(const IdentifyOptions& o) {
   }
   recs = cli::driven_only(std::move(recs), o.quiet);
   const model::RobotModel robot = model::load_robot(o.robot);
-  for (const auto& r : recs) cli::check_training_recording(r, robot, "identify");
+  for (const auto& r : recs) cli::check_training_recording(r, robot, "identify", torque);
   {
     std::vector<const device::Recording*> all;
     for (const auto& r : recs) all.push_back(&r);
@@ -278,6 +284,9 @@ int run_identify(const IdentifyOptions& o) {
   io.low_speed_friction = !o.no_low_speed_friction;
   io.target_direction = !o.no_target_direction;
   io.efficiency_passes = o.efficiency_passes;
+  io.joint_torque = torque;
+  if (torque && io.efficiency_fit != ident::EfficiencyFit::Joint)
+    throw InvalidArgument("--signal joint_torque has no drive efficiency to fit: --efficiency-fit alternating does not apply");
   ident::IdentReport report;
   const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   auto show = [&](double f) {
@@ -301,7 +310,8 @@ int run_identify(const IdentifyOptions& o) {
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s){} -> {}\n", twin.robot_name(), twin.method, o.recordings.size(),
                recs.size() > o.recordings.size() ? fmt::format(" ({} driven stretches)", recs.size()) : "", o.output);
-    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", "RMSE A", "R²", "c_gen", "gen %", "gain N·m/A");
+    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", fmt::format("RMSE {}", twin.channel_unit()), "R²", "c_gen",
+               "gen %", "gain N·m/A");
     // a gain the recordings did not fix is shown as the monitor uses it: the median of the identified
     // ones (the fitted number itself can be anything, e.g. 3240 on a joint no payload loads)
     std::vector<double> fixed;
@@ -316,6 +326,10 @@ int run_identify(const IdentifyOptions& o) {
       // back-driven share of the samples; '*' marks a c_gen the data did not fit (kept or pinned)
       const bool fitted = J < report.c_gen_identified.size() && report.c_gen_identified[J];
       const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
+      if (twin.measures_torque()) {  // (no drive between the torque sensor and the link: nothing of it to show)
+        fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2, "-", "-", "-");
+        continue;
+      }
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
                  fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
                  !twin.gains_known()  ? fmt::format("({:.3f})", m.gain)
@@ -488,7 +502,7 @@ struct ValidateOptions {
 
 int run_validate(const ValidateOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
-  const auto map = cli::load_column_map(o.column_map);
+  const auto map = cli::load_column_map(o.column_map, twin);
   if (!o.predictions.empty()) require_output(o.predictions, {o.recording, o.twin, o.column_map});
   // The recording is read twice, row by row, and never held, as `monitor` and `report` read one:
   // first to check every row, its units, the timing of its steps and the payloads it declares, then
@@ -538,8 +552,10 @@ int run_validate(const ValidateOptions& o) {
     predictions = &predictions_file.emplace(o.predictions).stream();
     auto w = std::back_inserter(line);
     fmt::format_to(w, "timestamp");
-    for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_current_{}", j);
-    for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_current_{}", j);
+    // (a joint-torque twin's channel: actual_joint_torque_*, predicted_joint_torque_*)
+    const std::string what = twin.measures_torque() ? "joint_torque" : "current";
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_{}_{}", what, j);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_{}_{}", what, j);
     fmt::format_to(w, "\n");
     predictions->write(line.data(), static_cast<std::streamsize>(line.size()));
   }
@@ -586,8 +602,8 @@ int run_validate(const ValidateOptions& o) {
                               {"com", {p.com.x(), p.com.y(), p.com.z()}}});
   }
   if (!o.json) {
-    fmt::print("validation of {} on {} ({} samples), current domain [A] (UR3e Table 3 layout)\n", o.twin, o.recording,
-               driven);
+    fmt::print("validation of {} on {} ({} samples), {} [{}] (UR3e Table 3 layout)\n", o.twin, o.recording, driven,
+               twin.measures_torque() ? "joint torque sensors" : "current domain", twin.channel_unit());
     fmt::print("{:<8}", "metric");
     for (int j = 0; j < n; ++j) fmt::print(" {:>8}", fmt::format("J{}", j + 1));
     fmt::print("\n");
@@ -610,8 +626,12 @@ int run_validate(const ValidateOptions& o) {
                              {"nrmse_pct", value(!constant[J], m.nrmse_pct)}, {"d_tau_pct", value(!zero[J], m.rel_err_pct)}});
     if (constant[J]) out["joints"].back()["measured_constant"] = first_measured[J];
   }
-  out["units"] = {{"rmse", "A"}, {"mae", "A"}, {"r2", "1"}, {"nrmse_pct", "% of the measured range"},
-                  {"d_tau_pct", "% (norm of the error / norm of the measured current)"}, {"measured_constant", "A"},
+  const std::string unit = twin.channel_unit();
+  out["signal"] = twin.measures_torque() ? "joint_torque" : "current";
+  out["units"] = {{"rmse", unit}, {"mae", unit}, {"r2", "1"}, {"nrmse_pct", "% of the measured range"},
+                  {"d_tau_pct", twin.measures_torque() ? "% (norm of the error / norm of the measured torque)"
+                                                       : "% (norm of the error / norm of the measured current)"},
+                  {"measured_constant", unit},
                   {"from_s", "s"}, {"mass", "kg"}, {"com", "m (flange frame)"}};
   if (o.json) {
     fmt::print("{}\n", out.dump());
@@ -632,8 +652,8 @@ int run_validate(const ValidateOptions& o) {
   row("d_tau%", [](const signal::FitMetrics& m) { return m.rel_err_pct; }, "{:.2f}", zero);
   for (int j = 0; j < n; ++j)
     if (constant[static_cast<size_t>(j)])
-      fmt::print("note: J{}'s measured current is {:g} A in every sample: R² and NRMSE are undefined (n/a); a dead or stuck channel?\n",
-                 j + 1, first_measured[static_cast<size_t>(j)]);
+      fmt::print("note: J{}'s measured {} is {:g} {} in every sample: R² and NRMSE are undefined (n/a); a dead or stuck channel?\n",
+                 j + 1, twin.measures_torque() ? "torque" : "current", first_measured[static_cast<size_t>(j)], twin.channel_unit());
   return 0;
 }
 
@@ -676,6 +696,12 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
       ->capture_default_str();
   auto* lasso_1se = sub->add_flag("--lasso-1se", o->lasso_1se, "sequential: choose lambda_1se (sparser) instead of lambda_min");
   auto* prune = sub->add_option("--prune", o->prune, "sequential: drop Lasso terms with |p_k| sd(g_k) < PRUNE sd(y)")->capture_default_str();
+  sub->add_option("--signal", o->signal,
+                  "What the twin predicts and the monitor compares: current (the motor currents actual_current_* [A], through "
+                  "identified drive gains) or joint_torque (joint torque sensors actual_joint_torque_* [N·m], as a Franka Panda or a "
+                  "Kinova Gen3 logs them: no drive gain, the sensor's own scale). physics and hybrid methods")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"current", "joint_torque"}));
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains; repeat the option for several recordings")

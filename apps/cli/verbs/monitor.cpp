@@ -169,7 +169,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   double wall_offset = std::numeric_limits<double>::quiet_NaN();
   StreamWallClock live_clock;
   if (o.rtde.empty()) {
-    map = cli::load_column_map(o.column_map);
+    map = cli::load_column_map(o.column_map, twin);
     stream = cli::scan_stream(o.recordings, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor", [&](const std::string& f) {
       if (!o.quiet && !o.json) say_checking(f);
     });
@@ -182,6 +182,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
     if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
+    if (twin.measures_torque())
+      throw InvalidArgument(fmt::format("the twin {} compares joint torque sensors (signal joint_torque), which RTDE does not stream (a UR "
+                                        "arm has none): monitor a recording of them, or a twin identified on the motor currents",
+                                        o.twin));
     cli::RtdeSourceOptions so;
     so.endpoint = o.rtde;
     so.wait_s = o.wait;
@@ -733,7 +737,7 @@ int run_thresholds(const ThresholdOptions& o) {
   ident::TwinModel twin = cli::load_twin(o.twin);
   std::vector<std::string> all = o.recordings;
   all.insert(all.end(), o.debounce_validation.begin(), o.debounce_validation.end());
-  const cli::ColumnMaps maps(o.column_maps, all);
+  const cli::ColumnMaps maps(o.column_maps, all, twin.measures_torque());
   // Each recording is checked now (a bad one fails in seconds, not after minutes of learning) and read
   // again by the learners, never held: a shift of healthy recordings at 500 Hz is 1.7 GB per robot
   // hour, which held did not fit the machine (docs/recordings.md)
@@ -798,9 +802,9 @@ int run_thresholds(const ThresholdOptions& o) {
   const bool has_slope = settings.trend.temperature_slope.size() == twin.n_dof();
   if (!o.program.empty() && (has_slope || has_default_set)) {
     if (has_slope)
-      say(!o.quiet, "temperature slope per joint {:.2e} A·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
+      say(!o.quiet, "temperature slope per joint {:.2e} {}·s/rad/°C: the twin's, which every threshold set shares (learn the default set "
                  "again, without --program, on a warm-up from cold to change it)\n",
-                 fmt::join(settings.trend.temperature_slope, " "));
+                 fmt::join(settings.trend.temperature_slope, " "), twin.channel_unit());
     else
       say(!o.quiet, "no temperature slope: the twin's default set was learned without one, and every threshold set shares it (learn the "
                  "default set again, without --program, on a warm-up from cold to learn one)\n");
@@ -811,9 +815,9 @@ int run_thresholds(const ThresholdOptions& o) {
       progress.begin("temperature slope", samples);
       settings.trend = monitor::learn_trend_temperature(twin, trend_runs, settings.trend);
       progress.end();
-      say(!o.quiet, "temperature slope of the viscous friction per joint {:.2e} A·s/rad/°C (learned on these recordings; the "
+      say(!o.quiet, "temperature slope of the viscous friction per joint {:.2e} {}·s/rad/°C (learned on these recordings; the "
                  "monitor and the wear trend compensate with it)\n",
-                 fmt::join(settings.trend.temperature_slope, " "));
+                 fmt::join(settings.trend.temperature_slope, " "), twin.channel_unit());
     } catch (const InvalidArgument& e) {
       progress.end();
       say(!o.quiet, "note: no temperature slope learned ({}){}\n", e.what(),
@@ -892,8 +896,8 @@ int run_thresholds(const ThresholdOptions& o) {
   }
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];
-    say(!o.quiet, "J{}  static {:.4f} A   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} A\n", j + 1,
-               shown.static_level[j], d.psi_qdd, d.psi_qd, d.psi_rev, d.rho, d.upsilon);
+    say(!o.quiet, "J{}  static {:.4f} {}   dynamic {:.4f}|qdd| + {:.4f}|qd| + {:.4f} exp(-{:g}|qd|) + {:.4f} {}\n", j + 1,
+               shown.static_level[j], twin.channel_unit(), d.psi_qdd, d.psi_qd, d.psi_rev, d.rho, d.upsilon, twin.channel_unit());
   }
   return 0;
 }
@@ -1028,7 +1032,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
                                       "With --record: start a new file each SECONDS of controller time (>= 1): rec.csv -> rec.000.csv, "
                                       "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered current residual| of any joint during the alert, in \"peak_residual_units\" A). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered residual| of any joint during the alert, in \"peak_residual_units\": A, or N·m for a twin of joint torque sensors). The file is replaced if it exists; the event store (--db) keeps the history across runs");
   auto* events_open = sub->add_flag("--events-open", o->events_open,
                                      "With --events, --json or --mqtt: also a line when an alert is raised and at each re-diagnosis (\"open\": true, "
                                      "\"class\" \"unknown\" until diagnosed); \"t_detected\" names the alert, and its line with \"open\": "

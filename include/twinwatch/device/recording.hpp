@@ -34,6 +34,12 @@ struct ColumnMap {
   std::map<std::string, Entry> columns;  ///< file column name -> entry
   std::string path;                      ///< the map file ("" if built in code), for error messages
   std::map<std::string, int> lines;      ///< file column name -> line of the map file
+  /// The twin compares joint torque sensors, not motor currents (ident::TwinModel::Signal::JointTorque):
+  /// the reader puts the actual_joint_torque_* group [N·m] where the monitor and the fit read the
+  /// measured channel (RobotSample::current, flagged kFieldActualCurrent), and leaves the file's own
+  /// actual_current_* columns unread. A file without actual_joint_torque_* is then refused at its
+  /// header. Set by the verbs from the twin (or identify --signal), never by a map file.
+  bool joint_torque_as_current = false;
   /// Loads "file_column,rtde_name[,scale]" lines ('#' comments). Throws ParseError with the line
   /// for a wrong number of cells, a scale that is not a finite non-zero number, an unknown RTDE
   /// name or a file column mapped twice. See docs/recordings.md.

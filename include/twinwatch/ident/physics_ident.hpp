@@ -51,6 +51,11 @@ struct IdentOptions {
   /// read the drive's direction on the controller's target velocity near standstill, measured on
   /// the recordings (estimate_target_direction; TwinModel::target_direction); false: the twin of before
   bool target_direction = true;
+  /// The recordings' measured channel is joint torque sensors (RobotSample::current holds them in
+  /// N·m: device::ColumnMap::joint_torque_as_current): no drive between the sensor and the link, so
+  /// every gain and c_gen stays 1, the torque scale is the sensors' own (gains_absolute) and the
+  /// twin's signal is TwinModel::Signal::JointTorque. Needs EfficiencyFit::Joint.
+  bool joint_torque = false;
   void validate() const;
 };
 

@@ -157,6 +157,19 @@ class TwinModel {
   Eigen::VectorXd beta;            ///< base parameters (torque units when gains_known)
   std::vector<JointDrive> joints;
   bool gains_absolute = false;     ///< true when a known payload fixed the torque scale
+  /// What the twin predicts and the monitor compares (the twin file's "signal"):
+  /// - Current: the motor currents (actual_current [A]) through the drive gains and factors above;
+  /// - JointTorque: joint torque sensors (actual_joint_torque [N·m], a Panda's or a Kinova's), read
+  ///   where the current is (device::ColumnMap::joint_torque_as_current). There is no drive between
+  ///   the sensor and the link: every gain and c_gen is 1 and gains_absolute is true (identify
+  ///   --signal joint_torque), so the "current" the twin predicts is the torque in N·m.
+  enum class Signal { Current, JointTorque };
+  Signal signal = Signal::Current;
+  bool measures_torque() const { return signal == Signal::JointTorque; }
+  /// The unit of the measured channel and of its residuals and thresholds: "A", or "N·m"
+  const char* channel_unit() const { return measures_torque() ? "N·m" : "A"; }
+  /// The recording columns of the measured channel: "actual_current", or "actual_joint_torque"
+  const char* channel_column() const { return measures_torque() ? "actual_joint_torque" : "actual_current"; }
   double temperature_ref = 35.0;        ///< [°C] reference of the temperature column
   /// [rad/s] width of the smooth motoring/back-driven switch of the current factor (0: hard switch
   /// at qd = 0); about the resolution of the measured velocity (twin_model.cpp, direction_factor)

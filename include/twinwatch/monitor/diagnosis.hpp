@@ -78,6 +78,14 @@ struct DiagnosisOptions {
   /// current. Empty (or 0 for a joint): unknown, and a joint at rest tells the contact isolation
   /// nothing.
   VectorJ static_friction;
+  /// The measured channel reads a resting joint's load as well as a moving one's: joint torque
+  /// sensors, which sit between the gear and the link, so friction holds nothing back from them
+  /// (ident::TwinModel::Signal::JointTorque). A joint at rest then weighs in the contact isolation as
+  /// a moving one does, and static_friction is not used.
+  bool rest_visible = false;
+  /// The measured channel's name and unit in what the diagnosis says ("current", "A"; "torque", "N·m")
+  std::string channel = "current";
+  std::string channel_unit = "A";
   void validate() const;
 };
 

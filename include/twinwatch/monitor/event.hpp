@@ -70,6 +70,8 @@ struct Event {
   /// the payload follow's evidence reads it)
   double explained = 0.0;
   double peak_residual = 0.0;  ///< largest |residual| seen during the alert (residual units)
+  /// the residual's units: the twin's measured channel, "A" (motor currents) or "N·m" (joint torque sensors)
+  std::string peak_residual_units = "A";
   std::string detail;       ///< human-readable one-liner, e.g. "extra friction on J5 ≈ 0.8 N·m"
   /// contacts: the joint impulse the link was chosen on (in memory only: not in the JSON line or
   /// the event store; `evaluate --link-ceiling` reads its noise)

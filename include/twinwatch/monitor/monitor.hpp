@@ -431,6 +431,8 @@ class Monitor {
   /// + payload_envelope_margin); false when payload_max is not recorded.
   bool payload_beyond_thresholds() const { return payload_beyond_; }
   const ident::TwinModel& twin() const { return twin_; }
+  /// What the measured channel is called in the events: "current", or "torque" for joint torque sensors
+  const char* channel_name() const { return twin_.measures_torque() ? "torque" : "current"; }
 
  private:
   void open_event(int joint, double start, double t, const char* channel);  // channel: what raised it, for the detail
@@ -570,6 +572,12 @@ class Monitor {
   double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
 
   ident::TwinModel twin_;
+  /// A new event, its residual in the twin's channel units (every event the monitor raises starts here)
+  Event new_event() const {
+    Event e;
+    e.peak_residual_units = twin_.channel_unit();
+    return e;
+  }
   MonitorConfig cfg_;
   int n_;
   double alpha_ = 1.0;  // IIR coefficient

@@ -23,6 +23,7 @@ struct Scenario {
   std::shared_ptr<const Trajectory> trajectory;
   std::vector<FaultSpec> faults;
   std::vector<double> current_sigma;  ///< per-joint override of the truth's noise (empty: defaults)
+  std::vector<double> joint_torque_sigma;  ///< [N·m] per-joint override of the torque sensors' noise (empty: defaults)
   std::string trajectory_type;
   /// The robot program this run is (the file's optional `program`): whose threshold set `evaluate`
   /// monitors it with, as 'monitor --program' would; empty: the trajectory type's set, if the twin

@@ -60,6 +60,10 @@ struct JointTruth {
   // measurement
   double current_sigma = 0.02;  ///< [A]
   double current_offset = 0.0;  ///< [A]
+  /// [N·m] noise of the joint's torque sensor (SimOptions::joint_torque_sensors): 0.2 % of the joint's
+  /// torque limit (UR3e 0.108 N·m on J1-J2, 0.056 on J3, 0.018 on the wrist), about the resolution
+  /// strain-gauge joint sensors of arms this size quote; an assumption, not a UR figure (UR arms have none)
+  double torque_sigma = 0.05;
 };
 
 /// The plant's hidden parameters.
@@ -204,6 +208,11 @@ struct SimOptions {
   /// target_moment), as RTDE does. False: a log without them (another robot's, a user's own logger
   /// that keeps the measured signals only); the controller still tracks its targets
   bool streams_targets = true;
+  /// the arm has joint torque sensors between each gear and its link (as a Panda or a Kinova Gen3
+  /// does; a UR does not) and the stream carries them: actual_joint_torque = the link-side torque,
+  /// tau_cmd - friction - rotor inertia x qdd = M qdd + h - tau_ext, plus JointTruth::torque_sigma
+  /// noise (drawn from a stream of its own: every other signal is the same with or without them)
+  bool joint_torque_sensors = false;
   VectorJ kp, kd;               ///< PD gains [N·m/rad], [N·m·s/rad]; empty: defaults from the inertia
   /// stops of the program (StopSpec), in time order, each resumed before the next begins
   std::vector<StopSpec> stops;
@@ -262,6 +271,9 @@ class Simulator {
   model::DynamicsData dtruth_, dctrl_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
+  std::mt19937_64 torque_rng_;  // the joint torque sensors' noise (its own stream: see SimOptions::joint_torque_sensors)
+  std::normal_distribution<double> torque_normal_{0.0, 1.0};
+  VectorJ link_torque_;  // the last physics substep's link-side torque, tau - friction - rotor inertia x qdd
   int n_;
   double t_ = 0.0, t_ctrl_ = 0.0;
   long tick_ = 0;
