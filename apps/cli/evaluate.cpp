@@ -187,7 +187,7 @@ ident::TwinModel train_reference(const std::string& robot, bool quiet, const std
   ident::IdentOptions io;
   io.joint_torque = joint_torque;
   ident::TwinModel twin = ident::identify_physics(robot, {{&exc, {}}, {&fig, p}, {&sw0, {}}, {&sw1, test_weight}}, io, report);
-  say(fmt::format("   identified drive gains {:.3g} N·m/A", fmt::join(gains_of(twin), " ")));
+  if (!joint_torque) say(fmt::format("   identified drive gains {:.3g} N·m/A", fmt::join(gains_of(twin), " ")));
   say(fmt::format("   identified: {} RMSE per joint {:.3f} {}", joint_torque ? "joint torque" : "current", fmt::join(report.rmse, " "),
                   twin.channel_unit()));
   // slow-wear trend first: the viscous friction's temperature slope on a healthy warm-up from cold
@@ -1118,7 +1118,8 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
                     "NORMAL or REDUCED): there is no twin fidelity or residual/velocity correlation to tabulate.");
   } else {
     std::vector<std::vector<std::string>> mrows(5);
-    const char* names[] = {"RMSE A", "MAE A", "R²", "NRMSE %", "d_tau %"};
+    const std::string rmse_name = fmt::format("RMSE {}", twin.channel_unit()), mae_name = fmt::format("MAE {}", twin.channel_unit());
+    const char* names[] = {rmse_name.c_str(), mae_name.c_str(), "R²", "NRMSE %", "d_tau %"};
     for (int k = 0; k < 5; ++k) mrows[static_cast<size_t>(k)].push_back(names[k]);
     std::vector<std::string> head{"metric"};
     for (int j = 0; j < n; ++j) {
@@ -1182,13 +1183,16 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
     r.add_plot(p);
   };
   const std::string green = "#859900";
-  r.add_heading("Total current (UR3e Fig. 12)");
-  plot("I_total = sum |i_j|", "A", {line("I_total", itot, "", false)}, spans);
-  r.add_heading("Measured vs predicted current, residual with threshold (UR3e Fig. 8, 10, 11)");
+  // (a joint-torque twin's channel: the sensors' torque in N·m)
+  const char* unit = twin.channel_unit();
+  const std::string channel = twin.measures_torque() ? "joint torque" : "current";
+  r.add_heading(twin.measures_torque() ? "Total joint torque (UR3e Fig. 12's I_total, from the torque sensors)" : "Total current (UR3e Fig. 12)");
+  plot(twin.measures_torque() ? "sum |tau_j|" : "I_total = sum |i_j|", unit, {line("I_total", itot, "", false)}, spans);
+  r.add_heading(fmt::format("Measured vs predicted {}, residual with threshold (UR3e Fig. 8, 10, 11)", channel));
   for (int j = 0; j < n; ++j) {
     const size_t J = static_cast<size_t>(j);
-    plot(fmt::format("J{} current", j + 1), "A", {line("measured", meas[J], "", false), line("twin", pred[J], "", true)}, spans);
-    plot(fmt::format("J{} filtered residual and threshold", j + 1), "A",
+    plot(fmt::format("J{} {}", j + 1, channel), unit, {line("measured", meas[J], "", false), line("twin", pred[J], "", true)}, spans);
+    plot(fmt::format("J{} filtered residual and threshold", j + 1), unit,
          {line("residual", res[J], "", false), line("+threshold", lev[J], green, true), line("-threshold", neg_lev[J], green, true)}, spans);
   }
   if (observer) {

@@ -68,7 +68,7 @@ TwinModel identify_learned(const std::string& robot, const std::vector<TrainingR
   VectorJ tau, i_phys;
   for (const TrainingRun& r : runs) {
     const device::Recording& rec = *r.recording;
-    const std::vector<VectorJ> qdd = joint_accelerations(rec);
+    const std::vector<VectorJ> qdd = joint_accelerations(rec, twin.acceleration_half_width(rec.median_period));
     const size_t K = rec.samples.size();
     // zero-phase smoothing of each joint's velocity [UR3e §3.5]
     std::vector<std::vector<double>> qd_s(static_cast<size_t>(n), std::vector<double>(K));

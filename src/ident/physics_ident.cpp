@@ -25,7 +25,6 @@ constexpr double kColumnActive = 1e-9;
 // (e.g. the payload column when no run carried a known payload)
 constexpr double kRidge = 1e-10;
 // half-width of the centred moving average applied to qd before differentiating [samples]
-constexpr int kSmoothHalfWidth = 3;
 
 // a joint's back-driven factor is fitted only with at least this many back-driven samples, and
 // this fraction of its samples (fewer: c_gen stays 1, the direction makes no measurable difference)
@@ -377,6 +376,9 @@ void IdentOptions::validate() const {
     throw InvalidArgument(fmt::format("direction_blend is {} rad/s, must be finite and >= 0", direction_blend));
   if (!std::isnan(velocity_lag) && !(std::abs(velocity_lag) <= TwinModel::kVelocityLagMax))
     throw InvalidArgument(fmt::format("velocity_lag is {} s, must be NaN (measure it) or within +-{:g} s", velocity_lag, TwinModel::kVelocityLagMax));
+  if (!(acceleration_window >= 0.0 && acceleration_window <= TwinModel::kAccelerationWindowMax))
+    throw InvalidArgument(fmt::format("acceleration_window is {} s, must be within 0 (the default) and {:g} s", acceleration_window,
+                                      TwinModel::kAccelerationWindowMax));
   if (joint_torque && efficiency_fit != EfficiencyFit::Joint)
     throw InvalidArgument("a joint-torque twin has no drive efficiency to fit: efficiency_fit must be the joint fit (gains and c_gen stay 1)");
 }
@@ -638,27 +640,27 @@ TargetDirectionFit estimate_target_direction(const std::vector<const device::Rec
   return fit;
 }
 
-std::vector<VectorJ> joint_accelerations(const device::Recording& rec) {
+std::vector<VectorJ> joint_accelerations(const device::Recording& rec, int half_width) {
   std::vector<VectorJ> out;
   out.reserve(rec.samples.size());
-  JointAccelerationStream stream(rec.n_dof, rec.present);
+  JointAccelerationStream stream(rec.n_dof, rec.present, half_width);
   const JointAccelerationStream::Ready keep = [&](const RobotSample&, const VectorJ& qdd) { out.push_back(qdd); };
   for (const RobotSample& s : rec.samples) stream.push(s, keep);
   stream.finish(keep);
   return out;
 }
 
-JointAccelerationStream::JointAccelerationStream(int n_dof, std::uint32_t present)
-    : n_(n_dof), target_(present & kFieldTargetQdd), has_qd_(present & kFieldActualQd) {}
+JointAccelerationStream::JointAccelerationStream(int n_dof, std::uint32_t present, int half_width)
+    : n_(n_dof), target_(present & kFieldTargetQdd), has_qd_(present & kFieldActualQd), half_(std::max(1, half_width)) {}
 
-// zero-phase: a centred moving average of qd (kSmoothHalfWidth each side, cut at the recording's
+// zero-phase: a centred moving average of qd (half_ each side, cut at the recording's
 // ends), then central differences on the time axis (one-sided at the ends)
 void JointAccelerationStream::smooth_up_to(size_t end) {
   for (; qs_end_ < end; ++qs_end_) {
     const long k = static_cast<long>(qs_end_);
     VectorJ acc = VectorJ::Zero(n_);
     int cnt = 0;
-    for (long m = k - kSmoothHalfWidth; m <= k + kSmoothHalfWidth; ++m) {
+    for (long m = k - half_; m <= k + half_; ++m) {
       if (m < 0 || m >= static_cast<long>(total_)) continue;
       acc += has_qd_ ? buf_[static_cast<size_t>(m) - base_].qd : VectorJ::Zero(n_);
       ++cnt;
@@ -675,7 +677,7 @@ void JointAccelerationStream::emit(size_t end, const Ready& ready) {
   }
   // what a later sample still needs: its own sample and the one before (the difference), and the
   // samples a later smoothing window reaches back to
-  const size_t keep_from = std::min(next_ == 0 ? 0 : next_ - 1, qs_end_ < static_cast<size_t>(kSmoothHalfWidth) ? 0 : qs_end_ - kSmoothHalfWidth);
+  const size_t keep_from = std::min(next_ == 0 ? 0 : next_ - 1, qs_end_ < static_cast<size_t>(half_) ? 0 : qs_end_ - half_);
   while (base_ < keep_from) {
     buf_.pop_front();
     qs_.pop_front();
@@ -691,7 +693,7 @@ void JointAccelerationStream::push(const RobotSample& s, const Ready& ready) {
   buf_.push_back(s);
   ++total_;
   // a sample's smoothed velocity once its window is in; its acceleration once the next one's is
-  if (total_ > static_cast<size_t>(kSmoothHalfWidth)) smooth_up_to(total_ - kSmoothHalfWidth);
+  if (total_ > static_cast<size_t>(half_)) smooth_up_to(total_ - half_);
   if (qs_end_ >= 2) emit(qs_end_ - 1, ready);
 }
 
@@ -815,7 +817,9 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     for (const int c : {int(kCoulomb), int(kViscous), nf, nf + 1}) nonneg.push_back(nb + nfx * j + c);
 
   std::vector<std::vector<VectorJ>> qdds;
-  for (const TrainingRun& r : runs) qdds.push_back(joint_accelerations(*r.recording));
+  twin.acceleration_window = o.acceleration_window;
+  for (const TrainingRun& r : runs)
+    qdds.push_back(joint_accelerations(*r.recording, twin.acceleration_half_width(median_step(*r.recording))));
   // how late the streamed velocity is: the drive's direction is read on the velocity at each
   // sample's instant, in the fit as in the prediction
   VelocityLag lag;  // (the report is reset per stage below: set at the end)

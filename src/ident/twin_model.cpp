@@ -463,6 +463,7 @@ std::string TwinModel::to_json() const {
   j["gains_absolute"] = gains_absolute;
   // (only for a joint-torque twin: a current twin's file stays what older readers load)
   if (measures_torque()) j["signal"] = "joint_torque";
+  if (acceleration_window > 0.0) j["acceleration_window"] = acceleration_window;  // (the same: only when set)
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
   if (learned) j["learned"] = nlohmann::json::parse(learned->to_json());
   if (!friction_json.empty()) j["friction_models"] = nlohmann::json::parse(friction_json);
@@ -597,7 +598,7 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
   try {
     const JsonFields top(j, origin, "");
     top.only({"format", "version", "robot", "method", "created", "recordings", "temperature_ref", "direction_blend", "velocity_lag", "target_direction",
-              "payload", "gains_absolute", "signal", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
+              "payload", "gains_absolute", "signal", "acceleration_window", "monitor", "learned", "friction_models", "base_columns", "beta", "joints", "sequential",
               "motion_envelope"});
     const std::string robot = top.text("robot");
     TwinModel t;
@@ -729,6 +730,13 @@ TwinModel TwinModel::from_json(const std::string& text, const std::string& origi
       top.fail("method", fmt::format("method \"{}\" expects {}, got {}", t.method, wants,
                                      t.learned ? (mlp ? "a \"learned\" block with role \"current\"" : "a \"learned\" block with role \"residual\"")
                                                : (t.sequential ? "a \"sequential\" block" : "neither block")));
+    // optional (since session 54; absent: 3 samples)
+    if (top.has("acceleration_window")) {
+      t.acceleration_window = top.number("acceleration_window");
+      if (!(t.acceleration_window > 0.0 && t.acceleration_window <= TwinModel::kAccelerationWindowMax))
+        top.fail("acceleration_window", fmt::format("expected a half window in (0, {:g}] s (the velocity smoothing of the acceleration), got {}",
+                                                    TwinModel::kAccelerationWindowMax, t.acceleration_window));
+    }
     // optional (since session 54; absent: the motor currents)
     if (top.has("signal")) {
       const std::string sig = top.text("signal");

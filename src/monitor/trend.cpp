@@ -376,7 +376,7 @@ TrendConfig learn_trend_temperature(const ident::TwinModel& twin, const std::vec
     // was seen, and whether it is judged looks back only)
     PayloadTimeline payload(twin, run.payload, follow_payload && (src.present() & kFieldPayload));
     const double period = src.median_period() > 0.0 ? src.median_period() : MonitorConfig{}.nominal_period;
-    ident::JointAccelerationStream accelerations(src.n_dof(), src.present());
+    ident::JointAccelerationStream accelerations(src.n_dof(), src.present(), twin.acceleration_half_width(period));
     ident::FrictionMemory memory;
     TemperatureHold hold;
     size_t k = 0;

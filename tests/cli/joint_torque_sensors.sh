@@ -51,6 +51,11 @@ echo "$hit"
 echo "$hit" | grep -q '"class":"collision".*"link":3' || { echo "FAIL: not a contact on link 3"; exit 1; }
 echo "$hit" | grep -q '"peak_residual_units":"N·m"' || { echo "FAIL: the residual is not in N·m"; exit 1; }
 
+# the report: the sensors' torque, in N·m
+"$B" report --twin "$W/twin.json" "$W/hit.csv" -o "$W/report.html" > /dev/null
+grep -q 'RMSE N·m' "$W/report.html" || { echo "FAIL: the report's table is not in N·m"; exit 1; }
+grep -q 'Measured vs predicted joint torque' "$W/report.html" || { echo "FAIL: the report's plots are not the joint torque"; exit 1; }
+
 # refusals, each naming what is wrong
 (cat "$D/short_exc.yaml") > "$W/plain.yaml"
 "$B" simulate "$W/plain.yaml" -o "$W/plain.csv" -q

@@ -150,7 +150,7 @@ int run_report(const ReportOptions& o) {
                  o.recordings.front(), own.string(), labels->scenario);
   }
   const model::RigidBodyInertia payload = cli::payload_for(twin, o.twin, o.payload_mass, o.payload_com);
-  const auto map = cli::load_column_map(o.column_map);
+  const auto map = cli::load_column_map(o.column_map, twin);
   // (what monitor applies over the twin's block, in its order: the filter, then the alert settings)
   const auto adjust = [&](monitor::MonitorConfig& cfg) {
     if (o.static_threshold) cfg.use_dynamic = false;

@@ -82,6 +82,7 @@ struct IdentifyOptions {
   std::vector<std::string> recordings, payloads, column_maps;
   std::string output, robot = "ur3e", method = "physics";
   std::string signal = "current";  // current | joint_torque: what the twin predicts and the monitor compares
+  double acceleration_window = 0.0;  // [s] half window of the velocity smoothing (0: 3 samples)
   double reversal_screen = 0.0;
   bool no_low_speed_friction = false;
   bool no_target_direction = false;
@@ -129,6 +130,7 @@ ident::LearnedIdentOptions learned_options(const IdentifyOptions& o) {
   lo.physics.target_direction = !o.no_target_direction;
   lo.physics.efficiency_passes = o.efficiency_passes;
   lo.physics.joint_torque = o.signal == "joint_torque";
+  lo.physics.acceleration_window = o.acceleration_window;
   lo.decimate = std::max(lo.decimate, o.decimate);
   lo.validate();
   return lo;
@@ -285,6 +287,7 @@ int run_identify(const IdentifyOptions& o) {
   io.target_direction = !o.no_target_direction;
   io.efficiency_passes = o.efficiency_passes;
   io.joint_torque = torque;
+  io.acceleration_window = o.acceleration_window;
   if (torque && io.efficiency_fit != ident::EfficiencyFit::Joint)
     throw InvalidArgument("--signal joint_torque has no drive efficiency to fit: --efficiency-fit alternating does not apply");
   ident::IdentReport report;
@@ -581,7 +584,7 @@ int run_validate(const ValidateOptions& o) {
     fmt::format_to(w, "\n");
     predictions->write(line.data(), static_cast<std::streamsize>(line.size()));
   };
-  ident::JointAccelerationStream accelerations(n, scan.present);
+  ident::JointAccelerationStream accelerations(n, scan.present, twin.acceleration_half_width(scan.timing.median_period));
   device::RecordingReader again(o.recording, map ? &*map : nullptr);
   const long replayed = device::replay_rows(again, scan, [&](const RobotSample& s) { accelerations.push(s, predict); });
   accelerations.finish(predict);
@@ -702,6 +705,12 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "Kinova Gen3 logs them: no drive gain, the sensor's own scale). physics and hybrid methods")
       ->capture_default_str()
       ->check(CLI::IsMember({"current", "joint_torque"}));
+  sub->add_option("--acceleration-window", o->acceleration_window,
+                  "physics/mlp/hybrid: half window [s] of the velocity smoothing that recordings without target_qdd take their "
+                  "joint acceleration from, kept in the twin for validate (default 0: 3 samples, 6 ms at 500 Hz). A 1 kHz log of a "
+                  "noisy velocity (a Franka Panda's dq) wants ~0.015: differenced over 3 ms its noise biases the inertia the fit finds")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, ident::TwinModel::kAccelerationWindowMax));
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains; repeat the option for several recordings")

@@ -51,6 +51,11 @@ struct IdentOptions {
   /// read the drive's direction on the controller's target velocity near standstill, measured on
   /// the recordings (estimate_target_direction; TwinModel::target_direction); false: the twin of before
   bool target_direction = true;
+  /// [s] TwinModel::acceleration_window: the half window of the velocity smoothing the acceleration of
+  /// a recording without target_qdd is differenced from (0: kAccelerationHalfWidth samples). A 1 kHz
+  /// log of a noisy velocity (a Panda's dq) needs ~15 ms: differenced over 3 ms its noise enters the
+  /// inertial columns of the fit and biases them towards 0 (errors in the variables)
+  double acceleration_window = 0.0;
   /// The recordings' measured channel is joint torque sensors (RobotSample::current holds them in
   /// N·m: device::ColumnMap::joint_torque_as_current): no drive between the sensor and the link, so
   /// every gain and c_gen stays 1, the torque scale is the sensors' own (gains_absolute) and the
@@ -120,9 +125,12 @@ struct IdentReport {
   std::vector<std::string> notes;
 };
 
+/// Half width [samples] of the velocity smoothing in joint_accelerations by default: 3 (6 ms at 500 Hz)
+inline constexpr int kAccelerationHalfWidth = 3;
 /// Joint accelerations of a recording: target_qdd when recorded, else a zero-phase smoothed
-/// central difference of actual_qd. Returns one vector per sample.
-std::vector<VectorJ> joint_accelerations(const device::Recording& rec);
+/// central difference of actual_qd (a centred mean over +-half_width samples, then central
+/// differences). Returns one vector per sample.
+std::vector<VectorJ> joint_accelerations(const device::Recording& rec, int half_width = kAccelerationHalfWidth);
 
 /// joint_accelerations a sample at a time, for a recording read row by row (validate): the same
 /// values, each handed over with its sample, in order, once known: at once with target_qdd, else when
@@ -131,8 +139,8 @@ std::vector<VectorJ> joint_accelerations(const device::Recording& rec);
 class JointAccelerationStream {
  public:
   using Ready = std::function<void(const RobotSample&, const VectorJ&)>;
-  /// `present`: the recording's fields (SampleField flags)
-  JointAccelerationStream(int n_dof, std::uint32_t present);
+  /// `present`: the recording's fields (SampleField flags); `half_width`: as joint_accelerations'
+  JointAccelerationStream(int n_dof, std::uint32_t present, int half_width = kAccelerationHalfWidth);
   void push(const RobotSample& s, const Ready& ready);
   /// the end of the recording: the samples still waiting for what came after them
   void finish(const Ready& ready);
@@ -142,6 +150,7 @@ class JointAccelerationStream {
   void emit(size_t end, const Ready& ready);  // accelerations of samples [next_, end)
   int n_;
   bool target_, has_qd_;
+  int half_;                // the smoothing's half width [samples]
   size_t total_ = 0;        // samples pushed
   size_t base_ = 0;         // global index of buf_.front() and qs_.front()
   size_t qs_end_ = 0;       // smoothed velocities known for [0, qs_end_)

@@ -16,6 +16,7 @@
 /// common scale of beta and g is arbitrary (fixed so that prod g_j = 1) and only currents are
 /// meaningful (gains_known() is false).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -166,6 +167,16 @@ class TwinModel {
   enum class Signal { Current, JointTorque };
   Signal signal = Signal::Current;
   bool measures_torque() const { return signal == Signal::JointTorque; }
+  /// [s] half window of the velocity smoothing the acceleration of a stream without target_qdd is
+  /// differenced from, in identification and validation (ident::joint_accelerations; identify
+  /// --acceleration-window); 0: the default 3 samples. The twin file's "acceleration_window"
+  double acceleration_window = 0.0;
+  static constexpr double kAccelerationWindowMax = 0.1;
+  /// That half window in samples of `period` [s] (3 when 0 or the period is unknown), at least 1
+  int acceleration_half_width(double period) const {
+    if (!(acceleration_window > 0.0) || !(period > 0.0)) return 3;
+    return std::max(1, static_cast<int>(std::lround(acceleration_window / period)));
+  }
   /// The unit of the measured channel and of its residuals and thresholds: "A", or "N·m"
   const char* channel_unit() const { return measures_torque() ? "N·m" : "A"; }
   /// The recording columns of the measured channel: "actual_current", or "actual_joint_torque"
