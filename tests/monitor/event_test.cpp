@@ -127,6 +127,7 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
     e.other_links.clear();
     e.active_at_stop = true;
     e.wall_offset = 1796324562.0 - 7.25;  // a live robot's: Unix time − controller time
+    e.peak_residual_units = "N·m";  // (a twin of joint torque sensors)
     store.insert(e, "robot 10.0.0.2");
     EXPECT_EQ(store.count(), 2);
   }
@@ -148,6 +149,8 @@ TEST(EventStore, PersistsEventsAcrossReopen) {
   EXPECT_TRUE(rows[1].event.other_links.empty());
   EXPECT_FALSE(rows[0].event.active_at_stop);
   EXPECT_TRUE(rows[1].event.active_at_stop);
+  EXPECT_EQ(rows[0].event.peak_residual_units, "A");
+  EXPECT_EQ(rows[1].event.peak_residual_units, "N·m");
   // the wall clock where it was known, and the start's wall time for a reader of the table
   EXPECT_TRUE(std::isnan(rows[0].event.wall_offset));
   EXPECT_DOUBLE_EQ(rows[1].event.wall_offset, 1796324562.0 - 7.25);
@@ -341,6 +344,7 @@ TEST(EventStore, AnOlderTableGainsTheOtherLinksColumnAndKeepsItsRows) {
     EXPECT_EQ(rows[0].source, "old.csv");
     EXPECT_EQ(rows[0].event.link, 2);
     EXPECT_TRUE(rows[0].event.other_links.empty());
+    EXPECT_EQ(rows[0].event.peak_residual_units, "A");  // (the column added, its old rows NULL: the currents')
     EXPECT_EQ(rows[1].event.other_links, std::vector<int>{4});
   }
   {
