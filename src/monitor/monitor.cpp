@@ -222,10 +222,14 @@ std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
 // The reference is valid while `s` is.
 class MonitorAcceleration {
  public:
-  MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period)
-      : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)) {}
+  /// `window`: samples per mean of the twin's windowed estimate (WindowedAcceleration; 0: the filtered difference)
+  MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period, int window = 0)
+      : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)) {
+    if (window > 0 && !target_) windowed_.emplace(n, window, window * gap_period);
+  }
   const VectorJ& push(const RobotSample& s) {
     if (target_) return s.target_qdd;  // (as ident::joint_accelerations takes it)
+    if (windowed_) return windowed_->push(s.timestamp, s.qd);  // (as Monitor::judge: its own restart)
     if (started_) {
       const double dt = s.timestamp - previous_t_;
       if (dt > 0.0 && dt <= gap_period_ && !s.gap_before) qdd_ += alpha_ * ((s.qd - previous_qd_) / dt - qdd_);
@@ -239,6 +243,7 @@ class MonitorAcceleration {
  private:
   bool target_;
   double alpha_, gap_period_;
+  std::optional<WindowedAcceleration> windowed_;
   VectorJ qdd_, previous_qd_;
   double previous_t_ = 0.0;
   bool started_ = false;
@@ -796,7 +801,8 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     ident::TwinModel t = twin;
     payload.start(t);
     const double alpha = iir_alpha(c.filter_cutoff_hz, period_of(src));
-    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src));
+    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src),
+                                      twin.acceleration_window > 0.0 ? twin.acceleration_half_width(period_of(src)) + 1 : 0);
     LearnedResidual residual(t, c, alpha);
     // the momentum observer, sample by sample exactly as the monitor runs it (its samples have their
     // own qd, qdd: it is judged from later after a payload change)
@@ -962,6 +968,13 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   }
   if (cfg_.sensitivity.size() == 0) cfg_.sensitivity = VectorJ::Ones(n_);
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
+  // a twin with an acceleration window (a noisy velocity): the windowed estimate where the stream has
+  // no target acceleration, over as many samples as the identification's half window
+  windowed_.reset();
+  if (twin_.acceleration_window > 0.0) {
+    const int w = twin_.acceleration_half_width(cfg_.nominal_period) + 1;
+    windowed_.emplace(n_, w, w * gap_factor_ * cfg_.nominal_period);
+  }
   // reversals under more load than the thresholds were learned with (widen_for_load)
   load_band_cur_ = load_band_obs_ = VectorJ::Zero(n_);
   reversal_width_ = reversal_width(twin_);
@@ -2351,6 +2364,8 @@ void Monitor::judge(const RobotSample& s) {
   // acceleration: the controller's target when streamed, else a filtered difference of qd
   if (s.has(kFieldTargetQdd)) {
     qdd_ = s.target_qdd;
+  } else if (windowed_) {
+    qdd_ = windowed_->push(t, s.qd);  // (a gap restarts it only beyond its own span: it reads the samples' times)
   } else if (have_prev_ && !restart) {  // (not across a gap or skipped samples)
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }

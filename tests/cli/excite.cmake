@@ -25,6 +25,11 @@ if(EXISTS ${panda})
   add_test(NAME cli.identify_torque_panda COMMAND twinwatch identify-torque ${panda} --robot panda
            --column-map franka_panda_gaz2019 --segment 0:0.65 -o ${d}/panda.json)
   set_tests_properties(cli.identify_torque_panda PROPERTIES PASS_REGULAR_EXPRESSION "J7 ")
+  # watched by its joint torque sensors: a twin of them, the monitor on the held-out part (session 54)
+  add_test(NAME cli.panda_joint_torque_twin
+    COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/panda_joint_torque.sh $<TARGET_FILE:twinwatch> ${panda}
+            ${PROJECT_SOURCE_DIR}/data/column_maps/franka_panda_gaz2019.csv ${PROJECT_BINARY_DIR}/cli-panda-torque ${PROJECT_SOURCE_DIR})
+  set_tests_properties(cli.panda_joint_torque_twin PROPERTIES PASS_REGULAR_EXPRESSION "PANDA-JOINT-TORQUE-OK" TIMEOUT 120)
 endif()
 add_test(NAME cli.validate_torque_bad_table COMMAND twinwatch validate-torque ${d}/exc.csv --model ${d}/rb.json --published ur3e
          --friction-table ${PROJECT_SOURCE_DIR}/tests/data/cli/bad_friction_table.csv)

@@ -707,8 +707,10 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
       ->check(CLI::IsMember({"current", "joint_torque"}));
   sub->add_option("--acceleration-window", o->acceleration_window,
                   "physics/mlp/hybrid: half window [s] of the velocity smoothing that recordings without target_qdd take their "
-                  "joint acceleration from, kept in the twin for validate (default 0: 3 samples, 6 ms at 500 Hz). A 1 kHz log of a "
-                  "noisy velocity (a Franka Panda's dq) wants ~0.015: differenced over 3 ms its noise biases the inertia the fit finds")
+                  "joint acceleration from, kept in the twin: validate uses it, and the monitor and thresholds take the difference "
+                  "of two means of as many velocities (default 0: 3 samples, 6 ms at 500 Hz, and the monitor's filtered difference). "
+                  "A 1 kHz log of a noisy velocity (a Franka Panda's dq) wants ~0.025: differenced over 3 ms its noise biases the "
+                  "inertia the fit finds, and widens the thresholds")
       ->capture_default_str()
       ->check(CLI::Range(0.0, ident::TwinModel::kAccelerationWindowMax));
   sub->add_option("--known-payload", o->payloads,

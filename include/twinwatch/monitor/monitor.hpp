@@ -21,6 +21,7 @@
 #include "twinwatch/device/recording.hpp"
 #include "twinwatch/ident/twin_model.hpp"
 #include "twinwatch/model/robot_model.hpp"
+#include "twinwatch/monitor/acceleration.hpp"
 #include "twinwatch/monitor/debounce.hpp"
 #include "twinwatch/monitor/diagnosis.hpp"
 #include "twinwatch/monitor/event.hpp"
@@ -595,6 +596,7 @@ class Monitor {
   RestBaseline rest_rf_, rest_obs_;  // held-at-rest baselines of the two residuals (decision only)
   VectorJ rf_dec_, obs_dec_;         // the residuals the decision compares with the thresholds
   VectorJ i_hat_, tau_hat_, r_, rf_, level_, qdd_, qd_prev_, frozen_val_;
+  std::optional<WindowedAcceleration> windowed_;  // the twin's windowed acceleration (a stream without target_qdd)
   ident::FrictionMemory memory_;  // the twin's pre-sliding state on this stream
   std::vector<int> frozen_run_;
   std::vector<int> frozen_event_;  // per joint: index of its open frozen-channel event (-1: none)

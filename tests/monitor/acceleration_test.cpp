@@ -1,0 +1,69 @@
+// The monitor's acceleration of a stream with a noisy velocity and no target_qdd (a twin with an
+// acceleration window): exact on a velocity whose acceleration changes linearly, and its noise.
+#include "twinwatch/monitor/acceleration.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace twinwatch::monitor {
+namespace {
+
+TEST(WindowedAcceleration, IsExactWhereTheAccelerationChangesLinearlyAndRestartsAtAGap) {
+  WindowedAcceleration a(2, 10, 0.05);
+  // qd = 0.3 + 2 t + 1.5 t^2 (qdd = 2 + 3 t) on a jittering 1 kHz clock
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> jitter(-0.0001, 0.0001);
+  double t = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    t = 0.001 * k + jitter(rng);
+    VectorJ qd(2);
+    qd << 0.3 + 2 * t + 1.5 * t * t, -1.0;
+    const VectorJ& qdd = a.push(t, qd);
+    if (k >= 19) {  // (held until both means of 10 are whole)
+      // the difference of the two means over their mean times: exact for a linear velocity, and for
+      // a quadratic one the acceleration at the midpoint of the two means' times (10 samples back)
+      const double tm = t - 0.0095;
+      EXPECT_NEAR(qdd[0], 2 + 3 * tm, 2e-3) << k;
+      EXPECT_NEAR(qdd[1], 0.0, 1e-9) << k;
+    } else {
+      EXPECT_EQ(qdd[0], 0.0) << k;
+    }
+  }
+  // a step within its span (a logger's lost samples) goes on; a longer one restarts it, and the
+  // estimate is held until 20 samples came again
+  const double before = a.value()[0];
+  VectorJ qd(2);
+  qd << 0.3 + 2 * (t + 0.004) + 1.5 * (t + 0.004) * (t + 0.004), -1.0;
+  EXPECT_NEAR(a.push(t + 0.004, qd)[0], 2 + 3 * (t + 0.004 - 0.0095), 0.05);
+  t += 0.004;
+  const double held = a.value()[0];
+  EXPECT_NE(held, before);
+  for (int k = 0; k < 19; ++k) EXPECT_EQ(a.push(t + 1.0 + 0.001 * k, qd)[0], held) << k;
+  EXPECT_NEAR(a.push(t + 1.019, qd)[0], 0.0, 1e-9);
+}
+
+TEST(WindowedAcceleration, TakesTheVelocitysNoiseOutAsTheWindowGrows) {
+  std::mt19937 rng(2);
+  std::normal_distribution<double> g(0.0, 0.01);
+  auto rms = [&](int w) {
+    WindowedAcceleration a(1, w, 0.05);
+    double e2 = 0.0;
+    int m = 0;
+    for (int k = 0; k < 5000; ++k) {
+      VectorJ qd(1);
+      qd << g(rng);
+      const double v = a.push(0.001 * k, qd)[0];
+      if (k >= 2 * w) e2 += v * v, ++m;  // (the mean difference's noise: sqrt(2 / w) 0.01 / (w 0.001))
+    }
+    return std::sqrt(e2 / m);
+  };
+  // the one-step difference: sqrt(2) 0.01 / 0.001 = 14 rad/s^2
+  const double w5 = rms(5), w25 = rms(25);
+  EXPECT_NEAR(w5, std::sqrt(2.0 / 5) * 0.01 / 0.005, 0.2);
+  EXPECT_NEAR(w25, std::sqrt(2.0 / 25) * 0.01 / 0.025, 0.02);
+}
+
+}  // namespace
+}  // namespace twinwatch::monitor
