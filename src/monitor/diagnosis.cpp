@@ -751,7 +751,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     }
     if (best >= options.frozen_samples)
       out.push_back({FaultClass::SensorFault, j, -1, static_cast<double>(best), "samples", 1.0,
-                     fmt::format("current channel of J{} frozen for {} samples while the joint moves", j + 1, best), {}, {}});
+                     fmt::format("{} channel of J{} frozen for {} samples while the joint moves", options.channel, j + 1, best), {}, {}});
   }
   if (!out.empty()) return out;
 

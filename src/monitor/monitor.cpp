@@ -2530,8 +2530,9 @@ void Monitor::judge(const RobotSample& s) {
     const auto raise_start = [&] {
       return dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
     };
-    const auto raised_by = [&] {
-      return dc.active() && dob.active() ? "current residual and momentum observer" : dc.active() ? "current residual" : "momentum observer";
+    const auto raised_by = [&]() -> std::string {
+      const std::string residual = fmt::format("{} residual", channel_name());  // (a joint-torque twin's: "torque residual")
+      return dc.active() && dob.active() ? residual + " and momentum observer" : dc.active() ? residual : std::string("momentum observer");
     };
     joint_active_[static_cast<size_t>(j)] = active;
     if (raised && open_ >= 0 && background_ < 0 && diagnosed_ && j != events_[static_cast<size_t>(open_)].joint &&
@@ -2544,7 +2545,7 @@ void Monitor::judge(const RobotSample& s) {
       background_rediagnosed_ = rediagnosed_;
       background_raise_time_ = raise_time_;
       background_last_over_ = last_over_;
-      open_event(j, raise_start(), t, raised_by());
+      open_event(j, raise_start(), t, raised_by().c_str());
       last_over_ = t;
     } else if (raised && open_ < 0) {
       // a persistent fault dips below the threshold at velocity reversals: a raise shortly after
@@ -2566,7 +2567,7 @@ void Monitor::judge(const RobotSample& s) {
         } else {
           report_pending_close();
         }
-        open_event(j, raise_start(), t, raised_by());
+        open_event(j, raise_start(), t, raised_by().c_str());
       }
     }
     if (background_ >= 0 && j == background_joint_) {

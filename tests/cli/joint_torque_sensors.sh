@@ -51,6 +51,11 @@ echo "$hit"
 echo "$hit" | grep -q '"class":"collision".*"link":3' || { echo "FAIL: not a contact on link 3"; exit 1; }
 echo "$hit" | grep -q '"peak_residual_units":"N·m"' || { echo "FAIL: the residual is not in N·m"; exit 1; }
 
+# what the monitor prints names the torque, not a current
+"$B" monitor --twin "$W/twin.json" "$W/hit.csv" --db '' > "$W/hit.txt" 2>&1
+grep -q 'torque residual above threshold' "$W/hit.txt" || { echo "FAIL: the alert does not name the torque residual"; cat "$W/hit.txt"; exit 1; }
+if grep -qi 'current' "$W/hit.txt"; then echo "FAIL: the monitor speaks of a current"; cat "$W/hit.txt"; exit 1; fi
+
 # the report: the sensors' torque, in N·m
 "$B" report --twin "$W/twin.json" "$W/hit.csv" -o "$W/report.html" > /dev/null
 grep -q 'RMSE N·m' "$W/report.html" || { echo "FAIL: the report's table is not in N·m"; exit 1; }
