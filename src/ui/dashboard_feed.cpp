@@ -181,7 +181,8 @@ std::string DashboardFeed::json_since(std::uint64_t since) const {
   out["whole"] = since == 0;  // everything kept: the page replaces what it holds
   out["reset"] = reset;
   out["setup"] = {{"title", setup_.title},   {"source", setup_.source},     {"n_dof", n},
-                  {"window_s", setup_.window_s}, {"points_per_s", setup_.points_per_s}, {"live", setup_.live}};
+                  {"window_s", setup_.window_s}, {"points_per_s", setup_.points_per_s}, {"live", setup_.live},
+                  {"channel", setup_.channel},   {"channel_unit", setup_.channel_unit}};
   out["status"] = {{"state", state}, {"counters", json::parse(counters, nullptr, false)}};
   if (out["status"]["counters"].is_discarded()) out["status"]["counters"] = json::object();
   // the points column-wise (a number array per signal and joint)

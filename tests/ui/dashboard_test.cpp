@@ -240,6 +240,10 @@ TEST(DashboardServer, ServesThePageAndTheStateAndSaysWhatIsWrongWithARequest) {
   EXPECT_THAT(state, testing::HasSubstr("Content-Type: application/json"));
   const json d = json::parse(body_of(state));
   EXPECT_EQ(d["setup"]["n_dof"], 2);
+  // the twin's channel, which the page's labels take (a twin of joint torque sensors: "joint torque", N·m)
+  EXPECT_EQ(d["setup"]["channel"], "current");
+  EXPECT_EQ(d["setup"]["channel_unit"], "A");
+  EXPECT_THAT(dashboard_page(), testing::HasSubstr("st.channel_unit"));
   EXPECT_EQ(d["events"][0]["detail"], "contact on link 3");
   EXPECT_EQ(d["points"]["t"].size(), 100u);
   EXPECT_EQ(d["cursor"].get<std::uint64_t>(), feed.cursor());

@@ -53,8 +53,11 @@ bool loopback(const std::string& host) { return host == "localhost" || host.rfin
 
 int run_serve(const cli::MonitorOptions& mo, const ServeOptions& so) {
   const auto [host, port] = split_listen(so.listen);
-  const int n_dof = cli::load_twin(mo.twin).n_dof();
+  const ident::TwinModel twin = cli::load_twin(mo.twin);
+  const int n_dof = twin.n_dof();
   ui::DashboardSetup setup;
+  setup.channel = twin.measures_torque() ? "joint torque" : "current";
+  setup.channel_unit = twin.channel_unit();
   setup.title = mo.twin;
   setup.source = mo.rtde.empty() ? fmt::format("{}", fmt::join(mo.recordings, " ")) : "rtde://" + mo.rtde;
   setup.n_dof = n_dof;

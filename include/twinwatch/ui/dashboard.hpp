@@ -25,6 +25,10 @@ struct DashboardSetup {
   double window_s = 120.0;     ///< [s] of signals kept (and drawn); > 0
   double points_per_s = 50.0;  ///< display rate [1/s]; > 0
   bool live = false;           ///< a robot, not a recording replayed
+  /// the twin's measured channel, as the page labels it: "current" [A], or "joint torque" [N·m] (a
+  /// twin of joint torque sensors, whose signals below are then torques)
+  std::string channel = "current";
+  std::string channel_unit = "A";
 
   /// Throws InvalidArgument naming the first field out of range.
   void validate() const;
