@@ -61,6 +61,12 @@ if grep -qi 'current' "$W/hit.txt"; then echo "FAIL: the monitor speaks of a cur
 grep -q 'RMSE N·m' "$W/report.html" || { echo "FAIL: the report's table is not in N·m"; exit 1; }
 grep -q 'Measured vs predicted joint torque' "$W/report.html" || { echo "FAIL: the report's plots are not the joint torque"; exit 1; }
 
+# the hybrid method on the sensors: the network corrects the torque, in N·m
+"$B" identify "$W/exc.csv" "$W/fig.csv" --known-payload "$W/fig.csv=0.5,0,0,0.04" --signal joint_torque --method hybrid \
+  -o "$W/hybrid.json" > "$W/hybrid.txt" 2>&1
+grep -q 'held-out RMSE N·m' "$W/hybrid.txt" || { echo "FAIL: the hybrid's held-out RMSE is not in N·m"; cat "$W/hybrid.txt"; exit 1; }
+grep -q '"signal": *"joint_torque"' "$W/hybrid.json" || { echo "FAIL: the hybrid twin does not say its signal"; exit 1; }
+
 # refusals, each naming what is wrong
 (cat "$D/short_exc.yaml") > "$W/plain.yaml"
 "$B" simulate "$W/plain.yaml" -o "$W/plain.csv" -q

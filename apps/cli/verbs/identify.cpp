@@ -370,7 +370,7 @@ int run_identify(const IdentifyOptions& o) {
                  "loss (z units) fit {:.4g} held-out {:.4g}\n",
                  twin.learned->inputs.to_string(), mo.n_inputs(), fmt::join(mo.hidden(), "-"), mo.l2, mo.seed,
                  ident::to_string(lr.fit.stop), lr.fit.evaluations, lr.fit.best_evaluation, lr.fit.train_loss, lr.fit.validation_loss);
-      fmt::print("held-out RMSE A: {:.4f}\n", fmt::join(lr.validation_rmse, " "));
+      fmt::print("held-out RMSE {}: {:.4f}\n", twin.channel_unit(), fmt::join(lr.validation_rmse, " "));
     }
   }
   return 0;
