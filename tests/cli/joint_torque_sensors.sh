@@ -53,6 +53,8 @@ echo "$hit" | grep -q '"peak_residual_units":"N·m"' || { echo "FAIL: the residu
 
 # what the monitor prints names the torque, not a current
 "$B" monitor --twin "$W/twin.json" "$W/hit.csv" --db '' > "$W/hit.txt" 2>&1
+"$B" monitor --twin "$W/twin.json" "$W/hit.csv" --db '' -q --trace "$W/trace.csv"
+head -1 "$W/trace.csv" | grep -q '^timestamp,residual_1_Nm,threshold_1_Nm,observer_1_Nm' || { echo "FAIL: the trace's columns"; head -1 "$W/trace.csv"; exit 1; }
 grep -q 'torque residual above threshold' "$W/hit.txt" || { echo "FAIL: the alert does not name the torque residual"; cat "$W/hit.txt"; exit 1; }
 if grep -qi 'current' "$W/hit.txt"; then echo "FAIL: the monitor speaks of a current"; cat "$W/hit.txt"; exit 1; fi
 

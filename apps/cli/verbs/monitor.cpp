@@ -405,8 +405,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     trace.open(o.trace);
     if (!trace) throw PathError(o.trace + ": cannot open for writing");
     trace << "timestamp";
+    // (the residual's unit in the names: A, or Nm for a twin of joint torque sensors)
+    const char* u = twin.measures_torque() ? "Nm" : "A";
     for (int j = 1; j <= twin.n_dof(); ++j)
-      trace << fmt::format(",residual_{0}_A,threshold_{0}_A,observer_{0}_Nm,observer_threshold_{0}_Nm", j);
+      trace << fmt::format(",residual_{0}_{1},threshold_{0}_{1},observer_{0}_Nm,observer_threshold_{0}_Nm", j, u);
     trace << '\n';
   }
   // the RTDE stream's counters for a status line ("" for a recording)
@@ -1072,7 +1074,8 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
   sub->add_flag("--json", o->json, "Print closed events as JSON lines only (the --events format)");
   sub->add_option("--trace", o->trace,
                   "Write every sample's filtered current residual, threshold, momentum-observer residual and observer threshold "
-                  "per joint to this CSV (to see why an alert was raised or late)");
+                  "per joint to this CSV (to see why an alert was raised or late; columns residual_J_A, or residual_J_Nm for a twin "
+                  "of joint torque sensors)");
   sub->add_flag("-q,--quiet", o->quiet, "Print nothing (no alerts, notes or summary) but the JSON lines that --json asks for");
   sub->add_option("--fail-on", o->fail_on,
                   fmt::format("Exit with status {} when the run found an event of these classes (comma-separated: collision, resistance, "
