@@ -367,6 +367,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                               double max_duration, bool quiet, const std::string& trend_csv,
                               double link_ceiling) {
   Evaluation ev;
+  ev.channel = twin.measures_torque() ? "torque" : "current";
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (static_threshold) cfg.use_dynamic = false;
   if (cfg.sensitivity.size() == 0) ev.sensitivity.assign(static_cast<size_t>(twin.n_dof()), 1.0);
@@ -885,9 +886,9 @@ void print_evaluation(const Evaluation& e) {
       cut = fmt::format("per joint, --sensitivity below {:.4f}", fmt::join(per, " "));
     }
     fmt::print("false-alarm margin on the {} healthy run(s) ({:.2f} h): the largest |residual| / threshold a whole debounce run "
-               "exceeded (>= 1: an alarm)\n  current   {}\n  observer  {}\n  largest "
+               "exceeded (>= 1: an alarm)\n  {:<9} {}\n  observer  {}\n  largest "
                "{:.4f}: {}\n",
-               e.healthy_runs, e.healthy_hours, fmt_row(e.margin_current), fmt_row(e.margin_observer), worst,
+               e.healthy_runs, e.healthy_hours, e.channel, fmt_row(e.margin_current), fmt_row(e.margin_observer), worst,
                worst < 1.0 ? fmt::format("thresholds tightened by more than {:.1f} % from those in use ({}) raise the first alarm",
                                          100.0 * (1.0 - worst), cut)
                            : e.false_alarms == 0

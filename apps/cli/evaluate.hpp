@@ -88,6 +88,7 @@ struct Evaluation {
   int healthy_runs = 0;
   double healthy_hours = 0.0;
   std::vector<double> margin_current, margin_observer;
+  std::string channel = "current";  ///< the twin's residual, as the margin row names it ("torque": joint torque sensors)
   /// the sensitivity per joint the margins were measured at (the twin's, or evaluate --sensitivity)
   std::vector<double> sensitivity;
   double false_alarms_per_hour() const { return monitored_hours > 0 ? false_alarms / monitored_hours : 0.0; }

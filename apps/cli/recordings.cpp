@@ -275,11 +275,15 @@ void UnitsCheck::finish() {
       const double lim = static_cast<int>(j) < robot_.n_dof() && std::isfinite(robot_.joint(static_cast<int>(j)).limits.torque_max)
                              ? 2.0 * robot_.joint(static_cast<int>(j)).limits.torque_max
                              : kTrainingCurrentMax;
+      const bool limited = lim != kTrainingCurrentMax;
       if (*at > lim)
-        throw InvalidArgument(fmt::format("{}: J{}'s joint torque is above {:.4g} N·m in 1 % of the samples, more than twice the {}'s "
-                                          "limit ({:g} N·m): are the torques in N·mm? Scale them with a column map "
-                                          "('COLUMN,actual_joint_torque_{},0.001', docs/recordings.md)",
-                                          path_, j + 1, *at, robot_.name(), lim, j));
+        throw InvalidArgument(fmt::format("{}: J{}'s joint torque is above {:.4g} N·m in 1 % of the samples, more than {}: are the "
+                                          "torques in N·mm? Scale them with a column map ('COLUMN,actual_joint_torque_{},0.001', "
+                                          "docs/recordings.md)",
+                                          path_, j + 1, *at,
+                                          limited ? fmt::format("twice the {}'s limit ({:g} N·m)", robot_.name(), lim / 2.0)
+                                                  : fmt::format("the {:g} N·m twinwatch takes where the description gives no limit", lim),
+                                          j));
       continue;
     }
     if (*at > kUnitsCurrentMax)

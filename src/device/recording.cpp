@@ -291,9 +291,12 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
   for (size_t g = 1; g < std::size(kGroups); ++g) {
     const bool all = std::all_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
     const bool any = std::any_of(seen[g].begin(), seen[g].end(), [](bool b) { return b; });
-    if (any && !all)
-      throw ParseError(path, 1, std::string(kGroups[g].prefix) + "*",
-                       fmt::format("some joints' columns are missing (expected {}0..{}{})", kGroups[g].prefix, kGroups[g].prefix, n - 1));
+    if (any && !all) {
+      // (a joint-torque twin's channel is read from the sensors' columns: they are the ones missing)
+      const std::string prefix = map && map->joint_torque_as_current && kGroups[g].flag == kFieldActualCurrent ? "actual_joint_torque_"
+                                                                                                                : kGroups[g].prefix;
+      throw ParseError(path, 1, prefix + "*", fmt::format("some joints' columns are missing (expected {}0..{}{})", prefix, prefix, n - 1));
+    }
     if (all) present_ |= kGroups[g].flag;
   }
   if (do_col >= 0) present_ |= kFieldDigitalOutputs;

@@ -1212,12 +1212,19 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     if (!report.c_gen_identified[static_cast<size_t>(j)] && report.generating_fraction[static_cast<size_t>(j)] < kMinGeneratingFraction)
       report.notes.push_back(fmt::format("J{}: {:.1f} % of the samples back-driven, too few to fit c_gen (kept at {:.3f})", j + 1,
                                          100.0 * report.generating_fraction[static_cast<size_t>(j)], twin.joints[static_cast<size_t>(j)].c_gen));
+  std::vector<std::string> held_at_zero;  // (a joint-torque twin's, said in one note)
   for (int i : held) {
     const int j = (i - nb) / nfx, c = (i - nb) % nfx;
     // a low-speed level held at 0 is no term: its shape goes too (the note below says why)
     JointDrive& jd = twin.joints[static_cast<size_t>(j)];
     if (c == nf) jd.presliding_alpha = 0.0;
     if (c == nf + 1) jd.stribeck_velocity = 0.0;
+    if (o.joint_torque) {
+      // a sensor behind the gear reads next to no gear friction: a level at 0 is what it should find,
+      // not recordings that fail to determine it
+      held_at_zero.push_back(fmt::format("J{} {}", j + 1, c == kCoulomb ? "Coulomb" : c == kViscous ? "viscous" : c == nf ? "pre-sliding" : "Stribeck"));
+      continue;
+    }
     const char* what = c == kCoulomb ? "Coulomb friction" : c == kViscous ? "viscous friction" : c == nf ? "pre-sliding friction level" : "Stribeck level";
     report.notes.push_back(fmt::format(
         "J{}: {} held at 0: the fit would make it negative (friction pushing the motion along), so the recordings do not "
@@ -1225,8 +1232,13 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
         "and check the joint with 'twinwatch validate'",
         j + 1, what));
   }
+  if (!held_at_zero.empty())
+    report.notes.push_back(fmt::format("friction levels at 0 ({}): joint torque sensors behind the gear read next to no gear friction, "
+                                       "so these are expected",
+                                       fmt::join(held_at_zero, ", ")));
   {
-    // one note per temperature span (usually one for every joint)
+    // one note per temperature span (usually one for every joint; none for a joint-torque twin, whose
+    // sensors read no gear friction to vary with temperature)
     std::vector<std::pair<std::string, std::vector<std::string>>> unfitted;  // span text -> joints
     for (int j = 0; j < n; ++j) {
       if (fit_temperature[static_cast<size_t>(j)]) continue;
@@ -1238,7 +1250,7 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       it->second.push_back(fmt::format("J{}", j + 1));
     }
     for (const auto& [what, joints] : unfitted)
-      report.notes.push_back(fmt::format(
+      if (!o.joint_torque) report.notes.push_back(fmt::format(
           "{}: viscous friction against temperature not fitted (kept at 0): the recordings' temperature {}, expected a span "
           ">= {:.0f} °C; record a warm-up from cold to fit it, or let the monitor's trend learn it "
           "('twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",

@@ -220,7 +220,7 @@ std::optional<Hypothesis> offset_raise(const std::vector<DiagnosisSample>& w, co
   return h;
 }
 
-Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, double total) {
+Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, double total, const DiagnosisOptions& o) {
   double mean = 0.0;
   for (const auto& s : w) mean += s.r_tau[j];
   mean /= static_cast<double>(w.size());
@@ -230,7 +230,9 @@ Hypothesis offset_hypothesis(const std::vector<DiagnosisSample>& w, int j, doubl
   h.explained = std::clamp(sq(mean) * static_cast<double>(w.size()) / total, 0.0, 1.0);
   h.magnitude = mean;
   h.units = "N·m";
-  h.detail = fmt::format("constant offset on the J{} current channel ≈ {:.2f} N·m equivalent", j + 1, mean);
+  // (a current channel's offset is said as the torque it stands for; a torque sensor's is in N·m itself)
+  h.detail = o.channel == "current" ? fmt::format("constant offset on the J{} current channel ≈ {:.2f} N·m equivalent", j + 1, mean)
+                                    : fmt::format("constant offset on the J{} {} channel ≈ {:.2f} N·m", j + 1, o.channel, mean);
   return h;
 }
 
@@ -698,10 +700,11 @@ std::optional<Hypothesis> current_glitch(const std::vector<DiagnosisSample>& w, 
         h.explained = std::clamp(energy / total, 0.0, 1.0);
         h.detail = fmt::format(
             "a glitch on the J{0} {1} channel: {2} at {3:.3f} s read{4} {5:.2f} {8} between samples of {6:.2f} and {7:.2f} {8}; a contact "
-            "cannot come and go in the {1} within {9} ms (the drive answers one through the joint's motion, over tens of ms): "
+            "cannot come and go in the {1} within {9} ms ({10}, over tens of ms): "
             "an electrical spike or a corrupted sample, not the arm",
             j + 1, o.channel, L == 1 ? "the sample" : fmt::format("{} samples", L), w[k].t, L == 1 ? "s" : "", peak, before, after,
-            o.channel_unit, fmt::format("{:.0f}", 1e3 * (w[k + L].t - w[k].t)));
+            o.channel_unit, fmt::format("{:.0f}", 1e3 * (w[k + L].t - w[k].t)),
+            o.channel == "current" ? "the drive answers one through the joint's motion" : "a contact's force rises and falls with the arm's motion");
         best = h;
       }
     }
@@ -906,7 +909,7 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     Hypothesis r = resistance_hypothesis(window, j, total_raw);
     reweigh(r, j);
     scored.emplace_back(r.explained - 2 * kComplexityPenalty - (pulse ? 0.3 : 0.0), r);
-    Hypothesis o = offset_hypothesis(window, j, total_raw);
+    Hypothesis o = offset_hypothesis(window, j, total_raw, options);
     reweigh(o, j);
     // without a velocity reversal a constant offset and a Coulomb resistance look alike; extra
     // torque that works against the motion is the common case (UR3e §2.3), so the offset only

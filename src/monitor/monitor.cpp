@@ -227,9 +227,16 @@ class MonitorAcceleration {
       : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)) {
     if (window > 0 && !target_) windowed_.emplace(n, window, window * gap_period);
   }
+  /// the estimate is one the monitor judges on: not a windowed one still held after a (re)start, nor
+  /// within kWindowSettle samples after it became whole (the residual filter's tail)
+  bool settled() const { return !windowed_ || since_ready_ > kWindowSettle; }
   const VectorJ& push(const RobotSample& s) {
     if (target_) return s.target_qdd;  // (as ident::joint_accelerations takes it)
-    if (windowed_) return windowed_->push(s.timestamp, s.qd);  // (as Monitor::judge: its own restart)
+    if (windowed_) {  // (as Monitor::judge: its own restart)
+      const VectorJ& a = windowed_->push(s.timestamp, s.qd);
+      since_ready_ = windowed_->ready() ? since_ready_ + 1 : 0;
+      return a;
+    }
     if (started_) {
       const double dt = s.timestamp - previous_t_;
       if (dt > 0.0 && dt <= gap_period_ && !s.gap_before) qdd_ += alpha_ * ((s.qd - previous_qd_) / dt - qdd_);
@@ -244,6 +251,7 @@ class MonitorAcceleration {
   bool target_;
   double alpha_, gap_period_;
   std::optional<WindowedAcceleration> windowed_;
+  long since_ready_ = 0;
   VectorJ qdd_, previous_qd_;
   double previous_t_ = 0.0;
   bool started_ = false;
@@ -748,6 +756,12 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   // the samples the dynamic fit uses (its uniform decimation needs their count beforehand).
   std::vector<PayloadTimeline> timelines;
   std::vector<size_t> skips;
+  // a twin's windowed acceleration judges a sample only once it is whole (MonitorAcceleration::settled):
+  // per run, the samples it is not (empty: every one is)
+  std::vector<std::vector<char>> unsettled(runs.size());
+  const auto window_of = [&](const device::SampleSource& src) {
+    return twin.acceleration_window > 0.0 ? twin.acceleration_half_width(period_of(src)) + 1 : 0;
+  };
   size_t judged = 0, judged_observer = 0;
   for (size_t i = 0; i < runs.size(); ++i) {
     const device::SampleSource& src = *runs[i];
@@ -758,8 +772,18 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     // start-up (commanded; on a run without target velocities, measured: RestBaseline::arm_rest)
     std::vector<LongestStretch> crawls(static_cast<size_t>(n));
     LongestStretch rest;
+    const int window = window_of(src);
+    std::optional<MonitorAcceleration> acc;
+    if (window > 0 && !(src.present() & kFieldTargetQdd)) {
+      acc.emplace(n, src.present(), 1.0, c.gap_factor * period_of(src), window);
+      unsettled[i].assign(src.size(), 0);
+    }
     src.replay([&](size_t k, const RobotSample& s) {
       payload.see(k, s);
+      if (acc) {
+        acc->push(s);
+        unsettled[i][k] = acc->settled() ? 0 : 1;
+      }
       if (k < skip) return;
       for (int j = 0; j < n; ++j) crawls[static_cast<size_t>(j)].see(s.timestamp, std::abs(s.qd[j]) < width);
       rest.see(s.timestamp, RestBaseline::arm_rest(s));
@@ -769,7 +793,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     longest_rest = std::max(longest_rest, rest.longest());
     c.payload_max = std::max(c.payload_max, payload.heaviest());
     for (size_t k = skip; k < src.size(); ++k) {
-      judged += payload.judged(k) ? 1 : 0;
+      judged += payload.judged(k) && (unsettled[i].empty() || !unsettled[i][k]) ? 1 : 0;
       judged_observer += payload.judged_observer(k) ? 1 : 0;
     }
     timelines.push_back(std::move(payload));
@@ -801,8 +825,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     ident::TwinModel t = twin;
     payload.start(t);
     const double alpha = iir_alpha(c.filter_cutoff_hz, period_of(src));
-    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src),
-                                      twin.acceleration_window > 0.0 ? twin.acceleration_half_width(period_of(src)) + 1 : 0);
+    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src), window_of(src));
     LearnedResidual residual(t, c, alpha);
     // the momentum observer, sample by sample exactly as the monitor runs it (its samples have their
     // own qd, qdd: it is judged from later after a payload change)
@@ -817,7 +840,7 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
       const VectorJ& qdd = accelerations.push(s);
       const bool changed = payload.advance(k, t);
       const VectorJ& rf = residual.push(t, s, qdd, changed);
-      if (k >= skip && payload.judged(k)) {
+      if (k >= skip && payload.judged(k) && accelerations.settled()) {
         level.add(rf);
         peak = peak.cwiseMax(rf.cwiseAbs());
         for (int j = 0; j < n; ++j) {
@@ -1123,6 +1146,7 @@ bool Monitor::carries_declared() const {
 }
 
 double Monitor::trusted_gain(int j) const {
+  if (twin_.measures_torque()) return 1.0;  // (a torque sensor reads N·m: no drive gain between it and the model)
   // a gain the recordings did not fix (JointDrive::gain_identified) or outside the plausible range
   // is not trusted: the median of the trusted ones converts that joint's residual to torque
   const auto trusted = [](const ident::JointDrive& d) { return d.gain_identified && d.gain >= kGainMin && d.gain <= kGainMax; };
@@ -2181,7 +2205,7 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   for (int j = 0; j < n_ && bad < 0; ++j) {
     if (unreadable(s.q[j])) bad = j, what = "position", v = s.q[j];
     else if (unreadable(s.qd[j])) bad = j, what = "velocity", v = s.qd[j];
-    else if (unreadable(s.current[j])) bad = j, what = "current", v = s.current[j];
+    else if (unreadable(s.current[j])) bad = j, what = channel_name(), v = s.current[j];
   }
   if (bad < 0) {
     invalid_run_ = false;
@@ -2366,6 +2390,10 @@ void Monitor::judge(const RobotSample& s) {
     qdd_ = s.target_qdd;
   } else if (windowed_) {
     qdd_ = windowed_->push(t, s.qd);  // (a gap restarts it only beyond its own span: it reads the samples' times)
+    // held after a (re)start until both means are whole: no decision on it, nor in the residual
+    // filter's tail after (a log that starts mid-motion raised a false contact at 50 ms: the held 0
+    // left M qdd out of the twin)
+    if (!windowed_->ready()) settle_until_ = std::max(settle_until_, n_samples_ + kWindowSettle);
   } else if (have_prev_ && !restart) {  // (not across a gap or skipped samples)
     qdd_ += alpha_ * ((s.qd - qd_prev_) / dt - qdd_);
   }

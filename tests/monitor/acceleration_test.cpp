@@ -27,8 +27,10 @@ TEST(WindowedAcceleration, IsExactWhereTheAccelerationChangesLinearlyAndRestarts
       const double tm = t - 0.0095;
       EXPECT_NEAR(qdd[0], 2 + 3 * tm, 2e-3) << k;
       EXPECT_NEAR(qdd[1], 0.0, 1e-9) << k;
+      EXPECT_TRUE(a.ready()) << k;
     } else {
       EXPECT_EQ(qdd[0], 0.0) << k;
+      EXPECT_FALSE(a.ready()) << k;  // (the monitor judges nothing on a held value)
     }
   }
   // a step within its span (a logger's lost samples) goes on; a longer one restarts it, and the
@@ -40,7 +42,10 @@ TEST(WindowedAcceleration, IsExactWhereTheAccelerationChangesLinearlyAndRestarts
   t += 0.004;
   const double held = a.value()[0];
   EXPECT_NE(held, before);
-  for (int k = 0; k < 19; ++k) EXPECT_EQ(a.push(t + 1.0 + 0.001 * k, qd)[0], held) << k;
+  for (int k = 0; k < 19; ++k) {
+    EXPECT_EQ(a.push(t + 1.0 + 0.001 * k, qd)[0], held) << k;
+    EXPECT_FALSE(a.ready()) << k;
+  }
   EXPECT_NEAR(a.push(t + 1.019, qd)[0], 0.0, 1e-9);
 }
 

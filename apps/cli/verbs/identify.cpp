@@ -705,7 +705,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "Kinova Gen3 logs them: no drive gain, the sensor's own scale). physics and hybrid methods")
       ->capture_default_str()
       ->check(CLI::IsMember({"current", "joint_torque"}));
-  sub->add_option("--acceleration-window", o->acceleration_window,
+  auto* acceleration_window = sub->add_option("--acceleration-window", o->acceleration_window,
                   "physics/mlp/hybrid: half window [s] of the velocity smoothing that recordings without target_qdd take their "
                   "joint acceleration from, kept in the twin: validate uses it, and the monitor and thresholds take the difference "
                   "of two means of as many velocities (default 0: 3 samples, 6 ms at 500 Hz, and the monitor's filtered difference). "
@@ -764,10 +764,13 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
     twinwatch::cli::refuse_unless({quasi_static, sine, lasso_joints, lasso_1se, prune}, m == "sequential",
                                   fmt::format("to --method sequential, not {}", m));
     twinwatch::cli::refuse_unless({efficiency_passes, reversal_screen, no_low_speed_friction, direction_blend, velocity_lag,
-                                   no_target_direction, efficiency_fit},
+                                   no_target_direction, efficiency_fit, acceleration_window},
                                   m != "sequential",
                                   "to --method physics, mlp or hybrid: the sequential method (Cao) fits gravity, friction and the "
                                   "rest its own way");
+    // (a torque sensor has no drive to fit an efficiency of: refused before the recordings are read)
+    twinwatch::cli::refuse_unless({efficiency_fit}, o->signal != "joint_torque" || o->efficiency_fit == "joint",
+                                  "with --signal current: a joint torque sensor has no drive efficiency to fit (only 'joint', the default)");
     o->robot_given = robot_option->count() > 0;
     twinwatch::cli::set_exit_code(run_identify(*o));
   });

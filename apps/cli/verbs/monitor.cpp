@@ -884,7 +884,8 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!o.part_com.empty())
     say(!o.quiet, "a part picked with no payload declared is fitted and followed at ({:g}, {:g}, {:g}) m in the flange frame (stored)\n",
         cfg.part_com.x(), cfg.part_com.y(), cfg.part_com.z());
-  if (shown.reversal_load_max.size() == twin.n_dof()) {
+  // (a joint-torque twin has no drive whose motoring/back-driven step its thresholds widen by)
+  if (shown.reversal_load_max.size() == twin.n_dof() && !twin.measures_torque()) {
     std::string loads;
     bool relative = false;  // a joint whose gain no known payload fixed: its load is in the twin's own scale
     for (int j = 0; j < twin.n_dof(); ++j) {

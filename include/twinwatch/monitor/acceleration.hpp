@@ -11,10 +11,10 @@ namespace twinwatch::monitor {
 
 /// The difference of two consecutive means of the measured velocity, the last w samples' and the w
 /// before them, over the difference of their mean times. For a velocity with white noise sigma its
-/// noise is sqrt(2 / w) sigma / (w dt), and it lags the acceleration by about w sample periods. The first-order filtered one-step difference the monitor
-/// uses otherwise (cutoff f) has sqrt(alpha / (2 - alpha)) sqrt(2) sigma / dt with alpha = 1 -
-/// exp(-2 pi f dt): 45 times the noise for w = 26 at 1 kHz and 40 Hz, for a lag of 4 ms instead of
-/// 26. An arm's inertial torque moves little in 26 ms (the Panda's excitation: ~0.4 N·m on J1), its
+/// noise is sqrt(2 / w) sigma / (w dt), and it lags the acceleration by about w sample periods. The
+/// first-order filtered one-step difference the monitor uses otherwise (cutoff f) has
+/// alpha sqrt(2 / (2 - alpha)) sigma / dt with alpha = 1 - exp(-2 pi f dt): 22 times the noise for
+/// w = 26 at 1 kHz and 40 Hz, for a lag of 4 ms instead of 26. An arm's inertial torque moves little in 26 ms (the Panda's excitation: ~0.4 N·m on J1), its
 /// velocity noise times the inertia a lot (the thresholds it set, docs/validation.md, "Joint torque
 /// sensors"). Measured on the real Panda log's J2 against a zero-phase +-25 sample estimate: rms
 /// 0.35 rad/s^2 at w = 26, 1.77 for the filtered difference; a causal quadratic fit at the newest
@@ -24,6 +24,9 @@ namespace twinwatch::monitor {
 /// one-step difference: restarted at each of the Panda log's gaps, it set thresholds 1.5x wider).
 /// Why our own: a ring of the last 2w samples, summed anew each sample (no drift of running sums),
 /// allocation-free after construction; nothing in Eigen or signal/ is this estimator.
+/// Samples after the estimate became whole before the monitor judges on it (the residual filter's tail)
+inline constexpr long kWindowSettle = 10;
+
 class WindowedAcceleration {
  public:
   /// @param n joints; @param w samples per mean, >= 1 (TwinModel::acceleration_half_width + 1);
@@ -35,6 +38,9 @@ class WindowedAcceleration {
   /// 0 at first, until 2w samples have come since the start or a restart).
   const VectorJ& push(double t, const VectorJ& qd);
   const VectorJ& value() const { return qdd_; }
+  /// Both means whole since the start or the last restart: before, the value is a held one, which
+  /// the monitor does not judge on (a stream that starts mid-motion: 0, M qdd missing from the twin)
+  bool ready() const { return count_ == qd_.size(); }
   int samples_per_mean() const { return w_; }
 
  private:
