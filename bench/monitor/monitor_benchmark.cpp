@@ -35,8 +35,8 @@ device::Recording without_targets(device::Recording r) {
 }
 
 struct Setup {
-  ident::TwinModel twin;
-  monitor::MonitorConfig cfg, cfg_bare;
+  ident::TwinModel twin, twin_windowed;
+  monitor::MonitorConfig cfg, cfg_bare, cfg_windowed;
   device::Recording rec, rec_bare;
   Setup() {
     const auto exc = simulate("robot: ur3e\nseed: 1\nduration: 40\ntrajectory: {type: fourier, amplitude: 0.9, period: 10, harmonics: 5, seed: 3}\n");
@@ -47,6 +47,11 @@ struct Setup {
     const auto exc_bare = without_targets(exc);
     rec_bare = without_targets(rec);
     cfg_bare = monitor::learn_thresholds(twin, {{&exc_bare, {}}});
+    // a twin with an acceleration window (a noisy velocity, e.g. a Panda's dq: 0.025 s, 14 samples a
+    // mean at 500 Hz): the monitor's windowed acceleration on the stream without targets
+    twin_windowed = twin;
+    twin_windowed.acceleration_window = 0.025;
+    cfg_windowed = monitor::learn_thresholds(twin_windowed, {{&exc_bare, {}}});
   }
 };
 const Setup& setup() {
@@ -61,15 +66,17 @@ const Setup& setup() {
 // the worst case of Monitor::widen_for_load); 3: as 1 without the widening (a twin file from before
 // session 25), for its cost in the same binary; 4: as 1 on the recording without the controller's
 // targets, with thresholds learned without them (the drive's doubt read on the measured velocity's
-// blend, session 33)
+// blend, session 33); 5: as 4 with the twin's acceleration window (monitor::WindowedAcceleration
+// instead of the filtered difference, session 54)
 struct Replayer {
   const Setup& s;
+  const ident::TwinModel& twin;
   const monitor::MonitorConfig cfg;
   const device::Recording& rec;
   monitor::Monitor mon;
   size_t k = 0, events = 0, replays = 0;  // alerts raised on the healthy replays (each runs a diagnosis)
   static monitor::MonitorConfig config(const Setup& s, std::int64_t observer) {
-    monitor::MonitorConfig c = observer == 4 ? s.cfg_bare : s.cfg;
+    monitor::MonitorConfig c = observer == 5 ? s.cfg_windowed : observer == 4 ? s.cfg_bare : s.cfg;
     if (observer == 0) c.observer_level.resize(0);
     c.observer_alerts = observer >= 1;
     if (observer == 2) c.reversal_load_max = VectorJ::Zero(s.twin.n_dof());
@@ -77,7 +84,8 @@ struct Replayer {
     return c;
   }
   Replayer(const Setup& setup, std::int64_t observer)
-      : s(setup), cfg(config(setup, observer)), rec(observer == 4 ? setup.rec_bare : setup.rec), mon(setup.twin, cfg) {}
+      : s(setup), twin(observer == 5 ? setup.twin_windowed : setup.twin), cfg(config(setup, observer)),
+        rec(observer >= 4 ? setup.rec_bare : setup.rec), mon(twin, cfg) {}
   void push() { mon.push(rec.samples[k]); }
   void next(benchmark::State& st) {
     if (++k < rec.samples.size()) return;
@@ -85,7 +93,7 @@ struct Replayer {
     st.PauseTiming();
     events += mon.events().size();
     ++replays;
-    mon = monitor::Monitor(s.twin, cfg);
+    mon = monitor::Monitor(twin, cfg);
     st.ResumeTiming();
   }
   void count(benchmark::State& st) const {
@@ -125,7 +133,7 @@ void BM_MonitorThroughput(benchmark::State& st) {
   benchmark::DoNotOptimize(r.mon.observer_residual().data());
   r.count(st);
 }
-BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->MinTime(2.0);
+BENCHMARK(BM_MonitorThroughput)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->Arg(5)->MinTime(2.0);
 
 #ifdef TWINWATCH_HAVE_DASHBOARD
 // The loop as `twinwatch serve` runs it: BM_MonitorThroughput/1 plus the dashboard's feed of every

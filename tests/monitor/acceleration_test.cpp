@@ -70,5 +70,37 @@ TEST(WindowedAcceleration, TakesTheVelocitysNoiseOutAsTheWindowGrows) {
   EXPECT_NEAR(w25, std::sqrt(2.0 / 25) * 0.01 / 0.025, 0.02);
 }
 
+// the running sums give what the two means of the ring give, summed anew, over many turns of it
+TEST(WindowedAcceleration, ItsRunningSumsAreTheMeansOfTheRing) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int w = 7;
+  WindowedAcceleration a(3, w, 1.0);
+  std::vector<VectorJ> qs;
+  std::vector<double> ts;
+  double t = 0.0;
+  double worst = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    t += 0.001 * (1.0 + 0.1 * g(rng) * 0.1);
+    VectorJ qd(3);
+    qd << 5.0 + g(rng), -3.0 * g(rng), 1e-3 * g(rng);
+    qs.push_back(qd);
+    ts.push_back(t);
+    const VectorJ got = a.push(t, qd);
+    if (k + 1 < 2 * w) continue;
+    VectorJ newer = VectorJ::Zero(3), older = VectorJ::Zero(3);
+    double tn = 0.0, to = 0.0;
+    for (int i = 0; i < w; ++i) {
+      newer += qs[static_cast<size_t>(k - i)];
+      tn += ts[static_cast<size_t>(k - i)];
+      older += qs[static_cast<size_t>(k - w - i)];
+      to += ts[static_cast<size_t>(k - w - i)];
+    }
+    const VectorJ want = (newer - older) / (tn - to);
+    worst = std::max(worst, (got - want).cwiseAbs().maxCoeff() / (1.0 + want.cwiseAbs().maxCoeff()));
+  }
+  EXPECT_LT(worst, 1e-9);
+}
+
 }  // namespace
 }  // namespace twinwatch::monitor

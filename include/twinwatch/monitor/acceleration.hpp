@@ -22,8 +22,9 @@ namespace twinwatch::monitor {
 /// restart it: it uses the samples' times; only a step longer than `max_step` does, and after a
 /// restart the estimate is held until 2w samples have come (means of one or two samples are the raw
 /// one-step difference: restarted at each of the Panda log's gaps, it set thresholds 1.5x wider).
-/// Why our own: a ring of the last 2w samples, summed anew each sample (no drift of running sums),
-/// allocation-free after construction; nothing in Eigen or signal/ is this estimator.
+/// Why our own: a ring of the last 2w samples with running sums, summed anew once a turn (the
+/// rounding of 2w additions at most), allocation-free after construction; nothing in Eigen or
+/// signal/ is this estimator.
 /// Samples after the estimate became whole before the monitor judges on it (the residual filter's tail)
 inline constexpr long kWindowSettle = 10;
 
@@ -50,7 +51,9 @@ class WindowedAcceleration {
   std::vector<double> t_;
   size_t head_ = 0;   // where the next sample goes
   size_t count_ = 0;  // samples since the (re)start, at most 2w
-  VectorJ qdd_, newer_, older_;
+  VectorJ qdd_, newer_, older_;  // the estimate; the sums of the newer and the older w velocities
+  double t_newer_ = 0.0, t_older_ = 0.0;  // the sums of their times
+  void sum_exactly();
 };
 
 }  // namespace twinwatch::monitor
