@@ -367,7 +367,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
                               double max_duration, bool quiet, const std::string& trend_csv,
                               double link_ceiling) {
   Evaluation ev;
-  ev.channel = twin.measures_torque() ? "torque" : "current";
+  ev.channel = twin.channel_name();
   monitor::MonitorConfig cfg = monitor::MonitorConfig::from_twin(twin);
   if (static_threshold) cfg.use_dynamic = false;
   if (cfg.sensitivity.size() == 0) ev.sensitivity.assign(static_cast<size_t>(twin.n_dof()), 1.0);
@@ -459,10 +459,10 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     std::vector<Declaration> declared_before(s.faults.size());
     std::vector<char> declaration_changed(s.faults.size(), 0), have_before(s.faults.size(), 0), onset_seen(s.faults.size(), 0);
     // (the simulator's complaint, e.g. a diverged run, names the scenario it is about)
+    const bool torque = t.measures_torque();
+    RobotSample sensed_sample;  // (a torque twin's view of each sample, reused)
     try {
     simulator->run([&](const RobotSample& given) {
-                     RobotSample sensed_sample;
-                     const bool torque = t.measures_torque();
                      if (torque) {
                        sensed_sample = given;
                        as_joint_torque_channel(sensed_sample);

@@ -272,10 +272,8 @@ void UnitsCheck::finish() {
     std::nth_element(a.begin(), at, a.end());
     if (torque_) {
       // joint torque sensors: twice the joint's torque limit (1000 N·m where the description has none)
-      const double lim = static_cast<int>(j) < robot_.n_dof() && std::isfinite(robot_.joint(static_cast<int>(j)).limits.torque_max)
-                             ? 2.0 * robot_.joint(static_cast<int>(j)).limits.torque_max
-                             : kTrainingCurrentMax;
-      const bool limited = lim != kTrainingCurrentMax;
+      const bool limited = static_cast<int>(j) < robot_.n_dof() && std::isfinite(robot_.joint(static_cast<int>(j)).limits.torque_max);
+      const double lim = limited ? 2.0 * robot_.joint(static_cast<int>(j)).limits.torque_max : kTrainingCurrentMax;
       if (*at > lim)
         throw InvalidArgument(fmt::format("{}: J{}'s joint torque is above {:.4g} N·m in 1 % of the samples, more than {}: are the "
                                           "torques in N·mm? Scale them with a column map ('COLUMN,actual_joint_torque_{},0.001', "

@@ -24,7 +24,6 @@ constexpr double kColumnActive = 1e-9;
 // relative ridge on the scaled normal equations: only guards against exactly unused columns
 // (e.g. the payload column when no run carried a known payload)
 constexpr double kRidge = 1e-10;
-// half-width of the centred moving average applied to qd before differentiating [samples]
 
 // a joint's back-driven factor is fitted only with at least this many back-driven samples, and
 // this fraction of its samples (fewer: c_gen stays 1, the direction makes no measurable difference)
@@ -1219,13 +1218,13 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
     JointDrive& jd = twin.joints[static_cast<size_t>(j)];
     if (c == nf) jd.presliding_alpha = 0.0;
     if (c == nf + 1) jd.stribeck_velocity = 0.0;
+    const char* what = c == kCoulomb ? "Coulomb friction" : c == kViscous ? "viscous friction" : c == nf ? "pre-sliding friction level" : "Stribeck level";
     if (o.joint_torque) {
       // a sensor behind the gear reads next to no gear friction: a level at 0 is what it should find,
       // not recordings that fail to determine it
-      held_at_zero.push_back(fmt::format("J{} {}", j + 1, c == kCoulomb ? "Coulomb" : c == kViscous ? "viscous" : c == nf ? "pre-sliding" : "Stribeck"));
+      held_at_zero.push_back(fmt::format("J{} {}", j + 1, what));
       continue;
     }
-    const char* what = c == kCoulomb ? "Coulomb friction" : c == kViscous ? "viscous friction" : c == nf ? "pre-sliding friction level" : "Stribeck level";
     report.notes.push_back(fmt::format(
         "J{}: {} held at 0: the fit would make it negative (friction pushing the motion along), so the recordings do not "
         "determine it (e.g. the joint moves one way only, or too little); record motion in both directions ('twinwatch excite') "

@@ -9,7 +9,7 @@
 namespace twinwatch::monitor {
 
 WindowedAcceleration::WindowedAcceleration(int n, int w, double max_step)
-    : n_(n), w_(w), max_step_(max_step), qd_(static_cast<size_t>(2 * std::max(w, 1)), VectorJ::Zero(std::max(n, 1))),
+    : w_(w), max_step_(max_step), qd_(static_cast<size_t>(2 * std::max(w, 1)), VectorJ::Zero(std::max(n, 1))),
       t_(static_cast<size_t>(2 * std::max(w, 1)), 0.0), qdd_(VectorJ::Zero(std::max(n, 1))), newer_(VectorJ::Zero(std::max(n, 1))),
       older_(VectorJ::Zero(std::max(n, 1))) {
   if (n < 1 || w < 1 || !(max_step > 0.0))

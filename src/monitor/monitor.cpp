@@ -993,7 +993,6 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   // a twin with an acceleration window (a noisy velocity): the windowed estimate where the stream has
   // no target acceleration, over as many samples as the identification's half window
-  windowed_.reset();
   if (twin_.acceleration_window > 0.0) {
     const int w = twin_.acceleration_half_width(cfg_.nominal_period) + 1;
     windowed_.emplace(n_, w, w * gap_factor_ * cfg_.nominal_period);
@@ -1331,7 +1330,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   // (joint torque sensors read a resting joint's load: no friction hides it from them)
   if (!twin_.measures_torque()) o.static_friction = static_friction_;
   o.rest_visible = twin_.measures_torque();
-  o.channel = channel_name();
+  o.channel = twin_.channel_name();
   o.channel_unit = twin_.channel_unit();
   const double duration = t - e.t_start;
   const auto hyps = diagnose(twin_.robot(), window_, duration, e.joint, o, obs_on_ ? &reference_ : nullptr);
@@ -2205,7 +2204,7 @@ bool Monitor::skip_invalid(const RobotSample& s) {
   for (int j = 0; j < n_ && bad < 0; ++j) {
     if (unreadable(s.q[j])) bad = j, what = "position", v = s.q[j];
     else if (unreadable(s.qd[j])) bad = j, what = "velocity", v = s.qd[j];
-    else if (unreadable(s.current[j])) bad = j, what = channel_name(), v = s.current[j];
+    else if (unreadable(s.current[j])) bad = j, what = twin_.channel_name(), v = s.current[j];
   }
   if (bad < 0) {
     invalid_run_ = false;
@@ -2492,7 +2491,7 @@ void Monitor::judge(const RobotSample& s) {
       f.joint = j;
       f.units = "samples";
       f.confidence = 1.0;
-      f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves", channel_name(), j + 1, s.current[j], twin_.channel_unit());
+      f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves", twin_.channel_name(), j + 1, s.current[j], twin_.channel_unit());
       events_.push_back(f);
       frozen_event_[J] = static_cast<int>(events_.size()) - 1;
       if (on_event) on_event(f);
@@ -2559,7 +2558,7 @@ void Monitor::judge(const RobotSample& s) {
       return dc.active() && dob.active() ? std::min(dc.start(), dob.start()) : (dc.active() ? dc.start() : dob.start());
     };
     const auto raised_by = [&]() -> std::string {
-      const std::string residual = fmt::format("{} residual", channel_name());  // (a joint-torque twin's: "torque residual")
+      const std::string residual = fmt::format("{} residual", twin_.channel_name());  // (a joint-torque twin's: "torque residual")
       return dc.active() && dob.active() ? residual + " and momentum observer" : dc.active() ? residual : std::string("momentum observer");
     };
     joint_active_[static_cast<size_t>(j)] = active;
@@ -2690,7 +2689,6 @@ void Monitor::judge(const RobotSample& s) {
   // slow wear: per-window friction trend (samples of an open alert are left out)
   if (trend_.push(t, s.qd, r_, rf_, level_, s.temperature, i_total_, open_ >= 0 || background_ >= 0)) {
     events_.push_back(trend_.warning());
-    events_.back().peak_residual_units = twin_.channel_unit();
     if (on_event) on_event(events_.back());
   }
   if (std::string note; trend_.take_note(note)) add_note(t, note);
@@ -2871,7 +2869,7 @@ void Monitor::close_frozen(int j, bool at_stop, const std::string& why) {
   f.active_at_stop = at_stop;
   f.t_end = t_prev_;  // the last sample that still held the value
   f.magnitude = std::round((f.t_end - f.t_start) / cfg_.nominal_period) + 1.0;
-  f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves ({:.0f} samples){}", channel_name(), j + 1,
+  f.detail = fmt::format("{} channel of J{} frozen at {:.4f} {} while the joint moves ({:.0f} samples){}", twin_.channel_name(), j + 1,
                          frozen_val_[j], twin_.channel_unit(),
                          f.magnitude, at_stop ? (why.empty() ? std::string("; still frozen when monitoring stopped") : why) : std::string());
   if (on_event) on_event(f);

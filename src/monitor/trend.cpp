@@ -86,7 +86,7 @@ double theil_sen_slope(const std::vector<double>& x, const std::vector<double>& 
 }
 
 TrendDetector::TrendDetector(const ident::TwinModel& twin, TrendConfig config, const VectorJ& gain, std::string units)
-    : cfg_(std::move(config)), n_(twin.n_dof()), units_(std::move(units)) {
+    : cfg_(std::move(config)), n_(twin.n_dof()), units_(std::move(units)), residual_units_(twin.channel_unit()) {
   cfg_.validate(n_);
   if (gain.size() != n_) throw InvalidArgument(fmt::format("trend gain has size {}, expected {} (twin.n_dof)", gain.size(), n_));
   for (int j = 0; j < n_; ++j)
@@ -274,6 +274,7 @@ bool TrendDetector::test_joint(int j, double t) {
   // the warning: joint, rate, projected time until the excess reaches the threshold
   Event& e = warning_;
   e = Event{};
+  e.peak_residual_units = residual_units_;
   e.t_start = xs_.front() * kSecondsPerHour;
   e.t_end = t;
   e.t_detected = t;

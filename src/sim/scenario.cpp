@@ -401,21 +401,20 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   if (root["noise"]) {
     const YAML::Node nz = root["noise"];
     y.only_keys(nz, "noise", {"current_sigma", "joint_torque_sigma"});
-    if (nz["current_sigma"]) {
-      const VectorJ sg = y.vec(nz, "noise", "current_sigma", n, true);
+    // per joint (or one for all), each >= 0
+    const auto sigmas = [&](const char* key, const char* unit, std::vector<double>& out) {
+      const VectorJ sg = y.vec(nz, "noise", key, n, true);
       for (int j = 0; j < n; ++j) {
-        if (!(sg[j] >= 0.0)) y.fail(nz["current_sigma"], "noise.current_sigma", fmt::format("must be >= 0, got {}", sg[j]));
-        s.current_sigma.push_back(sg[j]);
+        if (!(sg[j] >= 0.0)) y.fail(nz[key], std::string("noise.") + key, fmt::format("must be >= 0{}, got {}", unit, sg[j]));
+        out.push_back(sg[j]);
       }
-    }
+    };
+    // (a noise block with neither is named by the one it had to have before the sensors: current_sigma)
+    if (nz["current_sigma"] || !nz["joint_torque_sigma"]) sigmas("current_sigma", "", s.current_sigma);
     if (nz["joint_torque_sigma"]) {
       if (!s.options.joint_torque_sensors)
         y.fail(nz["joint_torque_sigma"], "noise.joint_torque_sigma", "the joint torque sensors' noise needs 'joint_torque_sensors: true'");
-      const VectorJ sg = y.vec(nz, "noise", "joint_torque_sigma", n, true);
-      for (int j = 0; j < n; ++j) {
-        if (!(sg[j] >= 0.0)) y.fail(nz["joint_torque_sigma"], "noise.joint_torque_sigma", fmt::format("must be >= 0 [N·m], got {}", sg[j]));
-        s.joint_torque_sigma.push_back(sg[j]);
-      }
+      sigmas("joint_torque_sigma", " [N·m]", s.joint_torque_sigma);
     }
   }
   // stops of the program (an operator's pause, a protective or an emergency stop): each at its line

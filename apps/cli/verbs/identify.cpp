@@ -288,8 +288,6 @@ int run_identify(const IdentifyOptions& o) {
   io.efficiency_passes = o.efficiency_passes;
   io.joint_torque = torque;
   io.acceleration_window = o.acceleration_window;
-  if (torque && io.efficiency_fit != ident::EfficiencyFit::Joint)
-    throw InvalidArgument("--signal joint_torque has no drive efficiency to fit: --efficiency-fit alternating does not apply");
   ident::IdentReport report;
   const bool bar = !o.quiet && (o.progress || isatty(STDERR_FILENO));
   auto show = [&](double f) {
@@ -656,7 +654,7 @@ int run_validate(const ValidateOptions& o) {
   for (int j = 0; j < n; ++j)
     if (constant[static_cast<size_t>(j)])
       fmt::print("note: J{}'s measured {} is {:g} {} in every sample: R² and NRMSE are undefined (n/a); a dead or stuck channel?\n",
-                 j + 1, twin.measures_torque() ? "torque" : "current", first_measured[static_cast<size_t>(j)], twin.channel_unit());
+                 j + 1, twin.channel_name(), first_measured[static_cast<size_t>(j)], twin.channel_unit());
   return 0;
 }
 

@@ -125,8 +125,8 @@ struct IdentReport {
   std::vector<std::string> notes;
 };
 
-/// Half width [samples] of the velocity smoothing in joint_accelerations by default: 3 (6 ms at 500 Hz)
-inline constexpr int kAccelerationHalfWidth = 3;
+/// Half width [samples] of the velocity smoothing in joint_accelerations by default
+inline constexpr int kAccelerationHalfWidth = TwinModel::kAccelerationHalfWidth;
 /// Joint accelerations of a recording: target_qdd when recorded, else a zero-phase smoothed
 /// central difference of actual_qd (a centred mean over +-half_width samples, then central
 /// differences). Returns one vector per sample.

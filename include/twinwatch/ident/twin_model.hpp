@@ -172,15 +172,18 @@ class TwinModel {
   /// --acceleration-window); 0: the default 3 samples. The twin file's "acceleration_window"
   double acceleration_window = 0.0;
   static constexpr double kAccelerationWindowMax = 0.1;
-  /// That half window in samples of `period` [s] (3 when 0 or the period is unknown), at least 1
+  /// Half width [samples] of that smoothing without a window: 3 (6 ms at 500 Hz)
+  static constexpr int kAccelerationHalfWidth = 3;
+  /// That half window in samples of `period` [s] (kAccelerationHalfWidth when 0 or the period is
+  /// unknown), at least 1
   int acceleration_half_width(double period) const {
-    if (!(acceleration_window > 0.0) || !(period > 0.0)) return 3;
+    if (!(acceleration_window > 0.0) || !(period > 0.0)) return kAccelerationHalfWidth;
     return std::max(1, static_cast<int>(std::lround(acceleration_window / period)));
   }
   /// The unit of the measured channel and of its residuals and thresholds: "A", or "N·m"
   const char* channel_unit() const { return measures_torque() ? "N·m" : "A"; }
-  /// The recording columns of the measured channel: "actual_current", or "actual_joint_torque"
-  const char* channel_column() const { return measures_torque() ? "actual_joint_torque" : "actual_current"; }
+  /// What the measured channel is called in what the tools say: "current", or "torque"
+  const char* channel_name() const { return measures_torque() ? "torque" : "current"; }
   double temperature_ref = 35.0;        ///< [°C] reference of the temperature column
   /// [rad/s] width of the smooth motoring/back-driven switch of the current factor (0: hard switch
   /// at qd = 0); about the resolution of the measured velocity (twin_model.cpp, direction_factor)

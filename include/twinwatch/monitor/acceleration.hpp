@@ -42,10 +42,9 @@ class WindowedAcceleration {
   /// Both means whole since the start or the last restart: before, the value is a held one, which
   /// the monitor does not judge on (a stream that starts mid-motion: 0, M qdd missing from the twin)
   bool ready() const { return count_ == qd_.size(); }
-  int samples_per_mean() const { return w_; }
 
  private:
-  int n_, w_;
+  int w_;
   double max_step_;
   std::vector<VectorJ> qd_;  // ring of the last 2w velocities
   std::vector<double> t_;

@@ -432,8 +432,6 @@ class Monitor {
   /// + payload_envelope_margin); false when payload_max is not recorded.
   bool payload_beyond_thresholds() const { return payload_beyond_; }
   const ident::TwinModel& twin() const { return twin_; }
-  /// What the measured channel is called in the events: "current", or "torque" for joint torque sensors
-  const char* channel_name() const { return twin_.measures_torque() ? "torque" : "current"; }
 
  private:
   void open_event(int joint, double start, double t, const char* channel);  // channel: what raised it, for the detail

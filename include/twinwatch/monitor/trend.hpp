@@ -142,6 +142,7 @@ class TrendDetector {
   double window_ = 30.0;
   VectorJ gain_, nominal_, v_ref_, z_, slope_, twin_fc_, twin_fv_;
   std::string units_;
+  std::string residual_units_;  // the twin's channel (Event::peak_residual_units of the warning)
   // accumulators of the open window, per joint: normal equations of [sign, qd, 1]
   std::vector<Eigen::Matrix3d> ata_;
   std::vector<Eigen::Vector3d> atb_;
