@@ -41,6 +41,11 @@ struct MonitorOptions {
 };
 /// monitor's exit status when an event of a --fail-on class was found (and the run otherwise ended 0)
 inline constexpr int kExitEventsFound = 3;
+/// monitor --rtde's exit status when a signal stopped it while the stream was silent (the robot
+/// switched off, a cable pulled): an operator's stop, not a failure, but the silence before it was not
+/// watched (a stream_fault event says so). Its own status, so that a service manager can take it as a
+/// clean stop (the systemd unit's SuccessExitStatus) while a connection lost at --duration's end stays 1
+inline constexpr int kExitStoppedInOutage = 4;
 
 /// What another front end sees of the loop (each may be empty). Called on the loop's thread.
 struct MonitorHooks {

@@ -22,7 +22,7 @@ find_program(SYSTEMD_ANALYZE systemd-analyze)
 if(SYSTEMD_ANALYZE)
   add_test(NAME cli.installed_service_unit
     COMMAND sh -c "cp ${d}/share/twinwatch/systemd/twinwatch-monitor@.service ${d}/twinwatch-monitor@cell3.service && \
-grep '^ExecStart=' ${d}/twinwatch-monitor@cell3.service && ${SYSTEMD_ANALYZE} verify ${d}/twinwatch-monitor@cell3.service 2>&1 && echo VERIFIED")
+grep -E '^(ExecStart|SuccessExitStatus)=' ${d}/twinwatch-monitor@cell3.service && ${SYSTEMD_ANALYZE} verify ${d}/twinwatch-monitor@cell3.service 2>&1 && echo VERIFIED")
   set_tests_properties(cli.installed_service_unit PROPERTIES FIXTURES_REQUIRED installed
-    PASS_REGULAR_EXPRESSION "^ExecStart=[^\n]*/cli-install/bin/twinwatch monitor .TWINWATCH_ARGS\nVERIFIED\n$")
+    PASS_REGULAR_EXPRESSION "^ExecStart=[^\n]*/cli-install/bin/twinwatch monitor .TWINWATCH_ARGS\nSuccessExitStatus=4\nVERIFIED\n$")
 endif()

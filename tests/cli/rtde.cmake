@@ -99,14 +99,15 @@ set_tests_properties(cli.serve_robot_controller_version_negative PROPERTIES
   PASS_REGULAR_EXPRESSION "--controller-version '-1.0.0.0': expected MAJOR.MINOR.BUGFIX.BUILD, four whole numbers 0 to 4294967295.*exit=2")
 # an operator's stop during an outage (here SIGHUP, as a closed SSH session sends it, 3 s after the
 # virtual robot's run ended) ends an unwatched stretch: it is a stream fault in the events file, the
-# summary is printed, and the status is 1 (the robot stopped answering). Before (audit of session 38):
+# summary is printed, and the status is 4 (a stop during an outage; it was 1 until session 55, which
+# made a systemd stop of a switched-off robot a failed unit). Before (audit of session 38):
 # SIGHUP killed the monitor with nothing written; SIGINT/SIGTERM stored the stretch as watched, exit 0
 add_test(NAME cli.rtde_monitor_stopped_during_an_outage
   COMMAND sh -c "rm -f ${PROJECT_BINARY_DIR}/outage_events.jsonl; $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35940 --speed 8 --duration 2 --wait-client 20 -q & \
 $<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35940 --wait 10 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' --events ${PROJECT_BINARY_DIR}/outage_events.jsonl & mp=\$!; \
 sleep 4; kill -HUP \$mp; wait \$mp; echo exit=\$?; cat ${PROJECT_BINARY_DIR}/outage_events.jsonl; wait")
 set_tests_properties(cli.rtde_monitor_stopped_during_an_outage PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
-  PASS_REGULAR_EXPRESSION "stream: [0-9]+ received[^\n]*\n.*event\\(s\\)[^\n]*\nexit=1\n[^\n]*\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring")
+  PASS_REGULAR_EXPRESSION "stream: [0-9]+ received[^\n]*\n.*event\\(s\\)[^\n]*\nexit=4\n[^\n]*\"class\":\"stream_fault\"[^\n]*no data for the last [0-9.]+ s of monitoring")
 # record stopped during an outage: the recording is written, the warning says the outage came before
 # the stop, the summary (stdout, after the warning on stderr) says the run was stopped, and the status is 1
 add_test(NAME cli.rtde_record_stopped_during_an_outage

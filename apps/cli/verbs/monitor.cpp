@@ -457,6 +457,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   };
   bool silent_gap = false;   // the silence at the end is one of the monitor's gaps (a stream fault)
   bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
+  bool stopped_in_outage = false;  // ... and a signal then stopped it (exit status 4)
   bool replay_stopped = false;  // a replay stopped at the user's request (serve, Ctrl-C)
   if (!client) {
     double previous = std::numeric_limits<double>::quiet_NaN();
@@ -565,6 +566,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     const bool dropped = o.no_reconnect && client->finished() && !cli::interrupted();
     if (dropped && !o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
     lost_at_end = silent_gap || dropped;
+    stopped_in_outage = silent_gap && !dropped && cli::interrupted();
     if (copy) {
       copy->close();
       const auto& files = copy->files();
@@ -643,7 +645,8 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (own_stop && replay_stopped) return 128 + cli::interrupt_signal();
   // (what was received is analysed and stored; a script learns that the end was not watched, or
   // that the broker did not get every event)
-  if (lost_at_end || mqtt_left > 0) return 1;
+  if (mqtt_left > 0) return 1;
+  if (lost_at_end) return stopped_in_outage ? cli::kExitStoppedInOutage : 1;
   // (--fail-on: a script's check of a recording or a shift, e.g. '|| notify')
   if (failing_events > 0) {
     std::fflush(stdout);  // (after the summary)
@@ -917,8 +920,10 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "links are numbered from 1, as in the scenario labels.\n"
       "Ctrl-C, SIGTERM or SIGHUP stop it in order: what was watched is reported and stored. Watching a\n"
       "recording, the exit status is then 128 + the signal (130 for Ctrl-C: it was not watched to its end);\n"
-      "watching a live stream (--rtde), 0, or 1 when the stream had been silent for more than 1.5 s before\n"
-      "the stop (a stream_fault event says so). A second signal ends it at once (128 + the signal).\n"
+      "watching a live stream (--rtde), 0, or 4 when the stream had been silent for more than 1.5 s before\n"
+      "the stop (a stream_fault event says so; the systemd unit takes 4 as a clean stop). A second signal\n"
+      "ends it at once (128 + the signal). Watching a live stream to --duration's end, 1 when the robot\n"
+      "stopped answering before it.\n"
       "With --fail-on CLASSES, 3 when an event of those classes was found (and the run otherwise ended 0)."));
   const auto check = twinwatch::cli::add_monitor_options(sub, o);
   sub->callback([=] {
