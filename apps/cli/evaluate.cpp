@@ -42,11 +42,6 @@ namespace twinwatch::cli {
 
 namespace {
 
-// healthy training runs: robot, trajectory, seed, payload
-// A simulated arm's sample as a joint-torque twin reads it: its torque sensors in the measured
-// channel's place (what device::ColumnMap::joint_torque_as_current does to a recording's columns)
-void as_joint_torque_channel(RobotSample& x) { x.current = x.joint_torque; }
-
 device::Recording simulate_to_memory(const sim::Scenario& given, const std::string& name, bool joint_torque = false) {
   device::Recording rec;
   rec.path = name;
@@ -55,11 +50,13 @@ device::Recording simulate_to_memory(const sim::Scenario& given, const std::stri
   sim::Scenario s = given;
   s.options.joint_torque_sensors |= joint_torque;
   const auto simulator = sim::make_simulator(s);
-  rec.present = simulator->sample_fields();
+  // (a simulated arm's samples as a joint-torque twin reads them: the sensors in the measured
+  // channel's place, no target acceleration; as a recording's columns are read for it)
+  rec.present = joint_torque ? device::read_as_joint_torque(simulator->sample_fields()) : simulator->sample_fields();
   try {
     simulator->run([&](const RobotSample& x) {
       rec.samples.push_back(x);
-      if (joint_torque) as_joint_torque_channel(rec.samples.back());
+      if (joint_torque) device::read_as_joint_torque(rec.samples.back());
     });
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(fmt::format("{}: {}", s.path.empty() ? name : s.path, e.what()));
@@ -465,7 +462,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
     simulator->run([&](const RobotSample& given) {
                      if (torque) {
                        sensed_sample = given;
-                       as_joint_torque_channel(sensed_sample);
+                       device::read_as_joint_torque(sensed_sample);
                      }
                      const RobotSample& x = torque ? sensed_sample : given;
                      mon.push(x);

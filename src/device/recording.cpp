@@ -207,10 +207,12 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
   }
   if (map && map->joint_torque_as_current) {
     // the twin's measured channel is the joint torque sensors': their columns fill the current's
-    // place, and the motor currents (a Kinova logs both) are not read
+    // place, and the motor currents (a Kinova logs both) are not read; nor is the controller's target
+    // acceleration: the sensors read the link's own (read_as_joint_torque does the same in memory)
     bool any = false;
     for (std::string& nm : names) {
       if (nm.rfind("actual_current_", 0) == 0 && nm.rfind("actual_current_as_torque_", 0) != 0) nm.clear();
+      else if (nm.rfind("target_qdd_", 0) == 0) nm.clear();
       else if (nm.rfind("actual_joint_torque_", 0) == 0) {
         nm = "actual_current_" + nm.substr(std::strlen("actual_joint_torque_"));
         any = true;
@@ -471,6 +473,17 @@ Recording read_recording(const std::string& path, const ColumnMap* map) {
   // a gap is a marker in the file's stream_gap column or a timestamp jump, or both
   for (const RobotSample& x : rec.samples) rec.gaps += x.gap_before ? 1 : 0;
   return rec;
+}
+
+std::uint32_t read_as_joint_torque(std::uint32_t present) {
+  const bool sensed = (present & kFieldJointTorque) != 0;
+  present &= ~(kFieldJointTorque | kFieldTargetQdd | kFieldActualCurrent);
+  return sensed ? present | kFieldActualCurrent : present;
+}
+
+void read_as_joint_torque(RobotSample& s) {
+  s.current = s.joint_torque;
+  s.present = read_as_joint_torque(s.present);
 }
 
 RecordingTiming recording_timing(const std::string& path, std::vector<double> dts) {

@@ -288,12 +288,12 @@ TEST(Recording, ColumnMapRenamesAndScalesForeignLogs) {
 }
 
 // a joint-torque twin's reading (session 54): the sensors' columns fill the measured channel, the
-// motor currents a Kinova logs beside them are not read, and a file without the sensors is refused at
-// its header, naming the column
+// motor currents a Kinova logs beside them are not read, nor the target acceleration (session 55),
+// and a file without the sensors is refused at its header, naming the column
 TEST(Recording, AJointTorqueTwinReadsTheSensorsWhereTheCurrentIs) {
   const std::string p = tmp("both.csv");
-  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1,actual_current_0,actual_current_1,tau0,tau1\n"
-                      "0.0,0.1,0.2,1.5,-0.5,12.25,-3.5\n0.002,0.1,0.2,1.6,-0.4,12.5,-3.75\n";
+  std::ofstream(p) << "timestamp,actual_q_0,actual_q_1,actual_current_0,actual_current_1,tau0,tau1,target_qdd_0,target_qdd_1\n"
+                      "0.0,0.1,0.2,1.5,-0.5,12.25,-3.5,0.5,0.25\n0.002,0.1,0.2,1.6,-0.4,12.5,-3.75,0.5,0.25\n";
   const std::string mp = tmp("both.map");
   std::ofstream(mp) << "tau0,actual_joint_torque_0\ntau1,actual_joint_torque_1\n";
   ColumnMap map = ColumnMap::load(mp);
@@ -301,11 +301,25 @@ TEST(Recording, AJointTorqueTwinReadsTheSensorsWhereTheCurrentIs) {
     const Recording r = read_recording(p, &map);
     EXPECT_EQ(r.samples[1].current[0], 1.6);
     EXPECT_EQ(r.samples[1].joint_torque[1], -3.75);
+    EXPECT_TRUE(r.present & kFieldTargetQdd);
   }
   map.joint_torque_as_current = true;
   const Recording r = read_recording(p, &map);
   ASSERT_TRUE(r.present & kFieldActualCurrent);
   EXPECT_FALSE(r.present & kFieldJointTorque);
+  // the sensors read the link's acceleration: the controller's target is not read (session 55)
+  EXPECT_FALSE(r.present & kFieldTargetQdd);
+  EXPECT_FALSE(r.samples[0].has(kFieldTargetQdd));
+  // a sample in memory (the simulator's), read the same way
+  RobotSample sim = r.samples[0];
+  sim.joint_torque = sim.current;
+  sim.current.setConstant(1.0);
+  sim.present = kFieldActualQd | kFieldActualCurrent | kFieldJointTorque | kFieldTargetQdd;
+  read_as_joint_torque(sim);
+  EXPECT_EQ(sim.present, kFieldActualQd | kFieldActualCurrent);
+  EXPECT_EQ(sim.current[0], 12.25);
+  EXPECT_EQ(read_as_joint_torque(std::uint32_t{kFieldActualQd | kFieldActualCurrent}), std::uint32_t{kFieldActualQd})
+      << "no sensors: no measured channel";
   EXPECT_EQ(r.samples[0].current[0], 12.25);
   EXPECT_EQ(r.samples[1].current[1], -3.75);
   // a file in twinwatch's own names, read without a map of its own

@@ -1,6 +1,7 @@
 // Identification from simulated recordings only: the twin never sees the simulator's truth; the
 // test (evaluation code) compares what came out with it.
 #include "twinwatch/ident/physics_ident.hpp"
+#include "twinwatch/device/recording.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <random>
 
 #include "twinwatch/core/error.hpp"
@@ -245,7 +247,8 @@ TEST_F(Fixture, PredictsAnUntrainedRunWithAnotherSeed) {
 // and c_gen stays 1 and the scale is absolute without a known payload; the drive's friction, which
 // the motor current carries (UR3e: Coulomb 0.4-0.75 N·m), is not in the sensors and comes out near
 // 0; an untrained run at another seed is predicted to within twice the sensors' noise plus what the
-// streamed acceleration leaves; the file keeps the signal and refuses a gain of another value.
+// acceleration estimate leaves; it predicts with the link's acceleration, not the target; the file
+// keeps the signal and refuses a gain of another value.
 TEST(JointTorqueTwin, IsIdentifiedOnTheSensorsWithoutADrive) {
   auto sensed = [](const std::string& name, double duration, unsigned seed) {
     sim::Scenario s = sim::load_scenario(std::string(TWINWATCH_SOURCE_DIR) + "/scenarios/ur3e/" + name + ".yaml");
@@ -256,10 +259,10 @@ TEST(JointTorqueTwin, IsIdentifiedOnTheSensorsWithoutADrive) {
     rec.path = name;
     rec.n_dof = 6;
     const auto sim = sim::make_simulator(s);
-    rec.present = sim->sample_fields();
+    rec.present = device::read_as_joint_torque(sim->sample_fields());  // (as the reader reads a file for the twin)
     sim->run([&](const RobotSample& x) {
       rec.samples.push_back(x);
-      rec.samples.back().current = x.joint_torque;  // (what the reader does for a joint-torque twin)
+      device::read_as_joint_torque(rec.samples.back());
     });
     return std::make_pair(rec, s);
   };
@@ -284,16 +287,47 @@ TEST(JointTorqueTwin, IsIdentifiedOnTheSensorsWithoutADrive) {
   TwinModel t = t0;
   t.set_payload(val_s.options.payload);
   const double sigma[6] = {0.108, 0.108, 0.056, 0.018, 0.018, 0.018};
+  const std::vector<VectorJ> qdd = joint_accelerations(val);
   for (int j = 0; j < 6; ++j) {
     std::vector<double> meas, pred;
     VectorJ i;
-    for (const auto& x : val.samples) {
-      t.predict_current(x.q, x.qd, x.target_qdd, x.temperature, i);
+    for (size_t k = 0; k < val.samples.size(); ++k) {
+      const RobotSample& x = val.samples[k];
+      t.predict_current(x.q, x.qd, qdd[k], x.temperature, i);
       meas.push_back(x.current[j]);
       pred.push_back(i[j]);
     }
-    const auto m = signal::fit_metrics(meas, pred);
-    EXPECT_LT(m.rmse, 2.0 * sigma[j] + 0.05) << "J" << j + 1;
+    EXPECT_LT(signal::fit_metrics(meas, pred).rmse, 2.0 * sigma[j] + 0.05) << "J" << j + 1;
+  }
+  // The sensors read the link's acceleration, not the controller's target (session 55): read for the
+  // twin, the run has no target_qdd, and the twin takes the acceleration from actual_qd. On an
+  // excitation at another noise seed, its largest 0.1 s mean error on J1-J3 (where inertia is large;
+  // the sensor noise averages out to ~0.015 N·m) is about half of what it is with the target, which
+  // trails or leads the link (measured: 0.054/0.058/0.034 against 0.102/0.121/0.062 N·m). With the
+  // target, the library's excitation raised a false alarm on J2 (ratio 1.07; 0.57 without).
+  const auto [ex, ex_s] = sensed("excitation", 20, 98);
+  EXPECT_FALSE(ex.present & kFieldTargetQdd);
+  const std::vector<VectorJ> link_qdd = joint_accelerations(ex);
+  const auto worst_mean_error = [&](int j, bool target) {
+    std::vector<double> e;
+    VectorJ i;
+    for (size_t k = 0; k < ex.samples.size(); ++k) {
+      const RobotSample& x = ex.samples[k];
+      t0.predict_current(x.q, x.qd, target ? x.target_qdd : link_qdd[k], x.temperature, i);  // (the target is still in the sample)
+      e.push_back(x.current[j] - i[j]);
+    }
+    constexpr size_t kSpan = 50;  // 0.1 s at 500 Hz
+    double sum = std::accumulate(e.begin(), e.begin() + kSpan, 0.0), worst = std::abs(sum) / kSpan;
+    for (size_t k = kSpan; k < e.size(); ++k) {
+      sum += e[k] - e[k - kSpan];
+      worst = std::max(worst, std::abs(sum) / kSpan);
+    }
+    return worst;
+  };
+  for (int j = 0; j < 3; ++j) {
+    const double link = worst_mean_error(j, false), target = worst_mean_error(j, true);
+    EXPECT_LT(link, 0.7 * target) << "J" << j + 1;
+    EXPECT_LT(link, 0.08) << "J" << j + 1;
   }
   // the file: the signal kept, a gain of another value refused with the joint named
   const TwinModel back = TwinModel::from_json(t0.to_json(), "t.json");

@@ -39,6 +39,11 @@ struct ColumnMap {
   /// measured channel (RobotSample::current, flagged kFieldActualCurrent), and leaves the file's own
   /// actual_current_* columns unread. A file without actual_joint_torque_* is then refused at its
   /// header. Set by the verbs from the twin (or identify --signal), never by a map file.
+  /// The controller's target acceleration (target_qdd_*) is not read either: a sensor behind the gear
+  /// reads the link's own motion, M q̈ + h with the q̈ the link had, and the twin then takes q̈ from
+  /// actual_qd as for a log without targets. On the simulated UR3e the target trails or leads the
+  /// link's q̈ by up to 0.26 rad/s² on the excitation's J2, which with the target raised a false alarm
+  /// (docs/validation.md, "A torque twin reads the link's acceleration", session 55).
   bool joint_torque_as_current = false;
   /// Loads "file_column,rtde_name[,scale]" lines ('#' comments). Throws ParseError with the line
   /// for a wrong number of cells, a scale that is not a finite non-zero number, an unknown RTDE
@@ -71,6 +76,13 @@ double jitter_gap_factor(double spread, double period, double floor);
 /// or a column map entry whose file column is not in the header. A UTF-8 byte-order mark before
 /// the header is skipped. Timestamp gaps are not errors: they are marked (gap_before) and counted.
 Recording read_recording(const std::string& path, const ColumnMap* map = nullptr);
+
+/// A sample in memory (the simulator's) as a joint-torque twin reads it: what
+/// ColumnMap::joint_torque_as_current does to a file's columns. The sensors' torque goes where the
+/// current is (flagged kFieldActualCurrent), and the sensors' own group and the target acceleration
+/// are no longer present. `present`: a Recording's flags, changed the same way.
+void read_as_joint_torque(RobotSample& s);
+std::uint32_t read_as_joint_torque(std::uint32_t present);
 
 /// Reads a recording row by row, without holding its rows: what read_recording reads, with the same
 /// checks and messages (the header's when constructed, each row's in next()). An offline monitor
