@@ -1,10 +1,23 @@
-// ui::MqttPublisher and its settings: the address and option checks, and what it does while no
-// broker answers (tests/cli/mqtt.sh runs it against a real broker and subscriber).
+// ui::MqttPublisher and its settings: the address and option checks, what it does while no broker
+// answers, and its fallback to MQTT 3.1.1 with a broker of the test's own (tests/cli/mqtt.cmake runs it
+// against a real broker and subscriber).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <mutex>
+#include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/ui/mqtt.hpp"
@@ -140,4 +153,165 @@ TEST(MqttPublisher, AFullOutboxDropsTheOldestEventsAndCountsThem) {
   bool said = false;
   for (const auto& n : pub.take_notes()) said = said || n.find("oldest event line(s) dropped") != std::string::npos;
   EXPECT_TRUE(said);
+}
+
+namespace {
+// A broker that speaks MQTT 3.1.1 only, as older brokers do (mosquitto 1.5, many PLC gateways): it
+// answers a CONNECT of another protocol level with CONNACK return code 1, "unacceptable protocol
+// level", and closes (MQTT 3.1.1 §3.1.2.2); a 3.1.1 CONNECT it accepts, then acknowledges each QoS 1
+// PUBLISH (PUBACK) and answers PINGREQ. It records the levels it was asked for and what was published.
+// (Debian's mosquitto 2 speaks 5 and cannot be told not to: the fallback needs a broker of its own.)
+class Mqtt311Broker {
+ public:
+  struct Published {
+    std::string topic, payload;
+    int qos = 0;
+    bool retain = false;
+  };
+  Mqtt311Broker() {
+    listener_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = 0;  // (any free port)
+    if (listener_ < 0 || ::bind(listener_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listener_, 4) != 0)
+      throw std::runtime_error("the test broker cannot listen");
+    socklen_t len = sizeof a;
+    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&a), &len);
+    port_ = ntohs(a.sin_port);
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~Mqtt311Broker() {
+    stop_ = true;
+    ::shutdown(listener_, SHUT_RDWR);
+    ::close(listener_);
+    thread_.join();
+  }
+  int port() const { return port_; }
+  std::vector<int> levels() const {
+    std::lock_guard lk(mu_);
+    return levels_;
+  }
+  std::vector<Published> published() const {
+    std::lock_guard lk(mu_);
+    return published_;
+  }
+
+ private:
+  // one whole packet: its first byte and its body (false: the connection ended)
+  bool read_packet(int fd, std::uint8_t& type, std::string& body) {
+    auto read_n = [this, fd](void* to, std::size_t n) {
+      auto* p = static_cast<char*>(to);
+      while (n > 0) {
+        if (stop_) return false;  // (a client that neither sends nor closes does not hold the test)
+        pollfd pf{fd, POLLIN, 0};
+        if (::poll(&pf, 1, 100) <= 0) continue;
+        const ssize_t got = ::recv(fd, p, n, 0);
+        if (got <= 0) return false;
+        p += got;
+        n -= static_cast<std::size_t>(got);
+      }
+      return true;
+    };
+    if (!read_n(&type, 1)) return false;
+    std::size_t length = 0;
+    for (int shift = 0; shift < 28; shift += 7) {  // the remaining length: a variable byte integer
+      std::uint8_t b = 0;
+      if (!read_n(&b, 1)) return false;
+      length |= static_cast<std::size_t>(b & 0x7f) << shift;
+      if (!(b & 0x80)) break;
+    }
+    body.assign(length, '\0');
+    return length == 0 || read_n(body.data(), length);
+  }
+  static void send_bytes(int fd, std::initializer_list<std::uint8_t> bytes) {
+    const std::vector<std::uint8_t> b(bytes);
+    (void)::send(fd, b.data(), b.size(), MSG_NOSIGNAL);
+  }
+  void serve() {
+    while (!stop_) {
+      pollfd pf{listener_, POLLIN, 0};
+      if (::poll(&pf, 1, 100) <= 0) continue;
+      const int fd = ::accept(listener_, nullptr, nullptr);
+      if (fd < 0) continue;
+      session(fd);
+      ::close(fd);
+    }
+  }
+  void session(int fd) {
+    std::uint8_t type = 0;
+    std::string body;
+    if (!read_packet(fd, type, body) || (type >> 4) != 1 || body.size() < 7) return;  // CONNECT
+    const int level = static_cast<std::uint8_t>(body[6]);                              // after "\0\4MQTT"
+    {
+      std::lock_guard lk(mu_);
+      levels_.push_back(level);
+    }
+    if (level != 4) {
+      send_bytes(fd, {0x20, 0x02, 0x00, 0x01});  // CONNACK: unacceptable protocol level; then close
+      return;
+    }
+    send_bytes(fd, {0x20, 0x02, 0x00, 0x00});
+    while (!stop_ && read_packet(fd, type, body)) {
+      const int kind = type >> 4;
+      if (kind == 3) {  // PUBLISH
+        Published m;
+        m.qos = (type >> 1) & 3;
+        m.retain = type & 1;
+        const std::size_t tlen = (static_cast<std::uint8_t>(body[0]) << 8) | static_cast<std::uint8_t>(body[1]);
+        m.topic = body.substr(2, tlen);
+        std::size_t at = 2 + tlen;
+        if (m.qos > 0) {
+          send_bytes(fd, {0x40, 0x02, static_cast<std::uint8_t>(body[at]), static_cast<std::uint8_t>(body[at + 1])});  // PUBACK
+          at += 2;
+        }
+        m.payload = body.substr(at);  // (3.1.1: no properties before it)
+        std::lock_guard lk(mu_);
+        published_.push_back(m);
+      } else if (kind == 12) {
+        send_bytes(fd, {0xd0, 0x00});  // PINGRESP
+      } else if (kind == 14) {
+        return;  // DISCONNECT
+      }
+    }
+  }
+  int listener_ = -1, port_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+  mutable std::mutex mu_;
+  std::vector<int> levels_;
+  std::vector<Published> published_;
+};
+}  // namespace
+
+// A broker that speaks MQTT 3.1.1 only: the publisher's MQTT 5 CONNECT is refused as an unacceptable
+// protocol level, it says so once and connects again with 3.1.1, and the events and the run's state
+// (retained, QoS 1) are delivered; under 3.1.1 the acknowledgement is a PUBACK without a reason code
+TEST(MqttPublisher, FallsBackToMqtt311WithABrokerThatSpeaksNothingElse) {
+  Mqtt311Broker broker;
+  ui::MqttSettings s;
+  s.host = "127.0.0.1";
+  s.port = broker.port();
+  s.topic = "cell3/ur3e";
+  ui::MqttPublisher pub(s);
+  pub.publish_status(R"({"state":"monitoring"})");
+  pub.publish_event("collision", R"({"class":"collision","joint":3})");
+  EXPECT_EQ(pub.drain(std::chrono::milliseconds(8000)), 0) << "everything delivered after the fallback";
+  const ui::MqttCounters c = pub.counters();
+  EXPECT_EQ(c.delivered, 2);
+  EXPECT_EQ(c.refused, 0);
+  EXPECT_EQ(c.connects, 1);
+  EXPECT_THAT(broker.levels(), ::testing::ElementsAre(5, 4));  // MQTT 5 asked first, then 3.1.1
+  std::string notes;
+  for (const auto& n : pub.take_notes()) notes += n + "\n";
+  EXPECT_THAT(notes, HasSubstr("speaks MQTT 3.1.1, not 5: publishing with 3.1.1"));
+  EXPECT_THAT(notes, ::testing::Not(HasSubstr("refused the connection"))) << "the fallback is no refusal";
+  const auto got = broker.published();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].topic, "cell3/ur3e/status");
+  EXPECT_EQ(got[0].payload, R"({"state":"monitoring"})");
+  EXPECT_TRUE(got[0].retain);
+  EXPECT_EQ(got[0].qos, 1);
+  EXPECT_EQ(got[1].topic, "cell3/ur3e/events/collision");
+  EXPECT_EQ(got[1].payload, R"({"class":"collision","joint":3})");
 }
