@@ -8,21 +8,37 @@
 namespace twinwatch::ident {
 
 namespace {
-constexpr std::uint32_t kNeeded = kFieldTargetQ | kFieldTargetQd | kFieldTargetQdd | kFieldTargetMoment;
+constexpr std::uint32_t kNeeded = kFieldTargetQ | kFieldTargetQd | kFieldTargetMoment;  // (and target_qdd, or the step before)
 // (measured: the arm's own model 0.05-0.17 relative rms, another's 0.6-2.2)
 constexpr double kOwnFit = 0.3, kFactor = 3.0;
+// a step longer than this is no step to difference the target velocity over (a gap)
+constexpr double kLongestStep = 0.05;
 }  // namespace
 
 ControllerTorqueAccumulator::ControllerTorqueAccumulator(const model::RobotModel& robot, size_t stride)
     : model_(robot), data_(model_), stride_(std::max<size_t>(1, stride)), e2_(VectorJ::Zero(robot.n_dof())) {}
 
 void ControllerTorqueAccumulator::add(const RobotSample& s) {
-  if ((s.present & kNeeded) != kNeeded || s.n_dof() != model_.n_dof()) return;
   // only where the controller drives the arm (RUNNING, NORMAL): stopped, powered off or braking, its
   // torque is no model's along targets
-  if (s.robot_mode != 7 || s.safety_mode != 1) return;
+  const bool usable = (s.present & kNeeded) == kNeeded && s.n_dof() == model_.n_dof() && s.robot_mode == 7 && s.safety_mode == 1 &&
+                      s.target_q.allFinite() && s.target_qd.allFinite() && s.target_moment.allFinite();
+  const bool streamed = (s.present & kFieldTargetQdd) != 0;
+  // without target_qdd: the middle of the step from the previous sample (this class's comment)
+  const double dt = s.timestamp - previous_t_;
+  const bool differenced = usable && !streamed && previous_ok_ && !s.gap_before && dt > 0.0 && dt <= kLongestStep;
+  if (usable && !streamed) {
+    if (differenced) {
+      q_ = 0.5 * (s.target_q + previous_q_);
+      qd_ = 0.5 * (s.target_qd + previous_qd_);
+      qdd_ = (s.target_qd - previous_qd_) / dt;
+      moment_ = 0.5 * (s.target_moment + previous_moment_);
+    }
+    previous_q_ = s.target_q, previous_qd_ = s.target_qd, previous_moment_ = s.target_moment, previous_t_ = s.timestamp;
+  }
+  previous_ok_ = usable && !streamed;
+  if (!(differenced || (usable && streamed && s.target_qdd.allFinite()))) return;
   if (seen_++ % stride_ != 0) return;
-  if (!s.target_q.allFinite() || !s.target_qd.allFinite() || !s.target_qdd.allFinite() || !s.target_moment.allFinite()) return;
   const bool with_payload = (s.present & kFieldPayload) != 0;
   const double mass = with_payload && std::isfinite(s.payload) && s.payload > 0.0 ? s.payload : 0.0;
   const Eigen::Vector3d cog = mass > 0.0 && std::isfinite(s.payload_cog[0]) && std::isfinite(s.payload_cog[1]) && std::isfinite(s.payload_cog[2])
@@ -39,9 +55,10 @@ void ControllerTorqueAccumulator::add(const RobotSample& s) {
     }
     declared_ = mass, declared_cog_ = cog;
   }
-  const VectorJ& tau = model::rnea(model_, data_, s.target_q, s.target_qd, s.target_qdd);
-  e2_ += (s.target_moment - tau).cwiseAbs2();
-  t2_ += s.target_moment.squaredNorm();
+  const VectorJ& tau = streamed ? model::rnea(model_, data_, s.target_q, s.target_qd, s.target_qdd) : model::rnea(model_, data_, q_, qd_, qdd_);
+  const VectorJ& measured = streamed ? s.target_moment : moment_;
+  e2_ += (measured - tau).cwiseAbs2();
+  t2_ += measured.squaredNorm();
   ++samples_;
 }
 

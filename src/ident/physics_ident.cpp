@@ -555,6 +555,7 @@ TargetDirectionFit estimate_target_direction(const std::vector<const device::Rec
     const double period = median_step(rec);
     if (!(period > 0.0)) continue;
     const bool acc = (rec.present & kFieldTargetQdd) != 0;
+    fit.with_acceleration = fit.with_acceleration && acc;
     for (size_t k = 1; k + 1 < rec.samples.size(); ++k) {
       const RobotSample& s = rec.samples[k];
       if (!central_step(rec, k, period)) continue;

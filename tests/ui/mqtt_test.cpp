@@ -183,9 +183,8 @@ class Mqtt311Broker {
   }
   ~Mqtt311Broker() {
     stop_ = true;
-    ::shutdown(listener_, SHUT_RDWR);
+    thread_.join();  // (its polls time out within 0.1 s and see the stop)
     ::close(listener_);
-    thread_.join();
   }
   int port() const { return port_; }
   std::vector<int> levels() const {
@@ -260,14 +259,14 @@ class Mqtt311Broker {
         m.retain = type & 1;
         const std::size_t tlen = (static_cast<std::uint8_t>(body[0]) << 8) | static_cast<std::uint8_t>(body[1]);
         m.topic = body.substr(2, tlen);
-        std::size_t at = 2 + tlen;
-        if (m.qos > 0) {
-          send_bytes(fd, {0x40, 0x02, static_cast<std::uint8_t>(body[at]), static_cast<std::uint8_t>(body[at + 1])});  // PUBACK
-          at += 2;
-        }
+        const std::size_t at = 2 + tlen + (m.qos > 0 ? 2 : 0);
         m.payload = body.substr(at);  // (3.1.1: no properties before it)
-        std::lock_guard lk(mu_);
-        published_.push_back(m);
+        {  // (stored before it is acknowledged: the test reads it once the publisher has its PUBACK)
+          std::lock_guard lk(mu_);
+          published_.push_back(m);
+        }
+        if (m.qos > 0)
+          send_bytes(fd, {0x40, 0x02, static_cast<std::uint8_t>(body[2 + tlen]), static_cast<std::uint8_t>(body[3 + tlen])});  // PUBACK
       } else if (kind == 12) {
         send_bytes(fd, {0xd0, 0x00});  // PINGRESP
       } else if (kind == 14) {

@@ -357,9 +357,14 @@ int run_identify(const IdentifyOptions& o) {
         width.push_back(fmt::format("{:.2f}", 1000.0 * td.width[j]));
         width_time.push_back(fmt::format("{:.1f}", 1000.0 * td.width_time[j]));
       }
-      fmt::print("drive direction near standstill: read on target_qd + lead x target_qdd where it agrees with actual_qd; lead [ms] {}; "
-                 "tracking error near standstill sqrt(w^2 + (t x target_qdd)^2), w [mrad/s] {}, t [ms] {} ({} joint samples)\n",
-                 fmt::join(lead, " "), fmt::join(width, " "), fmt::join(width_time, " "), report.target_direction.samples);
+      if (report.target_direction.with_acceleration)
+        fmt::print("drive direction near standstill: read on target_qd + lead x target_qdd where it agrees with actual_qd; lead [ms] {}; "
+                   "tracking error near standstill sqrt(w^2 + (t x target_qdd)^2), w [mrad/s] {}, t [ms] {} ({} joint samples)\n",
+                   fmt::join(lead, " "), fmt::join(width, " "), fmt::join(width_time, " "), report.target_direction.samples);
+      else  // (a torque twin reads no target_qdd; nor does a log without it)
+        fmt::print("{} near standstill: read on target_qd where it agrees with actual_qd (no target_qdd read: without a lead); "
+                   "tracking error near standstill w [mrad/s] {} ({} joint samples)\n",
+                   twin.measures_torque() ? "direction of motion" : "drive direction", fmt::join(width, " "), report.target_direction.samples);
     }
     for (const auto& note : report.notes) fmt::print("note: {}\n", note);
     if (learned) {

@@ -456,8 +456,9 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     trace << '\n';
   };
   bool silent_gap = false;   // the silence at the end is one of the monitor's gaps (a stream fault)
-  bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1)
-  bool stopped_in_outage = false;  // ... and a signal then stopped it (exit status 4)
+  bool lost_at_end = false;  // the robot stopped answering before monitoring ended (exit status 1, or 4 below)
+  bool stopped_in_outage = false;  // ... and a signal then stopped it (exit status 4: kExitStoppedInOutage)
+  bool stopped_by_signal = false;  // a live stream's monitoring ended by Ctrl-C, SIGTERM or SIGHUP
   bool replay_stopped = false;  // a replay stopped at the user's request (serve, Ctrl-C)
   if (!client) {
     double previous = std::numeric_limits<double>::quiet_NaN();
@@ -552,6 +553,9 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         tend_mqtt();
       }
     }
+    // (read once, where the loop ended: a signal during the stop below did not end the loop, and an
+    // outage at --duration's end stays a lost connection)
+    stopped_by_signal = cli::interrupted();
     client->stop();
     while (client->pop(s, std::chrono::nanoseconds(0))) take(s);  // what was received is still analysed
     // a connection lost and not restored before the end: that stretch was not watched, and the
@@ -563,10 +567,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
         cli::end_silence(std::chrono::steady_clock::now(), end, last_sample, o.duration > 0, client->stats().frequency);
     silent_gap = client->stats().received > 0 && silence.lost;
     if (silent_gap) mon.stream_silent(silence.seconds);
-    const bool dropped = o.no_reconnect && client->finished() && !cli::interrupted();
+    const bool dropped = o.no_reconnect && client->finished() && !stopped_by_signal;
     if (dropped && !o.quiet && !o.json) fmt::print("the connection was lost; --no-reconnect: monitoring stopped\n");
     lost_at_end = silent_gap || dropped;
-    stopped_in_outage = silent_gap && !dropped && cli::interrupted();
+    stopped_in_outage = silent_gap && !dropped && stopped_by_signal;
     if (copy) {
       copy->close();
       const auto& files = copy->files();
@@ -583,7 +587,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (!client->fatal_error().empty()) throw std::runtime_error(client->fatal_error());
   }
   mon.finish();
-  const char* status = lost_at_end ? "connection lost" : replay_stopped || (client && cli::interrupted()) ? "stopped" : "finished";
+  const char* status = lost_at_end ? "connection lost" : replay_stopped || stopped_by_signal ? "stopped" : "finished";
   if (hooks.on_status) hooks.on_status(mon, status, stream_line());
   close_written(jl, o.events_path);
   if (store && !unstored.empty()) {
@@ -922,9 +926,10 @@ twinwatch::cli::VerbRegistrar reg_monitor{"monitor", 40, [](CLI::App& app) {
       "recording, the exit status is then 128 + the signal (130 for Ctrl-C: it was not watched to its end);\n"
       "watching a live stream (--rtde), 0, or 4 when the stream had been silent for more than 1.5 s before\n"
       "the stop (a stream_fault event says so; the systemd unit takes 4 as a clean stop). A second signal\n"
-      "ends it at once (128 + the signal). Watching a live stream to --duration's end, 1 when the robot\n"
-      "stopped answering before it.\n"
-      "With --fail-on CLASSES, 3 when an event of those classes was found (and the run otherwise ended 0)."));
+      "ends it at once (128 + the signal). Without a signal, a live stream's monitoring exits 1 when the\n"
+      "robot had stopped answering at --duration's end, or when --no-reconnect ended it at a lost connection.\n"
+      "With --fail-on CLASSES, 3 when an event of those classes was found and the run otherwise ended 0\n"
+      "(1 and 4 come first)."));
   const auto check = twinwatch::cli::add_monitor_options(sub, o);
   sub->callback([=] {
     check();

@@ -144,7 +144,7 @@ twinwatch::cli::VerbRegistrar reg_serve{"serve", 44, [](CLI::App& app) {
       "its threshold, over the last seconds; I_total; the open alerts; the events; the notes. A script reads\n"
       "the same as JSON: GET /api/state?since=CURSOR (the cursor of the last answer; 0 for everything kept).\n"
       "Alerts, events, --events, --db and the exit status are those of 'twinwatch monitor' with the same options,\n"
-      "but Ctrl-C, SIGTERM or SIGHUP, the way a serve ends, exit 0 on a recording too (1 after a live stream's\n"
+      "but Ctrl-C, SIGTERM or SIGHUP, the way a serve ends, exit 0 on a recording too (4 after a live stream's\n"
       "silence of more than 1.5 s before the stop).\n"
       "Examples:\n"
       "  twinwatch serve --twin twin.json --rtde 192.168.1.10              # a robot, page at http://127.0.0.1:8080/\n"

@@ -29,6 +29,10 @@ struct ControllerTorqueFit {
 
 /// The fit accumulated sample by sample (every `stride`-th sample that carries finite targets and
 /// torque, of those where the controller drives the arm: robot_mode RUNNING, safety_mode NORMAL). The declared payload (kFieldPayload) is attached where the sample carries it, else none.
+/// A recording without target_qdd (a joint-torque twin reads none: device::ColumnMap::joint_torque_as_current)
+/// is compared at the middle of each step between two such samples: the acceleration the difference
+/// of target_qd over the step, the positions, velocities and torque the means of its ends (the
+/// targets are smooth and noise-free; second order in the 2 ms step).
 class ControllerTorqueAccumulator {
  public:
   explicit ControllerTorqueAccumulator(const model::RobotModel& robot, size_t stride = 1);
@@ -41,6 +45,10 @@ class ControllerTorqueAccumulator {
   model::DynamicsData data_;
   size_t stride_, seen_ = 0, samples_ = 0;
   VectorJ e2_;
+  // the previous sample's targets and torque (a recording without target_qdd), if it was one to compare
+  bool previous_ok_ = false;
+  double previous_t_ = 0.0;
+  VectorJ previous_q_, previous_qd_, previous_moment_, q_, qd_, qdd_, moment_;
   double t2_ = 0.0, declared_ = -1.0;
   Eigen::Vector3d declared_cog_ = Eigen::Vector3d::Zero();
 };

@@ -111,6 +111,9 @@ struct TargetDirectionFit {
   /// the blend is at least as wide in time as the switch's offset from the crossing at 90 % of them
   std::vector<long> switches;
   std::string note;   ///< why it is empty, when it is
+  /// every recording streamed target_qdd; without it (a joint-torque twin reads none) the lead and
+  /// the width's time part are 0: the direction is read on target_qd itself
+  bool with_acceleration = true;
 };
 TargetDirectionFit estimate_target_direction(const std::vector<const device::Recording*>& recordings);
 
