@@ -1013,6 +1013,7 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
   if (adjust) adjust(cfg);
   if (period > 0) cfg.nominal_period = period;
   cfg.gap_factor = std::max(cfg.gap_factor, stream.gap_factor);  // a jittery logger clock (device::RecordingTiming)
+  cfg.gaps_judged = true;  // (as monitor on a recording: the reader's gaps, one rule)
   monitor::Monitor mon(twin, cfg);
   // what the monitor says while it runs (the payload it predicts with, stops, held readings): the
   // report's reader sees what `monitor` prints

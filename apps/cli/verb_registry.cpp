@@ -112,6 +112,16 @@ const CLI::Validator& nonnegative_number() {
   return v;
 }
 
+CLI::Validator number_in(double lo, double hi, const char* unit) {
+  return CLI::Validator(
+      [lo, hi, unit](std::string& text) -> std::string {
+        double v = 0.0;
+        if (read_number(text, v) && v >= lo && v <= hi) return {};
+        return fmt::format("expected a number from {:g} to {:g} {}, got '{}'", lo, hi, unit, text);
+      },
+      fmt::format("{:g}..{:g} {}", lo, hi, unit));
+}
+
 CLI::Validator whole_number(long lo, long hi) {
   return CLI::Validator(
       [lo, hi](std::string& text) -> std::string {

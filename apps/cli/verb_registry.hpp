@@ -59,6 +59,8 @@ const CLI::Validator& nonnegative_number();
 /// A whole number from lo to hi: CLI11's Range on an int option said "Value 2.5 not in range 1 to
 /// 1000" for 2.5, which is in range and not whole.
 CLI::Validator whole_number(long lo, long hi);
+/// A finite number from lo to hi [unit]: "expected a number from 0 to 0.1 s, got 'abc'"
+CLI::Validator number_in(double lo, double hi, const char* unit);
 
 /// A library's message that begins with one of its fields ("ramp: expected ...", "q0 has 3 values")
 /// said with the option the user typed instead ("--ramp: expected ..."): the first `fields` pair

@@ -205,6 +205,8 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
       }
     }
   }
+  // the names as the file or its map gives them, for messages (before a torque twin's renaming)
+  const std::vector<std::string> given_names = names;
   if (map && map->joint_torque_as_current) {
     // the twin's measured channel is the joint torque sensors': their columns fill the current's
     // place, and the motor currents (a Kinova logs both) are not read; nor is the controller's target
@@ -281,10 +283,18 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
   for (size_t c = 0; c < names.size(); ++c) {
     if (names[c].empty() || !known_name(names[c])) continue;
     for (size_t d = c + 1; d < names.size(); ++d)
-      if (names[d] == names[c])
+      if (names[d] == names[c]) {
+        // (the map's lines, when the map made them the same)
+        std::string lines;
+        if (map) {
+          const auto a = map->lines.find(header[c]), b = map->lines.find(header[d]);
+          if (a != map->lines.end() && b != map->lines.end())
+            lines = fmt::format("; the column map{} maps both, lines {} and {}", map->path.empty() ? "" : " " + map->path, a->second, b->second);
+        }
         throw ParseError(path, 1, header[d],
-                         fmt::format("column {} is '{}' again (column {} is '{}'): expected each signal once",
-                                     d + 1, names[d], c + 1, header[c]));
+                         fmt::format("column {} is '{}' again (column {} is '{}'{}): expected each signal once",
+                                     d + 1, given_names[d], c + 1, header[c], lines));
+      }
   }
   if (ts_col < 0) throw ParseError(path, 1, "timestamp", "missing required column");
   for (int j = 0; j < n; ++j)

@@ -744,13 +744,17 @@ std::vector<Hypothesis> diagnose(const model::RobotModel& model, const std::vect
     out.push_back({FaultClass::StreamFault, -1, -1, static_cast<double>(gaps), "gaps", 1.0,
                    fmt::format("{} gap(s) in the sample stream", gaps), {}, {}});
   }
-  // frozen channel: identical consecutive current values while the joint moves
+  // frozen channel: identical consecutive current values while the joint moves (and, given the
+  // raise, a run that spans it)
+  const bool any_time = std::isnan(options.raised_at);
   for (int j = 0; j < n; ++j) {
     int run = 1, best = 1;
+    double run_from = window.front().t;
     for (size_t k = 1; k < window.size(); ++k) {
       const bool same = window[k].current[j] == window[k - 1].current[j] && std::abs(window[k].qd[j]) > kMovingVelocity;
       run = same ? run + 1 : 1;
-      best = std::max(best, run);
+      if (!same) run_from = window[k].t;
+      if (any_time || (run_from <= options.raised_at && window[k].t >= options.raised_at)) best = std::max(best, run);
     }
     if (best >= options.frozen_samples)
       out.push_back({FaultClass::SensorFault, j, -1, static_cast<double>(best), "samples", 1.0,

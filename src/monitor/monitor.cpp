@@ -1326,6 +1326,7 @@ void Monitor::run_diagnosis(double t, bool long_look, double until) {
   fill_window(e.t_start - cfg_.diagnosis_pre, until);
   DiagnosisOptions o;
   o.frozen_samples = cfg_.frozen_samples;
+  o.raised_at = raise_time_;
   o.payload_com = payload_com_in_link();
   // (joint torque sensors read a resting joint's load: no friction hides it from them)
   if (!twin_.measures_torque()) o.static_friction = static_friction_;
@@ -2336,7 +2337,7 @@ void Monitor::judge(const RobotSample& s) {
   // stream: gaps in the controller timestamp are events of their own, never interpolated
   const double dt = have_prev_ ? t - t_prev_ : cfg_.nominal_period;
   const bool gap = have_prev_ && (s.gap_before || dt > gap_factor_ * cfg_.nominal_period);
-  if (have_prev_ && !gap) track_jitter(dt, t);
+  if (have_prev_ && !gap && !cfg_.gaps_judged) track_jitter(dt, t);
   const bool restart = gap || restart_pending_;
   if (restart) {
     restart_after_gap(s);

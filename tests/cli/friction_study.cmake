@@ -56,6 +56,11 @@ set_tests_properties(cli.friction_study_save_twin_needs_gain PROPERTIES FIXTURES
 # real data (only where ../shared/data/real is present, as the CI machine has it)
 set(kinova ${PROJECT_SOURCE_DIR}/../shared/data/real/kinova_gen3_chiha)
 if(EXISTS ${kinova}/joint_2_trapez.csv)
+  # a joint-torque twin watching a run whose every Torque channel froze at once (audit of session 55)
+  add_test(NAME cli.kinova_joint_torque_frozen_channels
+    COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/kinova_joint_torque.sh $<TARGET_FILE:twinwatch> ${kinova}
+            ${PROJECT_SOURCE_DIR}/data/robots/kinova_gen3.urdf ${PROJECT_BINARY_DIR}/cli-kinova-torque)
+  set_tests_properties(cli.kinova_joint_torque_frozen_channels PROPERTIES PASS_REGULAR_EXPRESSION "KINOVA-JOINT-TORQUE-OK" TIMEOUT 120)
   # --save-twin does not store an equation that errs more than the validation record's own rms
   # (ParFam-H runs away on the trapezoid's unseen deceleration: 2.9e7 N·m), and says so after the tables
   set(fs ${PROJECT_BINARY_DIR}/cli-friction)

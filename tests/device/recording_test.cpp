@@ -610,6 +610,20 @@ TEST(Recording, ASignalInTwoColumnsIsRefusedNamingBoth) {
   EXPECT_THAT(error_of("timestamp,timestamp,actual_q_0\n0,0,0\n"), HasSubstr("column 2 is 'timestamp' again"));
   // unknown columns are ignored, so two of them are no conflict
   EXPECT_EQ(error_of("timestamp,actual_q_0,note,note\n0,0,1,2\n0.002,0,1,2\n"), "no error");
+  // two file columns a map gives one name: named as the map names them, with the map's lines, also
+  // for a torque twin, whose reading renames the sensors' group (it said 'actual_current_1': audit of
+  // session 55)
+  const std::string p = tmp("typo.csv");
+  std::ofstream(p) << "t,q0,q1,T0,T1\n0,0,0,1,2\n0.002,0,0,1,2\n";
+  const std::string mp = tmp("typo.map");
+  std::ofstream(mp) << "t,timestamp\nq0,actual_q_0\nq1,actual_q_1\nT0,actual_joint_torque_1\nT1,actual_joint_torque_1\n";
+  ColumnMap map = ColumnMap::load(mp);
+  for (bool torque : {false, true}) {
+    map.joint_torque_as_current = torque;
+    const std::string e = twinwatch::test::error_text<ParseError>([&] { read_recording(p, &map); });
+    EXPECT_THAT(e, HasSubstr("typo.csv:1: field 'T1': column 5 is 'actual_joint_torque_1' again (column 4 is 'T0'; the column map "));
+    EXPECT_THAT(e, HasSubstr("typo.map maps both, lines 4 and 5)"));
+  }
 }
 
 TEST(Recording, AByteOrderMarkBeforeTheHeaderIsSkipped) {

@@ -972,3 +972,42 @@ TEST(ContactIsolation, AOneJointResistanceIsScoredOnTheWeightedEnergy) {
 
 }  // namespace
 }  // namespace twinwatch::monitor
+
+namespace twinwatch::monitor {
+
+// A frozen channel explains an alert only when it was frozen at the alert's raise (session 55): a
+// persistent alert looked at again later took a stretch that froze long after its raise, in its
+// window, for its cause (a real Kinova log: a J5 alert raised at 0.05 s became "J1 frozen for 87
+// samples", beside the freeze's own event). Without the raise time, any run in the window counts.
+TEST(Diagnosis, AFrozenChannelExplainsAnAlertOnlyWhenFrozenAtItsRaise) {
+  const model::RobotModel m = model::load_robot("ur3e");
+  std::vector<DiagnosisSample> win;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int k = 0; k < 200; ++k) {
+    DiagnosisSample s;
+    s.t = 0.002 * k;
+    s.q = VectorJ::Constant(6, 0.3);
+    s.qd = VectorJ::Constant(6, 0.5);
+    s.qdd = VectorJ::Zero(6);
+    s.r_tau = VectorJ::Zero(6);
+    for (int j = 0; j < 6; ++j) s.r_tau[j] = noise(rng);
+    s.r_tau[4] += 2.0;  // (the alert's own residual, on J5)
+    s.current = VectorJ::Constant(6, 1.0) + 0.01 * k * VectorJ::Ones(6);
+    if (k >= 120 && k < 180) s.current[0] = 2.25;  // J1 frozen from 0.24 to 0.358 s while it moves
+    win.push_back(s);
+  }
+  const auto frozen = [&](double raised_at) {
+    DiagnosisOptions o;
+    o.raised_at = raised_at;
+    for (const Hypothesis& h : diagnose(m, win, 0.4, 4, o, nullptr))
+      if (h.fault == FaultClass::SensorFault && h.joint == 0 && h.detail.find("frozen") != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(frozen(std::numeric_limits<double>::quiet_NaN())) << "any time: the run counts";
+  EXPECT_TRUE(frozen(0.30)) << "raised while J1 was frozen";
+  EXPECT_FALSE(frozen(0.02)) << "raised long before J1 froze";
+  EXPECT_FALSE(frozen(0.39)) << "raised after J1 came back";
+}
+
+}  // namespace twinwatch::monitor

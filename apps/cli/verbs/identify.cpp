@@ -303,6 +303,17 @@ int run_identify(const IdentifyOptions& o) {
     report.rmse = lr.rmse;
     report.r2 = lr.r2;
   }
+  // a window narrower than the default's samples differences a noisier velocity (audit of session 55:
+  // 0.0005 s at 1 kHz, one sample, gave the Panda's J1 R² 0.50 and a false payload change)
+  if (o.acceleration_window > 0.0 && !runs.empty() && !o.quiet) {
+    const double period = runs.front().recording->median_period;
+    if (const int h = twin.acceleration_half_width(period); h < ident::TwinModel::kAccelerationHalfWidth)
+      fmt::print(stderr,
+                 "note: --acceleration-window {:g} s is {} sample(s) at the recordings' {:.3g} ms period, narrower than the default {}: "
+                 "the acceleration of a recording without target_qdd is then noisier (the default, or a wider window for a noisy "
+                 "velocity: ~0.025 s for a Franka Panda's dq)\n",
+                 o.acceleration_window, h, 1000.0 * period, ident::TwinModel::kAccelerationHalfWidth);
+  }
   // thresholds of the monitor from the same healthy recordings (re-learn with 'twinwatch thresholds')
   std::vector<monitor::HealthyRun> healthy;
   for (const auto& r : runs) healthy.push_back({r.recording, r.payload});
@@ -715,7 +726,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
                   "A 1 kHz log of a noisy velocity (a Franka Panda's dq) wants ~0.025: differenced over 3 ms its noise biases the "
                   "inertia the fit finds, and widens the thresholds")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, ident::TwinModel::kAccelerationWindowMax));
+      ->check(cli::number_in(0.0, ident::TwinModel::kAccelerationWindowMax, "s"));
   sub->add_option("--known-payload", o->payloads,
                   "FILE=MASS[,CX,CY,CZ]: the recording FILE was made with this payload (kg, m in the flange frame); "
                   "identifies the current-to-torque gains; repeat the option for several recordings")

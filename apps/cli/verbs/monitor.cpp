@@ -176,16 +176,18 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     for (size_t i = 0; i < o.recordings.size(); ++i) sources.push_back({stream.first_t[i], stored_path(o.recordings[i])});
     // a logger's jittery clock: steps the reader did not count as gaps are none to the monitor either
     cfg.gap_factor = std::max(cfg.gap_factor, stream.gap_factor);
+    cfg.gaps_judged = true;  // (by the reader, with the whole files' jitter: one rule, said once)
     if (stream.scans.front().timing.median_period > 0) use_rate(stream.scans.front().timing.median_period, o.recordings.front());
     if (std::isfinite(started_at)) wall_offset = started_at - sources.front().first;
   } else {
     if (!o.column_map.empty())
       throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
-    if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
+    // (the signal first: a Panda's torque twin is refused for what it compares, not for its 7 joints)
     if (twin.measures_torque())
       throw InvalidArgument(fmt::format("the twin {} compares joint torque sensors (signal joint_torque), which RTDE does not stream (a UR "
                                         "arm has none): monitor a recording of them, or a twin identified on the motor currents",
                                         o.twin));
+    if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
     cli::RtdeSourceOptions so;
     so.endpoint = o.rtde;
     so.wait_s = o.wait;
@@ -298,7 +300,10 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     return fail_on_any || std::find(fail_classes.begin(), fail_classes.end(), c) != fail_classes.end();
   };
   long failing_events = 0;
-  double raise_shown = std::numeric_limits<double>::quiet_NaN();  // the raise time of the alert last printed
+  // the raise times of the open alerts already printed: a later line of one is an UPDATE, also after
+  // another alert's lines came between (a persistent alert parked under a contact and resumed was
+  // printed as a new ALERT at its old time: audit of session 55)
+  std::set<std::uint64_t> raises_shown;  // (Event::serial)
   // extrapolation: where the robot moves beyond what the twin was identified on, an alert may be the
   // twin's model error; the alert says so when it was raised there (EnvelopeWatch::alert_note)
   monitor::EnvelopeWatch watch(twin.envelope);
@@ -352,15 +357,15 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
       if (o.quiet || o.json) return;
       // the raise time (what a detection delay counts to), and when the exceedance began; a later
       // diagnosis of the same alert is printed at the time it was made
-      if (e.t_detected != raise_shown)
+      if (e.serial == 0 || raises_shown.insert(e.serial).second)
         fmt::print("{}{:9.3f} s  ALERT  {} ({} {:.3f} s)\n", wall_prefix(e.t_detected), e.t_detected, e.detail,
                    e.fault == monitor::FaultClass::Unknown ? "above the threshold since" : "since", e.t_start);
       else
         fmt::print("{}{:9.3f} s  UPDATE {} (the alert raised at {:.3f} s)\n", wall_prefix(e.t_end), e.t_end, e.detail, e.t_detected);
       std::fflush(stdout);
-      raise_shown = e.t_detected;
       return;
     }
+    raises_shown.erase(e.serial);
     // stored first, printed after: a terminal that went away (a dropped SSH session) must not cost
     // the event its files
     if (fails(e.fault)) ++failing_events;
@@ -384,6 +389,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   // nothing is stored, and the closed lines never showed it
   mon.on_withdraw = [&](const monitor::Event& raw) {
     open_alerts.erase(raw.t_detected);
+    raises_shown.erase(raw.serial);
     monitor::Event e = raw;
     e.wall_offset = wall_offset;
     if (hooks.on_event) hooks.on_event(e);

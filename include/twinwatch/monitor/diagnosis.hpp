@@ -69,6 +69,11 @@ struct Hypothesis {
 struct DiagnosisOptions {
   double collision_max_duration = 0.25;  ///< [s] exceedances shorter than this read as a pulse
   int frozen_samples = 25;               ///< identical consecutive current values that mark a stuck channel
+  /// [s] when the alert was raised (NaN: any time): a frozen channel explains it only when frozen at
+  /// its raise. A persistent alert looked at again later must not take another stretch's freeze in
+  /// its window for its cause (the Kinova log: a J5 alert raised at 0.05 s became "J1 frozen" when
+  /// J1 froze at 1.55 s, which the monitor reported as an event of its own; audit of session 55)
+  double raised_at = std::numeric_limits<double>::quiet_NaN();
   double min_explained = 0.35;           ///< below this the class is Unknown
   /// centre of mass of a payload change, in the last link frame [m]: the declared payload's (a
   /// short window cannot resolve a free COM; the mass alone is fitted)

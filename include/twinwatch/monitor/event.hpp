@@ -2,6 +2,7 @@
 /// @file event.hpp
 /// What the monitor reports: alerts with a diagnosis, written as JSON lines and into an SQLite
 /// event store (the last stage of sample -> residual -> decision -> event).
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
@@ -41,6 +42,10 @@ struct ContactImpulse {
 
 /// One alert with its diagnosis.
 struct Event {
+  /// Which alert of the run this is, 1, 2, … as the monitor raised them (0: not numbered). Its lines
+  /// (open, re-diagnosed, closed) share it; t_detected does not tell apart the alerts raised at one
+  /// sample (each channel of a log whose every sensor froze at once). Not written to the event files.
+  std::uint64_t serial = 0;
   double t_start = 0.0;     ///< [s] controller time of the first exceedance of the alert's run
   double t_end = 0.0;       ///< [s] the last exceedance once closed (the clearing debounce is not counted); the latest sample while open
   double t_detected = 0.0;  ///< [s] when the alert was raised (t_start + debounce): the detection delay counts to here
