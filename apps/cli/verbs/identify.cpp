@@ -322,8 +322,12 @@ int run_identify(const IdentifyOptions& o) {
   if (!o.quiet) {
     fmt::print("twin '{}' ({} method) from {} recording(s){} -> {}\n", twin.robot_name(), twin.method, o.recordings.size(),
                recs.size() > o.recordings.size() ? fmt::format(" ({} driven stretches)", recs.size()) : "", o.output);
-    fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", fmt::format("RMSE {}", twin.channel_unit()), "R²", "c_gen",
-               "gen %", "gain N·m/A");
+    // (a torque twin has no drive: no c_gen, back-driven share or gain to show)
+    if (twin.measures_torque())
+      fmt::print("{:<6} {:>9} {:>9} {:>8}\n", "joint", "samples", fmt::format("RMSE {}", twin.channel_unit()), "R²");
+    else
+      fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", fmt::format("RMSE {}", twin.channel_unit()), "R²",
+                 "c_gen", "gen %", "gain N·m/A");
     // a gain the recordings did not fix is shown as the monitor uses it: the median of the identified
     // ones (the fitted number itself can be anything, e.g. 3240 on a joint no payload loads)
     std::vector<double> fixed;
@@ -339,7 +343,7 @@ int run_identify(const IdentifyOptions& o) {
       const bool fitted = J < report.c_gen_identified.size() && report.c_gen_identified[J];
       const double gen = J < report.generating_fraction.size() ? 100.0 * report.generating_fraction[J] : 0.0;
       if (twin.measures_torque()) {  // (no drive between the torque sensor and the link: nothing of it to show)
-        fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2, "-", "-", "-");
+        fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f}\n", j + 1, report.samples_used[J], m.rmse, m.r2);
         continue;
       }
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
@@ -792,7 +796,7 @@ twinwatch::cli::VerbRegistrar reg_identify{"identify", 30, [](CLI::App& app) {
 
 twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   auto o = std::make_shared<ValidateOptions>();
-  auto* sub = app.add_subcommand("validate", "Compare a twin's predicted currents with a recording (UR3e Table 3 metrics)");
+  auto* sub = app.add_subcommand("validate", "Compare a twin's predicted currents (or joint torques, for a twin of torque sensors) with a recording (UR3e Table 3 metrics)");
   sub->add_option("--twin", o->twin, "Twin file from 'twinwatch identify'")->required()->check(CLI::ExistingFile);
   sub->add_option("RECORDING", o->recording, "Recording CSV")->required()->check(CLI::ExistingFile);
   sub->add_option("--payload-mass", o->payload_mass,
@@ -802,7 +806,7 @@ twinwatch::cli::VerbRegistrar reg_validate{"validate", 31, [](CLI::App& app) {
   sub->add_flag("--keep-payload", o->keep_payload,
                 "Predict with the payload given (--payload-mass, else the twin's) throughout, not with the ones the recording declares");
   sub->add_option("--column-map", o->column_map, "CSV map for foreign logs");
-  sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current per sample to this CSV");
+  sub->add_option("--predictions", o->predictions, "Also write time, measured and predicted current (joint torque, for a twin of torque sensors) per sample to this CSV");
   sub->add_flag("--json", o->json, "Print {\"joints\": [{\"rmse\", \"mae\", \"r2\", \"nrmse_pct\", \"d_tau_pct\"}, ...]}");
   sub->callback([o] { twinwatch::cli::set_exit_code(run_validate(*o)); });
 }};
