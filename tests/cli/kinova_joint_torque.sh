@@ -4,6 +4,8 @@
 # (audit of session 55):
 # - each channel's freeze is one sensor_fault event, and no other alert takes it for its cause (an
 #   alert raised at 0.05 s had become "J1 frozen for 87 samples" when J1 froze at 1.55 s);
+# - identify says that J7's fit means little (its sensor reads almost nothing: a wrist roll without a
+#   payload), and of no other joint;
 # - each alert is printed as ALERT once, its later diagnoses as UPDATE, also when another alert's
 #   lines came between (the 0.05 s alert was printed as ALERT three times), and the channels that
 #   froze at one sample are each an ALERT of their own (they were printed as UPDATEs of the first).
@@ -12,7 +14,11 @@ set -e
 B=$1; K=$2; U=$3; W=$4
 mkdir -p "$W"
 "$B" identify "$K/RecordTrajectory_quadratic.csv" "$K/joint_2_trapez.csv" --robot "$U" --column-map kinova_gen3_chiha \
-  --signal joint_torque -o "$W/twin.json" -q 2> /dev/null
+  --signal joint_torque -o "$W/twin.json" > "$W/identify.txt" 2> /dev/null
+cat "$W/identify.txt"
+# J7 (the wrist roll, no payload) reads +-0.0004 N·m while it moves: its fit is said to mean little
+grep -q "note: J7's fit is far worse than a constant" "$W/identify.txt" || { echo "FAIL: J7's undetermined fit not said"; exit 1; }
+if grep -q "note: J[1-6]'s fit is far worse" "$W/identify.txt"; then echo "FAIL: a joint with signal said to have none"; exit 1; fi
 "$B" monitor --twin "$W/twin.json" "$K/RunTrajectory1.csv" --column-map kinova_gen3_chiha --db '' > "$W/monitor.txt" 2> /dev/null
 cat "$W/monitor.txt"
 frozen=$(grep -c 'sensor_fault   torque channel of J[1-7] frozen at [-0-9.]* N·m while the joint moves (122 samples)' "$W/monitor.txt" || true)

@@ -356,6 +356,18 @@ int run_identify(const IdentifyOptions& o) {
     if (twin.gains_known() && std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
       fmt::print("* gain: not identified (no recording loads the joint enough); shown is the median of the identified ones, which the "
                  "monitor uses\n");
+    // a joint fitted far worse than a constant would be: its recordings carry almost none of its
+    // signal (audit of session 55: the Kinova's wrist roll J7 reads ±0.0004 N·m on its torque sensor
+    // while it moves, and its fit had R² -33318, and -19557 on a held-out run). R² below -1: an error
+    // beyond 1.4 times the channel's own spread (a UR3e's J5 current sits near 0 at worst)
+    for (int j = 0; j < twin.n_dof(); ++j) {
+      const auto& m = twin.joints[static_cast<size_t>(j)];
+      if (std::isfinite(m.r2) && m.r2 < -1.0)
+        fmt::print("note: J{}'s fit is far worse than a constant (R² {:.4g}, RMSE {:.3g} {}): the recordings carry almost none of its {} "
+                   "(a joint its load hardly reaches, such as a wrist roll without a payload, or a dead channel); its parameters are not "
+                   "determined, and validate and monitor mean little on J{}\n",
+                   j + 1, m.r2, m.rmse, twin.channel_unit(), twin.channel_name(), j + 1);
+    }
     const ident::VelocityLag& vl = report.velocity_lag;
     if (vl.given)
       fmt::print("velocity lag: {:.3f} ms, as given (--velocity-lag): the drive's direction is read on actual_qd + lag x qdd\n",
