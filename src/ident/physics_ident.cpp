@@ -1249,12 +1249,13 @@ TwinModel identify_physics(const std::string& robot, const std::vector<TrainingR
       if (it == unfitted.end()) it = unfitted.insert(unfitted.end(), {what, {}});
       it->second.push_back(fmt::format("J{}", j + 1));
     }
-    for (const auto& [what, joints] : unfitted)
-      if (!o.joint_torque) report.notes.push_back(fmt::format(
-          "{}: viscous friction against temperature not fitted (kept at 0): the recordings' temperature {}, expected a span "
-          ">= {:.0f} °C; record a warm-up from cold to fit it, or let the monitor's trend learn it "
-          "('twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",
-          fmt::join(joints, ", "), what, kMinViscousTemperatureSpan));
+    if (!o.joint_torque)
+      for (const auto& [what, joints] : unfitted)
+        report.notes.push_back(fmt::format(
+            "{}: viscous friction against temperature not fitted (kept at 0): the recordings' temperature {}, expected a span "
+            ">= {:.0f} °C; record a warm-up from cold to fit it, or let the monitor's trend learn it "
+            "('twinwatch thresholds --twin TWIN COLD.csv WARM.csv')",
+            fmt::join(joints, ", "), what, kMinViscousTemperatureSpan));
   }
   // a payload whose current shows on no joint fixes no gain either (recordings declared without a
   // payload that carry one: the gains came out 430-3660 N·m/A, and the monitor, finding none it

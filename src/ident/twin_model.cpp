@@ -462,7 +462,7 @@ std::string TwinModel::to_json() const {
   j["payload"] = {{"mass", payload_.mass}, {"com", {payload_.com.x(), payload_.com.y(), payload_.com.z()}}};
   j["gains_absolute"] = gains_absolute;
   // (only for a joint-torque twin: a current twin's file stays what older readers load)
-  if (measures_torque()) j["signal"] = "joint_torque";
+  if (measures_torque()) j["signal"] = signal_name();
   if (acceleration_window > 0.0) j["acceleration_window"] = acceleration_window;  // (the same: only when set)
   if (!monitor_json.empty()) j["monitor"] = nlohmann::json::parse(monitor_json);
   if (learned) j["learned"] = nlohmann::json::parse(learned->to_json());

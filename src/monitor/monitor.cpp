@@ -213,19 +213,26 @@ std::vector<signal::FirFilter> make_fir_filters(const MonitorConfig& c, int n) {
   return f;
 }
 
-// the monitor's residual filters (first-order IIR, or the FIR where configured) over a whole run
-// The acceleration the monitor uses at each sample (Monitor::push): the controller's target when
-// streamed, else the causal filtered difference of qd (a threshold learned on a zero-phase
-// derivative would not be the one the monitor's residual meets)
-// The monitor's joint acceleration a sample at a time (Monitor::push): the target's where the
-// recording has one, else the IIR-smoothed difference of the measured velocity (a gap holds it).
-// The reference is valid while `s` is.
+// A twin's windowed acceleration at this sample period, none without an acceleration window: as
+// many samples per mean as the identification's half window and one, restarted by a step longer
+// than that many gap steps (Monitor's, and the thresholds' learner's through MonitorAcceleration)
+std::optional<WindowedAcceleration> windowed_acceleration(const ident::TwinModel& twin, int n, double period, double gap_factor) {
+  if (!(twin.acceleration_window > 0.0)) return std::nullopt;
+  const int w = twin.acceleration_half_width(period) + 1;
+  return WindowedAcceleration(n, w, w * gap_factor * period);
+}
+
+// The monitor's joint acceleration a sample at a time (Monitor::judge), for the thresholds' learner:
+// the controller's target where the recording has one, else the twin's windowed estimate, else the
+// causal IIR-smoothed difference of the measured velocity (a gap holds it; a threshold learned on a
+// zero-phase derivative would not be the one the monitor's residual meets). The reference is valid
+// while `s` is.
 class MonitorAcceleration {
  public:
-  /// `window`: samples per mean of the twin's windowed estimate (WindowedAcceleration; 0: the filtered difference)
-  MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period, int window = 0)
+  /// `windowed`: windowed_acceleration's (used where the recording has no target acceleration)
+  MonitorAcceleration(int n, std::uint32_t present, double alpha, double gap_period, std::optional<WindowedAcceleration> windowed = {})
       : target_(present & kFieldTargetQdd), alpha_(alpha), gap_period_(gap_period), qdd_(VectorJ::Zero(n)) {
-    if (window > 0 && !target_) windowed_.emplace(n, window, window * gap_period);
+    if (!target_) windowed_ = std::move(windowed);
   }
   /// the estimate is one the monitor judges on: not a windowed one still held after a (re)start, nor
   /// within kWindowSettle samples after it became whole (the residual filter's tail)
@@ -759,9 +766,6 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
   // a twin's windowed acceleration judges a sample only once it is whole (MonitorAcceleration::settled):
   // per run, the samples it is not (empty: every one is)
   std::vector<std::vector<char>> unsettled(runs.size());
-  const auto window_of = [&](const device::SampleSource& src) {
-    return twin.acceleration_window > 0.0 ? twin.acceleration_half_width(period_of(src)) + 1 : 0;
-  };
   size_t judged = 0, judged_observer = 0;
   for (size_t i = 0; i < runs.size(); ++i) {
     const device::SampleSource& src = *runs[i];
@@ -772,12 +776,12 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     // start-up (commanded; on a run without target velocities, measured: RestBaseline::arm_rest)
     std::vector<LongestStretch> crawls(static_cast<size_t>(n));
     LongestStretch rest;
-    const int window = window_of(src);
     std::optional<MonitorAcceleration> acc;
-    if (window > 0 && !(src.present() & kFieldTargetQdd)) {
-      acc.emplace(n, src.present(), 1.0, c.gap_factor * period_of(src), window);
-      unsettled[i].assign(src.size(), 0);
-    }
+    if (!(src.present() & kFieldTargetQdd))
+      if (auto w = windowed_acceleration(twin, n, period_of(src), c.gap_factor)) {
+        acc.emplace(n, src.present(), 1.0, c.gap_factor * period_of(src), std::move(w));
+        unsettled[i].assign(src.size(), 0);
+      }
     src.replay([&](size_t k, const RobotSample& s) {
       payload.see(k, s);
       if (acc) {
@@ -825,7 +829,8 @@ MonitorConfig learn_thresholds(const ident::TwinModel& twin, const std::vector<H
     ident::TwinModel t = twin;
     payload.start(t);
     const double alpha = iir_alpha(c.filter_cutoff_hz, period_of(src));
-    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src), window_of(src));
+    MonitorAcceleration accelerations(n, src.present(), alpha, c.gap_factor * period_of(src),
+                                      windowed_acceleration(twin, n, period_of(src), c.gap_factor));
     LearnedResidual residual(t, c, alpha);
     // the momentum observer, sample by sample exactly as the monitor runs it (its samples have their
     // own qd, qdd: it is judged from later after a payload change)
@@ -993,10 +998,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   alpha_ = iir_alpha(cfg_.filter_cutoff_hz, cfg_.nominal_period);
   // a twin with an acceleration window (a noisy velocity): the windowed estimate where the stream has
   // no target acceleration, over as many samples as the identification's half window
-  if (twin_.acceleration_window > 0.0) {
-    const int w = twin_.acceleration_half_width(cfg_.nominal_period) + 1;
-    windowed_.emplace(n_, w, w * gap_factor_ * cfg_.nominal_period);
-  }
+  windowed_ = windowed_acceleration(twin_, n_, cfg_.nominal_period, gap_factor_);
   // reversals under more load than the thresholds were learned with (widen_for_load)
   load_band_cur_ = load_band_obs_ = VectorJ::Zero(n_);
   reversal_width_ = reversal_width(twin_);
@@ -2815,7 +2817,7 @@ void Monitor::report_pending_close() {
 }
 
 // a stream fault for `seconds` without data after the last sample: its size in samples missed
-Event Monitor::silence_event(double seconds, bool open) const {
+Event Monitor::silence_event(double seconds, bool open) {
   Event g = new_event();
   g.t_start = t_prev_;
   g.t_end = t_prev_ + seconds;
@@ -2858,6 +2860,7 @@ void Monitor::close_outage(Event closed) {
   Event& g = events_[static_cast<size_t>(outage_)];
   outage_ = -1;
   closed.t_detected = g.t_detected;  // (the open line's name: its closing line ends it)
+  closed.serial = g.serial;          // (and the same alert's number)
   g = std::move(closed);
   if (on_event) on_event(g);
 }

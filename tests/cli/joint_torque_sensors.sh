@@ -7,16 +7,8 @@
 # usage: joint_torque_sensors.sh TWINWATCH DATA_DIR WORK_DIR
 set -e
 B=$1; D=$2; W=$3
-mkdir -p "$W"
-(cat "$D/short_exc.yaml"; echo "joint_torque_sensors: true") > "$W/exc.yaml"
-(cat "$D/short_fig8.yaml"; echo "joint_torque_sensors: true") > "$W/fig.yaml"
-run='robot: ur3e
-trajectory: {type: figure_eight, size: [0.12, 0.08], period: 11, tilt: [0.3, 0.4, 0.5]}
-payload: {mass: 0.5, com: [0, 0, 0.04]}
-joint_torque_sensors: true'
-printf 'name: slow\nseed: 8\nduration: 30\n%s\n' "$run" > "$W/slow.yaml"
-printf 'name: hit\nseed: 9\nduration: 20\n%s\nfaults:\n  - {type: collision, link: 3, onset: 13.0, magnitude: 5, duration: 0.05, point: [0.1, 0.0, 0.05], direction: [0.0, 0.3, 1.0]}\n' "$run" > "$W/hit.yaml"
-for n in exc fig slow hit; do "$B" simulate "$W/$n.yaml" -o "$W/$n.csv" -q; done
+. "$(dirname "$0")/simulated_runs.sh"
+simulated_runs "$B" "$D" "$W" "joint_torque_sensors: true" 11 30
 head -1 "$W/exc.csv" | grep -q 'actual_joint_torque_5' || { echo "FAIL: the recording has no actual_joint_torque columns"; exit 1; }
 
 # the twin: identified on the sensors, gains 1, its signal in the file
@@ -42,13 +34,7 @@ if bad: sys.exit("FAIL: validation RMSE " + ", ".join(bad))
 print("validation RMSE N·m:", " ".join(f"{r:.3f}" for r in rmse))
 EOF
 
-slow=$("$B" monitor --twin "$W/twin.json" "$W/slow.csv" --db '' --json | wc -l)
-hit=$("$B" monitor --twin "$W/twin.json" "$W/hit.csv" --db '' --json)
-echo "slow run: $slow event(s)"
-echo "$hit"
-[ "$slow" -eq 0 ] || { echo "FAIL: false events on the slow run"; exit 1; }
-[ "$(echo "$hit" | wc -l)" -eq 1 ] || { echo "FAIL: expected one event on the contact run"; exit 1; }
-echo "$hit" | grep -q '"class":"collision".*"link":3' || { echo "FAIL: not a contact on link 3"; exit 1; }
+slow_quiet_contact_found "$B" "$W"
 echo "$hit" | grep -q '"peak_residual_units":"N·m"' || { echo "FAIL: the residual is not in N·m"; exit 1; }
 
 # what the monitor prints names the torque, not a current

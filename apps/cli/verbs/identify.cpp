@@ -586,9 +586,8 @@ int run_validate(const ValidateOptions& o) {
     auto w = std::back_inserter(line);
     fmt::format_to(w, "timestamp");
     // (a joint-torque twin's channel: actual_joint_torque_*, predicted_joint_torque_*)
-    const std::string what = twin.measures_torque() ? "joint_torque" : "current";
-    for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_{}_{}", what, j);
-    for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_{}_{}", what, j);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",actual_{}_{}", twin.signal_name(), j);
+    for (int j = 0; j < n; ++j) fmt::format_to(w, ",predicted_{}_{}", twin.signal_name(), j);
     fmt::format_to(w, "\n");
     predictions->write(line.data(), static_cast<std::streamsize>(line.size()));
   }
@@ -660,7 +659,7 @@ int run_validate(const ValidateOptions& o) {
     if (constant[J]) out["joints"].back()["measured_constant"] = first_measured[J];
   }
   const std::string unit = twin.channel_unit();
-  out["signal"] = twin.measures_torque() ? "joint_torque" : "current";
+  out["signal"] = twin.signal_name();
   out["units"] = {{"rmse", unit}, {"mae", unit}, {"r2", "1"}, {"nrmse_pct", "% of the measured range"},
                   {"d_tau_pct", twin.measures_torque() ? "% (norm of the error / norm of the measured torque)"
                                                        : "% (norm of the error / norm of the measured current)"},

@@ -300,7 +300,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     return fail_on_any || std::find(fail_classes.begin(), fail_classes.end(), c) != fail_classes.end();
   };
   long failing_events = 0;
-  // the raise times of the open alerts already printed: a later line of one is an UPDATE, also after
+  // the open alerts already printed, by their numbers: a later line of one is an UPDATE, also after
   // another alert's lines came between (a persistent alert parked under a contact and resumed was
   // printed as a new ALERT at its old time: audit of session 55)
   std::set<std::uint64_t> raises_shown;  // (Event::serial)

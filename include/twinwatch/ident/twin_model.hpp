@@ -184,6 +184,8 @@ class TwinModel {
   const char* channel_unit() const { return measures_torque() ? "N·m" : "A"; }
   /// What the measured channel is called in what the tools say: "current", or "torque"
   const char* channel_name() const { return measures_torque() ? "torque" : "current"; }
+  /// The twin file's "signal" (and the column names of what is compared): "current", or "joint_torque"
+  const char* signal_name() const { return measures_torque() ? "joint_torque" : "current"; }
   double temperature_ref = 35.0;        ///< [°C] reference of the temperature column
   /// [rad/s] width of the smooth motoring/back-driven switch of the current factor (0: hard switch
   /// at qd = 0); about the resolution of the measured velocity (twin_model.cpp, direction_factor)

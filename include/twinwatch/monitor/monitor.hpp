@@ -578,13 +578,13 @@ class Monitor {
 
   ident::TwinModel twin_;
   /// A new event, its residual in the twin's channel units (every event the monitor raises starts here)
-  Event new_event() const {
+  Event new_event() {
     Event e;
     e.serial = ++serials_;
     e.peak_residual_units = twin_.channel_unit();
     return e;
   }
-  mutable std::uint64_t serials_ = 0;  // (new_event's count: Event::serial)
+  std::uint64_t serials_ = 0;  // (new_event's count: Event::serial)
   MonitorConfig cfg_;
   int n_;
   double alpha_ = 1.0;  // IIR coefficient
@@ -726,7 +726,7 @@ class Monitor {
   std::array<int*, 6> event_indices() { return {&open_, &pending_close_, &merge_into_, &background_, &held_, &outage_}; }
   int outage_ = -1;  // the open StreamFault of an outage that still lasts (stream_outage)
   void close_outage(Event closed);  // the gap or silence event takes the outage's place and t_detected
-  Event silence_event(double seconds, bool open) const;  // a stream fault: no data for seconds after the last sample
+  Event silence_event(double seconds, bool open);  // a stream fault: no data for seconds after the last sample
   // the twin's payload against the heaviest the thresholds were learned on (payload_max): checked
   // at the first sample and whenever the payload changes, said in a note each time it goes beyond
   bool payload_beyond_ = false;
