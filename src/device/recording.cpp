@@ -115,6 +115,14 @@ bool parse_double(std::string_view s, double& v) {
   return r.ec == std::errc() && r.ptr == e;
 }
 
+// the digits after a number's decimal point, up to its exponent (0 without a point)
+int decimals_of(std::string_view s) {
+  const size_t point = s.find('.');
+  if (point == std::string_view::npos) return 0;
+  const size_t exponent = s.find_first_of("eE", point);
+  return static_cast<int>((exponent == std::string_view::npos ? s.size() : exponent) - point - 1);
+}
+
 }  // namespace
 
 std::vector<std::string> recording_columns(int n, std::uint32_t fields) {
@@ -330,6 +338,12 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
 
 int RecordingReader::n_dof() const { return n; }
 
+bool RecordingReader::reads(size_t column) const {
+  const int c = static_cast<int>(column);
+  return c == ts_col || c == do_col || c == mode_col || c == safety_col || c == gap_col || c == payload_col || c == cog_col[0] ||
+         c == cog_col[1] || c == cog_col[2] || target[column].group >= 0;
+}
+
 std::uint32_t RecordingReader::present() const { return present_; }
 
 bool RecordingReader::next(RobotSample& s) {
@@ -348,6 +362,26 @@ bool RecordingReader::next(RobotSample& s) {
                             path, ln, cells.size(), header.size()));
       return false;
     }
+    // ... or with all its cells and the last one cut mid-number: empty, ending in '.', 'e' or a
+    // sign (no writer ends a number so), or with fewer decimals than that column had in every row
+    // before (a writer of fixed decimals, seen in 10 rows or more). A shortest-form writer's cell
+    // ("%g", to_chars) cut after a digit looks like a shorter number and cannot be told: it is
+    // read as it is
+    if (cells.size() == header.size() && f.eof() && reads(cells.size() - 1)) {
+      const std::string_view last = cells.back();
+      const int decimals = decimals_of(last);
+      const bool mid_number = last.empty() || std::string_view(".eE+-").find(last.back()) != std::string_view::npos;
+      const bool short_decimals = rows >= 10 && last_cell_decimals_ > 0 && decimals < last_cell_decimals_;
+      if (mid_number || short_decimals) {
+        if (say_cut_)
+          log::warn(fmt::format("{}:{}: the last row is cut off (its last cell '{}'{}, no line end): dropped, as a recording "
+                                "interrupted mid-write leaves it",
+                                path, ln, last,
+                                mid_number ? " ends mid-number"
+                                           : fmt::format(" has {} decimal(s), every row before had {} or more", decimals, last_cell_decimals_)));
+        return false;
+      }
+    }
     if (cells.size() != header.size())
       throw ParseError(path, ln, "", fmt::format("expected {} cells (as in the header), got {}", header.size(), cells.size()));
     hash_ = (hash_ ^ std::hash<std::string_view>{}(line)) * 1099511628211ull;  // (FNV-style mixing of each row's hash)
@@ -356,8 +390,7 @@ bool RecordingReader::next(RobotSample& s) {
     for (size_t c = 0; c < cells.size(); ++c) {
       const int ci = static_cast<int>(c);
       const bool cog = ci == cog_col[0] || ci == cog_col[1] || ci == cog_col[2];
-      const bool used = ci == ts_col || ci == do_col || ci == mode_col || ci == safety_col || ci == gap_col || ci == payload_col || cog || target[c].group >= 0;
-      if (!used) continue;
+      if (!reads(c)) continue;
       double v;
       if (!parse_double(cells[c], v))
         throw ParseError(path, ln, header[c], fmt::format("expected a number, got '{}'", cells[c]));
@@ -400,6 +433,8 @@ bool RecordingReader::next(RobotSample& s) {
       throw ParseError(path, ln, header[static_cast<size_t>(ts_col)],
                        fmt::format("timestamp {} does not increase (previous {})", s.timestamp, last_timestamp));
     last_timestamp = s.timestamp;
+    const int decimals = decimals_of(cells.back());
+    last_cell_decimals_ = last_cell_decimals_ < 0 ? decimals : std::min(last_cell_decimals_, decimals);
     ++rows;
     return true;
   }

@@ -252,6 +252,43 @@ TEST(Recording, ALastRowCutOffMidWriteIsDroppedAndSaid) {
   EXPECT_THAT(error_of("timestamp,actual_q_0,actual_q_1\n0.000,0.1\n0.002,0.1,0.2"), HasSubstr("bad.csv:2: expected 3 cells"));
 }
 
+// ... and so is a last row that has all its cells but the last one cut mid-number: one that ends
+// as no number does, or a fixed-decimals writer's cell with fewer decimals than every row before.
+// A shortest-form cell cut after a digit cannot be told from a shorter number: read as it is
+TEST(Recording, ALastRowCutMidNumberIsDroppedAndSaid) {
+  std::string rows = "timestamp,actual_q_0,actual_q_1\n";
+  for (int k = 0; k < 12; ++k) rows += fmt::format("{:.3f},0.100000,{:.6f}\n", 0.002 * k, 0.2 + 0.001 * k);
+  const auto read = [&](const std::string& last, std::string& warned) {
+    const std::string p = tmp("cutcell.csv");
+    std::ofstream(p) << rows << last;
+    warned.clear();
+    log::set_sink([&](log::Level, std::string_view m) { warned += std::string(m); });
+    const Recording r = read_recording(p);
+    log::set_sink(nullptr);
+    return r;
+  };
+  std::string warned;
+  for (const std::string cut : {"0.", "", "1.5e", "1.5e-", "-"}) {
+    const Recording r = read(fmt::format("0.024,0.100000,{}", cut), warned);
+    EXPECT_EQ(r.samples.size(), 12u) << cut;
+    EXPECT_THAT(warned, HasSubstr(fmt::format("cutcell.csv:14: the last row is cut off (its last cell '{}' ends mid-number, no line end): dropped", cut)));
+  }
+  Recording r = read("0.024,0.100000,0.2119", warned);  // of 0.211900
+  EXPECT_EQ(r.samples.size(), 12u);
+  EXPECT_THAT(warned, HasSubstr("cutcell.csv:14: the last row is cut off (its last cell '0.2119' has 4 decimal(s), every row before had 6 or more"));
+  // whole: the row is kept, without a word
+  r = read("0.024,0.100000,0.212000", warned);
+  ASSERT_EQ(r.samples.size(), 13u);
+  EXPECT_DOUBLE_EQ(r.samples.back().q[1], 0.212);
+  EXPECT_EQ(warned, "");
+  // a shorter cell ended by a line end is a number, as written
+  r = read("0.024,0.100000,0.2119\n", warned);
+  EXPECT_EQ(r.samples.size(), 13u);
+  EXPECT_EQ(warned, "");
+  // a cell that is no number, with its line end, is an error as before
+  EXPECT_THAT(error_of(rows + "0.024,0.100000,1.5e\n"), HasSubstr(":14: field 'actual_q_1': expected a number, got '1.5e'"));
+}
+
 TEST(Recording, NonNumericCellNamesLineAndColumn) {
   EXPECT_THAT(error_of("timestamp,actual_q_0\n0.0,0.1\n0.002,abc\n"),
               HasSubstr("bad.csv:3: field 'actual_q_0': expected a number, got 'abc'"));

@@ -97,7 +97,7 @@ class RecordingReader {
   std::uint32_t present() const;  ///< fields present in the file (SampleField flags)
   const std::string& file() const { return path; }
   /// The next row into `s`; false at the end of the file (a last row cut off mid-write is dropped,
-  /// and said). Throws ParseError naming the file, line and column for a bad row.
+  /// and said: one without a line end that is short of cells, or whose last cell is cut mid-number). Throws ParseError naming the file, line and column for a bad row.
   bool next(RobotSample& s);
   /// Reads on without saying a cut-off last row again (a second pass over a file already read)
   void quiet() { say_cut_ = false; }
@@ -109,6 +109,7 @@ class RecordingReader {
     int group;
     int joint;
   };
+  bool reads(size_t column) const;  // whether a column's cells are read (not an unknown column)
   std::string path;
   std::ifstream f;
   std::vector<std::string> header;
@@ -122,6 +123,7 @@ class RecordingReader {
   long rows = 0;
   double last_timestamp = 0.0;
   bool say_cut_ = true;
+  int last_cell_decimals_ = -1;  // the fewest decimals the last column had in a row so far (-1: no row yet)
   std::uint64_t hash_ = 14695981039346656037ull;
   std::string line_;
   std::vector<std::string_view> cells_;
