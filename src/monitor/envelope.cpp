@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace twinwatch::monitor {
 
@@ -44,13 +45,14 @@ Excursion EnvelopeWatch::check(const RobotSample& s) {
   ++outside_;
   if (episodes_.empty() || !(s.timestamp - episodes_.back().t_end <= kEpisodeGap)) {
     if (episodes_.size() == kEpisodes) episodes_.pop_front();
-    episodes_.push_back(Episode{s.timestamp, s.timestamp, best, out});
+    episodes_.push_back(Episode{s.timestamp, s.timestamp, best, out, {Record{s.timestamp, best, out}}});
   } else {
     Episode& e = episodes_.back();
     e.t_end = s.timestamp;
     if (best > e.score) {
       e.score = best;
       e.worst = out;
+      if (best > e.records.back().score * (1.0 + kRecordStep)) e.records.push_back(Record{s.timestamp, best, out});
     }
   }
   last_t_ = s.timestamp;
@@ -65,11 +67,21 @@ Excursion EnvelopeWatch::check(const RobotSample& s) {
 Excursion EnvelopeWatch::outside_during(double t0, double t1) const {
   Excursion out;
   double best = 0.0;
-  for (const Episode& e : episodes_)
-    if (e.t_end >= t0 && e.t_begin <= t1 && e.score > best) {
-      best = e.score;
-      out = e.worst;
+  for (const Episode& e : episodes_) {
+    if (e.t_end < t0 || e.t_begin > t1) continue;
+    // as far as it had gone by t1: all of it when it ended by then, else its last record by t1
+    double score = e.score;
+    const Excursion* worst = &e.worst;
+    if (e.t_end > t1) {
+      const auto after = std::upper_bound(e.records.begin(), e.records.end(), t1, [](double t, const Record& r) { return t < r.t; });
+      score = std::prev(after)->score;  // (the first record is the stretch's first sample, at or before t1)
+      worst = &std::prev(after)->worst;
     }
+    if (score > best) {
+      best = score;
+      out = *worst;
+    }
+  }
   return out;
 }
 

@@ -2,6 +2,8 @@
 // margins, the largest excursion is the one named, and the stretches outside are found by time.
 #include "twinwatch/monitor/envelope.hpp"
 
+#include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -77,6 +79,33 @@ TEST(EnvelopeWatch, StretchesOutsideAreFoundByTheTimeTheyOverlap) {
   EXPECT_FALSE(w.outside_during(0.0, 2.0).inside());
   EXPECT_EQ(w.samples_outside(), 50 + 10);
   EXPECT_DOUBLE_EQ(w.last_outside_time(), 1.518);
+}
+
+// an alert raised early in a stretch outside is named by how far the robot was at its raise, also
+// when its closing line is written after the stretch went much further (audit of session 55: the
+// remark named where the robot was at the close)
+TEST(EnvelopeWatch, AnAlertIsNamedByTheStretchAsItWasAtItsRaise) {
+  EnvelopeWatch w(two_joints());
+  // J1's speed ramps from 1.0 to 3.0 rad/s over 0.5-2.5 s (outside from 1.15 rad/s on, at 0.65 s)
+  const auto speed = [](double t) { return t < 0.5 ? 0.5 : 1.0 + (t - 0.5); };
+  const double raise = 0.9;  // at 1.4 rad/s
+  std::string at_raise;
+  for (int k = 0; k <= 1250; ++k) {
+    const double t = 0.002 * k;
+    w.check(at(t, 0.0, 0.0, speed(t), 0.0));
+    if (std::abs(t - raise) < 1e-9) at_raise = w.alert_note(0.8, raise);
+  }
+  EXPECT_EQ(at_raise, "; raised where the robot moves beyond what the twin was identified on (J1 at 1.40 rad/s, identified up to 1.00 "
+                      "rad/s): it may be model error, not a fault");
+  // at the close, 1.6 s later at 3.0 rad/s: as far as the stretch had gone by the raise + kAlertLag
+  // (1.50 rad/s), to within kRecordStep of its score
+  const Excursion later = w.outside_during(0.8 - EnvelopeWatch::kAlertLead, raise + EnvelopeWatch::kAlertLag);
+  EXPECT_NEAR(later.value, 1.5, 0.01 * 1.5);
+  EXPECT_LE(later.value, 1.5);
+  EXPECT_THAT(w.alert_note(0.8, raise), ::testing::HasSubstr(fmt::format("(J1 at {:.2f} rad/s", later.value)));
+  // a window reaching the present names the stretch's worst, exactly
+  EXPECT_DOUBLE_EQ(w.outside_during(2.0, 2.5).value, 3.0);
+  EXPECT_DOUBLE_EQ(w.worst().value, 3.0);
 }
 
 TEST(EnvelopeWatch, ATwinWithoutAnEnvelopeSaysNothing) {

@@ -6,6 +6,7 @@
 #include <deque>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "twinwatch/core/sample.hpp"
 #include "twinwatch/core/types.hpp"
@@ -49,8 +50,10 @@ class EnvelopeWatch {
   /// Timestamp of the last sample outside (NaN when none).
   double last_outside_time() const { return last_t_; }
   const ident::MotionEnvelope& envelope() const { return envelope_; }
-  /// The largest excursion of the stretches outside that overlap [t0, t1] (inside when none). The
-  /// last kEpisodes stretches are kept (a stretch ends after kEpisodeGap s back inside).
+  /// The largest excursion of the stretches outside that overlap [t0, t1], as far as each had gone
+  /// by t1 (inside when none): a stretch that went on growing after t1 is named as it was then, to
+  /// within kRecordStep of its score. The last kEpisodes stretches are kept (a stretch ends after
+  /// kEpisodeGap s back inside).
   Excursion outside_during(double t0, double t1) const;
   /// What an alert whose exceedance began at t_start and was raised at t_detected adds to its detail
   /// when it was raised where the robot moved beyond the training motion (from kAlertLead s before
@@ -65,11 +68,19 @@ class EnvelopeWatch {
   static constexpr double kAlertLag = 0.1;   ///< [s]
   static constexpr size_t kEpisodes = 1000;
   static constexpr double kEpisodeGap = 0.1;  ///< [s]
+  static constexpr double kRecordStep = 0.01;  ///< a stretch's worst is kept when it grows by this fraction
 
  private:
+  // a stretch's worst as it grew: a record each time its score passed the last record by kRecordStep
+  // (a joint driven further and further past its range at 500 Hz would add one each sample)
+  struct Record {
+    double t, score;
+    Excursion worst;
+  };
   struct Episode {
     double t_begin, t_end, score;
     Excursion worst;
+    std::vector<Record> records;
   };
   std::deque<Episode> episodes_;
   ident::MotionEnvelope envelope_;
