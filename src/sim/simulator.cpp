@@ -281,14 +281,54 @@ Simulator::ProgramState Simulator::program_state(double t) const {
   return p;
 }
 
+double Simulator::resistance(int j) const {
+  double size = 0.0;
+  for (const FaultSpec& f : faults_)
+    if (f.joint == j && f.type == FaultType::Resistance) size += f.magnitude * f.level(t_);
+  return size;
+}
+
+VectorJ Simulator::implicit_acceleration(const MatrixJ& M, const VectorJ& b, const VectorJ& qd, const VectorJ& R, double h) {
+  // qdd = argmin Phi(x) = x'Mx/2 - b'x + sum_j R_j vs/h logcosh((qd_j + h x_j)/vs), whose gradient
+  // M x - b + R tanh((qd + h x)/vs) is the substep's equation of motion with the resistance at the
+  // velocity it ends with. Phi is convex (M positive definite, logcosh convex): Newton steps with a
+  // backtracking line search converge from anywhere, where plain Newton on the saturated sign
+  // would overshoot
+  constexpr double vs = kResistanceVelocityScale;
+  const auto logcosh = [](double a) { return std::abs(a) + std::log1p(std::exp(-2.0 * std::abs(a))) - std::log(2.0); };
+  const auto phi = [&](const VectorJ& x) {
+    double v = 0.5 * x.dot(M * x) - b.dot(x);
+    for (int j = 0; j < n_; ++j)
+      if (R[j] > 0.0) v += R[j] * vs / h * logcosh((qd[j] + h * x[j]) / vs);
+    return v;
+  };
+  Eigen::LLT<MatrixJ> llt(M);
+  VectorJ x = llt.solve(b);  // (the arm without the resistance: a start on the far side is fine too)
+  for (int it = 0; it < 50; ++it) {
+    VectorJ g = M * x - b;
+    MatrixJ Jm = M;
+    for (int j = 0; j < n_; ++j) {
+      if (!(R[j] > 0.0)) continue;
+      const double th = std::tanh((qd[j] + h * x[j]) / vs);
+      g[j] += R[j] * th;
+      Jm(j, j) += h * R[j] * (1.0 - th * th) / vs;
+    }
+    if (g.norm() <= 1e-10 * (1.0 + b.norm())) break;
+    llt.compute(Jm);
+    const VectorJ dx = llt.solve(g);
+    const double f0 = phi(x), slope = g.dot(dx);
+    double t = 1.0;
+    while (t > 1e-12 && phi(x - t * dx) > f0 - 1e-4 * t * slope) t *= 0.5;
+    x -= t * dx;
+  }
+  return x;
+}
+
 double Simulator::friction_torque(int j, double v, double h) {
   const JointTruth& jt = truth_.joints[static_cast<size_t>(j)];
-  double wear = 1.0, extra = 0.0;
-  for (const FaultSpec& f : faults_) {
-    if (f.joint != j) continue;
-    if (f.type == FaultType::FrictionGrowth) wear *= 1.0 + f.magnitude * f.level(t_);
-    if (f.type == FaultType::Resistance) extra += f.magnitude * f.level(t_) * std::tanh(v / kResistanceVelocityScale);
-  }
+  double wear = 1.0;
+  for (const FaultSpec& f : faults_)
+    if (f.joint == j && f.type == FaultType::FrictionGrowth) wear *= 1.0 + f.magnitude * f.level(t_);
   // LuGre: z' = v - sigma0 |v| / g(v) z, advanced exactly with v held over the step
   const double Fc = jt.Fc * wear, Fs = jt.Fs * wear;
   const double g = Fc + (Fs - Fc) * std::exp(-(v / jt.vs) * (v / jt.vs));
@@ -305,7 +345,7 @@ double Simulator::friction_torque(int j, double v, double h) {
   const double Fv = jt.Fv * wear * std::exp(-jt.visc_temp_coeff * (temp_[j] - jt.T_ref));
   const double q = q_[j];
   const double ripple = jt.ripple * std::sin(jt.gear_ratio * q + jt.ripple_phase) + jt.ripple1 * std::sin(q + jt.ripple1_phase);
-  return jt.sigma0 * z + jt.sigma1 * zdot + Fv * v + ripple + extra;
+  return jt.sigma0 * z + jt.sigma1 * zdot + Fv * v + ripple;
 }
 
 void Simulator::apply_payload_faults(double t) {
@@ -377,10 +417,19 @@ bool Simulator::step(RobotSample& s) {
   // physics substeps (semi-implicit Euler of M qdd + h = tau - tau_f + tau_ext); the brakes hold
   // the arm where it stands
   if (ps.braked) qd_.setZero();
+  //
+  // A resistance's smooth sign is stiff: 100 N·m over 0.01 rad/s is a slope of 1e4 N·m s/rad, and
+  // explicit Euler of it is stable only for h slope / M < 2 (M ~ 0.03 kg m² at a wrist). Past that
+  // it chattered about qd = 0 with a mean near zero: from ~90 N·m on a UR3e wrist a larger resistance
+  // had less effect than a small one, and 1000 N·m none (audit of session 56). The substep takes it
+  // at the velocity it ends with (implicit_acceleration), which holds a joint stalled for any size
+  VectorJ R(n_);
+  for (int j = 0; j < n_; ++j) R[j] = resistance(j);
+  const bool resisted = (R.array() > 0.0).any();
   for (int k = 0; k < opt_.substeps && !ps.braked; ++k) {
     VectorJ tau = tau_cmd;
     for (int j = 0; j < n_; ++j) tau[j] -= friction_torque(j, qd_[j], h);
-    const VectorJ tau_link = tau;  // what passes the gear into the link (a torque sensor's side): no contact
+    VectorJ tau_link = tau;  // what passes the gear into the link (a torque sensor's side): no contact
     if (!pulses.empty()) {
       model::forward_kinematics(truth_model_, dtruth_, q_);
       for (const auto& [f, shape] : pulses) {
@@ -392,8 +441,14 @@ bool Simulator::step(RobotSample& s) {
     const VectorJ hvec = model::nonlinear_effects(truth_model_, dtruth_, q_, qd_);
     MatrixJ M = model::crba(truth_model_, dtruth_, q_);
     for (int j = 0; j < n_; ++j) M(j, j) += armature(truth_.joints[static_cast<size_t>(j)]);
-    dtruth_.llt.compute(M);
-    const VectorJ qdd = dtruth_.llt.solve(tau - hvec);
+    VectorJ qdd;
+    if (resisted) {
+      qdd = implicit_acceleration(M, tau - hvec, qd_, R, h);
+      for (int j = 0; j < n_; ++j) tau_link[j] -= R[j] * std::tanh((qd_[j] + h * qdd[j]) / kResistanceVelocityScale);
+    } else {
+      dtruth_.llt.compute(M);
+      qdd = dtruth_.llt.solve(tau - hvec);
+    }
     if (opt_.joint_torque_sensors && k == opt_.substeps - 1)
       for (int j = 0; j < n_; ++j) link_torque_[j] = tau_link[j] - armature(truth_.joints[static_cast<size_t>(j)]) * qdd[j];
     qd_ += h * qdd;
@@ -449,6 +504,7 @@ bool Simulator::step(RobotSample& s) {
     if (f.type == FaultType::TimestampJitter && f.level(t_) > 0.0)
       s.timestamp += f.magnitude * std::clamp(normal_(rng_), -kJitterClipSigmas, kJitterClipSigmas);
 
+  check_within_limits(s);
   q_meas_prev_ = q_meas;
   ++tick_;
   t_ = static_cast<double>(tick_) * dt;  // from the tick count: no drift of summed steps
@@ -462,6 +518,33 @@ bool Simulator::step(RobotSample& s) {
     if (phase < f.magnitude * dt) deliver = false;
   }
   return deliver;
+}
+
+void Simulator::check_within_limits(const RobotSample& s) const {
+  // A fault far beyond what the arm takes (a contact of 1000 N·m against J1's 54) threw it past its
+  // range at 40 rad/s, and the recording was written as if a real arm could do it (audit of session
+  // 56). A real controller stops the arm at its limits (a protective stop): the run is refused,
+  // naming where it left them. Speeds get half their limit again (a contact may push a joint past
+  // what the program commands), positions none
+  for (int j = 0; j < n_; ++j) {
+    const model::JointLimits& lim = nominal_.joint(j).limits;
+    const double q = s.q[j], qd = s.qd[j];
+    std::string what;
+    if (q < lim.q_min || q > lim.q_max)
+      what = fmt::format("J{} at {:.3f} rad, its range {:.3f} to {:.3f} rad", j + 1, q, lim.q_min, lim.q_max);
+    else if (std::abs(qd) > kSpeedLimitFactor * lim.qd_max)
+      what = fmt::format("J{} at {:.2f} rad/s, its limit {:.2f} rad/s", j + 1, qd, lim.qd_max);
+    if (what.empty()) continue;
+    std::string faults;
+    for (const FaultSpec& f : faults_)
+      if (f.type == FaultType::Collision || f.type == FaultType::Resistance)
+        faults += fmt::format("{}{} of {:g} N·m from {:g} s", faults.empty() ? "" : ", ", to_string(f.type), f.magnitude, f.onset);
+    throw InvalidArgument(fmt::format("the simulated arm left its limits at {:.3f} s: {} (a real controller stops the arm there, a "
+                                      "protective stop); {}",
+                                      s.timestamp, what,
+                                      faults.empty() ? "is the trajectory within the robot's range and speeds?"
+                                                     : "a fault beyond what the arm can take? the scenario's " + faults));
+  }
 }
 
 void Simulator::run(const std::function<void(const RobotSample&)>& sink, const std::function<void(double)>& progress) {

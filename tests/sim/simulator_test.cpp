@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -90,6 +91,35 @@ TEST(Simulator, J5ResistanceRaisesJ5CurrentAlongMotionWhilePositionsHold) {
   EXPECT_GT(along, 0.06);
   EXPECT_LT(along, 0.14);
   EXPECT_LT(pos_dev, 0.01) << "the controller hides the fault in position";
+}
+
+// A resistance larger than the drive's torque limit seizes the joint, whatever its size: the drive
+// saturates, the joint stands, the controller's error grows. Explicit Euler of the stiff smooth sign
+// chattered past ~90 N·m on J5 and the joint tracked again at 1000 N·m (audit of session 56)
+TEST(Simulator, AResistanceBeyondTheDriveSeizesTheJointWhateverItsSize) {
+  for (const double size : {20.0, 100.0, 1000.0, 1e5}) {
+    const auto rec = run(scenario(std::string(kFigureEight) + fmt::format("faults:\n  - {{type: resistance, joint: 5, onset: 2, magnitude: {}}}\n", size)));
+    double speed = 0.0, error = 0.0, moment = 0.0;
+    for (size_t k = 1500; k < rec.size(); ++k) {  // from 3 s
+      speed = std::max(speed, std::abs(rec[k].qd[4]));
+      error = std::max(error, std::abs(rec[k].target_q[4] - rec[k].q[4]));
+      moment = std::max(moment, std::abs(rec[k].target_moment[4]));
+    }
+    EXPECT_LT(speed, 0.02) << size << " N·m: J5 stands (encoder steps only)";
+    EXPECT_GT(error, 0.3) << size << " N·m: the target runs away from it";
+    EXPECT_DOUBLE_EQ(moment, 9.0) << size << " N·m: the drive at its torque limit";
+  }
+}
+
+// A fault far beyond what the arm takes throws it past its limits; the run is refused, naming where
+TEST(Simulator, AnArmThrownPastItsLimitsIsRefused) {
+  const std::string contact = std::string(kFigureEight) + "faults:\n  - {type: collision, link: 3, onset: 3, duration: 0.05, magnitude: 1000}\n";
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { run(scenario(contact)); }),
+              ::testing::MatchesRegex("the simulated arm left its limits at 3\\.[0-9]+ s: J[1-6] at -?[0-9.]+ rad/s, its limit [0-9.]+ rad/s "
+                                      "\\(a real controller stops the arm there, a protective stop\\); a fault beyond what the arm can "
+                                      "take\\? the scenario's collision of 1000 N·m from 3 s"));
+  // 20 N·m, as the scenario library's contacts: within them
+  EXPECT_NO_THROW(run(scenario(std::string(kFigureEight) + "faults:\n  - {type: collision, link: 3, onset: 3, duration: 0.05, magnitude: 20}\n")));
 }
 
 // UR3e §4.3: releasing 0.5 kg shifts the currents by what J^T m g predicts. Compared against the

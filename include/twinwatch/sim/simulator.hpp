@@ -258,7 +258,16 @@ class Simulator {
     bool braked = false;
   };
   ProgramState program_state(double t) const;
+  /// Throws InvalidArgument when a sample is beyond a joint's range or kSpeedLimitFactor x its speed limit.
+  void check_within_limits(const RobotSample& s) const;
+  static constexpr double kSpeedLimitFactor = 1.5;
+  /// Joint j's friction torque at velocity qd over a substep dt (without a resistance fault's).
   double friction_torque(int j, double qd, double dt);
+  /// The size of the resistance faults on joint j now [N·m] (0: none).
+  double resistance(int j) const;
+  /// A substep's qdd with the resistances R taken at the velocity qd + h qdd it ends with:
+  /// M qdd = b - R tanh((qd + h qdd)/vs).
+  VectorJ implicit_acceleration(const MatrixJ& M, const VectorJ& b, const VectorJ& qd, const VectorJ& R, double h);
   void apply_payload_faults(double t);
 
   model::RobotModel nominal_;
