@@ -212,7 +212,9 @@ UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present
   currents_.resize(static_cast<size_t>(n_dof));
 }
 
-void UnitsCheck::check_period(double median_period) const {
+void UnitsCheck::check_period(double median_period) const { check_sample_period(path_, median_period); }
+
+void check_sample_period(const std::string& path_, double median_period) {
   // (a sample index scaled by 1e-6 for 1e-3 was written into a twin, exit 0; review, session 47)
   if (median_period > 0.0 && median_period < kUnitsMinPeriod)
     throw InvalidArgument(fmt::format("{}: the samples are {:g} s apart (median), expected a controller's 0.001-0.1 s: is the time "

@@ -45,6 +45,12 @@ inline constexpr double kUnitsMinPeriod = 1e-4;      ///< [s] (10 kHz; controlle
 /// `torque`: the measured channel holds joint torque sensors (device::ColumnMap::joint_torque_as_current),
 /// judged against twice the robot's torque limits (N·mm read as N·m) instead of kUnitsCurrentMax.
 void check_units(const device::Recording& rec, const model::RobotModel& robot, bool torque = false);
+/// Throws InvalidArgument naming `path` when its samples are not a controller's 0.0001-0.5 s apart
+/// (a time column in milliseconds or microseconds): the one units check that needs no robot.
+void check_sample_period(const std::string& path, double median_period);
+/// [rad/s] faster than any arm joint turns (a UR wrist's limit is 6.28): speeds in degrees/s, for a
+/// verb without the arm's description
+inline constexpr double kUnitsAnyJointSpeedMax = 20.0;
 /// check_units a sample at a time, for a recording read row by row (monitor): the joint count at
 /// construction, check_period once the median period is known, add() per sample (positions and
 /// speeds at once; the currents kept in single precision, 24 bytes a sample for six joints), finish()

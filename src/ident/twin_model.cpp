@@ -186,6 +186,18 @@ TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
   robot_->clear_payload();
 }
 
+double TwinModel::trusted_gain(int j) const {
+  if (measures_torque()) return 1.0;
+  const auto trusted = [](const JointDrive& d) { return d.gain_identified && d.gain >= kTrustedGainMin && d.gain <= kTrustedGainMax; };
+  if (trusted(joints[static_cast<size_t>(j)])) return joints[static_cast<size_t>(j)].gain;
+  std::vector<double> ok;
+  for (const JointDrive& d : joints)
+    if (trusted(d)) ok.push_back(d.gain);
+  if (ok.empty()) return 1.0;
+  std::nth_element(ok.begin(), ok.begin() + static_cast<long>(ok.size() / 2), ok.end());
+  return ok[ok.size() / 2];
+}
+
 bool TwinModel::predicts_payload() const {
   if (sequential) return sequential->has_payload();
   return !(learned && learned->role == LearnedRole::Current);

@@ -108,10 +108,6 @@ constexpr double kUnseenRestLead = 0.02;
 constexpr double kStaticPeakMargin = 1.1;
 // the velocity below which a joint counts as at rest for the frozen-channel check [rad/s]
 constexpr double kMovingVelocity = 0.01;
-// plausible current-to-torque gains kt N eta of a harmonic-drive arm joint [N·m/A] (kt 0.05-0.3,
-// N 50-160, eta 0.7-0.95); outside, the identified gain is not
-// trusted for converting residuals to torque and the median of the plausible ones is used
-constexpr double kGainMin = 2.0, kGainMax = 40.0;
 
 // the largest residual filter cut-off a twin file may hold [Hz]: the Nyquist frequency of the
 // fastest stream the monitor reads (1 kHz, e.g. Franka's FCI; RTDE streams at 500 Hz). Above it the
@@ -984,7 +980,7 @@ Monitor::Monitor(const ident::TwinModel& twin, MonitorConfig config)
   // the observer runs in the twin's torque units; the diagnosis needs N·m (implausible gains, see
   // torque_gain, are replaced there as for the current residual)
   tau_gain_ = VectorJ::Ones(n_);
-  for (int j = 0; j < n_; ++j) tau_gain_[j] = trusted_gain(j);
+  for (int j = 0; j < n_; ++j) tau_gain_[j] = twin_.trusted_gain(j);
   obs_to_nm_ = VectorJ::Ones(n_);
   for (int j = 0; j < n_; ++j) obs_to_nm_[j] = torque_gain(j) / twin_.joints[static_cast<size_t>(j)].gain;
   // breakaway friction: the Coulomb level plus the Stribeck rise, in N·m like the observer's estimate
@@ -1144,21 +1140,6 @@ void Monitor::check_payload_envelope(double t) {
 bool Monitor::carries_declared() const {
   // (a followed change within its error of the declaration takes the declared mass: follow_payload)
   return declaration_taken() && std::abs(twin_.payload().mass - declared_mass_) <= kPayloadFollowFloor;
-}
-
-double Monitor::trusted_gain(int j) const {
-  if (twin_.measures_torque()) return 1.0;  // (a torque sensor reads N·m: no drive gain between it and the model)
-  // a gain the recordings did not fix (JointDrive::gain_identified) or outside the plausible range
-  // is not trusted: the median of the trusted ones converts that joint's residual to torque
-  const auto trusted = [](const ident::JointDrive& d) { return d.gain_identified && d.gain >= kGainMin && d.gain <= kGainMax; };
-  const auto& js = twin_.joints;
-  if (trusted(js[static_cast<size_t>(j)])) return js[static_cast<size_t>(j)].gain;
-  std::vector<double> ok;
-  for (const auto& d : js)
-    if (trusted(d)) ok.push_back(d.gain);
-  if (ok.empty()) return 1.0;
-  std::nth_element(ok.begin(), ok.begin() + static_cast<long>(ok.size() / 2), ok.end());
-  return ok[ok.size() / 2];
 }
 
 void Monitor::open_event(int joint, double start, double t, const char* channel) {

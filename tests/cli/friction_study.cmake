@@ -53,6 +53,12 @@ add_test(NAME cli.friction_study_save_twin_needs_gain COMMAND twinwatch friction
          --save-twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json)
 set_tests_properties(cli.friction_study_save_twin_needs_gain PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "no --gain was given \\(the default 1 leaves it in A\\)")
+# --save-twin takes friction of the twin's robot only: not the study's own simulated joints, not a
+# recording with another joint count (audit of session 56: both were stored, exit 0)
+add_test(NAME cli.friction_study_save_twin_refuses_another_arm
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> friction-study --simulated --trials 1 --save-twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json; echo exit $?")
+set_tests_properties(cli.friction_study_save_twin_refuses_another_arm PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION
+  "--simulated studies the study's own simulated joints, not the ur3e's[^\n]*\nexit 2")
 # real data (only where ../shared/data/real is present, as the CI machine has it)
 set(kinova ${PROJECT_SOURCE_DIR}/../shared/data/real/kinova_gen3_chiha)
 if(EXISTS ${kinova}/joint_2_trapez.csv)
@@ -65,13 +71,32 @@ if(EXISTS ${kinova}/joint_2_trapez.csv)
   # (ParFam-H runs away on the trapezoid's unseen deceleration: 2.9e7 N·m), and says so after the tables
   set(fs ${PROJECT_BINARY_DIR}/cli-friction)
   file(MAKE_DIRECTORY ${fs})
+  # (into a twin of the Kinova: a UR3e twin is refused for its joint count first)
   add_test(NAME cli.friction_study_refuses_a_runaway_equation
-           COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${fs}/x.json && $<TARGET_FILE:twinwatch> friction-study ${kinova}/joint_2_trapez.csv \
+           COMMAND sh -c "$<TARGET_FILE:twinwatch> identify ${kinova}/RecordTrajectory_quadratic.csv --robot ${PROJECT_SOURCE_DIR}/data/robots/kinova_gen3.urdf \
+--column-map kinova_gen3_chiha -q -o ${fs}/x0.json && cp ${fs}/x0.json ${fs}/x.json && $<TARGET_FILE:twinwatch> friction-study ${kinova}/joint_2_trapez.csv \
 --column-map kinova_gen3_chiha_current_torque --joint 2 --memory time --l1 1e-5 --functions sin,cos,exp,tanh --prior-remove-viscous 0 --gain 1 \
 --save-twin ${fs}/x.json -q > ${fs}/tables.txt 2> ${fs}/err.txt; echo exit $?; cat ${fs}/err.txt; grep -c 'Table VIII' ${fs}/tables.txt; \
-cmp ${fs}/x.json ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json && echo UNCHANGED")
-  set_tests_properties(cli.friction_study_refuses_a_runaway_equation PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION
+cmp ${fs}/x.json ${fs}/x0.json && echo UNCHANGED")
+  set_tests_properties(cli.friction_study_refuses_a_runaway_equation PROPERTIES PASS_REGULAR_EXPRESSION
     "exit 1\nerror: --save-twin [^\n]*x.json: not written: J2's ParFam-H errs [0-9.e+]+ N·m rms on the validation record, more than the record's own [0-9.]+ .zero friction would predict it better.. no equation of this study is stored\n1\nUNCHANGED")
+  # an equation that pushes the joint along its motion is no friction model (the Kinova's J5 fitted
+  # -15.32 qd + ..., stored with exit 0: audit of session 56)
+  add_test(NAME cli.friction_study_refuses_friction_that_drives_the_joint
+           COMMAND sh -c "$<TARGET_FILE:twinwatch> identify ${kinova}/RecordTrajectory_quadratic.csv --robot ${PROJECT_SOURCE_DIR}/data/robots/kinova_gen3.urdf \
+--column-map kinova_gen3_chiha -q -o ${fs}/k5.json && cp ${fs}/k5.json ${fs}/k5b.json && $<TARGET_FILE:twinwatch> friction-study ${kinova}/RecordTrajectory_quadratic.csv \
+--column-map kinova_gen3_chiha_current_torque --joint 5 --gain 1 --trials 1 -q --save-twin ${fs}/k5b.json > /dev/null; echo exit $?; cmp ${fs}/k5.json ${fs}/k5b.json && echo UNCHANGED")
+  set_tests_properties(cli.friction_study_refuses_friction_that_drives_the_joint PROPERTIES PASS_REGULAR_EXPRESSION
+    "not written: J5's ParFam-H pushes the joint along its motion above the record's median speed [0-9.]+ rad/s \\(its friction times the speed averages -[0-9.]+ N·m·rad/s[^\n]*\nexit 1\nUNCHANGED")
+  # a Kinova recording into a UR3e twin; a time column left in milliseconds; a --joint that never moves
+  add_test(NAME cli.friction_study_checks_what_it_is_given
+           COMMAND sh -c "cp ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json ${fs}/ur.json; \
+$<TARGET_FILE:twinwatch> friction-study ${kinova}/joint_2_trapez.csv --column-map kinova_gen3_chiha_current_torque --joint 2 --gain 1 --trials 1 -q --save-twin ${fs}/ur.json; echo exit $?; \
+sed 's/^Time,timestamp,0.001/Time,timestamp/' ${PROJECT_SOURCE_DIR}/data/column_maps/kinova_gen3_chiha_current_torque.csv > ${fs}/ms.csv; \
+$<TARGET_FILE:twinwatch> friction-study ${kinova}/joint_2_trapez.csv --column-map ${fs}/ms.csv --joint 2 --gain 1 -q; echo exit $?; \
+$<TARGET_FILE:twinwatch> friction-study ${kinova}/joint_2_trapez.csv --column-map kinova_gen3_chiha_current_torque --joint 1 --gain 1 -q; echo exit $?")
+  set_tests_properties(cli.friction_study_checks_what_it_is_given PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION
+    "ur.json: the recordings have 7 joints, the twin's robot \\(ur3e\\) 6: recordings of another arm\nexit 2\n[^\n]*joint_2_trapez.csv: the samples are 1 s apart \\(median\\)[^\n]*milliseconds[^\n]*\nexit 2\n[^\n]*--joint 1: J1 moves at most [0-9.e-]+ rad/s in [^\n]*joint_2_trapez.csv, not faster than 0.2 rad/s[^\n]*\nexit 2")
   # the temperature slope is fitted only on a joint's temperature span while it moves: the Kinova J5,
   # at rest in joint_2_trapez at 10 °C above the quadratic log, got a slope that made it 1.87 A
   # held-out (0.14 A now) and J7 4.60 A (0.18)

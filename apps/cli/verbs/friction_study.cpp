@@ -93,7 +93,8 @@ JointRecord slice(const JointRecord& r, long a, long b) {
   return s;
 }
 
-std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
+// (n_dof: the recordings' joint count)
+std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o, int& n_dof) {
   // (TRAIN given again as VALIDATION was called an "untrained validation record")
   cli::require_distinct(o.recordings, "RECORDINGS");
   if (o.recordings.size() > 3)
@@ -102,22 +103,43 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o) {
   std::vector<device::Recording> recs;
   for (const auto& f : o.recordings) recs.push_back(device::read_recording(f, maps.of(f)));
   for (const auto& r : recs) cli::require_driven(r, "friction-study");
+  // the units checks that need no arm (the study takes none): a time column in milliseconds made a
+  // 1 s sample period and fitted it, exit 0 (audit of session 56)
+  for (const auto& r : recs) {
+    cli::check_sample_period(r.path, r.median_period);
+    for (size_t k = 0; k < r.samples.size(); ++k)
+      for (int j = 0; j < r.n_dof; ++j)
+        if (std::abs(r.samples[k].qd[j]) > cli::kUnitsAnyJointSpeedMax)
+          throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), faster than any arm joint turns "
+                                            "({:g} rad/s): are the speeds in degrees/s, or is another column mapped to actual_qd_{}? Scale "
+                                            "them with a column map ('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
+                                            r.path, j + 1, r.samples[k].qd[j], r.samples[k].timestamp - r.samples.front().timestamp,
+                                            k + 1, cli::kUnitsAnyJointSpeedMax, j, j));
+  }
   for (const auto& r : recs)
     if (r.n_dof != recs[0].n_dof)
       throw InvalidArgument(fmt::format("{} has {} joints, {} has {}", r.path, r.n_dof, recs[0].path, recs[0].n_dof));
+  n_dof = recs[0].n_dof;
   // the joints: given, or every joint that moves in the training record
   std::vector<int> joints;
+  const auto peak_speed = [&](int j) {
+    double peak = 0.0;
+    for (const RobotSample& s : recs[0].samples) peak = std::max(peak, std::abs(s.qd[j]));
+    return peak;
+  };
   for (int j : o.joints) {
     if (j < 1 || j > recs[0].n_dof)
       throw InvalidArgument(fmt::format("--joint {} is out of range, expected 1..{}", j, recs[0].n_dof));
+    // (it said "the rigid-body fit keeps 0 samples", naming no joint)
+    if (const double peak = peak_speed(j - 1); !(peak > 2.0 * o.screening))
+      throw InvalidArgument(fmt::format("--joint {}: J{} moves at most {:.3g} rad/s in {}, not faster than {:g} rad/s (twice --screening): "
+                                        "the study needs a joint that moves (its friction away from the reversals)",
+                                        j, j, peak, recs[0].path, 2.0 * o.screening));
     joints.push_back(j - 1);
   }
   if (joints.empty())
-    for (int j = 0; j < recs[0].n_dof; ++j) {
-      double peak = 0.0;
-      for (const RobotSample& s : recs[0].samples) peak = std::max(peak, std::abs(s.qd[j]));
-      if (peak > 2.0 * o.screening) joints.push_back(j);
-    }
+    for (int j = 0; j < recs[0].n_dof; ++j)
+      if (peak_speed(j) > 2.0 * o.screening) joints.push_back(j);
   if (joints.empty())
     throw InvalidArgument(fmt::format("{}: no joint moves faster than {} rad/s; name one with --joint", recs[0].path,
                                       2.0 * o.screening));
@@ -463,13 +485,14 @@ int run(const StudyOptions& o) {
     require_output(o.predictions, inputs);
   }
   std::vector<ProtocolRecords> joints;
+  int recorded_dof = 0;
   if (o.simulated) {
     for (const SimulatedJoint& j : simulated_study_joints()) {
       if (!o.joints.empty() && std::find(o.joints.begin(), o.joints.end(), j.name[1] - '0') == o.joints.end()) continue;
       joints.push_back(simulated_protocol_records(j, o.seed, training_of(o)));
     }
   } else {
-    joints = recorded_joints(o);
+    joints = recorded_joints(o, recorded_dof);
   }
   ProtocolOptions po;
   po.trials = o.trials;
@@ -483,7 +506,20 @@ int run(const StudyOptions& o) {
       fmt::print(stderr, "[{:6.1f} s] {}\n", s, msg);
     };
   std::optional<ident::TwinModel> twin;
-  if (!o.save_twin.empty()) twin = cli::load_twin(o.save_twin);  // fail early on a bad twin file
+  if (!o.save_twin.empty()) {
+    twin = cli::load_twin(o.save_twin);  // fail early on a bad twin file, or one that cannot be written
+    require_writable(o.save_twin);       // (it was found after the study's minutes, exit 1)
+    // another arm's friction in the twin: the study's own simulated joints, or a recording with
+    // another joint count (a Kinova's J5 was stored in a UR3e twin, exit 0; audit of session 56)
+    if (o.simulated)
+      throw InvalidArgument(fmt::format("--save-twin {}: --simulated studies the study's own simulated joints, not the {}'s: their "
+                                        "friction is no model of the robot; give recordings of the robot",
+                                        o.save_twin, twin->robot_name()));
+    if (recorded_dof != twin->n_dof())
+      throw InvalidArgument(fmt::format("--save-twin {}: the recordings have {} joints, the twin's robot ({}) {}: recordings of another "
+                                        "arm",
+                                        o.save_twin, recorded_dof, twin->robot_name(), twin->n_dof()));
+  }
   std::vector<ProtocolResult> res;
   for (const auto& j : joints) res.push_back(run_hesr_protocol(j, po));
   if (!o.predictions.empty()) {
@@ -535,6 +571,27 @@ int run(const StudyOptions& o) {
                                              "than the record's own {:.4g} (zero friction would predict it better); no equation of "
                                              "this study is stored",
                                              o.save_twin, r.study.joint, ms.fourier_rmse, torque_unit(o), tau_rms));
+      // friction takes energy from the motion: an equation that, at the record's faster half of
+      // speeds, pushes the joint along (the Kinova's J5 fitted -15.32 qd + ..., which a UR3e twin
+      // took, audit of session 56) is no friction model, whatever its rms
+      if (refused.empty()) {
+        std::vector<double> speeds;
+        for (const double v : r.study.fourier.qd) speeds.push_back(std::abs(v));
+        if (!speeds.empty() && ms.fourier_prediction.size() == speeds.size()) {
+          std::vector<double> sorted = speeds;
+          std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+          const double median = sorted[sorted.size() / 2];
+          double power = 0.0;
+          long n = 0;
+          for (size_t k = 0; k < speeds.size(); ++k)
+            if (speeds[k] > median) power += ms.fourier_prediction[k] * r.study.fourier.qd[k], ++n;
+          if (n > 0 && power < 0.0)
+            refused = fmt::format("--save-twin {}: not written: {}'s ParFam-H pushes the joint along its motion above the record's median "
+                                  "speed {:.3g} rad/s (its friction times the speed averages {:.3g} {}·rad/s, where friction takes "
+                                  "energy from the motion: > 0); no equation of this study is stored",
+                                  o.save_twin, r.study.joint, median, power / static_cast<double>(n), torque_unit(o));
+        }
+      }
       eqs.push_back(friction_equation_of(*m, joint));
     }
     if (refused.empty()) {

@@ -328,14 +328,9 @@ int run_identify(const IdentifyOptions& o) {
     else
       fmt::print("{:<6} {:>9} {:>9} {:>8} {:>10} {:>7} {:>12}\n", "joint", "samples", fmt::format("RMSE {}", twin.channel_unit()), "R²",
                  "c_gen", "gen %", "gain N·m/A");
-    // a gain the recordings did not fix is shown as the monitor uses it: the median of the identified
-    // ones (the fitted number itself can be anything, e.g. 3240 on a joint no payload loads)
-    std::vector<double> fixed;
-    for (const auto& d : twin.joints)
-      if (d.gain_identified) fixed.push_back(d.gain);
-    std::sort(fixed.begin(), fixed.end());
-    const double median = fixed.empty() ? std::numeric_limits<double>::quiet_NaN()
-                                        : (fixed.size() % 2 ? fixed[fixed.size() / 2] : 0.5 * (fixed[fixed.size() / 2 - 1] + fixed[fixed.size() / 2]));
+    // a gain the recordings did not fix is shown as the monitor uses it (TwinModel::trusted_gain): the
+    // median of the trusted ones (the fitted number itself can be anything, e.g. 3240 on a joint no
+    // payload loads)
     for (int j = 0; j < twin.n_dof(); ++j) {
       const size_t J = static_cast<size_t>(j);
       const auto& m = twin.joints[J];
@@ -348,14 +343,17 @@ int run_identify(const IdentifyOptions& o) {
       }
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
                  fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
-                 !twin.gains_known()  ? fmt::format("({:.3f})", m.gain)
-                 : m.gain_identified  ? fmt::format("{:.3f}", m.gain)
-                                      : fmt::format("{:.3f}*", std::isfinite(median) ? median : m.gain));
+                 !twin.gains_known()                ? fmt::format("({:.3f})", m.gain)
+                 : twin.trusted_gain(j) == m.gain ? fmt::format("{:.3f}", m.gain)
+                                                  : fmt::format("{:.3f}*", twin.trusted_gain(j)));
     }
     // the notes say why; the mark keeps a reader of the table alone from taking the number as measured
-    if (twin.gains_known() && std::any_of(twin.joints.begin(), twin.joints.end(), [](const auto& d) { return !d.gain_identified; }))
-      fmt::print("* gain: not identified (no recording loads the joint enough); shown is the median of the identified ones, which the "
-                 "monitor uses\n");
+    bool median_shown = false;
+    for (int j = 0; j < twin.n_dof(); ++j) median_shown |= twin.gains_known() && twin.trusted_gain(j) != twin.joints[static_cast<size_t>(j)].gain;
+    if (median_shown)
+      fmt::print("* gain: not identified (no recording loads the joint enough) or beyond a harmonic drive's {:g}-{:g} N·m/A; shown is the "
+                 "median of the identified ones, which the monitor uses\n",
+                 ident::TwinModel::kTrustedGainMin, ident::TwinModel::kTrustedGainMax);
     // a joint fitted far worse than a constant would be: its recordings carry almost none of its
     // signal (audit of session 55: the Kinova's wrist roll J7 reads ±0.0004 N·m on its torque sensor
     // while it moves, and its fit had R² -33318, and -19557 on a held-out run). R² below -1: an error

@@ -750,6 +750,7 @@ int run_thresholds(const ThresholdOptions& o) {
   if (!o.program.empty()) monitor::check_program_name(o.program, "--program");
   cli::require_distinct(o.recordings, "RECORDINGS");
   ident::TwinModel twin = cli::load_twin(o.twin);
+  require_writable(o.twin);  // (found after the learning, exit 1: audit of session 56)
   std::vector<std::string> all = o.recordings;
   all.insert(all.end(), o.debounce_validation.begin(), o.debounce_validation.end());
   const cli::ColumnMaps maps(o.column_maps, all, twin.measures_torque());
@@ -899,16 +900,26 @@ int run_thresholds(const ThresholdOptions& o) {
         cfg.part_com.x(), cfg.part_com.y(), cfg.part_com.z());
   // (a joint-torque twin has no drive whose motoring/back-driven step its thresholds widen by)
   if (shown.reversal_load_max.size() == twin.n_dof() && !twin.measures_torque()) {
+    // (stored in the twin's torque scale, the joint's own gain; shown in N·m as the monitor sizes
+    // faults, through TwinModel::trusted_gain: a J6 no payload loads fitted a gain of 3080 and its
+    // load read 183.71 N·m on a 12 N·m wrist, audit of session 56)
     std::string loads;
-    bool relative = false;  // a joint whose gain no known payload fixed: its load is in the twin's own scale
+    bool relative = false, median = false;
     for (int j = 0; j < twin.n_dof(); ++j) {
-      const bool nm = twin.gains_known() && twin.joints[static_cast<size_t>(j)].gain_identified;
-      relative |= !nm;
-      loads += fmt::format("{}J{} {:.2f}{}", j ? "  " : "", j + 1, shown.reversal_load_max[j], nm ? "" : "*");
+      const double own = twin.joints[static_cast<size_t>(j)].gain, used = twin.trusted_gain(j);
+      const bool converted = twin.gains_known() && used != own;
+      relative |= !twin.gains_known();
+      median |= converted;
+      loads += fmt::format("{}J{} {:.2f}{}", j ? "  " : "", j + 1, shown.reversal_load_max[j] * (converted ? used / own : 1.0),
+                           twin.gains_known() && !converted ? "" : "*");
     }
     say(!o.quiet, "the largest load each joint reversed under in them [N·m{}], beyond which both of its thresholds widen by the drive's "
                "motoring/back-driven step: {}\n",
-               relative ? "; *: in the twin's own torque scale, the joint's gain not fixed by a known payload" : "", loads);
+               relative  ? "; *: in the twin's own torque scale, its gains not fixed by a known payload"
+               : median ? "; *: through the median of the identified gains, the joint's own not fixed by a known payload, as the monitor "
+                          "sizes faults"
+                        : "",
+               loads);
   }
   for (int j = 0; j < twin.n_dof(); ++j) {
     const auto& d = shown.dynamic[static_cast<size_t>(j)];

@@ -269,6 +269,14 @@ class TwinModel {
 
   /// True when the current-to-torque gains are absolute (a known payload was in the training data).
   bool gains_known() const { return gains_absolute; }
+  /// The gain [N·m/A] that converts joint j's current to torque: its own when the recordings fixed it
+  /// (gain_identified) and it is plausible for a harmonic-drive joint (kTrustedGainMin to Max), else
+  /// the median of the joints' that are (a joint no payload loads may fit e.g. 3080); 1 when none
+  /// is, and for a joint-torque twin (its sensors read N·m). What the monitor sizes faults with.
+  double trusted_gain(int j) const;
+  /// plausible current-to-torque gains kt N eta of a harmonic-drive arm joint [N·m/A] (kt 0.05-0.3,
+  /// N 50-160, eta 0.7-0.95)
+  static constexpr double kTrustedGainMin = 2.0, kTrustedGainMax = 40.0;
   /// True when the prediction changes with the payload (set_payload): the physics and hybrid twins,
   /// and a sequential one identified with payload columns; not a network that predicts the current
   /// alone (method "mlp"), which never saw a payload as an input.

@@ -574,7 +574,6 @@ class Monitor {
   void follow_payload(Event& e, double t, double rebase_from);  // rebase_from: rebase_on's first ring sample [s]
   VectorJ peaks(const std::vector<DebouncedPeak>& channel) const;  // DebouncedPeak::peak per joint (0 when off)
   double torque_gain(int j) const;   // current -> torque per joint (tau_gain_, set once)
-  double trusted_gain(int j) const;  // the identified gain when trusted, else the median of the trusted ones
 
   ident::TwinModel twin_;
   /// A new event, its residual in the twin's channel units (every event the monitor raises starts here)
