@@ -49,6 +49,9 @@ inline constexpr int kExitStoppedInOutage = 4;
 
 /// What another front end sees of the loop (each may be empty). Called on the loop's thread.
 struct MonitorHooks {
+  /// the options, the twin and every output path passed their checks; nothing read or connected yet
+  /// (serve says its address here, not before an input that is refused in a second)
+  std::function<void()> on_checked;
   /// the monitor is built and the input open; `source`: the recordings or "rtde://HOST[:PORT]"
   std::function<void(const monitor::Monitor&, const std::string& source)> on_start;
   /// before each sample is judged (a replay's pacing)

@@ -54,4 +54,10 @@ cmp -s "$dir/monitor.events" "$dir/serve.events" || { diff "$dir/monitor.events"
 [ -s "$dir/serve.events" ] || fail "no events"
 curl -s "$url" >/dev/null 2>&1 && fail "still serving after Ctrl-C"
 echo "events=$(wc -l <"$dir/serve.events") samples=$samples"
+# an input refused at once is said without a dashboard address before it (audit of session 56)
+rc=0
+"$tw" serve --twin "$twin" "$rec" --rtde 127.0.0.1:1 --listen 127.0.0.1:0 --db '' >"$dir/serve.out" 2>"$dir/serve.err" || rc=$?
+[ "$rc" -eq 2 ] || fail "RECORDING and --rtde: exit $rc, expected 2"
+grep -q "dashboard:" "$dir/serve.err" && fail "a dashboard address before the refusal"
+grep -q "give either RECORDING" "$dir/serve.err" || fail "RECORDING and --rtde not refused by name"
 echo "PASS"

@@ -153,6 +153,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     for (size_t b = a + 1; b < std::size(outs); ++b)
       if (!outs[a].second->empty() && !outs[b].second->empty() && same_file(*outs[a].second, *outs[b].second))
         throw PathError(fmt::format("{} and {} name the same file {}: each writes its own", outs[a].first, outs[b].first, *outs[a].second));
+  if (hooks.on_checked) hooks.on_checked();
   // A recording is read twice, row by row, and never held: first to check every row, its units and
   // the timing of its steps (the median period a gap is measured in needs the whole file), then to
   // monitor it. Held whole it took ~0.9 kB a sample (1.6 GB per hour at 500 Hz: a day's recording

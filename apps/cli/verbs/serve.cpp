@@ -67,14 +67,18 @@ int run_serve(const cli::MonitorOptions& mo, const ServeOptions& so) {
   // listening first: an address in use is said before a long check of the recording or a --wait
   ui::DashboardServer server(feed, host, port);
   const std::string url = fmt::format("http://{}:{}/", host.find(':') != std::string::npos ? "[" + host + "]" : host, server.port());
-  if (!mo.quiet) {
-    fmt::print(stderr, "dashboard: {}  (open it in a browser; Ctrl-C stops)\n", url);
-    if (!loopback(host))
-      fmt::print(stderr, "note: {} serves every machine that reaches it, without a password (the page only reads)\n", host);
-  }
   cli::install_interrupt_handler();
 
   cli::MonitorHooks hooks;
+  // the address once the options and outputs passed their checks (it was said before an input
+  // refused at once, e.g. RECORDING and --rtde both given: audit of session 56), and before the
+  // recording's check or the connection, whose progress the page shows
+  hooks.on_checked = [&, host = host] {
+    if (mo.quiet) return;
+    fmt::print(stderr, "dashboard: {}  (open it in a browser; Ctrl-C stops)\n", url);
+    if (!loopback(host))
+      fmt::print(stderr, "note: {} serves every machine that reaches it, without a password (the page only reads)\n", host);
+  };
   using clock = std::chrono::steady_clock;
   clock::time_point wall0;
   double t0 = 0.0;
