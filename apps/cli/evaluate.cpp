@@ -1151,7 +1151,12 @@ void write_report(const ident::TwinModel& twin_in, const std::vector<std::string
                                     ? ", predicted as the monitor predicts: the recording has no target_qdd, so the acceleration is "
                                       "the monitor's causal estimate from the measured velocity; 'twinwatch validate' differentiates "
                                       "the whole recording centred, and its table differs"
-                                    : ""),
+                                    // (the monitor's start of the friction memory and its choice of the
+                                    // drive's direction at reversals: J6 R² 0.9471 against validate's
+                                    // 0.9473 on the figure-eight, said nowhere; audit of session 56)
+                                    : ", predicted as the monitor predicts (its start of the joints' friction memory, its choice of "
+                                      "the drive's direction at reversals); 'twinwatch validate' predicts without them, and its table "
+                                      "differs slightly, mostly on joints with little current"),
                 head, mrows);
     const MatrixJ C = correlation.matrix();
     std::vector<std::vector<std::string>> crows;
