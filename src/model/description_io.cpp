@@ -3,6 +3,7 @@
 #include "twinwatch/model/description_io.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
 #include "twinwatch/core/json_fields.hpp"
+#include "twinwatch/model/dynamics.hpp"
 
 namespace twinwatch::model {
 
@@ -27,7 +29,7 @@ namespace fs = std::filesystem;
 // Bounds on a description's numbers that catch unit slips (mm for m, degrees for rad, cm/s² for
 // m/s², g for kg) and no real arm's values: DH lengths, centres of mass and a flange within 5 m,
 // angles within one turn, joint ranges within five turns, speeds up to 50 rad/s.
-constexpr double kMaxLength = 5.0;                     // [m]
+constexpr double kMaxLength = kMaxDescriptionLength;  // [m]
 constexpr double kMaxAngle = 2.0 * 3.14159265358979323846 + 1e-6;  // [rad]
 constexpr double kMaxJointRange = 5.0 * kMaxAngle;     // [rad]
 constexpr double kMaxJointSpeed = 50.0;                // [rad/s]
@@ -299,7 +301,53 @@ RobotDescription parse_description_json(const std::string& text, const std::stri
   } catch (const InvalidArgument& e) {
     throw ParseError(origin, 0, "joints", e.what());
   }
+  check_holds_itself(d, origin);
   return d;
+}
+
+void check_holds_itself(const RobotDescription& d, const std::string& origin) {
+  // Masses in grams pass every per-number bound (a UR3e's 2000 g upper arm is a plausible 2000 kg
+  // link of a heavy arm) but make an arm that cannot lift itself: the simulator then ran the UR3e
+  // with J2 at its limit, collapsed, exit 0 (audit of session 56). The gravity torque at poses
+  // spread over the joints' ranges (a fixed low-discrepancy set: the same verdict every load) is
+  // compared with each joint's published limit; a real arm holds itself with margin (the UR3e's J2
+  // needs at most ~half its 54 N·m), so five times the limit is a unit slip, not a heavy arm
+  constexpr double kHoldFactor = 5.0;
+  constexpr int kPoses = 256;
+  const RobotModel model(d);
+  DynamicsData data(model);
+  const int n = model.n_dof();
+  VectorJ q(n), worst = VectorJ::Zero(n);
+  std::vector<VectorJ> at(static_cast<size_t>(n), VectorJ::Zero(n));
+  for (int k = 0; k < kPoses; ++k) {
+    for (int j = 0; j < n; ++j) {
+      // the k-th point of an additive recurrence with the j-th prime's square root (R-sequence)
+      static constexpr double kRoots[] = {1.4142135623730951, 1.7320508075688772, 2.23606797749979,  2.6457513110645907,
+                                          3.3166247903554,    3.605551275463989,  4.123105625617661, 4.358898943540674};
+      const double u = std::fmod(0.5 + (k + 1) * kRoots[j % 8] * (1 + j / 8), 1.0);
+      const JointLimits& l = model.joint(j).limits;
+      const double lo = std::max(l.q_min, -M_PI), hi = std::min(l.q_max, M_PI);
+      q[j] = lo + u * (hi - lo);
+    }
+    const VectorJ& g = gravity_torque(model, data, q);
+    for (int j = 0; j < n; ++j)
+      if (std::abs(g[j]) > worst[j] || !std::isfinite(g[j])) {
+        worst[j] = std::isfinite(g[j]) ? std::abs(g[j]) : std::numeric_limits<double>::infinity();
+        at[static_cast<size_t>(j)] = q;
+      }
+  }
+  double moving = 0.0;
+  for (const Joint& j : d.joints) moving += j.body.mass;
+  for (int j = 0; j < n; ++j) {
+    const double limit = model.joint(j).limits.torque_max;
+    if (!std::isfinite(limit) || worst[j] <= kHoldFactor * limit) continue;
+    throw ParseError(origin, 0, fmt::format("joints[{}]", j),
+                     fmt::format("the arm cannot hold its own weight: {} ({}) needs {:.4g} N·m against gravity at q = [{:.2f}], more than {:g} "
+                                 "times its torque limit {:g} N·m; its links weigh {:.4g} kg in all (masses in grams? give kg)",
+                                 fmt::format("J{}", j + 1), model.joint(j).name, worst[j],
+                                 fmt::join(at[static_cast<size_t>(j)].data(), at[static_cast<size_t>(j)].data() + n, ", "), kHoldFactor,
+                                 limit, moving));
+  }
 }
 
 RobotDescription load_description_json(const std::string& path) { return parse_description_json(read_text_file(path), path); }

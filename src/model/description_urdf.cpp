@@ -97,6 +97,19 @@ int line_of_quoted_value(const std::string& text, const std::vector<std::string>
   return 0;
 }
 
+// 1-based line of the element `<TAG name="NAME"` in the text (0 if not found)
+int line_of_element(const std::string& text, const std::string& tag, const std::string& name) {
+  for (const char q : {'"', '\''}) {
+    const std::string needle = std::string("name=") + q + name + q;
+    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+      const size_t open = text.rfind('<', at);
+      if (open != std::string::npos && text.compare(open + 1, tag.size(), tag) == 0)
+        return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(open), '\n'));
+    }
+  }
+  return 0;
+}
+
 // rotation taking z onto the unit axis a
 Eigen::Matrix3d z_onto(const Eigen::Vector3d& a) {
   return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), a).toRotationMatrix();
@@ -182,6 +195,24 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   bool have_body = false;
   for (const auto& j : chain) {
     const Eigen::Isometry3d origin = to_iso(j->parent_to_joint_origin_transform);
+    // unit slips the JSON reader refuses too (description_io.cpp): an origin in mm, a negative
+    // limit (urdfdom reads them; velocity="-1" left the joint without a speed limit, audit of session 56)
+    const int line = line_of_element(text, "joint", j->name);
+    if (!(origin.translation().norm() <= kMaxDescriptionLength))
+      throw ParseError(path, line, fmt::format("joint '{}'.origin", j->name),
+                       fmt::format("expected an offset within {:g} m, got one of {:.4g} m (in mm? give metres)", kMaxDescriptionLength,
+                                   origin.translation().norm()));
+    if (j->limits)
+      for (const auto& [key, v] : {std::pair{"velocity", j->limits->velocity}, std::pair{"effort", j->limits->effort}})
+        if (!(v >= 0.0))
+          throw ParseError(path, line, fmt::format("joint '{}'.limit.{}", j->name, key),
+                           fmt::format("expected a limit >= 0 (0: not published), got {}", v));
+    if (const urdf::Link& child = *urdf_model->getLink(j->child_link_name); child.inertial) {
+      const urdf::Vector3& c = child.inertial->origin.position;
+      if (!(std::sqrt(c.x * c.x + c.y * c.y + c.z * c.z) <= kMaxDescriptionLength))
+        throw ParseError(path, line_of_element(text, "link", child.name), fmt::format("link '{}'.inertial.origin", child.name),
+                         fmt::format("expected a centre of mass within {:g} m of the link's frame (in mm? give metres)", kMaxDescriptionLength));
+    }
     const urdf::Link& child = *urdf_model->getLink(j->child_link_name);
     if (j->type == urdf::Joint::FIXED) {
       T_acc = T_acc * origin;
@@ -222,6 +253,7 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   } catch (const InvalidArgument& e) {
     throw ParseError(path, 0, "joints", e.what());
   }
+  check_holds_itself(d, path);
   return d;
 }
 

@@ -326,6 +326,43 @@ TEST(DescriptionUrdf, AMassThatIsNotANumberIsRefusedNotZero) {
   EXPECT_DOUBLE_EQ(load_description_urdf(path).joints.at(0).body.mass, 1.25);
 }
 
+// unit slips the JSON reader refuses are refused in a URDF too, with the joint's line: an origin in
+// mm, a negative limit (velocity="-1" left the joint without a speed limit; audit of session 56)
+TEST(DescriptionUrdf, AnOriginInMillimetresOrANegativeLimitIsRefused) {
+  const std::string path = ::testing::TempDir() + "description_test_units.urdf";
+  const auto urdf = [&](const std::string& origin, const std::string& limit) {
+    std::ofstream(path) << R"(<robot name="u"><link name="base"/>
+    <link name="l1"><inertial><origin xyz="0 0 0.1"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz=")" + origin +
+                               R"("/><axis xyz="0 0 1"/><limit lower="-1" upper="1" )" + limit + R"(/></joint></robot>)";
+    return twinwatch::test::error_text<ParseError>([&] { load_description_urdf(path); });
+  };
+  EXPECT_EQ(urdf("0 0 0.15", R"(effort="10" velocity="2")"), "no error");
+  EXPECT_THAT(urdf("0 0 152", R"(effort="10" velocity="2")"),
+              HasSubstr("description_test_units.urdf:3: field 'joint 'j1'.origin': expected an offset within 5 m, got one of 152 m (in mm? give metres)"));
+  EXPECT_THAT(urdf("0 0 0.15", R"(effort="10" velocity="-1")"),
+              HasSubstr("description_test_units.urdf:3: field 'joint 'j1'.limit.velocity': expected a limit >= 0 (0: not published), got -1"));
+  EXPECT_THAT(urdf("0 0 0.15", R"(effort="-10" velocity="2")"), HasSubstr("field 'joint 'j1'.limit.effort'"));
+}
+
+// Masses in grams pass every per-number bound but make an arm that cannot lift itself; the UR3e
+// with its link masses in grams was simulated with J2 at its limit, collapsed, exit 0 (audit of
+// session 56). The shipped arms hold themselves
+TEST(Description, AnArmThatCannotHoldItsOwnWeightIsRefused) {
+  for (const char* name : {"ur3e", "ur5e", "panda"}) EXPECT_NO_THROW(load_robot(name)) << name;
+  EXPECT_NO_THROW(load_robot(std::string(TWINWATCH_SOURCE_DIR) + "/data/robots/kinova_gen3.urdf"));
+  RobotDescription grams = load_robot("ur3e").description();
+  for (Joint& j : grams.joints) j.body.mass *= 1000.0;
+  const std::string error = twinwatch::test::error_text<ParseError>([&] { check_holds_itself(grams, "grams.json"); });
+  EXPECT_THAT(error, ::testing::MatchesRegex("grams\\.json: field 'joints\\[[12]\\]': the arm cannot hold its own weight: J[23] \\([a-z_]+\\) "
+                                             "needs [0-9.e+]+ N·m against gravity at q = \\[[-0-9., ]+\\], more than 5 times its torque limit "
+                                             "(54|28) N·m; its links weigh [0-9.]+ kg in all \\(masses in grams\\? give kg\\)"));
+  // twice the masses: a heavier arm, still one that holds itself
+  RobotDescription heavy = load_robot("ur3e").description();
+  for (Joint& j : heavy.joints) j.body.mass *= 2.0;
+  EXPECT_NO_THROW(check_holds_itself(heavy, "heavy.json"));
+}
+
 // a directory named like a description was read as an empty document ("not valid JSON: unexpected
 // end of input"): the wrong cause
 TEST(LoadRobot, ADirectoryNamedLikeADescriptionIsSaidToBeOne) {

@@ -20,6 +20,15 @@ RobotDescription load_description_json(const std::string& path);
 /// Parses a JSON description from a string; `origin` names it in error messages.
 RobotDescription parse_description_json(const std::string& text, const std::string& origin);
 
+/// Bound on a description's lengths (DH lengths, offsets, centres of mass) [m]: beyond it a value
+/// is a unit slip (mm for m), not a real arm's.
+inline constexpr double kMaxDescriptionLength = 5.0;
+
+/// Throws ParseError naming `origin` and the joint when the arm cannot hold its own weight: the
+/// gravity torque at poses spread over the joints' ranges more than five times a joint's published
+/// torque limit (masses in grams). Both loaders call it.
+void check_holds_itself(const RobotDescription& d, const std::string& origin);
+
 /// Loads a serial chain from a URDF file, from `base_link` to `tip_link` (empty: the root, and the
 /// leaf below the most revolute/continuous joints; a tie is an error naming the leaves). Fixed
 /// joints on the chain are merged; revolute/continuous joints become joints.
