@@ -1,6 +1,7 @@
 #include "verb_registry.hpp"
 
 #include <cctype>
+#include <charconv>
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -143,9 +144,22 @@ std::string with_option_names(std::string message, std::initializer_list<std::pa
 }
 
 CLI::Option* add_tool_point_option(CLI::App* sub, std::vector<double>& values, const std::string& help) {
+  // (each value a number: '--tool-point 0 0 -o x.script' took '-o' as the third and said only
+  // "Could not convert: --tool-point = 0,0,-o"; audit of session 56)
+  const CLI::Validator number(
+      [](std::string& v) {
+        double x = 0.0;
+        const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+        return ec == std::errc() && end == v.data() + v.size()
+                   ? std::string()
+                   : fmt::format("expected three numbers X Y Z [m] an occurrence, got '{}'{}", v,
+                                 !v.empty() && v[0] == '-' ? " (an option where a number was due: are numbers missing?)" : "");
+      },
+      "X Y Z");
   return sub->add_option("--tool-point", values, help)
       ->type_size(-3)  // three numbers an occurrence, any number of occurrences
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->check(number);
 }
 
 std::vector<Eigen::Vector3d> tool_points(const std::vector<double>& values) {

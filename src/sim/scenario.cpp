@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -343,6 +344,15 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   s.path = origin;
   s.name = y.text(root, "", "name", origin);
   s.robot = robot.empty() ? y.text(root, "", "robot", "ur3e") : robot;
+  // a description file the scenario names is found beside the scenario (as the scenario is moved
+  // with it), else from the working directory: 'robot: ../robots/arm.json' was read from the
+  // working directory only (audit of session 56). Kept as the path found, for every later load
+  if (robot.empty() && !model::robot_file(s.robot).empty()) {
+    const std::filesystem::path given(s.robot), dir = std::filesystem::path(origin).parent_path();
+    const std::string beside = (dir / given).string();
+    std::error_code ec;
+    if (given.is_relative() && !dir.empty() && std::filesystem::exists(model::robot_file(beside), ec)) s.robot = beside;
+  }
   s.program = y.text(root, "", "program", "");
   if (root["program"] && (s.program.empty() || s.program.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.-") !=
                                                    std::string::npos))
@@ -351,7 +361,8 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   model::RobotModel m = [&] {
     try {
       return model::load_robot(s.robot);
-    } catch (const InvalidArgument& e) {
+    } catch (const std::exception& e) {  // (a description file's own error too: ParseError naming it)
+      if (!root["robot"]) throw;
       y.fail(root["robot"], "robot", e.what());
     }
   }();

@@ -77,7 +77,14 @@ set_tests_properties(cli.excite_tool_point_in_mm PROPERTIES PASS_REGULAR_EXPRESS
   "error: --tool-point \\(number 2 of 2\\) is \\(0, 0, 150\\) m, 150 m from the flange: expected at most 2 m \\(a value in mm\\?\\) \\(ur3e\\)
 exit [1-9]")
 add_test(NAME cli.excite_tool_point_two_numbers COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e -o ${d}/two.yaml --tool-point 0 0.1 2>&1; echo exit \$?")
-set_tests_properties(cli.excite_tool_point_two_numbers PROPERTIES PASS_REGULAR_EXPRESSION "--tool-point: 3 required FLOAT missing[^\n]*\n.*exit [1-9]")
+set_tests_properties(cli.excite_tool_point_two_numbers PROPERTIES PASS_REGULAR_EXPRESSION "--tool-point: 3 required FLOAT[:A-Z ]* missing[^\n]*\n.*exit [1-9]")
+# an option where the third number was due is named as such (it said "Could not convert: --tool-point
+# = 0,0,-o"); one period beyond the longest run the simulator takes is refused before the design
+# (the file was written, exit 0, and simulate refused it: audit of session 56)
+add_test(NAME cli.excite_refuses_what_simulate_would COMMAND sh -c "$<TARGET_FILE:twinwatch> excite ur3e --tool-point 0 0 -o ${d}/x.yaml 2>&1; echo exit \$?; \
+$<TARGET_FILE:twinwatch> excite ur3e --base-frequency 1e-9 -o ${d}/lowf.yaml 2>&1; echo exit \$?; ls ${d}/lowf.yaml 2>&1")
+set_tests_properties(cli.excite_refuses_what_simulate_would PROPERTIES PASS_REGULAR_EXPRESSION
+  "--tool-point: expected three numbers X Y Z \\[m\\] an occurrence, got '-o' \\(an option where a number was due: are numbers missing\\?\\)[^\n]*\n.*exit 2\nerror: --base-frequency 1e-09 Hz: one period is 1e\\+09 s, longer than the longest run the simulator accepts \\(1e\\+06 s\\)[^\n]*\nexit 2\n[^\n]*No such file")
 # the library's field names are told as the options the user typed (audit of session 22: "q0 has 3 values")
 add_test(NAME cli.excite_option_named COMMAND twinwatch excite ur3e -o ${d}/bad.yaml --q0 0 0 0)
 set_tests_properties(cli.excite_option_named PROPERTIES PASS_REGULAR_EXPRESSION "error: --q0 has 3 values, expected 6 \\(model.n_dof\\) or none \\(ur3e\\)")

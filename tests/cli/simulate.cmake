@@ -67,3 +67,15 @@ set_tests_properties(cli.identify_checks_the_arm PROPERTIES PASS_REGULAR_EXPRESS
 add_test(NAME cli.monitor_checks_the_arm
   COMMAND sh -c "T=$<TARGET_FILE:twinwatch>; S=${PROJECT_SOURCE_DIR}/scenarios/ur3e; W=${PROJECT_BINARY_DIR}/cli-pipeline/twin.json; \$T simulate \$S/nominal_figure_eight.yaml --robot ur5e --duration 10 -o ${ds}/f5.csv -q && \$T simulate \$S/nominal_figure_eight.yaml --duration 10 -o ${ds}/f3.csv -q; \$T validate --twin \$W ${ds}/f5.csv 2>&1 >/dev/null | grep -c 'f5.csv is not a recording of a ur3e (the arm it is read for)'; \$T monitor --twin \$W ${ds}/f5.csv --db '' -q 2>&1 | grep -c 'reproduced by the ur5e.s model'; \$T monitor --twin \$W ${ds}/f3.csv --db '' -q 2>&1 | grep -c 'target_moment'; \$T identify-torque ${ds}/f5.csv --robot ur3e --signal target_moment -o ${ds}/it.json 2>&1 | grep -c 'f5.csv is not a recording of a ur3e'")
 set_tests_properties(cli.monitor_checks_the_arm PROPERTIES FIXTURES_REQUIRED twin PASS_REGULAR_EXPRESSION "^1\n1\n0\n1\n$")
+# a description file a scenario names is found beside the scenario, from any working directory; an
+# unreadable one is named at the scenario's line (both failed from the working directory with the
+# description's path alone: audit of session 56)
+add_test(NAME cli.simulate_robot_file_beside_the_scenario
+         COMMAND sh -c "mkdir -p ${ds}/beside/robots ${ds}/beside/scen && cp ${PROJECT_SOURCE_DIR}/data/robots/ur3e.json ${ds}/beside/robots/arm.json && \
+printf 'robot: ../robots/arm.json\\nduration: 0.5\\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\\n' > ${ds}/beside/scen/a.yaml && \
+printf 'robot: ../robots/none.json\\nduration: 0.5\\ntrajectory: {type: figure_eight, size: [0.12, 0.08], period: 8}\\n' > ${ds}/beside/scen/b.yaml && \
+cd / && $<TARGET_FILE:twinwatch> simulate ${ds}/beside/scen/a.yaml -o ${ds}/beside/a.csv -q; echo exit \$?; \
+$<TARGET_FILE:twinwatch> simulate ${ds}/beside/scen/b.yaml -o ${ds}/beside/b.csv -q 2>&1; echo exit \$?; \
+TWINWATCH_DATA_DIR=/nonexistent $<TARGET_FILE:twinwatch> model list 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_robot_file_beside_the_scenario PROPERTIES PASS_REGULAR_EXPRESSION
+  "^exit 0\nerror: [^\n]*b\\.yaml:1: field 'robot': \\.\\./robots/none\\.json: cannot open the file[^\n]*\nexit 2\nerror: /nonexistent/robots: no robot descriptions[^\n]*\nexit 2\n")

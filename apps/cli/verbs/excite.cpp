@@ -73,6 +73,9 @@ int run(const Options& o) {
   eo.base_frequency = o.base_frequency;
   eo.seed = o.seed;
   eo.samples = o.samples;
+  // the final limit check's grid at least as fine as the design's (--samples 100000 was refused as
+  // "check_samples is 5000", a name no option has: audit of session 56)
+  eo.check_samples = std::max(eo.check_samples, o.samples);
   eo.amplitude = o.amplitude;
   eo.default_qdd_max = o.qdd_default;
   eo.limit_fraction = o.fraction;
@@ -119,6 +122,12 @@ int run(const Options& o) {
       throw InvalidArgument(fmt::format("--duration {} s is not a whole number of periods ({} s at --base-frequency {} Hz); "
                                         "use e.g. {} s", o.duration, period, o.base_frequency, std::max(1L, std::lround(c)) * period));
   }
+  // (one period beyond the longest run: the file was written, exit 0, and simulate refused it;
+  // audit of session 56)
+  if (!(cycles * period <= sim::kMaxDuration))
+    throw InvalidArgument(fmt::format("--base-frequency {} Hz: one period is {:g} s, longer than the longest run the simulator accepts "
+                                      "({:g} s); expected at least {:g} Hz",
+                                      o.base_frequency, period, sim::kMaxDuration, 1.0 / sim::kMaxDuration));
   const bool bar = !o.quiet && !o.json && (o.progress || isatty(STDERR_FILENO));
   const auto t0 = std::chrono::steady_clock::now();
   const auto progress = [&](double f, double best) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "twinwatch/core/error.hpp"
 #include "twinwatch/model/description_io.hpp"
 #include "twinwatch/model/dynamics.hpp"
 #include "verb_registry.hpp"
@@ -115,7 +116,13 @@ twinwatch::cli::VerbRegistrar reg{"model", 10, [](CLI::App& app) {
 
   auto* list = model->add_subcommand("list", "List the built-in robots");
   list->callback([] {
-    for (const auto& n : twinwatch::model::builtin_robot_names()) fmt::print("{}\n", n);
+    const auto names = twinwatch::model::builtin_robot_names();
+    // (a missing data directory printed nothing, exit 0: audit of session 56)
+    if (names.empty())
+      throw twinwatch::PathError(fmt::format("{}: no robot descriptions (*.json) there: is twinwatch installed whole, or does "
+                                             "TWINWATCH_DATA_DIR name the wrong directory?",
+                                             twinwatch::model::robots_directory()));
+    for (const auto& n : names) fmt::print("{}\n", n);
   });
 }};
 

@@ -140,7 +140,7 @@ int run(Options o) {
       remedy = fmt::format("No --slow-down up to 100 fits it (it needs {:.3g})", slower);
     }
     throw InvalidArgument(fmt::format(
-        "{}: the program passes the installation's limits: {}: the arm would be slowed or stopped mid-run; no program written. {}; or make the motion slower ({}), or "
+        "{}: the program exceeds the installation's limits: {}: the arm would be slowed or stopped mid-run; no program written. {}; or make the motion slower ({}), or "
         "run it where the installation allows more",
         o.scenario, beyond, remedy,
         s.trajectory_type == "fourier" ? "design the excitation again with a lower twinwatch excite --limit-fraction or --amplitude"
