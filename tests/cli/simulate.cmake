@@ -79,3 +79,10 @@ $<TARGET_FILE:twinwatch> simulate ${ds}/beside/scen/b.yaml -o ${ds}/beside/b.csv
 TWINWATCH_DATA_DIR=/nonexistent $<TARGET_FILE:twinwatch> model list 2>&1; echo exit \$?")
 set_tests_properties(cli.simulate_robot_file_beside_the_scenario PROPERTIES PASS_REGULAR_EXPRESSION
   "^exit 0\nerror: [^\n]*b\\.yaml:1: field 'robot': \\.\\./robots/none\\.json: cannot open the file[^\n]*\nexit 2\nerror: /nonexistent/robots: no robot descriptions[^\n]*\nexit 2\n")
+# a run that cannot fit the disk is refused before it starts; a labels file's name is no recording's
+# (audit of session 56: --duration 1e6 wrote 481 MB in 5 s towards 480 GB; -o x.labels.json)
+add_test(NAME cli.simulate_refuses_a_run_the_disk_cannot_hold
+         COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --duration 1e6 -o ${ds}/huge.csv 2>&1; echo exit \$?; ls ${ds}/huge.csv 2>&1; \
+$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml -o ${ds}/x.labels.json 2>&1; echo exit \$?")
+set_tests_properties(cli.simulate_refuses_a_run_the_disk_cannot_hold PROPERTIES PASS_REGULAR_EXPRESSION
+  "huge\\.csv: cannot write: the run's 1e\\+06 s at 500 Hz make about [0-9.]+ GB, and [^\n]* has [0-9.]+ GB free[^\n]*\nexit 2\n[^\n]*No such file[^\n]*\n[^\n]*x\\.labels\\.json: cannot write: that is a labels file's name[^\n]*\nexit 2")
