@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -174,6 +176,17 @@ model::RigidBodyInertia payload_from(const Y& y, const YAML::Node& n, const std:
     p.validate("payload");
   } catch (const InvalidArgument& e) {
     y.fail(n, path, e.what());
+  }
+  // a part a flange carries lies within a metre of its centre of mass: its inertia about that centre
+  // is at most m (1 m)² (0.5 kg with [100, 0, 0, 100, 0, 100] kg m² was taken: audit of session 56)
+  if (n["inertia"]) {
+    constexpr double kPartExtent = 1.0;  // [m]
+    const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(p.inertia_com, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    if (largest > p.mass * kPartExtent * kPartExtent)
+      y.fail(n["inertia"], path + ".inertia",
+             fmt::format("a {:g} kg part has an inertia of at most {:g} kg m² about its centre of mass unless it reaches beyond {:g} m from "
+                         "it, got a principal moment of {:.4g} kg m² (in kg cm² or g m²? give kg m²)",
+                         p.mass, p.mass * kPartExtent * kPartExtent, kPartExtent, largest));
   }
   return p;
 }
@@ -555,10 +568,11 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
                            kMaxDigitalOutputBit, fs.io_bit));
       if (fs.type == FaultType::TimestampJitter) {
         const double max_jitter = kMaxJitterFraction / rate;
-        if (!(fs.magnitude >= 0.0 && fs.magnitude <= max_jitter))
+        // (0 was labelled a fault that changes nothing: audit of session 56)
+        if (!(fs.magnitude > 0.0 && fs.magnitude <= max_jitter))
           y.fail(f["magnitude"], p + ".magnitude",
-                 fmt::format("expected a jitter sigma from 0 to {:g} s (an eighth of the {:g} s sample period), got {} s", max_jitter,
-                             1.0 / rate, fs.magnitude));
+                 fmt::format("expected a jitter sigma above 0 and at most {:g} s (an eighth of the {:g} s sample period), got {} s",
+                             max_jitter, 1.0 / rate, fs.magnitude));
       }
       if (fs.type == FaultType::DroppedSamples) {
         fs.period = y.number_or(f, p, "period", 0.0);
@@ -578,6 +592,16 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
                fmt::format("the ramp from {} s over {} s ends after the run ({} s): the {} would never reach its magnitude, which its label "
                            "claims; shorten the ramp or lengthen the run",
                            fs.onset, fs.ramp, s.options.duration, to_string(fs.type)));
+      // (an end after the run stayed in the label, a time the fault never reached: audit of session 56)
+      if (f["end"] && fs.end > s.options.duration + 1e-9)
+        y.fail(f["end"], p + ".end",
+               fmt::format("the {} would end at {} s, after the run ({} s), which its label would claim; leave 'end' out (it lasts to "
+                           "the end) or end it by {} s",
+                           to_string(fs.type), fs.end, s.options.duration, s.options.duration));
+      if (fs.declare_delay != 0.0 && !(fs.onset + fs.declare_delay < s.options.duration))
+        y.fail(f["declare_delay"], p + ".declare_delay",
+               fmt::format("the declaration would come at {:g} s, not before the end of the run ({} s): the stream would never show it",
+                           fs.onset + fs.declare_delay, s.options.duration));
       if (fs.type == FaultType::Collision && fs.onset + fs.duration > s.options.duration + 1e-9)
         y.fail(f["duration"], p + ".duration",
                fmt::format("the contact from {} s for {} s lasts past the end of the run ({} s)", fs.onset, fs.duration, s.options.duration));

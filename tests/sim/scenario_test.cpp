@@ -70,8 +70,23 @@ TEST(Scenario, AFaultsValuesAreCheckedForItsType) {
        "field 'faults[0].point': expected a contact point within 1 m of the link's frame, got one 104.4 m away (in mm? give metres)"},
       {"{type: dropped_samples, onset: 1, magnitude: 1e9}", "field 'faults[0].magnitude': expected at most the 4500 samples left after the onset"},
       {"{type: current_offset, joint: 2, onset: 1, magnitude: 300}", "field 'faults[0].magnitude': expected a current offset within ±20 A, got 300 (in mA?"},
+      // labelled as what never happens (audit of session 56): a jitter of 0, an end after the run
+      {"{type: timestamp_jitter, onset: 1, magnitude: 0}", "field 'faults[0].magnitude': expected a jitter sigma above 0"},
+      {"{type: resistance, joint: 2, onset: 1, end: 100, magnitude: 1}",
+       "test.yaml:5: field 'faults[0].end': the resistance would end at 100 s, after the run (10 s), which its label would claim"},
   };
   for (const auto& [fault, message] : cases) EXPECT_THAT(error_of(head + "  - " + fault + "\n"), HasSubstr(message)) << fault;
+}
+
+// a declaration after the run never shows; a part's inertia beyond what its mass can have within a
+// metre is a unit slip (audit of session 56: both were taken)
+TEST(Scenario, APicksDeclarationAndAPartsInertiaMustBePossible) {
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 10\n" + kFig8 + "faults:\n  - {type: payload_pick, onset: 9.5, mass: 0.5, declare_delay: 1}\n"),
+              HasSubstr("test.yaml:5: field 'faults[0].declare_delay': the declaration would come at 10.5 s, not before the end of the run (10 s)"));
+  EXPECT_THAT(error_of("robot: ur3e\nduration: 10\n" + kFig8 + "payload: {mass: 0.5, com: [0, 0, 0.04], inertia: [100, 0, 0, 100, 0, 100]}\n"),
+              HasSubstr("test.yaml:4: field 'payload.inertia': a 0.5 kg part has an inertia of at most 0.5 kg m²"));
+  EXPECT_EQ(error_of("robot: ur3e\nduration: 10\n" + kFig8 + "payload: {mass: 0.5, com: [0, 0, 0.04], inertia: [0.001, 0, 0, 0.001, 0, 0.001]}\n"),
+            "no error");
 }
 
 TEST(Scenario, APayloadFaultsLabelIsTheChangeOfTheMassCarried) {
@@ -271,10 +286,10 @@ TEST(Scenario, PayloadAboveTheRatedPayloadIsRefused) {
 // jittered timestamps must stay increasing, or the simulator's own reader rejects the recording
 TEST(Scenario, TimestampJitterIsBoundedBelowTheSamplePeriod) {
   EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: timestamp_jitter, onset: 0.2, magnitude: 10}\n"),
-              HasSubstr("test.yaml:5: field 'faults[0].magnitude': expected a jitter sigma from 0 to 0.00025 s (an eighth of the "
+              HasSubstr("test.yaml:5: field 'faults[0].magnitude': expected a jitter sigma above 0 and at most 0.00025 s (an eighth of the "
                         "0.002 s sample period), got 10 s"));
   EXPECT_THAT(error_of("robot: ur3e\nduration: 1\n" + kSine + "faults:\n  - {type: timestamp_jitter, onset: 0.2, magnitude: -1e-4}\n"),
-              HasSubstr("field 'faults[0].magnitude': expected a jitter sigma from 0 to 0.00025 s"));
+              HasSubstr("field 'faults[0].magnitude': expected a jitter sigma above 0 and at most 0.00025 s"));
   // the largest jitter allowed: the recording reads back (every timestamp increases)
   const Scenario s = parse_scenario("robot: ur3e\nseed: 4\nduration: 20\n" + kSine +
                                         "faults:\n  - {type: timestamp_jitter, onset: 0, magnitude: 0.00025}\n",
