@@ -2,11 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "twinwatch/core/error.hpp"
 #include "twinwatch/core/file_io.hpp"
@@ -20,6 +22,12 @@ constexpr const char* kUtf8Bom = "\xEF\xBB\xBF";
 // 6 V, 1 A, 16 rad/s and 1.5 s), and small enough that the least-squares sums of squares stay finite
 // (a -1e300 cell turned the fitted gain into NaN)
 constexpr double kMaxMagnitude = 1e6;
+// an AGV wheel drive's plausible ranges (AGV §4.1: 6 V, 1 A, 16 rad/s, 5 ms logging): beyond them a
+// column is in another unit, which the fit takes as a physically wrong motor with exit 0 (mA: Ra
+// 0.006 Ohm, Tq 21 N·m; ms: tau 174 s; degrees/s: k 0.0056 V s/rad; audit of session 56)
+constexpr double kMaxCurrent = 50.0;     // [A]
+constexpr double kMaxSpeed = 200.0;      // [rad/s] at the wheel (1900 rpm: 20 m/s on a 0.1 m wheel)
+constexpr double kMaxStepPeriod = 0.5;   // [s] between a step test's rows
 
 // a line without the '\r' of a CRLF file (as the recording reader accepts them)
 void strip_cr(std::string& line) {
@@ -39,6 +47,7 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
   const char* cols[] = {"motor", "test", "voltage_V", "current_A", "speed_rad_s", "time_s"};
   std::vector<AgvTestRow> rows;
   std::map<std::pair<std::string, double>, int> step_line;  // (motor, time) of each step row -> its line
+  std::map<std::string, std::pair<double, int>> step_voltage;  // motor -> its step's voltage, and the line of its first step row
   int ln = 1;
   while (std::getline(f, line)) {
     ++ln;
@@ -79,10 +88,21 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
       if (std::abs(*dst[k]) > kMaxMagnitude)
         throw ParseError(path, ln, col, fmt::format("expected a number within +-{:g}, got '{}'", kMaxMagnitude, text));
     }
-    if (r.time < 0.0) throw ParseError(path, ln, "time_s", fmt::format("expected a time >= 0 s, got '{}'", c[5]));
+    // (time_s is read from any origin, as the help says: a log's clock may be negative)
+    if (std::abs(r.current) > kMaxCurrent)
+      throw ParseError(path, ln, "current_A", fmt::format("expected a wheel drive's current within ±{:g} A, got '{}' (in mA? give A)", kMaxCurrent, c[3]));
+    if (std::abs(r.speed) > kMaxSpeed)
+      throw ParseError(path, ln, "speed_rad_s",
+                       fmt::format("expected a wheel's speed within ±{:g} rad/s, got '{}' (in degrees/s or rpm? give rad/s)", kMaxSpeed, c[4]));
     // a motor's step test has one speed per instant: a second row at a time is a second test, or the
     // file's rows written twice, which the fit (sorted by time) would interleave into one response
     if (r.test == "step") {
+      // a step is one voltage held: another one in a row is another test (the fit read the speed alone)
+      const auto [first, was_new] = step_voltage.try_emplace(r.motor, std::pair{r.voltage, ln});
+      if (!was_new && r.voltage != first->second.first)
+        throw ParseError(path, ln, "voltage_V",
+                         fmt::format("the {} motor's step test holds one voltage: this row has {}, its first step row (line {}) {:g} V",
+                                     r.motor, c[2], first->second.second, first->second.first));
       const auto [at, fresh] = step_line.try_emplace({r.motor, r.time}, ln);
       if (!fresh)
         throw ParseError(path, ln, "time_s",
@@ -93,6 +113,21 @@ std::vector<AgvTestRow> read_agv_tests(const std::string& path) {
     rows.push_back(r);
   }
   if (rows.empty()) throw ParseError(path, 2, "", "no data rows after the header");
+  // a step test's logging period: a time column in ms made tau 174 s, exit 0
+  for (const auto& [motor, first] : step_voltage) {
+    std::vector<double> t;
+    for (const auto& [key, line] : step_line)
+      if (key.first == motor) t.push_back(key.second);  // (the map keeps them sorted)
+    std::vector<double> dt;
+    for (size_t k = 1; k < t.size(); ++k) dt.push_back(t[k] - t[k - 1]);
+    if (dt.empty()) continue;
+    std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
+    if (dt[dt.size() / 2] > kMaxStepPeriod)
+      throw ParseError(path, first.second, "time_s",
+                       fmt::format("the {} motor's step rows are {:g} s apart (median), expected a logger's period of at most {:g} s (in ms? "
+                                   "give s)",
+                                   motor, dt[dt.size() / 2], kMaxStepPeriod));
+  }
   return rows;
 }
 

@@ -31,6 +31,7 @@ void line_fit(const std::vector<double>& x, const std::vector<double>& y, double
 AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string& motor) {
   std::vector<double> x3, y3, w5, y5;
   std::vector<std::pair<double, double>> step;
+  double step_voltage = 0.0;
   for (const auto& r : rows) {
     if (r.motor != motor) continue;
     if (r.test == "steady" && r.speed > kMinSpeed) {
@@ -38,6 +39,7 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
       y3.push_back(r.voltage / r.speed);
     } else if (r.test == "step") {
       step.emplace_back(r.time, r.speed);
+      step_voltage = r.voltage;
     }
   }
   if (x3.size() < 3) {
@@ -84,6 +86,14 @@ AgvMotorFit fit_agv_motor(const std::vector<AgvTestRow>& rows, const std::string
                                       "speed is steady (about 5 time constants)",
                                       motor, final, step[step.size() - tail].first, 100 * std::abs(final - before) / std::abs(final),
                                       100 * kSettled));
+  // the steady fit takes the forward direction (eq. 5's friction sign): a step that turns the wheel
+  // backwards, or against its voltage, is another test (a backward step gave J 1.455e-3 for 3.39e-3,
+  // exit 0: audit of session 56)
+  if (!(final > kMinSpeed) || !(step_voltage > 0.0))
+    throw InvalidArgument(fmt::format("{} motor: the step response settles at {:.4g} rad/s under {:g} V, expected the wheel turning forwards "
+                                      "(> {:g} rad/s) under a positive voltage, as the steady test; test forwards, or negate the speed, "
+                                      "voltage and current of a backward test",
+                                      motor, final, step_voltage, kMinSpeed));
   const double target = 0.632 * final;
   // the encoder speed of sample k is the mean over (t_k - dt, t_k]: read it at the mid-point,
   // interpolating linearly between the samples around the crossing

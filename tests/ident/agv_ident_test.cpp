@@ -116,10 +116,35 @@ TEST(AgvIdent, NonFiniteAndAbsurdCellsAreNamed) {
   EXPECT_THAT(error_of("right,steady,2.4,0.1,inf,0"), ::testing::HasSubstr("agv_nonfinite.csv:3: field 'speed_rad_s': expected a finite number, got 'inf'"));
   EXPECT_THAT(error_of("right,steady,-1e300,0.1,5.2,0"),
               ::testing::HasSubstr("agv_nonfinite.csv:3: field 'voltage_V': expected a number within +-1e+06, got '-1e300'"));
-  EXPECT_THAT(error_of("right,step,6,0.1,5.2,-0.005"), ::testing::HasSubstr("agv_nonfinite.csv:3: field 'time_s': expected a time >= 0 s, got '-0.005'"));
+  // a log's clock from any origin, as the help says (it refused a negative one); other units named
+  // (audit of session 56: mA, degrees/s and ms were fitted as a physically wrong motor, exit 0)
+  EXPECT_EQ(error_of("right,step,6,0.1,5.2,-0.005"), "no error");
+  EXPECT_THAT(error_of("right,steady,2.4,65.1,5.2,0"),
+              ::testing::HasSubstr("agv_nonfinite.csv:3: field 'current_A': expected a wheel drive's current within ±50 A, got '65.1' (in mA? give A)"));
+  EXPECT_THAT(error_of("right,steady,2.4,0.1,297.9,0"),
+              ::testing::HasSubstr("agv_nonfinite.csv:3: field 'speed_rad_s': expected a wheel's speed within ±200 rad/s, got '297.9' (in degrees/s"));
+  EXPECT_THAT(error_of("right,step,6,0.1,5.2,5\r\nright,step,6,0.1,5.2,10\r\nright,step,6,0.1,5.2,15"),
+              ::testing::HasSubstr("agv_nonfinite.csv:3: field 'time_s': the right motor's step rows are 5 s apart (median), expected a logger's "
+                                   "period of at most 0.5 s (in ms? give s)"));
+  EXPECT_THAT(error_of("right,step,6,0.1,5.2,0.005\r\nright,step,6.5,0.1,5.2,0.010"),
+              ::testing::HasSubstr("agv_nonfinite.csv:4: field 'voltage_V': the right motor's step test holds one voltage: this row has 6.5, its "
+                                   "first step row (line 3) 6 V"));
   std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\n";
   EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(bad); }),
               ::testing::HasSubstr("agv_nonfinite.csv:2: no data rows after the header"));
+}
+
+// a step that turns the wheel backwards is another test than the forward steady fit (audit of session
+// 56: J 1.455e-3 for 3.39e-3, exit 0); its negated copy is the forward test
+TEST(AgvIdent, AStepThatTurnsTheWheelBackwardsIsRefused) {
+  auto rows = sim::simulate_agv_tests(sim::AgvParams{}, 6);
+  const ident::AgvMotorFit forward = ident::fit_agv_motor(rows, "right");
+  for (auto& r : rows)
+    if (r.test == "step") r.speed = -r.speed;
+  EXPECT_THAT(twinwatch::test::error_text<InvalidArgument>([&] { ident::fit_agv_motor(rows, "right"); }),
+              ::testing::MatchesRegex("right motor: the step response settles at -[0-9.]+ rad/s under [0-9.]+ V, expected the wheel turning "
+                                      "forwards .*"));
+  EXPECT_GT(forward.tau, 0.0);
 }
 
 // a file whose rows were written twice: the step rows repeat their times, which the fit would have

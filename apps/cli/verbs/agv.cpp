@@ -274,7 +274,9 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
                         "Test CSV with the header motor,test,voltage_V,current_A,speed_rad_s,time_s: motor 'right' or 'left'; test "
                         "'steady' (a constant voltage held until the speed is steady: one row per voltage, time_s unused; rows with the "
                         "wheel below 0.5 rad/s are left out) or 'step' (a voltage step from rest, one row per logging period from the "
-                        "first period after the step, until the speed has settled; time_s from any origin). Units: V, A, rad/s, s")
+                        "first period after the step at one voltage, the wheel turning forwards, until the speed has settled; time_s from any "
+                        "origin). Units: V, A, rad/s, s; a current beyond 50 A, a speed beyond 200 rad/s or step rows more than 0.5 s apart "
+                        "are refused as another unit (mA, degrees/s or rpm, ms)")
       ->required()
       ->check(CLI::ExistingFile);
   ident_cmd->add_flag("--json", idf->second, "Print {\"right\": {Ra, k, Tq, B, J, tau, pi: {Kc, Ti, tau_cl}}, \"left\": {...}, \"units\": {...}}");
