@@ -561,7 +561,7 @@ Evaluation evaluate_scenarios(const ident::TwinModel& twin, const std::vector<st
         }
         used[k] = true;
         sc.detected = true;
-        sc.delay_ms = 1000.0 * std::max(0.0, e.t_detected - onset);
+        sc.delay_ms = std::round(1e6 * std::max(0.0, e.t_detected - onset)) / 1e3;  // (to the microsecond: 9.999999999999787 ms read as noise)
         sc.predicted_class = std::string(monitor::to_string(e.fault));
         sc.class_ok = sc.predicted_class == want || (want == "wear" && sc.predicted_class == "resistance");
         const int lj = lf.joint;
@@ -735,7 +735,7 @@ Sweep sweep_collisions(const ident::TwinModel& twin, const SweepOptions& o, bool
           }
           if (!run.detected[k] && e.t_detected - onset <= o.max_delay) {
             run.detected[k] = true;
-            run.delay_ms[k] = 1000.0 * std::max(0.0, e.t_detected - onset);
+            run.delay_ms[k] = std::round(1e6 * std::max(0.0, e.t_detected - onset)) / 1e3;
           }
         }
       }

@@ -247,7 +247,7 @@ void UnitsCheck::add(const RobotSample& s) {
                                                               j)
                                                 : fmt::format("is it a recording of another arm than the {}, or are the joints in another "
                                                               "order or with another zero? (in degrees it would be {:.4g} rad, beyond the "
-                                                              "range too; give the arm's description with --robot)",
+                                                              "range too; give the arm's description with --robot, or, for a twin's verbs, a twin of that arm)",
                                                               robot_.name(), as_radians)));
     }
     if (std::abs(s.qd[j]) > kUnitsSpeedFactor * l.qd_max)

@@ -194,6 +194,14 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
   if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
   header = split_csv(line);
   scale.assign(header.size(), 1.0);
+  // a header in one cell that another separator splits, or quoted names: said wherever a name is
+  // missed (a column map's first missing column too: audit of session 56)
+  std::string separator_hint;
+  if (header.size() == 1 && (line.find(';') != std::string::npos || line.find('\t') != std::string::npos))
+    separator_hint = fmt::format(": the header is one cell, its names separated by {}; twinwatch reads comma-separated files",
+                                 line.find(';') != std::string::npos ? "';'" : "tabs");
+  else if (line.find('"') != std::string::npos)
+    separator_hint = ": the header's names are quoted; twinwatch reads them unquoted";
   std::vector<std::string> names = header;
   if (map) {
     // every mapped column must exist: a typo in the map would otherwise drop a signal silently
@@ -201,9 +209,9 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
       if (std::find(header.begin(), header.end(), col) == header.end()) {
         const auto at = map->lines.find(col);
         throw ParseError(path, 1, col,
-                         fmt::format("column map{} maps column '{}' to {}, but the header has no such column",
+                         fmt::format("column map{} maps column '{}' to {}, but the header has no such column{}",
                                      map->path.empty() ? "" : fmt::format(" ({} line {})", map->path, at == map->lines.end() ? 0 : at->second),
-                                     col, entry.rtde_name));
+                                     col, entry.rtde_name, separator_hint));
       }
     for (size_t c = 0; c < header.size(); ++c) {
       auto it = map->columns.find(header[c]);
@@ -243,14 +251,7 @@ RecordingReader::RecordingReader(const std::string& path_in, const ColumnMap* ma
     n = std::max(n, j + 1);
   }
   if (n == 0) {
-    // a header in one cell that another separator splits, or quoted names: say so, not only "missing"
-    std::string hint;
-    if (header.size() == 1 && (line.find(';') != std::string::npos || line.find('\t') != std::string::npos))
-      hint = fmt::format(": the header is one cell, its names separated by {}; twinwatch reads comma-separated files",
-                         line.find(';') != std::string::npos ? "';'" : "tabs");
-    else if (line.find('"') != std::string::npos)
-      hint = ": the header's names are quoted; twinwatch reads them unquoted";
-    throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)" + hint);
+    throw ParseError(path, 1, "actual_q_0", "missing required column (no actual_q_* in the header)" + separator_hint);
   }
   target.assign(names.size(), Target{-1, -1});
   std::vector<std::vector<bool>> seen(std::size(kGroups), std::vector<bool>(static_cast<size_t>(n), false));
@@ -429,9 +430,15 @@ bool RecordingReader::next(RobotSample& s) {
         s.payload_cog[ci == cog_col[0] ? 0 : (ci == cog_col[1] ? 1 : 2)] = v;
       } else (s.*kGroups[static_cast<size_t>(target[c].group)].member)[target[c].joint] = v;
     }
-    if (rows > 0 && !(s.timestamp > last_timestamp))
-      throw ParseError(path, ln, header[static_cast<size_t>(ts_col)],
-                       fmt::format("timestamp {} does not increase (previous {})", s.timestamp, last_timestamp));
+    // (as written, and in seconds after a map's scale: '698' was said as 0.6980000000000001)
+    if (rows > 0 && !(s.timestamp > last_timestamp)) {
+      const size_t tc = static_cast<size_t>(ts_col);
+      throw ParseError(path, ln, header[tc],
+                       scale[tc] == 1.0 ? fmt::format("timestamp {:.10g} does not increase (previous {:.10g})", s.timestamp, last_timestamp)
+                                        : fmt::format("timestamp '{}' ({:.10g} s after the column map's scale) does not increase (previous "
+                                                      "{:.10g} s)",
+                                                      cells[tc], s.timestamp, last_timestamp));
+    }
     last_timestamp = s.timestamp;
     const int decimals = decimals_of(cells.back());
     last_cell_decimals_ = last_cell_decimals_ < 0 ? decimals : std::min(last_cell_decimals_, decimals);

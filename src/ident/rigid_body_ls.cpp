@@ -368,9 +368,18 @@ RigidBodyModel identify_rigid_body(const model::RobotModel& model, const std::st
     A[static_cast<size_t>(j)] = A[static_cast<size_t>(j)].selfadjointView<Eigen::Lower>();
     all_rows += rows[static_cast<size_t>(j)];
   }
-  if (all_rows < kMinRowsPerUnknown * p)
-    throw InvalidArgument(fmt::format("identify: {} rows pass the reversal screen of {} rad/s, expected at least {} ({} x {} unknowns)",
-                                      all_rows, o.reversal_screen, kMinRowsPerUnknown * p, kMinRowsPerUnknown, p));
+  if (all_rows < kMinRowsPerUnknown * p) {
+    // (how many there were to screen: a --segment or --decimate that left one sample was blamed on
+    // the screen; audit of session 56)
+    size_t samples = 0;
+    for (const TorqueData& d : fwd) samples += (d.t.size() + static_cast<size_t>(o.decimate) - 1) / static_cast<size_t>(o.decimate);
+    throw InvalidArgument(fmt::format("identify: {} joint rows of {} sample(s) x {} joints pass the reversal screen of {} rad/s, expected at "
+                                      "least {} ({} x {} unknowns){}",
+                                      all_rows, samples, n, o.reversal_screen, kMinRowsPerUnknown * p, kMinRowsPerUnknown, p,
+                                      samples * static_cast<size_t>(n) < static_cast<size_t>(kMinRowsPerUnknown * p)
+                                          ? ": too few samples before any screening (--segment, --decimate?)"
+                                          : ""));
+  }
 
   // OLS, then weighted LS with w_j = 1 / sigma_j^2 re-estimated from the residuals [Gautier1990]
   std::vector<double> w(static_cast<size_t>(n), 1.0), ss(static_cast<size_t>(n), 0.0);

@@ -121,6 +121,10 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   const std::string text = read_text_file(path);
   if (const int line = first_invalid_utf8_line(text))
     throw ParseError(path, line, "", "not valid UTF-8 text (a URDF file is XML in UTF-8)");
+  // (a file that is no XML at all was said as urdfdom's "Error document empty ... (urdfdom would load
+  // the rest and leave this part out)": audit of session 56)
+  if (text.find("<robot") == std::string::npos)
+    throw ParseError(path, 0, "", "not a URDF: no <robot> element (a URDF is an XML file whose root is <robot name=\"...\">)");
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
     CollectUrdfdomErrors collect;

@@ -2504,8 +2504,10 @@ void Monitor::judge(const RobotSample& s) {
   // (a gripper output changed at this sample)
   const bool output_changed = have_prev_ && s.digital_outputs != outputs_prev_;
   track_rest(s, t, output_changed);
-  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest)
-  if (std::isfinite(cfg_.longest_rest)) watch_unseen_rest(s, t);
+  // a rest longer than the thresholds in use saw (MonitorConfig::longest_rest), timed from the
+  // sample the learner starts at (kSettleSamples): a run that starts at rest (the Panda log's 44 ms)
+  // was said to rest longer than its own training, "at most 0.00 s" (audit of session 56)
+  if (std::isfinite(cfg_.longest_rest) && n_samples_ > kSettleSamples) watch_unseen_rest(s, t);
   // (an alert held at this rest, which the stream's targets say is one: the part's step, looked at
   // when the arm moves on)
   const bool rest_held = arm_rests_ && rest_by_target_ && std::any_of(held_steps_.begin(), held_steps_.end(), [&](const HeldStep& h) {

@@ -6,6 +6,12 @@ add_test(NAME cli.align_setup
   COMMAND sh -c "$<TARGET_FILE:twinwatch> simulate ${PROJECT_SOURCE_DIR}/tests/data/cli/short_fig8.yaml --seed 6 -o ${da}/full.csv -q && \
 (head -n 1 ${da}/full.csv; tail -n +352 ${da}/full.csv) > ${da}/late.csv && echo CUT")
 set_tests_properties(cli.align_setup PROPERTIES FIXTURES_SETUP align_pair PASS_REGULAR_EXPRESSION "CUT")
+# a recording against its own first rows is in step (a lag of -0.00 samples was called "early"); the
+# headings of rad/s^2 stand apart (they ran together: audit of session 56)
+add_test(NAME cli.align_in_step_and_wide_headings
+  COMMAND sh -c "head -n 3001 ${da}/full.csv > ${da}/head.csv && $<TARGET_FILE:twinwatch> align ${da}/full.csv ${da}/head.csv --signal target_qdd")
+set_tests_properties(cli.align_in_step_and_wide_headings PROPERTIES FIXTURES_REQUIRED align_pair
+  PASS_REGULAR_EXPRESSION "common lag 0\\.00 samples = 0\\.0 ms \\([^\n]*head\\.csv is in step\\)\nJoint +lag \\[ms\\] +corr +Raw RMSE \\[rad/s\\^2\\] +Aligned RMSE")
 # joint angles: the 350 dropped rows come back as a lag of -350 samples (the second one is early)
 add_test(NAME cli.align_angles COMMAND twinwatch align ${PROJECT_BINARY_DIR}/cli-pipeline/fig.csv ${da}/late.csv)
 set_tests_properties(cli.align_angles PROPERTIES FIXTURES_REQUIRED "recordings;align_pair"

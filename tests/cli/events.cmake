@@ -29,9 +29,9 @@ add_test(NAME cli.events_runs COMMAND sh -c "rm -f ${d}/events_runs.db; \
 $0 monitor --twin ${d}/twin.json ${d}/fig.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events_runs.db -q && \
 $0 monitor --twin ${d}/twin.json ${d}/collision.csv --payload-mass 0.5 --payload-com 0 0 0.04 --db ${d}/events_runs.db -q && \
 $0 events --db ${d}/events_runs.db --runs && $0 events --db ${d}/events_runs.db --runs --json --last 1 && \
-$0 events --db ${d}/events_runs.db --runs --class collision" $<TARGET_FILE:twinwatch>)
+$0 events --db ${d}/events_runs.db --runs --class collision; $0 events --db ${d}/events_runs.db --run 99" $<TARGET_FILE:twinwatch>)
 set_tests_properties(cli.events_runs PROPERTIES FIXTURES_REQUIRED "twin;recordings;collision_recording"
-  PASS_REGULAR_EXPRESSION "run started \\(UTC\\) +ended \\(UTC\\) +samples +events +status +source\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +0 finished +[^\n]*fig.csv\n +2 [^\n]* +[1-9][0-9]+ +[1-9] finished +[^\n]*collision.csv\n2 run\\(s\\) of 2 stored in [^\n]*events_runs.db\n[{]\"ended_at\":\"[0-9-]+ [0-9:]+ UTC\",\"events\":[1-9],\"program\":null,\"run\":2,\"samples\":[1-9][0-9]+,[^\n]*\"status\":\"finished\"[^\n]*\n[^\n]*--class filters events. --runs lists the monitoring runs")
+  PASS_REGULAR_EXPRESSION "run started \\(UTC\\) +ended \\(UTC\\) +samples +events +status +source\n +1 [0-9-]+ [0-9:]+ [0-9-]+ [0-9:]+ +[1-9][0-9]+ +0 finished +[^\n]*fig.csv\n +2 [^\n]* +[1-9][0-9]+ +[1-9] finished +[^\n]*collision.csv\n2 run\\(s\\) of 2 stored in [^\n]*events_runs.db\n[{]\"ended_at\":\"[0-9-]+ [0-9:]+ UTC\",\"events\":[1-9],\"program\":null,\"run\":2,\"samples\":[1-9][0-9]+,[^\n]*\"status\":\"finished\"[^\n]*\n[^\n]*--class filters events. --runs lists the monitoring runs[^\n]*\n[^\n]*--run 99: [^\n]*events_runs.db holds no such run \\(its runs are 1 to 2. 'twinwatch events --db [^\n]* --runs' lists them\\)")
 # a recording's monitor stopped by a signal (session 52: the process died, its run left 'running'):
 # Ctrl-C once the run has its row stops the replay in order; what was watched is reported and the
 # run's row says 'stopped' with its samples; the exit status is 130 (128 + SIGINT), as the signal's

@@ -468,6 +468,10 @@ TEST(Recording, ColumnMapColumnAbsentFromTheFileIsAnError) {
     EXPECT_THAT(e.what(), HasSubstr("foreign.csv:1: field 'tau1'"));
     EXPECT_THAT(e.what(), HasSubstr("foreign.map line 3"));
   }
+  // the same file separated by ';': the cause is named as without a map (audit of session 56)
+  std::ofstream(p) << "Time;q1;tau1\n0;1;0\n1;2;0\n";
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { read_recording(p, &map); }),
+              HasSubstr("but the header has no such column: the header is one cell, its names separated by ';'"));
 }
 
 TEST(Recording, ColumnMapLoadsTorqueSensorAndTimeInAnotherUnit) {

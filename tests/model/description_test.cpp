@@ -268,6 +268,10 @@ TEST(DescriptionUrdf, MalformedXmlNamesTheFile) {
     EXPECT_THAT(e.what(), HasSubstr("bad.urdf"));
     EXPECT_THAT(e.what(), HasSubstr("not a valid URDF"));
   }
+  // a file that is no XML at all is said as such, not as urdfdom's "Error document empty"
+  std::ofstream(path) << "name,value\nmass,3\n";
+  EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { load_description_urdf(path); }),
+              HasSubstr("description_test_bad.urdf: not a URDF: no <robot> element"));
 }
 
 TEST(DescriptionUrdf, BranchingTreeNeedsATip) {

@@ -162,16 +162,24 @@ int run_align(const AlignCliOptions& o) {
   fmt::print("{} against {}: {} [{}], {:g} Hz, {} rows vs {}; lag search +-{} samples ({:g} ms){}\n", o.b, o.a, col.name, col.unit, 1.0 / T,
              rb.samples.size(), ra.samples.size(), res.empty() ? 0 : res.front().window, (res.empty() ? 0 : res.front().window) * ms,
              opt.subsample ? ", parabolic sub-sample peak" : "");
-  if (opt.common_lag && !res.empty())
-    fmt::print("common lag {:.2f} samples = {:.1f} ms ({} is {})\n", res.front().lag, res.front().lag * ms, o.b,
-               res.front().lag > 0 ? "late" : res.front().lag < 0 ? "early" : "in step");
+  // (a lag printed as -0.00 samples was called "early": audit of session 56; below the printed
+  // hundredth of a sample it is in step, and shown as 0.00)
+  if (opt.common_lag && !res.empty()) {
+    const double lag = std::abs(res.front().lag) < 0.005 ? 0.0 : res.front().lag;
+    fmt::print("common lag {:.2f} samples = {:.1f} ms ({} is {})\n", lag, lag * ms, o.b, lag > 0 ? "late" : lag < 0 ? "early" : "in step");
+  }
   const std::string u = col.unit;
-  fmt::print("{:<6}{:>10}{:>8}{:>18}{:>22}{:>17}{:>21}\n", "Joint", "lag [ms]", "corr", "Raw RMSE [" + u + "]", "Aligned RMSE [" + u + "]",
-             "Raw MAE [" + u + "]", "Aligned MAE [" + u + "]");
+  // each column at least two wider than its heading (rad/s^2 ran the headings together)
+  const std::string heads[] = {"Raw RMSE [" + u + "]", "Aligned RMSE [" + u + "]", "Raw MAE [" + u + "]", "Aligned MAE [" + u + "]"};
+  const size_t base[] = {18, 22, 17, 21};
+  size_t w[4];
+  for (int c = 0; c < 4; ++c) w[c] = std::max(base[c], heads[c].size() + 2);
+  fmt::print("{:<6}{:>10}{:>8}{:>{}}{:>{}}{:>{}}{:>{}}\n", "Joint", "lag [ms]", "corr", heads[0], w[0], heads[1], w[1], heads[2], w[2],
+             heads[3], w[3]);
   for (size_t k = 0; k < res.size(); ++k) {
     const auto& r = res[k];
-    fmt::print("J{:<5}{:>10.1f}{:>8.4f}{:>18.5g}{:>22.5g}{:>17.5g}{:>21.5g}{}\n", k + 1, r.lag * ms, r.correlation, r.raw.rmse, r.aligned.rmse,
-               r.raw.mae, r.aligned.mae, r.valid ? "" : "  (constant: no correlation of its own)");
+    fmt::print("J{:<5}{:>10.1f}{:>8.4f}{:>{}.5g}{:>{}.5g}{:>{}.5g}{:>{}.5g}{}\n", k + 1, std::abs(r.lag) < 0.005 ? 0.0 : r.lag * ms, r.correlation,
+               r.raw.rmse, w[0], r.aligned.rmse, w[1], r.raw.mae, w[2], r.aligned.mae, w[3], r.valid ? "" : "  (constant: no correlation of its own)");
   }
   if (edge)
     fmt::print(stderr, "warning: the correlation peak lies on the edge of the +-{:g} ms search window; the lag may be larger: widen --max-lag-ms\n",

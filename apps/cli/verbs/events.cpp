@@ -96,6 +96,16 @@ void run_events(const EventsOptions& o) {
     throw InvalidArgument(fmt::format("{}: no such event store ('twinwatch monitor --db {}' writes one)", o.db, o.db));
   if (o.last < 0) throw InvalidArgument(fmt::format("--last is {}, must be >= 0", o.last));
   const monitor::EventStore store(o.db, monitor::EventStore::Mode::Read);
+  // a run the store does not hold (it printed "0 event(s) of 4", as for a run without events: audit
+  // of session 56)
+  if (o.run > 0) {
+    const auto runs = store.read_runs();
+    if (std::none_of(runs.begin(), runs.end(), [&](const monitor::StoredRun& r) { return r.id == o.run; }))
+      throw InvalidArgument(fmt::format("--run {}: {} holds no such run ({}; 'twinwatch events --db {} --runs' lists them)", o.run, o.db,
+                                        runs.empty() ? std::string("it holds none")
+                                                     : fmt::format("its runs are {} to {}", runs.front().id, runs.back().id),
+                                        o.db));
+  }
   if (o.runs) {
     if (!o.fault.empty()) throw InvalidArgument("--class filters events; --runs lists the monitoring runs: give one of them");
     list_runs(store, o);

@@ -696,7 +696,8 @@ twinwatch::cli::VerbRegistrar reg{"friction-study", 34, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--predictions", o->predictions,
                   "Write CSV joint,t,qd,tau,reversal,<model>... of the validation record (residual torque) and every "
-                  "model's prediction, for plots; the training record follows as joint '<J>-train' without predictions");
+                  "model's prediction, for plots; before each joint's validation rows, its training record as joint '<J>-train' "
+                  "without predictions");
   sub->add_option("--functions", o->functions,
                   "ParFam operator set, a comma list of sin, cos, exp, tanh, stribeck (sgn(u) (1 - exp(-u^2))), one unit "
                   "each (default: the study's; HESR's library is sin,cos,exp,tanh)");

@@ -229,6 +229,12 @@ int run_validate(const ValidateOpts& o) {
   const auto [from, to] = parse_segment(o.segment);
   const ident::TorqueData d =
       ident::torque_data({&rec, from, to, nullptr}, rb.signal, rb.derivative_half_window, rb.derivative_order);
+  // (a segment of one sample scored R² 0.0000 on every joint, a number R² does not have there: audit
+  // of session 56; validate's own minimum)
+  constexpr size_t kMinSamples = 10;
+  if (d.t.size() < kMinSamples)
+    throw InvalidArgument(fmt::format("{}: --segment {} holds {} sample(s), expected at least {} to score", o.recording, o.segment, d.t.size(),
+                                      kMinSamples));
   model::DynamicsData dd(m);
   const auto ours = ident::torque_metrics(d, [&](size_t k) { return rb.predict(m, dd, d.q[k], d.qd[k], d.qdd[k]); });
   // the published model: RNEA with the description's parameters (+ a published friction table)
@@ -261,6 +267,11 @@ int run_validate(const ValidateOpts& o) {
     return 0;
   }
   fmt::print("{}: segment {} ({} samples, {:.2f} s), signal {}\n", o.recording, o.segment, d.t.size(), span, to_string(rb.signal));
+  // (the published model without --friction-table has no friction at all: J7 d_tau 100.53 % read
+  // as the published model's error, without a word; audit of session 56)
+  if (pub && o.friction_table.empty())
+    fmt::print("note: the published model here is {}'s rigid body alone, without friction (give its table with --friction-table)\n",
+               o.published);
   fmt::print("{:<6} {:>14} {:>12} {:>10}", "joint", "RMSE N·m", "d_tau %", "R²");
   if (pub) fmt::print(" | {:>14} {:>12} {:>10}", "published RMSE", "d_tau %", "R²");
   fmt::print("\n");

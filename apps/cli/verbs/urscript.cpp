@@ -175,6 +175,11 @@ int run(Options o) {
   header.push_back("  the installation's Robot Limits (tool speed, elbow speed, momentum) must allow them, or the arm stops or slows mid-run.");
   if (!s.faults.empty())
     header.push_back(fmt::format("The scenario's {} fault(s) are the virtual robot's: the program has none.", s.faults.size()));
+  // (the stops were dropped without a word: audit of session 56)
+  if (!s.options.stops.empty())
+    header.push_back(fmt::format("The scenario's {} stop(s) are the operator's and the safety system's on the virtual robot: the program "
+                                 "runs without them.",
+                                 s.options.stops.size()));
   write_text_file(o.output, sim::urscript_program(motion, o.program, robot, header));
 
   // (UR publishes no joint acceleration limits: a robot file that does is warned about beyond them)
@@ -238,6 +243,7 @@ int run(Options o) {
     j["payload_command"] = o.program.declare_payload ? nlohmann::json(o.program.target_payload ? "set_target_payload" : "set_payload")
                                                      : nlohmann::json(nullptr);
     j["faults_left_out"] = s.faults.size();
+    j["stops_left_out"] = s.options.stops.size();
     j["warnings"] = warnings;
     j["units"] = {{"motion_s", "s"}, {"start_pose", "rad"}, {"q_min", "rad"}, {"q_max", "rad"}, {"approach_s_at_most", "s"}, {"record_for_s", "s"},
                   {"tool_points", "m (flange frame)"}, {"tool_mass", "kg"}, {"carried_mass", "kg (tool and the scenario's payload)"},
@@ -277,6 +283,10 @@ int run(Options o) {
                                                     o.program.target_payload ? ", its inertia about the CoG" : "")
                                       : std::string("not changed (the installation's payload is used; --declare-payload declares the scenario's)"));
     if (!s.faults.empty()) fmt::print("  note: the scenario's {} fault(s) are the virtual robot's; the program has none\n", s.faults.size());
+    if (!s.options.stops.empty())
+      fmt::print("  note: the scenario's {} stop(s) (pause, protective or emergency stop) are the virtual robot's; the program runs "
+                 "without them\n",
+                 s.options.stops.size());
     fmt::print("  record it: start 'twinwatch record --rtde ROBOT_IP --frequency 500 --duration {:.0f} -o {}.csv', then run the program\n"
                "    (the motion, up to {:.1f} s of approach from --max-approach away at --approach-speed {:g} rad/s, and 30 s to spare)\n",
                record_for, s.name, approach_s, o.program.approach_speed);
