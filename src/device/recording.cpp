@@ -365,21 +365,21 @@ bool RecordingReader::next(RobotSample& s) {
     }
     // ... or with all its cells and the last one cut mid-number: empty, ending in '.', 'e' or a
     // sign (no writer ends a number so), or with fewer decimals than that column had in every row
-    // before (a writer of fixed decimals, seen in 10 rows or more). A shortest-form writer's cell
+    // before (a writer of fixed decimals: the same count in 10 rows or more). A shortest-form writer's cell
     // ("%g", to_chars) cut after a digit looks like a shorter number and cannot be told: it is
     // read as it is
     if (cells.size() == header.size() && f.eof() && reads(cells.size() - 1)) {
       const std::string_view last = cells.back();
       const int decimals = decimals_of(last);
       const bool mid_number = last.empty() || std::string_view(".eE+-").find(last.back()) != std::string_view::npos;
-      const bool short_decimals = rows >= 10 && last_cell_decimals_ > 0 && decimals < last_cell_decimals_;
+      const bool short_decimals = rows >= 10 && fixed_decimals_ && last_cell_decimals_ > 0 && decimals < last_cell_decimals_;
       if (mid_number || short_decimals) {
         if (say_cut_)
           log::warn(fmt::format("{}:{}: the last row is cut off (its last cell '{}'{}, no line end): dropped, as a recording "
                                 "interrupted mid-write leaves it",
                                 path, ln, last,
                                 mid_number ? " ends mid-number"
-                                           : fmt::format(" has {} decimal(s), every row before had {} or more", decimals, last_cell_decimals_)));
+                                           : fmt::format(" has {} decimal(s), every row before had {}", decimals, last_cell_decimals_)));
         return false;
       }
     }
@@ -440,8 +440,11 @@ bool RecordingReader::next(RobotSample& s) {
                                                       cells[tc], s.timestamp, last_timestamp));
     }
     last_timestamp = s.timestamp;
+    // (a writer of fixed decimals: the same count in every row; "%g" drops trailing zeros, and its
+    // whole -0.19871 for -0.198710 was dropped as cut: review of session 56)
     const int decimals = decimals_of(cells.back());
-    last_cell_decimals_ = last_cell_decimals_ < 0 ? decimals : std::min(last_cell_decimals_, decimals);
+    fixed_decimals_ = last_cell_decimals_ < 0 || (fixed_decimals_ && decimals == last_cell_decimals_);
+    last_cell_decimals_ = decimals;
     ++rows;
     return true;
   }

@@ -186,9 +186,14 @@ TwinModel::TwinModel(std::string robot, const model::RobotModel& model)
   robot_->clear_payload();
 }
 
+namespace {
+bool trusted(const JointDrive& d) { return d.gain_identified && d.gain >= TwinModel::kTrustedGainMin && d.gain <= TwinModel::kTrustedGainMax; }
+}  // namespace
+
+bool TwinModel::any_trusted_gain() const { return std::any_of(joints.begin(), joints.end(), trusted); }
+
 double TwinModel::trusted_gain(int j) const {
   if (measures_torque()) return 1.0;
-  const auto trusted = [](const JointDrive& d) { return d.gain_identified && d.gain >= kTrustedGainMin && d.gain <= kTrustedGainMax; };
   if (trusted(joints[static_cast<size_t>(j)])) return joints[static_cast<size_t>(j)].gain;
   std::vector<double> ok;
   for (const JointDrive& d : joints)

@@ -318,15 +318,22 @@ void check_holds_itself(const RobotDescription& d, const std::string& origin) {
   DynamicsData data(model);
   const int n = model.n_dof();
   VectorJ q(n), worst = VectorJ::Zero(n);
+  std::vector<double> roots;
+  for (int p = 2; static_cast<int>(roots.size()) < n; ++p) {
+    bool prime = true;
+    for (int d = 2; d * d <= p && prime; ++d) prime = p % d != 0;
+    if (prime) roots.push_back(std::sqrt(static_cast<double>(p)));
+  }
   std::vector<VectorJ> at(static_cast<size_t>(n), VectorJ::Zero(n));
   for (int k = 0; k < kPoses; ++k) {
     for (int j = 0; j < n; ++j) {
-      // the k-th point of an additive recurrence with the j-th prime's square root (R-sequence)
-      static constexpr double kRoots[] = {1.4142135623730951, 1.7320508075688772, 2.23606797749979,  2.6457513110645907,
-                                          3.3166247903554,    3.605551275463989,  4.123105625617661, 4.358898943540674};
-      const double u = std::fmod(0.5 + (k + 1) * kRoots[j % 8] * (1 + j / 8), 1.0);
+      // the k-th point of an additive recurrence with the square root of the j-th prime (a
+      // Kronecker sequence: independent per joint for any count of joints)
+      const double u = std::fmod(0.5 + (k + 1) * roots[static_cast<size_t>(j)], 1.0);
       const JointLimits& l = model.joint(j).limits;
-      const double lo = std::max(l.q_min, -M_PI), hi = std::min(l.q_max, M_PI);
+      // within one turn about 0 where the range allows, else the range itself (one beyond ±π)
+      double lo = std::max(l.q_min, -M_PI), hi = std::min(l.q_max, M_PI);
+      if (!(lo < hi)) lo = l.q_min, hi = l.q_max;
       q[j] = lo + u * (hi - lo);
     }
     const VectorJ& g = gravity_torque(model, data, q);

@@ -127,8 +127,9 @@ TEST(AgvIdent, NonFiniteAndAbsurdCellsAreNamed) {
               ::testing::HasSubstr("agv_nonfinite.csv:3: field 'time_s': the right motor's step rows are 5 s apart (median), expected a logger's "
                                    "period of at most 0.5 s (in ms? give s)"));
   EXPECT_THAT(error_of("right,step,6,0.1,5.2,0.005\r\nright,step,6.5,0.1,5.2,0.010"),
-              ::testing::HasSubstr("agv_nonfinite.csv:4: field 'voltage_V': the right motor's step test holds one voltage: this row has 6.5, its "
-                                   "first step row (line 3) 6 V"));
+              ::testing::HasSubstr("agv_nonfinite.csv:4: field 'voltage_V': the right motor's step test holds one voltage (within 5 %): this "
+                                   "row has 6.5, its first step row (line 3) 6 V"));
+  EXPECT_EQ(error_of("right,step,6,0.1,5.2,0.005\r\nright,step,6.01,0.1,5.2,0.010"), "no error");  // (a measured voltage)
   std::ofstream(bad) << "motor,test,voltage_V,current_A,speed_rad_s,time_s\n";
   EXPECT_THAT(twinwatch::test::error_text<ParseError>([&] { device::read_agv_tests(bad); }),
               ::testing::HasSubstr("agv_nonfinite.csv:2: no data rows after the header"));

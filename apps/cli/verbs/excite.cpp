@@ -125,9 +125,12 @@ int run(const Options& o) {
   // (one period beyond the longest run: the file was written, exit 0, and simulate refused it;
   // audit of session 56)
   if (!(cycles * period <= sim::kMaxDuration))
-    throw InvalidArgument(fmt::format("--base-frequency {} Hz: one period is {:g} s, longer than the longest run the simulator accepts "
-                                      "({:g} s); expected at least {:g} Hz",
-                                      o.base_frequency, period, sim::kMaxDuration, 1.0 / sim::kMaxDuration));
+    throw InvalidArgument(cycles == 1 ? fmt::format("--base-frequency {} Hz: one period is {:g} s, longer than the longest run the simulator "
+                                                    "accepts ({:g} s); expected at least {:g} Hz",
+                                                    o.base_frequency, period, sim::kMaxDuration, 1.0 / sim::kMaxDuration)
+                                      : fmt::format("--duration {}: {} whole periods of {:g} s make {:g} s, longer than the longest run the "
+                                                    "simulator accepts ({:g} s)",
+                                                    o.duration, cycles, period, cycles * period, sim::kMaxDuration));
   const bool bar = !o.quiet && !o.json && (o.progress || isatty(STDERR_FILENO));
   const auto t0 = std::chrono::steady_clock::now();
   const auto progress = [&](double f, double best) {

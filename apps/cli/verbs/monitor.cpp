@@ -908,18 +908,20 @@ int run_thresholds(const ThresholdOptions& o) {
     bool relative = false, median = false;
     for (int j = 0; j < twin.n_dof(); ++j) {
       const double own = twin.joints[static_cast<size_t>(j)].gain, used = twin.trusted_gain(j);
-      const bool converted = twin.gains_known() && used != own;
-      relative |= !twin.gains_known();
+      // (without a trusted gain there is no median: the twin's own scale, as before)
+      const bool converted = twin.gains_known() && twin.any_trusted_gain() && used != own && own > 0.0 && std::isfinite(own);
       median |= converted;
+      const bool own_scale = !twin.gains_known() || (!converted && used != own);
+      relative |= own_scale;
       loads += fmt::format("{}J{} {:.2f}{}", j ? "  " : "", j + 1, shown.reversal_load_max[j] * (converted ? used / own : 1.0),
-                           twin.gains_known() && !converted ? "" : "*");
+                           converted || own_scale ? "*" : "");
     }
-    say(!o.quiet, "the largest load each joint reversed under in them [N·m{}], beyond which both of its thresholds widen by the drive's "
+    say(!o.quiet, "the largest load each joint reversed under in them [N·m{}{}], beyond which both of its thresholds widen by the drive's "
                "motoring/back-driven step: {}\n",
-               relative  ? "; *: in the twin's own torque scale, its gains not fixed by a known payload"
-               : median ? "; *: through the median of the identified gains, the joint's own not fixed by a known payload, as the monitor "
-                          "sizes faults"
-                        : "",
+               relative ? "; *: in the twin's own torque scale, the joint's gain not fixed by a known payload" : "",
+               median ? "; *: through the median of the identified gains, the joint's own not fixed by a known payload, as the monitor "
+                        "sizes faults"
+                      : "",
                loads);
   }
   for (int j = 0; j < twin.n_dof(); ++j) {

@@ -123,7 +123,8 @@ class RecordingReader {
   long rows = 0;
   double last_timestamp = 0.0;
   bool say_cut_ = true;
-  int last_cell_decimals_ = -1;  // the fewest decimals the last column had in a row so far (-1: no row yet)
+  int last_cell_decimals_ = -1;  // the decimals of the last column in the last row (-1: no row yet)
+  bool fixed_decimals_ = true;   // every row so far had that many
   std::uint64_t hash_ = 14695981039346656037ull;
   std::string line_;
   std::vector<std::string_view> cells_;

@@ -274,6 +274,8 @@ class TwinModel {
   /// the median of the joints' that are (a joint no payload loads may fit e.g. 3080); 1 when none
   /// is, and for a joint-torque twin (its sensors read N·m). What the monitor sizes faults with.
   double trusted_gain(int j) const;
+  /// Whether any joint's gain is trusted (else trusted_gain is 1 for the untrusted ones: no median).
+  bool any_trusted_gain() const;
   /// plausible current-to-torque gains kt N eta of a harmonic-drive arm joint [N·m/A] (kt 0.05-0.3,
   /// N 50-160, eta 0.7-0.95)
   static constexpr double kTrustedGainMin = 2.0, kTrustedGainMax = 40.0;

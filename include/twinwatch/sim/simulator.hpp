@@ -258,9 +258,11 @@ class Simulator {
     bool braked = false;
   };
   ProgramState program_state(double t) const;
-  /// Throws InvalidArgument when a sample is beyond a joint's range or kSpeedLimitFactor x its speed limit.
+  /// Throws InvalidArgument when a sample is beyond a joint's range by kPositionLimitMargin or
+  /// beyond kSpeedLimitFactor x its speed limit.
   void check_within_limits(const RobotSample& s) const;
-  static constexpr double kSpeedLimitFactor = 1.5;
+  static constexpr double kSpeedLimitFactor = 3.0;
+  static constexpr double kPositionLimitMargin = 0.05;  ///< [rad]
   /// Joint j's friction torque at velocity qd over a substep dt (without a resistance fault's).
   double friction_torque(int j, double qd, double dt);
   /// The size of the resistance faults on joint j now [N·m] (0: none).
