@@ -95,6 +95,16 @@ class Y {
     if (!x) fail(n, join(path, key), fmt::format("expected a whole number within +-{}, got {}", std::numeric_limits<int>::max(), v));
     return *x;
   }
+  // a seed: a whole number 0 to 2^32 - 1, as 'simulate --seed' takes (an int stopped at 2^31 - 1)
+  unsigned seed(const YAML::Node& parent, const std::string& path, const std::string& key, unsigned fallback) const {
+    const YAML::Node n = parent[key];
+    if (!n) return fallback;
+    const double v = as_number(n, join(path, key));
+    constexpr double kMax = static_cast<double>(std::numeric_limits<unsigned>::max());
+    if (!(v >= 0.0 && v <= kMax && v == std::floor(v)))
+      fail(n, join(path, key), fmt::format("expected a whole number from 0 to {}, got {}", std::numeric_limits<unsigned>::max(), n.Scalar()));
+    return static_cast<unsigned>(v);
+  }
   std::string text(const YAML::Node& parent, const std::string& path, const std::string& key, const std::string& fallback) const {
     const YAML::Node n = parent[key];
     if (!n) return fallback;
@@ -220,10 +230,9 @@ std::shared_ptr<const Trajectory> trajectory_from(const Y& y, const YAML::Node& 
     }
     if (type == "fourier") {
       y.only_keys(t, p, {"type", "start", "amplitude", "period", "harmonics", "seed"});
-      const int fseed = y.integer(t, p, "seed", 1);
-      if (fseed < 0) y.fail(t["seed"], p + ".seed", fmt::format("expected a whole number >= 0, got {}", fseed));
+      const unsigned fseed = y.seed(t, p, "seed", 1);
       const auto c = random_fourier(start, y.number_or(t, p, "amplitude", 0.8), y.number_or(t, p, "period", 10.0),
-                                    y.integer(t, p, "harmonics", 5), static_cast<unsigned>(fseed));
+                                    y.integer(t, p, "harmonics", 5), fseed);
       return make_fourier(c);
     }
     if (type == "fourier_series") {
@@ -381,10 +390,10 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   }();
   const int n = m.n_dof();
   // (a negative seed or serial would wrap around to a large unsigned number)
-  const int seed = y.integer(root, "", "seed", 1), serial = y.integer(root, "", "robot_serial", 1);
-  if (seed < 0) y.fail(root["seed"], "seed", fmt::format("expected a whole number >= 0, got {}", seed));
+  const unsigned seed = y.seed(root, "", "seed", 1);
+  const int serial = y.integer(root, "", "robot_serial", 1);
   if (serial < 0) y.fail(root["robot_serial"], "robot_serial", fmt::format("expected a whole number >= 0, got {}", serial));
-  s.options.seed = static_cast<unsigned>(seed);
+  s.options.seed = seed;
   s.serial = static_cast<unsigned>(serial);
   // control rate and physics substeps: the default substeps meet rate x substeps >= kMinPhysicsRate
   const double rate = s.options.rate = y.number_or(root, "", "rate", 500.0);

@@ -328,7 +328,10 @@ TEST(Scenario, IoBitOutsideTheDigitalOutputsIsRefused) {
 
 // a negative seed or serial used to wrap around to a large unsigned number without a word
 TEST(Scenario, NegativeSeedOrSerialIsRefused) {
-  EXPECT_THAT(error_of("robot: ur3e\nseed: -3\nduration: 1\n" + kSine), HasSubstr("test.yaml:2: field 'seed': expected a whole number >= 0, got -3"));
+  EXPECT_THAT(error_of("robot: ur3e\nseed: -3\nduration: 1\n" + kSine), HasSubstr("test.yaml:2: field 'seed': expected a whole number from 0 to 4294967295, got -3"));
+  // a seed as 'simulate --seed' takes it, to 2^32 - 1 (it stopped at 2^31 - 1: audit of session 56)
+  EXPECT_EQ(error_of("robot: ur3e\nseed: 4294967295\nduration: 1\n" + kSine), "no error");
+  EXPECT_THAT(error_of("robot: ur3e\nseed: 4294967296\nduration: 1\n" + kSine), HasSubstr("field 'seed': expected a whole number from 0 to 4294967295"));
   EXPECT_THAT(error_of("robot: ur3e\nduration: 1\nrobot_serial: -1\n" + kSine),
               HasSubstr("test.yaml:3: field 'robot_serial': expected a whole number >= 0, got -1"));
 }

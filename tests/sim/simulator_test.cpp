@@ -386,7 +386,7 @@ TEST(Scenario, LibraryScenariosAllLoad) {
 // exception, or cast 1e20 to int (undefined)
 TEST(Scenario, OutOfRangeIntegersKeysAndRobotNamesAreParseErrors) {
   const std::string t = "trajectory: {type: sine, amplitude: 0.1, frequency: 0.5}\n";
-  EXPECT_THAT(error_of("robot: ur3e\nseed: 1e20\n" + t), HasSubstr("test.yaml:2: field 'seed': expected a whole number within +-2147483647, got 1e+20"));
+  EXPECT_THAT(error_of("robot: ur3e\nseed: 1e20\n" + t), HasSubstr("test.yaml:2: field 'seed': expected a whole number from 0 to 4294967295, got 1e20"));
   EXPECT_THAT(error_of("? [a]\n: 1\n"), HasSubstr("test.yaml:1: expected text keys, got a list or mapping as a key"));
   EXPECT_THAT(error_of("robot: " + std::string(300, 'a') + "\n" + t), HasSubstr("field 'robot': robot 'aaaa"));
 }

@@ -261,7 +261,8 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
   auto mk = std::make_shared<std::pair<std::string, unsigned>>("agv_tests.csv", 1u);
   auto* make = agv->add_subcommand("make-tests", "Simulate the motor tests of AGV §4.1 on the real-robot stand-in (Table 1 motors)");
   make->add_option("-o,--output", mk->first, "Test CSV to write")->capture_default_str();
-  make->add_option("--seed", mk->second, "Noise seed")->capture_default_str();
+  // (beyond 32 bits it said CLI11's "Could not convert", or "beyond a 64-bit integer": audit of session 56)
+  make->add_option("--seed", mk->second, "Noise seed (0 to 4294967295)")->capture_default_str()->check(twinwatch::cli::whole_number(0, 4294967295L));
   make->callback([mk] {
     require_writable(mk->first);  // (a directory or a missing folder: exit 2, named)
     device::write_agv_tests(mk->first, sim::simulate_agv_tests(sim::AgvParams{}, mk->second));
@@ -313,7 +314,9 @@ twinwatch::cli::VerbRegistrar reg{"agv", 50, [](CLI::App& app) {
   auto* demo = agv->add_subcommand("demo", "Real stand-in, twin and monitor as three processes on loopback; the paper's four tests");
   demo->add_option("--speed", d->speed, fmt::format("Time factor (10 = ten times faster than real time; {:g} to {:g})", kMinSpeed, kMaxSpeed))
       ->capture_default_str();
-  demo->add_option("--seed", d->seed, "Noise seed (of the simulated motor tests, unless --tests, and of the robots)")->capture_default_str();
+  demo->add_option("--seed", d->seed, "Noise seed (of the simulated motor tests, unless --tests, and of the robots; 0 to 4294967295)")
+      ->capture_default_str()
+      ->check(twinwatch::cli::whole_number(0, 4294967295L));
   demo->add_option("--tests", d->tests, "Identify the twin from this test CSV ('agv make-tests', or your motors' tests) instead of simulated ones")
       ->check(CLI::ExistingFile);
   demo->add_flag("--json", d->json,
