@@ -242,9 +242,15 @@ void UnitsCheck::add(const RobotSample& s) {
       throw InvalidArgument(fmt::format("{}: J{} is at {:.4g} rad at t = {:.3f} s (sample {}), beyond the {}'s range {:.3g} to {:.3g} "
                                         "rad: {}",
                                         path_, j + 1, s.q[j], t, samples_, robot_.name(), l.q_min, l.q_max,
+                                        // (a value a joint can have in radians may be another arm's: a Kinova log read
+                                        // with the Panda's model was asked only about degrees; audit of session 56)
                                         degrees ? fmt::format("are the positions in degrees? Scale them with a column map "
-                                                              "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
-                                                              j)
+                                                              "('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md){}",
+                                                              j,
+                                                              std::abs(s.q[j]) <= 2.0 * M_PI + kUnitsPositionMargin
+                                                                  ? fmt::format("; or, in radians, is it a recording of another arm than the {}?",
+                                                                                robot_.name())
+                                                                  : std::string())
                                                 : fmt::format("is it a recording of another arm than the {}, or are the joints in another "
                                                               "order or with another zero? (in degrees it would be {:.4g} rad, beyond the "
                                                               "range too; give the arm's description with --robot, or, for a twin's verbs, a twin of that arm)",
