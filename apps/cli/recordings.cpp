@@ -320,12 +320,27 @@ void warn_if_another_arm(const std::string& path, const model::RobotModel& robot
                path, robot.name(), v.own.relative_rms, j2);
 }
 
-device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
-                                     const std::string& verb, const std::string& user,
-                                     const std::function<void(const RobotSample&)>& each) {
+namespace {
+// the checks of a recording's header, before its first row (check_headers, scan_recording)
+device::RecordingReader open_checked(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
+                                     const std::string& verb, const std::string& user) {
   device::require_rereadable(path, verb);
   device::RecordingReader reader(path, map);
   device::require_fields(reader, kFieldActualQd | kFieldActualCurrent, user);
+  UnitsCheck(path, reader.n_dof(), reader.present(), robot, map && map->joint_torque_as_current);  // (its joint count)
+  return reader;
+}
+}  // namespace
+
+void check_headers(const std::vector<std::string>& files, const device::ColumnMap* map, const model::RobotModel& robot,
+                   const std::string& verb, const std::string& user) {
+  for (const std::string& f : files) open_checked(f, map, robot, verb, user);
+}
+
+device::RecordingScan scan_recording(const std::string& path, const device::ColumnMap* map, const model::RobotModel& robot,
+                                     const std::string& verb, const std::string& user,
+                                     const std::function<void(const RobotSample&)>& each) {
+  device::RecordingReader reader = open_checked(path, map, robot, verb, user);
   UnitsCheck units(path, reader.n_dof(), reader.present(), robot, map && map->joint_torque_as_current);
   // is it the twin's arm? (its controller's torque against the arm's model and the other built-in
   // arms', every 25th sample: 20 a second at 500 Hz; ident::ArmCheck)

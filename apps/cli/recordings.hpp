@@ -87,6 +87,12 @@ device::RecordingScan scan_recording(const std::string& path, const device::Colu
                                      const std::string& verb, const std::string& user,
                                      const std::function<void(const RobotSample&)>& each = {});
 
+/// What scan_recording checks before its first row, for every file: rereadable, its header (and the
+/// map's columns), actual_qd / actual_current present, the robot's joint count. Reads one line of
+/// each: a verb that says something before the whole-file check (serve's address) refuses these first.
+void check_headers(const std::vector<std::string>& files, const device::ColumnMap* map, const model::RobotModel& robot,
+                   const std::string& verb, const std::string& user);
+
 /// Several recordings read as one stream in the order given (monitor's and report's RECORDING...: the
 /// parts `record --split-every` writes, or a shift's files): each is checked on its own
 /// (scan_recording; `before_each` is called with its path first, may be empty), then they must share

@@ -60,4 +60,11 @@ rc=0
 [ "$rc" -eq 2 ] || fail "RECORDING and --rtde: exit $rc, expected 2"
 grep -q "dashboard:" "$dir/serve.err" && fail "a dashboard address before the refusal"
 grep -q "give either RECORDING" "$dir/serve.err" || fail "RECORDING and --rtde not refused by name"
+# ... and a recording whose header is refused (its whole-file check comes after the address)
+printf 'timestamp;actual_q_0\n0;0\n' >"$dir/semi.csv"
+rc=0
+"$tw" serve --twin "$twin" "$dir/semi.csv" --listen 127.0.0.1:0 --db '' >"$dir/serve.out" 2>"$dir/serve.err" || rc=$?
+[ "$rc" -eq 2 ] || fail "a ';' header: exit $rc, expected 2"
+grep -q "dashboard:" "$dir/serve.err" && fail "a dashboard address before the header's refusal"
+grep -q "separated by ';'" "$dir/serve.err" || fail "the ';' header not named"
 echo "PASS"

@@ -153,6 +153,22 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     for (size_t b = a + 1; b < std::size(outs); ++b)
       if (!outs[a].second->empty() && !outs[b].second->empty() && same_file(*outs[a].second, *outs[b].second))
         throw PathError(fmt::format("{} and {} name the same file {}: each writes its own", outs[a].first, outs[b].first, *outs[a].second));
+  // the inputs' cheap checks too (a recording's header, the twin against RTDE), before serve says its
+  // address; the whole-file check comes after it, and the page shows its progress
+  std::optional<device::ColumnMap> map;
+  if (o.rtde.empty()) {
+    map = cli::load_column_map(o.column_map, twin);
+    cli::check_headers(o.recordings, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor");
+  } else {
+    if (!o.column_map.empty())
+      throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
+    // (the signal first: a Panda's torque twin is refused for what it compares, not for its 7 joints)
+    if (twin.measures_torque())
+      throw InvalidArgument(fmt::format("the twin {} compares joint torque sensors (signal joint_torque), which RTDE does not stream (a UR "
+                                        "arm has none): monitor a recording of them, or a twin identified on the motor currents",
+                                        o.twin));
+    if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
+  }
   if (hooks.on_checked) hooks.on_checked();
   // A recording is read twice, row by row, and never held: first to check every row, its units and
   // the timing of its steps (the median period a gap is measured in needs the whole file), then to
@@ -163,14 +179,12 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   // recordings): each is checked on its own, then they must share their columns and follow each other
   // in time; the step from one file's last sample to the next one's first is judged as any other step
   // (a jump is a gap, a stream fault), and the estimators and the wear trend go on across it.
-  std::optional<device::ColumnMap> map;
   cli::StreamScan stream;
   // the wall clock: Unix time − controller time (NaN: unknown). A recording's is --started-at's; a
   // live stream's is read against this machine's clock as the samples come (StreamWallClock)
   double wall_offset = std::numeric_limits<double>::quiet_NaN();
   StreamWallClock live_clock;
   if (o.rtde.empty()) {
-    map = cli::load_column_map(o.column_map, twin);
     stream = cli::scan_stream(o.recordings, map ? &*map : nullptr, twin.robot(), "monitor", "the monitor", [&](const std::string& f) {
       if (!o.quiet && !o.json) say_checking(f);
     });
@@ -181,14 +195,6 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
     if (stream.scans.front().timing.median_period > 0) use_rate(stream.scans.front().timing.median_period, o.recordings.front());
     if (std::isfinite(started_at)) wall_offset = started_at - sources.front().first;
   } else {
-    if (!o.column_map.empty())
-      throw InvalidArgument("--column-map applies to a RECORDING; an RTDE stream carries the controller's own field names");
-    // (the signal first: a Panda's torque twin is refused for what it compares, not for its 7 joints)
-    if (twin.measures_torque())
-      throw InvalidArgument(fmt::format("the twin {} compares joint torque sensors (signal joint_torque), which RTDE does not stream (a UR "
-                                        "arm has none): monitor a recording of them, or a twin identified on the motor currents",
-                                        o.twin));
-    if (twin.n_dof() != 6) throw InvalidArgument(fmt::format("RTDE streams 6 joints; the twin {} has {}", o.twin, twin.n_dof()));
     cli::RtdeSourceOptions so;
     so.endpoint = o.rtde;
     so.wait_s = o.wait;
