@@ -192,6 +192,10 @@ bool trusted(const JointDrive& d) { return d.gain_identified && d.gain >= TwinMo
 
 bool TwinModel::any_trusted_gain() const { return std::any_of(joints.begin(), joints.end(), trusted); }
 
+bool TwinModel::gain_from_median(int j) const {
+  return gains_known() && !measures_torque() && !trusted(joints[static_cast<size_t>(j)]) && any_trusted_gain();
+}
+
 double TwinModel::trusted_gain(int j) const {
   if (measures_torque()) return 1.0;
   if (trusted(joints[static_cast<size_t>(j)])) return joints[static_cast<size_t>(j)].gain;

@@ -93,6 +93,27 @@ JointRecord slice(const JointRecord& r, long a, long b) {
   return s;
 }
 
+// The mean of friction x speed over the samples faster than the median speed (a friction model's
+// power taken from the motion there: > 0), and that median; none for no samples or predictions of
+// another length
+struct SpeedPower {
+  double median_speed, mean;
+};
+std::optional<SpeedPower> power_above_median_speed(const std::vector<double>& qd, const std::vector<double>& friction) {
+  if (qd.empty() || friction.size() != qd.size()) return std::nullopt;
+  std::vector<double> speeds;
+  for (const double v : qd) speeds.push_back(std::abs(v));
+  std::vector<double> sorted = speeds;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  double power = 0.0;
+  long n = 0;
+  for (size_t k = 0; k < qd.size(); ++k)
+    if (speeds[k] > median) power += friction[k] * qd[k], ++n;
+  if (n == 0) return std::nullopt;
+  return SpeedPower{median, power / static_cast<double>(n)};
+}
+
 // (n_dof: the recordings' joint count)
 std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o, int& n_dof) {
   // (TRAIN given again as VALIDATION was called an "untrained validation record")
@@ -574,24 +595,12 @@ int run(const StudyOptions& o) {
       // friction takes energy from the motion: an equation that, at the record's faster half of
       // speeds, pushes the joint along (the Kinova's J5 fitted -15.32 qd + ..., which a UR3e twin
       // took, audit of session 56) is no friction model, whatever its rms
-      if (refused.empty()) {
-        std::vector<double> speeds;
-        for (const double v : r.study.fourier.qd) speeds.push_back(std::abs(v));
-        if (!speeds.empty() && ms.fourier_prediction.size() == speeds.size()) {
-          std::vector<double> sorted = speeds;
-          std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-          const double median = sorted[sorted.size() / 2];
-          double power = 0.0;
-          long n = 0;
-          for (size_t k = 0; k < speeds.size(); ++k)
-            if (speeds[k] > median) power += ms.fourier_prediction[k] * r.study.fourier.qd[k], ++n;
-          if (n > 0 && power < 0.0)
-            refused = fmt::format("--save-twin {}: not written: {}'s ParFam-H pushes the joint along its motion above the record's median "
-                                  "speed {:.3g} rad/s (its friction times the speed averages {:.3g} {}·rad/s, where friction takes "
-                                  "energy from the motion: > 0); no equation of this study is stored",
-                                  o.save_twin, r.study.joint, median, power / static_cast<double>(n), torque_unit(o));
-        }
-      }
+      if (refused.empty())
+        if (const auto p = power_above_median_speed(r.study.fourier.qd, ms.fourier_prediction); p && p->mean < 0.0)
+          refused = fmt::format("--save-twin {}: not written: {}'s ParFam-H pushes the joint along its motion above the record's median "
+                                "speed {:.3g} rad/s (its friction times the speed averages {:.3g} {}·rad/s, where friction takes "
+                                "energy from the motion: > 0); no equation of this study is stored",
+                                o.save_twin, r.study.joint, p->median_speed, p->mean, torque_unit(o));
       eqs.push_back(friction_equation_of(*m, joint));
     }
     if (refused.empty()) {

@@ -343,15 +343,14 @@ int run_identify(const IdentifyOptions& o) {
       }
       fmt::print("J{:<5} {:>9} {:>9.4f} {:>8.4f} {:>10} {:>7} {:>12}\n", j + 1, report.samples_used[J], m.rmse, m.r2,
                  fmt::format("{:.3f}{}", m.c_gen, fitted ? "" : "*"), std::isfinite(gen) ? fmt::format("{:.1f}", gen) : std::string("-"),
-                 !twin.gains_known()                                         ? fmt::format("({:.3f})", m.gain)
-                 : twin.trusted_gain(j) == m.gain || !twin.any_trusted_gain() ? fmt::format("{:.3f}", m.gain)
-                                                                               : fmt::format("{:.3f}*", twin.trusted_gain(j)));
+                 !twin.gains_known()        ? fmt::format("({:.3f})", m.gain)
+                 : twin.gain_from_median(j) ? fmt::format("{:.3f}*", twin.trusted_gain(j))
+                                            : fmt::format("{:.3f}", m.gain));
     }
     // the notes say why; the mark keeps a reader of the table alone from taking the number as measured
     // (no trusted gain: no median to show, the fitted ones are shown as they are)
     bool median_shown = false;
-    for (int j = 0; j < twin.n_dof(); ++j)
-      median_shown |= twin.gains_known() && twin.any_trusted_gain() && twin.trusted_gain(j) != twin.joints[static_cast<size_t>(j)].gain;
+    for (int j = 0; j < twin.n_dof(); ++j) median_shown |= twin.gain_from_median(j);
     if (median_shown)
       fmt::print("* gain: not identified (no recording loads the joint enough) or beyond a harmonic drive's {:g}-{:g} N·m/A; shown is the "
                  "median of the identified ones, which the monitor uses\n",

@@ -915,7 +915,7 @@ int run_thresholds(const ThresholdOptions& o) {
     for (int j = 0; j < twin.n_dof(); ++j) {
       const double own = twin.joints[static_cast<size_t>(j)].gain, used = twin.trusted_gain(j);
       // (without a trusted gain there is no median: the twin's own scale, as before)
-      const bool converted = twin.gains_known() && twin.any_trusted_gain() && used != own && own > 0.0 && std::isfinite(own);
+      const bool converted = twin.gain_from_median(j) && own > 0.0 && std::isfinite(own);
       median |= converted;
       const bool own_scale = !twin.gains_known() || (!converted && used != own);
       relative |= own_scale;

@@ -276,6 +276,10 @@ class TwinModel {
   double trusted_gain(int j) const;
   /// Whether any joint's gain is trusted (else trusted_gain is 1 for the untrusted ones: no median).
   bool any_trusted_gain() const;
+  /// Whether joint j's torque is sized through the median of the trusted gains, not its own: a twin
+  /// with absolute gains, some trusted, and j's not among them (identify's table and thresholds
+  /// mark such a joint).
+  bool gain_from_median(int j) const;
   /// plausible current-to-torque gains kt N eta of a harmonic-drive arm joint [N·m/A] (kt 0.05-0.3,
   /// N 50-160, eta 0.7-0.95)
   static constexpr double kTrustedGainMin = 2.0, kTrustedGainMax = 40.0;
