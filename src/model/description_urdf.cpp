@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "twinwatch/core/error.hpp"
@@ -142,6 +144,25 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   }
   if (!urdf_model) throw ParseError(path, 0, "", "not a valid URDF (urdfdom could not parse it: check the XML and that every joint names existing links)");
 
+  // a joint whose child is its own parent, or joints that lead back to a link above them: urdfdom
+  // takes both, and every walk up the tree below went round for ever (found by fuzzing: a joint's
+  // parent and child both 'link2', session 57)
+  for (const auto& [first, joint] : urdf_model->joints_) {
+    std::set<std::string> seen;
+    for (urdf::LinkConstSharedPtr l = urdf_model->getLink(joint->child_link_name); l && l->parent_joint;
+         l = urdf_model->getLink(l->parent_joint->parent_link_name)) {
+      seen.insert(l->name);
+      // the joint that leads up to a link already passed is the one that closes the loop
+      const urdf::JointConstSharedPtr& up = l->parent_joint;
+      if (seen.count(up->parent_link_name))
+        throw ParseError(path, line_of_element(text, "joint", up->name), "joint",
+                         fmt::format("joint '{}' (parent '{}', child '{}') closes a loop: {}, expected a tree (each link the "
+                                     "child of one joint, none below itself)",
+                                     up->name, up->parent_link_name, up->child_link_name,
+                                     up->parent_link_name == up->child_link_name ? "its child is its own parent"
+                                                                                 : "the links above its child lead back to it"));
+    }
+  }
   // chain ends: root (or base_link) and the single leaf (or tip_link)
   const std::string base = base_link.empty() ? urdf_model->getRoot()->name : base_link;
   if (!urdf_model->getLink(base)) throw ParseError(path, 0, "link", fmt::format("base link '{}' does not exist", base));

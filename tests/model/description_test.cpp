@@ -1,5 +1,6 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 
 #include <cmath>
 #include <filesystem>
@@ -289,6 +290,30 @@ TEST(DescriptionUrdf, BranchingTreeNeedsATip) {
   }
   // named: the chain to that leaf
   EXPECT_EQ(load_robot(path + "#l2").description().joints.front().name, "j2");
+}
+
+// A joint whose child is its own parent: urdfdom takes it, and the loader's walk up the tree from
+// a leaf went round for ever (a fuzzing finding, session 57). It is refused, naming that joint and
+// its line; the same file with the joint's child fixed loads.
+TEST(DescriptionUrdf, AJointWhoseChildIsItsParentIsRefusedNotWalkedForEver) {
+  const std::string path = ::testing::TempDir() + "description_test_loop.urdf";
+  const auto write = [&](const char* parent) {
+    std::ofstream(path) << fmt::format(R"(<robot name="loop"><link name="base"/><link name="l1"/><link name="l2"/><link name="l3"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    <joint name="j2" type="revolute"><parent link="{}"/><child link="l2"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    </robot>)", parent);
+  };
+  write("l2");
+  try {
+    load_description_urdf(path);
+    FAIL() << "a joint from l2 to l2 loaded";
+  } catch (const ParseError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("description_test_loop.urdf:3: field 'joint': joint 'j2' (parent 'l2', child 'l2') closes a "
+                                    "loop: its child is its own parent"));
+  }
+  write("l1");
+  EXPECT_EQ(load_description_urdf(path).joints.size(), 3u);
 }
 
 // A description with frames beside the arm (ur_description's massless 'base' and 'tool0', a
