@@ -196,7 +196,7 @@ void require_driven(const device::Recording& rec, const std::string& user) {
 }
 
 UnitsCheck::UnitsCheck(const std::string& path, int n_dof, std::uint32_t present, const model::RobotModel& robot, bool torque)
-    : path_(path), robot_(robot), present_(present), torque_(torque), n_(std::min(n_dof, robot.n_dof())) {
+    : path_(path), robot_(robot), present_(present), torque_(torque), n_(std::min(n_dof, robot.n_dof())), agree_(path, n_dof) {
   // (report read a 7-joint log into a 6-joint twin and said "q has size 7, expected 6 (model.n_dof)")
   if (n_dof != robot.n_dof())
     throw InvalidArgument(fmt::format("{} has {} joints, the robot ({}) {}{}", path, n_dof, robot.name(), robot.n_dof(),
@@ -268,9 +268,11 @@ void UnitsCheck::add(const RobotSample& s) {
     for (size_t j = 0; j < currents_.size(); ++j)
       if (std::isfinite(s.current[static_cast<Eigen::Index>(j)]))
         currents_[j].push_back(static_cast<float>(std::abs(s.current[static_cast<Eigen::Index>(j)])));
+  if (present_ & kFieldActualQd) agree_.add(s);
 }
 
 void UnitsCheck::finish() {
+  agree_.finish();
   // currents in mA: judged on each joint's 99th percentile of |i|, which a glitch of a few samples
   // (a sensor fault the monitor is there to report) does not move
   for (size_t j = 0; j < currents_.size(); ++j) {
@@ -423,6 +425,78 @@ long StreamScan::replay(const std::vector<std::string>& files, const device::Col
     }
   }
   return total;
+}
+
+PositionSpeedCheck::PositionSpeedCheck(std::string path, int n_dof) : path_(std::move(path)), joints_(static_cast<size_t>(std::max(n_dof, 0))) {}
+
+void PositionSpeedCheck::add(const RobotSample& s) {
+  const int n = std::min(static_cast<int>(joints_.size()), s.n_dof());
+  bool finite = std::isfinite(s.timestamp);
+  for (int j = 0; j < n; ++j) finite = finite && std::isfinite(s.q[j]) && std::isfinite(s.qd[j]);
+  if (!has_prev_) t0_ = s.timestamp;
+  const double dt = s.timestamp - prev_t_;
+  if (!finite || !has_prev_ || !(dt > 0.0) || dt > kAgreeMaxStep || s.gap_before) {
+    // a new stretch from this sample (the steps across a gap, or around a value that is not a
+    // number, say nothing about the units)
+    close_stretch();
+    stretch_start_ = s.timestamp - t0_;
+  } else {
+    for (int j = 0; j < n; ++j) {
+      Joint& a = joints_[static_cast<size_t>(j)];
+      a.moved += s.q[j] - prev_q_[j];
+      a.integral += 0.5 * (s.qd[j] + prev_qd_[j]) * dt;
+    }
+    stretch_len_ += dt;
+    if (stretch_len_ >= kAgreeStretch) {
+      close_stretch();
+      stretch_start_ = s.timestamp - t0_;
+    }
+  }
+  has_prev_ = finite;
+  if (finite) prev_q_ = s.q, prev_qd_ = s.qd, prev_t_ = s.timestamp;
+}
+
+void PositionSpeedCheck::close_stretch() {
+  // the ratios a unit makes: positions in degrees, speeds in degrees/s, speeds of the other sign
+  static constexpr double kSignature[3] = {1.0 / kDegree, kDegree, -1.0};
+  for (Joint& a : joints_) {
+    if (std::abs(a.moved) >= kAgreeMinTravel && std::abs(a.integral) >= kAgreeMinTravel) {
+      const double ratio = a.moved / a.integral;
+      ++a.stretches;
+      for (int b = 0; b < 3; ++b)
+        if (ratio / kSignature[b] >= 1.0 / kAgreeBand && ratio / kSignature[b] <= kAgreeBand) {
+          if (a.in_band[b]++ == 0) a.first_t[b] = stretch_start_;
+          a.log_sum[b] += std::log(std::abs(ratio));
+        }
+    }
+    a.moved = a.integral = 0.0;
+  }
+  stretch_len_ = 0.0;
+}
+
+void PositionSpeedCheck::finish() const {
+  for (size_t j = 0; j < joints_.size(); ++j) {
+    const Joint& a = joints_[j];
+    if (a.stretches < kAgreeMinStretches) continue;
+    for (int b = 0; b < 3; ++b) {
+      if (static_cast<double>(a.in_band[b]) < kAgreeShare * static_cast<double>(a.stretches)) continue;
+      const double typical = (b == 2 ? -1.0 : 1.0) * std::exp(a.log_sum[b] / static_cast<double>(a.in_band[b]));
+      const std::string where = fmt::format("{}: J{}'s position changes {:.3g} times what its speed integrates to, in {} of the {} "
+                                            "stretches of {:g} s in which both move (the first from t = {:.3f} s)",
+                                            path_, j + 1, typical, a.in_band[b], a.stretches, kAgreeStretch, a.first_t[b]);
+      if (b == 0)
+        throw InvalidArgument(fmt::format("{}: are the positions in degrees and the speeds in rad/s? Scale the positions with a column "
+                                          "map ('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
+                                          where, j));
+      if (b == 1)
+        throw InvalidArgument(fmt::format("{}: are the speeds in degrees/s and the positions in radians? Scale the speeds with a column "
+                                          "map ('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
+                                          where, j));
+      throw InvalidArgument(fmt::format("{}: the speed has the other sign than the position's change. Does the logger count the speed "
+                                        "the other way round? Negate it with a column map ('COLUMN,actual_qd_{},-1', docs/recordings.md)",
+                                        where, j));
+    }
+  }
 }
 
 void check_units(const device::Recording& rec, const model::RobotModel& robot, bool torque) {

@@ -51,6 +51,46 @@ void check_sample_period(const std::string& path, double median_period);
 /// [rad/s] faster than any arm joint turns (a UR wrist's limit is 6.28): speeds in degrees/s, for a
 /// verb without the arm's description
 inline constexpr double kUnitsAnyJointSpeedMax = 20.0;
+/// Positions and speeds in different units, told from the recording alone (no arm needed): per
+/// joint, over stretches of kAgreeStretch of controller time, the change of the position against the
+/// speed's integral (trapezoid). Where at least kAgreeMinStretches stretches move both by
+/// kAgreeMinTravel and kAgreeShare of them put that ratio near 57.3 (positions in degrees, speeds in
+/// rad/s), near 1/57.3 (speeds in degrees/s) or near -1 (speeds of the other sign), finish() throws
+/// InvalidArgument naming the file, the joint, the typical ratio and the column map scale that fixes
+/// it (docs/recordings.md). A range check misses these when the motion is small or slow (5 deg/s
+/// read as 5 rad/s is within twice a UR joint's limit; a few degrees read as radians are within
+/// its ±2π). A filtered or lagging speed moves the ratio by tens of percent, not by these factors,
+/// and a channel frozen or offset by a fault gives no such ratio in most stretches.
+/// add() per sample in time order; a step of more than kAgreeMaxStep or back in time starts a new
+/// stretch.
+inline constexpr double kAgreeStretch = 0.5;     ///< [s]
+inline constexpr double kAgreeMaxStep = 0.25;    ///< [s]
+inline constexpr double kAgreeMinTravel = 0.005; ///< [rad] in a stretch, position change and speed integral both
+inline constexpr int kAgreeMinStretches = 4;
+inline constexpr double kAgreeShare = 0.75;
+inline constexpr double kAgreeBand = 1.6;  ///< a ratio within this factor of 57.3, 1/57.3 or -1
+class PositionSpeedCheck {
+ public:
+  PositionSpeedCheck(std::string path, int n_dof);
+  void add(const RobotSample& s);
+  void finish() const;
+
+ private:
+  void close_stretch();
+  struct Joint {
+    double moved = 0.0, integral = 0.0;  // [rad] this stretch: position change, speed integral
+    long stretches = 0;                  // that moved both by kAgreeMinTravel
+    long in_band[3] = {0, 0, 0};         // of those: degrees, degrees/s, other sign
+    double log_sum[3] = {0.0, 0.0, 0.0}; // their log |ratio|, for the typical one
+    double first_t[3] = {0.0, 0.0, 0.0}; // [s] the first such stretch's start
+  };
+  std::string path_;
+  std::vector<Joint> joints_;
+  bool has_prev_ = false;
+  VectorJ prev_q_, prev_qd_;
+  double prev_t_ = 0.0, t0_ = 0.0, stretch_start_ = 0.0, stretch_len_ = 0.0;
+};
+
 /// check_units a sample at a time, for a recording read row by row (monitor): the joint count at
 /// construction, check_period once the median period is known, add() per sample (positions and
 /// speeds at once; the currents kept in single precision, 24 bytes a sample for six joints), finish()
@@ -71,6 +111,7 @@ class UnitsCheck {
   long samples_ = 0;
   double t0_ = 0.0;
   std::vector<std::vector<float>> currents_;
+  PositionSpeedCheck agree_;
 };
 inline constexpr double kUnitsCurrentMax = 100.0;  ///< [A] a joint's 99th-percentile |current| (mA read as A)
 

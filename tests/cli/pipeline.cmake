@@ -146,6 +146,25 @@ add_test(NAME cli.identify_time_in_milliseconds
   COMMAND twinwatch identify ${d}/exc.csv --column-map ${s}/units_ms_map.csv -o ${d}/never_ms.json)
 set_tests_properties(cli.identify_time_in_milliseconds PROPERTIES FIXTURES_REQUIRED recordings
   PASS_REGULAR_EXPRESSION "exc.csv: the samples are 2 s apart \\(median\\)[^\n]*is the time column in milliseconds\\?")
+# positions and speeds in different units where the range check cannot tell (slow or small motion):
+# the position's change against the speed's integral says it, for every verb that reads the units
+# (validate, identify through check_units) and for friction-study, which takes no arm
+add_test(NAME cli.simulate_slow_sine COMMAND twinwatch simulate ${s}/slow_sine.yaml -o ${d}/slow_sine.csv)
+set_tests_properties(cli.simulate_slow_sine PROPERTIES FIXTURES_SETUP slow_sine PASS_REGULAR_EXPRESSION "samples")
+add_test(NAME cli.validate_slow_sine_in_its_units COMMAND twinwatch validate --twin ${d}/twin.json ${d}/slow_sine.csv --json)
+set_tests_properties(cli.validate_slow_sine_in_its_units PROPERTIES FIXTURES_REQUIRED "twin;slow_sine" PASS_REGULAR_EXPRESSION "\"joints\":")
+add_test(NAME cli.validate_speeds_in_degrees_per_second
+  COMMAND twinwatch validate --twin ${d}/twin.json ${d}/slow_sine.csv --column-map ${s}/units_speed_degrees_map.csv)
+set_tests_properties(cli.validate_speeds_in_degrees_per_second PROPERTIES FIXTURES_REQUIRED "twin;slow_sine"
+  PASS_REGULAR_EXPRESSION "slow_sine.csv: J1's position changes 0.017[0-9]* times what its speed integrates to, in [0-9]+ of the [0-9]+ stretches of 0.5 s [^\n]*are the speeds in degrees/s and the positions in radians\\? Scale the speeds with a column map \\('COLUMN,actual_qd_0,0.017453292519943295'")
+add_test(NAME cli.identify_speed_of_the_other_sign
+  COMMAND twinwatch identify ${d}/slow_sine.csv --column-map ${s}/units_speed_sign_map.csv -o ${d}/never_sign.json)
+set_tests_properties(cli.identify_speed_of_the_other_sign PROPERTIES FIXTURES_REQUIRED slow_sine
+  PASS_REGULAR_EXPRESSION "slow_sine.csv: J2's position changes -1 times what its speed integrates to[^\n]*the speed has the other sign than the position's change[^\n]*\\('COLUMN,actual_qd_1,-1'")
+add_test(NAME cli.friction_study_wrist_positions_in_degrees
+  COMMAND twinwatch friction-study ${d}/slow_sine.csv --column-map ${s}/units_wrist_degrees_map.csv --joint 6 --torque moment)
+set_tests_properties(cli.friction_study_wrist_positions_in_degrees PROPERTIES FIXTURES_REQUIRED slow_sine
+  PASS_REGULAR_EXPRESSION "slow_sine.csv: J6's position changes 57.3 times what its speed integrates to[^\n]*are the positions in degrees and the speeds in rad/s\\? Scale the positions with a column map \\('COLUMN,actual_q_5,0.017453292519943295'")
 # an output given the name of an input would destroy it; a bad output path is refused before the fit
 add_test(NAME cli.monitor_events_onto_the_recording COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --events ${d}/fig.csv --db '')
 set_tests_properties(cli.monitor_events_onto_the_recording PROPERTIES FIXTURES_REQUIRED twin

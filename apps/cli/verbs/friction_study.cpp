@@ -136,6 +136,12 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o, int& n_dof) 
                                             "them with a column map ('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
                                             r.path, j + 1, r.samples[k].qd[j], r.samples[k].timestamp - r.samples.front().timestamp,
                                             k + 1, cli::kUnitsAnyJointSpeedMax, j, j));
+    // positions in degrees beside speeds in rad/s (or the other way round, or of the other sign),
+    // told by the positions' change against the speeds' integral: the range check the other verbs
+    // make needs the arm's description, which the study takes none of (audit of session 56)
+    cli::PositionSpeedCheck agree(r.path, r.n_dof);
+    for (const RobotSample& s : r.samples) agree.add(s);
+    agree.finish();
   }
   for (const auto& r : recs)
     if (r.n_dof != recs[0].n_dof)
