@@ -125,13 +125,11 @@ std::string expected_class(const std::string& fault) {
   return "unknown";
 }
 
-// appends one scenario's per-window trend history: scenario, t, joint, friction, coulomb, viscous,
-// energy, temperature, valid, I_total
+// appends one scenario's per-window trend history (the columns of kTrendCsvHeader) to a file that
+// holds that header (the verb writes it before the first scenario)
 void append_trend_csv(const std::string& path, const std::string& name, const monitor::TrendDetector& tr) {
-  const bool fresh = !std::filesystem::exists(path);
   std::ofstream f(path, std::ios::app);
   if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  if (fresh) f << "scenario,t,joint,friction,coulomb,viscous,energy,temperature,valid,i_total\n";
   const auto& it = tr.total_current();
   for (int j = 0; j < tr.n_dof(); ++j) {
     const auto& h = tr.history(j);

@@ -36,6 +36,7 @@ struct MonitorOptions {
   std::string started_at;  // a recording: the wall-clock time of its first sample (ISO 8601 with zone)
   bool static_threshold = false, quiet = false, json = false, no_reconnect = false, keep_payload = false;
   bool events_open = false;  // --events-open: a line at each raise and re-diagnosis too ("open": true)
+  bool events_append = false;  // --events-append: add to the --events file instead of replacing it
   MqttCliOptions mqtt;       // --mqtt: the events and the run's state to a broker
   std::vector<std::string> fail_on;  // --fail-on: event classes (or "any") that make the exit status 3
 };

@@ -132,6 +132,14 @@ set_tests_properties(cli.monitor_relative_twin_marks_its_sizes PROPERTIES FIXTUR
 add_test(NAME cli.evaluate_false_alarms_inside_a_fault_window COMMAND twinwatch evaluate ${s}/pp_wear_tiny.yaml --twin ${d}/twin.json)
 set_tests_properties(cli.evaluate_false_alarms_inside_a_fault_window PROPERTIES FIXTURES_REQUIRED twin
                      PASS_REGULAR_EXPRESSION "false alarms: [1-9][0-9]* in 0.01 h")
+# evaluate --trend-csv: the file starts with its header, then one row per scenario, joint and trend
+# window (the header was never written: the verb created the file empty, and the first append wrote
+# one only to a file that did not exist; audit of session 57). 40 s: one 30 s window per joint.
+add_test(NAME cli.evaluate_trend_csv_has_its_header
+  COMMAND sh -c "$<TARGET_FILE:twinwatch> evaluate ${s}/pp_wear_tiny.yaml --twin ${d}/twin.json --trend-csv ${d}/trend_tiny.csv > /dev/null && \
+head -1 ${d}/trend_tiny.csv && grep -c '^pp_wear_tiny,' ${d}/trend_tiny.csv")
+set_tests_properties(cli.evaluate_trend_csv_has_its_header PROPERTIES FIXTURES_REQUIRED twin
+                     PASS_REGULAR_EXPRESSION "^scenario,t,joint,friction,coulomb,viscous,energy,temperature,valid,i_total\n6\n$")
 # demo: scenarios of another robot than --robot are refused before the training
 add_test(NAME cli.demo_scenarios_of_another_robot COMMAND twinwatch demo --robot ur5e -o ${d}/demo_ur5e)
 set_tests_properties(cli.demo_scenarios_of_another_robot PROPERTIES TIMEOUT 60

@@ -165,6 +165,15 @@ add_test(NAME cli.friction_study_wrist_positions_in_degrees
   COMMAND twinwatch friction-study ${d}/slow_sine.csv --column-map ${s}/units_wrist_degrees_map.csv --joint 6 --torque moment)
 set_tests_properties(cli.friction_study_wrist_positions_in_degrees PROPERTIES FIXTURES_REQUIRED slow_sine
   PASS_REGULAR_EXPRESSION "slow_sine.csv: J6's position changes 57.3 times what its speed integrates to[^\n]*are the positions in degrees and the speeds in rad/s\\? Scale the positions with a column map \\('COLUMN,actual_q_5,0.017453292519943295'")
+# --events-append: a second run adds its lines to the first's (a service started again); without it
+# the file is replaced; the flag alone is refused
+add_test(NAME cli.monitor_events_append
+  COMMAND sh -c "rm -f ${d}/append.jsonl; for i in 1 2; do $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' -q --events ${d}/append.jsonl --events-append; done; \
+a=\$(wc -l < ${d}/append.jsonl); $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' -q --events ${d}/append.jsonl; \
+r=\$(wc -l < ${d}/append.jsonl); [ \$r -gt 0 ] && [ \$a -eq \$((2 * r)) ] && echo appended=\$a replaced=\$r; \
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' --events-append 2>&1; echo exit=\$?")
+set_tests_properties(cli.monitor_events_append PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
+  PASS_REGULAR_EXPRESSION "appended=[0-9]+ replaced=[0-9]+\n[^\n]*--events-append applies only with --events\nexit=2")
 # an output given the name of an input would destroy it; a bad output path is refused before the fit
 add_test(NAME cli.monitor_events_onto_the_recording COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --events ${d}/fig.csv --db '')
 set_tests_properties(cli.monitor_events_onto_the_recording PROPERTIES FIXTURES_REQUIRED twin

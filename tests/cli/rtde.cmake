@@ -152,6 +152,16 @@ awk -v a=\$(tail -n1 rec.000.csv | cut -d, -f1) -v b=\$(sed -n 2p rec.001.csv | 
 $<TARGET_FILE:twinwatch> record --rtde 127.0.0.1:1 --split-every 0.5 -o x.csv 2>&1; echo exit=\$?")
 set_tests_properties(cli.rtde_record_split_every PROPERTIES TIMEOUT 40
   PASS_REGULAR_EXPRESSION "\"files\":\\[\"[^\"]*split_rec/rec\\.000\\.csv\",\"[^\"]*split_rec/rec\\.001\\.csv\",[^\n]*\nfiles=[3-9] headers=1\nrows=samples=[0-9]+\ncontiguous\n.*--split-every must be a finite time >= 1 s of controller time, got 0.5\nexit=2")
+# a service started again must not replace the last run's files: '{start}' in --record and --events
+# is the run's start in UTC, and --events-append adds to the events file (audit of session 57: the
+# example config's events file was emptied at every restart). Two runs, one after the other.
+add_test(NAME cli.rtde_monitor_start_in_file_names
+  COMMAND sh -c "rm -rf ${PROJECT_BINARY_DIR}/mstart; mkdir ${PROJECT_BINARY_DIR}/mstart; $<TARGET_FILE:twinwatch> serve-robot ${PROJECT_SOURCE_DIR}/scenarios/ur3e/nominal_figure_eight.yaml --port 35948 --speed 4 --duration 30 -q & \
+for run in 1 2; do $<TARGET_FILE:twinwatch> monitor --rtde 127.0.0.1:35948 --wait 10 --duration 0.5 --twin ${PROJECT_BINARY_DIR}/cli-pipeline/twin.json --payload-mass 0.5 --payload-com 0 0 0.04 --db '' \
+--record ${PROJECT_BINARY_DIR}/mstart/rec-{start}.csv --events ${PROJECT_BINARY_DIR}/mstart/ev-{start}.jsonl -q; sleep 1.1; done; kill \$! 2>/dev/null; wait; \
+cd ${PROJECT_BINARY_DIR}/mstart && echo recordings=\$(ls rec-*.csv | grep -cE '^rec-20[0-9]{6}T[0-9]{6}Z[.]csv$') events=\$(ls ev-*.jsonl | grep -cE '^ev-20[0-9]{6}T[0-9]{6}Z[.]jsonl$')")
+set_tests_properties(cli.rtde_monitor_start_in_file_names PROPERTIES FIXTURES_REQUIRED twin TIMEOUT 60
+  PASS_REGULAR_EXPRESSION "recordings=2 events=2")
 # monitor --record --split-every: the live monitor's copy of the stream split as record's is, every
 # sample once (session 41; before, --record wrote one file whatever the run's length)
 add_test(NAME cli.rtde_monitor_record_split_every

@@ -107,8 +107,10 @@ int run_evaluate(const EvaluateOptions& o) {
       throw InvalidArgument(fmt::format("{} runs robot '{}', the twin is of '{}': evaluate scores a twin on scenarios of its own robot",
                                         files[i], robots[i], twin.robot_name()));
   if (!o.save_twin.empty()) twin.save(o.save_twin);
-  // (the wear trend's rows are appended scenario by scenario: the file starts empty)
-  if (!o.trend_csv.empty()) write_text_file(o.trend_csv, "");
+  // (the wear trend's rows are appended scenario by scenario: the file starts with the header only;
+  // it had been created empty, so the header that the first append wrote to a new file never came:
+  // audit of session 57)
+  if (!o.trend_csv.empty()) write_text_file(o.trend_csv, cli::kTrendCsvHeader);
   const cli::Evaluation ev = cli::evaluate_scenarios(twin, files, o.static_threshold, o.max_duration, o.json, o.trend_csv, o.link_ceiling);
   if (o.json) fmt::print("{}\n", cli::evaluation_json(ev));
   else cli::print_evaluation(ev);
@@ -201,8 +203,10 @@ twinwatch::cli::VerbRegistrar reg_evaluate{"evaluate", 42, [](CLI::App& app) {
   auto* filter = sub->add_option("--filter", o->filter, cli::kFilterHelp);
   sub->add_flag("--json", o->json, "Print {\"scenarios\": [...], \"false_alarms_per_hour\": ...}");
   auto* trend_csv = sub->add_option("--trend-csv", o->trend_csv,
-                  "Write every scenario's per-window wear-trend history (friction, Coulomb, viscous, residual energy, "
-                  "temperature, I_total) to this CSV");
+                  "Write every scenario's per-window wear-trend history to this CSV, one row per scenario, joint and trend "
+                  "window (30 s by default), under the header scenario,t,joint,friction,coulomb,viscous,energy,temperature,valid,i_total: the "
+                  "window's end [s], its temperature-compensated extra friction and its Coulomb and viscous parts, the "
+                  "residual energy, the mean joint temperature [°C], 1 where the joint moved enough for a fit, and I_total [A]");
   auto* link_ceiling = sub->add_option("--link-ceiling", o->link_ceiling,
                   "Evaluation only: also name each detected contact's link from the simulator's TRUE joint impulse, exact "
                   "and with white noise at the sd the observer's estimate had on it: by the monitor's choice, by it told a "

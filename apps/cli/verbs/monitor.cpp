@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <exception>
 #include <functional>
@@ -71,7 +72,30 @@ using cli::split_filter;
 // a replay stopped at the user's request (MonitorHooks::stop_requested under serve; a signal under monitor)
 struct ReplayStopped {};
 
-int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
+// `path` with every "{start}" replaced by this run's start on this machine's clock, in UTC without
+// separators (20261208T031500Z): --record and --events of a service that systemd starts again write
+// new files instead of replacing the last run's (audit of session 57)
+std::string with_start_time(const std::string& path, double unix_now) {
+  static const std::string kField = "{start}";
+  if (path.find(kField) == std::string::npos) return path;
+  std::string stamp;
+  for (const char c : iso_utc(std::floor(unix_now)).substr(0, 19))  // 2026-12-08T03:15:00
+    if (c != '-' && c != ':') stamp += c;
+  stamp += 'Z';
+  std::string out = path;
+  for (size_t at = out.find(kField); at != std::string::npos; at = out.find(kField, at + stamp.size()))
+    out.replace(at, kField.size(), stamp);
+  return out;
+}
+
+int run_monitor_impl(const MonitorOptions& given, const MonitorHooks& hooks) {
+  const MonitorOptions o = [&] {
+    MonitorOptions c = given;
+    const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    c.record_to = with_start_time(c.record_to, now);
+    c.events_path = with_start_time(c.events_path, now);
+    return c;
+  }();
   if (o.quiet) log::set_level(log::Level::Warn);  // "print nothing": no info lines either (warnings still show)
   // (checked before anything is read)
   const double started_at = o.started_at.empty() ? std::numeric_limits<double>::quiet_NaN() : parse_iso_time(o.started_at, "--started-at");
@@ -211,7 +235,7 @@ int run_monitor_impl(const MonitorOptions& o, const MonitorHooks& hooks) {
   if (hooks.on_start) hooks.on_start(mon, source);
   std::ofstream jl;
   if (!o.events_path.empty()) {
-    jl.open(o.events_path);
+    jl.open(o.events_path, o.events_append ? std::ios::app : std::ios::trunc);
     if (!jl) throw PathError(o.events_path + ": cannot open for writing");
   }
   std::unique_ptr<monitor::EventStore> store;
@@ -1066,12 +1090,19 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
   auto* no_reconnect = sub->add_flag("--no-reconnect", o->no_reconnect,
                 "With --rtde: stop at the first disconnection (the rest of --duration is reported as a stream fault) instead of "
                 "reconnecting with back-off");
-  auto* record = sub->add_option("--record", o->record_to, "With --rtde: also write the stream to this recording CSV");
+  auto* record = sub->add_option("--record", o->record_to,
+                                 "With --rtde: also write the stream to this recording CSV (replaced if it exists; '{start}' in the "
+                                 "name is replaced by the run's start, UTC: rec-{start}.csv, so that a service started again keeps "
+                                 "the last run's recording)");
   auto* split_every = sub->add_option("--split-every", o->split_every,
                                       "With --record: start a new file each SECONDS of controller time (>= 1): rec.csv -> rec.000.csv, "
                                       "rec.001.csv, ..., each with the header (1.74 GB per robot hour at 500 Hz in one file otherwise)");
   sub->add_option("--column-map", o->column_map, kColumnMapHelp);
-  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered residual| of any joint during the alert, in \"peak_residual_units\": A, or N·m for a twin of joint torque sensors). The file is replaced if it exists; the event store (--db) keeps the history across runs");
+  sub->add_option("--events", o->events_path, "Write events as JSON lines to this file (one line per event, when it ends, or when monitoring stops: \"active_at_stop\": true; joints and links numbered from 1 as in the labels: \"joint\": 5 is J5, null none; \"magnitude\" in \"units\"; \"peak_residual\": the largest |filtered residual| of any joint during the alert, in \"peak_residual_units\": A, or N·m for a twin of joint torque sensors). The file is replaced if it exists (--events-append adds to it); the event store (--db) keeps the history across runs. "
+                  "'{start}' in the name is replaced by the run's start, UTC (events-{start}.jsonl: events-20261208T031500Z.jsonl)");
+  auto* events_append = sub->add_flag("--events-append", o->events_append,
+                                       "With --events: add the lines to the file instead of replacing it, e.g. for a service that "
+                                       "is started again after a robot was off (live lines carry wall-clock times; docs/events.md)");
   auto* events_open = sub->add_flag("--events-open", o->events_open,
                                      "With --events, --json or --mqtt: also a line when an alert is raised and at each re-diagnosis (\"open\": true, "
                                      "\"class\" \"unknown\" until diagnosed); \"t_detected\" names the alert, and its line with \"open\": "
@@ -1137,6 +1168,7 @@ std::function<void()> add_monitor_options(CLI::App* sub, const std::shared_ptr<M
   return [=] {
     mqtt_check();
     refuse_unless({events_open}, !o->events_path.empty() || o->json || !o->mqtt.address.empty(), "with --events, --json or --mqtt");
+    refuse_unless({events_append}, !o->events_path.empty(), "with --events");
     refuse_unless({duration, wait, record, no_reconnect}, !o->rtde.empty(), "with --rtde; a recording is watched whole");
     refuse_unless({started}, o->rtde.empty(), "with a RECORDING; a live stream's wall clock is read against this machine's");
     refuse_unless({split_every}, !o->record_to.empty(), "with --record");
