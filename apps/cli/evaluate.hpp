@@ -97,13 +97,14 @@ struct Evaluation {
 /// Whether `--max-duration` (0: none) skips scenario `s` in evaluate_scenarios (and so in demo).
 inline bool longer_than_max(const sim::Scenario& s, double max_duration) { return max_duration > 0 && s.options.duration > max_duration; }
 
-/// Runs every scenario file: simulate, monitor with `twin`, score against the labels.
 /// The header of `evaluate --trend-csv`'s file. One row per scenario, joint and closed trend window
 /// (monitor::TrendPoint): the window's end [s], its temperature-compensated extra friction and that
 /// friction's Coulomb and viscous parts (in the twin's residual unit: A, or N·m for a torque twin),
 /// the residual energy sum r² dt, the mean joint temperature [°C], whether the joint moved enough
 /// for a fit (1/0), and the window's mean total current I_total [A] (UR3e Fig. 12).
 inline constexpr const char* kTrendCsvHeader = "scenario,t,joint,friction,coulomb,viscous,energy,temperature,valid,i_total\n";
+
+/// Runs every scenario file: simulate, monitor with `twin`, score against the labels.
 /// `max_duration` skips longer scenarios (0: none skipped). `trend_csv` (may be empty) gets the
 /// per-window wear-trend history of every scenario appended. (A report of one run is `twinwatch
 /// report`'s, on a recording: `simulate` writes the scenario's.)

@@ -429,15 +429,45 @@ long StreamScan::replay(const std::vector<std::string>& files, const device::Col
 
 PositionSpeedCheck::PositionSpeedCheck(std::string path, int n_dof) : path_(std::move(path)), joints_(static_cast<size_t>(std::max(n_dof, 0))) {}
 
+namespace {
+// the ratios (position change / speed integral) a unit makes, and what each says: positions in
+// degrees, speeds in degrees/s, a speed counted the other way round, and either unit with the other
+// sign (the review of session 57 found -57.3 and -1/57.3 passing)
+struct Signature {
+  double ratio;
+  const char* advice;  // what the message asks and the map line that fixes it ({0}: the joint's index)
+};
+constexpr Signature kSignatures[kAgreeSignatures] = {
+    {1.0 / kDegree,
+     "are the positions in degrees and the speeds in rad/s? Scale the positions with a column map "
+     "('COLUMN,actual_q_{0},0.017453292519943295', docs/recordings.md)"},
+    {kDegree,
+     "are the speeds in degrees/s and the positions in radians? Scale the speeds with a column map "
+     "('COLUMN,actual_qd_{0},0.017453292519943295', docs/recordings.md)"},
+    {-1.0,
+     "the speed has the other sign than the position's change. Does the logger count the speed the other way round? Negate it "
+     "with a column map ('COLUMN,actual_qd_{0},-1', docs/recordings.md)"},
+    {-1.0 / kDegree,
+     "are the positions in degrees, and the speed counted the other way round? Scale the positions and negate the speed with "
+     "a column map ('COLUMN,actual_q_{0},0.017453292519943295' and 'COLUMN,actual_qd_{0},-1', docs/recordings.md)"},
+    {-kDegree,
+     "are the speeds in degrees/s and counted the other way round? Scale and negate them with a column map "
+     "('COLUMN,actual_qd_{0},-0.017453292519943295', docs/recordings.md)"},
+};
+}  // namespace
+
 void PositionSpeedCheck::add(const RobotSample& s) {
   const int n = std::min(static_cast<int>(joints_.size()), s.n_dof());
   bool finite = std::isfinite(s.timestamp);
   for (int j = 0; j < n; ++j) finite = finite && std::isfinite(s.q[j]) && std::isfinite(s.qd[j]);
   if (!has_prev_) t0_ = s.timestamp;
   const double dt = s.timestamp - prev_t_;
-  if (!finite || !has_prev_ || !(dt > 0.0) || dt > kAgreeMaxStep || s.gap_before) {
-    // a new stretch from this sample (the steps across a gap, or around a value that is not a
-    // number, say nothing about the units)
+  // (a lost sample or two is no reason to start anew: the trapezoid spans the step, and a logger
+  // that loses 5 % of its samples cut every stretch short of the travel the check needs, in the
+  // verbs that read the whole file with its gaps marked; review of session 57)
+  if (!finite || !has_prev_ || !(dt > 0.0) || dt > kAgreeMaxStep) {
+    // a new stretch from this sample (a long silence, a step back in time or a value that is not a
+    // number says nothing about the units)
     close_stretch();
     stretch_start_ = s.timestamp - t0_;
   } else {
@@ -457,14 +487,12 @@ void PositionSpeedCheck::add(const RobotSample& s) {
 }
 
 void PositionSpeedCheck::close_stretch() {
-  // the ratios a unit makes: positions in degrees, speeds in degrees/s, speeds of the other sign
-  static constexpr double kSignature[3] = {1.0 / kDegree, kDegree, -1.0};
   for (Joint& a : joints_) {
     if (std::abs(a.moved) >= kAgreeMinTravel && std::abs(a.integral) >= kAgreeMinTravel) {
       const double ratio = a.moved / a.integral;
       ++a.stretches;
-      for (int b = 0; b < 3; ++b)
-        if (ratio / kSignature[b] >= 1.0 / kAgreeBand && ratio / kSignature[b] <= kAgreeBand) {
+      for (int b = 0; b < kAgreeSignatures; ++b)
+        if (const double r = ratio / kSignatures[b].ratio; r >= 1.0 / kAgreeBand && r <= kAgreeBand) {
           if (a.in_band[b]++ == 0) a.first_t[b] = stretch_start_;
           a.log_sum[b] += std::log(std::abs(ratio));
         }
@@ -478,23 +506,14 @@ void PositionSpeedCheck::finish() const {
   for (size_t j = 0; j < joints_.size(); ++j) {
     const Joint& a = joints_[j];
     if (a.stretches < kAgreeMinStretches) continue;
-    for (int b = 0; b < 3; ++b) {
+    for (int b = 0; b < kAgreeSignatures; ++b) {
       if (static_cast<double>(a.in_band[b]) < kAgreeShare * static_cast<double>(a.stretches)) continue;
-      const double typical = (b == 2 ? -1.0 : 1.0) * std::exp(a.log_sum[b] / static_cast<double>(a.in_band[b]));
-      const std::string where = fmt::format("{}: J{}'s position changes {:.3g} times what its speed integrates to, in {} of the {} "
-                                            "stretches of {:g} s in which both move (the first from t = {:.3f} s)",
-                                            path_, j + 1, typical, a.in_band[b], a.stretches, kAgreeStretch, a.first_t[b]);
-      if (b == 0)
-        throw InvalidArgument(fmt::format("{}: are the positions in degrees and the speeds in rad/s? Scale the positions with a column "
-                                          "map ('COLUMN,actual_q_{},0.017453292519943295', docs/recordings.md)",
-                                          where, j));
-      if (b == 1)
-        throw InvalidArgument(fmt::format("{}: are the speeds in degrees/s and the positions in radians? Scale the speeds with a column "
-                                          "map ('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
-                                          where, j));
-      throw InvalidArgument(fmt::format("{}: the speed has the other sign than the position's change. Does the logger count the speed "
-                                        "the other way round? Negate it with a column map ('COLUMN,actual_qd_{},-1', docs/recordings.md)",
-                                        where, j));
+      const Signature& sig = kSignatures[b];
+      const double typical = std::copysign(std::exp(a.log_sum[b] / static_cast<double>(a.in_band[b])), sig.ratio);
+      throw InvalidArgument(fmt::format("{}: J{}'s position changes {:.3g} times what its speed integrates to, in {} of the {} stretches "
+                                        "of {:g} s in which both move (the first from t = {:.3f} s): {}",
+                                        path_, j + 1, typical, a.in_band[b], a.stretches, kAgreeStretch, a.first_t[b],
+                                        fmt::format(fmt::runtime(sig.advice), j)));
     }
   }
 }

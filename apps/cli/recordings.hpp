@@ -55,20 +55,24 @@ inline constexpr double kUnitsAnyJointSpeedMax = 20.0;
 /// joint, over stretches of kAgreeStretch of controller time, the change of the position against the
 /// speed's integral (trapezoid). Where at least kAgreeMinStretches stretches move both by
 /// kAgreeMinTravel and kAgreeShare of them put that ratio near 57.3 (positions in degrees, speeds in
-/// rad/s), near 1/57.3 (speeds in degrees/s) or near -1 (speeds of the other sign), finish() throws
+/// rad/s), near 1/57.3 (speeds in degrees/s), near -1 (speeds of the other sign) or near -57.3 or
+/// -1/57.3 (either unit with the other sign), finish() throws
 /// InvalidArgument naming the file, the joint, the typical ratio and the column map scale that fixes
 /// it (docs/recordings.md). A range check misses these when the motion is small or slow (5 deg/s
 /// read as 5 rad/s is within twice a UR joint's limit; a few degrees read as radians are within
 /// its ±2π). A filtered or lagging speed moves the ratio by tens of percent, not by these factors,
 /// and a channel frozen or offset by a fault gives no such ratio in most stretches.
-/// add() per sample in time order; a step of more than kAgreeMaxStep or back in time starts a new
-/// stretch.
+/// add() per sample in time order; a step of more than kAgreeMaxStep, back in time, or to a value
+/// that is not a number starts a new stretch (a lost sample or two does not: the trapezoid spans it).
+/// Each file is judged on its own: one with less than about 2 s of motion (a part of --split-every 1)
+/// is not judged.
 inline constexpr double kAgreeStretch = 0.5;     ///< [s]
 inline constexpr double kAgreeMaxStep = 0.25;    ///< [s]
 inline constexpr double kAgreeMinTravel = 0.005; ///< [rad] in a stretch, position change and speed integral both
 inline constexpr int kAgreeMinStretches = 4;
 inline constexpr double kAgreeShare = 0.75;
-inline constexpr double kAgreeBand = 1.6;  ///< a ratio within this factor of 57.3, 1/57.3 or -1
+inline constexpr double kAgreeBand = 1.6;  ///< a ratio within this factor of 57.3, 1/57.3, -1, -57.3 or -1/57.3
+inline constexpr int kAgreeSignatures = 5;
 class PositionSpeedCheck {
  public:
   PositionSpeedCheck(std::string path, int n_dof);
@@ -80,9 +84,9 @@ class PositionSpeedCheck {
   struct Joint {
     double moved = 0.0, integral = 0.0;  // [rad] this stretch: position change, speed integral
     long stretches = 0;                  // that moved both by kAgreeMinTravel
-    long in_band[3] = {0, 0, 0};         // of those: degrees, degrees/s, other sign
-    double log_sum[3] = {0.0, 0.0, 0.0}; // their log |ratio|, for the typical one
-    double first_t[3] = {0.0, 0.0, 0.0}; // [s] the first such stretch's start
+    long in_band[kAgreeSignatures] = {};      // of those: near each signature (recordings.cpp)
+    double log_sum[kAgreeSignatures] = {};    // their log |ratio|, for the typical one
+    double first_t[kAgreeSignatures] = {};    // [s] the first such stretch's start
   };
   std::string path_;
   std::vector<Joint> joints_;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
@@ -147,6 +148,15 @@ RobotDescription load_description_urdf(const std::string& path, const std::strin
   // a joint whose child is its own parent, or joints that lead back to a link above them: urdfdom
   // takes both, and every walk up the tree below went round for ever (found by fuzzing: a joint's
   // parent and child both 'link2', session 57)
+  // a link that two joints name as their child: urdfdom keeps one of them and drops the other
+  // without a word (review of session 57: base->l1 and l2->l1 loaded as three joints of four)
+  std::map<std::string, std::string> parent_joint_of;
+  for (const auto& [name, joint] : urdf_model->joints_)
+    if (const auto [at, fresh] = parent_joint_of.emplace(joint->child_link_name, name); !fresh)
+      throw ParseError(path, std::max(line_of_element(text, "joint", at->second), line_of_element(text, "joint", name)), "joint",
+                       fmt::format("link '{}' is the child of two joints, '{}' and '{}', expected a tree (each link the child of "
+                                   "one joint, none below itself)",
+                                   joint->child_link_name, at->second, name));
   for (const auto& [first, joint] : urdf_model->joints_) {
     std::set<std::string> seen;
     for (urdf::LinkConstSharedPtr l = urdf_model->getLink(joint->child_link_name); l && l->parent_joint;

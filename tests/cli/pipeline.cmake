@@ -161,6 +161,13 @@ add_test(NAME cli.identify_speed_of_the_other_sign
   COMMAND twinwatch identify ${d}/slow_sine.csv --column-map ${s}/units_speed_sign_map.csv -o ${d}/never_sign.json)
 set_tests_properties(cli.identify_speed_of_the_other_sign PROPERTIES FIXTURES_REQUIRED slow_sine
   PASS_REGULAR_EXPRESSION "slow_sine.csv: J2's position changes -1 times what its speed integrates to[^\n]*the speed has the other sign than the position's change[^\n]*\\('COLUMN,actual_qd_1,-1'")
+# either unit with the other sign (-1/57.3 here), and a logger that loses every 20th sample (the
+# verbs that read the whole file mark each lost sample as a gap: it had cut every stretch short)
+add_test(NAME cli.identify_speeds_in_degrees_negated_with_lost_samples
+  COMMAND sh -c "awk -F, 'NR == 1 || (NR - 2) % 20 != 19' ${d}/slow_sine.csv > ${d}/slow_sine_lossy.csv && \
+$<TARGET_FILE:twinwatch> identify ${d}/slow_sine_lossy.csv --column-map ${s}/units_speed_degrees_negated_map.csv -o ${d}/never_lossy.json")
+set_tests_properties(cli.identify_speeds_in_degrees_negated_with_lost_samples PROPERTIES FIXTURES_REQUIRED slow_sine
+  PASS_REGULAR_EXPRESSION "slow_sine_lossy.csv: J1's position changes -0.017[0-9]* times what its speed integrates to[^\n]*are the speeds in degrees/s and counted the other way round\\? Scale and negate them with a column map \\('COLUMN,actual_qd_0,-0.017453292519943295'")
 add_test(NAME cli.friction_study_wrist_positions_in_degrees
   COMMAND twinwatch friction-study ${d}/slow_sine.csv --column-map ${s}/units_wrist_degrees_map.csv --joint 6 --torque moment)
 set_tests_properties(cli.friction_study_wrist_positions_in_degrees PROPERTIES FIXTURES_REQUIRED slow_sine
@@ -171,9 +178,11 @@ add_test(NAME cli.monitor_events_append
   COMMAND sh -c "rm -f ${d}/append.jsonl; for i in 1 2; do $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' -q --events ${d}/append.jsonl --events-append; done; \
 a=\$(wc -l < ${d}/append.jsonl); $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' -q --events ${d}/append.jsonl; \
 r=\$(wc -l < ${d}/append.jsonl); [ \$r -gt 0 ] && [ \$a -eq \$((2 * r)) ] && echo appended=\$a replaced=\$r; \
-$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' --events-append 2>&1; echo exit=\$?")
+$<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' --events-append 2>&1; echo exit=\$?; \
+printf '{\"class\":\"collision\",\"t_start\":1.2' > ${d}/cut.jsonl; $<TARGET_FILE:twinwatch> monitor --twin ${d}/twin.json ${d}/collision.csv --db '' -q --events ${d}/cut.jsonl --events-append 2>&1; \
+sed -n 2p ${d}/cut.jsonl | cut -c1-18")
 set_tests_properties(cli.monitor_events_append PROPERTIES FIXTURES_REQUIRED "twin;collision_recording"
-  PASS_REGULAR_EXPRESSION "appended=[0-9]+ replaced=[0-9]+\n[^\n]*--events-append applies only with --events\nexit=2")
+  PASS_REGULAR_EXPRESSION "appended=[0-9]+ replaced=[0-9]+\n[^\n]*--events-append applies only with --events\nexit=2\n[^\n]*cut.jsonl: its last line has no line end[^\n]*\n\\{\"active_at_stop\":")
 # an output given the name of an input would destroy it; a bad output path is refused before the fit
 add_test(NAME cli.monitor_events_onto_the_recording COMMAND twinwatch monitor --twin ${d}/twin.json ${d}/fig.csv --events ${d}/fig.csv --db '')
 set_tests_properties(cli.monitor_events_onto_the_recording PROPERTIES FIXTURES_REQUIRED twin

@@ -235,8 +235,25 @@ int run_monitor_impl(const MonitorOptions& given, const MonitorHooks& hooks) {
   if (hooks.on_start) hooks.on_start(mon, source);
   std::ofstream jl;
   if (!o.events_path.empty()) {
+    // (appending after a last line that an earlier run left without its line end, a full disk or a
+    // power loss, glued the first new event onto it: both lost to a JSON-lines reader; review of
+    // session 57)
+    bool cut_line = false;
+    if (o.events_append) {
+      std::ifstream old(o.events_path, std::ios::binary | std::ios::ate);
+      if (old && old.tellg() > 0) {
+        old.seekg(-1, std::ios::end);
+        cut_line = old.get() != '\n';
+      }
+    }
     jl.open(o.events_path, o.events_append ? std::ios::app : std::ios::trunc);
     if (!jl) throw PathError(o.events_path + ": cannot open for writing");
+    if (cut_line) {
+      log::warn(fmt::format("{}: its last line has no line end (an earlier run cut off: a full disk, a power loss); the lines of this run "
+                            "start on a new line",
+                            o.events_path));
+      jl << '\n';
+    }
   }
   std::unique_ptr<monitor::EventStore> store;
   if (!o.db_path.empty()) {
