@@ -217,6 +217,18 @@ std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o) {
   return out;
 }
 
+std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given) {
+  const double k = sim::slow_down_for_joint_limits(motion, robot);
+  if (!std::isfinite(k) || k <= 1.0) return "";
+  // (rounded up to the hundredth the option is written with, and a thousandth above the peak: the
+  // servo period's samples of the slower motion fall elsewhere)
+  const double slower = std::ceil(given * k * 1.001 * 100.0) / 100.0;
+  if (slower > 100.0) return "";
+  return fmt::format("; --slow-down {:.2f} keeps every joint within its speed and acceleration limits (the same path, {:.2f} times "
+                     "slower than now)",
+                     slower, slower / given);
+}
+
 model::RigidBodyInertia carried_on_flange(const SafetyLimitOptions& o, const model::RobotModel& robot, const model::RigidBodyInertia& payload) {
   if (!o.tool_cog.empty() && o.tool_mass == 0.0) throw InvalidArgument("--tool-cog applies only with --tool-mass (the tool's mass [kg])");
   model::RigidBodyInertia tool;

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "twinwatch/model/robot_model.hpp"
+#include "twinwatch/sim/robot_program.hpp"
 
 namespace twinwatch::cli {
 
@@ -115,6 +116,12 @@ std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o);
 /// everything on the flange).
 model::RigidBodyInertia carried_on_flange(const SafetyLimitOptions& o, const model::RobotModel& robot,
                                           const model::RigidBodyInertia& payload = {});
+
+/// For a program whose motion leaves the joint limits: "; --slow-down K.KK keeps every joint within
+/// its speed and acceleration limits (…)" with the factor sim::slow_down_for_joint_limits gives
+/// (times the slow-down `given` already applied), or "" when slowing cannot help (a joint's range is
+/// left) or needs more than 100 (the option's bound). urscript and simulate --as-program append it.
+std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given);
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

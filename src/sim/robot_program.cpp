@@ -198,6 +198,18 @@ MotionPeaks motion_peaks(const ProgramMotion& motion) {
   return p;
 }
 
+double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot) {
+  const MotionPeaks p = motion_peaks(motion);
+  double k = 1.0;
+  for (int j = 0; j < std::min(motion.n_dof(), robot.n_dof()); ++j) {
+    const model::JointLimits& l = robot.joint(j).limits;
+    if (p.q_min[j] < l.q_min || p.q_max[j] > l.q_max) return std::numeric_limits<double>::infinity();
+    if (std::isfinite(l.qd_max)) k = std::max(k, p.qd[j] / l.qd_max);
+    if (std::isfinite(l.qdd_max)) k = std::max(k, std::sqrt(p.qdd[j] / l.qdd_max));
+  }
+  return k;
+}
+
 double approach_time_at_most(const ProgramOptions& o) {
   const double v = o.approach_speed, a = o.approach_acceleration, d = o.max_approach;
   return d >= v * v / a ? d / v + v / a : 2.0 * std::sqrt(d / a);

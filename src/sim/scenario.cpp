@@ -352,7 +352,7 @@ FaultType fault_type(const Y& y, const YAML::Node& n, const std::string& f) {
 }  // namespace
 
 
-Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot) {
+Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot, bool trajectory_limits) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -490,7 +490,8 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   }
   // the commanded trajectory stays inside the joint limits over the run (the controller would
   // otherwise drive the arm through its end stops or faster than its drives turn)
-  if (const std::string v = joint_limit_violation(*s.trajectory, m, s.options.duration, rate); !v.empty())
+  if (const std::string v = trajectory_limits ? joint_limit_violation(*s.trajectory, m, s.options.duration, rate) : std::string();
+      !v.empty())
     y.fail(Y::key_of(root, "trajectory"), "trajectory", v);
   s.trajectory_line = Y::key_of(root, "trajectory").Mark().line + 1;
   if (const YAML::Node fl = root["faults"]) {
@@ -657,21 +658,22 @@ Scenario parse_scenario(const std::string& text, const std::string& origin, cons
   return s;
 }
 
-Scenario load_scenario(const std::string& path, const std::string& robot) {
+Scenario load_scenario(const std::string& path, const std::string& robot, bool trajectory_limits) {
   refuse_directory_input(path);
   std::ifstream f(path);
   if (!f) throw ParseError(path, 0, "", "cannot open the scenario file");
   std::stringstream ss;
   ss << f.rdbuf();
-  return parse_scenario(ss.str(), path, robot);
+  return parse_scenario(ss.str(), path, robot, trajectory_limits);
 }
 
-void override_duration(Scenario& s, double duration, const std::string& option) {
+void override_duration(Scenario& s, double duration, const std::string& option, bool trajectory_limits) {
   if (const std::string why = duration_problem(duration, s.options.rate); !why.empty())
     throw InvalidArgument(fmt::format("{}: {}", option, why));
   // a longer run may reach a part of the trajectory the file's own duration did not
   const model::RobotModel m = model::load_robot(s.robot);
-  if (const std::string v = joint_limit_violation(*s.trajectory, m, duration, s.options.rate); !v.empty())
+  if (const std::string v = trajectory_limits ? joint_limit_violation(*s.trajectory, m, duration, s.options.rate) : std::string();
+      !v.empty())
     throw InvalidArgument(fmt::format("{} {} s: {} ({}:{}, trajectory)", option, duration, v, s.path, s.trajectory_line));
   s.options.duration = duration;
   for (size_t k = 0; k < s.faults.size(); ++k)

@@ -1,5 +1,9 @@
 add_test(NAME cli.model_show_ur3e COMMAND twinwatch model show ur3e)
 set_tests_properties(cli.model_show_ur3e PROPERTIES PASS_REGULAR_EXPRESSION "moving mass 8.7985 kg")
+# the UR10e (session 57): the fact sheet's moving mass and, from its DH table, the flange at q = 0
+# (a2 + a3, -(d4 + d6), d1 - d5)
+add_test(NAME cli.model_show_ur10e COMMAND twinwatch model show ur10e)
+set_tests_properties(cli.model_show_ur10e PROPERTIES PASS_REGULAR_EXPRESSION "moving mass 29.1040 kg[^\n]*\npayloads up to 12.5 kg[^\n]*\n[^\n]*\nflange at q = 0: \\[-1.18425 -0.29070 0.06085\\] m")
 add_test(NAME cli.model_show_json COMMAND twinwatch model show ur5e --json)
 set_tests_properties(cli.model_show_json PROPERTIES PASS_REGULAR_EXPRESSION "\"moving_mass\": 17.7")
 add_test(NAME cli.model_show_unknown COMMAND twinwatch model show ur99)

@@ -69,6 +69,7 @@ TEST(DescriptionJson, TheRatedPayloadIsTheLimitOfADeclaredPayload) {
   EXPECT_THAT(unrated.payload_limit_text(), HasSubstr("the moving mass of t: its description gives no rated payload"));
   EXPECT_EQ(load_robot("ur3e").payload_limit(), 3.0);
   EXPECT_EQ(load_robot("ur5e").payload_limit(), 5.0);
+  EXPECT_EQ(load_robot("ur10e").payload_limit(), 12.5);
   EXPECT_EQ(load_robot("panda").payload_limit(), 3.0);
   std::string bad = with;
   bad.replace(bad.find("2.5"), 3, "-1");
@@ -86,6 +87,7 @@ TEST(DescriptionJson, TheElbowHousingIsReadInMetresAlongTheElbowsAxis) {
   EXPECT_EQ(RobotModel(parse_description_json(with, "robot.json")).description().elbow_housing, Eigen::Vector2d(0.02, 0.1));
   EXPECT_EQ(RobotModel(parse_description_json(one_joint(kGood), "robot.json")).description().elbow_housing, Eigen::Vector2d::Zero());
   EXPECT_EQ(load_robot("ur5e").description().elbow_housing, Eigen::Vector2d(0.007, 0.138));
+  EXPECT_EQ(load_robot("ur10e").description().elbow_housing, Eigen::Vector2d(0.0393, 0.1762));
   std::string bad = with;
   bad.replace(bad.find("[0.02, 0.1]"), 11, "[27, 120]");
   EXPECT_THAT(error_of(bad), HasSubstr("robot.json: field 'elbow_housing': expected two distances along the elbow's axis within ±1 m, "
@@ -408,7 +410,7 @@ TEST(DescriptionUrdf, AnOriginInMillimetresOrANegativeLimitIsRefused) {
 // with its link masses in grams was simulated with J2 at its limit, collapsed, exit 0 (audit of
 // session 56). The shipped arms hold themselves
 TEST(Description, AnArmThatCannotHoldItsOwnWeightIsRefused) {
-  for (const char* name : {"ur3e", "ur5e", "panda"}) EXPECT_NO_THROW(load_robot(name)) << name;
+  for (const char* name : {"ur3e", "ur5e", "ur10e", "panda"}) EXPECT_NO_THROW(load_robot(name)) << name;
   EXPECT_NO_THROW(load_robot(std::string(TWINWATCH_SOURCE_DIR) + "/data/robots/kinova_gen3.urdf"));
   RobotDescription grams = load_robot("ur3e").description();
   for (Joint& j : grams.joints) j.body.mass *= 1000.0;

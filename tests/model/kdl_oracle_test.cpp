@@ -70,6 +70,17 @@ TEST(KdlOracle, Ur5eWithPayloadAgreesOnThousandStates) {
   compare_with_kdl(m, 202);
 }
 
+// the UR10e (session 57) with 10 kg on the flange
+TEST(KdlOracle, Ur10eWithPayloadAgreesOnThousandStates) {
+  RobotModel m = load_robot("ur10e");
+  RigidBodyInertia payload;
+  payload.mass = 10.0;
+  payload.com = Eigen::Vector3d(0.0, 0.03, 0.12);
+  payload.inertia_com = Eigen::Vector3d(0.03, 0.04, 0.02).asDiagonal();
+  m.set_payload(payload);
+  compare_with_kdl(m, 404);
+}
+
 // general placement rotations (not Rx(alpha)): the kernels' general path against the same oracle
 TEST(KdlOracle, Ur5eWithTurnedBodyFramesAgreesOnThousandStates) {
   RobotModel m = testing_support::with_turned_body_frames(load_robot("ur5e"), 7);

@@ -294,7 +294,7 @@ twinwatch::cli::VerbRegistrar reg{"excite", 35, [](CLI::App& app) {
       "the base-parameter observation matrix (rigid body + Coulomb/viscous/offset friction), keeping the arm above\n"
       "--min-height over the table it stands on (the tool too, with --tool-point). Writes a scenario\n"
       "YAML that `twinwatch simulate` runs; the coefficients in it drive a real robot program too."));
-  sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, panda) or a .json/.urdf description")->required();
+  sub->add_option("ROBOT", o->robot, "Built-in robot name (ur3e, ur5e, ur10e, panda) or a .json/.urdf description")->required();
   sub->add_option("-o,--output", o->output, "Scenario YAML to write")->required();
   sub->add_option("--harmonics", o->harmonics, "Harmonics L per joint (>= 3)")->capture_default_str();
   sub->add_option("--base-frequency", o->base_frequency, "Base frequency [Hz]; the period is its inverse")->capture_default_str();

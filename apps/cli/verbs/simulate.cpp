@@ -60,9 +60,10 @@ int run(const Options& o) {
   require_output(labels_path(o.output), {o.scenario, o.output});
   if (!o.robot.empty()) model::load_robot(o.robot);  // (a bad --robot said as such, not as the scenario's)
   sim::Scenario s = [&] {
-    if (o.robot.empty()) return sim::load_scenario(o.scenario);
+    // (with --as-program the program's own motion, slowed and ramped, is checked below)
+    if (o.robot.empty()) return sim::load_scenario(o.scenario, "", !o.as_program);
     try {
-      return sim::load_scenario(o.scenario, o.robot);
+      return sim::load_scenario(o.scenario, o.robot, !o.as_program);
     } catch (const std::exception& e) {  // (the file's field is right for its own robot: the message says which robot it was read for)
       throw InvalidArgument(fmt::format("{} (the scenario read for --robot {})", e.what(), o.robot));
     }
@@ -75,7 +76,7 @@ int run(const Options& o) {
       throw InvalidArgument(fmt::format("--seed: expected 0 to {}, got {}", std::numeric_limits<unsigned>::max(), o.seed));
     s.options.seed = static_cast<unsigned>(o.seed);
   }
-  if (o.duration_given) sim::override_duration(s, o.duration, "--duration");
+  if (o.duration_given) sim::override_duration(s, o.duration, "--duration", !o.as_program);
   std::shared_ptr<const sim::ProgramMotion> program;
   if (o.as_program) {
     sim::ProgramOptions po;
@@ -92,7 +93,8 @@ int run(const Options& o) {
     }
     const model::RobotModel robot = model::load_robot(s.robot);
     if (const std::string v = sim::joint_limit_violation(*program, robot, program->total(), s.options.rate); !v.empty())
-      throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; nothing written", o.scenario, v));
+      throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; nothing written{}", o.scenario, v,
+                                        twinwatch::cli::slow_down_remedy(*program, robot, o.slow_down)));
   }
   auto simulator = sim::make_simulator(s);
   const int n = simulator->truth_model().n_dof();

@@ -35,7 +35,7 @@ void check_holds_itself(const RobotDescription& d, const std::string& origin);
 RobotDescription load_description_urdf(const std::string& path, const std::string& base_link = "",
                                        const std::string& tip_link = "");
 
-/// Loads a robot by built-in name ("ur3e", "ur5e", "panda": data/robots/<name>.json) or by path
+/// Loads a robot by built-in name ("ur3e", "ur5e", "ur10e", "panda": data/robots/<name>.json) or by path
 /// to a .json or .urdf file; "FILE.urdf#TIP" takes the chain from the root to the link TIP (without
 /// it, the leaf below the most revolute joints).
 RobotModel load_robot(const std::string& name_or_path);

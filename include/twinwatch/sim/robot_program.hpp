@@ -120,6 +120,13 @@ struct MotionPeaks {
 };
 MotionPeaks motion_peaks(const ProgramMotion& motion);
 
+/// How many times slower than `motion` the same program must run to keep every joint within the
+/// robot's speed and (where published) acceleration limits: the peak speed over the limit, or the
+/// square root of the peak acceleration over its limit, whichever is larger (a program K times
+/// slower, ramps included, divides every speed by K and every acceleration by K²). 1 when the motion
+/// is within them; infinity when a joint's range is left, which no slow-down fixes.
+double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot);
+
 /// The figures of a motion that a UR installation's safety limits bound (PolyScope: Installation >
 /// Safety > Robot Limits: tool speed, elbow speed, momentum), at their peaks, sampled every servo
 /// period: a limit below them stops or slows the arm mid-run (a protective stop, or speed scaling

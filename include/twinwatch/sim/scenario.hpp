@@ -35,16 +35,22 @@ struct Scenario {
 
 /// Loads and validates a scenario file (needs the robot to build Cartesian trajectories). `robot`
 /// (a name or description file) runs it on another robot than the file's `robot`, validated for
-/// that one (its joint limits, its rated payload); empty: the file's.
-Scenario load_scenario(const std::string& path, const std::string& robot = "");
+/// that one (its joint limits, its rated payload); empty: the file's. `trajectory_limits` false
+/// leaves out the check of the trajectory against the joint limits, for a caller that runs the
+/// motion as a robot program and checks the program's own motion (slowed, ramped: urscript,
+/// simulate --as-program; a UR3e swing at 2.64 rad/s runs on a UR10e's 2.09 rad/s base only slowed).
+Scenario load_scenario(const std::string& path, const std::string& robot = "", bool trajectory_limits = true);
 /// Same from YAML text; `origin` names it in errors.
-Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot = "");
+Scenario parse_scenario(const std::string& text, const std::string& origin, const std::string& robot = "",
+                        bool trajectory_limits = true);
 
 /// Replaces the scenario's duration [s] by a command-line override and checks it as the file's own:
 /// duration_problem() and the trajectory's joint limits over the new run. A fault that starts at or
 /// after the new end stays in the scenario (and its labels) but does not fire: a warning is logged.
 /// @param option the override's name in errors, e.g. "--duration". Throws InvalidArgument.
-void override_duration(Scenario& s, double duration, const std::string& option);
+/// @param trajectory_limits false: the joint limits are left to the caller's check of the program
+/// it runs (as load_scenario's).
+void override_duration(Scenario& s, double duration, const std::string& option, bool trajectory_limits = true);
 
 /// Builds the simulator for a scenario (nominal robot loaded by name/path).
 std::unique_ptr<Simulator> make_simulator(const Scenario& s);
