@@ -217,13 +217,17 @@ std::vector<OperationalLimit> operational_limits(const SafetyLimitOptions& o) {
   return out;
 }
 
-std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given) {
-  const double k = sim::slow_down_for_joint_limits(motion, robot);
-  if (!std::isfinite(k) || k <= 1.0) return "";
+std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given, double qdd_cap,
+                             const std::function<std::string(double)>& violation_at) {
+  const double k = sim::slow_down_for_joint_limits(motion, robot, qdd_cap);
+  // (the review of session 57 found these said as nothing: the message just stopped)
+  if (!std::isfinite(k)) return "; a joint leaves its range, which no --slow-down changes (the same path at any speed)";
+  if (k <= 1.0) return "";
   // (rounded up to the hundredth the option is written with, and a thousandth above the peak: the
   // servo period's samples of the slower motion fall elsewhere)
-  const double slower = std::ceil(given * k * 1.001 * 100.0) / 100.0;
-  if (slower > 100.0) return "";
+  double slower = std::ceil(given * k * 1.001 * 100.0) / 100.0;
+  while (slower <= 100.0 && !violation_at(slower).empty()) slower = std::ceil(slower * 1.01 * 100.0) / 100.0;
+  if (slower > 100.0) return fmt::format("; no --slow-down up to 100 fits it (it needs {:.4g} or more)", slower);
   return fmt::format("; --slow-down {:.2f} keeps every joint within its speed and acceleration limits (the same path, {:.2f} times "
                      "slower than now)",
                      slower, slower / given);

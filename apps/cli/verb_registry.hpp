@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <initializer_list>
 #include <string>
 #include <string_view>
@@ -121,7 +122,13 @@ model::RigidBodyInertia carried_on_flange(const SafetyLimitOptions& o, const mod
 /// its speed and acceleration limits (…)" with the factor sim::slow_down_for_joint_limits gives
 /// (times the slow-down `given` already applied), or "" when slowing cannot help (a joint's range is
 /// left) or needs more than 100 (the option's bound). urscript and simulate --as-program append it.
-std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given);
+/// `qdd_cap` as sim::slow_down_for_joint_limits'. The factor is checked on the program built at it
+/// (`violation_at(K)`: the program with --slow-down K, its limit violation as text, empty when none)
+/// and raised by 1 % until it passes: short ramps are rounded to whole servo periods, so their
+/// accelerations do not scale exactly as 1/K² (a review found a suggested factor refused again).
+/// When no factor up to 100 fits, or a joint's range is left, it says so instead.
+std::string slow_down_remedy(const sim::ProgramMotion& motion, const model::RobotModel& robot, double given, double qdd_cap,
+                             const std::function<std::string(double)>& violation_at);
 
 /// Registers every verb on `app`, sorted by order. Called once by main().
 void register_all_verbs(CLI::App& app);

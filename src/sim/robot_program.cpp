@@ -198,16 +198,30 @@ MotionPeaks motion_peaks(const ProgramMotion& motion) {
   return p;
 }
 
-double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot) {
+double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot, double qdd_cap) {
   const MotionPeaks p = motion_peaks(motion);
   double k = 1.0;
   for (int j = 0; j < std::min(motion.n_dof(), robot.n_dof()); ++j) {
     const model::JointLimits& l = robot.joint(j).limits;
     if (p.q_min[j] < l.q_min || p.q_max[j] > l.q_max) return std::numeric_limits<double>::infinity();
     if (std::isfinite(l.qd_max)) k = std::max(k, p.qd[j] / l.qd_max);
-    if (std::isfinite(l.qdd_max)) k = std::max(k, std::sqrt(p.qdd[j] / l.qdd_max));
+    const double qdd_max = std::isfinite(l.qdd_max) ? l.qdd_max : qdd_cap;
+    if (std::isfinite(qdd_max)) k = std::max(k, std::sqrt(p.qdd[j] / qdd_max));
   }
   return k;
+}
+
+std::string acceleration_violation(const ProgramMotion& motion, const model::RobotModel& robot, double qdd_cap) {
+  const MotionPeaks p = motion_peaks(motion);
+  for (int j = 0; j < std::min(motion.n_dof(), robot.n_dof()); ++j) {
+    const double published = robot.joint(j).limits.qdd_max;
+    const double qdd_max = std::isfinite(published) ? published : qdd_cap;
+    if (std::isfinite(qdd_max) && p.qdd[j] > qdd_max)
+      return fmt::format("J{} accelerates at up to {:.3g} rad/s², beyond its {:g} rad/s² ({})", j + 1, p.qdd[j], qdd_max,
+                         std::isfinite(published) ? robot.name() : "the most a program written here commands where the robot file gives "
+                                                                   "no acceleration limit");
+  }
+  return "";
 }
 
 double approach_time_at_most(const ProgramOptions& o) {

@@ -399,6 +399,11 @@ std::string joint_limit_violation(const Trajectory& traj, const model::RobotMode
       if (!(std::abs(qd[j]) <= l.qd_max))
         return fmt::format("joint {} target velocity reaches {:.6g} rad/s at t = {:.6g} s, beyond its limit of {:.6g} rad/s ({})",
                            j + 1, qd[j], t, l.qd_max, m.name());
+      // (a published acceleration limit, the Panda's: a scenario at 8.3 rad/s² against its 7.5 was
+      // simulated; review of session 57)
+      if (!(std::abs(qdd[j]) <= l.qdd_max))
+        return fmt::format("joint {} target acceleration reaches {:.6g} rad/s² at t = {:.6g} s, beyond its limit of {:.6g} rad/s² ({})",
+                           j + 1, qdd[j], t, l.qdd_max, m.name());
     }
   }
   return "";

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "twinwatch/core/error.hpp"
@@ -83,7 +84,9 @@ int run(const Options& o) {
     po.duration = s.options.duration;
     po.ramp = o.ramp;
     po.slow_down = o.slow_down;
+    std::optional<sim::ClosedForm> form;  // (the scenario's, before rehearse_as_program puts the program in its place)
     try {
+      form = sim::scenario_closed_form(s);
       program = sim::rehearse_as_program(s, po);
     } catch (const InvalidArgument& e) {
       // (the library names its fields; the user typed options)
@@ -92,9 +95,16 @@ int run(const Options& o) {
       throw InvalidArgument(m.rfind(o.scenario, 0) == 0 ? m : fmt::format("{}: {}", o.scenario, m));
     }
     const model::RobotModel robot = model::load_robot(s.robot);
+    // the limits a rehearsal with --slow-down K leaves: a remedy is checked on the program it suggests
+    const auto violation_at = [&](double k) {
+      sim::ProgramOptions p = po;
+      p.slow_down = k;
+      const sim::ProgramMotion m(*form, p);
+      return sim::joint_limit_violation(m, robot, m.total(), s.options.rate);
+    };
     if (const std::string v = sim::joint_limit_violation(*program, robot, program->total(), s.options.rate); !v.empty())
       throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; nothing written{}", o.scenario, v,
-                                        twinwatch::cli::slow_down_remedy(*program, robot, o.slow_down)));
+                                        twinwatch::cli::slow_down_remedy(*program, robot, o.slow_down, std::numeric_limits<double>::infinity(), violation_at)));
   }
   auto simulator = sim::make_simulator(s);
   const int n = simulator->truth_model().n_dof();

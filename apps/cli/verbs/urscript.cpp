@@ -92,11 +92,20 @@ int run(Options o) {
     }
   };
   const sim::ProgramMotion motion = motion_of();
+  // the joint limits a program with --slow-down K leaves (speeds, ranges, accelerations): a remedy
+  // is checked on the program it suggests
+  const auto violation_at = [&](double k) {
+    sim::ProgramOptions p = o.program;
+    p.slow_down = k;
+    const sim::ProgramMotion m(form, p);
+    const std::string v = sim::joint_limit_violation(m, robot, m.total(), 1.0 / m.servo_period());
+    return v.empty() ? sim::acceleration_violation(m, robot, kMaxProgramAcceleration) : v;
+  };
   // the motion the arm makes, ramps included, within the robot's joint ranges and speed limits
   const std::string violation = sim::joint_limit_violation(motion, robot, motion.total(), 1.0 / motion.servo_period());
   if (!violation.empty())
     throw InvalidArgument(fmt::format("{}: the program's motion leaves the robot's limits: {}; no program written{}", o.scenario, violation,
-                                      twinwatch::cli::slow_down_remedy(motion, robot, o.program.slow_down)));
+                                      twinwatch::cli::slow_down_remedy(motion, robot, o.program.slow_down, kMaxProgramAcceleration, violation_at)));
   const sim::MotionPeaks peaks = sim::motion_peaks(motion);
   // the speeds and the momentum the installation's safety limits bound (the payload moves too, declared or not)
   const std::vector<Eigen::Vector3d> tool_points = twinwatch::cli::tool_points(o.tool);
@@ -162,7 +171,8 @@ int run(Options o) {
                                         motion.ramp_in() + motion.ramp_out() > 0.0 && motion.ramp_in() < 0.5 && motion.ramp_out() < 0.5
                                             ? fmt::format("Its ramps are short (--ramp {:g} s): lengthen them, or slow it down (--slow-down)",
                                                           o.program.ramp)
-                                            : std::string("Slow it down (--slow-down)")));
+                                            : std::string("Slow it down (--slow-down)") +
+                                                  twinwatch::cli::slow_down_remedy(motion, robot, o.program.slow_down, kMaxProgramAcceleration, violation_at)));
   for (int j = 0; j < robot.n_dof(); ++j) {
     const double tmax = robot.joint(j).limits.torque_max;
     if (std::isfinite(tmax) && safety.torque[j] > tmax)

@@ -124,8 +124,17 @@ MotionPeaks motion_peaks(const ProgramMotion& motion);
 /// robot's speed and (where published) acceleration limits: the peak speed over the limit, or the
 /// square root of the peak acceleration over its limit, whichever is larger (a program K times
 /// slower, ramps included, divides every speed by K and every acceleration by K²). 1 when the motion
-/// is within them; infinity when a joint's range is left, which no slow-down fixes.
-double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot);
+/// is within them; infinity when a joint's range is left, which no slow-down fixes. `qdd_cap`
+/// [rad/s²] stands for the acceleration limit of a joint whose description publishes none (urscript
+/// writes no program beyond 40 rad/s² there); infinity: none.
+double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot,
+                                  double qdd_cap = std::numeric_limits<double>::infinity());
+/// The first joint whose peak acceleration over `motion` exceeds its published qdd_max (or
+/// `qdd_cap` where none is published), as text ("J2 accelerates at up to 9.39 rad/s², beyond its
+/// 7.5 rad/s² (panda)"); empty when none does. joint_limit_violation checks the published limits
+/// too, sample by sample; this one is for the cap (urscript's 40 rad/s² on a UR arm).
+std::string acceleration_violation(const ProgramMotion& motion, const model::RobotModel& robot,
+                                   double qdd_cap = std::numeric_limits<double>::infinity());
 
 /// The figures of a motion that a UR installation's safety limits bound (PolyScope: Installation >
 /// Safety > Robot Limits: tool speed, elbow speed, momentum), at their peaks, sampled every servo

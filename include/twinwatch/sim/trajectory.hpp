@@ -92,7 +92,8 @@ std::unique_ptr<Trajectory> make_triangle(const model::RobotModel& model, const 
                                           double ik_step = 0.002);
 
 /// The first place where the target leaves the robot's joint position range or exceeds its velocity
-/// limit, as the controller would command it: sampled at t = k / rate [s, Hz] over the run of
+/// or (where the description publishes one, as the Panda's) acceleration limit, as the controller
+/// would command it: sampled at t = k / rate [s, Hz] over the run of
 /// `duration` [s], or over one period when the run is longer (the trajectory repeats). Returns the
 /// violation as text, e.g. "joint 2 target velocity reaches 4.1 rad/s at t = 1.25 s, beyond its limit
 /// of 3.14159 rad/s (ur3e)", or "" when the target stays inside. Limits the description does not
