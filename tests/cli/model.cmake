@@ -4,6 +4,12 @@ set_tests_properties(cli.model_show_ur3e PROPERTIES PASS_REGULAR_EXPRESSION "mov
 # (a2 + a3, -(d4 + d6), d1 - d5)
 add_test(NAME cli.model_show_ur10e COMMAND twinwatch model show ur10e)
 set_tests_properties(cli.model_show_ur10e PROPERTIES PASS_REGULAR_EXPRESSION "moving mass 29.1040 kg[^\n]*\npayloads up to 12.5 kg[^\n]*\n[^\n]*\nflange at q = 0: \\[-1.18425 -0.29070 0.06085\\] m")
+# its centres of mass in each joint's frame against [ROS2] physical_parameters.yaml's center_of_mass
+# (URDF link frames; the joint frame adds the DH d along the axis): shoulder (0.021, -0.027, 0 + 0.1807),
+# upper arm (-0.2327, 0, 0.158), forearm (-0.33155, 0, 0.068), wrist 3 (0, 0, 0.11655 - 0.026)
+add_test(NAME cli.model_show_ur10e_centres_of_mass COMMAND twinwatch model show ur10e)
+set_tests_properties(cli.model_show_ur10e_centres_of_mass PROPERTIES PASS_REGULAR_EXPRESSION
+  "shoulder_pan +7.3690 +\\[0.0210 -0.0270 0.1807\\][^\n]*\n[^\n]*shoulder_lift +13.0510 +\\[-0.2327 0.0000 0.1580\\][^\n]*\n[^\n]*elbow +3.9890 +\\[-0.3316 0.0000 0.0680\\][^\n]*\n(.*\n)*[^\n]*wrist_3 +0.6150 +\\[0.0000 0.0000 0.0906\\]")
 add_test(NAME cli.model_show_json COMMAND twinwatch model show ur5e --json)
 set_tests_properties(cli.model_show_json PROPERTIES PASS_REGULAR_EXPRESSION "\"moving_mass\": 17.7")
 add_test(NAME cli.model_show_unknown COMMAND twinwatch model show ur99)
