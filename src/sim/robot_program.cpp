@@ -211,19 +211,6 @@ double slow_down_for_joint_limits(const ProgramMotion& motion, const model::Robo
   return k;
 }
 
-std::string acceleration_violation(const ProgramMotion& motion, const model::RobotModel& robot, double qdd_cap) {
-  const MotionPeaks p = motion_peaks(motion);
-  for (int j = 0; j < std::min(motion.n_dof(), robot.n_dof()); ++j) {
-    const double published = robot.joint(j).limits.qdd_max;
-    const double qdd_max = std::isfinite(published) ? published : qdd_cap;
-    if (std::isfinite(qdd_max) && p.qdd[j] > qdd_max)
-      return fmt::format("J{} accelerates at up to {:.3g} rad/s², beyond its {:g} rad/s² ({})", j + 1, p.qdd[j], qdd_max,
-                         std::isfinite(published) ? robot.name() : "the most a program written here commands where the robot file gives "
-                                                                   "no acceleration limit");
-  }
-  return "";
-}
-
 double approach_time_at_most(const ProgramOptions& o) {
   const double v = o.approach_speed, a = o.approach_acceleration, d = o.max_approach;
   return d >= v * v / a ? d / v + v / a : 2.0 * std::sqrt(d / a);

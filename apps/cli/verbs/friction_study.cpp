@@ -128,7 +128,11 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o, int& n_dof) 
   // 1 s sample period and fitted it, exit 0 (audit of session 56)
   for (const auto& r : recs) {
     cli::check_sample_period(r.path, r.median_period);
-    for (size_t k = 0; k < r.samples.size(); ++k)
+    // (and positions in degrees beside speeds in rad/s, or the other way round, or of the other sign,
+    // told by the positions' change against the speeds' integral: the range check the other verbs
+    // make needs the arm's description, which the study takes none of; audit of session 56)
+    cli::PositionSpeedCheck agree(r.path, r.n_dof);
+    for (size_t k = 0; k < r.samples.size(); ++k) {
       for (int j = 0; j < r.n_dof; ++j)
         if (std::abs(r.samples[k].qd[j]) > cli::kUnitsAnyJointSpeedMax)
           throw InvalidArgument(fmt::format("{}: J{} moves at {:.4g} rad/s at t = {:.3f} s (sample {}), faster than any arm joint turns "
@@ -136,11 +140,8 @@ std::vector<ProtocolRecords> recorded_joints(const StudyOptions& o, int& n_dof) 
                                             "them with a column map ('COLUMN,actual_qd_{},0.017453292519943295', docs/recordings.md)",
                                             r.path, j + 1, r.samples[k].qd[j], r.samples[k].timestamp - r.samples.front().timestamp,
                                             k + 1, cli::kUnitsAnyJointSpeedMax, j, j));
-    // positions in degrees beside speeds in rad/s (or the other way round, or of the other sign),
-    // told by the positions' change against the speeds' integral: the range check the other verbs
-    // make needs the arm's description, which the study takes none of (audit of session 56)
-    cli::PositionSpeedCheck agree(r.path, r.n_dof);
-    for (const RobotSample& s : r.samples) agree.add(s);
+      agree.add(r.samples[k]);
+    }
     agree.finish();
   }
   for (const auto& r : recs)

@@ -92,6 +92,13 @@ int run(Options o) {
     }
   };
   const sim::ProgramMotion motion = motion_of();
+  // the first joint accelerating beyond kMaxProgramAcceleration where the robot file publishes no
+  // acceleration limit (-1: none; a published one is joint_limit_violation's)
+  const auto over_acceleration_cap = [&](const sim::MotionPeaks& p) {
+    for (int j = 0; j < robot.n_dof(); ++j)
+      if (!std::isfinite(robot.joint(j).limits.qdd_max) && p.qdd[j] > kMaxProgramAcceleration) return j;
+    return -1;
+  };
   // the joint limits a program with --slow-down K leaves (speeds, ranges, accelerations): a remedy
   // is checked on the program it suggests
   const auto violation_at = [&](double k) {
@@ -99,7 +106,9 @@ int run(Options o) {
     p.slow_down = k;
     const sim::ProgramMotion m(form, p);
     const std::string v = sim::joint_limit_violation(m, robot, m.total(), 1.0 / m.servo_period());
-    return v.empty() ? sim::acceleration_violation(m, robot, kMaxProgramAcceleration) : v;
+    if (!v.empty()) return v;
+    const int j = over_acceleration_cap(sim::motion_peaks(m));
+    return j < 0 ? std::string() : fmt::format("J{} accelerates beyond {:g} rad/s²", j + 1, kMaxProgramAcceleration);
   };
   // the motion the arm makes, ramps included, within the robot's joint ranges and speed limits
   const std::string violation = sim::joint_limit_violation(motion, robot, motion.total(), 1.0 / motion.servo_period());
@@ -162,17 +171,16 @@ int run(Options o) {
   // what the drives can follow: the rigid body's torque within each joint's torque_max, and, where the
   // robot file publishes no acceleration limit (UR publishes none), accelerations within
   // kMaxProgramAcceleration (a ramp of a few ms commanded 1000 rad/s², review of session 45)
-  for (int j = 0; j < robot.n_dof(); ++j)
-    if (!std::isfinite(robot.joint(j).limits.qdd_max) && peaks.qdd[j] > kMaxProgramAcceleration)
-      throw InvalidArgument(fmt::format("{}: the program accelerates J{} at up to {:.3g} rad/s², beyond {:g} rad/s² (the most a program "
-                                        "written here commands where the robot file gives no acceleration limit, as for the approach's "
-                                        "movej); no program written. {}",
-                                        o.scenario, j + 1, peaks.qdd[j], kMaxProgramAcceleration,
-                                        motion.ramp_in() + motion.ramp_out() > 0.0 && motion.ramp_in() < 0.5 && motion.ramp_out() < 0.5
-                                            ? fmt::format("Its ramps are short (--ramp {:g} s): lengthen them, or slow it down (--slow-down)",
-                                                          o.program.ramp)
-                                            : std::string("Slow it down (--slow-down)") +
-                                                  twinwatch::cli::slow_down_remedy(motion, robot, o.program.slow_down, kMaxProgramAcceleration, violation_at)));
+  if (const int j = over_acceleration_cap(peaks); j >= 0)
+    throw InvalidArgument(fmt::format("{}: the program accelerates J{} at up to {:.3g} rad/s², beyond {:g} rad/s² (the most a program "
+                                      "written here commands where the robot file gives no acceleration limit, as for the approach's "
+                                      "movej); no program written. {}",
+                                      o.scenario, j + 1, peaks.qdd[j], kMaxProgramAcceleration,
+                                      motion.ramp_in() + motion.ramp_out() > 0.0 && motion.ramp_in() < 0.5 && motion.ramp_out() < 0.5
+                                          ? fmt::format("Its ramps are short (--ramp {:g} s): lengthen them, or slow it down (--slow-down)",
+                                                        o.program.ramp)
+                                          : std::string("Slow it down (--slow-down)") +
+                                                twinwatch::cli::slow_down_remedy(motion, robot, o.program.slow_down, kMaxProgramAcceleration, violation_at)));
   for (int j = 0; j < robot.n_dof(); ++j) {
     const double tmax = robot.joint(j).limits.torque_max;
     if (std::isfinite(tmax) && safety.torque[j] > tmax)

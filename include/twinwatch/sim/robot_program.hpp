@@ -129,12 +129,6 @@ MotionPeaks motion_peaks(const ProgramMotion& motion);
 /// writes no program beyond 40 rad/s² there); infinity: none.
 double slow_down_for_joint_limits(const ProgramMotion& motion, const model::RobotModel& robot,
                                   double qdd_cap = std::numeric_limits<double>::infinity());
-/// The first joint whose peak acceleration over `motion` exceeds its published qdd_max (or
-/// `qdd_cap` where none is published), as text ("J2 accelerates at up to 9.39 rad/s², beyond its
-/// 7.5 rad/s² (panda)"); empty when none does. joint_limit_violation checks the published limits
-/// too, sample by sample; this one is for the cap (urscript's 40 rad/s² on a UR arm).
-std::string acceleration_violation(const ProgramMotion& motion, const model::RobotModel& robot,
-                                   double qdd_cap = std::numeric_limits<double>::infinity());
 
 /// The figures of a motion that a UR installation's safety limits bound (PolyScope: Installation >
 /// Safety > Robot Limits: tool speed, elbow speed, momentum), at their peaks, sampled every servo
